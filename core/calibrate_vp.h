@@ -1,0 +1,59 @@
+// Single-image calibration from vanishing points of user-drawn line families (the paper's
+// "three orthogonal vanishing points"). Each vanishing point is fitted by least squares over
+// all segments of its family (2 or more); the focal length and principal point follow from
+// the orthocentre construction with three vanishing points, or the focal length alone from
+// two with the principal point given; the rotation from the vanishing directions.
+// Reference: Hartley & Zisserman, Multiple View Geometry, 2nd ed., sections 8.6 and 8.8.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/project.h"
+
+namespace facet {
+
+struct VpCalibrationOptions {
+  int width_px = 0;  // image size (principal point "center" is (w - 1) / 2, (h - 1) / 2)
+  int height_px = 0;
+  // kSolve needs three families; with two families kSolve falls back to kImageCenter and
+  // says so in the warnings.
+  PrincipalPointMode principal_point_mode = PrincipalPointMode::kSolve;
+  Eigen::Vector2d fixed_principal_point_px = Eigen::Vector2d::Zero();  // for kFixed
+
+  bool Check(std::string* error) const;
+};
+
+struct VpCalibrationSummary {
+  bool success = false;
+  std::string message;                // why it failed, or a one-line result
+  std::vector<std::string> warnings;  // usable result, but the user should know
+  double focal_px = 0.0;
+  Eigen::Vector2d principal_point_px = Eigen::Vector2d::Zero();
+  // Columns: world x, y, z axes in the camera frame (core/conventions.h: z up). The world
+  // z axis points up in the image; x and y point towards their vanishing points' side in
+  // front of the camera; det = +1.
+  Eigen::Matrix3d cam_from_world_rotation = Eigen::Matrix3d::Identity();
+  // Homogeneous vanishing point per axis (x, y, z), unit norm; zero when the family is absent.
+  std::array<Eigen::Vector3d, 3> vanishing_points{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                                                   Eigen::Vector3d::Zero()};
+  std::array<int, 3> segments_per_axis = {0, 0, 0};
+  // Per input segment (same order): distance in px of its endpoints to the line through its
+  // midpoint and its family's vanishing point (RMS of the two).
+  std::vector<double> segment_residuals_px;
+  double time_ms = 0.0;
+
+  bool IsUsable() const { return success; }
+};
+
+// Calibrates from the segments of one image (their `axis` names the family). Degenerate
+// input (a family with fewer than 2 segments, parallel or coincident segments where a
+// finite vanishing point is needed, an obtuse vanishing-point triangle, fewer than two
+// families) gives success = false and a message that says which.
+VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& segments,
+                                                 const VpCalibrationOptions& options);
+
+}  // namespace facet
