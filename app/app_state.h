@@ -60,6 +60,11 @@ struct AppState {
   TexturedMesh mesh;
   std::uint64_t mesh_revision = 0;  // increments whenever mesh changes
   ModelUpdateSummary last_update;   // calibration and solve figures of the last change
+  TextureBakeSummary last_bake;
+  // What the current mesh was built from, to rebuild it only when that changes.
+  std::vector<Box> mesh_boxes;
+  std::vector<Image> mesh_images;
+  size_t mesh_photo_count = 0;
 
   std::vector<LogEntry> log;
   double time_s = 0.0;

@@ -1,0 +1,196 @@
+#include "app/app_state.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "core/project_io.h"
+
+namespace facet::app {
+namespace {
+
+// While a pin or endpoint is dragged, each frame gets a few warm-started iterations so the
+// frame never stalls; the full solve runs on release.
+constexpr int kDragIterationsPerFrame = 5;
+
+ModelUpdateOptions FullUpdateOptions() {
+  ModelUpdateOptions options;
+  options.solve.warm_start = true;
+  options.solve.max_iterations = 100;
+  return options;
+}
+
+ModelUpdateOptions DragUpdateOptions() {
+  ModelUpdateOptions options;
+  options.solve.warm_start = true;
+  options.solve.max_iterations = kDragIterationsPerFrame;
+  return options;
+}
+
+void LogUpdate(AppState* state, const ModelUpdateSummary& summary) {
+  for (const std::string& m : summary.messages) state->Log(LogLevel::kWarning, m);
+}
+
+}  // namespace
+
+const char* ToolName(Tool tool) {
+  switch (tool) {
+    case Tool::kSelect: return "Select";
+    case Tool::kLineX: return "Line X";
+    case Tool::kLineY: return "Line Y";
+    case Tool::kLineZ: return "Line Z";
+    case Tool::kPin: return "Pin";
+    case Tool::kAddBox: return "Add box";
+  }
+  return "?";
+}
+
+void AppState::Log(LogLevel level, std::string text) {
+  if (level != LogLevel::kInfo) std::fprintf(stderr, "facet: %s\n", text.c_str());
+  log.push_back({level, std::move(text), time_s});
+  constexpr size_t kMaxLogEntries = 2000;
+  if (log.size() > kMaxLogEntries) log.erase(log.begin(), log.begin() + (log.size() - kMaxLogEntries));
+}
+
+const Image* AppState::ActiveImage() const {
+  const Image* image = document.project().FindImage(active_image_id);
+  if (image) return image;
+  return document.project().images.empty() ? nullptr : &document.project().images.front();
+}
+
+bool OpenProject(AppState* state, const std::string& path) {
+  ProjectLoadResult loaded = LoadProject(path);
+  if (!loaded.ok()) {
+    state->Log(LogLevel::kError, "Cannot open " + path + ": " + loaded.error);
+    return false;
+  }
+  for (const std::string& w : loaded.warnings) state->Log(LogLevel::kWarning, w);
+  state->document.Reset(std::move(loaded.project));
+  state->project_path = path;
+  state->selection = {};
+  state->drag_start.reset();
+  state->photos.clear();
+  state->photo_errors.clear();
+  state->mesh_boxes.clear();
+  state->mesh_images.clear();
+  state->mesh_photo_count = 0;
+  state->mesh = {};
+  ++state->mesh_revision;
+  const Project& project = state->document.project();
+  state->active_image_id = project.images.empty() ? kNoId : project.images.front().id;
+  // Diagnostics for the panels; the stored solution stays as saved.
+  Project check;
+  state->last_update = UpdateModel(project, FullUpdateOptions(), &check);
+  state->Log(LogLevel::kInfo, "Opened " + path);
+  return true;
+}
+
+bool SaveProjectAs(AppState* state, const std::string& path) {
+  const std::string target = path.empty() ? state->project_path : path;
+  if (target.empty()) {
+    state->Log(LogLevel::kError, "Save: the project has no file name yet");
+    return false;
+  }
+  const std::string error = SaveProject(state->document.project(), target);
+  if (!error.empty()) {
+    state->Log(LogLevel::kError, "Cannot save " + target + ": " + error);
+    return false;
+  }
+  state->project_path = target;
+  state->document.MarkClean();
+  state->Log(LogLevel::kInfo, "Saved " + target);
+  return true;
+}
+
+void CommitEdit(AppState* state, const std::string& label, Project after) {
+  Project updated;
+  state->last_update = UpdateModel(after, FullUpdateOptions(), &updated);
+  LogUpdate(state, state->last_update);
+  if (state->document.Commit(label, updated)) state->Log(LogLevel::kInfo, label);
+}
+
+void BeginDrag(AppState* state, const std::string& label) {
+  if (state->drag_start) return;
+  state->drag_start = state->document.project();
+  state->drag_label = label;
+}
+
+void UpdateDrag(AppState* state, Project edited) {
+  if (!state->drag_start) return;
+  Project updated;
+  state->last_update = UpdateModel(edited, DragUpdateOptions(), &updated);
+  *state->document.MutableProjectForPreview() = std::move(updated);
+}
+
+void EndDrag(AppState* state) {
+  if (!state->drag_start) return;
+  Project updated;
+  state->last_update = UpdateModel(state->document.project(), FullUpdateOptions(), &updated);
+  LogUpdate(state, state->last_update);
+  *state->document.MutableProjectForPreview() = std::move(updated);
+  if (state->document.CommitFrom(state->drag_label, *state->drag_start))
+    state->Log(LogLevel::kInfo, state->drag_label);
+  state->drag_start.reset();
+}
+
+void CancelDrag(AppState* state) {
+  if (!state->drag_start) return;
+  state->document.CancelPreview(*state->drag_start);
+  state->drag_start.reset();
+}
+
+void Undo(AppState* state) {
+  if (state->drag_start) CancelDrag(state);
+  if (state->document.Undo()) state->Log(LogLevel::kInfo, "Undo");
+}
+
+void Redo(AppState* state) {
+  if (state->drag_start) return;
+  if (state->document.Redo()) state->Log(LogLevel::kInfo, "Redo");
+}
+
+void RefreshDerived(AppState* state) {
+  const Project& project = state->document.project();
+
+  // Photos: load the new ones once, forget the ones that left the project.
+  for (auto it = state->photos.begin(); it != state->photos.end();) {
+    it = project.FindImage(it->first) ? std::next(it) : state->photos.erase(it);
+  }
+  for (const Image& image : project.images) {
+    if (state->photos.count(image.id) || state->photo_errors.count(image.id)) continue;
+    const std::string path = state->project_path.empty()
+                                 ? image.path
+                                 : ResolveImagePath(state->project_path, image.path);
+    ImageReadResult read = ReadImage(path);
+    if (read.ok()) {
+      state->photos[image.id] = std::move(read.image);
+    } else {
+      state->photo_errors[image.id] = read.error;
+      state->Log(LogLevel::kError, read.error);
+    }
+  }
+
+  // The mesh depends on the boxes, the cameras and the loaded photos only.
+  if (state->mesh_boxes == project.boxes && state->mesh_images == project.images &&
+      state->mesh_photo_count == state->photos.size() && state->mesh_revision != 0) {
+    return;
+  }
+  std::vector<ImageRgba8> photos;
+  photos.reserve(project.images.size());
+  for (const Image& image : project.images) {
+    auto it = state->photos.find(image.id);
+    photos.push_back(it == state->photos.end() ? ImageRgba8{} : it->second);
+  }
+  TexturedMesh mesh;
+  state->last_bake = BakeTexturedMesh(project, photos, TextureBakeOptions{}, &mesh);
+  if (!state->last_bake.success) {
+    mesh = BuildUntexturedMesh(project);
+    state->Log(LogLevel::kWarning, "Texture: " + state->last_bake.message);
+  }
+  state->mesh = std::move(mesh);
+  state->mesh_boxes = project.boxes;
+  state->mesh_images = project.images;
+  state->mesh_photo_count = state->photos.size();
+  ++state->mesh_revision;
+}
+
+}  // namespace facet::app
