@@ -1,0 +1,200 @@
+// Image I/O: PNG round-trip, size without decoding, and errors (missing, truncated, garbage).
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include <doctest/doctest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/image_io.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path TempDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("facet_test_image_io_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+facet::ImageRgba8 MakePattern(int width, int height) {
+  facet::ImageRgba8 image;
+  image.width = width;
+  image.height = height;
+  image.pixels.resize(static_cast<size_t>(width) * height * 4);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      std::uint8_t* p = image.At(x, y);
+      p[0] = static_cast<std::uint8_t>(x * 7 + y);
+      p[1] = static_cast<std::uint8_t>(y * 5);
+      p[2] = static_cast<std::uint8_t>((x ^ y) * 3);
+      p[3] = static_cast<std::uint8_t>(255 - x);
+    }
+  }
+  return image;
+}
+
+void WriteBytes(const fs::path& path, const std::vector<std::uint8_t>& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+std::vector<std::uint8_t> ReadBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
+}
+
+// A noisy photo-like JPEG, so that the entropy-coded data is large.
+fs::path MakeJpeg(const fs::path& dir, int width, int height) {
+  cv::Mat bgr(height, width, CV_8UC3);
+  cv::randu(bgr, cv::Scalar::all(0), cv::Scalar::all(255));
+  const fs::path path = dir / "photo.jpg";
+  REQUIRE(cv::imwrite(path.string(), bgr));
+  return path;
+}
+
+}  // namespace
+
+TEST_CASE("PNG round-trip keeps every RGBA byte") {
+  const fs::path dir = TempDir("roundtrip");
+  const facet::ImageRgba8 image = MakePattern(37, 23);  // odd sizes catch stride errors
+  const std::string path = (dir / "pattern.png").string();
+  REQUIRE(facet::WritePng(path, image).empty());
+
+  const facet::ImageReadResult read = facet::ReadImage(path);
+  REQUIRE_MESSAGE(read.ok(), read.error);
+  CHECK(read.image.width == 37);
+  CHECK(read.image.height == 23);
+  REQUIRE(read.image.pixels.size() == image.pixels.size());
+  size_t differing = 0;
+  for (size_t i = 0; i < image.pixels.size(); ++i) differing += image.pixels[i] != read.image.pixels[i];
+  CHECK_MESSAGE(differing == 0, "differing bytes: " << differing);
+
+  // EncodePng produces the same kind of stream, decodable by OpenCV as BGRA.
+  const std::vector<std::uint8_t> png = facet::EncodePng(image);
+  const cv::Mat decoded = cv::imdecode(png, cv::IMREAD_UNCHANGED);
+  REQUIRE(decoded.type() == CV_8UC4);
+  const cv::Vec4b p = decoded.at<cv::Vec4b>(5, 11);
+  const std::uint8_t* q = image.At(11, 5);
+  CHECK(p[0] == q[2]);
+  CHECK(p[1] == q[1]);
+  CHECK(p[2] == q[0]);
+  CHECK(p[3] == q[3]);
+}
+
+TEST_CASE("a colour JPEG reads as RGBA with opaque alpha and its colours in RGB order") {
+  const fs::path dir = TempDir("jpeg_colour");
+  cv::Mat bgr(16, 24, CV_8UC3, cv::Scalar(200, 100, 30));  // B, G, R
+  const std::string path = (dir / "flat.jpg").string();
+  REQUIRE(cv::imwrite(path, bgr));
+  const facet::ImageReadResult read = facet::ReadImage(path);
+  REQUIRE_MESSAGE(read.ok(), read.error);
+  const std::uint8_t* p = read.image.At(10, 8);
+  constexpr int kJpegTolerance = 4;  // lossy coding of a flat colour
+  CAPTURE(int(p[0]));
+  CAPTURE(int(p[1]));
+  CAPTURE(int(p[2]));
+  CHECK(std::abs(p[0] - 30) <= kJpegTolerance);
+  CHECK(std::abs(p[1] - 100) <= kJpegTolerance);
+  CHECK(std::abs(p[2] - 200) <= kJpegTolerance);
+  CHECK(p[3] == 255);
+}
+
+TEST_CASE("ReadImageSize gives the size of PNG and JPEG, fast on a 12 MP photo") {
+  const fs::path dir = TempDir("size");
+  const std::string png = (dir / "p.png").string();
+  REQUIRE(facet::WritePng(png, MakePattern(41, 19)).empty());
+  int w = 0, h = 0;
+  std::string error;
+  REQUIRE_MESSAGE(facet::ReadImageSize(png, &w, &h, &error), error);
+  CHECK(w == 41);
+  CHECK(h == 19);
+
+  const fs::path jpeg = MakeJpeg(dir, 4000, 3000);
+  const auto start = std::chrono::steady_clock::now();
+  REQUIRE_MESSAGE(facet::ReadImageSize(jpeg.string(), &w, &h, &error), error);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  CHECK(w == 4000);
+  CHECK(h == 3000);
+  MESSAGE("ReadImageSize of a 12 MP JPEG: " << ms << " ms");
+  constexpr double kMaxSizeReadMs = 50.0;  // a full decode takes several hundred ms here
+  CHECK(ms < kMaxSizeReadMs);
+}
+
+TEST_CASE("a missing file is an error naming the file") {
+  const fs::path dir = TempDir("missing");
+  const std::string path = (dir / "nope.jpg").string();
+  const facet::ImageReadResult read = facet::ReadImage(path);
+  CHECK_FALSE(read.ok());
+  CHECK(read.image.empty());
+  CHECK(read.error.find("nope.jpg") != std::string::npos);
+  int w = 0, h = 0;
+  std::string error;
+  CHECK_FALSE(facet::ReadImageSize(path, &w, &h, &error));
+  CHECK(error.find("nope.jpg") != std::string::npos);
+}
+
+TEST_CASE("a truncated JPEG is reported, not half-decoded") {
+  const fs::path dir = TempDir("truncated");
+  const fs::path jpeg = MakeJpeg(dir, 320, 240);
+  const std::vector<std::uint8_t> bytes = ReadBytes(jpeg);
+  REQUIRE(bytes.size() > 1000);
+  // The intact file reads, so the failure below is due to the truncation alone.
+  REQUIRE(facet::ReadImage(jpeg.string()).ok());
+  for (double fraction : {0.3, 0.6, 0.95}) {
+    CAPTURE(fraction);
+    const fs::path cut = dir / "cut.jpg";
+    WriteBytes(cut, std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + static_cast<long>(bytes.size() * fraction)));
+    const facet::ImageReadResult read = facet::ReadImage(cut.string());
+    CHECK_FALSE(read.ok());
+    CHECK(read.image.empty());
+    MESSAGE(read.error);
+  }
+  // Just the last two bytes (the EOI marker) missing.
+  const fs::path cut = dir / "cut_eoi.jpg";
+  WriteBytes(cut, std::vector<std::uint8_t>(bytes.begin(), bytes.end() - 2));
+  CHECK_FALSE(facet::ReadImage(cut.string()).ok());
+}
+
+TEST_CASE("random bytes, an empty file and a corrupt PNG are errors, not crashes") {
+  const fs::path dir = TempDir("garbage");
+  std::mt19937 rng(7);
+  std::vector<std::uint8_t> noise(5000);
+  for (auto& b : noise) b = static_cast<std::uint8_t>(rng());
+  const fs::path random_path = dir / "random.jpg";
+  WriteBytes(random_path, noise);
+  CHECK_FALSE(facet::ReadImage(random_path.string()).ok());
+  int w = 0, h = 0;
+  std::string error;
+  CHECK_FALSE(facet::ReadImageSize(random_path.string(), &w, &h, &error));
+
+  // A JPEG signature followed by garbage.
+  noise[0] = 0xFF;
+  noise[1] = 0xD8;
+  noise[2] = 0xFF;
+  WriteBytes(random_path, noise);
+  CHECK_FALSE(facet::ReadImage(random_path.string()).ok());
+
+  const fs::path empty_path = dir / "empty.png";
+  WriteBytes(empty_path, {});
+  CHECK_FALSE(facet::ReadImage(empty_path.string()).ok());
+  CHECK_FALSE(facet::ReadImageSize(empty_path.string(), &w, &h, &error));
+
+  const fs::path png_path = dir / "p.png";
+  REQUIRE(facet::WritePng(png_path.string(), MakePattern(64, 64)).empty());
+  std::vector<std::uint8_t> png = ReadBytes(png_path);
+  png.resize(png.size() / 2);
+  WriteBytes(png_path, png);
+  CHECK_FALSE(facet::ReadImage(png_path.string()).ok());
+}
+
+TEST_CASE("writing an empty image or to a missing folder fails with a message") {
+  const fs::path dir = TempDir("write_errors");
+  CHECK_FALSE(facet::WritePng((dir / "e.png").string(), facet::ImageRgba8()).empty());
+  CHECK(facet::EncodePng(facet::ImageRgba8()).empty());
+  CHECK_FALSE(facet::WritePng((dir / "no_such_dir" / "x.png").string(), MakePattern(4, 4)).empty());
+}
