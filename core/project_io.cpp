@@ -1,0 +1,707 @@
+#include "core/project_io.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <set>
+#include <unordered_map>
+
+#include <Eigen/LU>
+#include <nlohmann/json.hpp>
+
+namespace facet {
+namespace {
+
+using Json = nlohmann::json;
+// Written objects keep the field order of the format description, so files diff well.
+using OrderedJson = nlohmann::ordered_json;
+
+constexpr const char* kFormatName = "facet-project";
+
+std::string ErrnoText(int err) { return std::strerror(err); }
+
+std::string Join(const std::string& base, const std::string& key) {
+  return base.empty() ? key : base + "." + key;
+}
+std::string Index(const std::string& base, size_t i) { return base + "[" + std::to_string(i) + "]"; }
+
+const char* PrincipalPointModeName(PrincipalPointMode mode) {
+  switch (mode) {
+    case PrincipalPointMode::kSolve: return "solve";
+    case PrincipalPointMode::kImageCenter: return "center";
+    case PrincipalPointMode::kFixed: return "fixed";
+  }
+  return "?";
+}
+
+std::optional<PrincipalPointMode> PrincipalPointModeFromName(const std::string& name) {
+  if (name == "solve") return PrincipalPointMode::kSolve;
+  if (name == "center") return PrincipalPointMode::kImageCenter;
+  if (name == "fixed") return PrincipalPointMode::kFixed;
+  return std::nullopt;
+}
+
+bool IsValidUtf8(const std::string& s) {
+  size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    int extra = 0;
+    unsigned min_code = 0;
+    unsigned code = 0;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if ((c & 0xE0) == 0xC0) {
+      extra = 1, min_code = 0x80, code = c & 0x1F;
+    } else if ((c & 0xF0) == 0xE0) {
+      extra = 2, min_code = 0x800, code = c & 0x0F;
+    } else if ((c & 0xF8) == 0xF0) {
+      extra = 3, min_code = 0x10000, code = c & 0x07;
+    } else {
+      return false;
+    }
+    if (i + extra >= s.size()) return false;
+    for (int k = 1; k <= extra; ++k) {
+      const auto cc = static_cast<unsigned char>(s[i + k]);
+      if ((cc & 0xC0) != 0x80) return false;
+      code = (code << 6) | (cc & 0x3F);
+    }
+    if (code < min_code || code > 0x10FFFF || (code >= 0xD800 && code <= 0xDFFF)) return false;
+    i += extra + 1;
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------
+// Writing. The writer records the first value JSON cannot represent (NaN, infinity,
+// invalid UTF-8) with its path, so SaveProject can refuse with a precise message.
+
+class Writer {
+ public:
+  const std::string& error() const { return error_; }
+
+  OrderedJson Number(const std::string& path, double v) {
+    if (!std::isfinite(v) && error_.empty()) {
+      error_ = path + ": " + (std::isnan(v) ? "NaN" : "infinity") +
+               " cannot be saved (JSON has no NaN or infinity)";
+    }
+    return v;
+  }
+  template <typename Derived>
+  OrderedJson Numbers(const std::string& path, const Eigen::DenseBase<Derived>& v) {
+    OrderedJson out = OrderedJson::array();
+    for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(Number(Index(path, i), v(i)));
+    return out;
+  }
+  // Row-major, so the file reads like the matrix.
+  OrderedJson Matrix(const std::string& path, const Eigen::Matrix3d& m) {
+    OrderedJson out = OrderedJson::array();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) out.push_back(Number(Index(path, r * 3 + c), m(r, c)));
+    return out;
+  }
+  OrderedJson String(const std::string& path, const std::string& s) {
+    if (!IsValidUtf8(s) && error_.empty()) error_ = path + ": text is not valid UTF-8";
+    return s;
+  }
+
+ private:
+  std::string error_;
+};
+
+OrderedJson WriteProject(const Project& p, Writer* w) {
+  OrderedJson root;
+  root["format"] = kFormatName;
+  root["version"] = Project::kFormatVersion;
+  root["units"] = w->String("units", p.units);
+  root["next_id"] = p.next_id;
+
+  OrderedJson images = OrderedJson::array();
+  for (size_t i = 0; i < p.images.size(); ++i) {
+    const Image& im = p.images[i];
+    const std::string at = Index("images", i);
+    OrderedJson j;
+    j["id"] = im.id;
+    j["path"] = w->String(Join(at, "path"), std::filesystem::path(im.path).generic_string());
+    j["width_px"] = im.width_px;
+    j["height_px"] = im.height_px;
+    const std::string cam_at = Join(at, "camera");
+    OrderedJson cam;
+    cam["width_px"] = im.camera.width_px;
+    cam["height_px"] = im.camera.height_px;
+    cam["focal_px"] = w->Number(Join(cam_at, "focal_px"), im.camera.focal_px);
+    cam["principal_point_px"] =
+        w->Numbers(Join(cam_at, "principal_point_px"), im.camera.principal_point_px);
+    cam["rotation"] = w->Matrix(Join(cam_at, "rotation"), im.camera.cam_from_world_rotation);
+    cam["translation"] =
+        w->Numbers(Join(cam_at, "translation"), im.camera.cam_from_world_translation);
+    j["camera"] = std::move(cam);
+    j["camera_calibrated"] = im.camera_calibrated;
+    j["principal_point_mode"] = PrincipalPointModeName(im.principal_point_mode);
+    j["fixed_principal_point_px"] =
+        w->Numbers(Join(at, "fixed_principal_point_px"), im.fixed_principal_point_px);
+    j["pose_locked"] = im.pose_locked;
+    images.push_back(std::move(j));
+  }
+  root["images"] = std::move(images);
+
+  OrderedJson segments = OrderedJson::array();
+  for (size_t i = 0; i < p.segments.size(); ++i) {
+    const Segment& s = p.segments[i];
+    const std::string at = Index("segments", i);
+    OrderedJson j;
+    j["id"] = s.id;
+    j["image_id"] = s.image_id;
+    j["axis"] = AxisName(s.axis);
+    j["a_px"] = w->Numbers(Join(at, "a_px"), s.a_px);
+    j["b_px"] = w->Numbers(Join(at, "b_px"), s.b_px);
+    segments.push_back(std::move(j));
+  }
+  root["segments"] = std::move(segments);
+
+  OrderedJson boxes = OrderedJson::array();
+  for (size_t i = 0; i < p.boxes.size(); ++i) {
+    const Box& b = p.boxes[i];
+    const std::string at = Index("boxes", i);
+    OrderedJson j;
+    j["id"] = b.id;
+    j["name"] = w->String(Join(at, "name"), b.name);
+    j["size"] = w->Numbers(Join(at, "size"), b.size);
+    j["rotation"] = w->Numbers(Join(at, "rotation"), b.rotation);
+    j["translation"] = w->Numbers(Join(at, "translation"), b.translation);
+    j["size_locked"] = {b.size_locked[0], b.size_locked[1], b.size_locked[2]};
+    j["rotation_locked"] = b.rotation_locked;
+    j["translation_locked"] = b.translation_locked;
+    boxes.push_back(std::move(j));
+  }
+  root["boxes"] = std::move(boxes);
+
+  OrderedJson pins = OrderedJson::array();
+  for (size_t i = 0; i < p.pins.size(); ++i) {
+    const Pin& pin = p.pins[i];
+    OrderedJson j;
+    j["id"] = pin.id;
+    j["image_id"] = pin.image_id;
+    j["box_id"] = pin.box_id;
+    j["corner"] = pin.corner;
+    j["uv_px"] = w->Numbers(Join(Index("pins", i), "uv_px"), pin.uv_px);
+    pins.push_back(std::move(j));
+  }
+  root["pins"] = std::move(pins);
+  return root;
+}
+
+// ---------------------------------------------------------------------------------------
+// Reading. Every accessor names the JSON path of what it reads; the first error wins.
+
+class Reader {
+ public:
+  explicit Reader(std::vector<std::string>* warnings) : warnings_(warnings) {}
+  const std::string& error() const { return error_; }
+
+  bool Fail(const std::string& path, const std::string& what) {
+    if (error_.empty()) error_ = (path.empty() ? std::string("(top level)") : path) + ": " + what;
+    return false;
+  }
+
+  // The value of a required field, or null after recording "missing field".
+  const Json* Field(const Json& obj, const std::string& obj_path, const char* key) {
+    auto it = obj.find(key);
+    if (it == obj.end()) {
+      Fail(Join(obj_path, key), "missing field");
+      return nullptr;
+    }
+    return &*it;
+  }
+
+  bool Object(const Json& j, const std::string& path, std::initializer_list<const char*> known) {
+    if (!j.is_object()) return Fail(path, "expected an object, found " + TypeName(j));
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      bool is_known = false;
+      for (const char* k : known) is_known = is_known || it.key() == k;
+      if (!is_known) warnings_->push_back(Join(path, it.key()) + ": unknown field ignored");
+    }
+    return true;
+  }
+
+  bool Array(const Json& obj, const std::string& obj_path, const char* key, const Json** out) {
+    const Json* j = Field(obj, obj_path, key);
+    if (!j) return false;
+    if (!j->is_array()) return Fail(Join(obj_path, key), "expected an array, found " + TypeName(*j));
+    *out = j;
+    return true;
+  }
+
+  bool Double(const Json& j, const std::string& path, double* out) {
+    if (!j.is_number()) return Fail(path, "expected a number, found " + TypeName(j));
+    *out = j.get<double>();
+    if (!std::isfinite(*out)) return Fail(path, "number out of range");
+    return true;
+  }
+  bool Double(const Json& obj, const std::string& obj_path, const char* key, double* out) {
+    const Json* j = Field(obj, obj_path, key);
+    return j && Double(*j, Join(obj_path, key), out);
+  }
+
+  template <int N>
+  bool Vector(const Json& obj, const std::string& obj_path, const char* key,
+              Eigen::Matrix<double, N, 1>* out) {
+    const Json* j = Field(obj, obj_path, key);
+    if (!j) return false;
+    const std::string path = Join(obj_path, key);
+    if (!j->is_array() || j->size() != N)
+      return Fail(path, "expected an array of " + std::to_string(N) + " numbers");
+    for (int i = 0; i < N; ++i)
+      if (!Double((*j)[i], Index(path, i), &(*out)(i))) return false;
+    return true;
+  }
+
+  bool Matrix(const Json& obj, const std::string& obj_path, const char* key, Eigen::Matrix3d* out) {
+    Eigen::Matrix<double, 9, 1> v;
+    if (!Vector<9>(obj, obj_path, key, &v)) return false;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) (*out)(r, c) = v(r * 3 + c);
+    return true;
+  }
+
+  bool Bool(const Json& j, const std::string& path, bool* out) {
+    if (!j.is_boolean()) return Fail(path, "expected true or false, found " + TypeName(j));
+    *out = j.get<bool>();
+    return true;
+  }
+  bool Bool(const Json& obj, const std::string& obj_path, const char* key, bool* out) {
+    const Json* j = Field(obj, obj_path, key);
+    return j && Bool(*j, Join(obj_path, key), out);
+  }
+
+  bool Int(const Json& obj, const std::string& obj_path, const char* key, int min, int max, int* out) {
+    const Json* j = Field(obj, obj_path, key);
+    if (!j) return false;
+    const std::string path = Join(obj_path, key);
+    const std::string range = "expected an integer from " + std::to_string(min) + " to " + std::to_string(max);
+    if (!j->is_number_integer()) return Fail(path, range + ", found " + TypeName(*j));
+    if (j->is_number_unsigned()) {
+      const auto v = j->get<std::uint64_t>();
+      if (v > static_cast<std::uint64_t>(max)) return Fail(path, range + ", found " + j->dump());
+      *out = static_cast<int>(v);
+    } else {
+      const auto v = j->get<std::int64_t>();
+      if (v < min || v > max) return Fail(path, range + ", found " + j->dump());
+      *out = static_cast<int>(v);
+    }
+    return true;
+  }
+
+  // Ids are positive: 0 is kNoId.
+  bool IdField(const Json& obj, const std::string& obj_path, const char* key, Id* out) {
+    const Json* j = Field(obj, obj_path, key);
+    if (!j) return false;
+    const std::string path = Join(obj_path, key);
+    if (!j->is_number_unsigned() || j->get<std::uint64_t>() == 0)
+      return Fail(path, "expected a positive integer id, found " + Describe(*j));
+    *out = j->get<std::uint64_t>();
+    return true;
+  }
+
+  bool String(const Json& obj, const std::string& obj_path, const char* key, std::string* out) {
+    const Json* j = Field(obj, obj_path, key);
+    if (!j) return false;
+    if (!j->is_string()) return Fail(Join(obj_path, key), "expected a string, found " + TypeName(*j));
+    *out = j->get<std::string>();
+    return true;
+  }
+
+  static std::string TypeName(const Json& j) {
+    if (j.is_null()) return "null";
+    if (j.is_boolean()) return "a boolean";
+    if (j.is_number()) return "a number";
+    if (j.is_string()) return "a string";
+    if (j.is_array()) return "an array";
+    if (j.is_object()) return "an object";
+    return "an unknown value";
+  }
+  static std::string Describe(const Json& j) {
+    return j.is_number() ? j.dump() : TypeName(j);
+  }
+
+ private:
+  std::string error_;
+  std::vector<std::string>* warnings_;
+};
+
+bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
+  if (!r->Object(j, at, {"id", "path", "width_px", "height_px", "camera", "camera_calibrated",
+                         "principal_point_mode", "fixed_principal_point_px", "pose_locked"}))
+    return false;
+  constexpr int kMaxSize = std::numeric_limits<int>::max();
+  if (!r->IdField(j, at, "id", &im->id) || !r->String(j, at, "path", &im->path) ||
+      !r->Int(j, at, "width_px", 0, kMaxSize, &im->width_px) ||
+      !r->Int(j, at, "height_px", 0, kMaxSize, &im->height_px))
+    return false;
+  const Json* cam = r->Field(j, at, "camera");
+  const std::string cam_at = Join(at, "camera");
+  if (!cam || !r->Object(*cam, cam_at, {"width_px", "height_px", "focal_px", "principal_point_px",
+                                        "rotation", "translation"}))
+    return false;
+  Camera& c = im->camera;
+  if (!r->Int(*cam, cam_at, "width_px", 0, kMaxSize, &c.width_px) ||
+      !r->Int(*cam, cam_at, "height_px", 0, kMaxSize, &c.height_px) ||
+      !r->Double(*cam, cam_at, "focal_px", &c.focal_px) ||
+      !r->Vector<2>(*cam, cam_at, "principal_point_px", &c.principal_point_px) ||
+      !r->Matrix(*cam, cam_at, "rotation", &c.cam_from_world_rotation) ||
+      !r->Vector<3>(*cam, cam_at, "translation", &c.cam_from_world_translation))
+    return false;
+  if (!(c.focal_px > 0)) return r->Fail(Join(cam_at, "focal_px"), "must be positive");
+  // A loose tolerance: solvers leave rounding-level drift, a corrupted file is far off.
+  const Eigen::Matrix3d& rot = c.cam_from_world_rotation;
+  const double orthonormality_error = (rot.transpose() * rot - Eigen::Matrix3d::Identity()).norm();
+  if (orthonormality_error > 1e-6 || rot.determinant() < 0)
+    return r->Fail(Join(cam_at, "rotation"), "not a rotation matrix (|R^T R - I| = " +
+                                                 std::to_string(orthonormality_error) +
+                                                 ", det = " + std::to_string(rot.determinant()) + ")");
+  std::string mode;
+  if (!r->Bool(j, at, "camera_calibrated", &im->camera_calibrated) ||
+      !r->String(j, at, "principal_point_mode", &mode))
+    return false;
+  const auto parsed_mode = PrincipalPointModeFromName(mode);
+  if (!parsed_mode)
+    return r->Fail(Join(at, "principal_point_mode"),
+                   "expected \"solve\", \"center\" or \"fixed\", found \"" + mode + "\"");
+  im->principal_point_mode = *parsed_mode;
+  return r->Vector<2>(j, at, "fixed_principal_point_px", &im->fixed_principal_point_px) &&
+         r->Bool(j, at, "pose_locked", &im->pose_locked);
+}
+
+bool ReadSegment(const Json& j, const std::string& at, Reader* r, Segment* s) {
+  std::string axis;
+  if (!r->Object(j, at, {"id", "image_id", "axis", "a_px", "b_px"}) ||
+      !r->IdField(j, at, "id", &s->id) || !r->IdField(j, at, "image_id", &s->image_id) ||
+      !r->String(j, at, "axis", &axis))
+    return false;
+  const auto parsed_axis = AxisFromName(axis);
+  if (!parsed_axis) return r->Fail(Join(at, "axis"), "expected \"x\", \"y\" or \"z\", found \"" + axis + "\"");
+  s->axis = *parsed_axis;
+  return r->Vector<2>(j, at, "a_px", &s->a_px) && r->Vector<2>(j, at, "b_px", &s->b_px);
+}
+
+bool ReadBox(const Json& j, const std::string& at, Reader* r, Box* b) {
+  if (!r->Object(j, at, {"id", "name", "size", "rotation", "translation", "size_locked",
+                         "rotation_locked", "translation_locked"}) ||
+      !r->IdField(j, at, "id", &b->id) || !r->String(j, at, "name", &b->name) ||
+      !r->Vector<3>(j, at, "size", &b->size))
+    return false;
+  for (int k = 0; k < 3; ++k)
+    if (b->size(k) < 0) return r->Fail(Index(Join(at, "size"), k), "a size cannot be negative");
+  if (!r->Vector<3>(j, at, "rotation", &b->rotation) ||
+      !r->Vector<3>(j, at, "translation", &b->translation))
+    return false;
+  const Json* locked = r->Field(j, at, "size_locked");
+  if (!locked) return false;
+  const std::string locked_at = Join(at, "size_locked");
+  if (!locked->is_array() || locked->size() != 3)
+    return r->Fail(locked_at, "expected an array of 3 booleans");
+  for (int k = 0; k < 3; ++k)
+    if (!r->Bool((*locked)[k], Index(locked_at, k), &b->size_locked[k])) return false;
+  return r->Bool(j, at, "rotation_locked", &b->rotation_locked) &&
+         r->Bool(j, at, "translation_locked", &b->translation_locked);
+}
+
+bool ReadPin(const Json& j, const std::string& at, Reader* r, Pin* p) {
+  return r->Object(j, at, {"id", "image_id", "box_id", "corner", "uv_px"}) &&
+         r->IdField(j, at, "id", &p->id) && r->IdField(j, at, "image_id", &p->image_id) &&
+         r->IdField(j, at, "box_id", &p->box_id) && r->Int(j, at, "corner", 0, 7, &p->corner) &&
+         r->Vector<2>(j, at, "uv_px", &p->uv_px);
+}
+
+template <typename T, typename ReadFn>
+bool ReadList(const Json& root, const char* key, Reader* r, ReadFn read, std::vector<T>* out) {
+  const Json* list = nullptr;
+  if (!r->Array(root, "", key, &list)) return false;
+  out->resize(list->size());
+  for (size_t i = 0; i < list->size(); ++i)
+    if (!read((*list)[i], Index(key, i), r, &(*out)[i])) return false;
+  return true;
+}
+
+// Cross-object checks: ids unique in the whole project (one counter makes them), references
+// resolve, and next_id lies beyond every id so new objects never collide.
+bool CheckReferences(const Project& p, Reader* r) {
+  std::unordered_map<Id, std::string> owner;
+  Id max_id = 0;
+  auto claim = [&](Id id, const std::string& at) {
+    auto [it, inserted] = owner.emplace(id, at);
+    if (!inserted) return r->Fail(Join(at, "id"), "duplicate id " + std::to_string(id) + " (also used by " + it->second + ")");
+    max_id = std::max(max_id, id);
+    return true;
+  };
+  std::set<Id> image_ids, box_ids;
+  for (size_t i = 0; i < p.images.size(); ++i) {
+    if (!claim(p.images[i].id, Index("images", i))) return false;
+    image_ids.insert(p.images[i].id);
+  }
+  for (size_t i = 0; i < p.boxes.size(); ++i) {
+    if (!claim(p.boxes[i].id, Index("boxes", i))) return false;
+    box_ids.insert(p.boxes[i].id);
+  }
+  for (size_t i = 0; i < p.segments.size(); ++i) {
+    const std::string at = Index("segments", i);
+    if (!claim(p.segments[i].id, at)) return false;
+    if (!image_ids.count(p.segments[i].image_id))
+      return r->Fail(Join(at, "image_id"), "refers to a missing image " + std::to_string(p.segments[i].image_id));
+  }
+  for (size_t i = 0; i < p.pins.size(); ++i) {
+    const std::string at = Index("pins", i);
+    if (!claim(p.pins[i].id, at)) return false;
+    if (!image_ids.count(p.pins[i].image_id))
+      return r->Fail(Join(at, "image_id"), "refers to a missing image " + std::to_string(p.pins[i].image_id));
+    if (!box_ids.count(p.pins[i].box_id))
+      return r->Fail(Join(at, "box_id"), "refers to a missing box " + std::to_string(p.pins[i].box_id));
+  }
+  if (p.next_id <= max_id)
+    return r->Fail("next_id", "must be greater than every id (" + std::to_string(p.next_id) +
+                                  " <= " + std::to_string(max_id) + ")");
+  return true;
+}
+
+// Migration: each step upgrades a document by one version, in place, so that reading only
+// ever deals with the current layout. kMigrationSteps[k] turns version k + 1 into k + 2.
+// When version 2 arrives: bump Project::kFormatVersion and append the step from 1 to 2 here.
+using MigrationStep = bool (*)(Json* doc, std::string* error);
+constexpr std::array<MigrationStep, Project::kFormatVersion - 1> kMigrationSteps = {};
+
+bool MigrateToCurrent(Json* doc, int version, std::string* error) {
+  for (int v = version; v < Project::kFormatVersion; ++v) {
+    if (!kMigrationSteps[static_cast<size_t>(v - 1)](doc, error)) {
+      *error = "upgrading from version " + std::to_string(v) + ": " + *error;
+      return false;
+    }
+    (*doc)["version"] = v + 1;
+  }
+  return true;
+}
+
+bool ReadProject(Json& root, Reader* r, Project* p) {
+  if (!root.is_object()) return r->Fail("", "expected a JSON object, found " + Reader::TypeName(root));
+  std::string format;
+  const Json* fmt = root.contains("format") ? &root["format"] : nullptr;
+  if (!fmt) return r->Fail("format", "missing field: this is not a Facet project file");
+  if (!fmt->is_string() || fmt->get<std::string>() != kFormatName)
+    return r->Fail("format", "expected \"" + std::string(kFormatName) + "\": this is not a Facet project file");
+  const Json* version = r->Field(root, "", "version");
+  if (!version) return false;
+  if (version->is_number_unsigned() && version->get<std::uint64_t>() > Project::kFormatVersion)
+    return r->Fail("version", "written by a newer Facet: version " + version->dump() +
+                                  ", this build reads up to " + std::to_string(Project::kFormatVersion));
+  if (!version->is_number_unsigned() || version->get<std::uint64_t>() < 1)
+    return r->Fail("version", "expected a positive integer, found " + Reader::Describe(*version));
+  std::string migrate_error;
+  if (!MigrateToCurrent(&root, version->get<int>(), &migrate_error)) return r->Fail("", migrate_error);
+
+  if (!r->Object(root, "", {"format", "version", "units", "next_id", "images", "segments", "boxes", "pins"}) ||
+      !r->String(root, "", "units", &p->units) || !r->IdField(root, "", "next_id", &p->next_id) ||
+      !ReadList(root, "images", r, ReadImage, &p->images) ||
+      !ReadList(root, "segments", r, ReadSegment, &p->segments) ||
+      !ReadList(root, "boxes", r, ReadBox, &p->boxes) || !ReadList(root, "pins", r, ReadPin, &p->pins))
+    return false;
+  return CheckReferences(*p, r);
+}
+
+// nlohmann reports a byte offset; people look for lines and columns.
+std::string LineColumn(const std::string& text, size_t byte) {
+  // `byte` counts the characters read, so the offending one is at byte - 1.
+  const size_t pos = std::min(byte == 0 ? 0 : byte - 1, text.size());
+  size_t line = 1, line_start = 0;
+  for (size_t i = 0; i < pos; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      line_start = i + 1;
+    }
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(pos - line_start + 1);
+}
+
+std::string ParseErrorText(const nlohmann::json::parse_error& e) {
+  // Drop nlohmann's "[json.exception...] parse error at ...: " prefix; we give our own position.
+  std::string what = e.what();
+  const size_t syntax = what.find("syntax error");
+  if (syntax != std::string::npos) return what.substr(syntax);
+  const size_t colon = what.rfind(": ");
+  return colon == std::string::npos ? what : what.substr(colon + 2);
+}
+
+bool ReadWholeFile(const std::string& path, std::string* bytes, std::string* error) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    *error = "cannot open " + path + ": it is a folder";
+    return false;
+  }
+  FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) {
+    *error = "cannot open " + path + ": " + ErrnoText(errno);
+    return false;
+  }
+  bytes->clear();
+  char buffer[1 << 16];
+  size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) bytes->append(buffer, n);
+  const bool failed = std::ferror(f);
+  const int err = errno;
+  std::fclose(f);
+  if (failed) {
+    *error = "cannot read " + path + ": " + ErrnoText(err);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::string ProjectToJson(const Project& project) {
+  Writer writer;
+  // Replacing invalid UTF-8 keeps this total; SaveProject refuses such text before it gets here.
+  return WriteProject(project, &writer).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+}
+
+std::string CheckProjectSavable(const Project& project) {
+  Writer writer;
+  WriteProject(project, &writer);
+  return writer.error();
+}
+
+ProjectLoadResult ProjectFromJson(const std::string& text) {
+  ProjectLoadResult result;
+  try {
+    if (text.find_first_not_of(" \t\r\n") == std::string::npos) {
+      result.error = "line 1, column 1: the file is empty";
+      return result;
+    }
+    Json root = Json::parse(text);
+    Reader reader(&result.warnings);
+    if (!ReadProject(root, &reader, &result.project)) {
+      result.error = reader.error();
+      result.project = Project();
+    }
+  } catch (const nlohmann::json::parse_error& e) {
+    result.error = LineColumn(text, e.byte) + ": " + ParseErrorText(e);
+  } catch (const std::exception& e) {
+    result.error = std::string("cannot read the project: ") + e.what();
+  }
+  if (!result.ok()) result.project = Project();
+  return result;
+}
+
+std::string SaveProject(const Project& project, const std::string& path) {
+  std::string error = CheckProjectSavable(project);
+  if (!error.empty()) return "cannot save " + path + ": " + error;
+  const std::string text = ProjectToJson(project);
+  // A file that would not load again is worse than no save: the old file stays instead.
+  const ProjectLoadResult check = ProjectFromJson(text);
+  if (!check.ok()) return "cannot save " + path + ": the project is inconsistent: " + check.error;
+  if (!(check.project == project)) return "cannot save " + path + ": the saved text does not read back equal";
+  return WriteFileAtomically(path, text);
+}
+
+ProjectLoadResult LoadProject(const std::string& path) {
+  ProjectLoadResult result;
+  std::string bytes;
+  if (!ReadWholeFile(path, &bytes, &result.error)) return result;
+  result = ProjectFromJson(bytes);
+  if (!result.ok()) {
+    result.error = path + ": " + result.error;
+    return result;
+  }
+  for (size_t i = 0; i < result.project.images.size(); ++i) {
+    const Image& image = result.project.images[i];
+    const std::string resolved = ResolveImagePath(path, image.path);
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(resolved, ec))
+      result.warnings.push_back("images[" + std::to_string(i) + "]: image file not found: " + resolved);
+  }
+  return result;
+}
+
+std::string ResolveImagePath(const std::string& project_path, const std::string& image_path) {
+  namespace fs = std::filesystem;
+  if (image_path.empty()) return image_path;
+  const fs::path image(image_path);
+  if (image.is_absolute()) return image.lexically_normal().string();
+  return (fs::path(project_path).parent_path() / image).lexically_normal().string();
+}
+
+std::string RelativeImagePath(const std::string& project_path, const std::string& image_file_path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path folder = fs::absolute(fs::path(project_path), ec).parent_path();
+  if (ec) return fs::path(image_file_path).generic_string();
+  const fs::path image = fs::absolute(fs::path(image_file_path), ec);
+  if (ec) return fs::path(image_file_path).generic_string();
+  const fs::path relative = image.lexically_normal().lexically_relative(folder.lexically_normal());
+  return relative.empty() ? image.lexically_normal().generic_string() : relative.generic_string();
+}
+
+void RebaseImagePaths(const std::string& old_project_path, const std::string& new_project_path,
+                      Project* project) {
+  for (Image& image : project->images) {
+    if (image.path.empty()) continue;
+    std::error_code ec;
+    const std::string absolute =
+        std::filesystem::absolute(ResolveImagePath(old_project_path, image.path), ec).string();
+    if (!ec) image.path = RelativeImagePath(new_project_path, absolute);
+  }
+}
+
+std::string WriteFileAtomically(const std::string& path, const std::string& bytes) {
+  namespace fs = std::filesystem;
+  std::string temp = path + ".tmp-XXXXXX";
+  const int fd = ::mkstemp(temp.data());
+  if (fd < 0) return "cannot create a temporary file beside " + path + ": " + ErrnoText(errno);
+  auto fail = [&](const std::string& what, int err) {
+    ::close(fd);
+    ::unlink(temp.c_str());
+    return "cannot save " + path + ": " + what + ": " + ErrnoText(err);
+  };
+  // mkstemp makes the file private (0600); keep the replaced file's mode, else the usual 0644.
+  struct stat existing {};
+  const mode_t mode = ::stat(path.c_str(), &existing) == 0 && S_ISREG(existing.st_mode)
+                          ? (existing.st_mode & 07777)
+                          : 0644;
+  if (::fchmod(fd, mode) != 0) return fail("setting permissions", errno);
+  size_t written = 0;
+  while (written < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return fail("writing", errno);
+    }
+    written += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0) return fail("flushing to disk", errno);
+  if (::close(fd) != 0) {
+    const int err = errno;
+    ::unlink(temp.c_str());
+    return "cannot save " + path + ": closing: " + ErrnoText(err);
+  }
+  if (::rename(temp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(temp.c_str());
+    return "cannot save " + path + ": replacing the file: " + ErrnoText(err);
+  }
+  // Make the rename itself durable; failure here does not undo a completed save.
+  const fs::path folder = fs::path(path).parent_path();
+  const int dir_fd = ::open(folder.empty() ? "." : folder.c_str(), O_RDONLY | O_DIRECTORY);
+  if (dir_fd >= 0) {
+    ::fsync(dir_fd);
+    ::close(dir_fd);
+  }
+  return "";
+}
+
+}  // namespace facet
