@@ -55,7 +55,9 @@ struct TextureBakeSummary {
 // Bakes a textured mesh. `photos[i]` holds the pixels of project.images[i] (an empty image
 // for a photo that is not loaded). A face is textured from the calibrated image that sees
 // it best: in front of the camera, facing it, and largest projected area times cosine of
-// the view angle.
+// the view angle. Boxes other than the face's own hide parts of it (sampled), lowering the
+// score. On failure (bad options, photos.size() != images.size(), atlas overflow) *mesh is the
+// untextured mesh and the summary says why.
 TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<ImageRgba8>& photos,
                                     const TextureBakeOptions& options, TexturedMesh* mesh);
 
