@@ -1,0 +1,59 @@
+// The input-script driver of the offscreen mode: a small text format, one command per line,
+// '#' starts a comment. Parsing expands every command into frame steps; each step's input
+// is applied at the start of one frame, so ImGui sees every press and release.
+//
+//   frames N                      N frames with no new input
+//   move X Y                      mouse position (screen px)
+//   down|up left|right|middle     press / release a button
+//   click BUTTON X Y              move and press (1 frame), release (1 frame)
+//   drag BUTTON X1 Y1 X2 Y2 STEPS press at 1, move in STEPS frames to 2, release
+//   wheel DY [X Y]                vertical wheel (positive: away from the user), optional move
+//   key [ctrl+][shift+][alt+]KEY  press (1 frame), release (1 frame); e.g. key ctrl+z
+//   type TEXT                     text characters for the active text field (1 frame)
+//   hold|release shift|ctrl|alt   keep a modifier down / let it go
+//   command NAME [ARGS]           undo, redo, save PATH, open PATH, tool NAME,
+//                                 select-image INDEX, fit, export PATH
+//   screenshot PATH               write a PNG of the frame just rendered
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace facet::app {
+
+// Key codes are GLFW's (letters are their upper-case ASCII codes) in both modes, so panels
+// can test io.KeysDown the same way with and without a window.
+struct ScriptKey {
+  int key_code = 0;
+  bool ctrl = false, shift = false, alt = false;
+  unsigned character = 0;  // text input sent along with the key (0: none)
+};
+
+struct ScriptStep {
+  int line = 0;  // source line, for error messages
+  std::optional<std::array<float, 2>> mouse_pos;
+  std::array<std::optional<bool>, 3> mouse_down;  // left, right, middle: press / release
+  float wheel = 0.0f;
+  std::optional<ScriptKey> key_press;  // held during this step only
+  std::string text;                    // characters typed this step
+  std::optional<bool> hold_shift, hold_ctrl, hold_alt;
+  std::string command;  // app command name; empty for none
+  std::vector<std::string> command_args;
+  std::string screenshot_path;  // written after this step's frame is rendered
+};
+
+struct Script {
+  std::vector<ScriptStep> steps;
+};
+
+// Returns false with "line N: what is wrong" in *error for unknown commands or bad arguments.
+bool ParseScript(const std::string& text, Script* script, std::string* error);
+bool LoadScript(const std::string& path, Script* script, std::string* error);
+
+// The GLFW key code for a key name ("a".."z", "0".."9", "delete", "escape", "f1", ...), or
+// -1 for an unknown name.
+int KeyCodeFromName(const std::string& name);
+
+}  // namespace facet::app
