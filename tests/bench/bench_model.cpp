@@ -1,0 +1,106 @@
+// Timings of what runs after every edit and during a drag, with OpenCV's nearest
+// equivalents in the same run as the reference.
+#include <benchmark/benchmark.h>
+
+#include <opencv2/calib3d.hpp>
+
+#include "core/calibrate_vp.h"
+#include "core/model_update.h"
+#include "core/scene_solve.h"
+#include "core/textured_mesh.h"
+#include "tests/synthetic_scene.h"
+
+namespace {
+
+using facet::testing::MakeBoxScene;
+using facet::testing::SyntheticSceneOptions;
+
+std::vector<facet::Segment> SceneSegments(const facet::Project& p) { return p.segments; }
+
+void BM_CalibrateThreeVanishingPoints(benchmark::State& state) {
+  SyntheticSceneOptions o;
+  o.noise_px = 0.5;
+  o.extra_lines_per_axis = static_cast<int>(state.range(0));
+  const auto scene = MakeBoxScene(o);
+  facet::VpCalibrationOptions options;
+  options.width_px = o.width_px;
+  options.height_px = o.height_px;
+  const auto segments = SceneSegments(scene.project);
+  for (auto _ : state) benchmark::DoNotOptimize(facet::CalibrateFromVanishingLines(segments, options));
+  state.counters["segments"] = static_cast<double>(segments.size());
+}
+BENCHMARK(BM_CalibrateThreeVanishingPoints)->Arg(4)->Arg(13)->Unit(benchmark::kMicrosecond);
+
+// One drag step: a pin moved by a pixel, calibration plus a warm-started solve of a few
+// iterations, exactly what the app runs per frame while a pin is dragged.
+void BM_DragStep(benchmark::State& state) {
+  SyntheticSceneOptions o;
+  o.noise_px = 0.5;
+  auto scene = MakeBoxScene(o);
+  facet::Project current;
+  facet::ModelUpdateOptions cold;
+  facet::UpdateModel(scene.project, cold, &current);
+  facet::ModelUpdateOptions drag;
+  drag.solve.warm_start = true;
+  drag.solve.max_iterations = 5;
+  int step = 0;
+  for (auto _ : state) {
+    current.pins[0].uv_px.x() += (step++ % 2 == 0) ? 1.0 : -1.0;
+    facet::Project next;
+    benchmark::DoNotOptimize(facet::UpdateModel(current, drag, &next));
+    current = std::move(next);
+  }
+}
+BENCHMARK(BM_DragStep)->Unit(benchmark::kMicrosecond);
+
+void BM_SolveSceneCold(benchmark::State& state) {
+  SyntheticSceneOptions o;
+  o.noise_px = 0.5;
+  const auto scene = MakeBoxScene(o);
+  facet::SceneSolveOptions options;
+  for (auto _ : state) {
+    facet::Project solved;
+    benchmark::DoNotOptimize(facet::SolveScene(scene.project, options, &solved));
+  }
+}
+BENCHMARK(BM_SolveSceneCold)->Unit(benchmark::kMicrosecond);
+
+// Reference: OpenCV's iterative PnP on the same 8 pins (6 pose parameters, known box), the
+// closest off-the-shelf problem to our camera-and-box solve (3 + 2 parameters).
+void BM_OpenCvSolvePnPReference(benchmark::State& state) {
+  SyntheticSceneOptions o;
+  o.noise_px = 0.5;
+  const auto scene = MakeBoxScene(o);
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> image;
+  const auto corners = facet::BoxCornersInWorld(scene.true_box);
+  for (const auto& pin : scene.project.pins) {
+    object.emplace_back(corners[pin.corner].x(), corners[pin.corner].y(), corners[pin.corner].z());
+    image.emplace_back(pin.uv_px.x(), pin.uv_px.y());
+  }
+  const Eigen::Matrix3d k = scene.true_camera.K();
+  const cv::Matx33d camera(k(0, 0), 0, k(0, 2), 0, k(1, 1), k(1, 2), 0, 0, 1);
+  for (auto _ : state) {
+    cv::Vec3d rvec, tvec;
+    benchmark::DoNotOptimize(cv::solvePnP(object, image, camera, cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_ITERATIVE));
+  }
+}
+BENCHMARK(BM_OpenCvSolvePnPReference)->Unit(benchmark::kMicrosecond);
+
+void BM_BakeTexture(benchmark::State& state) {
+  const auto scene = MakeBoxScene();
+  facet::ImageRgba8 photo;
+  photo.width = scene.project.images[0].width_px;
+  photo.height = scene.project.images[0].height_px;
+  photo.pixels.assign(static_cast<size_t>(photo.width) * photo.height * 4, 128);
+  const std::vector<facet::ImageRgba8> photos = {photo};
+  for (auto _ : state) {
+    facet::TexturedMesh mesh;
+    benchmark::DoNotOptimize(facet::BakeTexturedMesh(scene.project, photos, facet::TextureBakeOptions{}, &mesh));
+  }
+}
+BENCHMARK(BM_BakeTexture)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
