@@ -1,8 +1,805 @@
-// Placeholder until the image panel lands.
 #include "app/image_panel.h"
 
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+#include <imgui_internal.h>  // SetItemUsingMouseWheel: the view, not the window, takes the wheel
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+
+#include "app/image_tiles.h"
+#include "app/overlay_draw.h"
+
 namespace facet::app {
-void DrawImagePanel(AppState*) {}
-ImageViewReport LastImageViewReport() { return {}; }
-void ShutdownImagePanel() {}
+namespace {
+
+constexpr float kMinZoom = 1.0f / 1024.0f;
+constexpr float kMaxZoom = 64.0f;
+constexpr float kWheelZoomStep = 1.2f;
+constexpr float kFitMarginPx = 8.0f;
+constexpr double kPickRadiusPx = 6.0;
+constexpr double kCornerPickRadiusPx = 8.0;
+constexpr double kMinSegmentLengthPx = 3.0;  // shorter new segments are accidental clicks
+constexpr double kDragStartPx = 2.0;         // motion before a press becomes a drag
+constexpr float kLoupeSizePx = 220.0f;
+constexpr float kLoupeOffsetPx = 28.0f;
+constexpr float kMinLoupeMagnification = 2.0f;
+constexpr float kMaxLoupeMagnification = 32.0f;
+constexpr ImU32 kViewBackground = IM_COL32(38, 38, 42, 255);
+
+// Per image: the view transform (UI state, never part of the document).
+struct ViewState {
+  bool initialized = false;
+  bool fitted = false;  // refit when the panel is resized while this holds
+  float zoom = 1.0f;
+  ImVec2 origin{0, 0};
+  ImVec2 last_size{0, 0};
+};
+
+// GL textures of one photo, and which pixels they were made from.
+struct CachedPhoto {
+  const std::uint8_t* pixels = nullptr;
+  int width = 0, height = 0;
+  TiledTexture texture;
+};
+
+enum class DragKind { kNone, kPan, kNewSegment, kMoveEndpoint, kMoveSegment, kMovePin, kPlacePin };
+
+struct Interaction {
+  DragKind kind = DragKind::kNone;
+  int button = 0;
+  Id image_id = kNoId;
+  bool began = false;        // BeginDrag was called (edit drags) / motion passed the threshold
+  bool place_on_click = false;  // kPlacePin: a release without motion pins the corner there
+  Id target_id = kNoId;      // segment or pin
+  int endpoint = -1;
+  Id box_id = kNoId;
+  int corner = -1;
+  Axis axis = Axis::kX;
+  ImVec2 press_screen{0, 0};
+  Eigen::Vector2d press_uv = Eigen::Vector2d::Zero();
+  Eigen::Vector2d grab_offset = Eigen::Vector2d::Zero();  // item position minus press position
+  Eigen::Vector2d original_a = Eigen::Vector2d::Zero(), original_b = Eigen::Vector2d::Zero();
+  Eigen::Vector2d last_uv = Eigen::Vector2d::Constant(1e300);
+};
+
+struct PanelState {
+  std::map<Id, ViewState> views;
+  std::map<Id, CachedPhoto> textures;
+  Interaction interaction;
+  OverlayOptions overlay;
+  float loupe_magnification = 4.0f;
+  Id shown_tab = kNoId;
+  Id context_segment = kNoId;
+  bool fit_requested = false;
+  ImageViewReport report;
+};
+
+PanelState& Panel() {
+  static PanelState panel;
+  return panel;
+}
+
+Eigen::Vector2d ToEigen(ImVec2 p) { return {p.x, p.y}; }
+
+std::string FileName(const std::string& path) {
+  const size_t slash = path.find_last_of("/\\");
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+ViewTransform TransformOf(const ViewState& view) { return ViewTransform{view.origin, view.zoom}; }
+
+Eigen::Vector2d MouseUv(const ViewState& view) {
+  double u, v;
+  TransformOf(view).ToImage(ImGui::GetIO().MousePos, &u, &v);
+  return {u, v};
+}
+
+void FitView(ViewState* view, int width_px, int height_px, ImVec2 rect_min, ImVec2 rect_size) {
+  const float avail_w = std::max(1.0f, rect_size.x - 2.0f * kFitMarginPx);
+  const float avail_h = std::max(1.0f, rect_size.y - 2.0f * kFitMarginPx);
+  view->zoom = std::clamp(std::min(avail_w / width_px, avail_h / height_px), kMinZoom, kMaxZoom);
+  // The image spans [-0.5, size - 0.5]: its centre is at ((w - 1) / 2, (h - 1) / 2).
+  const ImVec2 center(rect_min.x + 0.5f * rect_size.x, rect_min.y + 0.5f * rect_size.y);
+  view->origin = ImVec2(center.x - view->zoom * 0.5f * (width_px - 1), center.y - view->zoom * 0.5f * (height_px - 1));
+  view->fitted = true;
+  view->initialized = true;
+  view->last_size = rect_size;
+}
+
+// Zooms keeping the image point under `anchor` (screen) fixed.
+void ZoomAbout(ViewState* view, float new_zoom, ImVec2 anchor) {
+  new_zoom = std::clamp(new_zoom, kMinZoom, kMaxZoom);
+  const float ratio = new_zoom / view->zoom;
+  view->origin = ImVec2(anchor.x - (anchor.x - view->origin.x) * ratio, anchor.y - (anchor.y - view->origin.y) * ratio);
+  view->zoom = new_zoom;
+  view->fitted = false;
+}
+
+const TiledTexture* TextureFor(PanelState* panel, const AppState& state, Id image_id) {
+  auto photo = state.photos.find(image_id);
+  if (photo == state.photos.end() || photo->second.empty()) return nullptr;
+  CachedPhoto& cached = panel->textures[image_id];
+  const ImageRgba8& image = photo->second;
+  if (cached.pixels != image.pixels.data() || cached.width != image.width || cached.height != image.height) {
+    DestroyTiledTexture(&cached.texture);
+    cached.texture = CreateTiledTexture(image);
+    cached.pixels = image.pixels.data();
+    cached.width = image.width;
+    cached.height = image.height;
+  }
+  return &cached.texture;
+}
+
+// Drops textures and views of images that left the project or whose photo went away.
+void CollectGarbage(PanelState* panel, const AppState& state) {
+  const Project& project = state.document.project();
+  for (auto it = panel->textures.begin(); it != panel->textures.end();) {
+    auto photo = state.photos.find(it->first);
+    const bool keep = project.FindImage(it->first) != nullptr && photo != state.photos.end() &&
+                      photo->second.pixels.data() == it->second.pixels;
+    if (keep) {
+      ++it;
+    } else {
+      DestroyTiledTexture(&it->second.texture);
+      it = panel->textures.erase(it);
+    }
+  }
+  for (auto it = panel->views.begin(); it != panel->views.end();) {
+    it = project.FindImage(it->first) ? std::next(it) : panel->views.erase(it);
+  }
+}
+
+const VpCalibrationSummary* CalibrationFor(const AppState& state, Id image_id) {
+  auto it = state.last_update.calibration.find(image_id);
+  return it == state.last_update.calibration.end() ? nullptr : &it->second;
+}
+
+// The residual of a segment from the last calibration, when that calibration still matches
+// the image's segments (the summary lists them in project order).
+bool SegmentResidual(const AppState& state, const Segment& segment, double* residual_px) {
+  const VpCalibrationSummary* calibration = CalibrationFor(state, segment.image_id);
+  if (calibration == nullptr) return false;
+  size_t index = 0, count = 0, found = SIZE_MAX;
+  for (const Segment& s : state.document.project().segments) {
+    if (s.image_id != segment.image_id) continue;
+    if (s.id == segment.id) found = index;
+    ++index;
+    ++count;
+  }
+  if (found == SIZE_MAX || calibration->segment_residuals_px.size() != count) return false;
+  *residual_px = calibration->segment_residuals_px[found];
+  return true;
+}
+
+// The nearest pickable item under the cursor within the pick radius.
+OverlayHover HitTest(const Project& project, const Image& image, const std::vector<ProjectedCorner>& corners,
+                     const ViewTransform& view, ImVec2 mouse, Tool tool) {
+  OverlayHover hover;
+  const Eigen::Vector2d m = ToEigen(mouse);
+  auto screen = [&](const Eigen::Vector2d& uv) { return ToEigen(view.ToScreen(uv.x(), uv.y())); };
+  const bool pick_corners = tool == Tool::kSelect || tool == Tool::kPin;
+  const bool pick_lines = tool == Tool::kSelect;
+  double best = kPickRadiusPx;
+  for (const Pin& pin : project.pins) {
+    if (pin.image_id != image.id || !pick_corners) continue;
+    // Pins win ties with the corner they pin: subtract a small bias.
+    const double d = (screen(pin.uv_px) - m).norm() - 0.5;
+    if (d < best) {
+      best = d;
+      hover = OverlayHover();
+      hover.pin_id = pin.id;
+    }
+  }
+  if (pick_lines) {
+    for (const Segment& segment : project.segments) {
+      if (segment.image_id != image.id) continue;
+      for (int end = 0; end < 2; ++end) {
+        const double d = (screen(end == 0 ? segment.a_px : segment.b_px) - m).norm();
+        if (d < best) {
+          best = d;
+          hover = OverlayHover();
+          hover.segment_id = segment.id;
+          hover.segment_endpoint = end;
+        }
+      }
+    }
+  }
+  if (pick_corners && hover.pin_id == kNoId && hover.segment_id == kNoId) {
+    double best_corner = kCornerPickRadiusPx;
+    for (const ProjectedCorner& corner : corners) {
+      if (!corner.in_front) continue;
+      const double d = (screen(corner.uv_px) - m).norm();
+      if (d < best_corner) {
+        best_corner = d;
+        hover = OverlayHover();
+        hover.box_id = corner.box_id;
+        hover.box_corner = corner.corner;
+      }
+    }
+  }
+  if (pick_lines && hover.pin_id == kNoId && hover.segment_id == kNoId && hover.box_id == kNoId) {
+    double best_line = kPickRadiusPx;
+    for (const Segment& segment : project.segments) {
+      if (segment.image_id != image.id) continue;
+      const double d = DistanceToSegment(m, screen(segment.a_px), screen(segment.b_px));
+      if (d < best_line) {
+        best_line = d;
+        hover = OverlayHover();
+        hover.segment_id = segment.id;
+      }
+    }
+  }
+  return hover;
+}
+
+std::string DescribeHover(const AppState& state, const OverlayHover& hover) {
+  const Project& project = state.document.project();
+  char text[160];
+  if (const Segment* segment = hover.segment_id != kNoId ? project.FindSegment(hover.segment_id) : nullptr) {
+    double residual_px = 0.0;
+    const bool has_residual = SegmentResidual(state, *segment, &residual_px);
+    const char* part = hover.segment_endpoint == 0 ? " end a" : hover.segment_endpoint == 1 ? " end b" : "";
+    if (has_residual) {
+      std::snprintf(text, sizeof(text), "%s line %llu%s, residual %.2f px", AxisName(segment->axis),
+                    static_cast<unsigned long long>(segment->id), part, residual_px);
+    } else {
+      std::snprintf(text, sizeof(text), "%s line %llu%s", AxisName(segment->axis),
+                    static_cast<unsigned long long>(segment->id), part);
+    }
+    return text;
+  }
+  if (const Pin* pin = hover.pin_id != kNoId ? project.FindPin(hover.pin_id) : nullptr) {
+    const Box* box = project.FindBox(pin->box_id);
+    std::snprintf(text, sizeof(text), "pin %llu: %s corner %d at (%.1f, %.1f)",
+                  static_cast<unsigned long long>(pin->id), box ? box->name.c_str() : "?", pin->corner,
+                  pin->uv_px.x(), pin->uv_px.y());
+    return text;
+  }
+  if (hover.box_id != kNoId) {
+    const Box* box = project.FindBox(hover.box_id);
+    std::snprintf(text, sizeof(text), "%s corner %d", box ? box->name.c_str() : "box", hover.box_corner);
+    return text;
+  }
+  return "";
+}
+
+// The project with (box, corner) pinned at uv in `image_id`, replacing an earlier pin of
+// that corner in that image. Returns the pin's id.
+Id PinCorner(Project* project, Id image_id, Id box_id, int corner, const Eigen::Vector2d& uv_px) {
+  for (Pin& pin : project->pins) {
+    if (pin.image_id == image_id && pin.box_id == box_id && pin.corner == corner) {
+      pin.uv_px = uv_px;
+      return pin.id;
+    }
+  }
+  Pin pin;
+  pin.id = project->NewId();
+  pin.image_id = image_id;
+  pin.box_id = box_id;
+  pin.corner = corner;
+  pin.uv_px = uv_px;
+  project->pins.push_back(pin);
+  return pin.id;
+}
+
+void DeleteSelection(AppState* state) {
+  Project edited = state->document.project();
+  const Selection& selection = state->selection;
+  if (selection.segment_id != kNoId && edited.FindSegment(selection.segment_id)) {
+    std::erase_if(edited.segments, [&](const Segment& s) { return s.id == selection.segment_id; });
+    state->selection = Selection();
+    CommitEdit(state, "Delete line", std::move(edited));
+  } else if (selection.pin_id != kNoId && edited.FindPin(selection.pin_id)) {
+    std::erase_if(edited.pins, [&](const Pin& p) { return p.id == selection.pin_id; });
+    state->selection = Selection();
+    CommitEdit(state, "Delete pin", std::move(edited));
+  }
+}
+
+Axis AxisOfTool(Tool tool) {
+  return tool == Tool::kLineY ? Axis::kY : tool == Tool::kLineZ ? Axis::kZ : Axis::kX;
+}
+
+bool IsLineTool(Tool tool) { return tool == Tool::kLineX || tool == Tool::kLineY || tool == Tool::kLineZ; }
+
+// Applies the current mouse position to the item being dragged, as a preview edit.
+void UpdateEditDrag(AppState* state, Interaction* drag, const Eigen::Vector2d& mouse_uv) {
+  const Eigen::Vector2d target = mouse_uv + drag->grab_offset;
+  if ((target - drag->last_uv).norm() == 0.0) return;
+  drag->last_uv = target;
+  Project edited = state->document.project();
+  switch (drag->kind) {
+    case DragKind::kMoveEndpoint:
+      if (Segment* s = edited.FindSegment(drag->target_id)) (drag->endpoint == 0 ? s->a_px : s->b_px) = target;
+      break;
+    case DragKind::kMoveSegment:
+      if (Segment* s = edited.FindSegment(drag->target_id)) {
+        const Eigen::Vector2d delta = mouse_uv - drag->press_uv;
+        s->a_px = drag->original_a + delta;
+        s->b_px = drag->original_b + delta;
+      }
+      break;
+    case DragKind::kMovePin:
+      if (Pin* p = edited.FindPin(drag->target_id)) p->uv_px = target;
+      break;
+    case DragKind::kPlacePin:
+      state->selection.pin_id = PinCorner(&edited, drag->image_id, drag->box_id, drag->corner, target);
+      break;
+    default:
+      return;
+  }
+  UpdateDrag(state, std::move(edited));
+}
+
+const char* DragLabel(DragKind kind) {
+  switch (kind) {
+    case DragKind::kMoveEndpoint: return "Move line end";
+    case DragKind::kMoveSegment: return "Move line";
+    case DragKind::kMovePin: return "Move pin";
+    case DragKind::kPlacePin: return "Pin corner";
+    default: return "Drag";
+  }
+}
+
+bool IsEditDrag(DragKind kind) {
+  return kind == DragKind::kMoveEndpoint || kind == DragKind::kMoveSegment || kind == DragKind::kMovePin ||
+         kind == DragKind::kPlacePin;
+}
+
+// A left press with the current tool: decides what the press will do.
+void StartLeftPress(AppState* state, PanelState* panel, const Image& image, const OverlayHover& hover,
+                    const Eigen::Vector2d& mouse_uv) {
+  Interaction& drag = panel->interaction;
+  drag = Interaction();
+  drag.button = ImGuiMouseButton_Left;
+  drag.image_id = image.id;
+  drag.press_screen = ImGui::GetIO().MousePos;
+  drag.press_uv = mouse_uv;
+  const Project& project = state->document.project();
+  const Tool tool = state->tool;
+  if (IsLineTool(tool)) {
+    drag.kind = DragKind::kNewSegment;
+    drag.axis = AxisOfTool(tool);
+    return;
+  }
+  if (tool != Tool::kSelect && tool != Tool::kPin) return;
+  if (hover.pin_id != kNoId) {
+    const Pin* pin = project.FindPin(hover.pin_id);
+    state->selection = Selection();
+    state->selection.pin_id = hover.pin_id;
+    drag.kind = DragKind::kMovePin;
+    drag.target_id = hover.pin_id;
+    drag.grab_offset = pin->uv_px - mouse_uv;
+    return;
+  }
+  if (hover.segment_id != kNoId) {
+    const Segment* segment = project.FindSegment(hover.segment_id);
+    state->selection = Selection();
+    state->selection.segment_id = hover.segment_id;
+    state->selection.segment_endpoint = hover.segment_endpoint;
+    drag.target_id = hover.segment_id;
+    if (hover.segment_endpoint >= 0) {
+      drag.kind = DragKind::kMoveEndpoint;
+      drag.endpoint = hover.segment_endpoint;
+      drag.grab_offset = (hover.segment_endpoint == 0 ? segment->a_px : segment->b_px) - mouse_uv;
+    } else {
+      drag.kind = DragKind::kMoveSegment;
+      drag.original_a = segment->a_px;
+      drag.original_b = segment->b_px;
+    }
+    return;
+  }
+  if (hover.box_id != kNoId) {
+    // Pressing on a projected corner chooses it; dragging from it pins it where released.
+    state->selection = Selection();
+    state->selection.box_id = hover.box_id;
+    state->selection.box_corner = hover.box_corner;
+    drag.kind = DragKind::kPlacePin;
+    drag.box_id = hover.box_id;
+    drag.corner = hover.box_corner;
+    // Start from where the corner is drawn, so that the first motion does not jump.
+    for (const ProjectedCorner& c : ProjectBoxCorners(project, image)) {
+      if (c.box_id == hover.box_id && c.corner == hover.box_corner) drag.grab_offset = c.uv_px - mouse_uv;
+    }
+    return;
+  }
+  if (tool == Tool::kPin && state->selection.box_id != kNoId && state->selection.box_corner >= 0 &&
+      project.FindBox(state->selection.box_id)) {
+    drag.kind = DragKind::kPlacePin;
+    drag.place_on_click = true;
+    drag.box_id = state->selection.box_id;
+    drag.corner = state->selection.box_corner;
+    return;
+  }
+  if (tool == Tool::kSelect) state->selection = Selection();
+}
+
+void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& mouse_uv) {
+  Interaction& drag = panel->interaction;
+  const ImVec2 mouse = ImGui::GetIO().MousePos;
+  if (drag.kind == DragKind::kNewSegment) {
+    const double length_px = (ToEigen(mouse) - ToEigen(drag.press_screen)).norm();
+    if (length_px >= kMinSegmentLengthPx && state->document.project().FindImage(drag.image_id)) {
+      Project edited = state->document.project();
+      Segment segment;
+      segment.id = edited.NewId();
+      segment.image_id = drag.image_id;
+      segment.axis = drag.axis;
+      segment.a_px = drag.press_uv;
+      segment.b_px = mouse_uv;
+      edited.segments.push_back(segment);
+      state->selection = Selection();
+      state->selection.segment_id = segment.id;
+      CommitEdit(state, std::string("Add ") + AxisName(drag.axis) + " line", std::move(edited));
+    }
+  } else if (IsEditDrag(drag.kind)) {
+    if (drag.began) {
+      EndDrag(state);
+    } else if (drag.kind == DragKind::kPlacePin && drag.place_on_click) {
+      Project edited = state->document.project();
+      const Id pin_id = PinCorner(&edited, drag.image_id, drag.box_id, drag.corner, mouse_uv);
+      state->selection = Selection();
+      state->selection.pin_id = pin_id;
+      state->selection.box_id = drag.box_id;
+      CommitEdit(state, "Pin corner", std::move(edited));
+    }
+    if (drag.kind == DragKind::kPlacePin && (drag.began || drag.place_on_click)) {
+      // The corner is pinned: the next pin starts by choosing a corner again.
+      state->selection.box_corner = -1;
+    }
+  }
+  drag = Interaction();
+}
+
+void DrawSegmentContextMenu(AppState* state, PanelState* panel) {
+  if (!ImGui::BeginPopup("##segment_menu")) return;
+  const Segment* segment = state->document.project().FindSegment(panel->context_segment);
+  if (segment == nullptr) {
+    ImGui::CloseCurrentPopup();
+    ImGui::EndPopup();
+    return;
+  }
+  ImGui::TextDisabled("%s line %llu", AxisName(segment->axis), static_cast<unsigned long long>(segment->id));
+  ImGui::Separator();
+  for (Axis axis : {Axis::kX, Axis::kY, Axis::kZ}) {
+    const std::string label = std::string(AxisName(axis)) + " family";
+    if (ImGui::MenuItem(label.c_str(), nullptr, segment->axis == axis) && segment->axis != axis) {
+      Project edited = state->document.project();
+      edited.FindSegment(panel->context_segment)->axis = axis;
+      CommitEdit(state, std::string("Make ") + AxisName(axis) + " line", std::move(edited));
+      break;  // `segment` points into the replaced project
+    }
+  }
+  if (state->document.project().FindSegment(panel->context_segment) && ImGui::MenuItem("Delete")) {
+    Project edited = state->document.project();
+    std::erase_if(edited.segments, [&](const Segment& s) { return s.id == panel->context_segment; });
+    if (state->selection.segment_id == panel->context_segment) state->selection = Selection();
+    CommitEdit(state, "Delete line", std::move(edited));
+  }
+  ImGui::EndPopup();
+}
+
+// The magnifier: the photo and overlays around the cursor, magnified, with a crosshair on
+// the exact cursor position.
+void DrawLoupe(ImDrawList* draw_list, const PanelState& panel, const TiledTexture* texture, const OverlayInput& overlay,
+               const ViewState& view, ImVec2 rect_min, ImVec2 rect_max, int width_px, int height_px) {
+  const ImVec2 mouse = ImGui::GetIO().MousePos;
+  const float size = std::min({kLoupeSizePx, rect_max.x - rect_min.x - 4.0f, rect_max.y - rect_min.y - 4.0f});
+  if (size < 40.0f) return;
+  // Above-right of the cursor, flipped to stay inside the view.
+  ImVec2 p_min(mouse.x + kLoupeOffsetPx, mouse.y - kLoupeOffsetPx - size);
+  if (p_min.x + size > rect_max.x) p_min.x = mouse.x - kLoupeOffsetPx - size;
+  if (p_min.y < rect_min.y) p_min.y = mouse.y + kLoupeOffsetPx;
+  p_min.x = std::clamp(p_min.x, rect_min.x + 2.0f, rect_max.x - size - 2.0f);
+  p_min.y = std::clamp(p_min.y, rect_min.y + 2.0f, rect_max.y - size - 2.0f);
+  const ImVec2 p_max(p_min.x + size, p_min.y + size);
+  const ImVec2 center(std::floor(p_min.x + 0.5f * size) + 0.5f, std::floor(p_min.y + 0.5f * size) + 0.5f);
+
+  const Eigen::Vector2d uv = MouseUv(view);
+  ViewTransform loupe;
+  loupe.zoom = std::min(view.zoom * panel.loupe_magnification, kMaxZoom * 4.0f);
+  loupe.origin = ImVec2(static_cast<float>(center.x - loupe.zoom * uv.x()), static_cast<float>(center.y - loupe.zoom * uv.y()));
+
+  draw_list->AddRectFilled(ImVec2(p_min.x - 3, p_min.y - 3), ImVec2(p_max.x + 3, p_max.y + 3), IM_COL32(0, 0, 0, 220));
+  draw_list->AddRectFilled(p_min, p_max, kViewBackground);
+  draw_list->PushClipRect(p_min, p_max, true);
+  if (texture != nullptr) {
+    DrawTiledTexture(draw_list, *texture, loupe, p_min, p_max);
+  } else {
+    draw_list->AddRectFilled(loupe.ToScreen(-0.5, -0.5), loupe.ToScreen(width_px - 0.5, height_px - 0.5),
+                             IM_COL32(70, 70, 76, 255));
+  }
+  OverlayOptions options = panel.overlay;
+  options.show_labels = false;
+  DrawImageOverlays(draw_list, overlay, loupe, p_min, p_max, options);
+  // Crosshair with a gap, so the pixel under the cursor stays visible.
+  const float gap = 4.0f;
+  const ImU32 dark = IM_COL32(0, 0, 0, 200), light = IM_COL32(255, 255, 255, 230);
+  for (int pass = 0; pass < 2; ++pass) {
+    const ImU32 c = pass == 0 ? dark : light;
+    const float t = pass == 0 ? 3.0f : 1.0f;
+    draw_list->AddLine(ImVec2(p_min.x, center.y), ImVec2(center.x - gap, center.y), c, t);
+    draw_list->AddLine(ImVec2(center.x + gap, center.y), ImVec2(p_max.x, center.y), c, t);
+    draw_list->AddLine(ImVec2(center.x, p_min.y), ImVec2(center.x, center.y - gap), c, t);
+    draw_list->AddLine(ImVec2(center.x, center.y + gap), ImVec2(center.x, p_max.y), c, t);
+  }
+  char text[96];
+  std::snprintf(text, sizeof(text), "%gx  (%.1f, %.1f)", panel.loupe_magnification, uv.x(), uv.y());
+  DrawShadowedText(draw_list, ImVec2(p_min.x + 5, p_max.y - ImGui::GetTextLineHeight() - 4), light, text);
+  draw_list->PopClipRect();
+  draw_list->AddRect(p_min, p_max, light, 0.0f, 0, 1.0f);
+}
+
+// The tab bar: selects state->active_image_id, and follows it when another panel changes it.
+void DrawTabs(AppState* state, PanelState* panel) {
+  const Project& project = state->document.project();
+  if (!project.FindImage(state->active_image_id)) state->active_image_id = project.images.front().id;
+  const Id requested = state->active_image_id != panel->shown_tab ? state->active_image_id : kNoId;
+  Id shown = kNoId;
+  if (ImGui::BeginTabBar("##image_tabs", ImGuiTabBarFlags_FittingPolicyScroll)) {
+    for (const Image& image : project.images) {
+      std::string label = FileName(image.path);
+      if (label.empty()) label = "image " + std::to_string(image.id);
+      if (state->photo_errors.count(image.id)) label += " (!)";
+      label += "##" + std::to_string(image.id);
+      const ImGuiTabItemFlags flags = image.id == requested ? ImGuiTabItemFlags_SetSelected : 0;
+      if (ImGui::BeginTabItem(label.c_str(), nullptr, flags)) {
+        shown = image.id;
+        ImGui::EndTabItem();
+      }
+    }
+    ImGui::EndTabBar();
+  }
+  // A tab chosen by the user becomes active; a pending request waits until its tab shows.
+  if (shown != kNoId && (requested == kNoId || shown == requested)) state->active_image_id = shown;
+  panel->shown_tab = shown;
+}
+
+void DrawToolbar(PanelState* panel, ViewState* view, bool* fit_now, bool* one_to_one) {
+  ImGui::AlignTextToFramePadding();
+  ImGui::Text("%6.1f%%", view->zoom * 100.0f);
+  ImGui::SameLine();
+  if (ImGui::SmallButton("Fit")) *fit_now = true;
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Fit the image to the panel (F)");
+  ImGui::SameLine();
+  if (ImGui::SmallButton("1:1")) *one_to_one = true;
+  ImGui::SameLine();
+  ImGui::TextDisabled("|");
+  ImGui::SameLine();
+  ImGui::Checkbox("Model", &panel->overlay.show_model);
+  ImGui::SameLine();
+  ImGui::Checkbox("VPs", &panel->overlay.show_vanishing_points);
+  ImGui::SameLine();
+  ImGui::Checkbox("VP lines", &panel->overlay.show_vp_lines);
+  ImGui::SameLine();
+  ImGui::TextDisabled("| loupe %gx (Shift)", panel->loupe_magnification);
+}
+
+std::string ToolHint(const AppState& state) {
+  switch (state.tool) {
+    case Tool::kLineX:
+    case Tool::kLineY:
+    case Tool::kLineZ:
+      return std::string("drag to draw a ") + AxisName(AxisOfTool(state.tool)) + " line";
+    case Tool::kPin:
+      if (state.selection.box_id != kNoId && state.selection.box_corner >= 0) {
+        return "click to pin corner " + std::to_string(state.selection.box_corner);
+      }
+      return "click a box corner, then where it is in the photo";
+    default:
+      return "";
+  }
+}
+
+void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
+  ImGuiIO& io = ImGui::GetIO();
+  ViewState& view = panel->views[image.id];
+  const TiledTexture* texture = TextureFor(panel, *state, image.id);
+  const int width_px = texture ? texture->width : std::max(1, image.width_px);
+  const int height_px = texture ? texture->height : std::max(1, image.height_px);
+
+  bool fit_now = false, one_to_one = false;
+  DrawToolbar(panel, &view, &fit_now, &one_to_one);
+
+  const float status_h = ImGui::GetTextLineHeightWithSpacing();
+  const ImVec2 avail = ImGui::GetContentRegionAvail();
+  const ImVec2 rect_size(std::max(avail.x, 32.0f), std::max(avail.y - status_h, 32.0f));
+  const ImVec2 rect_min = ImGui::GetCursorScreenPos();
+  const ImVec2 rect_max(rect_min.x + rect_size.x, rect_min.y + rect_size.y);
+
+  ImGui::InvisibleButton("##image_view", rect_size,
+                         ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight |
+                             ImGuiButtonFlags_MouseButtonMiddle);
+  ImGui::SetItemUsingMouseWheel();
+  const bool hovered = ImGui::IsItemHovered();
+  const bool focused = ImGui::IsWindowFocused(ImGuiFocusedFlags_RootAndChildWindows);
+  const bool keys_for_us = (hovered || focused) && !io.WantTextInput;
+
+  if (panel->fit_requested) fit_now = true;
+  if (keys_for_us && ImGui::IsKeyPressed(GLFW_KEY_F, false) && !io.KeyCtrl && !io.KeyAlt) fit_now = true;
+  const bool resized = view.last_size.x != rect_size.x || view.last_size.y != rect_size.y;
+  if (!view.initialized || fit_now || (view.fitted && resized)) {
+    FitView(&view, width_px, height_px, rect_min, rect_size);
+    panel->fit_requested = false;
+  }
+  view.last_size = rect_size;
+  if (one_to_one) ZoomAbout(&view, 1.0f, ImVec2(rect_min.x + 0.5f * rect_size.x, rect_min.y + 0.5f * rect_size.y));
+
+  // Wheel: zoom about the cursor; with Shift, the loupe's magnification.
+  if (hovered) {
+    const float wheel = io.KeyShift && io.MouseWheel == 0.0f ? io.MouseWheelH : io.MouseWheel;
+    if (wheel != 0.0f) {
+      if (io.KeyShift) {
+        const float factor = wheel > 0 ? 2.0f : 0.5f;
+        panel->loupe_magnification =
+            std::clamp(panel->loupe_magnification * factor, kMinLoupeMagnification, kMaxLoupeMagnification);
+      } else {
+        ZoomAbout(&view, view.zoom * std::pow(kWheelZoomStep, wheel), io.MousePos);
+      }
+    }
+  }
+
+  const Project& project = state->document.project();
+  const std::vector<ProjectedCorner> corners = ProjectBoxCorners(project, image);
+  ViewTransform transform = TransformOf(view);
+  const Eigen::Vector2d mouse_uv = MouseUv(view);
+  Interaction& drag = panel->interaction;
+  const bool busy = drag.kind != DragKind::kNone;
+  OverlayHover hover;
+  if (hovered && !busy) hover = HitTest(project, image, corners, transform, io.MousePos, state->tool);
+
+  // Presses start an interaction; a drag started elsewhere (another panel) blocks edits.
+  const bool space_down = ImGui::IsKeyDown(ImGui::GetKeyIndex(ImGuiKey_Space));
+  if (hovered && !busy) {
+    if (ImGui::IsMouseClicked(ImGuiMouseButton_Middle) ||
+        (ImGui::IsMouseClicked(ImGuiMouseButton_Left) && space_down)) {
+      drag = Interaction();
+      drag.kind = DragKind::kPan;
+      drag.button = ImGui::IsMouseClicked(ImGuiMouseButton_Middle) ? ImGuiMouseButton_Middle : ImGuiMouseButton_Left;
+    } else if (ImGui::IsMouseClicked(ImGuiMouseButton_Left) && !state->drag_start) {
+      StartLeftPress(state, panel, image, hover, mouse_uv);
+    } else if (ImGui::IsMouseClicked(ImGuiMouseButton_Right) && hover.segment_id != kNoId) {
+      panel->context_segment = hover.segment_id;
+      ImGui::OpenPopup("##segment_menu");
+    }
+  }
+
+  // Ongoing interaction.
+  if (drag.kind == DragKind::kPan) {
+    view.origin = ImVec2(view.origin.x + io.MouseDelta.x, view.origin.y + io.MouseDelta.y);
+    if (io.MouseDelta.x != 0.0f || io.MouseDelta.y != 0.0f) view.fitted = false;
+    if (!ImGui::IsMouseDown(drag.button)) drag = Interaction();
+  } else if (drag.kind != DragKind::kNone) {
+    const double moved_px = (ToEigen(io.MousePos) - ToEigen(drag.press_screen)).norm();
+    if (IsEditDrag(drag.kind) && !drag.began && moved_px >= kDragStartPx && !state->drag_start) {
+      drag.began = true;
+      BeginDrag(state, DragLabel(drag.kind));
+    }
+    if (IsEditDrag(drag.kind) && drag.began && ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
+      CancelDrag(state);
+      if (drag.kind == DragKind::kPlacePin) state->selection.pin_id = kNoId;
+      drag.kind = DragKind::kNone;  // the rest of the press does nothing
+    } else if (drag.kind == DragKind::kNewSegment &&
+               ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
+      drag.kind = DragKind::kNone;
+    } else if (IsEditDrag(drag.kind) && drag.began) {
+      UpdateEditDrag(state, &drag, mouse_uv);
+    }
+    if (ImGui::IsMouseReleased(drag.button) || !ImGui::IsMouseDown(drag.button)) {
+      FinishLeftPress(state, panel, mouse_uv);
+    }
+  } else if (keys_for_us) {
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete), false) ||
+        ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Backspace), false)) {
+      DeleteSelection(state);
+    }
+  }
+  DrawSegmentContextMenu(state, panel);
+
+  // Drawing (the project may have changed above: read it again).
+  transform = TransformOf(view);
+  const Project& current = state->document.project();
+  const Image* current_image = current.FindImage(image.id);
+  if (current_image == nullptr) return;
+  const std::vector<ProjectedCorner> current_corners = ProjectBoxCorners(current, *current_image);
+  OverlayInput overlay;
+  overlay.project = &current;
+  overlay.image = current_image;
+  overlay.calibration = CalibrationFor(*state, image.id);
+  overlay.corners = &current_corners;
+  overlay.selection = state->selection;
+  overlay.hover = hover;
+
+  ImDrawList* draw_list = ImGui::GetWindowDrawList();
+  draw_list->PushClipRect(rect_min, rect_max, true);
+  draw_list->AddRectFilled(rect_min, rect_max, kViewBackground);
+  const ImVec2 image_min = transform.ToScreen(-0.5, -0.5);
+  const ImVec2 image_max = transform.ToScreen(width_px - 0.5, height_px - 0.5);
+  if (texture != nullptr) {
+    DrawTiledTexture(draw_list, *texture, transform, rect_min, rect_max);
+  } else {
+    draw_list->AddRectFilled(image_min, image_max, IM_COL32(70, 70, 76, 255));
+  }
+  draw_list->AddRect(ImVec2(image_min.x - 1, image_min.y - 1), ImVec2(image_max.x + 1, image_max.y + 1),
+                     IM_COL32(0, 0, 0, 255));
+  DrawImageOverlays(draw_list, overlay, transform, rect_min, rect_max, panel->overlay);
+  if (drag.kind == DragKind::kNewSegment) {
+    DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, IM_COL32(0, 0, 0, 200), 4.0f);
+    DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, AxisColor(drag.axis), 2.0f);
+  }
+  if (auto error = state->photo_errors.find(image.id); error != state->photo_errors.end()) {
+    const std::string text = "Cannot show this photo: " + error->second;
+    draw_list->AddText(ImGui::GetFont(), ImGui::GetFontSize(), ImVec2(rect_min.x + 10, rect_min.y + 10),
+                       IM_COL32(255, 110, 110, 255), text.c_str(), nullptr, rect_size.x - 20.0f);
+  } else if (texture == nullptr) {
+    draw_list->AddText(ImVec2(rect_min.x + 10, rect_min.y + 10), IM_COL32(200, 200, 200, 255), "Loading photo...");
+  }
+  if (hovered && io.KeyShift && drag.kind != DragKind::kPan) {
+    DrawLoupe(draw_list, *panel, texture, overlay, view, rect_min, rect_max, width_px, height_px);
+  }
+  draw_list->PopClipRect();
+
+  if (hovered && drag.kind == DragKind::kNone && !io.KeyShift) {
+    const std::string hover_text = DescribeHover(*state, hover);
+    if (!hover_text.empty()) ImGui::SetTooltip("%s", hover_text.c_str());
+  }
+
+  // Status line.
+  const std::string hover_text = DescribeHover(*state, hover);
+  const std::string hint = ToolHint(*state);
+  if (hovered) {
+    ImGui::Text("(%.1f, %.1f) px   %.1f%%   %s%s%s", mouse_uv.x(), mouse_uv.y(), view.zoom * 100.0f,
+                hover_text.c_str(), hover_text.empty() || hint.empty() ? "" : "   ", hint.c_str());
+  } else {
+    ImGui::Text("%d x %d px   %.1f%%   %s", width_px, height_px, view.zoom * 100.0f, hint.c_str());
+  }
+
+  panel->report.image_id = image.id;
+  panel->report.origin_x = view.origin.x;
+  panel->report.origin_y = view.origin.y;
+  panel->report.zoom = view.zoom;
+  panel->report.rect_x = rect_min.x;
+  panel->report.rect_y = rect_min.y;
+  panel->report.rect_w = rect_size.x;
+  panel->report.rect_h = rect_size.y;
+}
+
+}  // namespace
+
+void DrawImagePanel(AppState* state) {
+  PanelState& panel = Panel();
+  CollectGarbage(&panel, *state);
+  const Project& project = state->document.project();
+  if (project.images.empty()) {
+    panel.report = ImageViewReport();
+    ImGui::TextDisabled("No images yet: add a photo to the project to start drawing lines.");
+    return;
+  }
+  DrawTabs(state, &panel);
+  const Image* image = state->document.project().FindImage(state->active_image_id);
+  if (image == nullptr) return;
+  // DrawImageView may replace the project (edits); keep the image by value.
+  const Image image_copy = *image;
+  ImGui::PushID(static_cast<int>(image_copy.id));
+  DrawImageView(state, &panel, image_copy);
+  ImGui::PopID();
+}
+
+ImageViewReport LastImageViewReport() { return Panel().report; }
+
+void RequestImageFit() { Panel().fit_requested = true; }
+
+void ShutdownImagePanel() {
+  PanelState& panel = Panel();
+  for (auto& [id, cached] : panel.textures) DestroyTiledTexture(&cached.texture);
+  panel.textures.clear();
+  panel.views.clear();
+  ShutdownImageTiles();
+}
+
 }  // namespace facet::app

@@ -19,6 +19,8 @@ struct ImageViewReport {
 void DrawImagePanel(AppState* state);
 // The transform used in the last frame.
 ImageViewReport LastImageViewReport();
+// Fits the active image to the panel on the next frame (the F key does the same).
+void RequestImageFit();
 // Frees GL resources (before the context goes away).
 void ShutdownImagePanel();
 

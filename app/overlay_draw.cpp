@@ -1,0 +1,344 @@
+#include "app/overlay_draw.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "core/box.h"
+
+namespace facet::app {
+namespace {
+
+// Camera-frame depth below which an edge is cut: projecting closer points would explode.
+constexpr double kNearDepth = 1e-6;
+// Screen margin (px) added around the clip rectangle before clipping lines, so that thick
+// lines and handles at the border are not cut visibly short.
+constexpr double kClipMarginPx = 8.0;
+
+constexpr ImU32 kPinColor = IM_COL32(255, 70, 200, 255);
+constexpr ImU32 kHighlightColor = IM_COL32(255, 255, 255, 255);
+constexpr ImU32 kShadowColor = IM_COL32(0, 0, 0, 200);
+constexpr ImU32 kHorizonColor = IM_COL32(255, 255, 255, 170);
+
+Eigen::Vector2d ToScreenD(const ViewTransform& view, const Eigen::Vector2d& uv_px) {
+  return {view.origin.x + static_cast<double>(view.zoom) * uv_px.x(),
+          view.origin.y + static_cast<double>(view.zoom) * uv_px.y()};
+}
+
+ImVec2 ToImVec(const Eigen::Vector2d& p) { return ImVec2(static_cast<float>(p.x()), static_cast<float>(p.y())); }
+
+struct ScreenRect {
+  Eigen::Vector2d min, max;
+  bool Contains(const Eigen::Vector2d& p, double margin = 0.0) const {
+    return p.x() >= min.x() - margin && p.y() >= min.y() - margin && p.x() <= max.x() + margin &&
+           p.y() <= max.y() + margin;
+  }
+};
+
+// A screen-space line (double) clipped and drawn.
+void DrawScreenLine(ImDrawList* draw_list, Eigen::Vector2d a, Eigen::Vector2d b, const ScreenRect& rect,
+                    ImU32 color, float thickness_px) {
+  const Eigen::Vector2d margin(kClipMarginPx, kClipMarginPx);
+  if (!ClipSegmentToRect(&a, &b, rect.min - margin, rect.max + margin)) return;
+  draw_list->AddLine(ToImVec(a), ToImVec(b), color, thickness_px);
+}
+
+void DrawDashedScreenLine(ImDrawList* draw_list, Eigen::Vector2d a, Eigen::Vector2d b, const ScreenRect& rect,
+                          ImU32 color, float thickness_px, double dash_px) {
+  const Eigen::Vector2d margin(kClipMarginPx, kClipMarginPx);
+  if (!ClipSegmentToRect(&a, &b, rect.min - margin, rect.max + margin)) return;
+  const double length = (b - a).norm();
+  if (length <= 0.0) return;
+  const Eigen::Vector2d dir = (b - a) / length;
+  for (double s = 0.0; s < length; s += 2.0 * dash_px) {
+    const double e = std::min(length, s + dash_px);
+    draw_list->AddLine(ToImVec(a + s * dir), ToImVec(a + e * dir), color, thickness_px);
+  }
+}
+
+// An infinite image line a*u + b*v + c = 0 drawn across the view.
+void DrawInfiniteImageLine(ImDrawList* draw_list, const Eigen::Vector3d& line, const ViewTransform& view,
+                           const ScreenRect& rect, ImU32 color, float thickness_px, bool dashed) {
+  const double n2 = line.x() * line.x() + line.y() * line.y();
+  if (n2 < 1e-300) return;  // the line at infinity
+  double cu, cv;
+  view.ToImage(ToImVec(0.5 * (rect.min + rect.max)), &cu, &cv);
+  const Eigen::Vector2d center(cu, cv);
+  const double offset = (line.x() * cu + line.y() * cv + line.z()) / n2;
+  const Eigen::Vector2d foot = center - offset * Eigen::Vector2d(line.x(), line.y());
+  const Eigen::Vector2d dir = Eigen::Vector2d(-line.y(), line.x()) / std::sqrt(n2);
+  const double reach_px = 2.0 * (rect.max - rect.min).norm() / view.zoom + 1.0;
+  const Eigen::Vector2d a = ToScreenD(view, foot - reach_px * dir);
+  const Eigen::Vector2d b = ToScreenD(view, foot + reach_px * dir);
+  if (dashed) {
+    DrawDashedScreenLine(draw_list, a, b, rect, color, thickness_px, 10.0);
+  } else {
+    DrawScreenLine(draw_list, a, b, rect, color, thickness_px);
+  }
+}
+
+// Marks a vanishing point: a target when it is in or near the view, else an arrow at the
+// view's border pointing towards it (also for points at infinity, by their direction).
+void DrawVanishingPoint(ImDrawList* draw_list, Axis axis, const Eigen::Vector3d& vp, const ViewTransform& view,
+                        const ScreenRect& rect, bool show_labels) {
+  const ImU32 color = AxisColor(axis);
+  const std::string label = std::string("VP") + AxisName(axis);
+  const Eigen::Vector2d center = 0.5 * (rect.min + rect.max);
+  Eigen::Vector2d direction;
+  const bool finite = std::abs(vp.z()) > 1e-12 * vp.head<2>().norm();
+  if (finite) {
+    const Eigen::Vector2d vp_screen = ToScreenD(view, vp.head<2>() / vp.z());
+    if (rect.Contains(vp_screen, 40.0)) {
+      const ImVec2 p = ToImVec(vp_screen);
+      draw_list->AddCircle(p, 9.0f, kShadowColor, 0, 4.0f);
+      draw_list->AddCircle(p, 9.0f, color, 0, 2.0f);
+      draw_list->AddLine(ImVec2(p.x - 14, p.y), ImVec2(p.x + 14, p.y), color, 1.5f);
+      draw_list->AddLine(ImVec2(p.x, p.y - 14), ImVec2(p.x, p.y + 14), color, 1.5f);
+      if (show_labels) DrawShadowedText(draw_list, ImVec2(p.x + 11, p.y - 22), color, label.c_str());
+      return;
+    }
+    direction = vp_screen - center;
+  } else {
+    direction = vp.head<2>();  // image and screen axes are parallel (positive zoom)
+  }
+  if (direction.norm() < 1e-12) return;
+  direction.normalize();
+  // Where the ray from the centre leaves the rectangle shrunk by the arrow's size.
+  const Eigen::Vector2d half = 0.5 * (rect.max - rect.min) - Eigen::Vector2d(18.0, 18.0);
+  if (half.x() <= 0.0 || half.y() <= 0.0) return;
+  const double s = std::min(std::abs(direction.x()) > 1e-12 ? half.x() / std::abs(direction.x()) : 1e300,
+                            std::abs(direction.y()) > 1e-12 ? half.y() / std::abs(direction.y()) : 1e300);
+  const Eigen::Vector2d tip = center + s * direction;
+  const Eigen::Vector2d normal(-direction.y(), direction.x());
+  const Eigen::Vector2d base = tip - 12.0 * direction;
+  draw_list->AddTriangleFilled(ToImVec(tip), ToImVec(base + 6.0 * normal), ToImVec(base - 6.0 * normal), color);
+  if (show_labels) {
+    const Eigen::Vector2d text_pos = base - 14.0 * direction - Eigen::Vector2d(10.0, 7.0);
+    DrawShadowedText(draw_list, ToImVec(text_pos), color, label.c_str());
+  }
+}
+
+}  // namespace
+
+ImU32 AxisColor(Axis axis, int alpha) {
+  switch (axis) {
+    case Axis::kX: return IM_COL32(255, 60, 60, alpha);
+    case Axis::kY: return IM_COL32(60, 230, 60, alpha);
+    case Axis::kZ: return IM_COL32(70, 140, 255, alpha);
+  }
+  return IM_COL32(255, 255, 255, alpha);
+}
+
+std::vector<ProjectedCorner> ProjectBoxCorners(const Project& project, const Image& image) {
+  std::vector<ProjectedCorner> result;
+  if (!image.camera_calibrated) return result;
+  const Camera& camera = image.camera;
+  for (const Box& box : project.boxes) {
+    const std::array<Eigen::Vector3d, 8> corners = BoxCornersInWorld(box);
+    for (int i = 0; i < 8; ++i) {
+      ProjectedCorner projected;
+      projected.box_id = box.id;
+      projected.corner = i;
+      const Eigen::Vector3d p_in_cam = camera.CamFromWorld(corners[i]);
+      projected.in_front = p_in_cam.z() > kNearDepth;
+      if (projected.in_front) projected.uv_px = camera.Project(corners[i]);
+      result.push_back(projected);
+    }
+  }
+  return result;
+}
+
+bool ClipSegmentToRect(Eigen::Vector2d* a, Eigen::Vector2d* b, const Eigen::Vector2d& rect_min,
+                       const Eigen::Vector2d& rect_max) {
+  // Liang-Barsky: the part of a + t (b - a), t in [0, 1], inside all four half-planes.
+  const Eigen::Vector2d d = *b - *a;
+  double t0 = 0.0, t1 = 1.0;
+  const double p[4] = {-d.x(), d.x(), -d.y(), d.y()};
+  const double q[4] = {a->x() - rect_min.x(), rect_max.x() - a->x(), a->y() - rect_min.y(), rect_max.y() - a->y()};
+  for (int i = 0; i < 4; ++i) {
+    if (p[i] == 0.0) {
+      if (q[i] < 0.0) return false;
+      continue;
+    }
+    const double t = q[i] / p[i];
+    if (p[i] < 0.0) {
+      if (t > t1) return false;
+      t0 = std::max(t0, t);
+    } else {
+      if (t < t0) return false;
+      t1 = std::min(t1, t);
+    }
+  }
+  const Eigen::Vector2d start = *a;
+  *a = start + t0 * d;
+  *b = start + t1 * d;
+  return true;
+}
+
+double DistanceToSegment(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b, double* t) {
+  const Eigen::Vector2d d = b - a;
+  const double len2 = d.squaredNorm();
+  double s = len2 > 0.0 ? (p - a).dot(d) / len2 : 0.0;
+  s = std::clamp(s, 0.0, 1.0);
+  if (t != nullptr) *t = s;
+  return (p - (a + s * d)).norm();
+}
+
+void DrawShadowedText(ImDrawList* draw_list, ImVec2 pos, ImU32 color, const char* text) {
+  draw_list->AddText(ImVec2(pos.x + 1, pos.y + 1), kShadowColor, text);
+  draw_list->AddText(pos, color, text);
+}
+
+void DrawImageLine(ImDrawList* draw_list, const ViewTransform& view, const Eigen::Vector2d& a_px,
+                   const Eigen::Vector2d& b_px, ImVec2 clip_min, ImVec2 clip_max, ImU32 color, float thickness_px) {
+  const ScreenRect rect{{clip_min.x, clip_min.y}, {clip_max.x, clip_max.y}};
+  DrawScreenLine(draw_list, ToScreenD(view, a_px), ToScreenD(view, b_px), rect, color, thickness_px);
+}
+
+void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view,
+                       ImVec2 clip_min, ImVec2 clip_max, const OverlayOptions& options) {
+  if (input.project == nullptr || input.image == nullptr) return;
+  const Project& project = *input.project;
+  const Image& image = *input.image;
+  const ScreenRect rect{{clip_min.x, clip_min.y}, {clip_max.x, clip_max.y}};
+  draw_list->PushClipRect(clip_min, clip_max, true);
+
+  const VpCalibrationSummary* calibration = input.calibration;
+  auto vanishing_point = [&](Axis axis) -> const Eigen::Vector3d* {
+    if (calibration == nullptr) return nullptr;
+    const Eigen::Vector3d& vp = calibration->vanishing_points[static_cast<int>(axis)];
+    return vp.squaredNorm() > 0.0 ? &vp : nullptr;
+  };
+
+  // Horizon and the faint segment-to-VP lines sit under everything else.
+  if (options.show_vanishing_points) {
+    const Eigen::Vector3d* vx = vanishing_point(Axis::kX);
+    const Eigen::Vector3d* vy = vanishing_point(Axis::kY);
+    if (vx != nullptr && vy != nullptr) {
+      DrawInfiniteImageLine(draw_list, vx->cross(*vy), view, rect, kHorizonColor, 1.5f, true);
+    }
+  }
+  if (options.show_segments && options.show_vp_lines) {
+    for (const Segment& segment : project.segments) {
+      if (segment.image_id != image.id) continue;
+      const Eigen::Vector3d* vp = vanishing_point(segment.axis);
+      if (vp == nullptr) continue;
+      const Eigen::Vector2d mid = 0.5 * (segment.a_px + segment.b_px);
+      const ImU32 color = AxisColor(segment.axis, 90);
+      if (std::abs(vp->z()) > 1e-12 * vp->head<2>().norm()) {
+        DrawImageLine(draw_list, view, mid, vp->head<2>() / vp->z(), clip_min, clip_max, color, 1.0f);
+      } else {
+        // A point at infinity: the line through the midpoint along its direction.
+        const Eigen::Vector3d line = Eigen::Vector3d(mid.x(), mid.y(), 1.0).cross(*vp);
+        DrawInfiniteImageLine(draw_list, line, view, rect, color, 1.0f, false);
+      }
+    }
+  }
+
+  // The projected model: edges cut at the near depth so that nothing behind the camera
+  // projects through the centre.
+  if (options.show_model && image.camera_calibrated) {
+    const Camera& camera = image.camera;
+    for (const Box& box : project.boxes) {
+      const std::array<Eigen::Vector3d, 8> corners = BoxCornersInWorld(box);
+      std::array<Eigen::Vector3d, 8> in_cam;
+      for (int i = 0; i < 8; ++i) in_cam[i] = camera.CamFromWorld(corners[i]);
+      const bool selected = input.selection.box_id == box.id;
+      for (const auto& edge : BoxEdges()) {
+        Eigen::Vector3d p = in_cam[edge[0]], q = in_cam[edge[1]];
+        if (p.z() < kNearDepth && q.z() < kNearDepth) continue;
+        if (p.z() < kNearDepth) std::swap(p, q);
+        if (q.z() < kNearDepth) q = p + (q - p) * ((p.z() - kNearDepth) / (p.z() - q.z()));
+        auto project_px = [&](const Eigen::Vector3d& x) {
+          return Eigen::Vector2d(camera.focal_px * x.x() / x.z() + camera.principal_point_px.x(),
+                                 camera.focal_px * x.y() / x.z() + camera.principal_point_px.y());
+        };
+        const Eigen::Vector2d a = ToScreenD(view, project_px(p));
+        const Eigen::Vector2d b = ToScreenD(view, project_px(q));
+        if (selected) DrawScreenLine(draw_list, a, b, rect, IM_COL32(255, 255, 255, 160), kModelEdgeThicknessPx + 3.0f);
+        DrawScreenLine(draw_list, a, b, rect, kModelEdgeColor, kModelEdgeThicknessPx);
+      }
+    }
+  }
+
+  if (options.show_segments) {
+    for (const Segment& segment : project.segments) {
+      if (segment.image_id != image.id) continue;
+      const bool selected = input.selection.segment_id == segment.id;
+      const bool hovered = input.hover.segment_id == segment.id;
+      const Eigen::Vector2d a = ToScreenD(view, segment.a_px);
+      const Eigen::Vector2d b = ToScreenD(view, segment.b_px);
+      const ImU32 color = AxisColor(segment.axis);
+      if (selected || hovered) {
+        DrawScreenLine(draw_list, a, b, rect, selected ? kHighlightColor : IM_COL32(255, 255, 255, 140),
+                       selected ? 5.0f : 4.0f);
+      } else {
+        DrawScreenLine(draw_list, a, b, rect, kShadowColor, 3.5f);
+      }
+      DrawScreenLine(draw_list, a, b, rect, color, 2.0f);
+      for (int end = 0; end < 2; ++end) {
+        const Eigen::Vector2d& p = end == 0 ? a : b;
+        if (!rect.Contains(p, kClipMarginPx)) continue;
+        const bool hot = (hovered && input.hover.segment_endpoint == end) ||
+                         (selected && input.selection.segment_endpoint == end);
+        const float r = hot ? 5.0f : 3.0f;
+        const ImVec2 c = ToImVec(p);
+        draw_list->AddRectFilled(ImVec2(c.x - r - 1, c.y - r - 1), ImVec2(c.x + r + 1, c.y + r + 1), kShadowColor);
+        draw_list->AddRectFilled(ImVec2(c.x - r, c.y - r), ImVec2(c.x + r, c.y + r), hot ? kHighlightColor : color);
+      }
+    }
+  }
+
+  if (options.show_model && input.corners != nullptr) {
+    for (const ProjectedCorner& corner : *input.corners) {
+      if (!corner.in_front) continue;
+      const Eigen::Vector2d p = ToScreenD(view, corner.uv_px);
+      if (!rect.Contains(p, kClipMarginPx)) continue;
+      const bool hot = (input.hover.box_id == corner.box_id && input.hover.box_corner == corner.corner);
+      const bool chosen = (input.selection.box_id == corner.box_id && input.selection.box_corner == corner.corner);
+      const ImVec2 c = ToImVec(p);
+      draw_list->AddCircleFilled(c, 4.0f, kShadowColor);
+      draw_list->AddCircleFilled(c, 3.0f, kModelEdgeColor);
+      if (hot || chosen) draw_list->AddCircle(c, chosen ? 9.0f : 7.0f, kHighlightColor, 0, 2.0f);
+    }
+  }
+
+  if (options.show_pins) {
+    int number = 0;
+    for (const Pin& pin : project.pins) {
+      if (pin.image_id != image.id) continue;
+      ++number;
+      const Eigen::Vector2d p = ToScreenD(view, pin.uv_px);
+      // The residual: from where the user pinned the corner to where the model puts it.
+      if (input.corners != nullptr) {
+        for (const ProjectedCorner& corner : *input.corners) {
+          if (corner.box_id != pin.box_id || corner.corner != pin.corner || !corner.in_front) continue;
+          DrawScreenLine(draw_list, p, ToScreenD(view, corner.uv_px), rect, kPinColor, 1.5f);
+        }
+      }
+      if (!rect.Contains(p, 20.0)) continue;
+      const bool hot = input.hover.pin_id == pin.id || input.selection.pin_id == pin.id;
+      const ImVec2 c = ToImVec(p);
+      draw_list->AddCircle(c, 6.0f, kShadowColor, 0, 4.0f);
+      draw_list->AddCircle(c, 6.0f, hot ? kHighlightColor : kPinColor, 0, 2.0f);
+      draw_list->AddCircleFilled(c, 1.5f, kPinColor);
+      if (options.show_labels) {
+        char text[16];
+        std::snprintf(text, sizeof(text), "%d", number);
+        DrawShadowedText(draw_list, ImVec2(c.x + 7, c.y - 18), hot ? kHighlightColor : kPinColor, text);
+      }
+    }
+  }
+
+  if (options.show_vanishing_points) {
+    for (Axis axis : {Axis::kX, Axis::kY, Axis::kZ}) {
+      if (const Eigen::Vector3d* vp = vanishing_point(axis)) {
+        DrawVanishingPoint(draw_list, axis, *vp, view, rect, options.show_labels);
+      }
+    }
+  }
+  draw_list->PopClipRect();
+}
+
+}  // namespace facet::app

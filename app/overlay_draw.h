@@ -1,0 +1,84 @@
+// What the image panel draws over a photo, as ImDrawList calls under an image-to-screen
+// transform: line segments by family, vanishing points and the horizon, the projected
+// boxes (12 edges, corners) and the pins with their residual lines. Also the projections
+// the panel's hit tests share with the drawing, so that what is picked is what is shown.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include <Eigen/Core>
+#include <imgui.h>
+
+#include "app/app_state.h"
+#include "app/image_tiles.h"
+
+namespace facet::app {
+
+// Colour of the projected model in every image: the shell's screenshot tests look for it.
+constexpr ImU32 kModelEdgeColor = IM_COL32(255, 220, 0, 255);
+constexpr float kModelEdgeThicknessPx = 2.0f;
+
+// Colour of a line family (x red, y green, z blue) with the given alpha.
+ImU32 AxisColor(Axis axis, int alpha = 255);
+
+// A box corner seen by an image's camera; uv_px is meaningful only when in_front.
+struct ProjectedCorner {
+  Id box_id = kNoId;
+  int corner = 0;
+  bool in_front = false;
+  Eigen::Vector2d uv_px = Eigen::Vector2d::Zero();
+};
+
+// All box corners of the project projected with `image`'s camera; empty when the camera is
+// not calibrated.
+std::vector<ProjectedCorner> ProjectBoxCorners(const Project& project, const Image& image);
+
+// Clips the segment a-b (screen coordinates in double, so points far outside the float
+// range still clip correctly) to the rectangle [min, max]. Returns false when nothing is left.
+bool ClipSegmentToRect(Eigen::Vector2d* a, Eigen::Vector2d* b, const Eigen::Vector2d& rect_min,
+                       const Eigen::Vector2d& rect_max);
+
+// Distance from p to the segment a-b, and the parameter t in [0, 1] of the closest point.
+double DistanceToSegment(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                         double* t = nullptr);
+
+struct OverlayOptions {
+  bool show_segments = true;
+  bool show_vanishing_points = true;
+  bool show_vp_lines = false;  // faint lines from each segment towards its vanishing point
+  bool show_model = true;
+  bool show_pins = true;
+  bool show_labels = true;     // pin numbers, VP names
+};
+
+// What is under the cursor, highlighted in addition to the state's selection.
+struct OverlayHover {
+  Id segment_id = kNoId;
+  int segment_endpoint = -1;  // 0 = a, 1 = b, -1 = the segment itself
+  Id pin_id = kNoId;
+  Id box_id = kNoId;
+  int box_corner = -1;
+};
+
+struct OverlayInput {
+  const Project* project = nullptr;
+  const Image* image = nullptr;
+  const VpCalibrationSummary* calibration = nullptr;  // may be null
+  const std::vector<ProjectedCorner>* corners = nullptr;  // from ProjectBoxCorners
+  Selection selection;
+  OverlayHover hover;
+};
+
+// Draws every overlay of input.image into the screen rectangle [clip_min, clip_max].
+void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view,
+                       ImVec2 clip_min, ImVec2 clip_max, const OverlayOptions& options);
+
+// A line between two image points, clipped to the rectangle (for previews).
+void DrawImageLine(ImDrawList* draw_list, const ViewTransform& view, const Eigen::Vector2d& a_px,
+                   const Eigen::Vector2d& b_px, ImVec2 clip_min, ImVec2 clip_max, ImU32 color, float thickness_px);
+
+// Text with a dark shadow so it reads on any photo.
+void DrawShadowedText(ImDrawList* draw_list, ImVec2 pos, ImU32 color, const char* text);
+
+}  // namespace facet::app
