@@ -17,8 +17,11 @@ namespace facet {
 struct SceneSolveOptions {
   int max_iterations = 100;
   double function_tolerance = 1e-14;   // relative decrease of the cost that stops the solve
-  double gradient_tolerance = 1e-14;   // max |J^T r| that stops the solve
-  double parameter_tolerance = 1e-14;  // relative step size that stops the solve
+  // max |J^T r| that stops the solve, with J's columns scaled to unit norm (so in px and
+  // independent of the scene's units)
+  double gradient_tolerance = 1e-14;
+  // relative step size that stops the solve, measured with the same column scaling
+  double parameter_tolerance = 1e-14;
   double initial_lambda = 1e-4;
   // Use the current parameter values as the start (interactive path). When false, a linear
   // initialisation computes camera centres and box sizes first.
@@ -41,12 +44,16 @@ struct SceneSolveSummary {
   std::string message;
   std::vector<std::string> warnings;  // e.g. "the box depth is not determined by the pins"
   int iterations = 0;
-  double initial_cost = 0.0;  // 0.5 * sum of squared residuals (px^2)
+  double initial_cost = 0.0;  // 0.5 * sum of squared residuals (px^2) at the project's values
   double final_cost = 0.0;
+  // Over the pins that took part: root mean square and maximum of the distance (px) between
+  // the projected corner and the pin.
   double reprojection_rms_px = 0.0;
   double reprojection_max_px = 0.0;
-  int num_residuals = 0;
+  int num_residuals = 0;   // 2 per pin that took part
   int num_parameters = 0;
+  int num_skipped_pins = 0;  // pins in uncalibrated images or naming missing objects
+  bool linear_initialization_used = false;  // false for a warm start or when it fell back
   double time_ms = 0.0;
   // Per pin, in project.pins order: reprojection error in px after the solve (NaN for pins
   // that did not take part).

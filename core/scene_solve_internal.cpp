@@ -1,0 +1,497 @@
+#include "core/scene_solve_internal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include <Eigen/Dense>
+#include <Eigen/SVD>
+
+#include "core/box.h"
+#include "core/camera.h"
+
+namespace facet::scene_solve_internal {
+namespace {
+
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d s;
+  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return s;
+}
+
+std::string BoxLabel(const Box& box) {
+  return box.name.empty() ? "#" + std::to_string(box.id) : "'" + box.name + "'";
+}
+
+std::string ImageLabel(const Image& image) {
+  return image.path.empty() ? "#" + std::to_string(image.id) : "'" + image.path + "'";
+}
+
+// "x", "x and y", "x, y and z".
+std::string JoinComponents(const std::vector<int>& components) {
+  static const char* kNames[3] = {"x", "y", "z"};
+  std::string out;
+  for (size_t i = 0; i < components.size(); ++i) {
+    if (i > 0) out += (i + 1 == components.size()) ? " and " : ", ";
+    out += kNames[components[i]];
+  }
+  return out;
+}
+
+}  // namespace
+
+SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
+  SceneProblem problem;
+  const int num_images = static_cast<int>(project.images.size());
+  const int num_boxes = static_cast<int>(project.boxes.size());
+  auto image_index = [&](Id id) {
+    for (int i = 0; i < num_images; ++i) if (project.images[i].id == id) return i;
+    return -1;
+  };
+  auto box_index = [&](Id id) {
+    for (int i = 0; i < num_boxes; ++i) if (project.boxes[i].id == id) return i;
+    return -1;
+  };
+
+  // First pass: which pins take part, and which images and boxes they use.
+  std::vector<std::pair<int, int>> pin_targets(project.pins.size(), {-1, -1});
+  std::vector<char> image_used(num_images, 0), box_used(num_boxes, 0);
+  std::map<int, int> uncalibrated_pin_counts;
+  for (size_t p = 0; p < project.pins.size(); ++p) {
+    const Pin& pin = project.pins[p];
+    const int ii = image_index(pin.image_id);
+    const int bi = box_index(pin.box_id);
+    const std::string pin_label = "pin #" + std::to_string(pin.id);
+    if (ii < 0) {
+      problem.warnings.push_back(pin_label + " refers to a missing image and was skipped");
+    } else if (bi < 0) {
+      problem.warnings.push_back(pin_label + " refers to a missing box and was skipped");
+    } else if (pin.corner < 0 || pin.corner > 7) {
+      problem.warnings.push_back(pin_label + " names corner " + std::to_string(pin.corner) +
+                                 ", which is not in 0..7, and was skipped");
+    } else if (!project.images[ii].camera_calibrated) {
+      ++uncalibrated_pin_counts[ii];
+    } else {
+      pin_targets[p] = {ii, bi};
+      image_used[ii] = 1;
+      box_used[bi] = 1;
+      continue;
+    }
+    ++problem.num_skipped_pins;
+  }
+  for (const auto& [ii, count] : uncalibrated_pin_counts) {
+    problem.warnings.push_back(std::to_string(count) + (count == 1 ? " pin" : " pins") + " in image " +
+                               ImageLabel(project.images[ii]) +
+                               " skipped: the image is not calibrated");
+  }
+
+  // Blocks in project order, so that the parameter numbering does not depend on pin order.
+  std::vector<int> camera_of_image(num_images, -1), block_of_box(num_boxes, -1);
+  int offset = 0;
+  auto add_parameters = [&](ParameterKind kind, int block, int count, int first_component) {
+    for (int k = 0; k < count; ++k) problem.parameters.push_back({kind, block, first_component + k});
+    const int first = offset;
+    offset += count;
+    return first;
+  };
+  *state = SceneState();
+  for (int i = 0; i < num_images; ++i) {
+    if (!image_used[i]) continue;
+    const Image& image = project.images[i];
+    CameraBlock block;
+    block.image_index = i;
+    block.focal_px = image.camera.focal_px;
+    block.principal_point_px = image.camera.principal_point_px;
+    block.cam_from_world_rotation = image.camera.cam_from_world_rotation;
+    camera_of_image[i] = static_cast<int>(problem.cameras.size());
+    if (!image.pose_locked) {
+      block.center_offset = add_parameters(ParameterKind::kCameraCenter, camera_of_image[i], 3, 0);
+    }
+    problem.cameras.push_back(block);
+    state->camera_centers.push_back(image.camera.CenterInWorld());
+  }
+  for (int i = 0; i < num_boxes; ++i) {
+    if (!box_used[i]) continue;
+    const Box& box = project.boxes[i];
+    BoxBlock block;
+    block.box_index = i;
+    const int b = static_cast<int>(problem.boxes.size());
+    block_of_box[i] = b;
+    for (int k = 0; k < 3; ++k) {
+      if (!box.size_locked[k]) block.size_offset[k] = add_parameters(ParameterKind::kBoxSize, b, 1, k);
+    }
+    if (!box.rotation_locked) block.rotation_offset = add_parameters(ParameterKind::kBoxRotation, b, 3, 0);
+    if (!box.translation_locked) {
+      block.translation_offset = add_parameters(ParameterKind::kBoxTranslation, b, 3, 0);
+    }
+    problem.boxes.push_back(block);
+    state->box_sizes.push_back(box.size);
+    state->box_rotations.push_back(RotationFromAngleAxis(box.rotation));
+    state->box_translations.push_back(box.translation);
+  }
+  problem.num_parameters = offset;
+
+  for (size_t p = 0; p < project.pins.size(); ++p) {
+    const auto [ii, bi] = pin_targets[p];
+    if (ii < 0) continue;
+    Observation obs;
+    obs.pin_index = static_cast<int>(p);
+    obs.camera = camera_of_image[ii];
+    obs.box = block_of_box[bi];
+    obs.corner = project.pins[p].corner;
+    obs.uv_px = project.pins[p].uv_px;
+    problem.observations.push_back(obs);
+  }
+  return problem;
+}
+
+int EvaluateScene(const SceneProblem& problem, const SceneState& state, Eigen::VectorXd* residuals,
+                  Eigen::MatrixXd* jacobian) {
+  const int m = 2 * static_cast<int>(problem.observations.size());
+  residuals->resize(m);
+  if (jacobian != nullptr) jacobian->setZero(m, problem.num_parameters);
+  int num_behind = 0;
+  for (size_t o = 0; o < problem.observations.size(); ++o) {
+    const Observation& obs = problem.observations[o];
+    const CameraBlock& cam = problem.cameras[obs.camera];
+    const BoxBlock& box = problem.boxes[obs.box];
+    const Eigen::Matrix3d& world_from_box = state.box_rotations[obs.box];
+    const Eigen::Vector3d corner_rotated = world_from_box * BoxCornerLocal(state.box_sizes[obs.box], obs.corner);
+    const Eigen::Vector3d corner_in_world = corner_rotated + state.box_translations[obs.box];
+    const Eigen::Vector3d p_in_cam =
+        cam.cam_from_world_rotation * (corner_in_world - state.camera_centers[obs.camera]);
+    if (!(p_in_cam.z() > 0.0)) ++num_behind;
+    const double inv_z = 1.0 / p_in_cam.z();
+    const int row = 2 * static_cast<int>(o);
+    (*residuals)(row) = cam.focal_px * p_in_cam.x() * inv_z + cam.principal_point_px.x() - obs.uv_px.x();
+    (*residuals)(row + 1) = cam.focal_px * p_in_cam.y() * inv_z + cam.principal_point_px.y() - obs.uv_px.y();
+    if (jacobian == nullptr) continue;
+
+    // d uv / d p_in_cam, then through p_in_cam = R_cam (X - C) to d uv / d X.
+    Eigen::Matrix<double, 2, 3> d_uv_d_cam;
+    const double fz = cam.focal_px * inv_z;
+    d_uv_d_cam << fz, 0.0, -fz * p_in_cam.x() * inv_z, 0.0, fz, -fz * p_in_cam.y() * inv_z;
+    const Eigen::Matrix<double, 2, 3> d_uv_d_world = d_uv_d_cam * cam.cam_from_world_rotation;
+    auto block = [&](int col) { return jacobian->block<2, 3>(row, col); };
+    if (cam.center_offset >= 0) block(cam.center_offset) = -d_uv_d_world;
+    for (int k = 0; k < 3; ++k) {
+      if (box.size_offset[k] >= 0 && ((obs.corner >> k) & 1)) {
+        jacobian->block<2, 1>(row, box.size_offset[k]) = d_uv_d_world * world_from_box.col(k);
+      }
+    }
+    // exp([d]x) R q ~ R q + d x (R q): the derivative with respect to d is -[R q]x.
+    if (box.rotation_offset >= 0) block(box.rotation_offset) = -d_uv_d_world * Skew(corner_rotated);
+    if (box.translation_offset >= 0) block(box.translation_offset) = d_uv_d_world;
+  }
+  return num_behind;
+}
+
+void ApplySceneStep(const SceneProblem& problem, const Eigen::VectorXd& delta, SceneState* state) {
+  for (size_t c = 0; c < problem.cameras.size(); ++c) {
+    const int off = problem.cameras[c].center_offset;
+    if (off >= 0) state->camera_centers[c] += delta.segment<3>(off);
+  }
+  for (size_t b = 0; b < problem.boxes.size(); ++b) {
+    const BoxBlock& box = problem.boxes[b];
+    for (int k = 0; k < 3; ++k) {
+      if (box.size_offset[k] >= 0) state->box_sizes[b](k) += delta(box.size_offset[k]);
+    }
+    if (box.rotation_offset >= 0) {
+      state->box_rotations[b] =
+          RotationFromAngleAxis(delta.segment<3>(box.rotation_offset)) * state->box_rotations[b];
+    }
+    if (box.translation_offset >= 0) state->box_translations[b] += delta.segment<3>(box.translation_offset);
+  }
+}
+
+void WriteSceneState(const SceneProblem& problem, const SceneState& state, Project* project) {
+  for (size_t c = 0; c < problem.cameras.size(); ++c) {
+    const CameraBlock& cam = problem.cameras[c];
+    if (cam.center_offset < 0) continue;
+    Camera& camera = project->images[cam.image_index].camera;
+    camera.SetPose(camera.cam_from_world_rotation, state.camera_centers[c]);
+  }
+  for (size_t b = 0; b < problem.boxes.size(); ++b) {
+    const BoxBlock& block = problem.boxes[b];
+    Box& box = project->boxes[block.box_index];
+    for (int k = 0; k < 3; ++k) {
+      if (block.size_offset[k] >= 0) box.size(k) = state.box_sizes[b](k);
+    }
+    if (block.rotation_offset >= 0) box.rotation = AngleAxisFromRotation(state.box_rotations[b]);
+    if (block.translation_offset >= 0) box.translation = state.box_translations[b];
+  }
+}
+
+bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::string* why) {
+  // Unknowns: free sizes, free box translations, free camera translations t = -R C.
+  std::vector<std::array<int, 3>> size_col(problem.boxes.size(), {-1, -1, -1});
+  std::vector<int> translation_col(problem.boxes.size(), -1), camera_col(problem.cameras.size(), -1);
+  int n = 0;
+  for (size_t b = 0; b < problem.boxes.size(); ++b) {
+    for (int k = 0; k < 3; ++k) {
+      if (problem.boxes[b].size_offset[k] >= 0) size_col[b][k] = n++;
+    }
+    if (problem.boxes[b].translation_offset >= 0) {
+      translation_col[b] = n;
+      n += 3;
+    }
+  }
+  for (size_t c = 0; c < problem.cameras.size(); ++c) {
+    if (problem.cameras[c].center_offset >= 0) {
+      camera_col[c] = n;
+      n += 3;
+    }
+  }
+  if (n == 0) {
+    *why = "no size or position is free";
+    return false;
+  }
+
+  const int m = 3 * static_cast<int>(problem.observations.size());
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(m, n);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
+  Eigen::VectorXd current(n);
+  for (size_t o = 0; o < problem.observations.size(); ++o) {
+    const Observation& obs = problem.observations[o];
+    const CameraBlock& cam = problem.cameras[obs.camera];
+    const int row = 3 * static_cast<int>(o);
+    const Eigen::Vector3d ray = Eigen::Vector3d((obs.uv_px.x() - cam.principal_point_px.x()) / cam.focal_px,
+                                                (obs.uv_px.y() - cam.principal_point_px.y()) / cam.focal_px, 1.0)
+                                    .normalized();
+    const Eigen::Matrix3d ray_cross = Skew(ray);
+    const Eigen::Matrix3d m_world = ray_cross * cam.cam_from_world_rotation;
+    const Eigen::Matrix3d& world_from_box = state->box_rotations[obs.box];
+    for (int k = 0; k < 3; ++k) {
+      if (!((obs.corner >> k) & 1)) continue;
+      const Eigen::Vector3d coeff = m_world * world_from_box.col(k);
+      const double size = state->box_sizes[obs.box](k);
+      if (size_col[obs.box][k] >= 0) {
+        a.block<3, 1>(row, size_col[obs.box][k]) = coeff;
+      } else {
+        rhs.segment<3>(row) -= coeff * size;
+      }
+    }
+    if (translation_col[obs.box] >= 0) {
+      a.block<3, 3>(row, translation_col[obs.box]) = m_world;
+    } else {
+      rhs.segment<3>(row) -= m_world * state->box_translations[obs.box];
+    }
+    const Eigen::Vector3d t = -cam.cam_from_world_rotation * state->camera_centers[obs.camera];
+    if (camera_col[obs.camera] >= 0) {
+      a.block<3, 3>(row, camera_col[obs.camera]) = ray_cross;
+    } else {
+      rhs.segment<3>(row) -= ray_cross * t;
+    }
+  }
+  for (size_t b = 0; b < problem.boxes.size(); ++b) {
+    for (int k = 0; k < 3; ++k) {
+      if (size_col[b][k] >= 0) current(size_col[b][k]) = state->box_sizes[b](k);
+    }
+    if (translation_col[b] >= 0) current.segment<3>(translation_col[b]) = state->box_translations[b];
+  }
+  for (size_t c = 0; c < problem.cameras.size(); ++c) {
+    if (camera_col[c] >= 0) {
+      current.segment<3>(camera_col[c]) = -problem.cameras[c].cam_from_world_rotation * state->camera_centers[c];
+    }
+  }
+
+  // Column scaling makes the rank test independent of the units.
+  Eigen::VectorXd col_norm = a.colwise().norm();
+  for (int j = 0; j < n; ++j) {
+    if (col_norm(j) == 0.0) {
+      *why = "the linear system is rank deficient (a free parameter appears in no pin)";
+      return false;
+    }
+  }
+  const Eigen::MatrixXd a_scaled = a * col_norm.cwiseInverse().asDiagonal();
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(a_scaled, Eigen::ComputeThinU | Eigen::ComputeFullV);
+  const Eigen::VectorXd& sigma = svd.singularValues();
+  constexpr double kRankTolerance = 1e-10;
+  const double threshold = kRankTolerance * sigma(0);
+  int rank = 0;
+  for (int i = 0; i < sigma.size(); ++i) rank += sigma(i) > threshold ? 1 : 0;
+
+  Eigen::VectorXd solution;
+  const bool homogeneous = rhs.norm() == 0.0;
+  if (!homogeneous) {
+    if (rank < n) {
+      *why = "the linear system is rank deficient (rank " + std::to_string(rank) + " of " + std::to_string(n) + ")";
+      return false;
+    }
+    solution = col_norm.cwiseInverse().asDiagonal() * svd.solve(rhs);
+  } else {
+    // No known length: the solution is the null vector, with the scale of the current values.
+    if (rank != n - 1) {
+      *why = "the homogeneous linear system has a null space of dimension " + std::to_string(n - rank);
+      return false;
+    }
+    const Eigen::VectorXd v = col_norm.cwiseInverse().asDiagonal() * svd.matrixV().col(n - 1);
+    const double alpha = v.dot(current) / v.squaredNorm();
+    if (!(std::abs(alpha) > 0.0)) {
+      *why = "no known length and the current values give no scale";
+      return false;
+    }
+    solution = alpha * v;
+  }
+  if (!solution.allFinite()) {
+    *why = "the linear solution is not finite";
+    return false;
+  }
+
+  SceneState trial = *state;
+  for (size_t b = 0; b < problem.boxes.size(); ++b) {
+    for (int k = 0; k < 3; ++k) {
+      if (size_col[b][k] >= 0) trial.box_sizes[b](k) = solution(size_col[b][k]);
+    }
+    if (translation_col[b] >= 0) trial.box_translations[b] = solution.segment<3>(translation_col[b]);
+  }
+  for (size_t c = 0; c < problem.cameras.size(); ++c) {
+    if (camera_col[c] >= 0) {
+      trial.camera_centers[c] = -problem.cameras[c].cam_from_world_rotation.transpose() * solution.segment<3>(camera_col[c]);
+    }
+  }
+  Eigen::VectorXd residuals;
+  const int num_behind = EvaluateScene(problem, trial, &residuals, nullptr);
+  if (num_behind > 0) {
+    *why = "the linear solution puts " + std::to_string(num_behind) + " pinned corner(s) behind the camera";
+    return false;
+  }
+  for (size_t b = 0; b < problem.boxes.size(); ++b) {
+    if ((trial.box_sizes[b].array() <= 0.0).any()) {
+      *why = "the linear solution gives a box a size that is not positive";
+      return false;
+    }
+  }
+  if (!residuals.allFinite()) {
+    *why = "the linear solution gives non-finite residuals";
+    return false;
+  }
+  *state = std::move(trial);
+  return true;
+}
+
+std::vector<std::string> UndeterminedParameterWarnings(const Project& project, const SceneProblem& problem,
+                                                       const SceneState& state) {
+  std::vector<std::string> warnings;
+  const int n = problem.num_parameters;
+  if (n == 0) return warnings;
+  Eigen::VectorXd residuals;
+  Eigen::MatrixXd jacobian;
+  EvaluateScene(problem, state, &residuals, &jacobian);
+  if (!jacobian.allFinite()) return warnings;
+
+  // Rank of the column-scaled Jacobian; a column of zeros stays zero (its parameter is free).
+  Eigen::VectorXd col_norm = jacobian.colwise().norm();
+  Eigen::VectorXd inv_norm(n);
+  for (int j = 0; j < n; ++j) inv_norm(j) = col_norm(j) > 0.0 ? 1.0 / col_norm(j) : 0.0;
+  const Eigen::MatrixXd scaled = jacobian * inv_norm.asDiagonal();
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(scaled, Eigen::ComputeFullV);
+  const Eigen::VectorXd& sigma = svd.singularValues();
+  // A scaled singular value below this is a direction the pins do not constrain: moving along
+  // it by one unit of "one column norm" changes the pixels by less than 1e-8 of the others.
+  constexpr double kRankTolerance = 1e-8;
+  const double threshold = sigma.size() > 0 ? kRankTolerance * sigma(0) : 0.0;
+  int rank = 0;
+  for (int i = 0; i < sigma.size(); ++i) rank += sigma(i) > threshold ? 1 : 0;
+  if (rank == n) return warnings;
+  Eigen::MatrixXd null_space = svd.matrixV().rightCols(n - rank);
+
+  // Whole-scene ambiguities (scale, position) are named once rather than per parameter.
+  auto gauge_direction = [&](int axis) {  // axis < 0: scale; else a shift along that axis
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+    for (int j = 0; j < n; ++j) {
+      const ParameterInfo& info = problem.parameters[j];
+      double value = 0.0;
+      switch (info.kind) {
+        case ParameterKind::kCameraCenter:
+          value = axis < 0 ? state.camera_centers[info.block](info.component) : (info.component == axis ? 1.0 : 0.0);
+          break;
+        case ParameterKind::kBoxTranslation:
+          value = axis < 0 ? state.box_translations[info.block](info.component) : (info.component == axis ? 1.0 : 0.0);
+          break;
+        case ParameterKind::kBoxSize:
+          value = axis < 0 ? state.box_sizes[info.block](info.component) : 0.0;
+          break;
+        case ParameterKind::kBoxRotation:
+          break;
+      }
+      g(j) = value * col_norm(j);
+    }
+    return g;
+  };
+  constexpr double kGaugeCosine = 0.99;
+  std::vector<Eigen::VectorXd> gauges;
+  bool scale_free = false, position_free = false;
+  for (int axis = -1; axis < 3; ++axis) {
+    Eigen::VectorXd g = gauge_direction(axis);
+    for (const auto& h : gauges) g -= h.dot(g) * h;
+    if (g.norm() == 0.0) continue;
+    g.normalize();
+    if ((null_space.transpose() * g).norm() > kGaugeCosine) {
+      gauges.push_back(g);
+      (axis < 0 ? scale_free : position_free) = true;
+    }
+  }
+  if (scale_free) {
+    warnings.push_back("the scale of the scene is not fixed by the pins: lock a box size whose length you know");
+  }
+  if (position_free) {
+    warnings.push_back(
+        "the position of the scene is not fixed by the pins: lock the translation of a box or the pose of a camera");
+  }
+  for (const auto& g : gauges) null_space -= g * (g.transpose() * null_space);
+  if (!gauges.empty() && null_space.cols() > 0) {
+    Eigen::JacobiSVD<Eigen::MatrixXd> basis(null_space, Eigen::ComputeThinU);
+    int keep = 0;
+    for (int i = 0; i < basis.singularValues().size(); ++i) keep += basis.singularValues()(i) > 0.5 ? 1 : 0;
+    null_space = basis.matrixU().leftCols(keep);
+  }
+  if (null_space.cols() == 0) return warnings;
+
+  // A parameter is named when the unconstrained directions move it noticeably.
+  constexpr double kNameThreshold = 0.1;
+  const Eigen::VectorXd weight = null_space.rowwise().norm();
+  std::map<std::pair<int, int>, std::vector<int>> free_components;  // (kind, block) -> components
+  for (int j = 0; j < n; ++j) {
+    if (weight(j) <= kNameThreshold) continue;
+    const ParameterInfo& info = problem.parameters[j];
+    free_components[{static_cast<int>(info.kind), info.block}].push_back(info.component);
+  }
+  static const char* kSizeNames[3] = {"width (x size)", "depth (y size)", "height (z size)"};
+  static const char* kFaceNames[3] = {"+x side", "back", "top"};
+  for (const auto& [key, components] : free_components) {
+    const auto kind = static_cast<ParameterKind>(key.first);
+    const int block = key.second;
+    if (kind == ParameterKind::kCameraCenter) {
+      const Image& image = project.images[problem.cameras[block].image_index];
+      warnings.push_back("the " + JoinComponents(components) + " coordinate" + (components.size() > 1 ? "s" : "") +
+                         " of the camera centre of image " + ImageLabel(image) +
+                         (components.size() > 1 ? " are" : " is") +
+                         " not determined by the pins: pin more vertices in this image or lock its pose");
+      continue;
+    }
+    const Box& box = project.boxes[problem.boxes[block].box_index];
+    switch (kind) {
+      case ParameterKind::kBoxSize:
+        for (int k : components) {
+          warnings.push_back(std::string("the ") + kSizeNames[k] + " of box " + BoxLabel(box) +
+                             " is not determined by the pins: pin a vertex on the " + kFaceNames[k] +
+                             " face or add a second image");
+        }
+        break;
+      case ParameterKind::kBoxRotation:
+        warnings.push_back("the rotation of box " + BoxLabel(box) +
+                           " is not determined by the pins: pin more of its vertices or lock its rotation");
+        break;
+      case ParameterKind::kBoxTranslation:
+        warnings.push_back("the " + JoinComponents(components) + " position of box " + BoxLabel(box) +
+                           " is not determined by the pins: pin more of its vertices or lock its translation");
+        break;
+      case ParameterKind::kCameraCenter:
+        break;
+    }
+  }
+  return warnings;
+}
+
+}  // namespace facet::scene_solve_internal
