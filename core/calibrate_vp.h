@@ -40,6 +40,13 @@ struct VpCalibrationSummary {
   // Homogeneous vanishing point per axis (x, y, z), unit norm; zero when the family is absent.
   std::array<Eigen::Vector3d, 3> vanishing_points{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
                                                    Eigen::Vector3d::Zero()};
+  // A family whose segments are parallel in the image (within ~1e-5 rad at the camera).
+  std::array<bool, 3> vanishing_point_at_infinity = {false, false, false};
+  // RMS over a family's segments of segment_residuals_px; zero when the family is absent.
+  std::array<double, 3> vanishing_point_rms_px = {0.0, 0.0, 0.0};
+  // Largest deviation from 90 deg between two fitted vanishing directions before the
+  // rotation is made orthonormal (zero by construction with three points and kSolve).
+  double max_orthogonality_error_deg = 0.0;
   std::array<int, 3> segments_per_axis = {0, 0, 0};
   // Per input segment (same order): distance in px of its endpoints to the line through its
   // midpoint and its family's vanishing point (RMS of the two).

@@ -1,0 +1,62 @@
+// Least-squares vanishing point of one family of image line segments, homogeneous throughout
+// so that vanishing points at or near infinity (segments parallel in the image) are handled.
+// The fit starts from the algebraic solution (smallest singular vector of the stacked segment
+// lines, each weighted by its length) and refines it by Levenberg-Marquardt over the unit
+// sphere, minimising the squared distances of each segment's endpoints to the line through
+// the segment's midpoint and the vanishing point (the maximum-likelihood-style cost of
+// Hartley & Zisserman, 2nd ed., section 8.6.1).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace facet {
+
+struct VanishingPointOptions {
+  // Conditioning: pixels are mapped to (uv_px - center_px) / scale_px before fitting, so the
+  // numbers are of order 1 (use the image centre and half the larger image side).
+  Eigen::Vector2d conditioning_center_px = Eigen::Vector2d::Zero();
+  double conditioning_scale_px = 1.0;
+  bool refine = true;       // false keeps the algebraic fit
+  int max_iterations = 50;  // Levenberg-Marquardt iterations of the refinement
+
+  bool Check(std::string* error) const;
+};
+
+struct VanishingPointSummary {
+  bool success = false;
+  std::string message;  // why it failed
+  // Unit-norm homogeneous vanishing point in pixels, and in conditioned coordinates; the
+  // third coordinate is >= 0 (zero for a vanishing point at infinity).
+  Eigen::Vector3d vp_px = Eigen::Vector3d::Zero();
+  Eigen::Vector3d vp_conditioned = Eigen::Vector3d::Zero();
+  // Distance from the image centre of the conditioned vanishing point in units of
+  // conditioning_scale_px; +infinity for a vanishing point at infinity.
+  double distance_in_scales = 0.0;
+  // Ratio of the second smallest to the largest singular value of the stacked lines: near
+  // zero when all segments lie on one line (the vanishing point is then undetermined).
+  double line_spread = 0.0;
+  // Per segment (input order): distance in px of its endpoints to the line through its
+  // midpoint and the vanishing point (both endpoints are equally far by symmetry).
+  std::vector<double> residuals_px;
+  double initial_rms_px = 0.0;  // of the algebraic fit
+  double final_rms_px = 0.0;
+  int iterations = 0;
+  bool refined = false;  // the refinement ran and was kept
+
+  bool IsUsable() const { return success; }
+};
+
+// segments_px: one (x1, y1, x2, y2) per segment, 2 or more, none of zero length.
+// Fewer than 2 segments, a zero-length or non-finite segment, or all segments on one line
+// give success = false.
+VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segments_px,
+                                        const VanishingPointOptions& options);
+
+// Distance in px of a segment's endpoints to the line through its midpoint and the
+// homogeneous vanishing point vp_px; +infinity when the vanishing point is the midpoint.
+double SegmentVanishingPointResidualPx(const Eigen::Vector4d& segment_px, const Eigen::Vector3d& vp_px);
+
+}  // namespace facet
