@@ -1,0 +1,519 @@
+#include "app/panels.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>  // key codes only: io.KeysDown is indexed by GLFW key codes in both modes
+
+#include "core/scene_solve.h"
+
+namespace facet::app {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+const ImVec4 kDimText(0.55f, 0.57f, 0.62f, 1.0f);
+const ImVec4 kWarningText(0.98f, 0.78f, 0.30f, 1.0f);
+const ImVec4 kErrorText(1.00f, 0.42f, 0.40f, 1.0f);
+const ImVec4 kGoodText(0.45f, 0.85f, 0.50f, 1.0f);
+
+struct ToolButton {
+  Tool tool;
+  const char* label;
+  const char* shortcut;
+  int key;
+  const char* hint;
+};
+constexpr ToolButton kToolButtons[] = {
+    {Tool::kSelect, "Select", "V", GLFW_KEY_V, "Pick and drag segment endpoints, pins and boxes."},
+    {Tool::kLineX, "Line X", "X", GLFW_KEY_X, "Drag in the image to draw a line parallel to the world x axis."},
+    {Tool::kLineY, "Line Y", "Y", GLFW_KEY_Y, "Drag in the image to draw a line parallel to the world y axis."},
+    {Tool::kLineZ, "Line Z", "Z", GLFW_KEY_Z, "Drag in the image to draw a vertical line (world z)."},
+    {Tool::kPin, "Pin", "P", GLFW_KEY_P, "Pick a box corner, then click where it is in the photo."},
+    {Tool::kAddBox, "Add box", "B", GLFW_KEY_B, "Adds a box; pin its corners to place it."},
+};
+
+ImVec4 AxisColor(Axis axis) {
+  switch (axis) {
+    case Axis::kX: return ImVec4(0.95f, 0.35f, 0.32f, 1.0f);
+    case Axis::kY: return ImVec4(0.40f, 0.85f, 0.40f, 1.0f);
+    case Axis::kZ: return ImVec4(0.40f, 0.60f, 1.00f, 1.0f);
+  }
+  return ImVec4(1, 1, 1, 1);
+}
+
+void LabelValue(const char* label, const char* fmt, ...) IM_FMTARGS(2);
+void LabelValue(const char* label, const char* fmt, ...) {
+  ImGui::TextColored(kDimText, "%s", label);
+  ImGui::SameLine(ImGui::GetFontSize() * 7.5f);
+  va_list args;
+  va_start(args, fmt);
+  ImGui::TextV(fmt, args);
+  va_end(args);
+}
+
+void WrappedColored(const ImVec4& color, const std::string& text) {
+  ImGui::PushStyleColor(ImGuiCol_Text, color);
+  ImGui::TextWrapped("%s", text.c_str());
+  ImGui::PopStyleColor();
+}
+
+// The undo pattern for continuous widgets: activation snapshots the project, every change
+// previews the edited copy, deactivation after an edit records the whole interaction as one
+// history entry. `changed` is the widget's return value; `apply` edits a project copy.
+void TrackEdit(AppState* state, const std::string& label, bool changed, const std::function<void(Project*)>& apply) {
+  if (ImGui::IsItemActivated()) BeginDrag(state, label);
+  if (changed) {
+    Project edited = state->document.project();
+    apply(&edited);
+    if (state->drag_start) {
+      UpdateDrag(state, std::move(edited));
+    } else {
+      CommitEdit(state, label, std::move(edited));
+    }
+  }
+  if (ImGui::IsItemDeactivatedAfterEdit()) {
+    EndDrag(state);
+  } else if (ImGui::IsItemDeactivated()) {
+    CancelDrag(state);
+  }
+}
+
+bool DragDoubles(const char* label, double* values, int count, float speed, const char* format) {
+  return ImGui::DragScalarN(label, ImGuiDataType_Double, values, count, speed, nullptr, nullptr, format);
+}
+
+void DrawImageSection(AppState* state) {
+  const Image* image = state->ActiveImage();
+  if (!image) {
+    ImGui::TextColored(kDimText, "No image in the project.");
+    return;
+  }
+  const Id image_id = image->id;
+  if (!ImGui::CollapsingHeader("Image", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  LabelValue("Path", "%s", image->path.c_str());
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", image->path.c_str());
+  LabelValue("Size", "%d x %d px", image->width_px, image->height_px);
+  if (auto err = state->photo_errors.find(image_id); err != state->photo_errors.end()) {
+    WrappedColored(kErrorText, err->second);
+  }
+  const Camera& cam = image->camera;
+  LabelValue("Calibrated", "%s", image->camera_calibrated ? "yes" : "no");
+  LabelValue("Focal", "%.1f px", cam.focal_px);
+  LabelValue("Principal pt", "%.1f, %.1f px", cam.principal_point_px.x(), cam.principal_point_px.y());
+  if (image->camera_calibrated) {
+    const Eigen::Vector3d c = cam.CenterInWorld();
+    LabelValue("Centre", "%.3f, %.3f, %.3f", c.x(), c.y(), c.z());
+  }
+
+  int mode = static_cast<int>(image->principal_point_mode);
+  const char* modes[] = {"Solve (3 VPs)", "Image centre", "Fixed"};
+  ImGui::SetNextItemWidth(-FLT_MIN);
+  if (ImGui::Combo("##pp_mode", &mode, modes, 3)) {
+    Project edited = state->document.project();
+    edited.FindImage(image_id)->principal_point_mode = static_cast<PrincipalPointMode>(mode);
+    CommitEdit(state, "Principal point mode", std::move(edited));
+  }
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("How calibration treats the principal point");
+  bool pose_locked = image->pose_locked;
+  if (ImGui::Checkbox("Lock camera position", &pose_locked)) {
+    Project edited = state->document.project();
+    edited.FindImage(image_id)->pose_locked = pose_locked;
+    CommitEdit(state, pose_locked ? "Lock camera" : "Unlock camera", std::move(edited));
+  }
+
+  ImGui::Spacing();
+  ImGui::TextColored(kDimText, "Vanishing-point calibration");
+  ImGui::Separator();
+  const auto cal = state->last_update.calibration.find(image_id);
+  if (cal == state->last_update.calibration.end()) {
+    ImGui::TextColored(kDimText, "No line families drawn in this image.");
+  } else {
+    const VpCalibrationSummary& c = cal->second;
+    ImGui::TextColored(c.success ? kGoodText : kErrorText, "%s", c.success ? "Calibrated" : "Failed");
+    LabelValue("Segments", " ");
+    for (int a = 0; a < 3; ++a) {
+      ImGui::SameLine();
+      ImGui::TextColored(AxisColor(static_cast<Axis>(a)), "%s %d", AxisName(static_cast<Axis>(a)), c.segments_per_axis[a]);
+    }
+    if (c.success) {
+      LabelValue("Focal", "%.1f px", c.focal_px);
+      LabelValue("Principal pt", "%.1f, %.1f px", c.principal_point_px.x(), c.principal_point_px.y());
+    }
+    if (!c.message.empty()) WrappedColored(c.success ? ImGui::GetStyleColorVec4(ImGuiCol_Text) : kErrorText, c.message);
+    for (const std::string& w : c.warnings) WrappedColored(kWarningText, w);
+  }
+}
+
+void DrawSolveSection(AppState* state) {
+  if (!ImGui::CollapsingHeader("Geometry solve", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  const SceneSolveSummary& s = state->last_update.solve;
+  const bool usable = s.IsUsable();
+  const bool nothing = s.termination == SolveTermination::kNothingToSolve;
+  ImGui::TextColored(usable ? kGoodText : (nothing ? kDimText : kErrorText), "%s",
+                     SolveTerminationName(s.termination));
+  if (usable) {
+    LabelValue("Iterations", "%d", s.iterations);
+    LabelValue("RMS", "%.3f px", s.reprojection_rms_px);
+    LabelValue("Max", "%.3f px", s.reprojection_max_px);
+    LabelValue("Residuals", "%d (%d parameters)", s.num_residuals, s.num_parameters);
+  }
+  LabelValue("Time", "%.2f ms (update %.2f ms)", s.time_ms, state->last_update.time_ms);
+  if (!s.message.empty()) WrappedColored(usable ? ImGui::GetStyleColorVec4(ImGuiCol_Text) : kDimText, s.message);
+  for (const std::string& w : s.warnings) WrappedColored(kWarningText, w);
+  for (const std::string& m : state->last_update.messages) WrappedColored(kWarningText, m);
+}
+
+void DrawBoxSection(AppState* state, const Box& box) {
+  if (!ImGui::CollapsingHeader("Box", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  const Id box_id = box.id;
+  ImGui::PushID("box");
+  std::string name = box.name;
+  ImGui::SetNextItemWidth(-FLT_MIN);
+  const bool renamed = ImGui::InputTextWithHint("##name", "name", &name);
+  TrackEdit(state, "Rename box", renamed, [&](Project* p) { p->FindBox(box_id)->name = name; });
+
+  double size[3] = {box.size.x(), box.size.y(), box.size.z()};
+  const bool resized = DragDoubles("Size", size, 3, 0.01f, "%.3f");
+  TrackEdit(state, "Resize box", resized, [&](Project* p) {
+    for (int i = 0; i < 3; ++i) p->FindBox(box_id)->size[i] = std::max(1e-3, size[i]);
+  });
+  double t[3] = {box.translation.x(), box.translation.y(), box.translation.z()};
+  const bool moved = DragDoubles("Position", t, 3, 0.01f, "%.3f");
+  TrackEdit(state, "Move box", moved, [&](Project* p) {
+    p->FindBox(box_id)->translation = Eigen::Vector3d(t[0], t[1], t[2]);
+  });
+  double r[3] = {box.rotation.x() * kRadToDeg, box.rotation.y() * kRadToDeg, box.rotation.z() * kRadToDeg};
+  const bool rotated = DragDoubles("Rotation", r, 3, 0.2f, "%.1f deg");
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Angle-axis vector in degrees (world_from_box)");
+  TrackEdit(state, "Rotate box", rotated, [&](Project* p) {
+    p->FindBox(box_id)->rotation = Eigen::Vector3d(r[0], r[1], r[2]) / kRadToDeg;
+  });
+
+  ImGui::TextColored(kDimText, "Keep while solving");
+  Box locks = box;
+  bool lock_changed = false;
+  const char* size_names[] = {"Size x", "Size y", "Size z"};
+  for (int i = 0; i < 3; ++i) {
+    if (i > 0) ImGui::SameLine();
+    bool v = locks.size_locked[i];
+    if (ImGui::Checkbox(size_names[i], &v)) {
+      locks.size_locked[i] = v;
+      lock_changed = true;
+    }
+  }
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("A kept size is a known length: it fixes the scale");
+  lock_changed |= ImGui::Checkbox("Rotation", &locks.rotation_locked);
+  ImGui::SameLine();
+  lock_changed |= ImGui::Checkbox("Position", &locks.translation_locked);
+  if (lock_changed) {
+    Project edited = state->document.project();
+    *edited.FindBox(box_id) = locks;
+    CommitEdit(state, "Box locks", std::move(edited));
+  }
+  if (ImGui::Button("Delete box")) {
+    Project edited = state->document.project();
+    std::erase_if(edited.boxes, [&](const Box& b) { return b.id == box_id; });
+    std::erase_if(edited.pins, [&](const Pin& pin) { return pin.box_id == box_id; });
+    state->selection = {};
+    CommitEdit(state, "Delete box", std::move(edited));
+  }
+  ImGui::PopID();
+}
+
+void DrawPinSection(AppState* state, const Pin& pin) {
+  if (!ImGui::CollapsingHeader("Pin", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  const Project& project = state->document.project();
+  const Id pin_id = pin.id;
+  const Box* box = project.FindBox(pin.box_id);
+  LabelValue("Box", "%s", box ? box->name.c_str() : "(missing)");
+  LabelValue("Corner", "%d", pin.corner);
+  ImGui::PushID("pin");
+  double uv[2] = {pin.uv_px.x(), pin.uv_px.y()};
+  const bool moved = DragDoubles("Pixel", uv, 2, 0.25f, "%.2f");
+  TrackEdit(state, "Move pin", moved, [&](Project* p) { p->FindPin(pin_id)->uv_px = Eigen::Vector2d(uv[0], uv[1]); });
+  ImGui::PopID();
+  const auto& residuals = state->last_update.solve.pin_residuals_px;
+  for (size_t i = 0; i < project.pins.size() && i < residuals.size(); ++i) {
+    if (project.pins[i].id == pin_id && std::isfinite(residuals[i])) LabelValue("Residual", "%.3f px", residuals[i]);
+  }
+}
+
+void DrawSegmentSection(AppState* state, const Segment& segment) {
+  if (!ImGui::CollapsingHeader("Segment", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  const Project& project = state->document.project();
+  const Id seg_id = segment.id;
+  ImGui::PushID("segment");
+  int axis = static_cast<int>(segment.axis);
+  const char* axes[] = {"x", "y", "z"};
+  if (ImGui::Combo("Family", &axis, axes, 3)) {
+    Project edited = project;
+    edited.FindSegment(seg_id)->axis = static_cast<Axis>(axis);
+    CommitEdit(state, "Change line family", std::move(edited));
+  }
+  double a[2] = {segment.a_px.x(), segment.a_px.y()};
+  const bool moved_a = DragDoubles("Start", a, 2, 0.25f, "%.2f");
+  TrackEdit(state, "Move line end", moved_a, [&](Project* p) { p->FindSegment(seg_id)->a_px = Eigen::Vector2d(a[0], a[1]); });
+  double b[2] = {segment.b_px.x(), segment.b_px.y()};
+  const bool moved_b = DragDoubles("End", b, 2, 0.25f, "%.2f");
+  TrackEdit(state, "Move line end", moved_b, [&](Project* p) { p->FindSegment(seg_id)->b_px = Eigen::Vector2d(b[0], b[1]); });
+  ImGui::PopID();
+  LabelValue("Length", "%.1f px", (segment.b_px - segment.a_px).norm());
+  // Calibration residuals follow the order of the image's segments in the project.
+  const auto cal = state->last_update.calibration.find(segment.image_id);
+  if (cal != state->last_update.calibration.end()) {
+    size_t index = 0;
+    for (const Segment& s : project.segments) {
+      if (s.image_id != segment.image_id) continue;
+      if (s.id == seg_id) {
+        if (index < cal->second.segment_residuals_px.size()) {
+          LabelValue("Residual", "%.3f px", cal->second.segment_residuals_px[index]);
+        }
+        break;
+      }
+      ++index;
+    }
+  }
+}
+
+std::string StemOf(const std::string& path) {
+  if (path.empty()) return "model";
+  return std::filesystem::path(path).replace_extension().string();
+}
+
+}  // namespace
+
+float DrawMenuBar(AppState* state, ShellState* shell) {
+  float height = 0;
+  if (!ImGui::BeginMainMenuBar()) return height;
+  height = ImGui::GetWindowSize().y;
+  shell->menu_bar_rect = {0, 0, ImGui::GetWindowSize().x, height};
+  auto open_dialog = [&](Dialog d, std::string path) {
+    shell->dialog = d;
+    shell->dialog_just_opened = true;
+    shell->dialog_path = std::move(path);
+    shell->dialog_error.clear();
+  };
+  if (ImGui::BeginMenu("File")) {
+    if (ImGui::MenuItem("New", "Ctrl+N")) {
+      if (state->document.dirty()) {
+        open_dialog(Dialog::kConfirmNew, "");
+      } else {
+        std::string error;
+        RunAppCommand(state, shell, "new", {}, &error);
+      }
+    }
+    if (ImGui::MenuItem("Open...", "Ctrl+O")) open_dialog(Dialog::kOpen, state->project_path);
+    if (ImGui::MenuItem("Save", "Ctrl+S")) {
+      if (state->project_path.empty()) {
+        open_dialog(Dialog::kSaveAs, "untitled.facet");
+      } else {
+        SaveProjectAs(state, "");
+      }
+    }
+    if (ImGui::MenuItem("Save As...", "Ctrl+Shift+S")) {
+      open_dialog(Dialog::kSaveAs, state->project_path.empty() ? "untitled.facet" : state->project_path);
+    }
+    ImGui::Separator();
+    const bool has_mesh = !state->mesh.indices.empty();
+    if (ImGui::MenuItem("Export glTF...", nullptr, false, has_mesh)) {
+      open_dialog(Dialog::kExport, StemOf(state->project_path) + ".glb");
+    }
+    if (ImGui::MenuItem("Export OBJ...", nullptr, false, has_mesh)) {
+      open_dialog(Dialog::kExport, StemOf(state->project_path) + ".obj");
+    }
+    ImGui::Separator();
+    if (ImGui::MenuItem("Quit", "Ctrl+Q")) RequestQuit(state, shell);
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("Edit")) {
+    const auto& undo = state->document.undo_stack();
+    const auto& redo = state->document.redo_stack();
+    const std::string undo_label = undo.empty() ? "Undo" : "Undo " + undo.back().label;
+    const std::string redo_label = redo.empty() ? "Redo" : "Redo " + redo.back().label;
+    if (ImGui::MenuItem(undo_label.c_str(), "Ctrl+Z", false, !undo.empty())) Undo(state);
+    if (ImGui::MenuItem(redo_label.c_str(), "Ctrl+Shift+Z", false, !redo.empty())) Redo(state);
+    ImGui::Separator();
+    if (ImGui::MenuItem("Add box", "B")) AddBox(state);
+    if (ImGui::MenuItem("Solve")) SolveNow(state);
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("View")) {
+    for (int i = 0; i < kNumPanels; ++i) {
+      PanelPlacement& p = shell->layout.panels[i];
+      if (ImGui::MenuItem(PanelTitle(static_cast<PanelId>(i)), nullptr, &p.visible)) shell->layout_changed = true;
+    }
+    ImGui::Separator();
+    if (ImGui::MenuItem("Dock all panels")) {
+      for (PanelPlacement& p : shell->layout.panels) p.floating = false;
+      shell->layout_changed = true;
+    }
+    if (ImGui::MenuItem("Reset layout")) {
+      shell->layout = DefaultLayout();
+      shell->layout_changed = true;
+    }
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("Help")) {
+    if (ImGui::MenuItem("About Facet")) open_dialog(Dialog::kAbout, "");
+    ImGui::EndMenu();
+  }
+  // Right-aligned status: tool and solve quality.
+  const SceneSolveSummary& s = state->last_update.solve;
+  char status[160];
+  if (s.IsUsable()) {
+    std::snprintf(status, sizeof(status), "%s   |   RMS %.2f px   |   %zu boxes, %zu pins", ToolName(state->tool),
+                  s.reprojection_rms_px, state->document.project().boxes.size(), state->document.project().pins.size());
+  } else {
+    std::snprintf(status, sizeof(status), "%s   |   %zu boxes, %zu pins", ToolName(state->tool),
+                  state->document.project().boxes.size(), state->document.project().pins.size());
+  }
+  const float w = ImGui::CalcTextSize(status).x;
+  ImGui::SameLine(ImGui::GetWindowWidth() - w - ImGui::GetStyle().ItemSpacing.x * 2);
+  ImGui::TextColored(kDimText, "%s", status);
+  ImGui::EndMainMenuBar();
+  return height;
+}
+
+void HandleToolShortcuts(AppState* state) {
+  const ImGuiIO& io = ImGui::GetIO();
+  if (io.WantTextInput || io.KeyCtrl || io.KeyAlt || io.KeySuper) return;
+  for (const ToolButton& b : kToolButtons) {
+    if (!ImGui::IsKeyPressed(b.key, false)) continue;
+    if (b.tool == Tool::kAddBox) {
+      AddBox(state);
+    } else {
+      state->tool = b.tool;
+    }
+  }
+}
+
+void AddBox(AppState* state) {
+  Project edited = state->document.project();
+  Box box;
+  box.id = edited.NewId();
+  box.name = "box " + std::to_string(edited.boxes.size() + 1);
+  // Beside the last box, so a new box does not hide inside an existing one.
+  if (!edited.boxes.empty()) {
+    const Box& last = edited.boxes.back();
+    box.size = last.size;
+    box.translation = last.translation + Eigen::Vector3d(last.size.x() * 1.25, 0, 0);
+  }
+  box.size_locked = {false, false, edited.boxes.empty()};
+  edited.boxes.push_back(box);
+  state->selection = {};
+  state->selection.box_id = box.id;
+  CommitEdit(state, "Add box", std::move(edited));
+  state->tool = Tool::kPin;
+}
+
+void SolveNow(AppState* state) { CommitEdit(state, "Solve", state->document.project()); }
+
+void DrawToolsPanel(AppState* state) {
+  const float width = ImGui::GetContentRegionAvail().x;
+  const ImVec2 button_size(width, ImGui::GetFrameHeight() * 1.25f);
+  for (const ToolButton& b : kToolButtons) {
+    const bool active = state->tool == b.tool;
+    if (active) ImGui::PushStyleColor(ImGuiCol_Button, ImGui::GetStyleColorVec4(ImGuiCol_ButtonActive));
+    char label[64];
+    std::snprintf(label, sizeof(label), "%s##tool", b.label);
+    if (ImGui::Button(label, button_size)) {
+      if (b.tool == Tool::kAddBox) {
+        AddBox(state);
+      } else {
+        state->tool = b.tool;
+      }
+    }
+    if (active) ImGui::PopStyleColor();
+    // The shortcut letter at the right end of the button.
+    const ImVec2 max = ImGui::GetItemRectMax();
+    const ImVec2 min = ImGui::GetItemRectMin();
+    const ImVec2 text = ImGui::CalcTextSize(b.shortcut);
+    ImGui::GetWindowDrawList()->AddText(ImVec2(max.x - text.x - 8, (min.y + max.y - text.y) / 2),
+                                        ImGui::GetColorU32(kDimText), b.shortcut);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s (%s)", b.hint, b.shortcut);
+  }
+  ImGui::Spacing();
+  ImGui::Separator();
+  ImGui::Spacing();
+  if (ImGui::Button("Solve", button_size)) SolveNow(state);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Re-run calibration and the geometry solve");
+  ImGui::Spacing();
+  for (const ToolButton& b : kToolButtons) {
+    if (b.tool == state->tool) {
+      ImGui::PushStyleColor(ImGuiCol_Text, kDimText);
+      ImGui::TextWrapped("%s", b.hint);
+      ImGui::PopStyleColor();
+    }
+  }
+}
+
+void DrawPropertiesPanel(AppState* state) {
+  DrawImageSection(state);
+  DrawSolveSection(state);
+  const Project& project = state->document.project();
+  if (const Box* box = project.FindBox(state->selection.box_id)) DrawBoxSection(state, *box);
+  if (const Pin* pin = project.FindPin(state->selection.pin_id)) DrawPinSection(state, *pin);
+  if (const Segment* seg = project.FindSegment(state->selection.segment_id)) DrawSegmentSection(state, *seg);
+  if (state->selection.Empty()) {
+    ImGui::Spacing();
+    ImGui::TextColored(kDimText, "Select a box, pin or line to edit it.");
+  }
+}
+
+void DrawHistoryPanel(AppState* state) {
+  const auto& undo = state->document.undo_stack();
+  const auto& redo = state->document.redo_stack();
+  const int n_undo = static_cast<int>(undo.size());
+  const int n_redo = static_cast<int>(redo.size());
+  // Position k: the state after the first k edits (0 = as opened).
+  int target = -1;
+  auto entry = [&](int position, const std::string& label, bool future) {
+    const bool current = position == n_undo;
+    if (future) ImGui::PushStyleColor(ImGuiCol_Text, kDimText);
+    char text[256];
+    std::snprintf(text, sizeof(text), "%3d  %s##h%d", position, label.c_str(), position);
+    if (ImGui::Selectable(text, current) && !current) target = position;
+    if (current && ImGui::IsWindowAppearing()) ImGui::SetScrollHereY();
+    if (future) ImGui::PopStyleColor();
+  };
+  entry(0, state->project_path.empty() ? "New project" : "Opened", false);
+  for (int i = 0; i < n_undo; ++i) entry(i + 1, undo[i].label, false);
+  for (int i = n_redo - 1; i >= 0; --i) entry(n_undo + (n_redo - i), redo[i].label, true);
+  if (target >= 0) {
+    for (int i = target; i < n_undo; ++i) Undo(state);
+    for (int i = n_undo; i < target; ++i) Redo(state);
+  }
+}
+
+void DrawLogPanel(AppState* state) {
+  if (ImGui::SmallButton("Clear")) state->log.clear();
+  ImGui::SameLine();
+  ImGui::TextColored(kDimText, "%zu messages", state->log.size());
+  ImGui::Separator();
+  ImGui::BeginChild("##log_lines", ImVec2(0, 0), false, ImGuiWindowFlags_HorizontalScrollbar);
+  const bool at_bottom = ImGui::GetScrollY() >= ImGui::GetScrollMaxY() - 1.0f;
+  ImGuiListClipper clipper;
+  clipper.Begin(static_cast<int>(state->log.size()));
+  while (clipper.Step()) {
+    for (int i = clipper.DisplayStart; i < clipper.DisplayEnd; ++i) {
+      const LogEntry& e = state->log[i];
+      ImGui::TextColored(kDimText, "%7.2f", e.time_s);
+      ImGui::SameLine();
+      switch (e.level) {
+        case LogLevel::kInfo: ImGui::TextUnformatted(e.text.c_str()); break;
+        case LogLevel::kWarning: ImGui::TextColored(kWarningText, "%s", e.text.c_str()); break;
+        case LogLevel::kError: ImGui::TextColored(kErrorText, "%s", e.text.c_str()); break;
+      }
+    }
+  }
+  if (at_bottom) ImGui::SetScrollHereY(1.0f);
+  ImGui::EndChild();
+}
+
+}  // namespace facet::app
