@@ -1,0 +1,203 @@
+#include "core/calibrate_io.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/calibrate_vp.h"
+
+namespace facet {
+namespace {
+
+using nlohmann::json;
+
+CalibrateIoResult Error(std::string message) {
+  CalibrateIoResult result;
+  result.error = std::move(message);
+  return result;
+}
+
+bool ReadNumber(const json& value, double* out) {
+  if (!value.is_number()) return false;
+  *out = value.get<double>();
+  return std::isfinite(*out);
+}
+
+// Fills *error and returns false when the document does not have the documented shape.
+bool ParseInput(const json& doc, std::vector<Segment>* segments, VpCalibrationOptions* options,
+                std::vector<int>* family_order, std::string* error) {
+  if (!doc.is_object()) {
+    *error = "the top level must be a JSON object";
+    return false;
+  }
+  const auto size_it = doc.find("image_size");
+  if (size_it == doc.end()) {
+    *error = "missing \"image_size\": [width, height]";
+    return false;
+  }
+  double w = 0, h = 0;
+  if (!size_it->is_array() || size_it->size() != 2 || !ReadNumber((*size_it)[0], &w) ||
+      !ReadNumber((*size_it)[1], &h) || w != std::floor(w) || h != std::floor(h) || w < 1 || h < 1 || w > 1e9 ||
+      h > 1e9) {
+    *error = "\"image_size\" must be [width, height], two positive integers, got " + size_it->dump();
+    return false;
+  }
+  options->width_px = static_cast<int>(w);
+  options->height_px = static_cast<int>(h);
+
+  const auto families_it = doc.find("families");
+  if (families_it == doc.end()) {
+    *error = "missing \"families\": [{\"axis\": \"x\", \"segments\": [[x1, y1, x2, y2], ...]}, ...]";
+    return false;
+  }
+  if (!families_it->is_array()) {
+    *error = "\"families\" must be an array";
+    return false;
+  }
+  std::array<bool, 3> seen{};
+  for (size_t f = 0; f < families_it->size(); ++f) {
+    const json& family = (*families_it)[f];
+    const std::string where = "families[" + std::to_string(f) + "]";
+    if (!family.is_object()) {
+      *error = where + " must be an object with \"axis\" and \"segments\"";
+      return false;
+    }
+    const auto axis_it = family.find("axis");
+    if (axis_it == family.end() || !axis_it->is_string()) {
+      *error = where + ": missing \"axis\" (\"x\", \"y\" or \"z\")";
+      return false;
+    }
+    const std::optional<Axis> axis = AxisFromName(axis_it->get<std::string>());
+    if (!axis) {
+      *error = where + ": unknown axis " + axis_it->dump() + " (expected \"x\", \"y\" or \"z\")";
+      return false;
+    }
+    const int a = static_cast<int>(*axis);
+    if (seen[a]) {
+      *error = where + ": axis \"" + AxisName(*axis) + "\" is given twice";
+      return false;
+    }
+    seen[a] = true;
+    family_order->push_back(a);
+    const auto segments_it = family.find("segments");
+    if (segments_it == family.end() || !segments_it->is_array()) {
+      *error = where + ": missing \"segments\": [[x1, y1, x2, y2], ...]";
+      return false;
+    }
+    for (size_t i = 0; i < segments_it->size(); ++i) {
+      const json& s = (*segments_it)[i];
+      double c[4];
+      bool ok = s.is_array() && s.size() == 4;
+      for (int k = 0; ok && k < 4; ++k) ok = ReadNumber(s[k], &c[k]);
+      if (!ok) {
+        *error = where + ".segments[" + std::to_string(i) + "] must be [x1, y1, x2, y2], four finite numbers, got " +
+                 s.dump();
+        return false;
+      }
+      Segment segment;
+      segment.axis = *axis;
+      segment.a_px = {c[0], c[1]};
+      segment.b_px = {c[2], c[3]};
+      segments->push_back(segment);
+    }
+  }
+
+  const int num_families = static_cast<int>(family_order->size());
+  options->principal_point_mode = num_families >= 3 ? PrincipalPointMode::kSolve : PrincipalPointMode::kImageCenter;
+  const auto pp_it = doc.find("principal_point");
+  if (pp_it != doc.end()) {
+    double cx = 0, cy = 0;
+    if (pp_it->is_string() && pp_it->get<std::string>() == "solve") {
+      options->principal_point_mode = PrincipalPointMode::kSolve;
+    } else if (pp_it->is_string() && pp_it->get<std::string>() == "center") {
+      options->principal_point_mode = PrincipalPointMode::kImageCenter;
+    } else if (pp_it->is_array() && pp_it->size() == 2 && ReadNumber((*pp_it)[0], &cx) &&
+               ReadNumber((*pp_it)[1], &cy)) {
+      options->principal_point_mode = PrincipalPointMode::kFixed;
+      options->fixed_principal_point_px = {cx, cy};
+    } else {
+      *error = "\"principal_point\" must be \"solve\", \"center\" or [cx, cy], got " + pp_it->dump();
+      return false;
+    }
+  }
+  return true;
+}
+
+json Rows(const Eigen::Matrix3d& m) {
+  json rows = json::array();
+  for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
+  return rows;
+}
+
+}  // namespace
+
+CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
+  try {
+    json doc;
+    try {
+      doc = json::parse(lines_json_text);
+    } catch (const json::parse_error& e) {
+      return Error(std::string("malformed JSON: ") + e.what());
+    }
+    std::vector<Segment> segments;
+    VpCalibrationOptions options;
+    std::vector<int> family_order;
+    std::string error;
+    if (!ParseInput(doc, &segments, &options, &family_order, &error)) return Error(error);
+
+    const VpCalibrationSummary summary = CalibrateFromVanishingLines(segments, options);
+    if (!summary.success) return Error("calibration failed: " + summary.message);
+
+    Eigen::Matrix3d k = Eigen::Matrix3d::Identity();
+    k(0, 0) = k(1, 1) = summary.focal_px;
+    k(0, 2) = summary.principal_point_px.x();
+    k(1, 2) = summary.principal_point_px.y();
+
+    json out = json::object();
+    out["focal_px"] = summary.focal_px;
+    out["principal_point"] = {summary.principal_point_px.x(), summary.principal_point_px.y()};
+    out["K"] = Rows(k);
+    out["R"] = Rows(summary.cam_from_world_rotation);
+    json axes = json::array(), points = json::array(), homogeneous = json::array();
+    for (int a = 0; a < 3; ++a) {
+      if (summary.segments_per_axis[a] == 0) continue;
+      const Eigen::Vector3d& v = summary.vanishing_points[a];
+      axes.push_back(AxisName(static_cast<Axis>(a)));
+      if (summary.vanishing_point_at_infinity[a])
+        points.push_back(nullptr);
+      else
+        points.push_back({v.x() / v.z(), v.y() / v.z()});
+      homogeneous.push_back({v.x(), v.y(), v.z()});
+    }
+    out["vanishing_point_axes"] = axes;
+    out["vanishing_points"] = points;
+    out["vanishing_points_homogeneous"] = homogeneous;
+    out["segment_residuals_px"] = summary.segment_residuals_px;
+    out["segments_per_axis"] = summary.segments_per_axis;
+    out["warnings"] = summary.warnings;
+    out["message"] = summary.message;
+    out["time_ms"] = summary.time_ms;
+    CalibrateIoResult result;
+    result.json = out.dump(2) + "\n";
+    return result;
+  } catch (const std::exception& e) {
+    // Type errors and the like that slipped past the checks: still a message, never a throw.
+    return Error(std::string("cannot read the line families: ") + e.what());
+  }
+}
+
+CalibrateIoResult CalibrateLinesFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error("cannot open " + path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return Error("cannot read " + path);
+  CalibrateIoResult result = CalibrateLinesJson(text.str());
+  if (!result.ok()) result.error = path + ": " + result.error;
+  return result;
+}
+
+}  // namespace facet
