@@ -1,1 +1,101 @@
-int main() { return 0; }
+// facet: one executable for the GUI and the command line (calibrate, solve, export, render).
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <unistd.h>
+
+#include "app/app.h"
+#include "app/cli_commands.h"
+
+namespace {
+
+// The bundled sample: next to the executable in an install, else in the source tree.
+std::string SampleProjectPath() {
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  const std::filesystem::path candidates[] = {
+      exe.parent_path() / "../share/facet/samples/leuven/leuven.facet",
+      std::filesystem::path(FACET_SOURCE_DIR) / "assets/samples/leuven/leuven.facet",
+  };
+  for (const auto& c : candidates)
+    if (std::filesystem::exists(c, ec)) return std::filesystem::weakly_canonical(c, ec).string();
+  return {};
+}
+
+bool ParseSize(const std::string& text, int* width, int* height) {
+  const size_t x = text.find('x');
+  if (x == std::string::npos) return false;
+  try {
+    *width = std::stoi(text.substr(0, x));
+    *height = std::stoi(text.substr(x + 1));
+  } catch (...) {
+    return false;
+  }
+  return *width >= 64 && *height >= 64 && *width <= 16384 && *height <= 16384;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{
+      "Facet: interactive image-based modeling. Turn ordinary photos into a textured 3D model.\n"
+      "Without a command, opens the GUI on PROJECT (or the bundled sample)."};
+  cli.require_subcommand(0, 1);
+
+  std::string gui_project;
+  cli.add_option("project", gui_project, "Project file (*.facet) to open in the GUI");
+
+  auto* calibrate = cli.add_subcommand("calibrate", "Calibrate one camera from line families; prints the camera as JSON");
+  std::string lines_path;
+  calibrate->add_option("--lines", lines_path,
+                        "LINES.json: {\"image_size\": [w, h], \"families\": [{\"axis\": \"x\", \"segments\": "
+                        "[[x1, y1, x2, y2], ...]}, ...], \"principal_point\": \"solve\" | \"center\" | [cx, cy]}")
+      ->required()
+      ->check(CLI::ExistingFile);
+
+  auto* solve = cli.add_subcommand("solve", "Re-calibrate and re-solve a project; writes the result and prints a JSON summary");
+  std::string solve_project, solve_out;
+  solve->add_option("project", solve_project, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
+  solve->add_option("-o,--output", solve_out, "Where to write the solved project")->required();
+
+  auto* exporter = cli.add_subcommand("export", "Export the textured model as binary glTF (.glb) or OBJ + MTL + PNG");
+  std::string export_project, export_out;
+  exporter->add_option("project", export_project, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
+  exporter->add_option("-o,--output", export_out, "FILE.glb or FILE.obj")->required();
+
+  auto* render = cli.add_subcommand("render", "Render the application offscreen (EGL, no display needed) to a PNG");
+  facet::app::RenderOptions render_options;
+  std::string render_size = "1600x900";
+  render->add_option("project", render_options.project_path, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
+  render->add_option("-o,--output", render_options.output_png, "SHOT.png")->required();
+  render->add_option("--size", render_size, "Window size WxH in pixels")->capture_default_str();
+  render->add_option("--script", render_options.script_path,
+                     "Input script: mouse, keys and app commands, one per line (see README)")
+      ->check(CLI::ExistingFile);
+  render->add_option("--report", render_options.report_path,
+                     "Also write a JSON report: panel rectangles, image view transform, history, project");
+
+  CLI11_PARSE(cli, argc, argv);
+
+  if (*calibrate) return facet::app::RunCalibrateCommand(lines_path);
+  if (*solve) return facet::app::RunSolveCommand(solve_project, solve_out);
+  if (*exporter) return facet::app::RunExportCommand(export_project, export_out);
+  if (*render) {
+    if (!ParseSize(render_size, &render_options.width, &render_options.height)) {
+      std::cerr << "facet render: --size must be WxH, e.g. 1600x900 (64..16384 each)\n";
+      return 1;
+    }
+    return facet::app::RunOffscreen(render_options);
+  }
+
+  facet::app::GuiOptions gui;
+  gui.project_path = gui_project.empty() ? SampleProjectPath() : gui_project;
+  if (!gui_project.empty() && !std::filesystem::exists(gui_project)) {
+    std::cerr << "facet: no such project file: " << gui_project << "\n";
+    return 1;
+  }
+  return facet::app::RunGui(gui);
+}
