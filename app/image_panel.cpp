@@ -516,6 +516,7 @@ void DrawLoupe(ImDrawList* draw_list, const PanelState& panel, const TiledTextur
   }
   OverlayOptions options = panel.overlay;
   options.show_labels = false;
+  options.show_vanishing_points = false;  // border arrows would crowd the small square
   DrawImageOverlays(draw_list, overlay, loupe, p_min, p_max, options);
   // Crosshair with a gap, so the pixel under the cursor stays visible.
   const float gap = 4.0f;
@@ -663,9 +664,13 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
       drag.button = ImGui::IsMouseClicked(ImGuiMouseButton_Middle) ? ImGuiMouseButton_Middle : ImGuiMouseButton_Left;
     } else if (ImGui::IsMouseClicked(ImGuiMouseButton_Left) && !state->drag_start) {
       StartLeftPress(state, panel, image, hover, mouse_uv);
-    } else if (ImGui::IsMouseClicked(ImGuiMouseButton_Right) && hover.segment_id != kNoId) {
-      panel->context_segment = hover.segment_id;
-      ImGui::OpenPopup("##segment_menu");
+    } else if (ImGui::IsMouseClicked(ImGuiMouseButton_Right)) {
+      // The context menu works with every tool, so pick segments as the select tool does.
+      const OverlayHover under = HitTest(project, image, corners, transform, io.MousePos, Tool::kSelect);
+      if (under.segment_id != kNoId) {
+        panel->context_segment = under.segment_id;
+        ImGui::OpenPopup("##segment_menu");
+      }
     }
   }
 
@@ -697,6 +702,9 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete), false) ||
         ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Backspace), false)) {
       DeleteSelection(state);
+    }
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false) && state->tool == Tool::kPin) {
+      state->selection.box_corner = -1;  // forget the chosen corner
     }
   }
   DrawSegmentContextMenu(state, panel);
