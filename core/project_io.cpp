@@ -583,7 +583,19 @@ ProjectLoadResult ProjectFromJson(const std::string& text) {
       result.error = "line 1, column 1: the file is empty";
       return result;
     }
-    Json root = Json::parse(text);
+    Json root;
+    try {
+      root = Json::parse(text);
+    } catch (const nlohmann::json::out_of_range& e) {
+      // A number beyond the range of a double: nlohmann names the token but not where it is.
+      const std::string what = e.what();
+      const size_t open = what.find('\'');
+      const size_t close = what.rfind('\'');
+      const size_t at = open < close ? text.find(what.substr(open + 1, close - open - 1)) : std::string::npos;
+      result.error = (at == std::string::npos ? "" : LineColumn(text, at + 1) + ": ") +
+                     "number out of range" + (open < close ? " " + what.substr(open) : "");
+      return result;
+    }
     Reader reader(&result.warnings);
     if (!ReadProject(root, &reader, &result.project)) {
       result.error = reader.error();
