@@ -20,6 +20,7 @@ struct ExportSummary {
 // Writes atomically (temporary file, then rename).
 ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const std::string& path);
 // FILE.obj, FILE.mtl and FILE.png (the atlas) side by side; OBJ's v runs upwards, so v is flipped.
+// Positions and normals use the same Y-up axes as the GLB. `path` may end in .obj or not.
 ExportSummary ExportObj(const TexturedMesh& mesh, const std::string& path);
 
 }  // namespace facet
