@@ -1,0 +1,407 @@
+// Export: the GLB is parsed back byte by byte (header, chunks, accessors, embedded PNG,
+// camera nodes), the OBJ line by line.
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <doctest/doctest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/export.h"
+#include "core/textured_mesh.h"
+#include "synthetic_scene.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+fs::path TempDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("facet_test_export_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::vector<std::uint8_t> ReadBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
+}
+
+std::uint32_t U32(const std::vector<std::uint8_t>& b, size_t offset) {
+  std::uint32_t v = 0;
+  for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(b[offset + i]) << (8 * i);
+  return v;
+}
+
+// A smooth colour ramp: every face the camera sees gets some texture.
+facet::ImageRgba8 RampPhoto(int width, int height) {
+  facet::ImageRgba8 photo;
+  photo.width = width;
+  photo.height = height;
+  photo.pixels.resize(static_cast<size_t>(width) * height * 4);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      std::uint8_t* p = photo.At(x, y);
+      p[0] = static_cast<std::uint8_t>(x * 255 / width);
+      p[1] = static_cast<std::uint8_t>(y * 255 / height);
+      p[2] = static_cast<std::uint8_t>((x + y) % 256);
+      p[3] = 255;
+    }
+  }
+  return photo;
+}
+
+struct Fixture {
+  facet::testing::SyntheticScene scene;
+  facet::TexturedMesh mesh;
+};
+
+Fixture BakedScene() {
+  Fixture f;
+  f.scene = facet::testing::MakeBoxScene();
+  const auto summary = facet::BakeTexturedMesh(
+      f.scene.project, {RampPhoto(f.scene.true_camera.width_px, f.scene.true_camera.height_px)}, {}, &f.mesh);
+  REQUIRE_MESSAGE(summary.success, summary.message);
+  REQUIRE(summary.faces_textured == 3);
+  return f;
+}
+
+struct Glb {
+  json gltf;
+  std::vector<std::uint8_t> bin;
+};
+
+// Parses and checks the container: header, exactly a JSON chunk then a BIN chunk.
+Glb ParseGlb(const fs::path& path) {
+  const std::vector<std::uint8_t> bytes = ReadBytes(path);
+  REQUIRE(bytes.size() >= 28);
+  CHECK(U32(bytes, 0) == 0x46546C67);  // "glTF"
+  CHECK(U32(bytes, 4) == 2);
+  CHECK(U32(bytes, 8) == bytes.size());
+  const std::uint32_t json_length = U32(bytes, 12);
+  CHECK(U32(bytes, 16) == 0x4E4F534A);  // "JSON"
+  CHECK(json_length % 4 == 0);
+  REQUIRE(20 + json_length + 8 <= bytes.size());
+  const size_t bin_header = 20 + json_length;
+  const std::uint32_t bin_length = U32(bytes, bin_header);
+  CHECK(U32(bytes, bin_header + 4) == 0x004E4942);  // "BIN\0"
+  CHECK(bin_length % 4 == 0);
+  REQUIRE(bin_header + 8 + bin_length == bytes.size());
+  Glb glb;
+  glb.gltf = json::parse(bytes.begin() + 20, bytes.begin() + 20 + json_length);
+  glb.bin.assign(bytes.begin() + static_cast<long>(bin_header + 8), bytes.end());
+  return glb;
+}
+
+// The bytes of an accessor or a bufferView, bounds-checked against the BIN chunk.
+const std::uint8_t* ViewData(const Glb& glb, int view_index, size_t* length) {
+  const json& view = glb.gltf["bufferViews"][view_index];
+  const size_t offset = view.value("byteOffset", 0);
+  *length = view["byteLength"];
+  CHECK(view["buffer"] == 0);
+  CHECK(offset % 4 == 0);
+  REQUIRE(offset + *length <= glb.bin.size());
+  return glb.bin.data() + offset;
+}
+
+template <typename T>
+std::vector<T> AccessorData(const Glb& glb, int accessor_index, int components) {
+  const json& accessor = glb.gltf["accessors"][accessor_index];
+  size_t length = 0;
+  const std::uint8_t* data = ViewData(glb, accessor["bufferView"], &length);
+  const size_t count = accessor["count"];
+  REQUIRE(count * components * sizeof(T) <= length);
+  std::vector<T> out(count * components);
+  std::memcpy(out.data(), data, out.size() * sizeof(T));
+  return out;
+}
+
+Eigen::Vector3d YUp(const Eigen::Vector3d& p) { return {p.x(), p.z(), -p.y()}; }
+
+}  // namespace
+
+TEST_CASE("GLB: container, accessors, bounds, embedded atlas and triangles") {
+  const Fixture f = BakedScene();
+  const fs::path dir = TempDir("glb");
+  const fs::path path = dir / "model.glb";
+  const facet::ExportSummary summary = facet::ExportGlb(f.mesh, f.scene.project, path.string());
+  REQUIRE_MESSAGE(summary.success, summary.message);
+  CHECK(summary.files_written == std::vector<std::string>{path.string()});
+  // Atomic write leaves no temporary file behind.
+  CHECK(std::distance(fs::directory_iterator(dir), fs::directory_iterator()) == 1);
+
+  const Glb glb = ParseGlb(path);
+  const json& g = glb.gltf;
+  CHECK(g["asset"]["version"] == "2.0");
+  CHECK(g["buffers"].size() == 1);
+  CHECK(g["buffers"][0]["byteLength"].get<size_t>() <= glb.bin.size());
+  REQUIRE(g["meshes"].size() == 1);
+  const json& primitives = g["meshes"][0]["primitives"];
+  REQUIRE(primitives.size() == 2);  // textured and plain faces
+
+  const int position_accessor = primitives[0]["attributes"]["POSITION"];
+  const json& pa = g["accessors"][position_accessor];
+  CHECK(pa["count"] == f.mesh.positions.size());
+  CHECK(pa["componentType"] == 5126);
+  CHECK(pa["type"] == "VEC3");
+  const std::vector<float> positions = AccessorData<float>(glb, position_accessor, 3);
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = -lo;
+  constexpr double kPositionTolerance = 1e-6;  // float storage of metre-scale values
+  for (size_t v = 0; v < f.mesh.positions.size(); ++v) {
+    const Eigen::Vector3f p(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]);
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+    CHECK((p.cast<double>() - YUp(f.mesh.positions[v].cast<double>())).norm() < kPositionTolerance);
+  }
+  for (int k = 0; k < 3; ++k) {
+    CHECK(pa["min"][k].get<float>() == lo[k]);
+    CHECK(pa["max"][k].get<float>() == hi[k]);
+  }
+  // The box spans z in [0, 2.5] in world, i.e. y in [0, 2.5] and z in [-3, 0] in glTF.
+  CHECK(std::abs(pa["max"][1].get<double>() - 2.5) < kPositionTolerance);
+  CHECK(std::abs(pa["min"][2].get<double>() + 3.0) < kPositionTolerance);
+
+  const int normal_accessor = primitives[0]["attributes"]["NORMAL"];
+  const std::vector<float> normals = AccessorData<float>(glb, normal_accessor, 3);
+  const int uv_accessor = primitives[0]["attributes"]["TEXCOORD_0"];
+  CHECK(g["accessors"][uv_accessor]["count"] == f.mesh.uvs.size());
+  const std::vector<float> uvs = AccessorData<float>(glb, uv_accessor, 2);
+  for (float u : uvs) CHECK((u >= 0.0f && u <= 1.0f));
+
+  // Triangles: all indices present once, and each still counter-clockwise around its
+  // (converted) normal, since the axis change is a rotation.
+  size_t index_total = 0, textured_triangles = 0;
+  for (size_t p = 0; p < primitives.size(); ++p) {
+    const json& acc = g["accessors"][primitives[p]["indices"].get<int>()];
+    CHECK(acc["componentType"] == 5125);
+    const std::vector<std::uint32_t> idx = AccessorData<std::uint32_t>(glb, primitives[p]["indices"], 1);
+    index_total += idx.size();
+    if (primitives[p]["attributes"].contains("TEXCOORD_0")) textured_triangles += idx.size() / 3;
+    for (size_t t = 0; t < idx.size(); t += 3) {
+      REQUIRE((idx[t] < f.mesh.positions.size() && idx[t + 1] < f.mesh.positions.size() &&
+               idx[t + 2] < f.mesh.positions.size()));
+      auto pos = [&](std::uint32_t v) {
+        return Eigen::Vector3d(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]);
+      };
+      const Eigen::Vector3d n = (pos(idx[t + 1]) - pos(idx[t])).cross(pos(idx[t + 2]) - pos(idx[t])).normalized();
+      const Eigen::Vector3d stored(normals[3 * idx[t]], normals[3 * idx[t] + 1], normals[3 * idx[t] + 2]);
+      CHECK((n - stored).norm() < 1e-5);
+    }
+  }
+  CHECK(index_total == f.mesh.indices.size());
+  CHECK(textured_triangles == 6);  // 3 faces
+
+  // Material, texture, sampler and the atlas PNG.
+  const json& textured_material = g["materials"][primitives[0]["material"].get<int>()];
+  const int texture = textured_material["pbrMetallicRoughness"]["baseColorTexture"]["index"];
+  const json& image = g["images"][g["textures"][texture]["source"].get<int>()];
+  CHECK(image["mimeType"] == "image/png");
+  CHECK(g["textures"][texture].contains("sampler"));
+  size_t png_length = 0;
+  const std::uint8_t* png = ViewData(glb, image["bufferView"], &png_length);
+  const cv::Mat decoded = cv::imdecode(cv::Mat(1, static_cast<int>(png_length), CV_8UC1, const_cast<std::uint8_t*>(png)),
+                                       cv::IMREAD_UNCHANGED);
+  REQUIRE(!decoded.empty());
+  CHECK(decoded.cols == f.mesh.atlas.width);
+  CHECK(decoded.rows == f.mesh.atlas.height);
+  REQUIRE(decoded.type() == CV_8UC4);
+  int differing = 0;
+  for (int y = 0; y < decoded.rows; ++y) {
+    for (int x = 0; x < decoded.cols; ++x) {
+      const cv::Vec4b bgra = decoded.at<cv::Vec4b>(y, x);
+      const std::uint8_t* rgba = f.mesh.atlas.At(x, y);
+      differing += bgra[2] != rgba[0] || bgra[1] != rgba[1] || bgra[0] != rgba[2] || bgra[3] != rgba[3];
+    }
+  }
+  CHECK(differing == 0);
+  const json& plain_material = g["materials"][primitives[1]["material"].get<int>()];
+  CHECK_FALSE(plain_material["pbrMetallicRoughness"].contains("baseColorTexture"));
+}
+
+TEST_CASE("GLB: one camera node per calibrated image, at the camera's pose in Y-up axes") {
+  Fixture f = BakedScene();
+  // A second, uncalibrated image must not produce a camera.
+  facet::Image extra = f.scene.project.images[0];
+  extra.id = f.scene.project.NewId();
+  extra.path = "not_calibrated.jpg";
+  extra.camera_calibrated = false;
+  f.scene.project.images.push_back(extra);
+  f.mesh.atlas = facet::ImageRgba8();  // plain mesh: one primitive, no image
+  const fs::path path = TempDir("glb_camera") / "model.glb";
+  const facet::ExportSummary summary = facet::ExportGlb(f.mesh, f.scene.project, path.string());
+  REQUIRE_MESSAGE(summary.success, summary.message);
+  const Glb glb = ParseGlb(path);
+  const json& g = glb.gltf;
+  CHECK(g["meshes"][0]["primitives"].size() == 1);
+  CHECK_FALSE(g.contains("images"));
+
+  REQUIRE(g["cameras"].size() == 1);
+  const facet::Camera& cam = f.scene.true_camera;
+  const json& perspective = g["cameras"][0]["perspective"];
+  CHECK(g["cameras"][0]["type"] == "perspective");
+  const double yfov = perspective["yfov"];
+  const double expected_yfov = 2.0 * std::atan(cam.height_px / (2.0 * cam.focal_px));
+  constexpr double kAngleTolerance = 1e-12;
+  CHECK(std::abs(yfov - expected_yfov) < kAngleTolerance);
+  CHECK(std::abs(perspective["aspectRatio"].get<double>() - 1024.0 / 768.0) < 1e-12);
+  CHECK(perspective["znear"].get<double>() > 0.0);
+
+  const json* node = nullptr;
+  for (const json& n : g["nodes"]) {
+    if (n.contains("camera")) {
+      CHECK(node == nullptr);
+      node = &n;
+    }
+  }
+  REQUIRE(node != nullptr);
+  CHECK((*node)["name"] == "synthetic.png");
+  const Eigen::Quaterniond q((*node)["rotation"][3].get<double>(), (*node)["rotation"][0].get<double>(),
+                             (*node)["rotation"][1].get<double>(), (*node)["rotation"][2].get<double>());
+  constexpr double kPoseTolerance = 1e-9;
+  CHECK(std::abs(q.norm() - 1.0) < kPoseTolerance);
+  const Eigen::Matrix3d r = q.normalized().toRotationMatrix();
+  CHECK((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() < kPoseTolerance);
+  CHECK(std::abs(r.determinant() - 1.0) < kPoseTolerance);
+  const Eigen::Vector3d t((*node)["translation"][0].get<double>(), (*node)["translation"][1].get<double>(),
+                          (*node)["translation"][2].get<double>());
+  const Eigen::Vector3d c = cam.CenterInWorld();
+  CAPTURE(t.transpose());
+  CAPTURE(c.transpose());
+  CHECK((t - Eigen::Vector3d(c.x(), c.z(), -c.y())).norm() < kPoseTolerance);
+
+  // A glTF viewer looking through this node (down -Z, +Y up) sees each box corner at the
+  // pixel the Facet camera projects it to.
+  const Eigen::Vector2d pp = cam.principal_point_px;
+  constexpr double kPixelTolerance = 1e-6;
+  for (const Eigen::Vector3d& corner : facet::BoxCornersInWorld(f.scene.true_box)) {
+    const Eigen::Vector3d p_in_gltf_cam = r.transpose() * (YUp(corner) - t);
+    REQUIRE(p_in_gltf_cam.z() < 0);
+    const Eigen::Vector2d uv(pp.x() + cam.focal_px * p_in_gltf_cam.x() / -p_in_gltf_cam.z(),
+                             pp.y() - cam.focal_px * p_in_gltf_cam.y() / -p_in_gltf_cam.z());
+    const Eigen::Vector2d expected = cam.Project(corner);
+    CAPTURE(uv.transpose());
+    CAPTURE(expected.transpose());
+    CHECK((uv - expected).norm() < kPixelTolerance);
+  }
+}
+
+TEST_CASE("OBJ: counts, flipped UVs in [0,1], material and texture side by side") {
+  const Fixture f = BakedScene();
+  const fs::path dir = TempDir("obj");
+  const facet::ExportSummary summary = facet::ExportObj(f.mesh, (dir / "house.obj").string());
+  REQUIRE_MESSAGE(summary.success, summary.message);
+  CHECK(summary.files_written.size() == 3);
+  REQUIRE(fs::exists(dir / "house.obj"));
+  REQUIRE(fs::exists(dir / "house.mtl"));
+  REQUIRE(fs::exists(dir / "house.png"));
+  CHECK(std::distance(fs::directory_iterator(dir), fs::directory_iterator()) == 3);
+
+  std::ifstream obj(dir / "house.obj");
+  std::string line, mtllib;
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Eigen::Vector2d> vt;
+  size_t vn = 0, faces = 0, textured_faces = 0, bad_refs = 0;
+  std::string material;
+  while (std::getline(obj, line)) {
+    std::istringstream in(line);
+    std::string tag;
+    in >> tag;
+    if (tag == "v") {
+      Eigen::Vector3d p;
+      in >> p.x() >> p.y() >> p.z();
+      v.push_back(p);
+    } else if (tag == "vt") {
+      Eigen::Vector2d t;
+      in >> t.x() >> t.y();
+      vt.push_back(t);
+    } else if (tag == "vn") {
+      ++vn;
+    } else if (tag == "mtllib") {
+      in >> mtllib;
+    } else if (tag == "usemtl") {
+      in >> material;
+    } else if (tag == "f") {
+      ++faces;
+      textured_faces += material == "facet_textured";
+      std::string corner;
+      int corners = 0;
+      while (in >> corner) {
+        ++corners;
+        int vi = 0, ti = 0, ni = 0;
+        if (std::sscanf(corner.c_str(), "%d/%d/%d", &vi, &ti, &ni) != 3 && std::sscanf(corner.c_str(), "%d//%d", &vi, &ni) != 2) {
+          ++bad_refs;
+          continue;
+        }
+        const size_t n = f.mesh.positions.size();
+        bad_refs += vi < 1 || static_cast<size_t>(vi) > n || ti < 0 || static_cast<size_t>(ti) > n || ni < 1 ||
+                    static_cast<size_t>(ni) > n;
+      }
+      CHECK(corners == 3);
+    }
+  }
+  CHECK(v.size() == f.mesh.positions.size());
+  CHECK(vt.size() == f.mesh.uvs.size());
+  CHECK(vn == f.mesh.normals.size());
+  CHECK(faces == f.mesh.indices.size() / 3);
+  CHECK(textured_faces == 6);
+  CHECK(bad_refs == 0);
+  CHECK(mtllib == "house.mtl");
+  constexpr double kTextTolerance = 1e-6;  // 9 significant digits of floats
+  for (size_t i = 0; i < vt.size(); ++i) {
+    CHECK((vt[i].x() >= 0 && vt[i].x() <= 1 && vt[i].y() >= 0 && vt[i].y() <= 1));
+    CHECK(std::abs(vt[i].y() - (1.0 - f.mesh.uvs[i].y())) < kTextTolerance);
+    CHECK((v[i] - YUp(f.mesh.positions[i].cast<double>())).norm() < kTextTolerance);
+  }
+
+  std::ifstream mtl(dir / "house.mtl");
+  const std::string mtl_text((std::istreambuf_iterator<char>(mtl)), {});
+  CHECK(mtl_text.find("newmtl facet_textured") != std::string::npos);
+  CHECK(mtl_text.find("newmtl facet_untextured") != std::string::npos);
+  CHECK(mtl_text.find("map_Kd house.png") != std::string::npos);
+  const cv::Mat png = cv::imread((dir / "house.png").string(), cv::IMREAD_UNCHANGED);
+  CHECK(png.cols == f.mesh.atlas.width);
+  CHECK(png.rows == f.mesh.atlas.height);
+
+  // Without texture: no PNG, no map.
+  const fs::path plain_dir = TempDir("obj_plain");
+  const auto plain = facet::ExportObj(facet::BuildUntexturedMesh(f.scene.project), (plain_dir / "box").string());
+  REQUIRE_MESSAGE(plain.success, plain.message);
+  CHECK(fs::exists(plain_dir / "box.obj"));
+  CHECK_FALSE(fs::exists(plain_dir / "box.png"));
+  std::ifstream plain_mtl(plain_dir / "box.mtl");
+  const std::string plain_mtl_text((std::istreambuf_iterator<char>(plain_mtl)), {});
+  CHECK(plain_mtl_text.find("map_Kd") == std::string::npos);
+}
+
+TEST_CASE("export errors: unwritable path, empty or malformed mesh") {
+  const Fixture f = BakedScene();
+  const fs::path missing = TempDir("errors") / "no_such_folder";
+  auto s = facet::ExportGlb(f.mesh, f.scene.project, (missing / "m.glb").string());
+  CHECK_FALSE(s.success);
+  CHECK(s.message.find("m.glb") != std::string::npos);
+  MESSAGE(s.message);
+  s = facet::ExportObj(f.mesh, (missing / "m.obj").string());
+  CHECK_FALSE(s.success);
+  CHECK_FALSE(s.message.empty());
+  CHECK_FALSE(fs::exists(missing));
+
+  const fs::path dir = TempDir("errors_mesh");
+  s = facet::ExportGlb(facet::TexturedMesh(), f.scene.project, (dir / "e.glb").string());
+  CHECK_FALSE(s.success);
+  CHECK(s.message.find("empty") != std::string::npos);
+  s = facet::ExportObj(facet::TexturedMesh(), (dir / "e.obj").string());
+  CHECK_FALSE(s.success);
+  facet::TexturedMesh broken = f.mesh;
+  broken.indices.push_back(static_cast<std::uint32_t>(broken.positions.size()));
+  broken.indices.push_back(0);
+  broken.indices.push_back(1);
+  broken.triangle_textured.push_back(0);
+  s = facet::ExportGlb(broken, f.scene.project, (dir / "b.glb").string());
+  CHECK_FALSE(s.success);
+  CHECK(std::distance(fs::directory_iterator(dir), fs::directory_iterator()) == 0);
+}
