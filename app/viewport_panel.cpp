@@ -25,7 +25,8 @@
 namespace facet::app {
 namespace {
 
-constexpr int kMsaaSamples = 4;
+// Multisampling quadruples the panel's cost under llvmpipe; software renderers go without.
+constexpr int kMsaaSamplesHardware = 4;
 constexpr int kMaxPhotoTextureSide = 1024;
 constexpr float kPickRadiusPx = 8.0f;
 constexpr float kClickSlopPx = 4.0f;
@@ -167,8 +168,8 @@ constexpr Rgba kActiveFrustumColor = {255, 210, 60, 255};
 constexpr Rgba kAxisX = {230, 60, 60, 255};
 constexpr Rgba kAxisY = {70, 200, 70, 255};
 constexpr Rgba kAxisZ = {70, 120, 255, 255};
-constexpr Rgba kGridMinor = {150, 155, 165, 70};
-constexpr Rgba kGridMajor = {170, 175, 185, 150};
+constexpr Rgba kGridMinor = {150, 155, 165, 80};
+constexpr Rgba kGridMajor = {190, 195, 205, 190};
 
 // A range of vertices inside one buffer.
 struct DrawRange {
@@ -234,6 +235,7 @@ struct GlResources {
   std::map<Id, PhotoTexture> photo_textures;
   GlRenderTarget target;
   bool wide_lines = false;
+  int msaa_samples = 1;
 };
 
 // Scene measures that size the grid, the frustums and the framing.
@@ -262,6 +264,8 @@ struct PanelState {
   bool left_pressed_here = false;
   ImVec2 left_press_pos;
   CornerRef hovered_corner;
+  bool frame_requested = false;
+  Id view_from_photo_requested = kNoId;
 };
 
 // Created on first use and deleted by ShutdownViewportPanel while the context is current; a
@@ -369,6 +373,12 @@ bool InitGl(GlResources* gl) {
   GLfloat range[2] = {1.0f, 1.0f};
   glGetFloatv(GL_ALIASED_LINE_WIDTH_RANGE, range);
   gl->wide_lines = (flags & GL_CONTEXT_FLAG_FORWARD_COMPATIBLE_BIT) == 0 && range[1] >= 2.0f;
+  const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  const std::string renderer_name = renderer ? renderer : "";
+  const bool software = renderer_name.find("llvmpipe") != std::string::npos ||
+                        renderer_name.find("softpipe") != std::string::npos ||
+                        renderer_name.find("SwiftShader") != std::string::npos;
+  gl->msaa_samples = software ? 1 : kMsaaSamplesHardware;
   while (glGetError() != GL_NO_ERROR) {
   }
   return true;
@@ -477,9 +487,9 @@ SceneMeasure MeasureScene(const Project& project) {
   m.size = box_bounds.isEmpty() ? 2.0 * m.bounds.radius : std::max(box_bounds.diagonal().norm(), 1e-3);
   m.frustum_depth = 0.25 * m.size;
 
-  // Grid steps are powers of ten: major near the scene's size, minor a tenth of it.
-  m.grid_major = std::pow(10.0, std::floor(std::log10(m.size)));
-  m.grid_minor = m.grid_major / 10.0;
+  // Grid steps are powers of ten: 4 to 40 minor cells across the scene, major every ten.
+  m.grid_minor = std::pow(10.0, std::floor(std::log10(m.size / 4.0)));
+  m.grid_major = 10.0 * m.grid_minor;
   m.grid_center = Eigen::Vector3d(std::round(m.bounds.center.x() / m.grid_major) * m.grid_major,
                                   std::round(m.bounds.center.y() / m.grid_major) * m.grid_major, 0.0);
   const double reach = m.bounds.radius + (m.bounds.center.head<2>() - m.grid_center.head<2>()).norm();
@@ -575,7 +585,7 @@ void BuildSceneGeometry(const AppState& state, const SceneMeasure& measure, Id p
   end_range(&gl->frustums);
 
   begin_range(&gl->axes);
-  const double axis_length = std::max(measure.grid_major, 0.3 * measure.size);
+  const double axis_length = 0.35 * measure.size;
   PushLine(&lines, Eigen::Vector3d::Zero(), axis_length * Eigen::Vector3d::UnitX(), kAxisX);
   PushLine(&lines, Eigen::Vector3d::Zero(), axis_length * Eigen::Vector3d::UnitY(), kAxisY);
   PushLine(&lines, Eigen::Vector3d::Zero(), axis_length * Eigen::Vector3d::UnitZ(), kAxisZ);
@@ -723,16 +733,14 @@ void RenderScene(const AppState& state, const PanelState& panel, const ViewSetup
     glUniform1i(gl.line_fade, 1);
     glUniform3f(gl.line_fade_center, static_cast<float>(measure.grid_center.x()), static_cast<float>(measure.grid_center.y()), 0.0f);
     glUniform1f(gl.line_fade_radius, static_cast<float>(measure.grid_half_extent));
-    glUniform1f(gl.line_fade_eye_distance, static_cast<float>(std::max(measure.grid_minor * 120.0, 3.0 * measure.size)));
+    // Lines fade before their spacing shrinks to a few pixels.
+    glUniform1f(gl.line_fade_eye_distance, static_cast<float>(measure.grid_minor * 250.0));
     glDrawArrays(GL_LINES, gl.grid_minor.first, gl.grid_minor.count);
-    glUniform1f(gl.line_fade_eye_distance, static_cast<float>(measure.grid_major * 120.0 + 6.0 * measure.size));
+    glUniform1f(gl.line_fade_eye_distance, static_cast<float>(measure.grid_major * 250.0));
     glDrawArrays(GL_LINES, gl.grid_major.first, gl.grid_major.count);
     glDepthMask(GL_TRUE);
   }
   glUniform1i(gl.line_fade, 0);
-  SetLineWidth(gl, 2.0f);
-  glDrawArrays(GL_LINES, gl.axes.first, gl.axes.count);
-  SetLineWidth(gl, 1.0f);
 
   // The mesh, pushed back a little so that the outlines drawn on its faces win.
   if (panel.show_mesh && gl.mesh_vertex_count > 0) {
@@ -769,6 +777,10 @@ void RenderScene(const AppState& state, const PanelState& panel, const ViewSetup
   glUseProgram(gl.line_program.id);
   glBindVertexArray(gl.lines_vao);
   if (panel.show_wireframe) glDrawArrays(GL_LINES, gl.box_edges.first, gl.box_edges.count);
+  // After the outlines: a first box usually sits at the origin, its edges along the axes.
+  SetLineWidth(gl, 2.5f);
+  glDrawArrays(GL_LINES, gl.axes.first, gl.axes.count);
+  SetLineWidth(gl, 1.0f);
   if (panel.show_cameras) {
     glDrawArrays(GL_LINES, gl.frustums.first, gl.frustums.count);
     if (gl.active_frustum.count > 0) {
@@ -796,6 +808,42 @@ CornerRef NearestCorner(const Project& project, const ViewSetup& view, ImVec2 mo
         best_d2 = d2;
         best = {box.id, i};
       }
+    }
+  }
+  return best;
+}
+
+// The box under a panel pixel (nearest along the view ray), or kNoId.
+Id BoxUnderPixel(const Project& project, const ViewSetup& view, ImVec2 pixel_in_panel) {
+  // Unproject the pixel at the near and far planes with the same matrices the frame used.
+  const Eigen::Matrix4d world_from_clip = view.clip_from_world.inverse();
+  const double ndc_x = 2.0 * pixel_in_panel.x / view.width_px - 1.0;
+  const double ndc_y = 1.0 - 2.0 * pixel_in_panel.y / view.height_px;
+  const Eigen::Vector4d near_h = world_from_clip * Eigen::Vector4d(ndc_x, ndc_y, -1.0, 1.0);
+  const Eigen::Vector4d far_h = world_from_clip * Eigen::Vector4d(ndc_x, ndc_y, 1.0, 1.0);
+  const Eigen::Vector3d origin = near_h.head<3>() / near_h.w();
+  const Eigen::Vector3d direction = far_h.head<3>() / far_h.w() - origin;
+  Id best = kNoId;
+  double best_t = std::numeric_limits<double>::infinity();
+  for (const Box& box : project.boxes) {
+    // Slab test in the box's own frame, where it spans [0, size].
+    const Eigen::Matrix3d box_from_world = RotationFromAngleAxis(box.rotation).transpose();
+    const Eigen::Vector3d o = box_from_world * (origin - box.translation);
+    const Eigen::Vector3d d = box_from_world * direction;
+    double t0 = 0.0, t1 = 1.0;
+    for (int a = 0; a < 3 && t0 <= t1; ++a) {
+      if (std::abs(d[a]) < 1e-15) {
+        if (o[a] < 0.0 || o[a] > box.size[a]) t0 = 2.0;
+        continue;
+      }
+      double ta = (0.0 - o[a]) / d[a], tb = (box.size[a] - o[a]) / d[a];
+      if (ta > tb) std::swap(ta, tb);
+      t0 = std::max(t0, ta);
+      t1 = std::min(t1, tb);
+    }
+    if (t0 <= t1 && t0 < best_t) {
+      best_t = t0;
+      best = box.id;
     }
   }
   return best;
@@ -880,7 +928,7 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
 
   // Help and counts in the bottom-left corner.
   char counts[128];
-  std::snprintf(counts, sizeof(counts), "%zu vertices \xc2\xb7 %zu faces", state.mesh.positions.size(),
+  std::snprintf(counts, sizeof(counts), "%zu vertices \xc2\xb7 %zu triangles", state.mesh.positions.size(),
                 state.mesh.indices.size() / 3);
   const float line_h = ImGui::GetTextLineHeight();
   const ImVec2 help_size = ImGui::CalcTextSize(kHelpText);
@@ -971,8 +1019,15 @@ void DrawViewportPanel(AppState* state) {
     OrbitPan(&panel.orbit, delta_px.x, delta_px.y, width_px, height_px);
   }
   if (hovered && io.MouseWheel != 0.0f) OrbitZoom(&panel.orbit, io.MouseWheel, width_px, height_px);
-  if ((hovered && ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) || ((hovered || active) && FramePressed(io))) {
+  if ((hovered && ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) || ((hovered || active) && FramePressed(io)) ||
+      panel.frame_requested) {
     OrbitFrame(&panel.orbit, measure.bounds, width_px, height_px);
+  }
+  panel.frame_requested = false;
+  if (panel.view_from_photo_requested != kNoId) {
+    const Image* image = project.FindImage(panel.view_from_photo_requested);
+    if (image && Drawable(*image)) OrbitViewFromPhoto(&panel.orbit, image->id, image->camera, measure.bounds);
+    panel.view_from_photo_requested = kNoId;
   }
 
   const ViewSetup view = MakeView(panel.orbit, measure, width_px, height_px);
@@ -983,8 +1038,9 @@ void DrawViewportPanel(AppState* state) {
     panel.left_pressed_here = false;
     const float dx = io.MousePos.x - panel.left_press_pos.x, dy = io.MousePos.y - panel.left_press_pos.y;
     if (dx * dx + dy * dy <= kClickSlopPx * kClickSlopPx && hovered) {
+      // A corner within reach, else the box under the cursor (no corner), else nothing.
       const CornerRef picked = NearestCorner(project, view, mouse_px, kPickRadiusPx * scale_x);
-      state->selection.box_id = picked.box_id;
+      state->selection.box_id = picked.box_id != kNoId ? picked.box_id : BoxUnderPixel(project, view, mouse_px);
       state->selection.box_corner = picked.corner;
     }
   }
@@ -999,7 +1055,7 @@ void DrawViewportPanel(AppState* state) {
     gl.scene_key = std::move(key);
   }
   std::string target_error;
-  if (!gl.target.Ensure(width_px, height_px, kMsaaSamples, &target_error)) {
+  if (!gl.target.Ensure(width_px, height_px, gl.msaa_samples, &target_error)) {
     saved.Restore();
     ImGui::GetWindowDrawList()->AddText(origin, IM_COL32(255, 100, 100, 255), target_error.c_str());
     return;
@@ -1014,6 +1070,10 @@ void DrawViewportPanel(AppState* state) {
                                        ImVec2(origin.x + size.x, origin.y + size.y), ImVec2(0, 1), ImVec2(1, 0));
   DrawOverlay(*state, panel, view, origin, size);
 }
+
+void RequestViewportFrame() { Panel().frame_requested = true; }
+
+void RequestViewportViewFromPhoto(Id image_id) { Panel().view_from_photo_requested = image_id; }
 
 void ShutdownViewportPanel() {
   if (!g_panel) return;

@@ -12,4 +12,10 @@ void DrawViewportPanel(AppState* state);
 // Frees GL resources (before the context goes away).
 void ShutdownViewportPanel();
 
+// Requests carried out by the next DrawViewportPanel, for menus, shortcuts and the input
+// script: frame the whole model (boxes and camera centres), or look through the camera of
+// a calibrated image (ignored when it is not calibrated).
+void RequestViewportFrame();
+void RequestViewportViewFromPhoto(Id image_id);
+
 }  // namespace facet::app
