@@ -670,8 +670,15 @@ void RebaseImagePaths(const std::string& old_project_path, const std::string& ne
   }
 }
 
-std::string WriteFileAtomically(const std::string& path, const std::string& bytes) {
+std::string WriteFileAtomically(const std::string& requested_path, const std::string& bytes) {
   namespace fs = std::filesystem;
+  // Renaming over a symlink would replace the link by a file; write where it points instead.
+  std::error_code link_ec;
+  std::string path = requested_path;
+  if (fs::is_symlink(requested_path, link_ec)) {
+    const fs::path target = fs::weakly_canonical(requested_path, link_ec);
+    if (!link_ec) path = target.string();
+  }
   std::string temp = path + ".tmp-XXXXXX";
   const int fd = ::mkstemp(temp.data());
   if (fd < 0) return "cannot create a temporary file beside " + path + ": " + ErrnoText(errno);

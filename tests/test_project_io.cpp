@@ -665,6 +665,16 @@ TEST_CASE("atomic save: missing folder, replacing a file, failures leave no trac
     CHECK((fs::status(path).permissions() & fs::perms::all) ==
           (fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read | fs::perms::others_read));
   }
+  SUBCASE("saving through a symlink replaces the file it points to and keeps the link") {
+    fs::create_directory(dir.path / "real");
+    const std::string target = dir / "real/p.facet";
+    WriteFile(target, "old contents");
+    fs::create_symlink(target, dir.path / "link.facet");
+    REQUIRE(facet::SaveProject(p, dir / "link.facet") == "");
+    CHECK(fs::is_symlink(dir.path / "link.facet"));
+    CHECK(ReadFile(target) == facet::ProjectToJson(p));
+    CHECK(ListDir(dir.path / "real") == std::set<std::string>{"p.facet"});
+  }
   SUBCASE("a target that is a folder fails; the folder stays and no temp file remains") {
     fs::create_directory(dir.path / "taken.facet");
     WriteFile(dir / "taken.facet/inside.txt", "keep me");
