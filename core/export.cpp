@@ -163,7 +163,10 @@ ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const 
   accessors[position_accessor]["min"] = {lo.x(), lo.y(), lo.z()};
   accessors[position_accessor]["max"] = {hi.x(), hi.y(), hi.z()};
   const int normal_accessor = add_vertex_accessor(normals.data(), n * sizeof(Eigen::Vector3f), "VEC3");
-  const int uv_accessor = add_vertex_accessor(mesh.uvs.data(), n * sizeof(Eigen::Vector2f), "VEC2");
+  // UVs only when some primitive samples the atlas; validators flag unused accessors.
+  const int uv_accessor = textured_indices.empty()
+                              ? -1
+                              : add_vertex_accessor(mesh.uvs.data(), n * sizeof(Eigen::Vector2f), "VEC2");
   static_assert(sizeof(Eigen::Vector3f) == 12 && sizeof(Eigen::Vector2f) == 8, "tightly packed vectors");
 
   Json materials = Json::array(), primitives = Json::array();
