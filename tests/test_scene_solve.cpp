@@ -470,6 +470,20 @@ TEST_CASE("degenerate inputs: nothing to solve, bad pins and bad options leave t
     CHECK(HasWarningContaining(summary, "'raw.png' skipped: the image is not calibrated"));
     CHECK(std::isnan(summary.pin_residuals_px.back()));
   }
+  SUBCASE("a pin naming a missing box is skipped with a warning") {
+    Pin pin = scene.project.pins[0];
+    pin.id = scene.project.NewId();
+    pin.box_id = scene.project.NewId();
+    scene.project.pins.push_back(pin);
+    Project solved;
+    const SceneSolveSummary summary = SolveScene(scene.project, SceneSolveOptions(), &solved);
+    INFO(AllWarnings(summary));
+    REQUIRE(summary.IsUsable());
+    CHECK(summary.num_skipped_pins == 1);
+    CHECK(HasWarningContaining(summary, "pin #" + std::to_string(pin.id) + " refers to a missing box"));
+    CHECK(std::isnan(summary.pin_residuals_px.back()));
+    CHECK(summary.time_ms > 0.0);
+  }
   SUBCASE("bad options") {
     SceneSolveOptions options;
     std::string error;
