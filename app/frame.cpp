@@ -488,7 +488,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     return true;
   }
   if (name == "fit") {
-    shell->request_fit = true;
+    RequestImageFit();
     return true;
   }
   if (name == "export") {
@@ -550,7 +550,6 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   }
   shell->floating_to_place = -1;
   if (!ImGui::GetIO().MouseDown[0]) shell->tearing_panel = -1;
-  shell->request_fit = false;
 
   DrawDialogs(state, shell);
   if (shell->dialog == Dialog::kNone) HandleToolShortcuts(state);

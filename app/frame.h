@@ -30,7 +30,6 @@ struct ShellState {
   // then exits.
   bool quit_now = false;
   bool quit_after_save = false;  // the Save As dialog was opened by the quit confirmation
-  bool request_fit = false;      // "fit" command: fit the image view this frame
 
   // Splitter and tear-off interaction.
   int active_splitter = -1;  // index into the last TiledLayout's splitters
