@@ -198,3 +198,30 @@ TEST_CASE("writing an empty image or to a missing folder fails with a message") 
   CHECK(facet::EncodePng(facet::ImageRgba8()).empty());
   CHECK_FALSE(facet::WritePng((dir / "no_such_dir" / "x.png").string(), MakePattern(4, 4)).empty());
 }
+
+TEST_CASE("grey, 16-bit and TIFF images read as 8-bit RGBA; TIFF size falls back to decoding") {
+  const fs::path dir = TempDir("formats");
+  cv::Mat grey(10, 12, CV_8UC1, cv::Scalar(77));
+  REQUIRE(cv::imwrite((dir / "grey.png").string(), grey));
+  facet::ImageReadResult read = facet::ReadImage((dir / "grey.png").string());
+  REQUIRE_MESSAGE(read.ok(), read.error);
+  const std::uint8_t* p = read.image.At(3, 4);
+  CHECK((p[0] == 77 && p[1] == 77 && p[2] == 77 && p[3] == 255));
+
+  cv::Mat deep(8, 9, CV_16UC3, cv::Scalar(257 * 10, 257 * 20, 257 * 30));  // B, G, R
+  REQUIRE(cv::imwrite((dir / "deep.png").string(), deep));
+  read = facet::ReadImage((dir / "deep.png").string());
+  REQUIRE_MESSAGE(read.ok(), read.error);
+  p = read.image.At(2, 2);
+  CHECK((p[0] == 30 && p[1] == 20 && p[2] == 10 && p[3] == 255));
+
+  REQUIRE(cv::haveImageWriter(".tiff"));
+  cv::Mat bgr(21, 34, CV_8UC3, cv::Scalar(1, 2, 3));
+  const std::string tiff = (dir / "t.tiff").string();
+  REQUIRE(cv::imwrite(tiff, bgr));
+  int w = 0, h = 0;
+  std::string error;
+  REQUIRE_MESSAGE(facet::ReadImageSize(tiff, &w, &h, &error), error);
+  CHECK(w == 34);
+  CHECK(h == 21);
+}
