@@ -8,6 +8,7 @@
 
 #include <Eigen/Dense>
 
+#include "core/camera.h"
 #include "core/vanishing_point.h"
 
 namespace facet {
@@ -24,6 +25,14 @@ constexpr double kCentralVanishingPointDeg = 5.0;
 // Second / largest singular value of a family's stacked lines below which its segments are
 // nearly on one line.
 constexpr double kNearlyCollinearSpread = 1e-3;
+
+// Standard deviation, in half image sizes, of the weak prior that keeps a solved principal
+// point near the image centre where the segments leave it loose (5 %: 16 px at 640 x 480).
+constexpr double kPrincipalPointPriorSigma = 0.05;
+// When the closed form fails and the joint fit starts from the image centre, the result is
+// accepted only if its residuals stay near those of free vanishing points.
+constexpr double kMaxJointRmsRatio = 2.0;
+constexpr double kJointRmsSlackPx = 0.1;
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
@@ -70,6 +79,93 @@ Eigen::Matrix3d NearestRotation(const Eigen::Matrix3d& m) {
   Eigen::Matrix3d u = svd.matrixU();
   if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) *= -1.0;
   return u * svd.matrixV().transpose();
+}
+
+// Maximum-likelihood-style fit of the whole camera to all segments at once: focal length,
+// principal point (when solved) and rotation, with the three vanishing directions kept
+// orthogonal by construction (v_a = K R e_a). Residuals are the segments' endpoint distances
+// (core/vanishing_point.h) in conditioned coordinates. Levenberg-Marquardt on log f, the
+// principal point and a left rotation increment; the Jacobian by central differences
+// (6 columns, cheap next to the fit's other costs). Returns the number of accepted steps.
+struct JointSegment {
+  Eigen::Vector4d segment;  // conditioned
+  int axis;
+};
+
+Eigen::VectorXd JointResiduals(const std::vector<JointSegment>& segments, double f, const Eigen::Vector2d& pp,
+                               const Eigen::Matrix3d& r, double prior_weight) {
+  Eigen::Matrix3d k = Eigen::Matrix3d::Identity();
+  k(0, 0) = k(1, 1) = f;
+  k(0, 2) = pp.x();
+  k(1, 2) = pp.y();
+  const Eigen::Matrix3d vps = k * r;
+  Eigen::VectorXd residuals(segments.size() + (prior_weight > 0 ? 2 : 0));
+  for (size_t i = 0; i < segments.size(); ++i)
+    residuals(i) = SegmentVanishingPointSignedDistance(segments[i].segment, vps.col(segments[i].axis));
+  if (prior_weight > 0) residuals.tail<2>() = prior_weight * pp;
+  return residuals;
+}
+
+int RefineJointly(const std::vector<JointSegment>& segments, bool solve_pp, double prior_weight, double* f,
+                  Eigen::Vector2d* pp, Eigen::Matrix3d* r) {
+  const int num_params = solve_pp ? 6 : 4;
+  auto apply = [&](const Eigen::VectorXd& delta, double* f_out, Eigen::Vector2d* pp_out, Eigen::Matrix3d* r_out) {
+    *f_out = *f * std::exp(delta(0));
+    *pp_out = solve_pp ? Eigen::Vector2d(*pp + delta.segment<2>(1)) : *pp;
+    *r_out = RotationFromAngleAxis(delta.tail<3>()) * *r;
+  };
+  auto residuals_at = [&](const Eigen::VectorXd& delta) {
+    double f2;
+    Eigen::Vector2d pp2;
+    Eigen::Matrix3d r2;
+    apply(delta, &f2, &pp2, &r2);
+    return JointResiduals(segments, f2, pp2, r2, prior_weight);
+  };
+  Eigen::VectorXd residuals = JointResiduals(segments, *f, *pp, *r, prior_weight);
+  double cost = residuals.squaredNorm();
+  double lambda = 1e-4;
+  int accepted = 0;
+  constexpr double kStep = 1e-7;
+  Eigen::MatrixXd jacobian(residuals.size(), num_params);
+  for (int iteration = 0; iteration < 100 && std::isfinite(cost) && cost > 0.0; ++iteration) {
+    for (int p = 0; p < num_params; ++p) {
+      Eigen::VectorXd delta = Eigen::VectorXd::Zero(num_params);
+      delta(p) = kStep;
+      const Eigen::VectorXd plus = residuals_at(delta);
+      delta(p) = -kStep;
+      jacobian.col(p) = (plus - residuals_at(delta)) / (2 * kStep);
+    }
+    const Eigen::MatrixXd jtj = jacobian.transpose() * jacobian;
+    const Eigen::VectorXd jtr = jacobian.transpose() * residuals;
+    bool improved = false;
+    while (lambda < 1e12) {
+      Eigen::MatrixXd damped = jtj;
+      damped.diagonal() += lambda * (jtj.diagonal().array() + 1e-12).matrix();
+      const Eigen::VectorXd step = -damped.ldlt().solve(jtr);
+      if (!step.allFinite()) break;
+      double f2;
+      Eigen::Vector2d pp2;
+      Eigen::Matrix3d r2;
+      apply(step, &f2, &pp2, &r2);
+      const Eigen::VectorXd candidate = JointResiduals(segments, f2, pp2, r2, prior_weight);
+      const double candidate_cost = candidate.squaredNorm();
+      if (candidate_cost < cost) {
+        const double decrease = cost - candidate_cost;
+        *f = f2;
+        *pp = pp2;
+        *r = r2;
+        residuals = candidate;
+        cost = candidate_cost;
+        lambda = std::max(lambda * 0.1, 1e-12);
+        ++accepted;
+        improved = decrease > 1e-15 * cost && step.norm() > 1e-14;
+        break;
+      }
+      lambda *= 10.0;
+    }
+    if (!improved) break;
+  }
+  return accepted;
 }
 
 }  // namespace
@@ -167,9 +263,24 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
   for (int i = 0; i < 3; ++i)
     for (int j = i + 1; j < 3; ++j)
       if (present[i] && present[j]) pairs.push_back({i, j});
+  // f^2 by least squares over the pairs for a given principal point; NaN when no pair has
+  // two finite points (then f does not enter any constraint).
+  auto focal_squared_for = [&](const Eigen::Vector2d& c) {
+    double num = 0.0, den = 0.0, max_coefficient = 0.0;
+    for (const auto& pair : pairs) {
+      const Eigen::Vector3d& vi = v[pair[0]];
+      const Eigen::Vector3d& vj = v[pair[1]];
+      const double coefficient = vi.z() * vj.z();
+      num += coefficient * (vi.head<2>() - c * vi.z()).dot(vj.head<2>() - c * vj.z());
+      den += coefficient * coefficient;
+      max_coefficient = std::max(max_coefficient, std::abs(coefficient));
+    }
+    return max_coefficient > 1.0 / (kAtInfinityDistance * kAtInfinityDistance) ? -num / den : std::nan("");
+  };
 
   Eigen::Vector2d pp;  // conditioned
   double f_squared = 0.0;
+  bool started_from_center = false;
   if (mode == PrincipalPointMode::kSolve) {
     for (int a = 0; a < 3; ++a)
       if (at_infinity[a])
@@ -199,38 +310,35 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
     const Eigen::Vector3d u = svd.solve(rhs);
     pp = u.head<2>();
     f_squared = u(2) - pp.squaredNorm();
+    summary.closed_form_focal_px = f_squared > 0.0 ? std::sqrt(f_squared) * scale_px : 0.0;
+    summary.closed_form_principal_point_px = center_px + scale_px * pp;
+    // A vanishing point far from the image makes the closed form unstable: noise can push
+    // f^2 below zero. The joint fit below, started at the image centre, still finds the
+    // camera if one explains the segments (checked after the fit).
+    const double f_squared_at_center = focal_squared_for(Eigen::Vector2d::Zero());
+    if (!(f_squared > 0.0) && f_squared_at_center > 0.0) {
+      started_from_center = true;
+      pp.setZero();
+      f_squared = f_squared_at_center;
+    }
   } else {
     const Eigen::Vector2d pp_px =
         mode == PrincipalPointMode::kFixed ? options.fixed_principal_point_px : center_px;
     pp = (pp_px - center_px) / scale_px;
-    double num = 0.0, den = 0.0, max_coefficient = 0.0;
-    for (const auto& pair : pairs) {
-      const Eigen::Vector3d& vi = v[pair[0]];
-      const Eigen::Vector3d& vj = v[pair[1]];
-      const double coefficient = vi.z() * vj.z();
-      const double constant = (vi.head<2>() - pp * vi.z()).dot(vj.head<2>() - pp * vj.z());
-      num += coefficient * constant;
-      den += coefficient * coefficient;
-      max_coefficient = std::max(max_coefficient, std::abs(coefficient));
-    }
-    if (!(max_coefficient > 1.0 / (kAtInfinityDistance * kAtInfinityDistance)))
+    f_squared = focal_squared_for(pp);
+    if (std::isnan(f_squared))
       return Fail(summary,
                   "the focal length is undetermined: no two families have finite vanishing points (segments parallel "
                   "in the image)",
                   start);
-    f_squared = -num / den;
   }
-  if (!std::isfinite(f_squared))
-    return Fail(summary, "the focal length is not finite (numerical failure)", start);
-  if (f_squared <= 0.0)
-    return Fail(summary,
-                "the vanishing points give no real focal length (f^2 = " + Fmt(f_squared * scale_px * scale_px) +
-                    " px^2 <= 0): the vanishing-point triangle is obtuse or the families are not mutually orthogonal; "
-                    "check the family assignment of the segments",
-                start);
-  const double f = std::sqrt(f_squared);
-  summary.focal_px = f * scale_px;
-  summary.principal_point_px = center_px + scale_px * pp;
+  const std::string no_real_focal =
+      "the vanishing points give no real focal length (f^2 = " + Fmt(f_squared * scale_px * scale_px) +
+      " px^2 <= 0): the vanishing-point triangle is obtuse or the families are not mutually orthogonal; check the "
+      "family assignment of the segments";
+  if (!std::isfinite(f_squared)) return Fail(summary, "the focal length is not finite (numerical failure)", start);
+  if (f_squared <= 0.0) return Fail(summary, no_real_focal, start);
+  double f = std::sqrt(f_squared);
 
   // Vanishing directions d ~ K^-1 v (the same in conditioned and pixel coordinates).
   Eigen::Matrix3d k_inverse = Eigen::Matrix3d::Identity();
@@ -251,7 +359,73 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
     const int b = (a + 1) % 3, c = (a + 2) % 3;
     directions.col(a) = directions.col(b).cross(directions.col(c)).normalized();
   }
-  summary.cam_from_world_rotation = NearestRotation(ChooseAxisSigns(directions));
+  Eigen::Matrix3d rotation = NearestRotation(ChooseAxisSigns(directions));
+
+  // Joint fit of the camera to all segments. With a fixed principal point it enforces the
+  // orthogonality the closed form only approximates. With the principal point solved, three
+  // free vanishing points and (f, c, R) have the same 6 degrees of freedom, so the data alone
+  // would return the closed form; the weak prior at the image centre, weighted by the noise
+  // the segments show, decides only where the data leave the principal point loose (a
+  // vanishing point far away) and vanishes for exact data.
+  std::vector<JointSegment> joint;
+  std::vector<int> joint_input_index;
+  double independent_sum_sq = 0.0;
+  for (int a = 0; a < 3; ++a)
+    for (size_t k = 0; k < family_segments[a].size(); ++k) {
+      const Eigen::Vector4d& s = family_segments[a][k];
+      Eigen::Vector4d c;
+      c.head<2>() = (s.head<2>() - center_px) / scale_px;
+      c.tail<2>() = (s.tail<2>() - center_px) / scale_px;
+      joint.push_back({c, a});
+      joint_input_index.push_back(family_indices[a][k]);
+      independent_sum_sq += std::pow(summary.segment_residuals_px[family_indices[a][k]], 2);
+    }
+  const double independent_rms_px = std::sqrt(independent_sum_sq / joint.size());
+  const double prior_weight =
+      mode == PrincipalPointMode::kSolve ? independent_rms_px / (kPrincipalPointPriorSigma * scale_px) : 0.0;
+  summary.joint_fit_iterations =
+      RefineJointly(joint, mode == PrincipalPointMode::kSolve, prior_weight, &f, &pp, &rotation);
+  summary.focal_px = f * scale_px;
+  summary.principal_point_px = center_px + scale_px * pp;
+  summary.cam_from_world_rotation = NearestRotation(ChooseAxisSigns(rotation));
+
+  // Report the vanishing points of the final camera and the residuals against them, so
+  // that camera, points and residuals agree.
+  Eigen::Matrix3d k_final = Eigen::Matrix3d::Identity();
+  k_final(0, 0) = k_final(1, 1) = summary.focal_px;
+  k_final(0, 2) = summary.principal_point_px.x();
+  k_final(1, 2) = summary.principal_point_px.y();
+  const Eigen::Matrix3d final_vps = k_final * summary.cam_from_world_rotation;
+  double joint_sum_sq = 0.0;
+  std::array<double, 3> family_sum_sq = {0, 0, 0};
+  for (size_t i = 0; i < joint.size(); ++i) {
+    const Segment& s = segments[joint_input_index[i]];
+    const Eigen::Vector4d seg(s.a_px.x(), s.a_px.y(), s.b_px.x(), s.b_px.y());
+    const double r = SegmentVanishingPointResidualPx(seg, final_vps.col(joint[i].axis));
+    summary.segment_residuals_px[joint_input_index[i]] = r;
+    joint_sum_sq += r * r;
+    family_sum_sq[joint[i].axis] += r * r;
+  }
+  summary.rms_residual_px = std::sqrt(joint_sum_sq / joint.size());
+  for (int a = 0; a < 3; ++a) {
+    if (!present[a]) continue;
+    Eigen::Vector3d vp = final_vps.col(a).normalized();
+    if (vp.z() < 0.0) vp = -vp;
+    summary.vanishing_points[a] = vp;
+    summary.vanishing_point_rms_px[a] = std::sqrt(family_sum_sq[a] / summary.segments_per_axis[a]);
+  }
+  if (started_from_center) {
+    // Orthogonal directions that explain the segments about as well as free vanishing points
+    // do mean the closed form failed on noise, not on inconsistent families.
+    if (!(summary.rms_residual_px <= kMaxJointRmsRatio * independent_rms_px + kJointRmsSlackPx))
+      return Fail(summary,
+                  no_real_focal + " (a fit with orthogonal directions leaves " + Fmt(summary.rms_residual_px) +
+                      " px RMS against " + Fmt(independent_rms_px) + " px for free vanishing points)",
+                  start);
+    summary.warnings.push_back(
+        "the three vanishing points alone give no real focal length (a vanishing point far from the image makes "
+        "them unstable); the camera was fitted to all segments starting from the image centre");
+  }
   if (!summary.cam_from_world_rotation.allFinite() || !std::isfinite(summary.focal_px) ||
       !summary.principal_point_px.allFinite())
     return Fail(summary, "the calibration is not finite (numerical failure)", start);

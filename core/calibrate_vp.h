@@ -2,7 +2,10 @@
 // "three orthogonal vanishing points"). Each vanishing point is fitted by least squares over
 // all segments of its family (2 or more); the focal length and principal point follow from
 // the orthocentre construction with three vanishing points, or the focal length alone from
-// two with the principal point given; the rotation from the vanishing directions.
+// two with the principal point given; the rotation from the vanishing directions. That
+// closed form then starts a joint least-squares fit of focal length, principal point (with
+// a weak, noise-weighted prior at the image centre) and rotation to all segments, which
+// keeps the three directions orthogonal.
 // Reference: Hartley & Zisserman, Multiple View Geometry, 2nd ed., sections 8.6 and 8.8.
 #pragma once
 
@@ -37,7 +40,8 @@ struct VpCalibrationSummary {
   // z axis points up in the image; x and y point towards their vanishing points' side in
   // front of the camera; det = +1.
   Eigen::Matrix3d cam_from_world_rotation = Eigen::Matrix3d::Identity();
-  // Homogeneous vanishing point per axis (x, y, z), unit norm; zero when the family is absent.
+  // Homogeneous vanishing point per axis (x, y, z) of the fitted camera (K R e_axis), unit
+  // norm, third coordinate >= 0; zero when the family is absent.
   std::array<Eigen::Vector3d, 3> vanishing_points{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
                                                    Eigen::Vector3d::Zero()};
   // A family whose segments are parallel in the image (within ~1e-5 rad at the camera).
@@ -47,6 +51,12 @@ struct VpCalibrationSummary {
   // Largest deviation from 90 deg between two fitted vanishing directions before the
   // rotation is made orthonormal (zero by construction with three points and kSolve).
   double max_orthogonality_error_deg = 0.0;
+  // The three-point closed form (kSolve with three families) before the joint fit of the
+  // camera to all segments; zero when it gave no real focal length.
+  double closed_form_focal_px = 0.0;
+  Eigen::Vector2d closed_form_principal_point_px = Eigen::Vector2d::Zero();
+  int joint_fit_iterations = 0;
+  double rms_residual_px = 0.0;  // RMS of segment_residuals_px
   std::array<int, 3> segments_per_axis = {0, 0, 0};
   // Per input segment (same order): distance in px of its endpoints to the line through its
   // midpoint and its family's vanishing point (RMS of the two).

@@ -130,6 +130,10 @@ double SegmentVanishingPointResidualPx(const Eigen::Vector4d& segment_px, const 
   return std::abs(Residual(s, vp_px, nullptr));
 }
 
+double SegmentVanishingPointSignedDistance(const Eigen::Vector4d& segment, const Eigen::Vector3d& vp) {
+  return Residual(MakeConditionedSegment(segment.head<2>(), segment.tail<2>()), vp, nullptr);
+}
+
 VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segments_px,
                                         const VanishingPointOptions& options) {
   VanishingPointSummary summary;

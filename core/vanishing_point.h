@@ -58,5 +58,8 @@ VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segm
 // Distance in px of a segment's endpoints to the line through its midpoint and the
 // homogeneous vanishing point vp_px; +infinity when the vanishing point is the midpoint.
 double SegmentVanishingPointResidualPx(const Eigen::Vector4d& segment_px, const Eigen::Vector3d& vp_px);
+// The same distance with a sign (which side of that line endpoint a lies on), smooth in
+// vp_px for least squares; it works in any coordinates the segment and point share.
+double SegmentVanishingPointSignedDistance(const Eigen::Vector4d& segment, const Eigen::Vector3d& vp);
 
 }  // namespace facet

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "core/calibrate_vp.h"
+#include "core/vanishing_point.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {
@@ -113,57 +114,103 @@ TEST_CASE("three vanishing points recover focal length, principal point and rota
   CHECK(summary.time_ms >= 0.0);
 }
 
-TEST_CASE("segment residuals are endpoint distances, and the vanishing points minimise their squares") {
+// Residual of one segment for a vanishing point given in pixels, from plain 2D geometry:
+// the distance of endpoint a to the line through the midpoint towards the point.
+double EndpointDistance(const Segment& s, const Eigen::Vector2d& vp) {
+  const Eigen::Vector2d mid = 0.5 * (s.a_px + s.b_px);
+  const Eigen::Vector2d dir = (vp - mid).normalized();
+  const Eigen::Vector2d d = s.a_px - mid;
+  return std::abs(d.x() * dir.y() - d.y() * dir.x());
+}
+
+double CostOfCamera(const std::vector<Segment>& segments, const Camera& camera) {
+  double cost = 0.0;
+  for (const Segment& s : segments) {
+    const Eigen::Vector3d vp = camera.K() * camera.cam_from_world_rotation.col(static_cast<int>(s.axis));
+    cost += std::pow(EndpointDistance(s, vp.head<2>() / vp.z()), 2);
+  }
+  return cost;
+}
+
+TEST_CASE("segment residuals are endpoint distances to the fitted camera's vanishing points") {
   SyntheticSceneOptions o;
   o.noise_px = 1.0;
   const SyntheticScene scene = MakeBoxScene(o);
-  const VpCalibrationSummary summary =
-      CalibrateFromVanishingLines(scene.project.segments, OptionsFor(scene, PrincipalPointMode::kSolve));
-  REQUIRE(summary.success);
-  REQUIRE(summary.segment_residuals_px.size() == scene.project.segments.size());
-  // Residual of one segment for a vanishing point given in pixels, from plain 2D geometry:
-  // the distance of endpoint a to the line through the midpoint towards the point.
-  auto distance = [](const Segment& s, const Eigen::Vector2d& vp) {
-    const Eigen::Vector2d mid = 0.5 * (s.a_px + s.b_px);
-    const Eigen::Vector2d dir = (vp - mid).normalized();
-    const Eigen::Vector2d d = s.a_px - mid;
-    return std::abs(d.x() * dir.y() - d.y() * dir.x());
-  };
-  std::array<double, 3> cost = {0, 0, 0};
-  for (size_t i = 0; i < scene.project.segments.size(); ++i) {
-    const Segment& s = scene.project.segments[i];
-    const Eigen::Vector3d& vp = summary.vanishing_points[static_cast<int>(s.axis)];
-    const double expected = distance(s, vp.head<2>() / vp.z());
-    CAPTURE(i);
-    CHECK(std::abs(summary.segment_residuals_px[i] - expected) < 1e-9 * std::max(1.0, expected));
-    cost[static_cast<int>(s.axis)] += expected * expected;
+  for (PrincipalPointMode mode : {PrincipalPointMode::kSolve, PrincipalPointMode::kFixed}) {
+    VpCalibrationOptions options = OptionsFor(scene, mode);
+    options.fixed_principal_point_px = scene.true_camera.principal_point_px;
+    const VpCalibrationSummary summary = CalibrateFromVanishingLines(scene.project.segments, options);
+    REQUIRE(summary.success);
+    REQUIRE(summary.segment_residuals_px.size() == scene.project.segments.size());
+    Camera fitted = scene.true_camera;
+    fitted.focal_px = summary.focal_px;
+    fitted.principal_point_px = summary.principal_point_px;
+    fitted.cam_from_world_rotation = summary.cam_from_world_rotation;
+    double sum_sq = 0.0;
+    for (size_t i = 0; i < scene.project.segments.size(); ++i) {
+      const Segment& s = scene.project.segments[i];
+      const Eigen::Vector3d& vp = summary.vanishing_points[static_cast<int>(s.axis)];
+      // The reported points are the fitted camera's: K R e_axis.
+      const Eigen::Vector3d camera_vp = (fitted.K() * fitted.cam_from_world_rotation.col(static_cast<int>(s.axis))).normalized();
+      CHECK(std::min((vp - camera_vp).norm(), (vp + camera_vp).norm()) < 1e-12);
+      const double expected = EndpointDistance(s, vp.head<2>() / vp.z());
+      CAPTURE(i);
+      CHECK(std::abs(summary.segment_residuals_px[i] - expected) < 1e-9 * std::max(1.0, expected));
+      sum_sq += expected * expected;
+    }
+    CHECK(std::abs(summary.rms_residual_px - std::sqrt(sum_sq / scene.project.segments.size())) < 1e-12);
+    if (mode == PrincipalPointMode::kFixed) {
+      // A least-squares fit over (f, R) explains the noisy segments at least as well as the
+      // true camera does.
+      CHECK(CostOfCamera(scene.project.segments, fitted) <= CostOfCamera(scene.project.segments, scene.true_camera));
+    }
   }
-  // The fit is a least-squares minimum: moving a vanishing point by a small fraction of its
-  // distance to the image, in any direction, does not lower its family's cost.
-  for (int a = 0; a < 3; ++a) {
-    const Eigen::Vector3d& vp = summary.vanishing_points[a];
-    const Eigen::Vector2d center = vp.head<2>() / vp.z();
-    const double step = 1e-4 * (center - scene.true_camera.principal_point_px).norm();
+}
+
+TEST_CASE("the vanishing point of a family minimises its segments' squared endpoint distances") {
+  SyntheticSceneOptions o;
+  o.noise_px = 1.0;
+  const SyntheticScene scene = MakeBoxScene(o);
+  VanishingPointOptions options;
+  options.conditioning_center_px = {511.5, 383.5};
+  options.conditioning_scale_px = 512.0;
+  for (Axis axis : {Axis::kX, Axis::kY, Axis::kZ}) {
+    const std::vector<Segment> family = SegmentsOfAxes(scene, {axis});
+    std::vector<Eigen::Vector4d> raw;
+    for (const Segment& s : family) raw.emplace_back(s.a_px.x(), s.a_px.y(), s.b_px.x(), s.b_px.y());
+    const VanishingPointSummary fit = FitVanishingPoint(raw, options);
+    REQUIRE(fit.success);
+    CHECK(fit.final_rms_px <= fit.initial_rms_px);  // the refinement never makes it worse
+    const Eigen::Vector2d center = fit.vp_px.head<2>() / fit.vp_px.z();
+    double cost = 0.0;
+    for (size_t i = 0; i < family.size(); ++i) {
+      const double d = EndpointDistance(family[i], center);
+      CHECK(std::abs(fit.residuals_px[i] - d) < 1e-9 * std::max(1.0, d));
+      cost += d * d;
+    }
+    // Moving the point by a small fraction of its distance to the image, in any direction,
+    // does not lower the cost.
+    const double step = 1e-4 * (center - options.conditioning_center_px).norm();
     for (int k = 0; k < 8; ++k) {
       const Eigen::Vector2d moved = center + step * Eigen::Vector2d(std::cos(k * M_PI / 4), std::sin(k * M_PI / 4));
       double moved_cost = 0.0;
-      for (const Segment& s : scene.project.segments)
-        if (static_cast<int>(s.axis) == a) moved_cost += std::pow(distance(s, moved), 2);
-      CAPTURE(a);
+      for (const Segment& s : family) moved_cost += std::pow(EndpointDistance(s, moved), 2);
+      CAPTURE(AxisName(axis));
       CAPTURE(k);
-      CHECK(moved_cost >= cost[a] * (1 - 1e-12));
+      CHECK(moved_cost >= cost * (1 - 1e-12));
     }
   }
 }
 
 TEST_CASE("0.5 px noise: errors stay within the first-order propagated noise") {
-  // Each segment endpoint gets N(0, 0.5 px) per coordinate. A first-order propagation of
-  // that noise through this calibration (finite differences over all 112 endpoint
-  // coordinates of the scene, done once while writing the test and reproduced in the
-  // MESSAGE below) gives a standard deviation of the focal length of about sigma_f (printed)
-  // px. The bounds: median |error| <= 1.5 sigma (the median of |N(0, sigma)| is 0.67 sigma;
-  // 1.5 leaves room for the spread of a 25-sample median and for non-linearity), and max
-  // |error| <= 4.5 sigma over 25 seeds (probability of a larger normal deviate ~ 2e-4).
+  // Each segment endpoint gets N(0, 0.5 px) per coordinate. The bounds come from a
+  // first-order propagation of that noise through this calibration, computed below by finite
+  // differences over all 112 endpoint coordinates of the scene (about 8.5 px of focal
+  // length, 0.95 %, for this box; the principal-point prior vanishes for exact data, so this
+  // is the sigma of the unregularised fit). Median |error| <= 1.5 sigma (the median of
+  // |N(0, sigma)| is 0.67 sigma; 1.5 leaves room for the spread of a 25-sample median and for
+  // non-linearity), max |error| <= 4.5 sigma over 25 seeds (a larger normal deviate has
+  // probability ~2e-4 over all seeds).
   constexpr double kNoisePx = 0.5;
   constexpr int kSeeds = 25;
 

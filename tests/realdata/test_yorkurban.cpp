@@ -1,0 +1,154 @@
+// Single-image calibration (core/calibrate_vp.h) on the York Urban DB train split: the
+// hand-labelled segments of each photo, three vanishing points, against the ground-truth K.
+// Data: FACET_SHARED_DATA/yorkurbandb-train (README.md and PROVENANCE.md there). The files
+// use MATLAB's 1-based pixel coordinates; Facet's pixel centres are 0-based.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/calibrate_vp.h"
+
+namespace facet {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kDataDir = fs::path(FACET_SHARED_DATA) / "yorkurbandb-train";
+constexpr int kWidthPx = 640;
+constexpr int kHeightPx = 480;
+// The baseline for least squares over all segments with three vanishing points.
+constexpr double kMaxMedianFocalErrorPercent = 2.5;
+
+// Lines of numbers of a text file, skipping '#' comments.
+std::vector<std::vector<double>> ReadNumberRows(const fs::path& path) {
+  std::ifstream in(path);
+  REQUIRE_MESSAGE(in.good(), "cannot open " << path);
+  std::vector<std::vector<double>> rows;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    std::vector<double> row;
+    double x;
+    while (fields >> x) row.push_back(x);
+    if (!row.empty()) rows.push_back(row);
+  }
+  return rows;
+}
+
+// Segments of one photo, 0-based pixels. The three labelled families become x, y, z; the
+// family whose segments are most vertical in the image (length-weighted |cos| to the image
+// column) is z, the other two keep their label order as x and y. Only the rotation's sign
+// rules depend on that naming; the intrinsics do not.
+std::vector<Segment> ReadSegments(const fs::path& lines_path) {
+  std::vector<std::array<double, 4>> family_raw[3];
+  for (const auto& row : ReadNumberRows(lines_path)) {
+    REQUIRE_MESSAGE(row.size() == 5, "bad row in " << lines_path);
+    const int vp_index = static_cast<int>(row[4]);
+    REQUIRE_MESSAGE((vp_index >= 1 && vp_index <= 3), "bad vp_index in " << lines_path);
+    family_raw[vp_index - 1].push_back({row[0] - 1.0, row[1] - 1.0, row[2] - 1.0, row[3] - 1.0});
+  }
+  double verticality[3] = {0, 0, 0};
+  for (int f = 0; f < 3; ++f) {
+    double total = 0.0;
+    for (const auto& s : family_raw[f]) {
+      const double dx = s[2] - s[0], dy = s[3] - s[1];
+      const double length = std::hypot(dx, dy);
+      verticality[f] += std::abs(dy);
+      total += length;
+    }
+    verticality[f] = total > 0 ? verticality[f] / total : 0.0;
+  }
+  const int z_family = static_cast<int>(std::max_element(verticality, verticality + 3) - verticality);
+  std::vector<Segment> segments;
+  int next_horizontal = 0;
+  for (int f = 0; f < 3; ++f) {
+    const Axis axis = f == z_family ? Axis::kZ : static_cast<Axis>(next_horizontal++);
+    for (const auto& s : family_raw[f]) {
+      Segment seg;
+      seg.axis = axis;
+      seg.a_px = {s[0], s[1]};
+      seg.b_px = {s[2], s[3]};
+      segments.push_back(seg);
+    }
+  }
+  return segments;
+}
+
+double Percentile(std::vector<double> values, double p) {
+  std::sort(values.begin(), values.end());
+  const double position = p * (values.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(position));
+  const size_t hi = std::min(lo + 1, values.size() - 1);
+  return values[lo] + (position - lo) * (values[hi] - values[lo]);
+}
+
+struct Figures {
+  std::vector<double> focal_errors_percent;
+  std::vector<double> pp_errors_px;
+  std::vector<double> times_ms;
+  std::vector<std::string> failures;
+  int images_with_warnings = 0;
+};
+
+TEST_CASE("York Urban train split: focal length and principal point from three vanishing points") {
+  REQUIRE_MESSAGE(fs::is_directory(kDataDir), kDataDir << " is missing");
+  const auto k_rows = ReadNumberRows(kDataDir / "K.txt");
+  REQUIRE(k_rows.size() == 3);
+  const double true_focal_px = k_rows[0][0];
+  const Eigen::Vector2d true_pp_px(k_rows[0][2] - 1.0, k_rows[1][2] - 1.0);
+
+  std::vector<fs::path> folders;
+  for (const auto& entry : fs::directory_iterator(kDataDir))
+    if (entry.is_directory()) folders.push_back(entry.path());
+  std::sort(folders.begin(), folders.end());
+  CHECK(folders.size() == 51);
+
+  Figures solve, center;
+  for (const fs::path& folder : folders) {
+    const std::string id = folder.filename().string();
+    const std::vector<Segment> segments = ReadSegments(folder / (id + "_lines.txt"));
+    for (auto* figures : {&solve, &center}) {
+      VpCalibrationOptions options;
+      options.width_px = kWidthPx;
+      options.height_px = kHeightPx;
+      options.principal_point_mode =
+          figures == &solve ? PrincipalPointMode::kSolve : PrincipalPointMode::kImageCenter;
+      const VpCalibrationSummary s = CalibrateFromVanishingLines(segments, options);
+      if (!s.success) {
+        figures->failures.push_back(id + ": " + s.message);
+        continue;
+      }
+      figures->focal_errors_percent.push_back(100.0 * std::abs(s.focal_px - true_focal_px) / true_focal_px);
+      figures->pp_errors_px.push_back((s.principal_point_px - true_pp_px).norm());
+      figures->times_ms.push_back(s.time_ms);
+      if (!s.warnings.empty()) ++figures->images_with_warnings;
+    }
+  }
+
+  for (auto* figures : {&solve, &center}) {
+    const std::string name = figures == &solve ? "3 VPs, principal point solved" : "3 VPs, principal point at image centre";
+    std::ostringstream failures;
+    for (const auto& f : figures->failures) failures << "\n  " << f;
+    INFO(name << ": images without a usable result:" << failures.str());
+    CHECK(figures->failures.empty());
+    REQUIRE(!figures->focal_errors_percent.empty());
+    MESSAGE(name << " (" << figures->focal_errors_percent.size() << " images): focal error median "
+                 << Percentile(figures->focal_errors_percent, 0.5) << " %, p90 "
+                 << Percentile(figures->focal_errors_percent, 0.9) << " %, max "
+                 << Percentile(figures->focal_errors_percent, 1.0) << " %; principal point error median "
+                 << Percentile(figures->pp_errors_px, 0.5) << " px, p90 " << Percentile(figures->pp_errors_px, 0.9)
+                 << " px; " << figures->images_with_warnings << " images with warnings; time median "
+                 << Percentile(figures->times_ms, 0.5) << " ms");
+  }
+  CHECK(Percentile(solve.focal_errors_percent, 0.5) <= kMaxMedianFocalErrorPercent);
+}
+
+}  // namespace
+}  // namespace facet
