@@ -12,17 +12,33 @@ void DiffList(const std::vector<T>& before, const std::vector<T>& after, std::ve
   std::unordered_map<Id, size_t> after_index;
   for (size_t i = 0; i < after.size(); ++i) after_index[after[i].id] = i;
   std::unordered_map<Id, size_t> before_index;
+  for (size_t i = 0; i < before.size(); ++i) before_index[before[i].id] = i;
+
+  // Objects present on both sides normally keep their relative order; when they do not, a
+  // moved object is recorded as a removal at its old position plus an insertion at its new
+  // one, so that applying and reverting restore the order exactly.
+  bool kept_order_changed = false;
+  size_t last_after = 0;
+  bool first = true;
+  for (const T& item : before) {
+    auto it = after_index.find(item.id);
+    if (it == after_index.end()) continue;
+    if (!first && it->second < last_after) kept_order_changed = true;
+    last_after = it->second;
+    first = false;
+  }
+
   for (size_t i = 0; i < before.size(); ++i) {
-    before_index[before[i].id] = i;
     auto it = after_index.find(before[i].id);
-    if (it == after_index.end()) {
+    if (it == after_index.end() || kept_order_changed) {
       out->push_back({before[i].id, before[i], std::nullopt, i, 0});
     } else if (!(after[it->second] == before[i])) {
       out->push_back({before[i].id, before[i], after[it->second], i, it->second});
     }
   }
   for (size_t i = 0; i < after.size(); ++i) {
-    if (!before_index.count(after[i].id)) out->push_back({after[i].id, std::nullopt, after[i], 0, i});
+    if (!before_index.count(after[i].id) || kept_order_changed)
+      out->push_back({after[i].id, std::nullopt, after[i], 0, i});
   }
 }
 

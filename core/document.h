@@ -32,8 +32,8 @@ struct Edit {
   bool Empty() const;
 };
 
-// The edit that turns `before` into `after`, matching objects by id. Objects keep their
-// relative order when reverted; new objects are appended.
+// The edit that turns `before` into `after`, matching objects by id. Applying it to
+// `before` gives exactly `after` and reverting it gives exactly `before`, order included.
 Edit DiffProjects(const std::string& label, const Project& before, const Project& after);
 void ApplyEdit(const Edit& edit, Project* project);
 void RevertEdit(const Edit& edit, Project* project);

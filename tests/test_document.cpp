@@ -2,6 +2,7 @@
 // record nothing, the dirty flag follows the saved state, drags are one history entry.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <random>
 #include <string>
 #include <vector>
@@ -388,4 +389,32 @@ TEST_CASE("CancelPreview restores the snapshot and leaves history alone") {
   CHECK_FALSE(doc.dirty());
   REQUIRE(doc.Redo());
   CHECK(doc.project() == p);
+}
+
+TEST_CASE("reordering a list, with or without other changes, applies and reverts exactly") {
+  for (unsigned seed = 2000; seed < 2100; ++seed) {
+    CAPTURE(seed);
+    std::mt19937 rng(seed);
+    Project a = StartProject();
+    for (int k = 2 + static_cast<int>(Pick(rng, 5)); k > 0; --k) a = RandomEdit(a, rng);
+    Project b = a;
+    std::shuffle(b.segments.begin(), b.segments.end(), rng);
+    std::shuffle(b.pins.begin(), b.pins.end(), rng);
+    if (seed % 2 == 0) b = RandomEdit(b, rng);
+    Project p = a;
+    const Edit edit = facet::DiffProjects("reorder", a, b);
+    facet::ApplyEdit(edit, &p);
+    REQUIRE(p == b);
+    facet::RevertEdit(edit, &p);
+    REQUIRE(p == a);
+
+    Document doc(a);
+    const bool recorded = doc.Commit("reorder", b);
+    CHECK(recorded == !(a == b));
+    CHECK(doc.project() == b);
+    if (recorded) {
+      REQUIRE(doc.Undo());
+      CHECK(doc.project() == a);
+    }
+  }
 }
