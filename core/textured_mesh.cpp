@@ -395,8 +395,9 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<Im
   }
   if (textured.empty()) {
     summary.success = true;
-    summary.message = views.empty() ? "no calibrated image with loaded pixels; the mesh is untextured"
-                                    : "no face is seen by a calibrated image; the mesh is untextured";
+    summary.message = geometry.empty() ? "the project has no boxes"
+                      : views.empty()  ? "no calibrated image with loaded pixels; the mesh is untextured"
+                                       : "no face is seen by a calibrated image; the mesh is untextured";
     summary.time_ms = ElapsedMs(start);
     return summary;
   }
