@@ -244,11 +244,8 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
     return finish(SolveTermination::kNothingToSolve,
                   "nothing is free: every camera pose and box parameter that the pins touch is locked");
   }
-  if (!std::isfinite(summary.initial_cost)) {
-    return finish(SolveTermination::kFailed,
-                  "the reprojection is not finite at the start: a pinned corner lies in the plane of its camera");
-  }
-
+  // A cold start replaces the current values, so only its result has to be finite: a camera
+  // that was just calibrated still sits at the origin, often on a box corner.
   if (!options.warm_start) {
     std::string why;
     if (scene_solve_internal::LinearInitialization(problem, &state, &why)) {
@@ -256,6 +253,10 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
     } else {
       summary.warnings.push_back("linear initialisation not used (" + why + "); starting from the current values");
     }
+  }
+  if (!std::isfinite(summary.initial_cost) && !std::isfinite(record_residuals(state))) {
+    return finish(SolveTermination::kFailed,
+                  "the reprojection is not finite at the start: a pinned corner lies in the plane of its camera");
   }
 
   const auto lm = RunLevenbergMarquardt(problem, options, &state);
