@@ -105,9 +105,13 @@ uniform vec3 u_fade_center;
 uniform float u_fade_radius;
 uniform vec3 u_eye;
 uniform float u_fade_eye_distance;
+uniform int u_lighten_dark;
 out vec4 frag_color;
 void main() {
   float alpha = v_color.a;
+  vec3 rgb = v_color.rgb;
+  // Outlines are dark to read on the mesh; with the mesh hidden they must read on the background.
+  if (u_lighten_dark != 0 && max(rgb.r, max(rgb.g, rgb.b)) < 0.2) rgb = vec3(0.85);
   if (u_fade != 0) {
     float rim = length(v_position.xy - u_fade_center.xy) / u_fade_radius;
     alpha *= 1.0 - smoothstep(0.55, 1.0, rim);
@@ -115,7 +119,7 @@ void main() {
     alpha *= 1.0 - smoothstep(0.4, 1.0, eye);
   }
   if (alpha <= 0.002) discard;
-  frag_color = vec4(v_color.rgb, alpha);
+  frag_color = vec4(rgb, alpha);
 }
 )";
 
@@ -214,6 +218,7 @@ struct GlResources {
   Program mesh_program;
   GLint mesh_atlas = -1, mesh_use_texture = -1, mesh_eye = -1;
   Program line_program;
+  GLint line_lighten_dark = -1;
   GLint line_fade = -1, line_fade_center = -1, line_fade_radius = -1, line_eye = -1, line_fade_eye_distance = -1;
   Program photo_program;
   GLint photo_sampler = -1, photo_alpha = -1;
@@ -339,6 +344,7 @@ bool InitGl(GlResources* gl) {
   gl->mesh_use_texture = glGetUniformLocation(gl->mesh_program.id, "u_use_texture");
   gl->mesh_eye = glGetUniformLocation(gl->mesh_program.id, "u_eye");
   gl->line_fade = glGetUniformLocation(gl->line_program.id, "u_fade");
+  gl->line_lighten_dark = glGetUniformLocation(gl->line_program.id, "u_lighten_dark");
   gl->line_fade_center = glGetUniformLocation(gl->line_program.id, "u_fade_center");
   gl->line_fade_radius = glGetUniformLocation(gl->line_program.id, "u_fade_radius");
   gl->line_eye = glGetUniformLocation(gl->line_program.id, "u_eye");
@@ -727,6 +733,7 @@ void RenderScene(const AppState& state, const PanelState& panel, const ViewSetup
   glUseProgram(gl.line_program.id);
   SetMatrix(gl.line_program.clip_from_world, clip_from_world);
   glUniform3f(gl.line_eye, eye.x(), eye.y(), eye.z());
+  glUniform1i(gl.line_lighten_dark, 0);
   glBindVertexArray(gl.lines_vao);
   if (panel.show_grid) {
     glDepthMask(GL_FALSE);
@@ -776,7 +783,11 @@ void RenderScene(const AppState& state, const PanelState& panel, const ViewSetup
 
   glUseProgram(gl.line_program.id);
   glBindVertexArray(gl.lines_vao);
-  if (panel.show_wireframe) glDrawArrays(GL_LINES, gl.box_edges.first, gl.box_edges.count);
+  if (panel.show_wireframe) {
+    glUniform1i(gl.line_lighten_dark, panel.show_mesh && gl.mesh_vertex_count > 0 ? 0 : 1);
+    glDrawArrays(GL_LINES, gl.box_edges.first, gl.box_edges.count);
+    glUniform1i(gl.line_lighten_dark, 0);
+  }
   // After the outlines: a first box usually sits at the origin, its edges along the axes.
   SetLineWidth(gl, 2.5f);
   glDrawArrays(GL_LINES, gl.axes.first, gl.axes.count);
@@ -870,14 +881,22 @@ std::string ImageLabel(const Project& project, const Image& image) {
 
 void DrawToolbar(AppState* state, PanelState* panel, const SceneMeasure& measure, int width_px, int height_px) {
   const Project& project = state->document.project();
-  if (ImGui::SmallButton("Frame (F)")) OrbitFrame(&panel->orbit, measure.bounds, width_px, height_px);
+  if (ImGui::SmallButton("Frame")) OrbitFrame(&panel->orbit, measure.bounds, width_px, height_px);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Frame the whole model (F, or double-click)");
   ImGui::SameLine();
   std::string preview = "View from photo";
   if (panel->orbit.photo_image_id != kNoId) {
     if (const Image* image = project.FindImage(panel->orbit.photo_image_id)) preview = ImageLabel(project, *image);
   }
-  ImGui::SetNextItemWidth(std::min(220.0f, std::max(120.0f, ImGui::GetContentRegionAvail().x * 0.3f)));
-  if (ImGui::BeginCombo("##view_from_photo", preview.c_str())) {
+  // The "Show" button keeps its room; the combo takes what is left, up to a comfortable width.
+  const float show_width = ImGui::CalcTextSize("Show").x + 2.0f * ImGui::GetStyle().FramePadding.x;
+  ImGui::SetNextItemWidth(std::clamp(ImGui::GetContentRegionAvail().x - show_width - ImGui::GetStyle().ItemSpacing.x,
+                                     80.0f, 260.0f));
+  // As tall as the small buttons beside it.
+  ImGui::PushStyleVar(ImGuiStyleVar_FramePadding, ImVec2(ImGui::GetStyle().FramePadding.x, 0.0f));
+  const bool combo_open = ImGui::BeginCombo("##view_from_photo", preview.c_str());
+  ImGui::PopStyleVar();
+  if (combo_open) {
     bool any = false;
     for (const Image& image : project.images) {
       if (!Drawable(image)) continue;
@@ -894,15 +913,15 @@ void DrawToolbar(AppState* state, PanelState* panel, const SceneMeasure& measure
   }
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Look through a calibrated photo's camera");
   ImGui::SameLine();
-  ImGui::Checkbox("Mesh", &panel->show_mesh);
-  ImGui::SameLine();
-  ImGui::Checkbox("Texture", &panel->show_texture);
-  ImGui::SameLine();
-  ImGui::Checkbox("Edges", &panel->show_wireframe);
-  ImGui::SameLine();
-  ImGui::Checkbox("Cameras", &panel->show_cameras);
-  ImGui::SameLine();
-  ImGui::Checkbox("Grid", &panel->show_grid);
+  if (ImGui::SmallButton("Show")) ImGui::OpenPopup("##viewport_show");
+  if (ImGui::BeginPopup("##viewport_show")) {
+    ImGui::Checkbox("Mesh", &panel->show_mesh);
+    ImGui::Checkbox("Texture", &panel->show_texture);
+    ImGui::Checkbox("Box edges", &panel->show_wireframe);
+    ImGui::Checkbox("Cameras and photos", &panel->show_cameras);
+    ImGui::Checkbox("Ground grid", &panel->show_grid);
+    ImGui::EndPopup();
+  }
 }
 
 void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup& view, ImVec2 origin, ImVec2 size) {
