@@ -90,6 +90,9 @@ void DrawSplitters(ShellState* shell, const TiledLayout& tiled, const Rect& work
                                  ImGuiWindowFlags_NoScrollWithMouse;
   ImGui::Begin("##workspace", nullptr, flags);
   ImGui::PopStyleVar(2);
+  // Behind every panel, also those created later: ImGui puts new windows that never come to
+  // the front at the bottom of the stack, which would otherwise leave this one above them.
+  ImGui::BringWindowToDisplayBack(ImGui::GetCurrentWindow());
   ImDrawList* draw = ImGui::GetWindowDrawList();
   for (size_t i = 0; i < tiled.splitters.size(); ++i) {
     const Splitter& s = tiled.splitters[i];
