@@ -247,7 +247,7 @@ struct GlResources {
 struct SceneMeasure {
   SceneBounds bounds;             // boxes and camera centres
   double size = 1.0;              // diagonal of the boxes (or of everything when no box)
-  double frustum_depth = 0.3;     // world units from apex to image plane
+  double frustum_depth = 0.3;     // world units from apex to image plane (at most)
   double grid_minor = 0.1, grid_major = 1.0, grid_half_extent = 5.0;
   Eigen::Vector3d grid_center = Eigen::Vector3d::Zero();
 };
@@ -491,7 +491,7 @@ SceneMeasure MeasureScene(const Project& project) {
   m.bounds.radius = std::max(0.5 * all_bounds.diagonal().norm(), 1e-3);
   if (box_bounds.isEmpty() && all_bounds.diagonal().norm() < 1e-9) m.bounds.radius = 1.0;
   m.size = box_bounds.isEmpty() ? 2.0 * m.bounds.radius : std::max(box_bounds.diagonal().norm(), 1e-3);
-  m.frustum_depth = 0.25 * m.size;
+  m.frustum_depth = 0.2 * m.size;
 
   // Grid steps are powers of ten: 4 to 40 minor cells across the scene, major every ten.
   m.grid_minor = std::pow(10.0, std::floor(std::log10(m.size / 4.0)));
@@ -561,7 +561,9 @@ void BuildSceneGeometry(const AppState& state, const SceneMeasure& measure, Id p
     const bool active = image.id == state.active_image_id;
     const size_t first = lines.size();
     const Eigen::Vector3d apex = image.camera.CenterInWorld();
-    const std::array<Eigen::Vector3d, 4> corners = ImagePlaneCorners(image.camera, measure.frustum_depth);
+    // Proportional to the scene, but never reaching far into it from a close camera.
+    const double depth = std::min(measure.frustum_depth, 0.4 * (apex - measure.bounds.center).norm() + 1e-9);
+    const std::array<Eigen::Vector3d, 4> corners = ImagePlaneCorners(image.camera, depth);
     const Rgba& color = active ? kActiveFrustumColor : kFrustumColor;
     for (int i = 0; i < 4; ++i) {
       PushLine(&lines, apex, corners[i], color);
