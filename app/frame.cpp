@@ -119,7 +119,13 @@ void DrawSplitters(ShellState* shell, const TiledLayout& tiled, const Rect& work
 void MakeFloating(ShellState* shell, int panel, const Rect& from) {
   PanelPlacement& p = shell->layout.panels[panel];
   p.floating = true;
-  p.floating_rect = {from.x + 24, from.y + 24, std::clamp(from.w, 240.0f, 720.0f), std::clamp(from.h, 160.0f, 520.0f)};
+  const ImGuiViewport* vp = ImGui::GetMainViewport();
+  const float w = std::clamp(from.w, 240.0f, std::min(720.0f, vp->Size.x));
+  const float h = std::clamp(from.h, 160.0f, std::min(520.0f, vp->Size.y));
+  // Fully inside the window, so that the title bar (and its Dock button) stays reachable.
+  const float x = std::clamp(from.x + 24, vp->Pos.x, std::max(vp->Pos.x, vp->Pos.x + vp->Size.x - w));
+  const float y = std::clamp(from.y + 24, vp->Pos.y, std::max(vp->Pos.y, vp->Pos.y + vp->Size.y - h));
+  p.floating_rect = {x, y, w, h};
   shell->floating_to_place = panel;
   shell->layout_changed = true;
 }
@@ -136,8 +142,9 @@ bool TitleBarButton(const char* label) {
   ImGui::PushClipRect(title.Min, title.Max, false);
   ImGui::SetCursorScreenPos(ImVec2(x, title.Min.y + (title.GetHeight() - ImGui::GetFontSize()) * 0.5f));
   ImGui::PushStyleColor(ImGuiCol_Button, ImVec4(0, 0, 0, 0));
+  ImGui::PushStyleColor(ImGuiCol_Text, kDimText);
   const bool pressed = ImGui::SmallButton(label);
-  ImGui::PopStyleColor();
+  ImGui::PopStyleColor(2);
   ImGui::PopClipRect();
   ImGui::SetCursorScreenPos(cursor);
   window->DC.CursorMaxPos = max_pos;
@@ -191,12 +198,19 @@ void DrawPanel(AppState* state, ShellState* shell, int index, const TiledLayout&
   bool open = true;
   const bool expanded = ImGui::Begin(PanelTitle(panel), &open, flags);
   if (canvas) ImGui::PopStyleVar();
+  if (floating && shell->floating_to_place == index) {
+    // A panel created while docked sits at the bottom of ImGui's window stack (docked
+    // windows never come to the front); once floating it must be above the tiled panels.
+    ImGui::BringWindowToDisplayFront(ImGui::GetCurrentWindow());
+  }
   const ImVec2 pos = ImGui::GetWindowPos();
   const ImVec2 size = ImGui::GetWindowSize();
   const Rect window_rect{pos.x, pos.y, size.x, size.y};
   shell->panel_rects[index] = window_rect;
   shell->panel_drawn[index] = expanded;
-  if (floating && shell->floating_to_place != index) {
+  const bool placed_now = floating && shell->floating_to_place == index;
+  if (placed_now) shell->floating_to_place = -1;
+  if (floating && !placed_now) {
     if (window_rect.x != placement.floating_rect.x || window_rect.y != placement.floating_rect.y ||
         window_rect.w != placement.floating_rect.w || window_rect.h != placement.floating_rect.h) {
       shell->layout_changed = true;
@@ -551,7 +565,6 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
       if (shell->layout.panels[i].floating == (pass == 1)) DrawPanel(state, shell, i, tiled);
     }
   }
-  shell->floating_to_place = -1;
   if (!ImGui::GetIO().MouseDown[0]) shell->tearing_panel = -1;
 
   DrawDialogs(state, shell);
