@@ -490,3 +490,63 @@ TEST_CASE("gui: without a display the app says how to render offscreen and exits
   CAPTURE(ss.str());
   CHECK(ss.str().find("facet render") != std::string::npos);
 }
+
+TEST_CASE("render: a splitter drag resizes its neighbours; title-bar drag and Undock float panels, Dock returns them") {
+  TempDir dir("layout_edit");
+  const Fixture f = WriteFixture(dir, /*with_box=*/false, /*with_pins=*/false);
+  RunResult run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "start.png") + "' --report '" +
+                                     (dir / "start.json") + "'");
+  INFO("stderr: " << run.stderr_text);
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json start = ReadJson(dir / "start.json").at("panels");
+  auto num = [](const nlohmann::json& panel, const char* key) { return panel.at(key).get<double>(); };
+  const nlohmann::json& image = start.at("Image");
+  const nlohmann::json& log = start.at("Log");
+  const nlohmann::json& history = start.at("History");
+
+  // The bar between Image and 3D lies in the gap right of the image panel.
+  constexpr double kShiftPx = -120.0;
+  const double bar_x = num(image, "x") + num(image, "w") + 3.0;
+  const double bar_y = num(image, "y") + num(image, "h") / 2;
+  // Log's Undock button sits left of the close button at the title bar's right end.
+  const double undock_x = num(log, "x") + num(log, "w") - 60.0, title_y = num(log, "y") + 10.0;
+  std::ostringstream script;
+  script << "frames 2\n"
+         << "drag left " << bar_x << " " << bar_y << " " << bar_x + kShiftPx << " " << bar_y << " 8\n"
+         << "frames 2\n"
+         << "click left " << undock_x << " " << title_y << "\n"
+         << "frames 2\n"
+         // Tear History off by dragging its title bar up into the middle of the window.
+         << "drag left " << num(history, "x") + 80 << " " << num(history, "y") + 10 << " 500 300 10\n"
+         << "frames 2\n";
+  WriteText(dir / "layout.txt", script.str());
+  run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "edited.png") + "' --script '" +
+                           (dir / "layout.txt") + "' --report '" + (dir / "edited.json") + "'");
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json edited = ReadJson(dir / "edited.json").at("panels");
+  INFO("panels after the edits: " << edited.dump());
+  constexpr double kPositionTolerancePx = 1.0;
+  CHECK(std::abs(num(edited.at("Image"), "w") - (num(image, "w") + kShiftPx)) <= kPositionTolerancePx);
+  CHECK(std::abs(num(edited.at("3D"), "x") - (num(start.at("3D"), "x") + kShiftPx)) <= kPositionTolerancePx);
+  CHECK(edited.at("Log").at("floating").get<bool>());
+  CHECK(edited.at("History").at("floating").get<bool>());
+  // With the bottom row empty, the tiled panels grow down to the bottom of the window.
+  CHECK(num(edited.at("Image"), "y") + num(edited.at("Image"), "h") > num(log, "y") + num(log, "h") - 1.0);
+  // The torn-off panel follows the cursor (its title bar under the release point).
+  CHECK(std::abs(num(edited.at("History"), "y") + 10.0 - 300.0) <= 12.0);
+
+  // Dock the floating log again with its title-bar button.
+  const nlohmann::json& floating_log = edited.at("Log");
+  const double dock_x = num(floating_log, "x") + num(floating_log, "w") - 52.0;
+  WriteText(dir / "dock.txt", script.str() + "click left " + std::to_string(dock_x) + " " +
+                                  std::to_string(num(floating_log, "y") + 10.0) + "\nframes 2\n");
+  run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "docked.png") + "' --script '" + (dir / "dock.txt") +
+                           "' --report '" + (dir / "docked.json") + "'");
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json docked = ReadJson(dir / "docked.json").at("panels");
+  INFO("panels after docking the log: " << docked.dump());
+  CHECK(!docked.at("Log").at("floating").get<bool>());
+  // Back in its slot: the bottom row, now alone there, across the whole width.
+  CHECK(std::abs(num(docked.at("Log"), "y") - num(log, "y")) <= kPositionTolerancePx);
+  CHECK(std::abs(num(docked.at("Log"), "x") - num(history, "x")) <= kPositionTolerancePx);
+}
