@@ -1,0 +1,199 @@
+// The command line as a user runs it: help, the no-display message, calibrate, solve and
+// export on synthetic scenes with known answers, and clear errors for bad input.
+#include <doctest/doctest.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/project_io.h"
+#include "tests/synthetic_scene.h"
+
+namespace fs = std::filesystem;
+using facet::testing::MakeBoxScene;
+
+namespace {
+
+struct TempDir {
+  fs::path path;
+  explicit TempDir(const std::string& name) {
+    path = fs::temp_directory_path() / ("facet_cli_test_" + std::to_string(::getpid()) + "_" + name);
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  std::string operator/(const std::string& file) const { return (path / file).string(); }
+};
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Runs facet with `args` (already shell-quoted where needed), without a display.
+RunResult RunFacet(const TempDir& dir, const std::string& args) {
+  const std::string out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string command = "env -u DISPLAY -u WAYLAND_DISPLAY '" + std::string(FACET_APP_EXE) + "' " + args +
+                              " > '" + out + "' 2> '" + err + "'";
+  const int status = std::system(command.c_str());
+  RunResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = ReadText(out);
+  r.err = ReadText(err);
+  return r;
+}
+
+nlohmann::json LinesJsonFor(const facet::Project& project, const facet::Image& image, const char* principal_point) {
+  nlohmann::json families = nlohmann::json::array();
+  for (facet::Axis axis : {facet::Axis::kX, facet::Axis::kY, facet::Axis::kZ}) {
+    nlohmann::json segments = nlohmann::json::array();
+    for (const auto& s : project.segments)
+      if (s.axis == axis) segments.push_back({s.a_px.x(), s.a_px.y(), s.b_px.x(), s.b_px.y()});
+    families.push_back({{"axis", facet::AxisName(axis)}, {"segments", segments}});
+  }
+  return {{"image_size", {image.width_px, image.height_px}}, {"families", families}, {"principal_point", principal_point}};
+}
+
+}  // namespace
+
+TEST_CASE("help describes every command") {
+  TempDir dir("help");
+  const RunResult top = RunFacet(dir, "--help");
+  CHECK(top.exit_code == 0);
+  for (const char* command : {"calibrate", "solve", "export", "render"}) {
+    CAPTURE(command);
+    CHECK(top.out.find(command) != std::string::npos);
+    const RunResult sub = RunFacet(dir, std::string(command) + " --help");
+    CHECK(sub.exit_code == 0);
+    CHECK(sub.out.find("Usage") != std::string::npos);
+  }
+  CHECK(RunFacet(dir, "render --help").out.find("--script") != std::string::npos);
+  CHECK(RunFacet(dir, "calibrate --help").out.find("--lines") != std::string::npos);
+}
+
+TEST_CASE("without a display the GUI says so and points to facet render") {
+  TempDir dir("nodisplay");
+  const RunResult r = RunFacet(dir, "");
+  CHECK(r.exit_code != 0);
+  CHECK(r.err.find("no display") != std::string::npos);
+  CHECK(r.err.find("facet render") != std::string::npos);
+}
+
+TEST_CASE("calibrate --lines recovers the synthetic camera and rejects bad input") {
+  TempDir dir("calibrate");
+  const auto scene = MakeBoxScene();
+  const auto& image = scene.project.images[0];
+  {
+    std::ofstream(dir / "lines.json") << LinesJsonFor(scene.project, image, "solve").dump();
+  }
+  const RunResult r = RunFacet(dir, "calibrate --lines '" + (dir / "lines.json") + "'");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const nlohmann::json out = nlohmann::json::parse(r.out);
+  // Noise-free segments: the printed camera is exact up to the solver's convergence.
+  constexpr double kRelativeTolerance = 1e-6;
+  const double focal = out.at("focal_px").get<double>();
+  CHECK(std::abs(focal - scene.true_camera.focal_px) < kRelativeTolerance * scene.true_camera.focal_px);
+  const double cx = out.at("principal_point")[0].get<double>(), cy = out.at("principal_point")[1].get<double>();
+  CHECK(std::abs(cx - scene.true_camera.principal_point_px.x()) < kRelativeTolerance * focal);
+  CHECK(std::abs(cy - scene.true_camera.principal_point_px.y()) < kRelativeTolerance * focal);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      CHECK(std::abs(out.at("R")[i][j].get<double>() - scene.true_camera.cam_from_world_rotation(i, j)) < 1e-6);
+  CHECK(out.at("K")[0][0].get<double>() == doctest::Approx(focal));
+  CHECK(out.at("vanishing_points").size() == 3);
+  CHECK(out.contains("warnings"));
+
+  // Unusable input: exit 1 with a message on stderr, nothing on stdout.
+  std::ofstream(dir / "truncated.json") << R"({"image_size": [640, 480], "families": [{"axis": "x", "segm)";
+  const RunResult truncated = RunFacet(dir, "calibrate --lines '" + (dir / "truncated.json") + "'");
+  CHECK(truncated.exit_code == 1);
+  CHECK_FALSE(truncated.err.empty());
+  CHECK(truncated.out.empty());
+
+  nlohmann::json parallel = LinesJsonFor(scene.project, image, "solve");
+  parallel["families"][0]["segments"] = {{0, 0, 100, 0}, {0, 50, 100, 50}, {0, 90, 100, 90}};
+  std::ofstream(dir / "parallel.json") << parallel.dump();
+  const RunResult par = RunFacet(dir, "calibrate --lines '" + (dir / "parallel.json") + "'");
+  CHECK(par.exit_code == 1);
+  CHECK(par.err.find("x") != std::string::npos);
+}
+
+TEST_CASE("solve re-solves a perturbed project, writes it and prints its summary") {
+  TempDir dir("solve");
+  auto scene = MakeBoxScene();
+  facet::Project& p = scene.project;
+  // Move the box size and camera well away from the truth: the command starts cold anyway.
+  p.boxes[0].size.x() *= 1.4;
+  p.boxes[0].size.y() *= 0.6;
+  p.images[0].camera.SetPose(p.images[0].camera.cam_from_world_rotation, Eigen::Vector3d(1, 2, 3));
+  REQUIRE(facet::SaveProject(p, dir / "in.facet").empty());
+
+  const RunResult r = RunFacet(dir, "solve '" + (dir / "in.facet") + "' -o '" + (dir / "out.facet") + "'");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const nlohmann::json summary = nlohmann::json::parse(r.out);
+  for (const char* key : {"iterations", "initial_cost", "final_cost", "reprojection_rms_px", "time_ms"}) {
+    CAPTURE(key);
+    CHECK(summary.contains(key));
+  }
+  CHECK(summary.at("reprojection_rms_px").get<double>() < 1e-6);
+  const facet::ProjectLoadResult solved = facet::LoadProject(dir / "out.facet");
+  REQUIRE(solved.ok());
+  constexpr double kRelativeTolerance = 1e-9;
+  const Eigen::Vector3d size = solved.project.boxes[0].size;
+  CHECK((size - scene.true_box.size).norm() < kRelativeTolerance * scene.true_box.size.norm());
+
+  const RunResult missing = RunFacet(dir, "solve '" + (dir / "nope.facet") + "' -o '" + (dir / "x.facet") + "'");
+  CHECK(missing.exit_code != 0);
+  std::ofstream(dir / "bad.facet") << "{\"format\": \"facet-project\", \"version\": 1, \"images\": [";
+  const RunResult bad = RunFacet(dir, "solve '" + (dir / "bad.facet") + "' -o '" + (dir / "y.facet") + "'");
+  CHECK(bad.exit_code == 1);
+  CHECK(bad.err.find("line") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "y.facet"));
+}
+
+TEST_CASE("export writes a GLB and an OBJ with its material and texture") {
+  TempDir dir("export");
+  auto scene = MakeBoxScene();
+  cv::Mat photo(scene.true_camera.height_px, scene.true_camera.width_px, CV_8UC3, cv::Scalar(40, 120, 200));
+  REQUIRE(cv::imwrite(dir / "synthetic.png", photo));
+  REQUIRE(facet::SaveProject(scene.project, dir / "scene.facet").empty());
+
+  const RunResult glb = RunFacet(dir, "export '" + (dir / "scene.facet") + "' -o '" + (dir / "model.glb") + "'");
+  INFO(glb.err);
+  REQUIRE(glb.exit_code == 0);
+  const std::string bytes = ReadText(dir / "model.glb");
+  REQUIRE(bytes.size() > 20);
+  CHECK(bytes.substr(0, 4) == "glTF");
+
+  const RunResult obj = RunFacet(dir, "export '" + (dir / "scene.facet") + "' -o '" + (dir / "model.obj") + "'");
+  REQUIRE(obj.exit_code == 0);
+  CHECK(fs::exists(dir / "model.obj"));
+  CHECK(fs::exists(dir / "model.mtl"));
+  CHECK(fs::exists(dir / "model.png"));
+
+  const RunResult unknown = RunFacet(dir, "export '" + (dir / "scene.facet") + "' -o '" + (dir / "model.fbx") + "'");
+  CHECK(unknown.exit_code == 1);
+  CHECK(unknown.err.find(".glb") != std::string::npos);
+}
