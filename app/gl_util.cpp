@@ -237,6 +237,7 @@ SavedGlState SavedGlState::Capture() {
   s.polygon_offset_fill = glIsEnabled(GL_POLYGON_OFFSET_FILL);
   s.multisample = glIsEnabled(GL_MULTISAMPLE);
   glGetBooleanv(GL_DEPTH_WRITEMASK, &s.depth_mask);
+  glGetIntegerv(GL_DEPTH_FUNC, &s.depth_func);
   glGetFloatv(GL_COLOR_CLEAR_VALUE, s.clear_color);
   return s;
 }
@@ -262,6 +263,7 @@ void SavedGlState::Restore() const {
   set_enabled(GL_POLYGON_OFFSET_FILL, polygon_offset_fill);
   set_enabled(GL_MULTISAMPLE, multisample);
   glDepthMask(depth_mask);
+  glDepthFunc(static_cast<GLenum>(depth_func));
   glClearColor(clear_color[0], clear_color[1], clear_color[2], clear_color[3]);
 }
 

@@ -73,6 +73,7 @@ struct SavedGlState {
   GLint texture_2d = 0;
   GLint blend_src_rgb = 0, blend_dst_rgb = 0, blend_src_alpha = 0, blend_dst_alpha = 0;
   GLint blend_equation_rgb = 0, blend_equation_alpha = 0;
+  GLint depth_func = GL_LESS;
   GLboolean blend = GL_FALSE, depth_test = GL_FALSE, cull_face = GL_FALSE, scissor_test = GL_FALSE;
   GLboolean polygon_offset_fill = GL_FALSE, multisample = GL_FALSE;
   GLboolean depth_mask = GL_TRUE;

@@ -533,8 +533,19 @@ std::array<Eigen::Vector3d, 4> ImagePlaneCorners(const Camera& camera, double de
   return out;
 }
 
+// The image's camera with its size filled in from the image when calibration left it unset.
+Camera CameraOf(const Image& image) {
+  Camera camera = image.camera;
+  if (camera.width_px <= 0 || camera.height_px <= 0) {
+    camera.width_px = image.width_px;
+    camera.height_px = image.height_px;
+  }
+  return camera;
+}
+
 bool Drawable(const Image& image) {
-  return image.camera_calibrated && image.camera.width_px > 0 && image.camera.height_px > 0 && image.camera.focal_px > 0;
+  const Camera camera = CameraOf(image);
+  return image.camera_calibrated && camera.width_px > 0 && camera.height_px > 0 && camera.focal_px > 0;
 }
 
 void BuildSceneGeometry(const AppState& state, const SceneMeasure& measure, Id photo_view_id, GlResources* gl) {
@@ -560,10 +571,11 @@ void BuildSceneGeometry(const AppState& state, const SceneMeasure& measure, Id p
     if (!Drawable(image) || image.id == photo_view_id) continue;
     const bool active = image.id == state.active_image_id;
     const size_t first = lines.size();
-    const Eigen::Vector3d apex = image.camera.CenterInWorld();
+    const Camera camera = CameraOf(image);
+    const Eigen::Vector3d apex = camera.CenterInWorld();
     // Proportional to the scene, but never reaching far into it from a close camera.
     const double depth = std::min(measure.frustum_depth, 0.4 * (apex - measure.bounds.center).norm() + 1e-9);
-    const std::array<Eigen::Vector3d, 4> corners = ImagePlaneCorners(image.camera, depth);
+    const std::array<Eigen::Vector3d, 4> corners = ImagePlaneCorners(camera, depth);
     const Rgba& color = active ? kActiveFrustumColor : kFrustumColor;
     for (int i = 0; i < 4; ++i) {
       PushLine(&lines, apex, corners[i], color);
@@ -906,7 +918,7 @@ void DrawToolbar(AppState* state, PanelState* panel, const SceneMeasure& measure
       const std::string label = ImageLabel(project, image);
       ImGui::PushID(static_cast<int>(image.id));
       if (ImGui::Selectable(label.c_str(), panel->orbit.photo_image_id == image.id)) {
-        OrbitViewFromPhoto(&panel->orbit, image.id, image.camera, measure.bounds);
+        OrbitViewFromPhoto(&panel->orbit, image.id, CameraOf(image), measure.bounds);
       }
       ImGui::PopID();
     }
@@ -1016,7 +1028,7 @@ void DrawViewportPanel(AppState* state) {
     if (!image || !Drawable(*image)) {
       OrbitLeavePhotoView(&panel.orbit, width_px, height_px);
     } else {
-      panel.orbit.photo_camera = image->camera;  // follow re-calibration
+      panel.orbit.photo_camera = CameraOf(*image);  // follow re-calibration
     }
   }
 
@@ -1047,7 +1059,7 @@ void DrawViewportPanel(AppState* state) {
   panel.frame_requested = false;
   if (panel.view_from_photo_requested != kNoId) {
     const Image* image = project.FindImage(panel.view_from_photo_requested);
-    if (image && Drawable(*image)) OrbitViewFromPhoto(&panel.orbit, image->id, image->camera, measure.bounds);
+    if (image && Drawable(*image)) OrbitViewFromPhoto(&panel.orbit, image->id, CameraOf(*image), measure.bounds);
     panel.view_from_photo_requested = kNoId;
   }
 
