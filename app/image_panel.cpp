@@ -619,7 +619,11 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ImGui::SetItemUsingMouseWheel();
   const bool hovered = ImGui::IsItemHovered();
   const bool focused = ImGui::IsWindowFocused(ImGuiFocusedFlags_RootAndChildWindows);
-  const bool keys_for_us = (hovered || focused) && !io.WantTextInput;
+  // Keys go to the panel under the mouse, or to this one when it has focus and the mouse
+  // is over no other window (the 3D panel also answers F).
+  const bool other_window_hovered = ImGui::IsWindowHovered(ImGuiHoveredFlags_AnyWindow) &&
+                                    !ImGui::IsWindowHovered(ImGuiHoveredFlags_RootAndChildWindows);
+  const bool keys_for_us = (hovered || (focused && !other_window_hovered)) && !io.WantTextInput;
 
   if (panel->fit_requested) fit_now = true;
   if (keys_for_us && ImGui::IsKeyPressed(GLFW_KEY_F, false) && !io.KeyCtrl && !io.KeyAlt) fit_now = true;
@@ -680,6 +684,9 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
     if (io.MouseDelta.x != 0.0f || io.MouseDelta.y != 0.0f) view.fitted = false;
     if (!ImGui::IsMouseDown(drag.button)) drag = Interaction();
   } else if (drag.kind != DragKind::kNone) {
+    if (IsEditDrag(drag.kind) && drag.began && !state->drag_start) {
+      drag.kind = DragKind::kNone;  // cancelled elsewhere (undo during the drag)
+    }
     const double moved_px = (ToEigen(io.MousePos) - ToEigen(drag.press_screen)).norm();
     if (IsEditDrag(drag.kind) && !drag.began && moved_px >= kDragStartPx && !state->drag_start) {
       drag.began = true;
