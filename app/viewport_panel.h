@@ -8,6 +8,10 @@
 namespace facet::app {
 
 // Draws the panel's contents into the current ImGui window (the caller owns the window).
+// Needs a current OpenGL 3.3 core context (epoxy). Reads state->document, mesh, photos,
+// active_image_id; writes only state->selection.box_id / box_corner (a click on or near a
+// projected box corner picks it, a click on a box face picks the box, elsewhere clears both).
+// Mouse and the F key act only while the panel is hovered or being dragged.
 void DrawViewportPanel(AppState* state);
 // Frees GL resources (before the context goes away).
 void ShutdownViewportPanel();
