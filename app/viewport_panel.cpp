@@ -838,6 +838,36 @@ CornerRef NearestCorner(const Project& project, const ViewSetup& view, ImVec2 mo
   return best;
 }
 
+// Where the ray origin + t * direction (0 <= t <= 1) enters the box, or +infinity.
+double RayBoxEntry(const Box& box, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) {
+  // Slab test in the box's own frame, where it spans [0, size].
+  const Eigen::Matrix3d box_from_world = RotationFromAngleAxis(box.rotation).transpose();
+  const Eigen::Vector3d o = box_from_world * (origin - box.translation);
+  const Eigen::Vector3d d = box_from_world * direction;
+  double t0 = 0.0, t1 = 1.0;
+  for (int a = 0; a < 3 && t0 <= t1; ++a) {
+    if (std::abs(d[a]) < 1e-15) {
+      if (o[a] < 0.0 || o[a] > box.size[a]) return std::numeric_limits<double>::infinity();
+      continue;
+    }
+    double ta = (0.0 - o[a]) / d[a], tb = (box.size[a] - o[a]) / d[a];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+  }
+  return t0 <= t1 ? t0 : std::numeric_limits<double>::infinity();
+}
+
+// Whether a world point is hidden from the eye by a box (its own box's faces excepted:
+// a corner lies on them).
+bool HiddenByBoxes(const Project& project, const Eigen::Vector3d& eye, const Eigen::Vector3d& p_in_world) {
+  constexpr double kOnSurface = 1e-4;  // fraction of the eye-point distance
+  for (const Box& box : project.boxes) {
+    if (RayBoxEntry(box, eye, p_in_world - eye) < 1.0 - kOnSurface) return true;
+  }
+  return false;
+}
+
 // The box under a panel pixel (nearest along the view ray), or kNoId.
 Id BoxUnderPixel(const Project& project, const ViewSetup& view, ImVec2 pixel_in_panel) {
   // Unproject the pixel at the near and far planes with the same matrices the frame used.
@@ -851,23 +881,9 @@ Id BoxUnderPixel(const Project& project, const ViewSetup& view, ImVec2 pixel_in_
   Id best = kNoId;
   double best_t = std::numeric_limits<double>::infinity();
   for (const Box& box : project.boxes) {
-    // Slab test in the box's own frame, where it spans [0, size].
-    const Eigen::Matrix3d box_from_world = RotationFromAngleAxis(box.rotation).transpose();
-    const Eigen::Vector3d o = box_from_world * (origin - box.translation);
-    const Eigen::Vector3d d = box_from_world * direction;
-    double t0 = 0.0, t1 = 1.0;
-    for (int a = 0; a < 3 && t0 <= t1; ++a) {
-      if (std::abs(d[a]) < 1e-15) {
-        if (o[a] < 0.0 || o[a] > box.size[a]) t0 = 2.0;
-        continue;
-      }
-      double ta = (0.0 - o[a]) / d[a], tb = (box.size[a] - o[a]) / d[a];
-      if (ta > tb) std::swap(ta, tb);
-      t0 = std::max(t0, ta);
-      t1 = std::min(t1, tb);
-    }
-    if (t0 <= t1 && t0 < best_t) {
-      best_t = t0;
+    const double t = RayBoxEntry(box, origin, direction);
+    if (t < best_t) {
+      best_t = t;
       best = box.id;
     }
   }
@@ -943,21 +959,24 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
   draw->PushClipRect(origin, ImVec2(origin.x + size.x, origin.y + size.y), true);
   const Project& project = state.document.project();
 
-  // Corner markers: hovered as a ring, selected as a filled dot.
-  auto corner_pos = [&](const CornerRef& ref, ImVec2* out) {
+  // Corner markers: hovered as a ring, selected as a filled dot; faint where a box hides them.
+  auto corner_pos = [&](const CornerRef& ref, ImVec2* out, int* alpha) {
     const Box* box = project.FindBox(ref.box_id);
     if (!box || ref.corner < 0 || ref.corner > 7) return false;
+    const Eigen::Vector3d corner = BoxCornerInWorld(*box, ref.corner);
     ImVec2 px;
-    if (!PanelPixelOf(view, BoxCornerInWorld(*box, ref.corner), &px)) return false;
+    if (!PanelPixelOf(view, corner, &px)) return false;
     *out = ImVec2(origin.x + px.x, origin.y + px.y);
+    *alpha = HiddenByBoxes(project, view.eye, corner) ? 100 : 255;
     return true;
   };
   ImVec2 p;
-  if (corner_pos({state.selection.box_id, state.selection.box_corner}, &p)) {
-    draw->AddCircleFilled(p, 5.5f, IM_COL32(255, 160, 40, 255));
-    draw->AddCircle(p, 6.5f, IM_COL32(20, 20, 20, 255), 0, 1.5f);
+  int alpha = 255;
+  if (corner_pos({state.selection.box_id, state.selection.box_corner}, &p, &alpha)) {
+    draw->AddCircleFilled(p, 5.5f, IM_COL32(255, 160, 40, alpha));
+    draw->AddCircle(p, 6.5f, IM_COL32(20, 20, 20, alpha), 0, 1.5f);
   }
-  if (corner_pos(panel.hovered_corner, &p)) draw->AddCircle(p, 8.0f, IM_COL32(255, 235, 90, 255), 0, 2.0f);
+  if (corner_pos(panel.hovered_corner, &p, &alpha)) draw->AddCircle(p, 8.0f, IM_COL32(255, 235, 90, alpha), 0, 2.0f);
 
   // Help and counts in the bottom-left corner.
   char counts[128];
