@@ -17,6 +17,7 @@
 #include "app/frame.h"
 #include "app/image_panel.h"
 #include "app/layout.h"
+#include "app/panels.h"
 #include "app/platform_egl.h"
 #include "app/platform_glfw.h"
 #include "app/script.h"
@@ -117,6 +118,9 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
     panels[PanelTitle(static_cast<PanelId>(i))] = p;
   }
   report["panels"] = panels;
+  nlohmann::json items = nlohmann::json::object();
+  for (const auto& [name, rect] : LastItemRects()) items[name] = RectJson(rect);
+  report["items"] = items;
   const ImageViewReport view = LastImageViewReport();
   report["image_view"] = {{"image_id", view.image_id},
                           {"origin_x", view.origin_x},

@@ -558,6 +558,7 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   }
 
   shell->panel_drawn.fill(false);
+  ClearItemRects();
   DrawSplitters(shell, tiled, work);
   // Docked panels first: floating ones are created later and so stay in front.
   for (int pass = 0; pass < 2; ++pass) {

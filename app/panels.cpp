@@ -38,6 +38,17 @@ constexpr ToolButton kToolButtons[] = {
     {Tool::kAddBox, "Add box", "B", GLFW_KEY_B, "Adds a box; pin its corners to place it."},
 };
 
+// Per-frame UI introspection, not document data: rebuilt every frame.
+std::map<std::string, Rect>& ItemRects() {
+  static std::map<std::string, Rect> rects;
+  return rects;
+}
+
+void RecordItem(const std::string& name) {
+  const ImVec2 min = ImGui::GetItemRectMin(), size = ImGui::GetItemRectSize();
+  ItemRects()[name] = {min.x, min.y, size.x, size.y};
+}
+
 ImVec4 AxisColor(Axis axis) {
   switch (axis) {
     case Axis::kX: return ImVec4(0.95f, 0.35f, 0.32f, 1.0f);
@@ -89,11 +100,13 @@ bool DragDoubles(const char* label, double* values, int count, float speed, cons
 }
 
 void DrawImageSection(AppState* state) {
-  const Image* image = state->ActiveImage();
-  if (!image) {
+  if (!state->ActiveImage()) {
     ImGui::TextColored(kDimText, "No image in the project.");
     return;
   }
+  // A copy: the edits below replace the project that a pointer would point into.
+  const Image active_image = *state->ActiveImage();
+  const Image* image = &active_image;
   const Id image_id = image->id;
   if (!ImGui::CollapsingHeader("Image", ImGuiTreeNodeFlags_DefaultOpen)) return;
   LabelValue("Path", "%s", image->path.c_str());
@@ -169,22 +182,26 @@ void DrawSolveSection(AppState* state) {
   for (const std::string& m : state->last_update.messages) WrappedColored(kWarningText, m);
 }
 
-void DrawBoxSection(AppState* state, const Box& box) {
+// Takes a copy: the edits below replace the project that a reference would point into.
+void DrawBoxSection(AppState* state, const Box box) {
   if (!ImGui::CollapsingHeader("Box", ImGuiTreeNodeFlags_DefaultOpen)) return;
   const Id box_id = box.id;
   ImGui::PushID("box");
   std::string name = box.name;
   ImGui::SetNextItemWidth(-FLT_MIN);
   const bool renamed = ImGui::InputTextWithHint("##name", "name", &name);
+  RecordItem("box.name");
   TrackEdit(state, "Rename box", renamed, [&](Project* p) { p->FindBox(box_id)->name = name; });
 
   double size[3] = {box.size.x(), box.size.y(), box.size.z()};
   const bool resized = DragDoubles("Size", size, 3, 0.01f, "%.3f");
+  RecordItem("box.size");
   TrackEdit(state, "Resize box", resized, [&](Project* p) {
     for (int i = 0; i < 3; ++i) p->FindBox(box_id)->size[i] = std::max(1e-3, size[i]);
   });
   double t[3] = {box.translation.x(), box.translation.y(), box.translation.z()};
   const bool moved = DragDoubles("Position", t, 3, 0.01f, "%.3f");
+  RecordItem("box.position");
   TrackEdit(state, "Move box", moved, [&](Project* p) {
     p->FindBox(box_id)->translation = Eigen::Vector3d(t[0], t[1], t[2]);
   });
@@ -226,7 +243,7 @@ void DrawBoxSection(AppState* state, const Box& box) {
   ImGui::PopID();
 }
 
-void DrawPinSection(AppState* state, const Pin& pin) {
+void DrawPinSection(AppState* state, const Pin pin) {
   if (!ImGui::CollapsingHeader("Pin", ImGuiTreeNodeFlags_DefaultOpen)) return;
   const Project& project = state->document.project();
   const Id pin_id = pin.id;
@@ -236,6 +253,7 @@ void DrawPinSection(AppState* state, const Pin& pin) {
   ImGui::PushID("pin");
   double uv[2] = {pin.uv_px.x(), pin.uv_px.y()};
   const bool moved = DragDoubles("Pixel", uv, 2, 0.25f, "%.2f");
+  RecordItem("pin.uv");
   TrackEdit(state, "Move pin", moved, [&](Project* p) { p->FindPin(pin_id)->uv_px = Eigen::Vector2d(uv[0], uv[1]); });
   ImGui::PopID();
   const auto& residuals = state->last_update.solve.pin_residuals_px;
@@ -244,7 +262,7 @@ void DrawPinSection(AppState* state, const Pin& pin) {
   }
 }
 
-void DrawSegmentSection(AppState* state, const Segment& segment) {
+void DrawSegmentSection(AppState* state, const Segment segment) {
   if (!ImGui::CollapsingHeader("Segment", ImGuiTreeNodeFlags_DefaultOpen)) return;
   const Project& project = state->document.project();
   const Id seg_id = segment.id;
@@ -287,6 +305,9 @@ std::string StemOf(const std::string& path) {
 }
 
 }  // namespace
+
+const std::map<std::string, Rect>& LastItemRects() { return ItemRects(); }
+void ClearItemRects() { ItemRects().clear(); }
 
 float DrawMenuBar(AppState* state, ShellState* shell) {
   float height = 0;
@@ -430,6 +451,7 @@ void DrawToolsPanel(AppState* state) {
       }
     }
     if (active) ImGui::PopStyleColor();
+    RecordItem(std::string("tool.") + b.label);
     // The shortcut letter at the right end of the button.
     const ImVec2 max = ImGui::GetItemRectMax();
     const ImVec2 min = ImGui::GetItemRectMin();
@@ -442,6 +464,7 @@ void DrawToolsPanel(AppState* state) {
   ImGui::Separator();
   ImGui::Spacing();
   if (ImGui::Button("Solve", button_size)) SolveNow(state);
+  RecordItem("tool.Solve");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Re-run calibration and the geometry solve");
   ImGui::Spacing();
   for (const ToolButton& b : kToolButtons) {
@@ -479,6 +502,7 @@ void DrawHistoryPanel(AppState* state) {
     char text[256];
     std::snprintf(text, sizeof(text), "%3d  %s##h%d", position, label.c_str(), position);
     if (ImGui::Selectable(text, current) && !current) target = position;
+    RecordItem("history." + std::to_string(position));
     if (current && ImGui::IsWindowAppearing()) ImGui::SetScrollHereY();
     if (future) ImGui::PopStyleColor();
   };

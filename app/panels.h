@@ -3,6 +3,9 @@
 // functions of app/app_state.h.
 #pragma once
 
+#include <map>
+#include <string>
+
 #include "app/app_state.h"
 #include "app/frame.h"
 
@@ -18,6 +21,12 @@ void DrawPropertiesPanel(AppState* state);
 void DrawHistoryPanel(AppState* state);
 // The log, coloured by level.
 void DrawLogPanel(AppState* state);
+
+// Screen rectangles of the shell panels' main widgets in the last frame, by name (e.g.
+// "tool.Pin", "box.size", "box.name", "history.2"), for the render report and tests.
+const std::map<std::string, Rect>& LastItemRects();
+// Starts a new frame's record (DrawFrame calls it).
+void ClearItemRects();
 
 // Tool shortcuts (V, X, Y, Z, P, B) when no text field is active and no modifier is down.
 void HandleToolShortcuts(AppState* state);

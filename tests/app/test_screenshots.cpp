@@ -550,3 +550,71 @@ TEST_CASE("render: a splitter drag resizes its neighbours; title-bar drag and Un
   CHECK(std::abs(num(docked.at("Log"), "y") - num(log, "y")) <= kPositionTolerancePx);
   CHECK(std::abs(num(docked.at("Log"), "x") - num(history, "x")) <= kPositionTolerancePx);
 }
+
+TEST_CASE("render: a property drag is one undo entry; clicking the first history entry undoes everything") {
+  TempDir dir("properties");
+  const Fixture f = WriteFixture(dir, /*with_box=*/true, /*with_pins=*/false);
+  const std::string start_json = facet::ProjectToJson(facet::LoadProject(f.project_path).project);
+  RunResult run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "start.png") + "' --report '" +
+                                     (dir / "start.json") + "'");
+  INFO("stderr: " << run.stderr_text);
+  REQUIRE(run.exit_code == 0);
+  const View view = ViewFromReport(ReadJson(dir / "start.json"));
+
+  // Select the box by pressing on its projected corner 4 (in front, on the outline).
+  const Eigen::Vector2d corner =
+      view.ToScreen(f.scene.true_camera.Project(facet::BoxCornerInWorld(f.scene.true_box, 4)));
+  REQUIRE(view.Inside(corner, 10.0));
+  std::ostringstream select;
+  select << "frames 2\nclick left " << corner.x() << " " << corner.y() << "\nframes 2\n";
+  WriteText(dir / "select.txt", select.str());
+  run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "selected.png") + "' --script '" +
+                           (dir / "select.txt") + "' --report '" + (dir / "selected.json") + "'");
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json selected = ReadJson(dir / "selected.json");
+  INFO("selection: " << selected.at("selection").dump() << " items: " << selected.at("items").dump());
+  REQUIRE(selected.at("selection").at("box_id").get<facet::Id>() == f.scene.box_id);
+  REQUIRE(selected.at("items").contains("box.size"));
+  const auto& size_item = selected.at("items").at("box.size");
+  const double grab_x = size_item.at("x").get<double>() + 20.0;  // inside the first (x) component
+  const double grab_y = size_item.at("y").get<double>() + size_item.at("h").get<double>() / 2;
+
+  // Drag the size's x component 40 px to the right over ten frames, then key p (pin tool).
+  std::ostringstream edit;
+  edit << select.str() << "drag left " << grab_x << " " << grab_y << " " << grab_x + 40 << " " << grab_y << " 10\n"
+       << "frames 2\nkey p\nframes 1\n";
+  WriteText(dir / "edit.txt", edit.str());
+  run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "edit.png") + "' --script '" + (dir / "edit.txt") +
+                           "' --report '" + (dir / "edit.json") + "'");
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json edited = ReadJson(dir / "edit.json");
+  INFO("undo stack: " << edited.at("undo_stack").dump());
+  CHECK(edited.at("undo_stack") == nlohmann::json::array({"Resize box"}));
+  CHECK(edited.at("tool").get<std::string>() == "Pin");
+  const facet::ProjectLoadResult after = facet::ProjectFromJson(edited.at("project").dump());
+  REQUIRE(after.ok());
+  const facet::Box* box = after.project.FindBox(f.scene.box_id);
+  REQUIRE(box != nullptr);
+  // ImGui's drag speed here is 0.01 per px: 40 px is about 0.4 (a few px go to the drag threshold).
+  const double grown = box->size.x() - f.scene.true_box.size.x();
+  CAPTURE(grown);
+  CHECK(grown > 0.2);
+  CHECK(grown < 0.45);
+  CHECK(box->size.y() == f.scene.true_box.size.y());
+  CHECK(box->size.z() == f.scene.true_box.size.z());
+
+  // Clicking history entry 0 ("Opened") undoes back to the file's project.
+  const auto& first = edited.at("items").at("history.0");
+  std::ostringstream undo_all;
+  undo_all << edit.str() << "click left " << first.at("x").get<double>() + 40 << " "
+           << first.at("y").get<double>() + first.at("h").get<double>() / 2 << "\nframes 2\n";
+  WriteText(dir / "undo_all.txt", undo_all.str());
+  run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "undo_all.png") + "' --script '" +
+                           (dir / "undo_all.txt") + "' --report '" + (dir / "undo_all.json") + "'");
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json undone = ReadJson(dir / "undo_all.json");
+  CHECK(undone.at("undo_stack").empty());
+  CHECK(undone.at("redo_stack").size() == 1);
+  CHECK(undone.at("project") == nlohmann::json::parse(start_json));
+  CHECK(!undone.at("dirty").get<bool>());
+}
