@@ -77,6 +77,14 @@ struct PanelState {
   Id context_segment = kNoId;
   bool fit_requested = false;
   ImageViewReport report;
+  // Fine pointing while Shift is held: ImGui reports whole screen pixels, so the pointer
+  // moves at 1 / magnification of the mouse's speed from where Shift went down, and the
+  // loupe shows it. That gives sub-screen-pixel placement at any zoom.
+  bool fine_active = false;
+  ImVec2 fine_anchor_screen{0, 0};
+  Eigen::Vector2d fine_anchor_uv = Eigen::Vector2d::Zero();
+  bool fine_reanchor = false;
+  Eigen::Vector2d last_pointer_uv = Eigen::Vector2d::Zero();
 };
 
 PanelState& Panel() {
@@ -419,11 +427,13 @@ void StartLeftPress(AppState* state, PanelState* panel, const Image& image, cons
   if (tool == Tool::kSelect) state->selection = Selection();
 }
 
-void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& mouse_uv) {
+// `pointer_px_per_image_px`: screen px per image px of the pointer's motion (the zoom, times
+// the magnification in fine mode), so "too short" means what the user saw.
+void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& mouse_uv,
+                     double pointer_px_per_image_px) {
   Interaction& drag = panel->interaction;
-  const ImVec2 mouse = ImGui::GetIO().MousePos;
   if (drag.kind == DragKind::kNewSegment) {
-    const double length_px = (ToEigen(mouse) - ToEigen(drag.press_screen)).norm();
+    const double length_px = (mouse_uv - drag.press_uv).norm() * pointer_px_per_image_px;
     if (length_px >= kMinSegmentLengthPx && state->document.project().FindImage(drag.image_id)) {
       Project edited = state->document.project();
       Segment segment;
@@ -487,7 +497,8 @@ void DrawSegmentContextMenu(AppState* state, PanelState* panel) {
 // The magnifier: the photo and overlays around the cursor, magnified, with a crosshair on
 // the exact cursor position.
 void DrawLoupe(ImDrawList* draw_list, const PanelState& panel, const TiledTexture* texture, const OverlayInput& overlay,
-               const ViewState& view, ImVec2 rect_min, ImVec2 rect_max, int width_px, int height_px) {
+               const ViewState& view, const Eigen::Vector2d& uv, ImVec2 rect_min, ImVec2 rect_max, int width_px,
+               int height_px) {
   const ImVec2 mouse = ImGui::GetIO().MousePos;
   const float size = std::min({kLoupeSizePx, rect_max.x - rect_min.x - 4.0f, rect_max.y - rect_min.y - 4.0f});
   if (size < 40.0f) return;
@@ -500,7 +511,6 @@ void DrawLoupe(ImDrawList* draw_list, const PanelState& panel, const TiledTextur
   const ImVec2 p_max(p_min.x + size, p_min.y + size);
   const ImVec2 center(std::floor(p_min.x + 0.5f * size) + 0.5f, std::floor(p_min.y + 0.5f * size) + 0.5f);
 
-  const Eigen::Vector2d uv = MouseUv(view);
   ViewTransform loupe;
   loupe.zoom = std::min(view.zoom * panel.loupe_magnification, kMaxZoom * 4.0f);
   loupe.origin = ImVec2(static_cast<float>(center.x - loupe.zoom * uv.x()), static_cast<float>(center.y - loupe.zoom * uv.y()));
@@ -643,6 +653,9 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
         const float factor = wheel > 0 ? 2.0f : 0.5f;
         panel->loupe_magnification =
             std::clamp(panel->loupe_magnification * factor, kMinLoupeMagnification, kMaxLoupeMagnification);
+        // Re-anchored below at the current pointer, so that it does not jump.
+        panel->fine_active = false;
+        panel->fine_reanchor = true;
       } else {
         ZoomAbout(&view, view.zoom * std::pow(kWheelZoomStep, wheel), io.MousePos);
       }
@@ -652,11 +665,24 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   const Project& project = state->document.project();
   const std::vector<ProjectedCorner> corners = ProjectBoxCorners(project, image);
   ViewTransform transform = TransformOf(view);
-  const Eigen::Vector2d mouse_uv = MouseUv(view);
   Interaction& drag = panel->interaction;
   const bool busy = drag.kind != DragKind::kNone;
+  // The pointer: the mouse, or in fine mode (Shift) the slowed-down point the loupe shows.
+  const bool fine = io.KeyShift && drag.kind != DragKind::kPan && (hovered || busy);
+  if (fine && !panel->fine_active) {
+    panel->fine_anchor_screen = io.MousePos;
+    panel->fine_anchor_uv = panel->fine_reanchor ? panel->last_pointer_uv : MouseUv(view);
+  }
+  panel->fine_active = fine;
+  panel->fine_reanchor = false;
+  const double pointer_scale = view.zoom * (fine ? panel->loupe_magnification : 1.0f);
+  const Eigen::Vector2d mouse_uv =
+      fine ? Eigen::Vector2d(panel->fine_anchor_uv + (ToEigen(io.MousePos) - ToEigen(panel->fine_anchor_screen)) / pointer_scale)
+           : MouseUv(view);
+  const ImVec2 pointer_screen = transform.ToScreen(mouse_uv.x(), mouse_uv.y());
+  panel->last_pointer_uv = mouse_uv;
   OverlayHover hover;
-  if (hovered && !busy) hover = HitTest(project, image, corners, transform, io.MousePos, state->tool);
+  if (hovered && !busy) hover = HitTest(project, image, corners, transform, pointer_screen, state->tool);
 
   // Presses start an interaction; a drag started elsewhere (another panel) blocks edits.
   const bool space_down = ImGui::IsKeyDown(ImGui::GetKeyIndex(ImGuiKey_Space));
@@ -670,7 +696,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
       StartLeftPress(state, panel, image, hover, mouse_uv);
     } else if (ImGui::IsMouseClicked(ImGuiMouseButton_Right)) {
       // The context menu works with every tool, so pick segments as the select tool does.
-      const OverlayHover under = HitTest(project, image, corners, transform, io.MousePos, Tool::kSelect);
+      const OverlayHover under = HitTest(project, image, corners, transform, pointer_screen, Tool::kSelect);
       if (under.segment_id != kNoId) {
         panel->context_segment = under.segment_id;
         ImGui::OpenPopup("##segment_menu");
@@ -703,7 +729,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
       UpdateEditDrag(state, &drag, mouse_uv);
     }
     if (ImGui::IsMouseReleased(drag.button) || !ImGui::IsMouseDown(drag.button)) {
-      FinishLeftPress(state, panel, mouse_uv);
+      FinishLeftPress(state, panel, mouse_uv, pointer_scale);
     }
   } else if (keys_for_us) {
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete), false) ||
@@ -755,7 +781,11 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
     draw_list->AddText(ImVec2(rect_min.x + 10, rect_min.y + 10), IM_COL32(200, 200, 200, 255), "Loading photo...");
   }
   if (hovered && io.KeyShift && drag.kind != DragKind::kPan) {
-    DrawLoupe(draw_list, *panel, texture, overlay, view, rect_min, rect_max, width_px, height_px);
+    DrawLoupe(draw_list, *panel, texture, overlay, view, mouse_uv, rect_min, rect_max, width_px, height_px);
+    // Where the slowed-down pointer is in the main view.
+    const ImVec2 p = transform.ToScreen(mouse_uv.x(), mouse_uv.y());
+    draw_list->AddCircle(p, 5.0f, IM_COL32(0, 0, 0, 200), 0, 3.0f);
+    draw_list->AddCircle(p, 5.0f, IM_COL32(255, 255, 255, 230), 0, 1.5f);
   }
   draw_list->PopClipRect();
 
