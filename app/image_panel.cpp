@@ -77,13 +77,13 @@ struct PanelState {
   Id context_segment = kNoId;
   bool fit_requested = false;
   ImageViewReport report;
-  // Fine pointing while Shift is held: ImGui reports whole screen pixels, so the pointer
-  // moves at 1 / magnification of the mouse's speed from where Shift went down, and the
-  // loupe shows it. That gives sub-screen-pixel placement at any zoom.
+  // Fine pointing, Shift held during a press: ImGui reports whole screen pixels, so the
+  // pointer then moves at 1 / magnification of the mouse's speed, continuing from where it
+  // was, and the loupe shows it. That gives sub-screen-pixel placement at any zoom.
   bool fine_active = false;
   ImVec2 fine_anchor_screen{0, 0};
   Eigen::Vector2d fine_anchor_uv = Eigen::Vector2d::Zero();
-  bool fine_reanchor = false;
+  ImVec2 last_mouse_screen{0, 0};
   Eigen::Vector2d last_pointer_uv = Eigen::Vector2d::Zero();
 };
 
@@ -499,7 +499,7 @@ void DrawSegmentContextMenu(AppState* state, PanelState* panel) {
 void DrawLoupe(ImDrawList* draw_list, const PanelState& panel, const TiledTexture* texture, const OverlayInput& overlay,
                const ViewState& view, const Eigen::Vector2d& uv, ImVec2 rect_min, ImVec2 rect_max, int width_px,
                int height_px) {
-  const ImVec2 mouse = ImGui::GetIO().MousePos;
+  const ImVec2 mouse = TransformOf(view).ToScreen(uv.x(), uv.y());
   const float size = std::min({kLoupeSizePx, rect_max.x - rect_min.x - 4.0f, rect_max.y - rect_min.y - 4.0f});
   if (size < 40.0f) return;
   // Above-right of the cursor, flipped to stay inside the view.
@@ -653,9 +653,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
         const float factor = wheel > 0 ? 2.0f : 0.5f;
         panel->loupe_magnification =
             std::clamp(panel->loupe_magnification * factor, kMinLoupeMagnification, kMaxLoupeMagnification);
-        // Re-anchored below at the current pointer, so that it does not jump.
-        panel->fine_active = false;
-        panel->fine_reanchor = true;
+        panel->fine_active = false;  // re-anchored below at the current pointer
       } else {
         ZoomAbout(&view, view.zoom * std::pow(kWheelZoomStep, wheel), io.MousePos);
       }
@@ -667,20 +665,21 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ViewTransform transform = TransformOf(view);
   Interaction& drag = panel->interaction;
   const bool busy = drag.kind != DragKind::kNone;
-  // The pointer: the mouse, or in fine mode (Shift) the slowed-down point the loupe shows.
-  const bool fine = io.KeyShift && drag.kind != DragKind::kPan && (hovered || busy);
+  // The pointer: the mouse, or in fine mode (Shift during a press) the slowed-down point
+  // that the loupe shows.
+  const bool fine = io.KeyShift && busy && drag.kind != DragKind::kPan;
   if (fine && !panel->fine_active) {
-    panel->fine_anchor_screen = io.MousePos;
-    panel->fine_anchor_uv = panel->fine_reanchor ? panel->last_pointer_uv : MouseUv(view);
+    panel->fine_anchor_screen = panel->last_mouse_screen;
+    panel->fine_anchor_uv = panel->last_pointer_uv;
   }
   panel->fine_active = fine;
-  panel->fine_reanchor = false;
   const double pointer_scale = view.zoom * (fine ? panel->loupe_magnification : 1.0f);
   const Eigen::Vector2d mouse_uv =
       fine ? Eigen::Vector2d(panel->fine_anchor_uv + (ToEigen(io.MousePos) - ToEigen(panel->fine_anchor_screen)) / pointer_scale)
            : MouseUv(view);
   const ImVec2 pointer_screen = transform.ToScreen(mouse_uv.x(), mouse_uv.y());
   panel->last_pointer_uv = mouse_uv;
+  panel->last_mouse_screen = io.MousePos;
   OverlayHover hover;
   if (hovered && !busy) hover = HitTest(project, image, corners, transform, pointer_screen, state->tool);
 
@@ -780,12 +779,13 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   } else if (texture == nullptr) {
     draw_list->AddText(ImVec2(rect_min.x + 10, rect_min.y + 10), IM_COL32(200, 200, 200, 255), "Loading photo...");
   }
-  if (hovered && io.KeyShift && drag.kind != DragKind::kPan) {
+  if ((hovered || fine) && io.KeyShift && drag.kind != DragKind::kPan) {
     DrawLoupe(draw_list, *panel, texture, overlay, view, mouse_uv, rect_min, rect_max, width_px, height_px);
-    // Where the slowed-down pointer is in the main view.
-    const ImVec2 p = transform.ToScreen(mouse_uv.x(), mouse_uv.y());
-    draw_list->AddCircle(p, 5.0f, IM_COL32(0, 0, 0, 200), 0, 3.0f);
-    draw_list->AddCircle(p, 5.0f, IM_COL32(255, 255, 255, 230), 0, 1.5f);
+    if (fine) {  // where the slowed-down pointer is in the main view
+      const ImVec2 p = transform.ToScreen(mouse_uv.x(), mouse_uv.y());
+      draw_list->AddCircle(p, 5.0f, IM_COL32(0, 0, 0, 200), 0, 3.0f);
+      draw_list->AddCircle(p, 5.0f, IM_COL32(255, 255, 255, 230), 0, 1.5f);
+    }
   }
   draw_list->PopClipRect();
 

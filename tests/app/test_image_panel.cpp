@@ -361,14 +361,14 @@ TEST_CASE("image panel: the pin tool pins a clicked box corner where the next cl
   CHECK(report.at("undo_stack").size() == 1);
 }
 
-TEST_CASE("image panel: with Shift held the pointer moves at 1/magnification of the mouse (fine placement)") {
+TEST_CASE("image panel: with Shift held during a press the pointer moves at 1/magnification of the mouse") {
   TempDir dir("fine");
   const Fixture f = WriteFixture(dir, false, false);
   const View view = ViewFromReport(Render(dir, f, "start", ""));
   const Eigen::Vector2d a = Whole(ViewCenter(view) + Eigen::Vector2d(-50, 20));
   const Eigen::Vector2d mouse_motion(40, -12);
   constexpr double kMagnification = 4.0;  // the loupe's default
-  // Shift goes down with the mouse at a; the press and the motion happen in fine mode.
+  // Shift is down before the press: the press lands on the mouse, the motion is slowed.
   const std::string script = "frames 2\ncommand tool line-z\nmove " + Fmt(a) + "\nhold shift\nframes 2\ndown left\nmove " +
                              Fmt(a + 0.5 * mouse_motion) + "\nmove " + Fmt(a + mouse_motion) +
                              "\nframes 1\nup left\nframes 1\nrelease shift\nframes 2\n";
