@@ -528,6 +528,11 @@ void DrawLoupe(ImDrawList* draw_list, const PanelState& panel, const TiledTextur
   options.show_labels = false;
   options.show_vanishing_points = false;  // border arrows would crowd the small square
   DrawImageOverlays(draw_list, overlay, loupe, p_min, p_max, options);
+  const Interaction& drag = panel.interaction;
+  if (drag.kind == DragKind::kNewSegment) {
+    DrawImageLine(draw_list, loupe, drag.press_uv, uv, p_min, p_max, IM_COL32(0, 0, 0, 200), 4.0f);
+    DrawImageLine(draw_list, loupe, drag.press_uv, uv, p_min, p_max, AxisColor(drag.axis), 2.0f);
+  }
   // Crosshair with a gap, so the pixel under the cursor stays visible.
   const float gap = 4.0f;
   const ImU32 dark = IM_COL32(0, 0, 0, 200), light = IM_COL32(255, 255, 255, 230);
