@@ -73,6 +73,7 @@ bool OpenProject(AppState* state, const std::string& path) {
   state->mesh_boxes.clear();
   state->mesh_images.clear();
   state->mesh_photo_count = 0;
+  state->mesh_texture_stale = false;
   state->mesh = {};
   ++state->mesh_revision;
   const Project& project = state->document.project();
@@ -170,10 +171,28 @@ void RefreshDerived(AppState* state) {
   }
 
   // The mesh depends on the boxes, the cameras and the loaded photos only.
-  if (state->mesh_boxes == project.boxes && state->mesh_images == project.images &&
-      state->mesh_photo_count == state->photos.size() && state->mesh_revision != 0) {
-    return;
+  const bool inputs_unchanged = state->mesh_boxes == project.boxes && state->mesh_images == project.images &&
+                                state->mesh_photo_count == state->photos.size() && state->mesh_revision != 0;
+  if (inputs_unchanged && (!state->mesh_texture_stale || state->drag_start)) return;
+  state->mesh_boxes = project.boxes;
+  state->mesh_images = project.images;
+  state->mesh_photo_count = state->photos.size();
+  ++state->mesh_revision;
+
+  // While a pin is dragged only the geometry follows: re-baking the texture every frame would
+  // stall on large photos. Faces keep their place in the atlas, so the old UVs stay valid;
+  // the texture is baked again when the drag ends.
+  if (state->drag_start && !state->mesh.atlas.empty()) {
+    TexturedMesh geometry = BuildUntexturedMesh(project);
+    if (geometry.positions.size() == state->mesh.positions.size() &&
+        geometry.triangle_box == state->mesh.triangle_box) {
+      state->mesh.positions = std::move(geometry.positions);
+      state->mesh.normals = std::move(geometry.normals);
+      state->mesh_texture_stale = true;
+      return;
+    }
   }
+
   std::vector<ImageRgba8> photos;
   photos.reserve(project.images.size());
   for (const Image& image : project.images) {
@@ -187,10 +206,8 @@ void RefreshDerived(AppState* state) {
     state->Log(LogLevel::kWarning, "Texture: " + state->last_bake.message);
   }
   state->mesh = std::move(mesh);
-  state->mesh_boxes = project.boxes;
-  state->mesh_images = project.images;
-  state->mesh_photo_count = state->photos.size();
-  ++state->mesh_revision;
+  state->mesh_texture_stale = false;
+  ++state->atlas_revision;
 }
 
 }  // namespace facet::app

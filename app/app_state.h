@@ -58,13 +58,15 @@ struct AppState {
 
   // Derived from the project after each change (RefreshDerived).
   TexturedMesh mesh;
-  std::uint64_t mesh_revision = 0;  // increments whenever mesh changes
+  std::uint64_t mesh_revision = 0;   // increments whenever mesh changes
+  std::uint64_t atlas_revision = 0;  // increments when mesh.atlas changes (a subset of the above)
   ModelUpdateSummary last_update;   // calibration and solve figures of the last change
   TextureBakeSummary last_bake;
   // What the current mesh was built from, to rebuild it only when that changes.
   std::vector<Box> mesh_boxes;
   std::vector<Image> mesh_images;
   size_t mesh_photo_count = 0;
+  bool mesh_texture_stale = false;  // geometry moved during a drag; texture not re-baked yet
 
   std::vector<LogEntry> log;
   double time_s = 0.0;

@@ -228,6 +228,7 @@ struct GlResources {
   GLuint atlas_texture = 0;
   bool mesh_uploaded = false;
   std::uint64_t mesh_revision = 0;
+  std::uint64_t atlas_revision = 0;
 
   GLuint lines_vao = 0, lines_vbo = 0;
   DrawRange box_edges, frustums, active_frustum, axes, grid_minor, grid_major;
@@ -413,7 +414,7 @@ void ReleaseGl(GlResources* gl) {
 // ---------------------------------------------------------------------------------------
 // Uploads (only when their source changed)
 
-void UploadMesh(const TexturedMesh& mesh, std::uint64_t revision, GlResources* gl) {
+void UploadMesh(const TexturedMesh& mesh, std::uint64_t revision, std::uint64_t atlas_revision, GlResources* gl) {
   // Triangles are expanded to their own vertices so that "textured" can be per triangle.
   std::vector<MeshVertex> vertices;
   const size_t triangle_count = mesh.indices.size() / 3;
@@ -443,8 +444,12 @@ void UploadMesh(const TexturedMesh& mesh, std::uint64_t revision, GlResources* g
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(MeshVertex)),
                vertices.empty() ? nullptr : vertices.data(), GL_STATIC_DRAW);
   gl->mesh_vertex_count = static_cast<GLsizei>(vertices.size());
-  if (gl->atlas_texture) glDeleteTextures(1, &gl->atlas_texture);
-  gl->atlas_texture = UploadGlTextureRgba8(mesh.atlas, /*mipmaps=*/true);
+  // During a drag only positions change; the atlas is uploaded only when it is new.
+  if (!gl->mesh_uploaded || gl->atlas_revision != atlas_revision) {
+    if (gl->atlas_texture) glDeleteTextures(1, &gl->atlas_texture);
+    gl->atlas_texture = UploadGlTextureRgba8(mesh.atlas, /*mipmaps=*/true);
+    gl->atlas_revision = atlas_revision;
+  }
   gl->mesh_uploaded = true;
   gl->mesh_revision = revision;
 }
@@ -1099,7 +1104,7 @@ void DrawViewportPanel(AppState* state) {
 
   // GL work: uploads when their sources changed, then the frame.
   const SavedGlState saved = SavedGlState::Capture();
-  if (!gl.mesh_uploaded || gl.mesh_revision != state->mesh_revision) UploadMesh(state->mesh, state->mesh_revision, &gl);
+  if (!gl.mesh_uploaded || gl.mesh_revision != state->mesh_revision) UploadMesh(state->mesh, state->mesh_revision, state->atlas_revision, &gl);
   UpdatePhotoTextures(*state, &gl);
   SceneKey key{project.boxes, project.images, state->active_image_id, state->selection.box_id, panel.orbit.photo_image_id};
   if (!gl.scene_built || !(key == gl.scene_key)) {
