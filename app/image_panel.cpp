@@ -12,33 +12,17 @@
 #include <string>
 
 #include "app/image_tiles.h"
+#include "app/image_view.h"
 #include "app/overlay_draw.h"
 
 namespace facet::app {
 namespace {
 
-constexpr float kMinZoom = 1.0f / 1024.0f;
-constexpr float kMaxZoom = 64.0f;
 constexpr float kWheelZoomStep = 1.2f;
-constexpr float kFitMarginPx = 8.0f;
 constexpr double kPickRadiusPx = 6.0;
 constexpr double kCornerPickRadiusPx = 8.0;
 constexpr double kMinSegmentLengthPx = 3.0;  // shorter new segments are accidental clicks
 constexpr double kDragStartPx = 2.0;         // motion before a press becomes a drag
-constexpr float kLoupeSizePx = 220.0f;
-constexpr float kLoupeOffsetPx = 28.0f;
-constexpr float kMinLoupeMagnification = 2.0f;
-constexpr float kMaxLoupeMagnification = 32.0f;
-constexpr ImU32 kViewBackground = IM_COL32(38, 38, 42, 255);
-
-// Per image: the view transform (UI state, never part of the document).
-struct ViewState {
-  bool initialized = false;
-  bool fitted = false;  // refit when the panel is resized while this holds
-  float zoom = 1.0f;
-  ImVec2 origin{0, 0};
-  ImVec2 last_size{0, 0};
-};
 
 // GL textures of one photo, and which pixels they were made from.
 struct CachedPhoto {
@@ -68,7 +52,7 @@ struct Interaction {
 };
 
 struct PanelState {
-  std::map<Id, ViewState> views;
+  std::map<Id, ImageViewState> views;
   std::map<Id, CachedPhoto> textures;
   Interaction interaction;
   OverlayOptions overlay;
@@ -99,33 +83,10 @@ std::string FileName(const std::string& path) {
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
-ViewTransform TransformOf(const ViewState& view) { return ViewTransform{view.origin, view.zoom}; }
-
-Eigen::Vector2d MouseUv(const ViewState& view) {
+Eigen::Vector2d MouseUv(const ImageViewState& view) {
   double u, v;
   TransformOf(view).ToImage(ImGui::GetIO().MousePos, &u, &v);
   return {u, v};
-}
-
-void FitView(ViewState* view, int width_px, int height_px, ImVec2 rect_min, ImVec2 rect_size) {
-  const float avail_w = std::max(1.0f, rect_size.x - 2.0f * kFitMarginPx);
-  const float avail_h = std::max(1.0f, rect_size.y - 2.0f * kFitMarginPx);
-  view->zoom = std::clamp(std::min(avail_w / width_px, avail_h / height_px), kMinZoom, kMaxZoom);
-  // The image spans [-0.5, size - 0.5]: its centre is at ((w - 1) / 2, (h - 1) / 2).
-  const ImVec2 center(rect_min.x + 0.5f * rect_size.x, rect_min.y + 0.5f * rect_size.y);
-  view->origin = ImVec2(center.x - view->zoom * 0.5f * (width_px - 1), center.y - view->zoom * 0.5f * (height_px - 1));
-  view->fitted = true;
-  view->initialized = true;
-  view->last_size = rect_size;
-}
-
-// Zooms keeping the image point under `anchor` (screen) fixed.
-void ZoomAbout(ViewState* view, float new_zoom, ImVec2 anchor) {
-  new_zoom = std::clamp(new_zoom, kMinZoom, kMaxZoom);
-  const float ratio = new_zoom / view->zoom;
-  view->origin = ImVec2(anchor.x - (anchor.x - view->origin.x) * ratio, anchor.y - (anchor.y - view->origin.y) * ratio);
-  view->zoom = new_zoom;
-  view->fitted = false;
 }
 
 const TiledTexture* TextureFor(PanelState* panel, const AppState& state, Id image_id) {
@@ -494,63 +455,6 @@ void DrawSegmentContextMenu(AppState* state, PanelState* panel) {
   ImGui::EndPopup();
 }
 
-// The magnifier: the photo and overlays around the cursor, magnified, with a crosshair on
-// the exact cursor position.
-void DrawLoupe(ImDrawList* draw_list, const PanelState& panel, const TiledTexture* texture, const OverlayInput& overlay,
-               const ViewState& view, const Eigen::Vector2d& uv, ImVec2 rect_min, ImVec2 rect_max, int width_px,
-               int height_px) {
-  const ImVec2 mouse = TransformOf(view).ToScreen(uv.x(), uv.y());
-  const float size = std::min({kLoupeSizePx, rect_max.x - rect_min.x - 4.0f, rect_max.y - rect_min.y - 4.0f});
-  if (size < 40.0f) return;
-  // Above-right of the cursor, flipped to stay inside the view.
-  ImVec2 p_min(mouse.x + kLoupeOffsetPx, mouse.y - kLoupeOffsetPx - size);
-  if (p_min.x + size > rect_max.x) p_min.x = mouse.x - kLoupeOffsetPx - size;
-  if (p_min.y < rect_min.y) p_min.y = mouse.y + kLoupeOffsetPx;
-  p_min.x = std::clamp(p_min.x, rect_min.x + 2.0f, rect_max.x - size - 2.0f);
-  p_min.y = std::clamp(p_min.y, rect_min.y + 2.0f, rect_max.y - size - 2.0f);
-  const ImVec2 p_max(p_min.x + size, p_min.y + size);
-  const ImVec2 center(std::floor(p_min.x + 0.5f * size) + 0.5f, std::floor(p_min.y + 0.5f * size) + 0.5f);
-
-  ViewTransform loupe;
-  loupe.zoom = std::min(view.zoom * panel.loupe_magnification, kMaxZoom * 4.0f);
-  loupe.origin = ImVec2(static_cast<float>(center.x - loupe.zoom * uv.x()), static_cast<float>(center.y - loupe.zoom * uv.y()));
-
-  draw_list->AddRectFilled(ImVec2(p_min.x - 3, p_min.y - 3), ImVec2(p_max.x + 3, p_max.y + 3), IM_COL32(0, 0, 0, 220));
-  draw_list->AddRectFilled(p_min, p_max, kViewBackground);
-  draw_list->PushClipRect(p_min, p_max, true);
-  if (texture != nullptr) {
-    DrawTiledTexture(draw_list, *texture, loupe, p_min, p_max);
-  } else {
-    draw_list->AddRectFilled(loupe.ToScreen(-0.5, -0.5), loupe.ToScreen(width_px - 0.5, height_px - 0.5),
-                             IM_COL32(70, 70, 76, 255));
-  }
-  OverlayOptions options = panel.overlay;
-  options.show_labels = false;
-  options.show_vanishing_points = false;  // border arrows would crowd the small square
-  DrawImageOverlays(draw_list, overlay, loupe, p_min, p_max, options);
-  const Interaction& drag = panel.interaction;
-  if (drag.kind == DragKind::kNewSegment) {
-    DrawImageLine(draw_list, loupe, drag.press_uv, uv, p_min, p_max, IM_COL32(0, 0, 0, 200), 4.0f);
-    DrawImageLine(draw_list, loupe, drag.press_uv, uv, p_min, p_max, AxisColor(drag.axis), 2.0f);
-  }
-  // Crosshair with a gap, so the pixel under the cursor stays visible.
-  const float gap = 4.0f;
-  const ImU32 dark = IM_COL32(0, 0, 0, 200), light = IM_COL32(255, 255, 255, 230);
-  for (int pass = 0; pass < 2; ++pass) {
-    const ImU32 c = pass == 0 ? dark : light;
-    const float t = pass == 0 ? 3.0f : 1.0f;
-    draw_list->AddLine(ImVec2(p_min.x, center.y), ImVec2(center.x - gap, center.y), c, t);
-    draw_list->AddLine(ImVec2(center.x + gap, center.y), ImVec2(p_max.x, center.y), c, t);
-    draw_list->AddLine(ImVec2(center.x, p_min.y), ImVec2(center.x, center.y - gap), c, t);
-    draw_list->AddLine(ImVec2(center.x, center.y + gap), ImVec2(center.x, p_max.y), c, t);
-  }
-  char text[96];
-  std::snprintf(text, sizeof(text), "%gx  (%.1f, %.1f)", panel.loupe_magnification, uv.x(), uv.y());
-  DrawShadowedText(draw_list, ImVec2(p_min.x + 5, p_max.y - ImGui::GetTextLineHeight() - 4), light, text);
-  draw_list->PopClipRect();
-  draw_list->AddRect(p_min, p_max, light, 0.0f, 0, 1.0f);
-}
-
 // The tab bar: selects state->active_image_id, and follows it when another panel changes it.
 void DrawTabs(AppState* state, PanelState* panel) {
   const Project& project = state->document.project();
@@ -576,7 +480,7 @@ void DrawTabs(AppState* state, PanelState* panel) {
   panel->shown_tab = shown;
 }
 
-void DrawToolbar(PanelState* panel, ViewState* view, bool* fit_now, bool* one_to_one) {
+void DrawToolbar(PanelState* panel, ImageViewState* view, bool* fit_now, bool* one_to_one) {
   ImGui::AlignTextToFramePadding();
   ImGui::Text("%6.1f%%", view->zoom * 100.0f);
   ImGui::SameLine();
@@ -614,7 +518,7 @@ std::string ToolHint(const AppState& state) {
 
 void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ImGuiIO& io = ImGui::GetIO();
-  ViewState& view = panel->views[image.id];
+  ImageViewState& view = panel->views[image.id];
   const TiledTexture* texture = TextureFor(panel, *state, image.id);
   const int width_px = texture ? texture->width : std::max(1, image.width_px);
   const int height_px = texture ? texture->height : std::max(1, image.height_px);
@@ -644,11 +548,11 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   if (keys_for_us && ImGui::IsKeyPressed(GLFW_KEY_F, false) && !io.KeyCtrl && !io.KeyAlt) fit_now = true;
   const bool resized = view.last_size.x != rect_size.x || view.last_size.y != rect_size.y;
   if (!view.initialized || fit_now || (view.fitted && resized)) {
-    FitView(&view, width_px, height_px, rect_min, rect_size);
+    FitImageView(&view, width_px, height_px, rect_min, rect_size);
     panel->fit_requested = false;
   }
   view.last_size = rect_size;
-  if (one_to_one) ZoomAbout(&view, 1.0f, ImVec2(rect_min.x + 0.5f * rect_size.x, rect_min.y + 0.5f * rect_size.y));
+  if (one_to_one) ZoomImageViewAbout(&view, 1.0f, ImVec2(rect_min.x + 0.5f * rect_size.x, rect_min.y + 0.5f * rect_size.y));
 
   // Wheel: zoom about the cursor; with Shift, the loupe's magnification.
   if (hovered) {
@@ -660,7 +564,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
             std::clamp(panel->loupe_magnification * factor, kMinLoupeMagnification, kMaxLoupeMagnification);
         panel->fine_active = false;  // re-anchored below at the current pointer
       } else {
-        ZoomAbout(&view, view.zoom * std::pow(kWheelZoomStep, wheel), io.MousePos);
+        ZoomImageViewAbout(&view, view.zoom * std::pow(kWheelZoomStep, wheel), io.MousePos);
       }
     }
   }
@@ -762,7 +666,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
 
   ImDrawList* draw_list = ImGui::GetWindowDrawList();
   draw_list->PushClipRect(rect_min, rect_max, true);
-  draw_list->AddRectFilled(rect_min, rect_max, kViewBackground);
+  draw_list->AddRectFilled(rect_min, rect_max, kImageViewBackground);
   const ImVec2 image_min = transform.ToScreen(-0.5, -0.5);
   const ImVec2 image_max = transform.ToScreen(width_px - 0.5, height_px - 0.5);
   if (texture != nullptr) {
@@ -785,7 +689,10 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
     draw_list->AddText(ImVec2(rect_min.x + 10, rect_min.y + 10), IM_COL32(200, 200, 200, 255), "Loading photo...");
   }
   if ((hovered || fine) && io.KeyShift && drag.kind != DragKind::kPan) {
-    DrawLoupe(draw_list, *panel, texture, overlay, view, mouse_uv, rect_min, rect_max, width_px, height_px);
+    std::optional<LoupePreview> preview;
+    if (drag.kind == DragKind::kNewSegment) preview = LoupePreview{drag.press_uv, drag.axis};
+    DrawLoupe(draw_list, texture, overlay, panel->overlay, view, panel->loupe_magnification, mouse_uv, preview, rect_min,
+              rect_max, width_px, height_px);
     if (fine) {  // where the slowed-down pointer is in the main view
       const ImVec2 p = transform.ToScreen(mouse_uv.x(), mouse_uv.y());
       draw_list->AddCircle(p, 5.0f, IM_COL32(0, 0, 0, 200), 0, 3.0f);
