@@ -26,6 +26,14 @@ ModelUpdateOptions DragUpdateOptions() {
   return options;
 }
 
+// After undo, redo or a cancelled drag the project is one the solver already produced; the
+// panels still need its vanishing points and residuals, so they are recomputed for display
+// without touching the project.
+void RefreshDiagnostics(AppState* state) {
+  Project unused;
+  state->last_update = UpdateModel(state->document.project(), FullUpdateOptions(), &unused);
+}
+
 void LogUpdate(AppState* state, const ModelUpdateSummary& summary) {
   for (const std::string& m : summary.messages) state->Log(LogLevel::kWarning, m);
 }
@@ -78,9 +86,7 @@ bool OpenProject(AppState* state, const std::string& path) {
   ++state->mesh_revision;
   const Project& project = state->document.project();
   state->active_image_id = project.images.empty() ? kNoId : project.images.front().id;
-  // Diagnostics for the panels; the stored solution stays as saved.
-  Project check;
-  state->last_update = UpdateModel(project, FullUpdateOptions(), &check);
+  RefreshDiagnostics(state);  // the stored solution stays as saved
   state->Log(LogLevel::kInfo, "Opened " + path);
   return true;
 }
@@ -137,16 +143,23 @@ void CancelDrag(AppState* state) {
   if (!state->drag_start) return;
   state->document.CancelPreview(*state->drag_start);
   state->drag_start.reset();
+  RefreshDiagnostics(state);
 }
 
 void Undo(AppState* state) {
   if (state->drag_start) CancelDrag(state);
-  if (state->document.Undo()) state->Log(LogLevel::kInfo, "Undo");
+  if (state->document.Undo()) {
+    state->Log(LogLevel::kInfo, "Undo");
+    RefreshDiagnostics(state);
+  }
 }
 
 void Redo(AppState* state) {
   if (state->drag_start) return;
-  if (state->document.Redo()) state->Log(LogLevel::kInfo, "Redo");
+  if (state->document.Redo()) {
+    state->Log(LogLevel::kInfo, "Redo");
+    RefreshDiagnostics(state);
+  }
 }
 
 void RefreshDerived(AppState* state) {
