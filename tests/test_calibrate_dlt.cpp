@@ -1,0 +1,520 @@
+// Calibration from known 3D points (core/calibrate_dlt.h) and its JSON adapter
+// (core/calibrate_points_io.h) on synthetic cameras with known K, R, t.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/calibrate_dlt.h"
+#include "core/calibrate_points_io.h"
+#include "tests/synthetic_scene.h"
+
+namespace facet {
+namespace {
+
+using testing::MakeLookAtCamera;
+using testing::SyntheticSceneOptions;
+
+// Noise-free recovery: the linear step and the refinement are exact up to rounding.
+constexpr double kExactRelative = 1e-9;
+
+Eigen::Vector2d ProjectDistorted(const Camera& camera, double k1, double k2, const Eigen::Vector3d& p_in_world) {
+  const Eigen::Vector3d p = camera.CamFromWorld(p_in_world);
+  const double x = p.x() / p.z(), y = p.y() / p.z();
+  const double r2 = x * x + y * y;
+  const double d = 1.0 + k1 * r2 + k2 * r2 * r2;
+  return {camera.focal_px * x * d + camera.principal_point_px.x(),
+          camera.focal_px * y * d + camera.principal_point_px.y()};
+}
+
+struct SceneSpec {
+  int num_points = 40;
+  bool planar = false;
+  double noise_px = 0.0;
+  double k1 = 0.0;
+  double k2 = 0.0;
+  double scale = 1.0;
+  double extent = 1.0;  // multiplies the size of the volume or plane
+  unsigned seed = 1;
+};
+
+// The default synthetic camera and points inside its image (a 4 x 4 x 3 volume around the
+// look-at point, or a tilted 4 x 3 plane through it, so the plane's frame is not the world's;
+// extent 3 fills the image).
+std::vector<PointCorrespondence> MakePoints(const Camera& camera, const SceneSpec& spec,
+                                            const SyntheticSceneOptions& scene) {
+  std::mt19937 rng(spec.seed);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  const Eigen::Vector3d center = scene.look_at * spec.scale;
+  const Eigen::Vector3d plane_u = Eigen::Vector3d(1.0, 0.2, 0.3).normalized();
+  const Eigen::Vector3d plane_v = plane_u.cross(Eigen::Vector3d(0.1, -0.3, 1.0)).normalized();
+  std::vector<PointCorrespondence> points;
+  while (static_cast<int>(points.size()) < spec.num_points) {
+    Eigen::Vector3d xyz;
+    if (spec.planar)
+      xyz = center + spec.scale * spec.extent * (2.0 * uniform(rng) * plane_u + 1.5 * uniform(rng) * plane_v);
+    else
+      xyz = center + spec.scale * spec.extent *
+                         Eigen::Vector3d(2.0 * uniform(rng), 2.0 * uniform(rng), 1.5 * uniform(rng));
+    const Eigen::Vector2d uv = ProjectDistorted(camera, spec.k1, spec.k2, xyz);
+    if (camera.CamFromWorld(xyz).z() <= 0.0 || uv.x() < 0 || uv.y() < 0 || uv.x() > camera.width_px - 1 ||
+        uv.y() > camera.height_px - 1)
+      continue;
+    PointCorrespondence c;
+    c.xyz = xyz;
+    c.uv_px = uv + spec.noise_px * Eigen::Vector2d(noise(rng), noise(rng));
+    points.push_back(c);
+  }
+  return points;
+}
+
+SyntheticSceneOptions DefaultScene(double scale = 1.0) {
+  SyntheticSceneOptions o;
+  o.scale = scale;
+  return o;
+}
+
+double RotationErrorDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  return AngleAxisFromRotation(a * b.transpose()).norm() * 180.0 / M_PI;
+}
+
+DltCalibrationOptions OptionsFor(const Camera& camera) {
+  DltCalibrationOptions options;
+  options.width_px = camera.width_px;
+  options.height_px = camera.height_px;
+  return options;
+}
+
+void CheckCameraExact(const Camera& got, const Camera& want) {
+  CAPTURE(got.focal_px);
+  CAPTURE(want.focal_px);
+  CHECK(std::abs(got.focal_px - want.focal_px) <= kExactRelative * want.focal_px);
+  CHECK((got.principal_point_px - want.principal_point_px).norm() <= kExactRelative * want.focal_px);
+  const double rotation_error = (got.cam_from_world_rotation - want.cam_from_world_rotation).norm();
+  CAPTURE(rotation_error);
+  CHECK(rotation_error <= kExactRelative);
+  const double t_error = (got.cam_from_world_translation - want.cam_from_world_translation).norm();
+  CAPTURE(t_error);
+  CHECK(t_error <= kExactRelative * want.cam_from_world_translation.norm());
+}
+
+}  // namespace
+
+TEST_CASE("DLT: noise-free non-planar points give K, R, t exactly, from the linear step alone too") {
+  const Camera truth = MakeLookAtCamera(DefaultScene());
+  const auto points = MakePoints(truth, {}, DefaultScene());
+  DltCalibrationOptions options = OptionsFor(truth);
+
+  options.refine = false;
+  const DltCalibrationSummary linear = CalibrateFromPoints(points, options);
+  REQUIRE_MESSAGE(linear.success, linear.message);
+  CHECK_FALSE(linear.planar);
+  CAPTURE(linear.fx);
+  CAPTURE(linear.fy);
+  CAPTURE(linear.skew);
+  CHECK(std::abs(linear.fx - truth.focal_px) <= kExactRelative * truth.focal_px);
+  CHECK(std::abs(linear.fy - truth.focal_px) <= kExactRelative * truth.focal_px);
+  CHECK(std::abs(linear.skew) <= kExactRelative * truth.focal_px);
+  CHECK((linear.linear_principal_point_px - truth.principal_point_px).norm() <= kExactRelative * truth.focal_px);
+  CheckCameraExact(linear.camera, truth);
+  // P equals K [R | t] up to scale.
+  const Eigen::Matrix<double, 3, 4> p_true = truth.ProjectionMatrix() / truth.ProjectionMatrix().norm();
+  CHECK((linear.P - p_true).norm() <= kExactRelative);
+  CHECK(linear.initial_rms_px <= 1e-6);
+  CHECK(linear.iterations == 0);
+
+  options.refine = true;
+  const DltCalibrationSummary refined = CalibrateFromPoints(points, options);
+  REQUIRE_MESSAGE(refined.success, refined.message);
+  CheckCameraExact(refined.camera, truth);
+  CHECK(refined.reprojection_rms_px <= 1e-6);
+  CHECK(refined.residuals_px.size() == points.size());
+  CHECK(refined.warnings.empty());
+  MESSAGE("noise-free DLT: f error " << std::abs(refined.camera.focal_px - truth.focal_px) << " px, time "
+                                     << refined.time_ms << " ms");
+}
+
+TEST_CASE("DLT: exactly 6 points suffice") {
+  const Camera truth = MakeLookAtCamera(DefaultScene());
+  SceneSpec spec;
+  spec.num_points = 6;
+  spec.seed = 7;
+  const auto points = MakePoints(truth, spec, DefaultScene());
+  const DltCalibrationSummary s = CalibrateFromPoints(points, OptionsFor(truth));
+  REQUIRE_MESSAGE(s.success, s.message);
+  CheckCameraExact(s.camera, truth);
+}
+
+TEST_CASE("DLT: with 0.5 px noise the errors match the fit's covariance over 40 seeds") {
+  // Each seed: |f - f_true| <= 4 sigma (sigma from the covariance, per seed); over the seeds
+  // the observed spread of f agrees with the mean predicted sigma within the sampling error
+  // of 40 draws (a factor 0.6..1.6 is far outside its ~11 % standard error).
+  constexpr double kNoisePx = 0.5;
+  constexpr int kSeeds = 40;
+  const Camera truth = MakeLookAtCamera(DefaultScene());
+  double sum_sq_error = 0.0, sum_sigma = 0.0, max_rotation_deg = 0.0, sum_sq_start_error = 0.0;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    SceneSpec spec;
+    spec.noise_px = kNoisePx;
+    spec.seed = seed;
+    const auto points = MakePoints(truth, spec, DefaultScene());
+    const DltCalibrationSummary s = CalibrateFromPoints(points, OptionsFor(truth));
+    REQUIRE_MESSAGE(s.success, s.message);
+    const double f_error = s.camera.focal_px - truth.focal_px;
+    CAPTURE(seed);
+    CAPTURE(f_error);
+    CAPTURE(s.focal_std_px);
+    REQUIRE(s.focal_std_px > 0.0);
+    CHECK(std::abs(f_error) <= 4.0 * s.focal_std_px);
+    CHECK((s.camera.principal_point_px - truth.principal_point_px).cwiseAbs().maxCoeff() <=
+          4.0 * s.principal_point_std_px.maxCoeff());
+    // The refinement starts from f = (fx + fy) / 2 of the linear step and moves off it (the
+    // linear camera's own RMS is lower: it has fx, fy and skew free).
+    const double start_f = 0.5 * (s.fx + s.fy);
+    CAPTURE(start_f);
+    CHECK(std::abs(s.camera.focal_px - start_f) > 1e-6 * truth.focal_px);
+    CHECK(s.iterations >= 1);
+    sum_sq_start_error += (start_f - truth.focal_px) * (start_f - truth.focal_px);
+    // RMS of the 2D residual: sigma * sqrt(2 (2n - p) / 2n) with p = 9 parameters.
+    const double expected_rms = kNoisePx * std::sqrt(2.0 * (2.0 * points.size() - 9) / (2.0 * points.size()));
+    CAPTURE(s.reprojection_rms_px);
+    CHECK(std::abs(s.reprojection_rms_px - expected_rms) <= 0.25 * expected_rms);
+    sum_sq_error += f_error * f_error;
+    sum_sigma += s.focal_std_px;
+    max_rotation_deg = std::max(max_rotation_deg,
+                                RotationErrorDeg(s.camera.cam_from_world_rotation, truth.cam_from_world_rotation));
+  }
+  const double observed = std::sqrt(sum_sq_error / kSeeds), predicted = sum_sigma / kSeeds;
+  MESSAGE("DLT 0.5 px noise, 40 points: f error RMS over seeds " << observed << " px, predicted sigma " << predicted
+                                                                 << " px, max rotation error " << max_rotation_deg
+                                                                 << " deg; linear start f error RMS "
+                                                                 << std::sqrt(sum_sq_start_error / kSeeds) << " px");
+  CHECK(observed < std::sqrt(sum_sq_start_error / kSeeds));
+  CHECK(observed >= 0.6 * predicted);
+  CHECK(observed <= 1.6 * predicted);
+}
+
+TEST_CASE("Planar: noise-free points on a tilted plane give K, R, t exactly") {
+  SUBCASE("principal point at the image centre (the default)") {
+    SyntheticSceneOptions scene = DefaultScene();
+    scene.principal_point_offset_px = {0.0, 0.0};
+    const Camera truth = MakeLookAtCamera(scene);
+    SceneSpec spec;
+    spec.planar = true;
+    spec.num_points = 30;
+    const auto points = MakePoints(truth, spec, scene);
+    DltCalibrationOptions options = OptionsFor(truth);
+    options.refine = false;
+    const DltCalibrationSummary linear = CalibrateFromPoints(points, options);
+    REQUIRE_MESSAGE(linear.success, linear.message);
+    CHECK(linear.planar);
+    CheckCameraExact(linear.camera, truth);
+    options.refine = true;
+    const DltCalibrationSummary s = CalibrateFromPoints(points, options);
+    REQUIRE_MESSAGE(s.success, s.message);
+    CheckCameraExact(s.camera, truth);
+  }
+  SUBCASE("principal point given off-centre") {
+    const Camera truth = MakeLookAtCamera(DefaultScene());
+    SceneSpec spec;
+    spec.planar = true;
+    spec.num_points = 4;
+    const auto points = MakePoints(truth, spec, DefaultScene());
+    DltCalibrationOptions options = OptionsFor(truth);
+    options.principal_point_mode = PrincipalPointMode::kFixed;
+    options.fixed_principal_point_px = truth.principal_point_px;
+    const DltCalibrationSummary s = CalibrateFromPoints(points, options);
+    REQUIRE_MESSAGE(s.success, s.message);
+    CHECK(s.planar);
+    CheckCameraExact(s.camera, truth);
+  }
+}
+
+TEST_CASE("Planar: with 0.5 px noise the errors match the fit's covariance over 40 seeds") {
+  constexpr double kNoisePx = 0.5;
+  constexpr int kSeeds = 40;
+  SyntheticSceneOptions scene = DefaultScene();
+  scene.principal_point_offset_px = {0.0, 0.0};
+  const Camera truth = MakeLookAtCamera(scene);
+  double sum_sq_error = 0.0, sum_sigma = 0.0;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    SceneSpec spec;
+    spec.planar = true;
+    spec.noise_px = kNoisePx;
+    spec.seed = seed;
+    const auto points = MakePoints(truth, spec, scene);
+    const DltCalibrationSummary s = CalibrateFromPoints(points, OptionsFor(truth));
+    REQUIRE_MESSAGE(s.success, s.message);
+    const double f_error = s.camera.focal_px - truth.focal_px;
+    CAPTURE(seed);
+    CAPTURE(f_error);
+    CAPTURE(s.focal_std_px);
+    REQUIRE(s.focal_std_px > 0.0);
+    CHECK(std::abs(f_error) <= 4.0 * s.focal_std_px);
+    CHECK(s.initial_rms_px > s.reprojection_rms_px);
+    sum_sq_error += f_error * f_error;
+    sum_sigma += s.focal_std_px;
+  }
+  const double observed = std::sqrt(sum_sq_error / kSeeds), predicted = sum_sigma / kSeeds;
+  MESSAGE("planar 0.5 px noise, 40 points: f error RMS over seeds " << observed << " px, predicted sigma "
+                                                                     << predicted << " px");
+  CHECK(observed >= 0.6 * predicted);
+  CHECK(observed <= 1.6 * predicted);
+}
+
+TEST_CASE("Distortion: k1 = -0.2 is recovered and the RMS falls to the noise level; a pinhole fit cannot") {
+  constexpr double kNoisePx = 0.5;
+  constexpr double kTrueK1 = -0.2;
+  for (const bool planar : {false, true}) {
+    SyntheticSceneOptions scene = DefaultScene();
+    if (planar) scene.principal_point_offset_px = {0.0, 0.0};
+    const Camera truth = MakeLookAtCamera(scene);
+    SceneSpec spec;
+    spec.planar = planar;
+    spec.num_points = 80;
+    spec.extent = 3.0;
+    spec.noise_px = kNoisePx;
+    spec.k1 = kTrueK1;
+    spec.seed = 3;
+    const auto points = MakePoints(truth, spec, scene);
+    DltCalibrationOptions options = OptionsFor(truth);
+    CAPTURE(planar);
+
+    const DltCalibrationSummary pinhole = CalibrateFromPoints(points, options);
+    REQUIRE_MESSAGE(pinhole.success, pinhole.message);
+    options.radial_distortion_terms = 1;
+    const DltCalibrationSummary one = CalibrateFromPoints(points, options);
+    REQUIRE_MESSAGE(one.success, one.message);
+    options.radial_distortion_terms = 2;
+    const DltCalibrationSummary two = CalibrateFromPoints(points, options);
+    REQUIRE_MESSAGE(two.success, two.message);
+
+    const double noise_rms = kNoisePx * std::sqrt(2.0);  // RMS of a 2D residual
+    CAPTURE(pinhole.reprojection_rms_px);
+    CAPTURE(one.reprojection_rms_px);
+    CAPTURE(two.reprojection_rms_px);
+    CAPTURE(one.k1);
+    CAPTURE(one.k1_std);
+    CAPTURE(one.camera.focal_px);
+    // The start of the distortion fit (k1 = 0, the linear camera) is far from the answer.
+    CHECK(one.initial_rms_px > 5.0 * noise_rms);
+    CHECK(pinhole.reprojection_rms_px > 3.0 * noise_rms);
+    CHECK(one.reprojection_rms_px <= 1.1 * noise_rms);
+    CHECK(two.reprojection_rms_px <= 1.1 * noise_rms);
+    // k1 within 4 sigma of its covariance, and that sigma small: 0.01 absolute.
+    CHECK(std::abs(one.k1 - kTrueK1) <= 4.0 * one.k1_std);
+    CHECK(one.k1_std <= 0.01);
+    CHECK(std::abs(one.camera.focal_px - truth.focal_px) <= 4.0 * one.focal_std_px);
+    const std::string label = planar ? "planar" : "non-planar";
+    MESSAGE(label << " k1 = -0.2, 0.5 px noise: k1 = " << one.k1 << " +- "
+                                               << one.k1_std << ", RMS pinhole " << pinhole.reprojection_rms_px
+                                               << " px, k1 " << one.reprojection_rms_px << " px, k1+k2 "
+                                               << two.reprojection_rms_px << " px; f error "
+                                               << one.camera.focal_px - truth.focal_px << " px");
+  }
+}
+
+TEST_CASE("DLT: scaling the 3D points by 1e-3 and 1e3 gives the same K and a scaled t") {
+  // The problem is invariant to the world scale; with the same pixel noise the solutions agree
+  // up to the solver's convergence tolerance.
+  constexpr double kSameRelative = 1e-7;
+  for (const bool planar : {false, true}) {
+    std::vector<DltCalibrationSummary> results;
+    for (const double scale : {1.0, 1e-3, 1e3}) {
+      SyntheticSceneOptions scene = DefaultScene(scale);
+      scene.principal_point_offset_px = planar ? Eigen::Vector2d(0.0, 0.0) : Eigen::Vector2d(12.0, -9.0);
+      const Camera truth = MakeLookAtCamera(scene);
+      SceneSpec spec;
+      spec.planar = planar;
+      spec.noise_px = 0.5;
+      spec.scale = scale;
+      const auto points = MakePoints(truth, spec, scene);
+      DltCalibrationOptions options = OptionsFor(truth);
+      options.radial_distortion_terms = 1;
+      const DltCalibrationSummary s = CalibrateFromPoints(points, options);
+      REQUIRE_MESSAGE(s.success, s.message);
+      results.push_back(s);
+      const double t_ratio = s.camera.cam_from_world_translation.norm() /
+                             (results[0].camera.cam_from_world_translation.norm() * scale);
+      CAPTURE(planar);
+      CAPTURE(scale);
+      CAPTURE(s.camera.focal_px);
+      CAPTURE(results[0].camera.focal_px);
+      CHECK(std::abs(s.camera.focal_px - results[0].camera.focal_px) <= kSameRelative * results[0].camera.focal_px);
+      CHECK((s.camera.principal_point_px - results[0].camera.principal_point_px).norm() <=
+            kSameRelative * results[0].camera.focal_px);
+      CHECK(std::abs(s.k1 - results[0].k1) <= kSameRelative);
+      CHECK(std::abs(t_ratio - 1.0) <= kSameRelative);
+    }
+  }
+}
+
+TEST_CASE("Degenerate input gives a clear error") {
+  const Camera truth = MakeLookAtCamera(DefaultScene());
+  const auto points = MakePoints(truth, {}, DefaultScene());
+  const DltCalibrationOptions options = OptionsFor(truth);
+  auto expect_failure = [&](const std::vector<PointCorrespondence>& input, const DltCalibrationOptions& o,
+                            const std::string& needle) {
+    const DltCalibrationSummary s = CalibrateFromPoints(input, o);
+    CAPTURE(s.message);
+    CHECK_FALSE(s.success);
+    CHECK_FALSE(s.IsUsable());
+    CHECK(s.message.find(needle) != std::string::npos);
+  };
+  expect_failure({points.begin(), points.begin() + 3}, options, "got 3");
+  expect_failure({points.begin(), points.begin() + 5}, options, "6 or more");
+  {
+    auto bad = points;
+    bad[4].uv_px.x() = std::nan("");
+    expect_failure(bad, options, "point 4");
+  }
+  {
+    std::vector<PointCorrespondence> line;
+    for (int i = 0; i < 10; ++i) {
+      PointCorrespondence c;
+      c.xyz = Eigen::Vector3d(2.0, 1.5, 1.0) + 0.3 * i * Eigen::Vector3d(1.0, 0.5, 0.2);
+      c.uv_px = truth.Project(c.xyz);
+      line.push_back(c);
+    }
+    expect_failure(line, options, "one line");
+  }
+  {
+    // Four coplanar points, three of them on one line: no homography.
+    std::vector<PointCorrespondence> plane;
+    for (const Eigen::Vector3d xyz : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(2, 0, 0),
+                                      Eigen::Vector3d(0, 1, 0)}) {
+      PointCorrespondence c;
+      c.xyz = xyz;
+      c.uv_px = truth.Project(xyz);
+      plane.push_back(c);
+    }
+    expect_failure(plane, options, "homography");
+  }
+  {
+    // A plane seen exactly fronto-parallel: the focal length is not observable.
+    SyntheticSceneOptions scene = DefaultScene();
+    scene.principal_point_offset_px = {0.0, 0.0};
+    Camera frontal = MakeLookAtCamera(scene);
+    frontal.SetPose(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.0, 0.0, -10.0));
+    std::vector<PointCorrespondence> plane;
+    for (int i = 0; i < 5; ++i)
+      for (int j = 0; j < 4; ++j) {
+        PointCorrespondence c;
+        c.xyz = Eigen::Vector3d(i - 2.0, j - 1.5, 0.0);
+        c.uv_px = frontal.Project(c.xyz);
+        plane.push_back(c);
+      }
+    expect_failure(plane, options, "fronto-parallel");
+  }
+  {
+    DltCalibrationOptions o = options;
+    o.width_px = 0;
+    expect_failure(points, o, "image size");
+    o = options;
+    o.refine = false;
+    o.radial_distortion_terms = 1;
+    expect_failure(points, o, "refine");
+    o = options;
+    o.square_pixels_zero_skew = false;
+    expect_failure(points, o, "square pixels");
+  }
+}
+
+TEST_CASE("Warnings: nearly coplanar points, a point behind the camera") {
+  const Camera truth = MakeLookAtCamera(DefaultScene());
+  {
+    SceneSpec spec;
+    spec.planar = true;
+    spec.num_points = 30;
+    auto points = MakePoints(truth, spec, DefaultScene());
+    // Lift points off the plane by up to 0.5 % of its extent, keeping their exact pixels.
+    for (size_t i = 0; i < points.size(); ++i) {
+      points[i].xyz.z() += 0.01 * ((i % 3) - 1.0);
+      points[i].uv_px = truth.Project(points[i].xyz);
+    }
+    const DltCalibrationSummary s = CalibrateFromPoints(points, OptionsFor(truth));
+    REQUIRE_MESSAGE(s.success, s.message);
+    CHECK_FALSE(s.planar);
+    REQUIRE(!s.warnings.empty());
+    CHECK(s.warnings[0].find("nearly coplanar") != std::string::npos);
+  }
+  {
+    auto points = MakePoints(truth, {}, DefaultScene());
+    // A point behind the camera still projects (through the centre) to a pixel.
+    PointCorrespondence behind;
+    behind.xyz = truth.CenterInWorld() - 3.0 * (Eigen::Vector3d(2.0, 1.5, 1.0) - truth.CenterInWorld());
+    behind.uv_px = truth.Project(behind.xyz);
+    points.push_back(behind);
+    const DltCalibrationSummary s = CalibrateFromPoints(points, OptionsFor(truth));
+    REQUIRE_MESSAGE(s.success, s.message);
+    bool warned = false;
+    for (const auto& w : s.warnings) warned = warned || w.find("behind the camera") != std::string::npos;
+    CHECK(warned);
+  }
+}
+
+TEST_CASE("JSON adapter: round trip and malformed input") {
+  const Camera truth = MakeLookAtCamera(DefaultScene());
+  SceneSpec spec;
+  spec.k1 = -0.1;
+  const auto points = MakePoints(truth, spec, DefaultScene());
+  nlohmann::json doc;
+  doc["image_size"] = {truth.width_px, truth.height_px};
+  doc["distortion"] = 1;
+  doc["points"] = nlohmann::json::array();
+  for (const auto& p : points)
+    doc["points"].push_back({{"xyz", {p.xyz.x(), p.xyz.y(), p.xyz.z()}}, {"uv", {p.uv_px.x(), p.uv_px.y()}}});
+  const CalibrateIoResult result = CalibratePointsJson(doc.dump());
+  REQUIRE_MESSAGE(result.ok(), result.error);
+  const nlohmann::json out = nlohmann::json::parse(result.json);
+  Eigen::Matrix3d k, r;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      k(i, j) = out["K"][i][j].get<double>();
+      r(i, j) = out["R"][i][j].get<double>();
+    }
+  const Eigen::Vector3d t(out["t"][0].get<double>(), out["t"][1].get<double>(), out["t"][2].get<double>());
+  CHECK((k - truth.K()).norm() <= kExactRelative * truth.focal_px);
+  CHECK((r - truth.cam_from_world_rotation).norm() <= kExactRelative);
+  CHECK((t - truth.cam_from_world_translation).norm() <= kExactRelative * truth.cam_from_world_translation.norm());
+  CHECK(std::abs(out["focal_px"].get<double>() - truth.focal_px) <= kExactRelative * truth.focal_px);
+  CHECK(std::abs(out["distortion"][0].get<double>() - spec.k1) <= 1e-9);
+  CHECK(out["distortion"][1].get<double>() == 0.0);
+  CHECK(out["residuals_px"].size() == points.size());
+  CHECK(out["reprojection_rms_px"].get<double>() <= 1e-6);
+  CHECK(out["warnings"].is_array());
+  CHECK(out["principal_point"].size() == 2);
+
+  auto expect_error = [](const std::string& text, const std::string& needle) {
+    const CalibrateIoResult r = CalibratePointsJson(text);
+    CAPTURE(text);
+    CAPTURE(r.error);
+    CHECK_FALSE(r.ok());
+    CHECK(r.error.find(needle) != std::string::npos);
+  };
+  expect_error("{not json", "malformed JSON");
+  expect_error("[]", "JSON object");
+  expect_error(R"({"points": []})", "image_size");
+  expect_error(R"({"image_size": [640], "points": []})", "image_size");
+  expect_error(R"({"image_size": [640, 480]})", "missing \"points\"");
+  expect_error(R"({"image_size": [640, 480], "points": {}})", "must be an array");
+  expect_error(R"({"image_size": [640, 480], "points": [{"xyz": [1, 2], "uv": [1, 2]}]})", "points[0]: \"xyz\"");
+  expect_error(R"({"image_size": [640, 480], "points": [{"xyz": [1, 2, 3]}]})", "points[0]: \"uv\"");
+  expect_error(R"({"image_size": [640, 480], "points": [{"xyz": [1, 2, "3"], "uv": [1, 2]}]})", "\"xyz\"");
+  expect_error(R"({"image_size": [640, 480], "points": [1]})", "points[0] must be an object");
+  nlohmann::json bad = doc;
+  bad["distortion"] = 3;
+  expect_error(bad.dump(), "\"distortion\"");
+  bad = doc;
+  bad["points"] = nlohmann::json::array({doc["points"][0], doc["points"][1], doc["points"][2]});
+  expect_error(bad.dump(), "calibration failed");
+  const CalibrateIoResult missing = CalibratePointsFile("/nonexistent/points.json");
+  CHECK_FALSE(missing.ok());
+  CHECK(missing.error.find("cannot open") != std::string::npos);
+}
+
+}  // namespace facet
