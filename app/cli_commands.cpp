@@ -8,9 +8,11 @@
 #include <nlohmann/json.hpp>
 
 #include "core/calibrate_io.h"
+#include "core/calibrate_points_io.h"
 #include "core/export.h"
 #include "core/model_update.h"
 #include "core/project_io.h"
+#include "core/relate_io.h"
 #include "core/textured_mesh.h"
 
 namespace facet::app {
@@ -32,10 +34,20 @@ nlohmann::json NumberOrNull(double value) { return std::isfinite(value) ? nlohma
 
 }  // namespace
 
-int RunCalibrateCommand(const std::string& lines_path) {
-  const CalibrateIoResult result = CalibrateLinesFile(lines_path);
+int RunCalibrateCommand(const std::string& lines_path, const std::string& points_path) {
+  const CalibrateIoResult result = lines_path.empty() ? CalibratePointsFile(points_path) : CalibrateLinesFile(lines_path);
   if (!result.ok()) {
     std::cerr << "facet calibrate: " << result.error << "\n";
+    return 1;
+  }
+  std::cout << result.json << "\n";
+  return 0;
+}
+
+int RunRelateCommand(const std::string& matches_path) {
+  const RelateIoResult result = RelateMatchesFile(matches_path);
+  if (!result.ok()) {
+    std::cerr << "facet relate: " << result.error << "\n";
     return 1;
   }
   std::cout << result.json << "\n";

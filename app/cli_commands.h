@@ -1,4 +1,4 @@
-// The command-line verbs that work without a window: calibrate, solve, export. Each prints
+// The command-line verbs that work without a window: calibrate, relate, solve, export. Each prints
 // its result (JSON where a program may read it) on stdout, errors on stderr, and returns the
 // process exit code (0 success, 1 unusable input).
 #pragma once
@@ -7,7 +7,9 @@
 
 namespace facet::app {
 
-int RunCalibrateCommand(const std::string& lines_path);
+// Exactly one of the two inputs is set: line families (vanishing points) or known 3D points (DLT).
+int RunCalibrateCommand(const std::string& lines_path, const std::string& points_path);
+int RunRelateCommand(const std::string& matches_path);
 int RunSolveCommand(const std::string& project_path, const std::string& output_path);
 int RunExportCommand(const std::string& project_path, const std::string& output_path);
 

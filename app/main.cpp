@@ -1,4 +1,5 @@
-// facet: one executable for the GUI and the command line (calibrate, solve, export, render).
+// facet: one executable for the GUI and the command line (calibrate, relate, solve, export,
+// render).
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -48,11 +49,31 @@ int main(int argc, char** argv) {
   std::string gui_project;
   cli.add_option("project", gui_project, "Project file (*.facet) to open in the GUI");
 
-  auto* calibrate = cli.add_subcommand("calibrate", "Calibrate one camera from line families; prints the camera as JSON");
-  std::string lines_path;
-  calibrate->add_option("--lines", lines_path,
-                        "LINES.json: {\"image_size\": [w, h], \"families\": [{\"axis\": \"x\", \"segments\": "
-                        "[[x1, y1, x2, y2], ...]}, ...], \"principal_point\": \"solve\" | \"center\" | [cx, cy]}")
+  auto* calibrate = cli.add_subcommand(
+      "calibrate", "Calibrate one camera from line families or from known 3D points; prints the camera as JSON");
+  std::string lines_path, points_path;
+  auto* lines_option =
+      calibrate
+          ->add_option("--lines", lines_path,
+                       "LINES.json: {\"image_size\": [w, h], \"families\": [{\"axis\": \"x\", \"segments\": "
+                       "[[x1, y1, x2, y2], ...]}, ...], \"principal_point\": \"solve\" | \"center\" | [cx, cy]}")
+          ->check(CLI::ExistingFile);
+  auto* points_option =
+      calibrate
+          ->add_option("--points", points_path,
+                       "POINTS.json: {\"image_size\": [w, h], \"points\": [{\"xyz\": [X, Y, Z], \"uv\": [u, v]}, "
+                       "...], \"distortion\": 0 | 1 | 2} (6+ points, or 4+ on one plane)")
+          ->check(CLI::ExistingFile);
+  lines_option->excludes(points_option);
+  calibrate->require_option(1);
+
+  auto* relate = cli.add_subcommand(
+      "relate", "Two-view geometry from matches: fundamental matrix, and relative pose when K is known; prints JSON");
+  std::string matches_path;
+  relate
+      ->add_option("--matches", matches_path,
+                   "MATCHES.json: {\"image_sizes\": [[w, h], [w, h]], \"matches\": [[u1, v1, u2, v2], ...], "
+                   "\"K\": [K1, K2] (optional)}")
       ->required()
       ->check(CLI::ExistingFile);
 
@@ -80,7 +101,8 @@ int main(int argc, char** argv) {
 
   CLI11_PARSE(cli, argc, argv);
 
-  if (*calibrate) return facet::app::RunCalibrateCommand(lines_path);
+  if (*calibrate) return facet::app::RunCalibrateCommand(lines_path, points_path);
+  if (*relate) return facet::app::RunRelateCommand(matches_path);
   if (*solve) return facet::app::RunSolveCommand(solve_project, solve_out);
   if (*exporter) return facet::app::RunExportCommand(export_project, export_out);
   if (*render) {

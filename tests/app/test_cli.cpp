@@ -15,6 +15,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/box.h"
 #include "core/project_io.h"
 #include "tests/synthetic_scene.h"
 
@@ -196,4 +197,70 @@ TEST_CASE("export writes a GLB and an OBJ with its material and texture") {
   const RunResult unknown = RunFacet(dir, "export '" + (dir / "scene.facet") + "' -o '" + (dir / "model.fbx") + "'");
   CHECK(unknown.exit_code == 1);
   CHECK(unknown.err.find(".glb") != std::string::npos);
+}
+
+TEST_CASE("calibrate --points recovers a camera from known 3D points") {
+  TempDir dir("points");
+  const auto scene = MakeBoxScene();
+  const facet::Camera& truth = scene.true_camera;
+  // Box corners plus points on its faces: 6 or more points, not coplanar.
+  nlohmann::json points = nlohmann::json::array();
+  for (int i = 0; i < 8; ++i) {
+    for (double f : {0.0, 0.5}) {
+      const Eigen::Vector3d x = facet::BoxCornerInWorld(scene.true_box, i) * (1.0 - f) +
+                                facet::BoxCornerInWorld(scene.true_box, 7 - i) * f * 0.5;
+      const Eigen::Vector2d uv = truth.Project(x);
+      points.push_back({{"xyz", {x.x(), x.y(), x.z()}}, {"uv", {uv.x(), uv.y()}}});
+    }
+  }
+  std::ofstream(dir / "points.json") << nlohmann::json{{"image_size", {truth.width_px, truth.height_px}}, {"points", points}}.dump();
+  const RunResult r = RunFacet(dir, "calibrate --points '" + (dir / "points.json") + "'");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const nlohmann::json out = nlohmann::json::parse(r.out);
+  constexpr double kRelativeTolerance = 1e-6;  // noise-free points
+  CHECK(std::abs(out.at("focal_px").get<double>() - truth.focal_px) < kRelativeTolerance * truth.focal_px);
+  CHECK(out.at("reprojection_rms_px").get<double>() < 1e-6);
+
+  std::ofstream(dir / "few.json") << R"({"image_size": [640, 480], "points": [{"xyz": [0, 0, 0], "uv": [1, 2]}]})";
+  const RunResult few = RunFacet(dir, "calibrate --points '" + (dir / "few.json") + "'");
+  CHECK(few.exit_code == 1);
+  CHECK_FALSE(few.err.empty());
+  CHECK(RunFacet(dir, "calibrate").exit_code != 0);  // neither --lines nor --points
+}
+
+TEST_CASE("relate --matches gives F and, with K, the relative pose") {
+  TempDir dir("relate");
+  facet::testing::SyntheticSceneOptions o1, o2;
+  o2.camera_center = {5.0, -10.0, 4.0};
+  const facet::Camera c1 = facet::testing::MakeLookAtCamera(o1), c2 = facet::testing::MakeLookAtCamera(o2);
+  nlohmann::json matches = nlohmann::json::array();
+  for (int i = 0; i < 40; ++i) {
+    const Eigen::Vector3d x(-1.0 + 0.17 * (i % 7), 0.3 * (i % 5), 0.25 * (i % 9));
+    const Eigen::Vector2d a = c1.Project(x), b = c2.Project(x);
+    matches.push_back({a.x(), a.y(), b.x(), b.y()});
+  }
+  auto k_json = [](const facet::Camera& c) {
+    const Eigen::Matrix3d k = c.K();
+    return nlohmann::json{{k(0, 0), k(0, 1), k(0, 2)}, {k(1, 0), k(1, 1), k(1, 2)}, {k(2, 0), k(2, 1), k(2, 2)}};
+  };
+  const nlohmann::json input = {{"image_sizes", {{c1.width_px, c1.height_px}, {c2.width_px, c2.height_px}}},
+                                {"matches", matches},
+                                {"K", {k_json(c1), k_json(c2)}}};
+  std::ofstream(dir / "matches.json") << input.dump();
+  const RunResult r = RunFacet(dir, "relate --matches '" + (dir / "matches.json") + "'");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const nlohmann::json out = nlohmann::json::parse(r.out);
+  CHECK(out.at("symmetric_epipolar_rms_px").get<double>() < 1e-6);
+  const Eigen::Matrix3d r_true = c2.cam_from_world_rotation * c1.cam_from_world_rotation.transpose();
+  double max_error = 0.0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) max_error = std::max(max_error, std::abs(out.at("R")[i][j].get<double>() - r_true(i, j)));
+  CHECK(max_error < 1e-6);
+
+  std::ofstream(dir / "bad.json") << R"({"image_sizes": [[640, 480]], "matches": []})";
+  const RunResult bad = RunFacet(dir, "relate --matches '" + (dir / "bad.json") + "'");
+  CHECK(bad.exit_code == 1);
+  CHECK_FALSE(bad.err.empty());
 }
