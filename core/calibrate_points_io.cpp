@@ -94,6 +94,22 @@ bool ParseInput(const json& doc, std::vector<PointCorrespondence>* points, DltCa
     }
     options->radial_distortion_terms = static_cast<int>(terms);
   }
+
+  const auto pp_it = doc.find("principal_point");
+  if (pp_it != doc.end()) {
+    double pp[2] = {0, 0};
+    if (pp_it->is_string() && pp_it->get<std::string>() == "solve") {
+      options->principal_point_mode = PrincipalPointMode::kSolve;
+    } else if (pp_it->is_string() && pp_it->get<std::string>() == "center") {
+      options->principal_point_mode = PrincipalPointMode::kImageCenter;
+    } else if (ReadVector(*pp_it, 2, pp)) {
+      options->principal_point_mode = PrincipalPointMode::kFixed;
+      options->fixed_principal_point_px = {pp[0], pp[1]};
+    } else {
+      *error = "\"principal_point\" must be \"solve\", \"center\" or [cx, cy], got " + pp_it->dump();
+      return false;
+    }
+  }
   return true;
 }
 

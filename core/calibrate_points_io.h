@@ -4,7 +4,9 @@
 // Input (world units of the user's choice; pixels 0-based, core/conventions.h):
 //   {"image_size": [w, h],
 //    "points": [{"xyz": [X, Y, Z], "uv": [u, v]}, ...],   (6 or more, or 4 or more coplanar)
-//    "distortion": 0 | 1 | 2}                               (optional, default 0: radial terms)
+//    "distortion": 0 | 1 | 2,                               (optional, default 0: radial terms)
+//    "principal_point": "solve" | "center" | [cx, cy]}      (optional, default "solve": free
+//   for non-coplanar points; coplanar points then use the image centre, see calibrate_dlt.h)
 // Output (pretty JSON, doubles with enough digits to round-trip):
 //   {"K": 3x3 rows, "R": 3x3 rows (cam_from_world), "t": [tx, ty, tz] (world units),
 //    "focal_px": f, "principal_point": [cx, cy], "distortion": [k1, k2] (OpenCV's radial model),

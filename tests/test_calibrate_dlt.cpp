@@ -512,6 +512,20 @@ TEST_CASE("JSON adapter: round trip and malformed input") {
   bad = doc;
   bad["points"] = nlohmann::json::array({doc["points"][0], doc["points"][1], doc["points"][2]});
   expect_error(bad.dump(), "calibration failed");
+  bad = doc;
+  bad["principal_point"] = "middle";
+  expect_error(bad.dump(), "\"principal_point\"");
+  {
+    // A fixed principal point is held: the result keeps it exactly.
+    nlohmann::json fixed = doc;
+    fixed["principal_point"] = {500.0, 400.0};
+    const CalibrateIoResult r = CalibratePointsJson(fixed.dump());
+    REQUIRE_MESSAGE(r.ok(), r.error);
+    const nlohmann::json o = nlohmann::json::parse(r.json);
+    CHECK(o["principal_point"][0].get<double>() == 500.0);
+    CHECK(o["principal_point"][1].get<double>() == 400.0);
+    CHECK(o["reprojection_rms_px"].get<double>() > 0.1);
+  }
   const CalibrateIoResult missing = CalibratePointsFile("/nonexistent/points.json");
   CHECK_FALSE(missing.ok());
   CHECK(missing.error.find("cannot open") != std::string::npos);
