@@ -148,6 +148,14 @@ TEST_CASE("seven matches: one of the 7-point roots is the true F") {
   REQUIRE_MESSAGE(summary.success, summary.message);
   CHECK(summary.symmetric_epipolar_rms_px < 1e-6);
   CHECK(HasWarning(summary.warnings, "7 matches"));
+
+  // Eight matches: the 8-point solution, exact, but with no check for wrong clicks.
+  const Points uv1_8(s.uv1.begin(), s.uv1.begin() + 8), uv2_8(s.uv2.begin(), s.uv2.begin() + 8);
+  const FundamentalSummary eight = EstimateFundamentalMatrix(uv1_8, uv2_8, FundamentalOptions());
+  REQUIRE_MESSAGE(eight.success, eight.message);
+  CAPTURE(MaxAbsDiff(eight.F, s.F));
+  CHECK(MaxAbsDiff(eight.F, s.F) < kExactTol);
+  CHECK(HasWarning(eight.warnings, "no redundancy"));
 }
 
 TEST_CASE("with 0.5 px noise the refined RMS is near the noise and never above the 8-point start") {
@@ -211,6 +219,10 @@ TEST_CASE("10 % wrong matches are flagged") {
     CAPTURE(summary.symmetric_epipolar_rms_px);
     CHECK(summary.symmetric_epipolar_rms_px < 2.0 * kNoisePx);
     CHECK(HasWarning(summary.warnings, "outliers"));
+    // Seeded RANSAC: the same input gives the same answer.
+    const FundamentalSummary again = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
+    CHECK(again.inliers == summary.inliers);
+    CHECK(MaxAbsDiff(again.F, summary.F) == 0.0);
   }
   const double recall = static_cast<double>(true_positive) / outliers_total;
   const double precision = flagged > 0 ? static_cast<double>(true_positive) / flagged : 0.0;

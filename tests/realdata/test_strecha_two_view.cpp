@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -174,6 +175,23 @@ TEST_CASE("Strecha fountain: relative pose and F from 30 SIFT matches per pair")
         Eigen::AngleAxisd(pose.cam2_from_cam1_rotation * true_r.transpose()).angle() * kRadToDeg;
     const Eigen::Vector3d& t = pose.cam2_from_cam1_translation;
     const double t_err_deg = std::atan2(t.cross(true_t).norm(), t.dot(true_t)) * kRadToDeg;
+
+    // The ground-truth F judges the flags: a flagged match should be off its epipolar line.
+    const Eigen::Vector3d u = true_t.normalized();
+    Eigen::Matrix3d skew;
+    skew << 0, -u.z(), u.y(), u.z(), 0, -u.x(), -u.y(), u.x(), 0;
+    const Eigen::Matrix3d true_f = c2.K.inverse().transpose() * skew * true_r * c1.K.inverse();
+    const double true_f_rms = SymmetricEpipolarRms(true_f, uv1, uv2, f.inliers);
+    double closest_outlier_px = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < uv1.size(); ++i)
+      if (!f.inliers[i])
+        closest_outlier_px = std::min(closest_outlier_px, SymmetricEpipolarDistances(true_f, uv1[i], uv2[i]).norm());
+    MESSAGE(name1 << "-" << name2 << ": ground-truth F RMS on our inliers " << true_f_rms << " px; "
+                  << (f.num_inliers == static_cast<int>(uv1.size())
+                          ? std::string("no match flagged")
+                          : "flagged matches are at least " + std::to_string(closest_outlier_px) +
+                                " px off the true epipolar lines"));
+    CHECK(closest_outlier_px > 1.0);
 
     // OpenCV on the same matches, all judged by our metric on our inliers.
     const double ours = f.symmetric_epipolar_rms_px;
