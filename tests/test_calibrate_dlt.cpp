@@ -156,46 +156,50 @@ TEST_CASE("DLT: with 0.5 px noise the errors match the fit's covariance over 40 
   constexpr double kNoisePx = 0.5;
   constexpr int kSeeds = 40;
   const Camera truth = MakeLookAtCamera(DefaultScene());
-  double sum_sq_error = 0.0, sum_sigma = 0.0, max_rotation_deg = 0.0, sum_sq_start_error = 0.0;
-  for (int seed = 1; seed <= kSeeds; ++seed) {
-    SceneSpec spec;
-    spec.noise_px = kNoisePx;
-    spec.seed = seed;
-    const auto points = MakePoints(truth, spec, DefaultScene());
-    const DltCalibrationSummary s = CalibrateFromPoints(points, OptionsFor(truth));
-    REQUIRE_MESSAGE(s.success, s.message);
-    const double f_error = s.camera.focal_px - truth.focal_px;
-    CAPTURE(seed);
-    CAPTURE(f_error);
-    CAPTURE(s.focal_std_px);
-    REQUIRE(s.focal_std_px > 0.0);
-    CHECK(std::abs(f_error) <= 4.0 * s.focal_std_px);
-    CHECK((s.camera.principal_point_px - truth.principal_point_px).cwiseAbs().maxCoeff() <=
-          4.0 * s.principal_point_std_px.maxCoeff());
-    // The refinement starts from f = (fx + fy) / 2 of the linear step and moves off it (the
-    // linear camera's own RMS is lower: it has fx, fy and skew free).
-    const double start_f = 0.5 * (s.fx + s.fy);
-    CAPTURE(start_f);
-    CHECK(std::abs(s.camera.focal_px - start_f) > 1e-6 * truth.focal_px);
-    CHECK(s.iterations >= 1);
-    sum_sq_start_error += (start_f - truth.focal_px) * (start_f - truth.focal_px);
-    // RMS of the 2D residual: sigma * sqrt(2 (2n - p) / 2n) with p = 9 parameters.
-    const double expected_rms = kNoisePx * std::sqrt(2.0 * (2.0 * points.size() - 9) / (2.0 * points.size()));
-    CAPTURE(s.reprojection_rms_px);
-    CHECK(std::abs(s.reprojection_rms_px - expected_rms) <= 0.25 * expected_rms);
-    sum_sq_error += f_error * f_error;
-    sum_sigma += s.focal_std_px;
-    max_rotation_deg = std::max(max_rotation_deg,
-                                RotationErrorDeg(s.camera.cam_from_world_rotation, truth.cam_from_world_rotation));
+  // Extent 1: the points fill the image's middle third (f weakly determined); 3: all of it.
+  for (const double extent : {1.0, 3.0}) {
+    double sum_sq_error = 0.0, sum_sigma = 0.0, max_rotation_deg = 0.0, sum_sq_start_error = 0.0;
+    for (int seed = 1; seed <= kSeeds; ++seed) {
+      SceneSpec spec;
+      spec.noise_px = kNoisePx;
+      spec.extent = extent;
+      spec.seed = seed;
+      const auto points = MakePoints(truth, spec, DefaultScene());
+      const DltCalibrationSummary s = CalibrateFromPoints(points, OptionsFor(truth));
+      REQUIRE_MESSAGE(s.success, s.message);
+      const double f_error = s.camera.focal_px - truth.focal_px;
+      CAPTURE(seed);
+      CAPTURE(f_error);
+      CAPTURE(s.focal_std_px);
+      REQUIRE(s.focal_std_px > 0.0);
+      CHECK(std::abs(f_error) <= 4.0 * s.focal_std_px);
+      CHECK((s.camera.principal_point_px - truth.principal_point_px).cwiseAbs().maxCoeff() <=
+            4.0 * s.principal_point_std_px.maxCoeff());
+      // The refinement starts from f = (fx + fy) / 2 of the linear step and moves off it (the
+      // linear camera's own RMS is lower: it has fx, fy and skew free).
+      const double start_f = 0.5 * (s.fx + s.fy);
+      CAPTURE(start_f);
+      CHECK(std::abs(s.camera.focal_px - start_f) > 1e-6 * truth.focal_px);
+      CHECK(s.iterations >= 1);
+      sum_sq_start_error += (start_f - truth.focal_px) * (start_f - truth.focal_px);
+      // RMS of the 2D residual: sigma * sqrt(2 (2n - p) / 2n) with p = 9 parameters.
+      const double expected_rms = kNoisePx * std::sqrt(2.0 * (2.0 * points.size() - 9) / (2.0 * points.size()));
+      CAPTURE(s.reprojection_rms_px);
+      CHECK(std::abs(s.reprojection_rms_px - expected_rms) <= 0.25 * expected_rms);
+      sum_sq_error += f_error * f_error;
+      sum_sigma += s.focal_std_px;
+      max_rotation_deg = std::max(max_rotation_deg,
+                                  RotationErrorDeg(s.camera.cam_from_world_rotation, truth.cam_from_world_rotation));
+    }
+    const double observed = std::sqrt(sum_sq_error / kSeeds), predicted = sum_sigma / kSeeds;
+    MESSAGE("DLT 0.5 px noise, 40 points, extent " << extent << ": f error RMS over seeds " << observed
+                                                  << " px, predicted sigma " << predicted << " px, max rotation error "
+                                                  << max_rotation_deg << " deg; linear start f error RMS "
+                                                  << std::sqrt(sum_sq_start_error / kSeeds) << " px");
+    CHECK(observed < std::sqrt(sum_sq_start_error / kSeeds));
+    CHECK(observed >= 0.6 * predicted);
+    CHECK(observed <= 1.6 * predicted);
   }
-  const double observed = std::sqrt(sum_sq_error / kSeeds), predicted = sum_sigma / kSeeds;
-  MESSAGE("DLT 0.5 px noise, 40 points: f error RMS over seeds " << observed << " px, predicted sigma " << predicted
-                                                                 << " px, max rotation error " << max_rotation_deg
-                                                                 << " deg; linear start f error RMS "
-                                                                 << std::sqrt(sum_sq_start_error / kSeeds) << " px");
-  CHECK(observed < std::sqrt(sum_sq_start_error / kSeeds));
-  CHECK(observed >= 0.6 * predicted);
-  CHECK(observed <= 1.6 * predicted);
 }
 
 TEST_CASE("Planar: noise-free points on a tilted plane give K, R, t exactly") {
@@ -316,6 +320,60 @@ TEST_CASE("Distortion: k1 = -0.2 is recovered and the RMS falls to the noise lev
                                                << two.reprojection_rms_px << " px; f error "
                                                << one.camera.focal_px - truth.focal_px << " px");
   }
+}
+
+TEST_CASE("Distortion: noise-free k1, k2 are recovered exactly from a pinhole start") {
+  // The linear step is pinhole, so the refinement starts away from the answer (checked) and
+  // must converge to it: this exercises the Levenberg-Marquardt loop and its Jacobian.
+  constexpr double kTrueK1 = -0.2, kTrueK2 = 0.05;
+  for (const bool planar : {false, true}) {
+    SyntheticSceneOptions scene = DefaultScene();
+    if (planar) scene.principal_point_offset_px = {0.0, 0.0};
+    const Camera truth = MakeLookAtCamera(scene);
+    SceneSpec spec;
+    spec.planar = planar;
+    spec.num_points = 60;
+    spec.extent = 3.0;
+    spec.k1 = kTrueK1;
+    spec.k2 = kTrueK2;
+    const auto points = MakePoints(truth, spec, scene);
+    DltCalibrationOptions options = OptionsFor(truth);
+    options.radial_distortion_terms = 2;
+    const DltCalibrationSummary s = CalibrateFromPoints(points, options);
+    REQUIRE_MESSAGE(s.success, s.message);
+    CAPTURE(planar);
+    CAPTURE(s.initial_rms_px);
+    CAPTURE(s.reprojection_rms_px);
+    CAPTURE(s.iterations);
+    CAPTURE(s.k1);
+    CAPTURE(s.k2);
+    CHECK(s.initial_rms_px > 1.0);
+    CHECK(s.reprojection_rms_px <= 1e-6);
+    CHECK(std::abs(s.k1 - kTrueK1) <= kExactRelative);
+    CHECK(std::abs(s.k2 - kTrueK2) <= kExactRelative);
+    const std::string label = planar ? "planar" : "non-planar";
+    MESSAGE(label << std::string(" noise-free k1, k2: errors ") << s.k1 - kTrueK1
+                                               << ", " << s.k2 - kTrueK2 << ", f error "
+                                               << s.camera.focal_px - truth.focal_px << " px, " << s.iterations
+                                               << " iterations from RMS " << s.initial_rms_px << " px");
+    CheckCameraExact(s.camera, truth);
+  }
+}
+
+TEST_CASE("DLT: a principal point held at the image centre is kept, and exact when true") {
+  SyntheticSceneOptions scene = DefaultScene();
+  scene.principal_point_offset_px = {0.0, 0.0};
+  const Camera truth = MakeLookAtCamera(scene);
+  SceneSpec spec;
+  spec.noise_px = 0.0;
+  const auto points = MakePoints(truth, spec, scene);
+  DltCalibrationOptions options = OptionsFor(truth);
+  options.principal_point_mode = PrincipalPointMode::kImageCenter;
+  const DltCalibrationSummary s = CalibrateFromPoints(points, options);
+  REQUIRE_MESSAGE(s.success, s.message);
+  CHECK(s.camera.principal_point_px == Eigen::Vector2d((truth.width_px - 1) / 2.0, (truth.height_px - 1) / 2.0));
+  CHECK(s.principal_point_std_px == Eigen::Vector2d::Zero());
+  CheckCameraExact(s.camera, truth);
 }
 
 TEST_CASE("DLT: scaling the 3D points by 1e-3 and 1e3 gives the same K and a scaled t") {
