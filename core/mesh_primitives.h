@@ -1,0 +1,68 @@
+// K_create: parametric primitives (Facade style) added to a scene mesh. Every vertex's
+// local position is a linear function of the primitive's parameters (LocalDefinition), and
+// world = R * local + t with R from the angle-axis `rotation` (core/conventions.h).
+//
+// A scene is one PolyMesh holding any number of primitives as disjoint components; vertices
+// and faces carry their primitive's id. Faces are counter-clockwise seen from outside, so
+// FaceNormal points outwards. Local frame: Z up; boxes, wedges, pyramids and planes span
+// [0, sx] x [0, sy] from the local origin; prisms and cylinders are centred on the local Z axis.
+//
+// Not done yet: attaching primitives to one another (a wedge sharing a box's top face),
+// and face extrusion.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/mesh.h"
+
+namespace facet {
+
+enum class PrimitiveKind { kBox, kWedge, kPrism, kPyramid, kCylinder, kPlane };
+const char* PrimitiveKindName(PrimitiveKind kind);
+
+// Parameters, in world units, by kind (unused entries stay 0):
+//   kBox      (sx, sy, sz)
+//   kWedge    (sx, sy, sz): triangular prism, ridge along x at y = sy / 2, height sz (gable roof)
+//   kPrism    (radius, height), `segments` sides (>= 3), circumscribed radius
+//   kCylinder (radius, height), `segments` sides (>= 3); side faces share material 1
+//   kPyramid  (sx, sy, height): rectangular base, apex above the base centre
+//   kPlane    (sx, sy): one quad at local z = 0 facing +Z, with a boundary
+struct Primitive {
+  PrimitiveId id = 0;
+  PrimitiveKind kind = PrimitiveKind::kBox;
+  PrimitiveParams params = PrimitiveParams::Zero();
+  int segments = 0;
+  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();     // world_from_primitive, angle-axis
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();  // world_from_primitive
+};
+
+Primitive MakeBox(PrimitiveId id, const Eigen::Vector3d& size);
+Primitive MakeWedge(PrimitiveId id, const Eigen::Vector3d& size);
+Primitive MakePrism(PrimitiveId id, int sides, double radius, double height);
+Primitive MakeCylinder(PrimitiveId id, int segments, double radius, double height);
+Primitive MakePyramid(PrimitiveId id, const Eigen::Vector3d& size);
+Primitive MakePlane(PrimitiveId id, double sx, double sy);
+
+struct AddPrimitiveResult {
+  bool ok = false;
+  std::string message;
+  std::vector<VertexId> vertices;
+  std::vector<FaceId> faces;
+};
+
+// K_create: adds the primitive's vertices and faces to the mesh with world positions from
+// its pose, per-corner UVs (the corner's local position projected on the face's first edge
+// and its in-plane normal, in world units) and per-face materials (face index, or 0/1 for
+// caps/sides of a cylinder). Refuses non-positive dimensions or too few segments.
+AddPrimitiveResult AddPrimitive(PolyMesh* mesh, const Primitive& primitive);
+
+// Recomputes the world positions of every vertex of `primitive.id` from its local
+// definitions, parameters and pose, e.g. after the solve changed its dimensions. O(V).
+void UpdatePrimitivePositions(PolyMesh* mesh, const Primitive& primitive);
+
+Eigen::Vector3d PrimitiveLocalToWorld(const Primitive& primitive, const Eigen::Vector3d& p_in_primitive);
+
+}  // namespace facet

@@ -1,0 +1,289 @@
+// The polygon mesh (core/mesh.h), K_create primitives (core/mesh_primitives.h) and their
+// triangulation (core/mesh_triangulate.h): invariants on every primitive kind, and
+// Validate() naming exactly what a corrupted mesh breaks.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <set>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "core/camera.h"
+#include "core/mesh.h"
+#include "core/mesh_primitives.h"
+#include "core/mesh_triangulate.h"
+
+namespace facet {
+namespace {
+
+constexpr double kGeomTol = 1e-9;  // noise-free geometry, metres
+
+std::vector<Primitive> AllKinds() {
+  std::vector<Primitive> p = {MakeBox(1, {2.0, 3.0, 1.5}),     MakeWedge(2, {4.0, 2.0, 1.0}),
+                              MakePrism(3, 5, 1.2, 2.0),        MakePyramid(4, {2.0, 2.5, 1.8}),
+                              MakeCylinder(5, 12, 0.7, 3.0),    MakePlane(6, 3.0, 2.0)};
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p[i].rotation = Eigen::Vector3d(0.1 * i, -0.2, 0.3);
+    p[i].translation = Eigen::Vector3d(5.0 * i, 1.0, -2.0);
+  }
+  return p;
+}
+
+struct Expected {
+  int v, e, f, euler;
+};
+Expected ExpectedCounts(const Primitive& p) {
+  const int n = p.segments;
+  switch (p.kind) {
+    case PrimitiveKind::kBox: return {8, 12, 6, 2};
+    case PrimitiveKind::kWedge: return {6, 9, 5, 2};
+    case PrimitiveKind::kPyramid: return {5, 8, 5, 2};
+    case PrimitiveKind::kPlane: return {4, 4, 1, 1};
+    case PrimitiveKind::kPrism:
+    case PrimitiveKind::kCylinder: return {2 * n, 3 * n, n + 2, 2};
+  }
+  return {};
+}
+
+// Signed volume of a closed mesh by the divergence theorem over the triangulation.
+double SignedVolume(const PolyMesh& mesh) {
+  double volume = 0.0;
+  const MeshTriangulation t = TriangulateMesh(mesh);
+  for (const auto& tris : t.by_face) {
+    for (const CornerTriangle& c : tris) {
+      const Eigen::Vector3d& a = mesh.vertex(mesh.Origin(c[0])).position;
+      const Eigen::Vector3d& b = mesh.vertex(mesh.Origin(c[1])).position;
+      const Eigen::Vector3d& d = mesh.vertex(mesh.Origin(c[2])).position;
+      volume += a.dot(b.cross(d)) / 6.0;
+    }
+  }
+  return volume;
+}
+
+double ExpectedVolume(const Primitive& p) {
+  const double kPi = 3.14159265358979323846;
+  switch (p.kind) {
+    case PrimitiveKind::kBox: return p.params[0] * p.params[1] * p.params[2];
+    case PrimitiveKind::kWedge: return 0.5 * p.params[0] * p.params[1] * p.params[2];
+    case PrimitiveKind::kPyramid: return p.params[0] * p.params[1] * p.params[2] / 3.0;
+    case PrimitiveKind::kPrism:
+    case PrimitiveKind::kCylinder:
+      return 0.5 * p.segments * p.params[0] * p.params[0] * std::sin(2.0 * kPi / p.segments) * p.params[1];
+    case PrimitiveKind::kPlane: return 0.0;
+  }
+  return 0.0;
+}
+
+TEST_CASE("every primitive kind is a valid oriented manifold with the expected counts") {
+  for (const Primitive& p : AllKinds()) {
+    const std::string kind = PrimitiveKindName(p.kind);
+    CAPTURE(kind);
+    PolyMesh mesh;
+    const AddPrimitiveResult r = AddPrimitive(&mesh, p);
+    REQUIRE_MESSAGE(r.ok, r.message);
+    const auto report = Validate(mesh);
+    CHECK_MESSAGE(report.empty(), (report.empty() ? "" : report.front()));
+    const Expected e = ExpectedCounts(p);
+    CHECK(mesh.NumVertices() == e.v);
+    CHECK(mesh.NumEdges() == e.e);
+    CHECK(mesh.NumFaces() == e.f);
+    CHECK(EulerCharacteristic(mesh) == e.euler);
+    // Outward orientation: a closed primitive has its (positive) volume.
+    if (p.kind == PrimitiveKind::kPlane) {
+      // An open surface has no volume: its one face faces local +Z.
+      const Eigen::Vector3d up = RotationFromAngleAxis(p.rotation) * Eigen::Vector3d::UnitZ();
+      CHECK((FaceNormal(mesh, r.faces[0]) - up).norm() < kGeomTol);
+      continue;
+    }
+    const double volume = SignedVolume(mesh);
+    CAPTURE(volume);
+    CHECK(std::abs(volume - ExpectedVolume(p)) < kGeomTol * std::max(1.0, ExpectedVolume(p)));
+  }
+}
+
+TEST_CASE("a scene of several primitives keeps them as separate components") {
+  PolyMesh mesh;
+  int expected_euler = 0;
+  for (const Primitive& p : AllKinds()) {
+    REQUIRE(AddPrimitive(&mesh, p).ok);
+    expected_euler += ExpectedCounts(p).euler;
+  }
+  CHECK(Validate(mesh).empty());
+  CHECK(EulerCharacteristic(mesh) == expected_euler);
+  for (FaceId f = 0; f < mesh.FaceIdEnd(); ++f) {
+    for (VertexId v : FaceVertices(mesh, f)) CHECK(mesh.vertex(v).primitive == mesh.face(f).primitive);
+  }
+}
+
+TEST_CASE("vertex world positions are the pose applied to local functions of the parameters") {
+  for (Primitive p : AllKinds()) {
+    const std::string kind = PrimitiveKindName(p.kind);
+    CAPTURE(kind);
+    PolyMesh mesh;
+    const AddPrimitiveResult r = AddPrimitive(&mesh, p);
+    REQUIRE(r.ok);
+    p.params *= 1.7;
+    p.translation += Eigen::Vector3d(0.5, -1.0, 2.0);
+    const PolyMesh before = mesh;
+    UpdatePrimitivePositions(&mesh, p);
+    CHECK_FALSE(mesh == before);  // the update is not a no-op
+    PolyMesh rebuilt;
+    REQUIRE(AddPrimitive(&rebuilt, p).ok);
+    for (VertexId v : r.vertices) {
+      const double error = (mesh.vertex(v).position - rebuilt.vertex(v).position).norm();
+      CAPTURE(error);
+      CHECK(error < kGeomTol);
+    }
+  }
+}
+
+TEST_CASE("AddPrimitive refuses bad parameters and leaves the mesh unchanged") {
+  PolyMesh mesh;
+  REQUIRE(AddPrimitive(&mesh, MakeBox(1, {1, 1, 1})).ok);
+  const PolyMesh before = mesh;
+  for (const Primitive& bad : {MakeBox(2, {1.0, 0.0, 1.0}), MakePrism(3, 2, 1.0, 1.0),
+                               MakeCylinder(4, 8, -1.0, 1.0), MakePlane(5, 1.0, NAN)}) {
+    const AddPrimitiveResult r = AddPrimitive(&mesh, bad);
+    CAPTURE(r.message);
+    CHECK_FALSE(r.ok);
+    CHECK_FALSE(r.message.empty());
+    CHECK(mesh == before);
+  }
+}
+
+TEST_CASE("Validate names each kind of breakage") {
+  PolyMesh good;
+  REQUIRE(AddPrimitive(&good, MakeBox(1, {1, 2, 3})).ok);
+  REQUIRE(Validate(good).empty());
+  auto contains = [](const std::vector<std::string>& report, const std::string& text) {
+    for (const auto& line : report) {
+      if (line.find(text) != std::string::npos) return true;
+    }
+    return false;
+  };
+  const HalfedgeId h = good.face(0).halfedge;
+  SUBCASE("next/prev inconsistency") {
+    PolyMesh m = good;
+    m.halfedge(h).prev = m.Next(h);
+    const auto report = Validate(m);
+    CHECK(contains(report, "next/prev inconsistency"));
+  }
+  SUBCASE("dangling twin") {
+    PolyMesh m = good;
+    m.halfedge(PolyMesh::Twin(h)).alive = false;
+    CHECK(contains(Validate(m), "dangling twin"));
+  }
+  SUBCASE("inconsistent orientation") {
+    PolyMesh m = good;
+    m.halfedge(PolyMesh::Twin(h)).origin = m.Origin(h);
+    CHECK(contains(Validate(m), "orientation"));
+  }
+  SUBCASE("face with fewer than 3 vertices") {
+    PolyMesh m;
+    std::vector<VertexId> v = {m.NewVertex(), m.NewVertex()};
+    const EdgeId e = m.NewEdge();
+    const FaceId f = m.NewFace();
+    const FaceId g = m.NewFace();
+    for (int side = 0; side < 2; ++side) {
+      const HalfedgeId x = PolyMesh::EdgeHalfedge(e, side);
+      m.halfedge(x).origin = v[side];
+      m.halfedge(x).next = x;
+      m.halfedge(x).prev = x;
+      m.halfedge(x).face = side == 0 ? f : g;
+      m.vertex(v[side]).halfedge = x;
+    }
+    m.face(f).halfedge = PolyMesh::EdgeHalfedge(e, 0);
+    m.face(g).halfedge = PolyMesh::EdgeHalfedge(e, 1);
+    CHECK(contains(Validate(m), "fewer than 3 vertices"));
+  }
+  SUBCASE("non-manifold edge: no face on either side") {
+    PolyMesh m = good;
+    const HalfedgeId t = PolyMesh::Twin(h);
+    m.halfedge(h).face = kNoFace;
+    m.halfedge(t).face = kNoFace;
+    CHECK(contains(Validate(m), "non-manifold edge"));
+  }
+  SUBCASE("non-manifold vertex: two cones glued at a tip") {
+    PolyMesh m;
+    std::vector<VertexId> v;
+    for (int i = 0; i < 7; ++i) v.push_back(m.NewVertex());
+    std::string message;
+    // Two closed tetrahedra sharing only vertex 0.
+    REQUIRE(AddPolygons(&m, v, {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}, {0, 5, 4}, {0, 4, 6}, {4, 5, 6}, {0, 6, 5}},
+                        {}, 1, &message)
+                .size() == 8);
+    CHECK(contains(Validate(m), "non-manifold vertex"));
+  }
+}
+
+TEST_CASE("AddPolygons refuses inconsistent orientation and changes nothing") {
+  PolyMesh m;
+  std::vector<VertexId> v;
+  for (int i = 0; i < 4; ++i) v.push_back(m.NewVertex());
+  const PolyMesh before = m;
+  std::string message;
+  CHECK(AddPolygons(&m, v, {{0, 1, 2}, {0, 1, 3}}, {}, 1, &message).empty());
+  CHECK(message.find("orientation") != std::string::npos);
+  CHECK(m == before);
+}
+
+TEST_CASE("triangulation: n - 2 triangles per face, oriented with the face, each mapped once") {
+  PolyMesh mesh;
+  for (const Primitive& p : AllKinds()) REQUIRE(AddPrimitive(&mesh, p).ok);
+  const MeshTriangulation t = TriangulateMesh(mesh);
+  const FlatTriangles flat = Flatten(mesh, t);
+  int expected = 0;
+  for (FaceId f = 0; f < mesh.FaceIdEnd(); ++f) expected += FaceDegree(mesh, f) - 2;
+  CHECK(static_cast<int>(flat.triangles.size()) == expected);
+  std::set<int> covered;
+  for (FaceId f = 0; f < mesh.FaceIdEnd(); ++f) {
+    const Eigen::Vector3d normal = FaceNormal(mesh, f);
+    double area = 0.0;
+    for (std::size_t k = 0; k < t.by_face[f].size(); ++k) {
+      const int index = flat.first_triangle[f] + static_cast<int>(k);
+      CHECK(flat.triangle_face[index] == f);
+      CHECK(covered.insert(index).second);
+      const CornerTriangle& c = t.by_face[f][k];
+      for (HalfedgeId h : c) CHECK(mesh.Face(h) == f);
+      const Eigen::Vector3d& a = mesh.vertex(mesh.Origin(c[0])).position;
+      const Eigen::Vector3d tri_normal =
+          (mesh.vertex(mesh.Origin(c[1])).position - a).cross(mesh.vertex(mesh.Origin(c[2])).position - a);
+      CAPTURE(f);
+      CHECK(tri_normal.dot(normal) > 0.0);
+      area += 0.5 * tri_normal.norm();
+    }
+    // Planar faces: the triangles tile the face (Newell area).
+    Eigen::Vector3d newell = Eigen::Vector3d::Zero();
+    for (HalfedgeId h : FaceHalfedges(mesh, f)) {
+      newell += mesh.vertex(mesh.Origin(h)).position.cross(mesh.vertex(mesh.Dest(h)).position);
+    }
+    CHECK(std::abs(area - 0.5 * newell.norm()) < kGeomTol * std::max(1.0, area));
+  }
+  CHECK(static_cast<int>(covered.size()) == expected);
+}
+
+TEST_CASE("ear clipping handles a non-convex face (L shape)") {
+  PolyMesh m;
+  std::vector<VertexId> v;
+  const std::vector<Eigen::Vector2d> l = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};
+  for (const auto& p : l) {
+    v.push_back(m.NewVertex());
+    m.vertex(v.back()).position = Eigen::Vector3d(p.x(), p.y(), 0.0);
+  }
+  std::string message;
+  REQUIRE(AddPolygons(&m, v, {{0, 1, 2, 3, 4, 5}}, {}, 1, &message).size() == 1);
+  const auto tris = TriangulateFace(m, 0);
+  REQUIRE(tris.size() == 4);
+  double area = 0.0;
+  for (const auto& c : tris) {
+    const Eigen::Vector3d a = m.vertex(m.Origin(c[0])).position;
+    const Eigen::Vector3d n = (m.vertex(m.Origin(c[1])).position - a).cross(m.vertex(m.Origin(c[2])).position - a);
+    CHECK(n.z() > 0.0);
+    area += 0.5 * n.z();
+  }
+  CHECK(std::abs(area - 3.0) < kGeomTol);
+}
+
+}  // namespace
+}  // namespace facet
