@@ -445,7 +445,9 @@ DltCalibrationSummary CalibrateFromPoints(const std::vector<PointCorrespondence>
   }
 
   const bool solve_principal_point = !summary.planar && options.principal_point_mode == PrincipalPointMode::kSolve;
-  if (!solve_principal_point) model.principal_point_px = given_principal_point;
+  // Without refinement the camera stays the linear one (a non-planar DLT estimates its own
+  // principal point); the refinement starts from the held principal point.
+  if (!solve_principal_point && options.refine) model.principal_point_px = given_principal_point;
   if (options.refine) {
     std::vector<int> free = {kFocal};
     if (solve_principal_point) free.insert(free.end(), {kCx, kCy});
@@ -507,6 +509,9 @@ DltCalibrationSummary CalibrateFromPoints(const std::vector<PointCorrespondence>
   summary.message = Format(summary.planar ? "planar (homography), f = %.2f px, RMS %.3f px (linear %.3f px)"
                                           : "DLT, f = %.2f px, RMS %.3f px (linear %.3f px)",
                            camera.focal_px, summary.reprojection_rms_px, summary.initial_rms_px);
+  if (!solve_principal_point && (options.refine || summary.planar))
+    summary.message += Format("; principal point held at (%.1f, %.1f)", camera.principal_point_px.x(),
+                              camera.principal_point_px.y());
   return finish(summary);
 }
 

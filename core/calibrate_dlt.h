@@ -53,8 +53,9 @@ struct DltCalibrationOptions {
   bool square_pixels_zero_skew = true;
   int radial_distortion_terms = 0;  // 0, 1 (k1) or 2 (k1, k2); needs refine
   // kSolve: free in the non-planar refinement; the planar path then uses the image centre.
-  // kImageCenter / kFixed: held fixed on both paths (the non-planar linear step still
-  // estimates it; the refinement then moves it to the fixed value).
+  // kImageCenter / kFixed: held on both paths. The non-planar linear step estimates its own
+  // principal point regardless (kept when refine is false); the refinement starts from the
+  // held one.
   PrincipalPointMode principal_point_mode = PrincipalPointMode::kSolve;
   Eigen::Vector2d fixed_principal_point_px = Eigen::Vector2d::Zero();  // for kFixed
   int max_iterations = 100;
