@@ -47,13 +47,17 @@ std::vector<CornerTriangle> TriangulateFace(const PolyMesh& mesh, FaceId face) {
   const double eps = 1e-12 * extent * extent;
   std::vector<int> ring(n);
   for (int i = 0; i < n; ++i) ring[i] = i;
+  // In a convex face no vertex can lie in an ear, so the O(n) containment test per ear is
+  // skipped and the common case (primitive faces and their V_connect parts) is linear.
+  bool convex = true;
+  for (int k = 0; k < n && convex; ++k) convex = Cross2(p[(k + n - 1) % n], p[k], p[(k + 1) % n]) >= -eps;
   int guard = 0;
   int i = 0;
   while (ring.size() > 3 && guard < 2 * static_cast<int>(ring.size()) + 2) {
     const int m = static_cast<int>(ring.size());
     const int ia = ring[(i + m - 1) % m], ib = ring[i % m], ic = ring[(i + 1) % m];
     bool ear = Cross2(p[ia], p[ib], p[ic]) > eps;
-    for (int k = 0; ear && k < m; ++k) {
+    for (int k = 0; ear && !convex && k < m; ++k) {
       const int q = ring[k];
       if (q != ia && q != ib && q != ic && InsideOrOn(p[q], p[ia], p[ib], p[ic], eps)) ear = false;
     }
