@@ -212,6 +212,22 @@ AddPrimitiveResult AddPrimitive(PolyMesh* mesh, const Primitive& primitive) {
   return result;
 }
 
+bool AttachOnTop(const Primitive& base, Primitive* top, std::string* message) {
+  if (base.kind != PrimitiveKind::kBox) {
+    if (message) *message = std::string("attach: the base must be a box, not a ") + PrimitiveKindName(base.kind);
+    return false;
+  }
+  if (top->kind == PrimitiveKind::kPrism || top->kind == PrimitiveKind::kCylinder) {
+    if (message) *message = std::string("attach: a ") + PrimitiveKindName(top->kind) + " has no rectangular footprint";
+    return false;
+  }
+  top->params[0] = base.params[0];
+  top->params[1] = base.params[1];
+  top->rotation = base.rotation;
+  top->translation = PrimitiveLocalToWorld(base, Eigen::Vector3d(0.0, 0.0, base.params[2]));
+  return true;
+}
+
 void UpdatePrimitivePositions(PolyMesh* mesh, const Primitive& primitive) {
   const Eigen::Matrix3d world_from_primitive = RotationFromAngleAxis(primitive.rotation);
   for (VertexId v = 0; v < mesh->VertexIdEnd(); ++v) {

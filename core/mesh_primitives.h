@@ -7,8 +7,8 @@
 // FaceNormal points outwards. Local frame: Z up; boxes, wedges, pyramids and planes span
 // [0, sx] x [0, sy] from the local origin; prisms and cylinders are centred on the local Z axis.
 //
-// Not done yet: attaching primitives to one another (a wedge sharing a box's top face),
-// and face extrusion.
+// Attachment is a pose/footprint rule (AttachOnTop) re-applied after each change of the
+// base; the mesh keeps the primitives as separate components. Not done yet: face extrusion.
 #pragma once
 
 #include <string>
@@ -62,6 +62,13 @@ AddPrimitiveResult AddPrimitive(PolyMesh* mesh, const Primitive& primitive);
 // Recomputes the world positions of every vertex of `primitive.id` from its local
 // definitions, parameters and pose, e.g. after the solve changed its dimensions. O(V).
 void UpdatePrimitivePositions(PolyMesh* mesh, const Primitive& primitive);
+
+// Sets `top` on the top face of the box `base`: top's footprint (params 0 and 1) becomes the
+// box's (sx, sy) and its pose the box's, raised by sz, so the top's bottom corners coincide
+// with the box's top corners. Call it again whenever the box changes ("one drag moves both").
+// Refuses a base that is not a box and a top kind without a rectangular [0, sx] x [0, sy]
+// footprint (prism, cylinder); `top` is then unchanged.
+bool AttachOnTop(const Primitive& base, Primitive* top, std::string* message);
 
 Eigen::Vector3d PrimitiveLocalToWorld(const Primitive& primitive, const Eigen::Vector3d& p_in_primitive);
 

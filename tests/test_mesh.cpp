@@ -138,6 +138,44 @@ TEST_CASE("vertex world positions are the pose applied to local functions of the
   }
 }
 
+TEST_CASE("a wedge attached on top of a box follows the box when it is resized") {
+  Primitive box = MakeBox(1, {2.0, 3.0, 1.5});
+  box.rotation = Eigen::Vector3d(0.0, 0.0, 0.7);
+  box.translation = Eigen::Vector3d(1.0, -2.0, 0.5);
+  Primitive roof = MakeWedge(2, {1.0, 1.0, 0.8});
+  std::string message;
+  REQUIRE(AttachOnTop(box, &roof, &message));
+  PolyMesh mesh;
+  const AddPrimitiveResult b = AddPrimitive(&mesh, box);
+  const AddPrimitiveResult w = AddPrimitive(&mesh, roof);
+  REQUIRE((b.ok && w.ok));
+  auto check_shared = [&](const char* when) {
+    CAPTURE(when);
+    // Wedge corners 0..3 are its footprint; box corners 4..7 (z = sz) its top face.
+    const int box_top[4] = {4, 5, 7, 6};
+    for (int i = 0; i < 4; ++i) {
+      const double gap = (mesh.vertex(w.vertices[i]).position - mesh.vertex(b.vertices[box_top[i]]).position).norm();
+      CAPTURE(gap);
+      CHECK(gap < kGeomTol);
+    }
+  };
+  check_shared("attached");
+  const Eigen::Vector3d roof_apex_before = mesh.vertex(w.vertices[4]).position;
+  box.params.head<3>() = Eigen::Vector3d(4.0, 1.0, 2.5);
+  box.translation.z() += 1.0;
+  REQUIRE(AttachOnTop(box, &roof, &message));
+  UpdatePrimitivePositions(&mesh, box);
+  UpdatePrimitivePositions(&mesh, roof);
+  check_shared("after the box changed");
+  CHECK((mesh.vertex(w.vertices[4]).position - roof_apex_before).norm() > 0.5);
+  CHECK(roof.params[2] == 0.8);  // the roof keeps its own height
+  Primitive cylinder = MakeCylinder(3, 8, 1.0, 1.0);
+  const Primitive cylinder_before = cylinder;
+  CHECK_FALSE(AttachOnTop(box, &cylinder, &message));
+  CHECK(message.find("footprint") != std::string::npos);
+  CHECK(cylinder.params == cylinder_before.params);
+}
+
 TEST_CASE("AddPrimitive refuses bad parameters and leaves the mesh unchanged") {
   PolyMesh mesh;
   REQUIRE(AddPrimitive(&mesh, MakeBox(1, {1, 1, 1})).ok);

@@ -51,11 +51,6 @@ std::string FirstProblem(const PolyMesh& mesh) {
     CHECK_MESSAGE(problem.empty(), problem);        \
   } while (0)
 
-struct Counts {
-  int v, e, f;
-};
-Counts CountsOf(const PolyMesh& m) { return {m.NumVertices(), m.NumEdges(), m.NumFaces()}; }
-
 TEST_CASE("E_split then V_delete on every edge of every primitive") {
   for (const Primitive& p : AllKinds()) {
     const std::string kind = PrimitiveKindName(p.kind);
