@@ -1,6 +1,7 @@
 #include "app/frame.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include <imgui.h>
@@ -130,13 +131,15 @@ void MakeFloating(ShellState* shell, int panel, const Rect& from) {
   shell->layout_changed = true;
 }
 
-// A small button in the window's title bar, left of the close button.
-bool TitleBarButton(const char* label) {
+// A small button in the window's title bar, left of the close button; left out when the
+// bar is too narrow to show it beside the title (the title's context menu still works).
+bool TitleBarButton(const char* label, const char* window_title, const char* tooltip) {
   ImGuiWindow* window = ImGui::GetCurrentWindow();
   const ImGuiStyle& style = ImGui::GetStyle();
   const ImRect title = window->TitleBarRect();
   const float width = ImGui::CalcTextSize(label, nullptr, true).x + style.FramePadding.x * 2;
   const float x = title.Max.x - style.FramePadding.x - ImGui::GetFontSize() - style.ItemInnerSpacing.x * 2 - width;
+  if (x < title.Min.x + style.FramePadding.x * 2 + ImGui::CalcTextSize(window_title).x + 8.0f) return false;
   const ImVec2 cursor = ImGui::GetCursorScreenPos();
   const ImVec2 max_pos = window->DC.CursorMaxPos;
   ImGui::PushClipRect(title.Min, title.Max, false);
@@ -145,6 +148,7 @@ bool TitleBarButton(const char* label) {
   ImGui::PushStyleColor(ImGuiCol_Text, kDimText);
   const bool pressed = ImGui::SmallButton(label);
   ImGui::PopStyleColor(2);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tooltip);
   ImGui::PopClipRect();
   ImGui::SetCursorScreenPos(cursor);
   window->DC.CursorMaxPos = max_pos;
@@ -221,8 +225,8 @@ void DrawPanel(AppState* state, ShellState* shell, int index, const TiledLayout&
   // Title bar: Dock/Undock button, context menu, and tear-off by dragging a docked title.
   ImGuiWindow* window = ImGui::GetCurrentWindow();
   const ImRect title = window->TitleBarRect();
-  bool toggle_dock = TitleBarButton(floating ? "Dock##dock" : "Undock##dock");
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip(floating ? "Return to its place in the layout" : "Float as a separate window");
+  bool toggle_dock = TitleBarButton(floating ? "Dock##dock" : "Undock##dock", PanelTitle(panel),
+                                    floating ? "Return to its place in the layout" : "Float as a separate window");
   const bool title_hovered = ImGui::IsWindowHovered(ImGuiHoveredFlags_AllowWhenBlockedByActiveItem) &&
                              title.Contains(io.MousePos) && !ImGui::IsAnyItemHovered();
   if (title_hovered && ImGui::IsMouseReleased(ImGuiMouseButton_Right)) ImGui::OpenPopup("##panel_menu");
@@ -261,37 +265,40 @@ void DrawPanel(AppState* state, ShellState* shell, int index, const TiledLayout&
 }
 
 // The folder browser under the path field of the open/save/export dialogs.
-bool DrawFileList(ShellState* shell, const std::string& extension) {
+bool DrawFileList(ShellState* shell, const std::string& extension, double time_s) {
   namespace fs = std::filesystem;
+  constexpr double kRelistAfterS = 2.0;
   std::error_code ec;
-  fs::path typed(shell->dialog_path);
+  const fs::path typed(shell->dialog_path);
   fs::path dir = shell->dialog_path.empty() || shell->dialog_path.back() == '/' ? typed : typed.parent_path();
   if (dir.empty()) dir = fs::current_path(ec);
-  if (!fs::is_directory(dir, ec)) return false;
-  std::vector<fs::directory_entry> dirs, files;
-  for (const auto& e : fs::directory_iterator(dir, fs::directory_options::skip_permission_denied, ec)) {
-    const std::string name = e.path().filename().string();
-    if (name.empty() || name[0] == '.') continue;
-    if (e.is_directory(ec)) dirs.push_back(e);
-    else if (extension.empty() || e.path().extension() == extension) files.push_back(e);
-    if (dirs.size() + files.size() > 2000) break;
+  if (dir.string() != shell->listed_dir || time_s - shell->listed_time_s > kRelistAfterS || time_s < shell->listed_time_s) {
+    shell->listed_dir = dir.string();
+    shell->listed_time_s = time_s;
+    shell->listed_dirs.clear();
+    shell->listed_files.clear();
+    constexpr size_t kMaxEntries = 2000;
+    for (const auto& e : fs::directory_iterator(dir, fs::directory_options::skip_permission_denied, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name.empty() || name[0] == '.') continue;
+      if (e.is_directory(ec)) shell->listed_dirs.push_back(name);
+      else if (extension.empty() || e.path().extension() == extension) shell->listed_files.push_back(name);
+      if (shell->listed_dirs.size() + shell->listed_files.size() > kMaxEntries) break;
+    }
+    std::sort(shell->listed_dirs.begin(), shell->listed_dirs.end());
+    std::sort(shell->listed_files.begin(), shell->listed_files.end());
   }
-  auto by_name = [](const fs::directory_entry& a, const fs::directory_entry& b) { return a.path() < b.path(); };
-  std::sort(dirs.begin(), dirs.end(), by_name);
-  std::sort(files.begin(), files.end(), by_name);
   bool accept = false;
-  ImGui::TextColored(kDimText, "%s", dir.string().c_str());
+  ImGui::TextColored(kDimText, "%s", shell->listed_dir.c_str());
   ImGui::BeginChild("##files", ImVec2(560, 220), true);
   if (ImGui::Selectable("../")) shell->dialog_path = dir.parent_path().string() + "/";
-  for (const auto& d : dirs) {
-    const std::string label = d.path().filename().string() + "/";
-    if (ImGui::Selectable(label.c_str())) shell->dialog_path = d.path().string() + "/";
+  for (const std::string& d : shell->listed_dirs) {
+    if (ImGui::Selectable((d + "/").c_str())) shell->dialog_path = (dir / d).string() + "/";
   }
-  for (const auto& f : files) {
-    const std::string label = f.path().filename().string();
-    const bool selected = f.path() == typed;
-    if (ImGui::Selectable(label.c_str(), selected, ImGuiSelectableFlags_AllowDoubleClick)) {
-      shell->dialog_path = f.path().string();
+  for (const std::string& f : shell->listed_files) {
+    const bool selected = dir / f == typed;
+    if (ImGui::Selectable(f.c_str(), selected, ImGuiSelectableFlags_AllowDoubleClick)) {
+      shell->dialog_path = (dir / f).string();
       if (ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) accept = true;
     }
   }
@@ -326,7 +333,7 @@ void DrawPathDialog(AppState* state, ShellState* shell) {
   if (ImGui::IsWindowAppearing()) ImGui::SetKeyboardFocusHere();
   ImGui::SetNextItemWidth(560);
   bool accept = ImGui::InputText("##path", &shell->dialog_path, ImGuiInputTextFlags_EnterReturnsTrue);
-  accept |= DrawFileList(shell, extension);
+  accept |= DrawFileList(shell, extension, state->time_s);
   if (!shell->dialog_error.empty()) ImGui::TextColored(kErrorText, "%s", shell->dialog_error.c_str());
   accept |= ImGui::Button(verb, ImVec2(100, 0));
   ImGui::SameLine();
@@ -572,7 +579,8 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   if (shell->dialog == Dialog::kNone) HandleToolShortcuts(state);
 }
 
-void ConfigureImGui(bool offscreen) {
+void ConfigureImGui(bool offscreen, float ui_scale) {
+  ui_scale = std::clamp(ui_scale, 1.0f, 4.0f);
   ImGuiIO& io = ImGui::GetIO();
   io.ConfigWindowsMoveFromTitleBarOnly = true;  // drags inside the image and 3D panels never move windows
   io.ConfigFlags |= ImGuiConfigFlags_NavEnableKeyboard;
@@ -582,7 +590,7 @@ void ConfigureImGui(bool offscreen) {
   if (std::filesystem::exists(font_path, ec)) {
     ImFontConfig config;
     config.OversampleH = 2;
-    io.Fonts->AddFontFromFileTTF(font_path, 15.0f, &config);
+    io.Fonts->AddFontFromFileTTF(font_path, std::round(15.0f * ui_scale), &config);
   } else {
     io.Fonts->AddFontDefault();
   }
@@ -619,6 +627,7 @@ void ConfigureImGui(bool offscreen) {
   c[ImGuiCol_SeparatorHovered] = ImVec4(0.30f, 0.50f, 0.80f, 0.8f);
   c[ImGuiCol_SeparatorActive] = ImVec4(0.35f, 0.58f, 0.92f, 1.0f);
 
+  style.ScaleAllSizes(ui_scale);
   if (offscreen) {
     io.IniFilename = nullptr;  // deterministic screenshots: never read or write user settings
   }

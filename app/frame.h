@@ -25,6 +25,11 @@ struct ShellState {
   bool dialog_just_opened = false;
   std::string dialog_path;  // the path field of the open/save/export dialogs
   std::string dialog_error;
+  // The dialog's folder listing, re-read when the folder changes or after a while (not
+  // every frame: the frame loop does no file-system work of its own).
+  std::string listed_dir;
+  double listed_time_s = -1.0;
+  std::vector<std::string> listed_dirs, listed_files;  // file names, sorted
 
   // Set when the user confirmed quitting (or there was nothing to save); the platform loop
   // then exits.
@@ -45,7 +50,8 @@ struct ShellState {
 };
 
 // Fonts, style and IO flags shared by both modes; `offscreen` also disables the ini file.
-void ConfigureImGui(bool offscreen);
+// `ui_scale` enlarges fonts and sizes for high-density displays (1 offscreen).
+void ConfigureImGui(bool offscreen, float ui_scale = 1.0f);
 
 // Runs one frame's UI for the state. `time_s` is the time since start (fixed steps offscreen).
 void DrawFrame(AppState* state, ShellState* shell, double time_s);

@@ -456,8 +456,10 @@ void DrawToolsPanel(AppState* state) {
     const ImVec2 max = ImGui::GetItemRectMax();
     const ImVec2 min = ImGui::GetItemRectMin();
     const ImVec2 text = ImGui::CalcTextSize(b.shortcut);
-    ImGui::GetWindowDrawList()->AddText(ImVec2(max.x - text.x - 8, (min.y + max.y - text.y) / 2),
-                                        ImGui::GetColorU32(kDimText), b.shortcut);
+    if (ImGui::CalcTextSize(b.label).x + 2 * text.x + 24 < max.x - min.x) {
+      ImGui::GetWindowDrawList()->AddText(ImVec2(max.x - text.x - 8, (min.y + max.y - text.y) / 2),
+                                          ImGui::GetColorU32(kDimText), b.shortcut);
+    }
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s (%s)", b.hint, b.shortcut);
   }
   ImGui::Spacing();

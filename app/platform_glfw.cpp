@@ -5,6 +5,7 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 
@@ -57,7 +58,16 @@ int RunGlfwWindow(AppState* state, ShellState* shell, const std::string& imgui_i
 
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
-  ConfigureImGui(/*offscreen=*/false);
+  // Fonts and sizes follow the monitor's content scale (e.g. 2 on a HiDPI screen).
+  float scale_x = 1.0f, scale_y = 1.0f;
+  glfwGetWindowContentScale(window, &scale_x, &scale_y);
+  // Where the framebuffer is already denser than window coordinates (Wayland, macOS), ImGui's
+  // framebuffer scale does that part; only the rest enlarges the UI.
+  int window_w = 0, window_h = 0, fb_w = 0, fb_h = 0;
+  glfwGetWindowSize(window, &window_w, &window_h);
+  glfwGetFramebufferSize(window, &fb_w, &fb_h);
+  const float framebuffer_scale = window_w > 0 ? static_cast<float>(fb_w) / window_w : 1.0f;
+  ConfigureImGui(/*offscreen=*/false, std::max(scale_x, scale_y) / std::max(1.0f, framebuffer_scale));
   ImGui::GetIO().IniFilename = imgui_ini_path.empty() ? nullptr : imgui_ini_path.c_str();
   ImGui_ImplGlfw_InitForOpenGL(window, /*install_callbacks=*/true);
   ImGui_ImplOpenGL3_Init("#version 330");

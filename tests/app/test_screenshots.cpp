@@ -116,11 +116,14 @@ struct RunResult {
   std::string stderr_text;
 };
 
-// Runs `facet render` without a display and with a private config folder.
+// Runs `facet render` without a display and with a private config folder. A render that
+// hangs is killed (exit code 124) rather than hanging the suite.
 RunResult RunRender(const TempDir& dir, const std::string& args) {
+  constexpr int kRenderTimeoutS = 300;
   const std::string err = dir / "stderr.txt";
-  const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY XDG_CONFIG_HOME='" + (dir / "config") + "' '" +
-                          std::string(FACET_APP_EXE) + "' render " + args + " 2> '" + err + "'";
+  const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY XDG_CONFIG_HOME='" + (dir / "config") + "' timeout " +
+                          std::to_string(kRenderTimeoutS) + " '" + std::string(FACET_APP_EXE) + "' render " + args +
+                          " 2> '" + err + "'";
   const int status = std::system(cmd.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
