@@ -190,6 +190,32 @@ TEST_CASE("AddPrimitive refuses bad parameters and leaves the mesh unchanged") {
   }
 }
 
+TEST_CASE("mesh equality sees every field of live elements and ignores dead slots") {
+  PolyMesh a;
+  REQUIRE(AddPrimitive(&a, MakeBox(1, {1, 2, 3})).ok);
+  CHECK(a == a);
+  PolyMesh b = a;
+  b.halfedge(3).uv.x() += 1e-12;
+  CHECK_FALSE(a == b);
+  b = a;
+  b.face(2).material = 9;
+  CHECK_FALSE(a == b);
+  b = a;
+  b.vertex(1).position.z() += 1e-12;
+  CHECK_FALSE(a == b);
+  b = a;
+  b.vertex(1).local.t = 0.5;
+  CHECK_FALSE(a == b);
+  b = a;
+  std::swap(b.halfedge(0).next, b.halfedge(2).next);
+  CHECK_FALSE(a == b);
+  b = a;
+  const VertexId extra = b.NewVertex();
+  CHECK_FALSE(a == b);
+  b.KillVertex(extra);
+  CHECK(a == b);  // a dead slot does not count
+}
+
 TEST_CASE("Validate names each kind of breakage") {
   PolyMesh good;
   REQUIRE(AddPrimitive(&good, MakeBox(1, {1, 2, 3})).ok);

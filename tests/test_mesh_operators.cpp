@@ -67,6 +67,19 @@ TEST_CASE("E_split then V_delete on every edge of every primitive") {
       CHECK(mesh.NumFaces() == start.NumFaces());
       CHECK(EulerCharacteristic(mesh) == EulerCharacteristic(start));
       CHECK(VertexDegree(mesh, split.vertex) == 2);
+      // Attributes: in each face beside the edge, the new corner's UV is the interpolation
+      // of its neighbours' at t along the edge; the world position likewise.
+      for (int side = 0; side < 2; ++side) {
+        const HalfedgeId into = side == 0 ? PolyMesh::EdgeHalfedge(e, 0) : mesh.Prev(PolyMesh::EdgeHalfedge(e, 1));
+        const HalfedgeId at_m = mesh.Next(into), after = mesh.Next(at_m);
+        REQUIRE(mesh.Origin(at_m) == split.vertex);
+        const double s = side == 0 ? 0.3 : 0.7;  // measured from `into`'s origin
+        const Eigen::Vector2d expected = (1.0 - s) * mesh.halfedge(into).uv + s * mesh.halfedge(after).uv;
+        CHECK((mesh.halfedge(at_m).uv - expected).norm() < kGeomTol);
+      }
+      const Eigen::Vector3d pa = mesh.vertex(mesh.Origin(PolyMesh::EdgeHalfedge(e, 0))).position;
+      const Eigen::Vector3d pb = mesh.vertex(mesh.Dest(split.new_edge * 2)).position;
+      CHECK((mesh.vertex(split.vertex).position - (0.7 * pa + 0.3 * pb)).norm() < kGeomTol);
       const PolyMesh split_mesh = mesh;
 
       const VDeleteResult undo = UndoESplit(&mesh, split);
@@ -121,6 +134,16 @@ TEST_CASE("V_connect then E_delete on every non-adjacent vertex pair of every fa
           CHECK(mesh.NumFaces() == base.NumFaces() + 1);
           CHECK(EulerCharacteristic(mesh) == EulerCharacteristic(base));
           CHECK(FaceDegree(mesh, f) + FaceDegree(mesh, c.new_face) == n + 2);
+          // Convex planar input gives convex parts: no corner turns against the normal.
+          for (FaceId part : {f, c.new_face}) {
+            const Eigen::Vector3d normal = FaceNormal(mesh, part);
+            for (HalfedgeId h : FaceHalfedges(mesh, part)) {
+              const Eigen::Vector3d& p0 = mesh.vertex(mesh.Origin(mesh.Prev(h))).position;
+              const Eigen::Vector3d& p1 = mesh.vertex(mesh.Origin(h)).position;
+              const Eigen::Vector3d& p2 = mesh.vertex(mesh.Dest(h)).position;
+              CHECK((p1 - p0).cross(p2 - p1).dot(normal) > -kGeomTol);
+            }
+          }
           const PolyMesh connected = mesh;
 
           const EDeleteResult d = UndoVConnect(&mesh, c);
