@@ -17,6 +17,7 @@
 // and attributes; dead slots and the next-id counters are not compared.
 #pragma once
 
+#include <cassert>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -92,13 +93,14 @@ struct MeshFace {
 
 class PolyMesh {
  public:
-  // Element access by id; the id must be live (asserted in debug builds).
-  const MeshVertex& vertex(VertexId v) const { return vertices_[v]; }
-  const MeshHalfedge& halfedge(HalfedgeId h) const { return halfedges_[h]; }
-  const MeshFace& face(FaceId f) const { return faces_[f]; }
-  MeshVertex& vertex(VertexId v) { return vertices_[v]; }
-  MeshHalfedge& halfedge(HalfedgeId h) { return halfedges_[h]; }
-  MeshFace& face(FaceId f) { return faces_[f]; }
+  // Element access by id; the id must have been handed out (asserted in debug builds). A
+  // dead element's record stays readable until its id is revived.
+  const MeshVertex& vertex(VertexId v) const { return assert(v < vertices_.size()), vertices_[v]; }
+  const MeshHalfedge& halfedge(HalfedgeId h) const { return assert(h < halfedges_.size()), halfedges_[h]; }
+  const MeshFace& face(FaceId f) const { return assert(f < faces_.size()), faces_[f]; }
+  MeshVertex& vertex(VertexId v) { return assert(v < vertices_.size()), vertices_[v]; }
+  MeshHalfedge& halfedge(HalfedgeId h) { return assert(h < halfedges_.size()), halfedges_[h]; }
+  MeshFace& face(FaceId f) { return assert(f < faces_.size()), faces_[f]; }
 
   bool IsVertex(VertexId v) const { return v < vertices_.size() && vertices_[v].alive; }
   bool IsHalfedge(HalfedgeId h) const { return h < halfedges_.size() && halfedges_[h].alive; }
