@@ -176,7 +176,9 @@ void DrawSolveSection(AppState* state) {
     LabelValue("Max", "%.3f px", s.reprojection_max_px);
     LabelValue("Residuals", "%d (%d parameters)", s.num_residuals, s.num_parameters);
   }
-  LabelValue("Time", "%.2f ms (update %.2f ms)", s.time_ms, state->last_update.time_ms);
+  LabelValue("Time", "%.2f ms", s.time_ms);
+  LabelValue("Update", "%.2f ms", state->last_update.time_ms);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Calibration and solve after the last change");
   if (!s.message.empty()) WrappedColored(usable ? ImGui::GetStyleColorVec4(ImGuiCol_Text) : kDimText, s.message);
   for (const std::string& w : s.warnings) WrappedColored(kWarningText, w);
   for (const std::string& m : state->last_update.messages) WrappedColored(kWarningText, m);
