@@ -65,6 +65,32 @@ const Image* AppState::ActiveImage() const {
   return document.project().images.empty() ? nullptr : &document.project().images.front();
 }
 
+namespace {
+// Everything that belongs to one document: its history, selection, photos and derived mesh.
+void ResetDocument(AppState* state, Project project, const std::string& path) {
+  state->document.Reset(std::move(project));
+  state->project_path = path;
+  state->selection = {};
+  state->active_image_id = kNoId;
+  state->drag_start.reset();
+  state->photos.clear();
+  state->photo_errors.clear();
+  state->last_update = {};
+  state->mesh_boxes.clear();
+  state->mesh_images.clear();
+  state->mesh_photo_count = 0;
+  state->mesh_texture_stale = false;
+  state->mesh = {};
+  ++state->mesh_revision;
+  ++state->atlas_revision;
+}
+}  // namespace
+
+void NewProject(AppState* state) {
+  ResetDocument(state, Project{}, "");
+  state->Log(LogLevel::kInfo, "New project");
+}
+
 bool OpenProject(AppState* state, const std::string& path) {
   ProjectLoadResult loaded = LoadProject(path);
   if (!loaded.ok()) {
@@ -72,18 +98,7 @@ bool OpenProject(AppState* state, const std::string& path) {
     return false;
   }
   for (const std::string& w : loaded.warnings) state->Log(LogLevel::kWarning, w);
-  state->document.Reset(std::move(loaded.project));
-  state->project_path = path;
-  state->selection = {};
-  state->drag_start.reset();
-  state->photos.clear();
-  state->photo_errors.clear();
-  state->mesh_boxes.clear();
-  state->mesh_images.clear();
-  state->mesh_photo_count = 0;
-  state->mesh_texture_stale = false;
-  state->mesh = {};
-  ++state->mesh_revision;
+  ResetDocument(state, std::move(loaded.project), path);
   const Project& project = state->document.project();
   state->active_image_id = project.images.empty() ? kNoId : project.images.front().id;
   RefreshDiagnostics(state);  // the stored solution stays as saved

@@ -79,6 +79,8 @@ struct AppState {
   const Image* ActiveImage() const;
 };
 
+// Starts an empty, unsaved project (clears history).
+void NewProject(AppState* state);
 // Loads a project file into the state (clears history). Returns false and logs on failure,
 // leaving the state as it was.
 bool OpenProject(AppState* state, const std::string& path);

@@ -38,23 +38,6 @@ std::string LastLoggedError(const AppState& state) {
   return "see the log";
 }
 
-void ResetToNewProject(AppState* state) {
-  state->document.Reset(Project{});
-  state->project_path.clear();
-  state->selection = {};
-  state->active_image_id = kNoId;
-  state->drag_start.reset();
-  state->photos.clear();
-  state->photo_errors.clear();
-  state->last_update = {};
-  state->mesh_boxes.clear();
-  state->mesh_images.clear();
-  state->mesh_photo_count = 0;
-  state->mesh = {};
-  ++state->mesh_revision;
-  state->Log(LogLevel::kInfo, "New project");
-}
-
 void HandleGlobalShortcuts(AppState* state, ShellState* shell) {
   const ImGuiIO& io = ImGui::GetIO();
   if (io.WantTextInput || shell->dialog != Dialog::kNone || !io.KeyCtrl) return;
@@ -74,7 +57,7 @@ void HandleGlobalShortcuts(AppState* state, ShellState* shell) {
   if (ImGui::IsKeyPressed(GLFW_KEY_O, false)) OpenDialog(shell, Dialog::kOpen, state->project_path);
   if (ImGui::IsKeyPressed(GLFW_KEY_N, false)) {
     if (state->document.dirty()) OpenDialog(shell, Dialog::kConfirmNew);
-    else ResetToNewProject(state);
+    else NewProject(state);
   }
   if (ImGui::IsKeyPressed(GLFW_KEY_Q, false)) RequestQuit(state, shell);
 }
@@ -402,7 +385,7 @@ void DrawDialogs(AppState* state, ShellState* shell) {
         if (d == Dialog::kConfirmQuit) {
           shell->quit_now = true;
         } else if (d == Dialog::kConfirmNew) {
-          ResetToNewProject(state);
+          NewProject(state);
         } else {
           std::string error;
           RunAppCommand(state, shell, "open", {pending_path}, &error);
@@ -465,7 +448,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
                    std::string* error) {
   const std::string arg = args.empty() ? std::string() : args.front();
   if (name == "new") {
-    ResetToNewProject(state);
+    NewProject(state);
     return true;
   }
   if (name == "undo") {
