@@ -17,28 +17,17 @@
 
 #include "core/box.h"
 #include "core/project_io.h"
+#include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 
 namespace fs = std::filesystem;
 using facet::testing::MakeBoxScene;
+using facet::testing::TempDir;
 
 namespace {
 
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name) {
-    path = fs::temp_directory_path() / ("facet_cli_test_" + std::to_string(::getpid()) + "_" + name);
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string operator/(const std::string& file) const { return (path / file).string(); }
-};
 
-struct RunResult {
+struct CliResult {
   int exit_code = -1;
   std::string out;
   std::string err;
@@ -52,12 +41,12 @@ std::string ReadText(const std::string& path) {
 }
 
 // Runs facet with `args` (already shell-quoted where needed), without a display.
-RunResult RunFacet(const TempDir& dir, const std::string& args) {
+CliResult RunFacet(const TempDir& dir, const std::string& args) {
   const std::string out = dir / "stdout.txt", err = dir / "stderr.txt";
   const std::string command = "env -u DISPLAY -u WAYLAND_DISPLAY '" + std::string(FACET_APP_EXE) + "' " + args +
                               " > '" + out + "' 2> '" + err + "'";
   const int status = std::system(command.c_str());
-  RunResult r;
+  CliResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.out = ReadText(out);
   r.err = ReadText(err);
@@ -79,12 +68,12 @@ nlohmann::json LinesJsonFor(const facet::Project& project, const facet::Image& i
 
 TEST_CASE("help describes every command") {
   TempDir dir("help");
-  const RunResult top = RunFacet(dir, "--help");
+  const CliResult top = RunFacet(dir, "--help");
   CHECK(top.exit_code == 0);
   for (const char* command : {"calibrate", "solve", "export", "render"}) {
     CAPTURE(command);
     CHECK(top.out.find(command) != std::string::npos);
-    const RunResult sub = RunFacet(dir, std::string(command) + " --help");
+    const CliResult sub = RunFacet(dir, std::string(command) + " --help");
     CHECK(sub.exit_code == 0);
     CHECK(sub.out.find("Usage") != std::string::npos);
   }
@@ -94,7 +83,7 @@ TEST_CASE("help describes every command") {
 
 TEST_CASE("without a display the GUI says so and points to facet render") {
   TempDir dir("nodisplay");
-  const RunResult r = RunFacet(dir, "");
+  const CliResult r = RunFacet(dir, "");
   CHECK(r.exit_code != 0);
   CHECK(r.err.find("no display") != std::string::npos);
   CHECK(r.err.find("facet render") != std::string::npos);
@@ -107,7 +96,7 @@ TEST_CASE("calibrate --lines recovers the synthetic camera and rejects bad input
   {
     std::ofstream(dir / "lines.json") << LinesJsonFor(scene.project, image, "solve").dump();
   }
-  const RunResult r = RunFacet(dir, "calibrate --lines '" + (dir / "lines.json") + "'");
+  const CliResult r = RunFacet(dir, "calibrate --lines '" + (dir / "lines.json") + "'");
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   const nlohmann::json out = nlohmann::json::parse(r.out);
@@ -127,7 +116,7 @@ TEST_CASE("calibrate --lines recovers the synthetic camera and rejects bad input
 
   // Unusable input: exit 1 with a message on stderr, nothing on stdout.
   std::ofstream(dir / "truncated.json") << R"({"image_size": [640, 480], "families": [{"axis": "x", "segm)";
-  const RunResult truncated = RunFacet(dir, "calibrate --lines '" + (dir / "truncated.json") + "'");
+  const CliResult truncated = RunFacet(dir, "calibrate --lines '" + (dir / "truncated.json") + "'");
   CHECK(truncated.exit_code == 1);
   CHECK_FALSE(truncated.err.empty());
   CHECK(truncated.out.empty());
@@ -135,7 +124,7 @@ TEST_CASE("calibrate --lines recovers the synthetic camera and rejects bad input
   nlohmann::json parallel = LinesJsonFor(scene.project, image, "solve");
   parallel["families"][0]["segments"] = {{0, 0, 100, 0}, {0, 50, 100, 50}, {0, 90, 100, 90}};
   std::ofstream(dir / "parallel.json") << parallel.dump();
-  const RunResult par = RunFacet(dir, "calibrate --lines '" + (dir / "parallel.json") + "'");
+  const CliResult par = RunFacet(dir, "calibrate --lines '" + (dir / "parallel.json") + "'");
   CHECK(par.exit_code == 1);
   CHECK(par.err.find("x") != std::string::npos);
 }
@@ -150,7 +139,7 @@ TEST_CASE("solve re-solves a perturbed project, writes it and prints its summary
   p.images[0].camera.SetPose(p.images[0].camera.cam_from_world_rotation, Eigen::Vector3d(1, 2, 3));
   REQUIRE(facet::SaveProject(p, dir / "in.facet").empty());
 
-  const RunResult r = RunFacet(dir, "solve '" + (dir / "in.facet") + "' -o '" + (dir / "out.facet") + "'");
+  const CliResult r = RunFacet(dir, "solve '" + (dir / "in.facet") + "' -o '" + (dir / "out.facet") + "'");
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   const nlohmann::json summary = nlohmann::json::parse(r.out);
@@ -165,10 +154,10 @@ TEST_CASE("solve re-solves a perturbed project, writes it and prints its summary
   const Eigen::Vector3d size = solved.project.boxes[0].size;
   CHECK((size - scene.true_box.size).norm() < kRelativeTolerance * scene.true_box.size.norm());
 
-  const RunResult missing = RunFacet(dir, "solve '" + (dir / "nope.facet") + "' -o '" + (dir / "x.facet") + "'");
+  const CliResult missing = RunFacet(dir, "solve '" + (dir / "nope.facet") + "' -o '" + (dir / "x.facet") + "'");
   CHECK(missing.exit_code != 0);
   std::ofstream(dir / "bad.facet") << "{\"format\": \"facet-project\", \"version\": 1, \"images\": [";
-  const RunResult bad = RunFacet(dir, "solve '" + (dir / "bad.facet") + "' -o '" + (dir / "y.facet") + "'");
+  const CliResult bad = RunFacet(dir, "solve '" + (dir / "bad.facet") + "' -o '" + (dir / "y.facet") + "'");
   CHECK(bad.exit_code == 1);
   CHECK(bad.err.find("line") != std::string::npos);
   CHECK_FALSE(fs::exists(dir / "y.facet"));
@@ -181,20 +170,20 @@ TEST_CASE("export writes a GLB and an OBJ with its material and texture") {
   REQUIRE(cv::imwrite(dir / "synthetic.png", photo));
   REQUIRE(facet::SaveProject(scene.project, dir / "scene.facet").empty());
 
-  const RunResult glb = RunFacet(dir, "export '" + (dir / "scene.facet") + "' -o '" + (dir / "model.glb") + "'");
+  const CliResult glb = RunFacet(dir, "export '" + (dir / "scene.facet") + "' -o '" + (dir / "model.glb") + "'");
   INFO(glb.err);
   REQUIRE(glb.exit_code == 0);
   const std::string bytes = ReadText(dir / "model.glb");
   REQUIRE(bytes.size() > 20);
   CHECK(bytes.substr(0, 4) == "glTF");
 
-  const RunResult obj = RunFacet(dir, "export '" + (dir / "scene.facet") + "' -o '" + (dir / "model.obj") + "'");
+  const CliResult obj = RunFacet(dir, "export '" + (dir / "scene.facet") + "' -o '" + (dir / "model.obj") + "'");
   REQUIRE(obj.exit_code == 0);
   CHECK(fs::exists(dir / "model.obj"));
   CHECK(fs::exists(dir / "model.mtl"));
   CHECK(fs::exists(dir / "model.png"));
 
-  const RunResult unknown = RunFacet(dir, "export '" + (dir / "scene.facet") + "' -o '" + (dir / "model.fbx") + "'");
+  const CliResult unknown = RunFacet(dir, "export '" + (dir / "scene.facet") + "' -o '" + (dir / "model.fbx") + "'");
   CHECK(unknown.exit_code == 1);
   CHECK(unknown.err.find(".glb") != std::string::npos);
 }
@@ -214,7 +203,7 @@ TEST_CASE("calibrate --points recovers a camera from known 3D points") {
     }
   }
   std::ofstream(dir / "points.json") << nlohmann::json{{"image_size", {truth.width_px, truth.height_px}}, {"points", points}}.dump();
-  const RunResult r = RunFacet(dir, "calibrate --points '" + (dir / "points.json") + "'");
+  const CliResult r = RunFacet(dir, "calibrate --points '" + (dir / "points.json") + "'");
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   const nlohmann::json out = nlohmann::json::parse(r.out);
@@ -223,7 +212,7 @@ TEST_CASE("calibrate --points recovers a camera from known 3D points") {
   CHECK(out.at("reprojection_rms_px").get<double>() < 1e-6);
 
   std::ofstream(dir / "few.json") << R"({"image_size": [640, 480], "points": [{"xyz": [0, 0, 0], "uv": [1, 2]}]})";
-  const RunResult few = RunFacet(dir, "calibrate --points '" + (dir / "few.json") + "'");
+  const CliResult few = RunFacet(dir, "calibrate --points '" + (dir / "few.json") + "'");
   CHECK(few.exit_code == 1);
   CHECK_FALSE(few.err.empty());
   CHECK(RunFacet(dir, "calibrate").exit_code != 0);  // neither --lines nor --points
@@ -248,7 +237,7 @@ TEST_CASE("relate --matches gives F and, with K, the relative pose") {
                                 {"matches", matches},
                                 {"K", {k_json(c1), k_json(c2)}}};
   std::ofstream(dir / "matches.json") << input.dump();
-  const RunResult r = RunFacet(dir, "relate --matches '" + (dir / "matches.json") + "'");
+  const CliResult r = RunFacet(dir, "relate --matches '" + (dir / "matches.json") + "'");
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   const nlohmann::json out = nlohmann::json::parse(r.out);
@@ -260,7 +249,7 @@ TEST_CASE("relate --matches gives F and, with K, the relative pose") {
   CHECK(max_error < 1e-6);
 
   std::ofstream(dir / "bad.json") << R"({"image_sizes": [[640, 480]], "matches": []})";
-  const RunResult bad = RunFacet(dir, "relate --matches '" + (dir / "bad.json") + "'");
+  const CliResult bad = RunFacet(dir, "relate --matches '" + (dir / "bad.json") + "'");
   CHECK(bad.exit_code == 1);
   CHECK_FALSE(bad.err.empty());
 }
