@@ -1,11 +1,11 @@
 #include "core/calibrate_io.h"
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "core/json_io_internal.h"
 
 #include "core/calibrate_vp.h"
 
@@ -13,6 +13,8 @@ namespace facet {
 namespace {
 
 using nlohmann::json;
+using json_io::ReadNumber;
+using json_io::Rows;
 
 CalibrateIoResult Error(std::string message) {
   CalibrateIoResult result;
@@ -20,11 +22,6 @@ CalibrateIoResult Error(std::string message) {
   return result;
 }
 
-bool ReadNumber(const json& value, double* out) {
-  if (!value.is_number()) return false;
-  *out = value.get<double>();
-  return std::isfinite(*out);
-}
 
 // Fills *error and returns false when the document does not have the documented shape.
 bool ParseInput(const json& doc, std::vector<Segment>* segments, VpCalibrationOptions* options,
@@ -107,30 +104,11 @@ bool ParseInput(const json& doc, std::vector<Segment>* segments, VpCalibrationOp
 
   const int num_families = static_cast<int>(family_order->size());
   options->principal_point_mode = num_families >= 3 ? PrincipalPointMode::kSolve : PrincipalPointMode::kImageCenter;
-  const auto pp_it = doc.find("principal_point");
-  if (pp_it != doc.end()) {
-    double cx = 0, cy = 0;
-    if (pp_it->is_string() && pp_it->get<std::string>() == "solve") {
-      options->principal_point_mode = PrincipalPointMode::kSolve;
-    } else if (pp_it->is_string() && pp_it->get<std::string>() == "center") {
-      options->principal_point_mode = PrincipalPointMode::kImageCenter;
-    } else if (pp_it->is_array() && pp_it->size() == 2 && ReadNumber((*pp_it)[0], &cx) &&
-               ReadNumber((*pp_it)[1], &cy)) {
-      options->principal_point_mode = PrincipalPointMode::kFixed;
-      options->fixed_principal_point_px = {cx, cy};
-    } else {
-      *error = "\"principal_point\" must be \"solve\", \"center\" or [cx, cy], got " + pp_it->dump();
-      return false;
-    }
-  }
+  if (!json_io::ReadPrincipalPoint(doc, &options->principal_point_mode, &options->fixed_principal_point_px, error))
+    return false;
   return true;
 }
 
-json Rows(const Eigen::Matrix3d& m) {
-  json rows = json::array();
-  for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
-  return rows;
-}
 
 }  // namespace
 
@@ -190,12 +168,9 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
 }
 
 CalibrateIoResult CalibrateLinesFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error("cannot open " + path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return Error("cannot read " + path);
-  CalibrateIoResult result = CalibrateLinesJson(text.str());
+  std::string text, error;
+  if (!json_io::ReadTextFile(path, &text, &error)) return Error(error);
+  CalibrateIoResult result = CalibrateLinesJson(text);
   if (!result.ok()) result.error = path + ": " + result.error;
   return result;
 }

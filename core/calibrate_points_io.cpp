@@ -1,11 +1,11 @@
 #include "core/calibrate_points_io.h"
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "core/json_io_internal.h"
 
 #include "core/calibrate_dlt.h"
 
@@ -13,6 +13,9 @@ namespace facet {
 namespace {
 
 using nlohmann::json;
+using json_io::ReadNumber;
+using json_io::ReadVector;
+using json_io::Rows;
 
 CalibrateIoResult Error(std::string message) {
   CalibrateIoResult result;
@@ -20,19 +23,7 @@ CalibrateIoResult Error(std::string message) {
   return result;
 }
 
-bool ReadNumber(const json& value, double* out) {
-  if (!value.is_number()) return false;
-  *out = value.get<double>();
-  return std::isfinite(*out);
-}
 
-// Reads an array of exactly `size` finite numbers.
-bool ReadVector(const json& value, int size, double* out) {
-  if (!value.is_array() || static_cast<int>(value.size()) != size) return false;
-  for (int k = 0; k < size; ++k)
-    if (!ReadNumber(value[k], &out[k])) return false;
-  return true;
-}
 
 // Fills *error and returns false when the document does not have the documented shape.
 bool ParseInput(const json& doc, std::vector<PointCorrespondence>* points, DltCalibrationOptions* options,
@@ -95,29 +86,11 @@ bool ParseInput(const json& doc, std::vector<PointCorrespondence>* points, DltCa
     options->radial_distortion_terms = static_cast<int>(terms);
   }
 
-  const auto pp_it = doc.find("principal_point");
-  if (pp_it != doc.end()) {
-    double pp[2] = {0, 0};
-    if (pp_it->is_string() && pp_it->get<std::string>() == "solve") {
-      options->principal_point_mode = PrincipalPointMode::kSolve;
-    } else if (pp_it->is_string() && pp_it->get<std::string>() == "center") {
-      options->principal_point_mode = PrincipalPointMode::kImageCenter;
-    } else if (ReadVector(*pp_it, 2, pp)) {
-      options->principal_point_mode = PrincipalPointMode::kFixed;
-      options->fixed_principal_point_px = {pp[0], pp[1]};
-    } else {
-      *error = "\"principal_point\" must be \"solve\", \"center\" or [cx, cy], got " + pp_it->dump();
-      return false;
-    }
-  }
+  if (!json_io::ReadPrincipalPoint(doc, &options->principal_point_mode, &options->fixed_principal_point_px, error))
+    return false;
   return true;
 }
 
-json Rows(const Eigen::Matrix3d& m) {
-  json rows = json::array();
-  for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
-  return rows;
-}
 
 }  // namespace
 
@@ -164,12 +137,9 @@ CalibrateIoResult CalibratePointsJson(const std::string& points_json_text) {
 }
 
 CalibrateIoResult CalibratePointsFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error("cannot open " + path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return Error("cannot read " + path);
-  CalibrateIoResult result = CalibratePointsJson(text.str());
+  std::string text, error;
+  if (!json_io::ReadTextFile(path, &text, &error)) return Error(error);
+  CalibrateIoResult result = CalibratePointsJson(text);
   if (!result.ok()) result.error = path + ": " + result.error;
   return result;
 }

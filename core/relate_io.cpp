@@ -1,11 +1,11 @@
 #include "core/relate_io.h"
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "core/json_io_internal.h"
 
 #include "core/two_view.h"
 
@@ -13,6 +13,9 @@ namespace facet {
 namespace {
 
 using nlohmann::json;
+using json_io::ReadMatrix3;
+using json_io::ReadNumber;
+using json_io::Rows;
 
 RelateIoResult Error(std::string message) {
   RelateIoResult result;
@@ -20,21 +23,7 @@ RelateIoResult Error(std::string message) {
   return result;
 }
 
-bool ReadNumber(const json& value, double* out) {
-  if (!value.is_number()) return false;
-  *out = value.get<double>();
-  return std::isfinite(*out);
-}
 
-bool ReadMatrix3(const json& value, Eigen::Matrix3d* m) {
-  if (!value.is_array() || value.size() != 3) return false;
-  for (int r = 0; r < 3; ++r) {
-    if (!value[r].is_array() || value[r].size() != 3) return false;
-    for (int c = 0; c < 3; ++c)
-      if (!ReadNumber(value[r][c], &(*m)(r, c))) return false;
-  }
-  return true;
-}
 
 struct Input {
   std::vector<Eigen::Vector2d> uv1, uv2;
@@ -92,11 +81,6 @@ bool ParseInput(const json& doc, Input* in, std::string* error) {
   return true;
 }
 
-json Rows(const Eigen::Matrix3d& m) {
-  json rows = json::array();
-  for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
-  return rows;
-}
 
 }  // namespace
 
@@ -152,12 +136,9 @@ RelateIoResult RelateMatchesJson(const std::string& matches_json_text) {
 }
 
 RelateIoResult RelateMatchesFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error("cannot open " + path);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return Error("cannot read " + path);
-  RelateIoResult result = RelateMatchesJson(text.str());
+  std::string text, error;
+  if (!json_io::ReadTextFile(path, &text, &error)) return Error(error);
+  RelateIoResult result = RelateMatchesJson(text);
   if (!result.ok()) result.error = path + ": " + result.error;
   return result;
 }
