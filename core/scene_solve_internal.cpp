@@ -19,13 +19,17 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
   return s;
 }
 
-std::string BoxLabel(const Box& box) {
-  return box.name.empty() ? "#" + std::to_string(box.id) : "'" + box.name + "'";
+// Built by appending: GCC 12 reports a false -Wrestrict on "literal" + std::string.
+std::string QuotedOrId(const std::string& name, Id id) {
+  std::string label = name.empty() ? "#" : "'";
+  label.append(name.empty() ? std::to_string(id) : name);
+  if (!name.empty()) label.append("'");
+  return label;
 }
 
-std::string ImageLabel(const Image& image) {
-  return image.path.empty() ? "#" + std::to_string(image.id) : "'" + image.path + "'";
-}
+std::string BoxLabel(const Box& box) { return QuotedOrId(box.name, box.id); }
+
+std::string ImageLabel(const Image& image) { return QuotedOrId(image.path, image.id); }
 
 // "x", "x and y", "x, y and z".
 std::string JoinComponents(const std::vector<int>& components) {
