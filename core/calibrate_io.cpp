@@ -168,11 +168,7 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
 }
 
 CalibrateIoResult CalibrateLinesFile(const std::string& path) {
-  std::string text, error;
-  if (!json_io::ReadTextFile(path, &text, &error)) return Error(error);
-  CalibrateIoResult result = CalibrateLinesJson(text);
-  if (!result.ok()) result.error = path + ": " + result.error;
-  return result;
+  return json_io::FromFile<CalibrateIoResult>(path, CalibrateLinesJson);
 }
 
 }  // namespace facet

@@ -137,11 +137,7 @@ CalibrateIoResult CalibratePointsJson(const std::string& points_json_text) {
 }
 
 CalibrateIoResult CalibratePointsFile(const std::string& path) {
-  std::string text, error;
-  if (!json_io::ReadTextFile(path, &text, &error)) return Error(error);
-  CalibrateIoResult result = CalibratePointsJson(text);
-  if (!result.ok()) result.error = path + ": " + result.error;
-  return result;
+  return json_io::FromFile<CalibrateIoResult>(path, CalibratePointsJson);
 }
 
 }  // namespace facet

@@ -27,4 +27,19 @@ bool ReadPrincipalPoint(const nlohmann::json& doc, PrincipalPointMode* mode, Eig
 // The whole file as text; false with *error ("cannot open PATH") when it cannot be read.
 bool ReadTextFile(const std::string& path, std::string* text, std::string* error);
 
+// The file form of an adapter: reads `path` and passes its text to `from_text`, prefixing
+// any error with the path. Result has `std::string error` and `bool ok()`.
+template <typename Result, typename FromText>
+Result FromFile(const std::string& path, FromText from_text) {
+  std::string text, error;
+  if (!ReadTextFile(path, &text, &error)) {
+    Result failed;
+    failed.error = error;
+    return failed;
+  }
+  Result result = from_text(text);
+  if (!result.ok()) result.error = path + ": " + result.error;
+  return result;
+}
+
 }  // namespace facet::json_io

@@ -136,11 +136,7 @@ RelateIoResult RelateMatchesJson(const std::string& matches_json_text) {
 }
 
 RelateIoResult RelateMatchesFile(const std::string& path) {
-  std::string text, error;
-  if (!json_io::ReadTextFile(path, &text, &error)) return Error(error);
-  RelateIoResult result = RelateMatchesJson(text);
-  if (!result.ok()) result.error = path + ": " + result.error;
-  return result;
+  return json_io::FromFile<RelateIoResult>(path, RelateMatchesJson);
 }
 
 }  // namespace facet
