@@ -106,7 +106,7 @@ int NumParams(PrimitiveKind kind) {
   }
 }
 
-Template TemplateOf(const Primitive& p) {
+Template TemplateOf(const PrimitiveShape& p) {
   switch (p.kind) {
     case PrimitiveKind::kBox: return BoxTemplate();
     case PrimitiveKind::kWedge: return WedgeTemplate();
@@ -118,8 +118,8 @@ Template TemplateOf(const Primitive& p) {
   return BoxTemplate();
 }
 
-Primitive MakeSized(PrimitiveId id, PrimitiveKind kind, const Eigen::Vector3d& size) {
-  Primitive p;
+PrimitiveShape MakeSized(PrimitiveId id, PrimitiveKind kind, const Eigen::Vector3d& size) {
+  PrimitiveShape p;
   p.id = id;
   p.kind = kind;
   p.params.head<3>() = size;
@@ -140,34 +140,34 @@ const char* PrimitiveKindName(PrimitiveKind kind) {
   return "?";
 }
 
-Primitive MakeBox(PrimitiveId id, const Eigen::Vector3d& size) {
+PrimitiveShape MakeBox(PrimitiveId id, const Eigen::Vector3d& size) {
   return MakeSized(id, PrimitiveKind::kBox, size);
 }
-Primitive MakeWedge(PrimitiveId id, const Eigen::Vector3d& size) {
+PrimitiveShape MakeWedge(PrimitiveId id, const Eigen::Vector3d& size) {
   return MakeSized(id, PrimitiveKind::kWedge, size);
 }
-Primitive MakePyramid(PrimitiveId id, const Eigen::Vector3d& size) {
+PrimitiveShape MakePyramid(PrimitiveId id, const Eigen::Vector3d& size) {
   return MakeSized(id, PrimitiveKind::kPyramid, size);
 }
-Primitive MakePlane(PrimitiveId id, double sx, double sy) {
+PrimitiveShape MakePlane(PrimitiveId id, double sx, double sy) {
   return MakeSized(id, PrimitiveKind::kPlane, Eigen::Vector3d(sx, sy, 0.0));
 }
-Primitive MakePrism(PrimitiveId id, int sides, double radius, double height) {
-  Primitive p = MakeSized(id, PrimitiveKind::kPrism, Eigen::Vector3d(radius, height, 0.0));
+PrimitiveShape MakePrism(PrimitiveId id, int sides, double radius, double height) {
+  PrimitiveShape p = MakeSized(id, PrimitiveKind::kPrism, Eigen::Vector3d(radius, height, 0.0));
   p.segments = sides;
   return p;
 }
-Primitive MakeCylinder(PrimitiveId id, int segments, double radius, double height) {
-  Primitive p = MakeSized(id, PrimitiveKind::kCylinder, Eigen::Vector3d(radius, height, 0.0));
+PrimitiveShape MakeCylinder(PrimitiveId id, int segments, double radius, double height) {
+  PrimitiveShape p = MakeSized(id, PrimitiveKind::kCylinder, Eigen::Vector3d(radius, height, 0.0));
   p.segments = segments;
   return p;
 }
 
-Eigen::Vector3d PrimitiveLocalToWorld(const Primitive& primitive, const Eigen::Vector3d& p_in_primitive) {
+Eigen::Vector3d PrimitiveLocalToWorld(const PrimitiveShape& primitive, const Eigen::Vector3d& p_in_primitive) {
   return RotationFromAngleAxis(primitive.rotation) * p_in_primitive + primitive.translation;
 }
 
-AddPrimitiveResult AddPrimitive(PolyMesh* mesh, const Primitive& primitive) {
+AddPrimitiveResult AddPrimitive(PolyMesh* mesh, const PrimitiveShape& primitive) {
   AddPrimitiveResult result;
   const int num_params = NumParams(primitive.kind);
   for (int i = 0; i < num_params; ++i) {
@@ -212,7 +212,7 @@ AddPrimitiveResult AddPrimitive(PolyMesh* mesh, const Primitive& primitive) {
   return result;
 }
 
-bool AttachOnTop(const Primitive& base, Primitive* top, std::string* message) {
+bool AttachOnTop(const PrimitiveShape& base, PrimitiveShape* top, std::string* message) {
   if (base.kind != PrimitiveKind::kBox) {
     if (message) *message = std::string("attach: the base must be a box, not a ") + PrimitiveKindName(base.kind);
     return false;
@@ -228,7 +228,7 @@ bool AttachOnTop(const Primitive& base, Primitive* top, std::string* message) {
   return true;
 }
 
-void UpdatePrimitivePositions(PolyMesh* mesh, const Primitive& primitive) {
+void UpdatePrimitivePositions(PolyMesh* mesh, const PrimitiveShape& primitive) {
   const Eigen::Matrix3d world_from_primitive = RotationFromAngleAxis(primitive.rotation);
   for (VertexId v = 0; v < mesh->VertexIdEnd(); ++v) {
     if (!mesh->IsVertex(v) || mesh->vertex(v).primitive != primitive.id) continue;

@@ -30,7 +30,7 @@ const char* PrimitiveKindName(PrimitiveKind kind);
 //   kCylinder (radius, height), `segments` sides (>= 3); side faces share material 1
 //   kPyramid  (sx, sy, height): rectangular base, apex above the base centre
 //   kPlane    (sx, sy): one quad at local z = 0 facing +Z, with a boundary
-struct Primitive {
+struct PrimitiveShape {
   PrimitiveId id = 0;
   PrimitiveKind kind = PrimitiveKind::kBox;
   PrimitiveParams params = PrimitiveParams::Zero();
@@ -39,12 +39,12 @@ struct Primitive {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();  // world_from_primitive
 };
 
-Primitive MakeBox(PrimitiveId id, const Eigen::Vector3d& size);
-Primitive MakeWedge(PrimitiveId id, const Eigen::Vector3d& size);
-Primitive MakePrism(PrimitiveId id, int sides, double radius, double height);
-Primitive MakeCylinder(PrimitiveId id, int segments, double radius, double height);
-Primitive MakePyramid(PrimitiveId id, const Eigen::Vector3d& size);
-Primitive MakePlane(PrimitiveId id, double sx, double sy);
+PrimitiveShape MakeBox(PrimitiveId id, const Eigen::Vector3d& size);
+PrimitiveShape MakeWedge(PrimitiveId id, const Eigen::Vector3d& size);
+PrimitiveShape MakePrism(PrimitiveId id, int sides, double radius, double height);
+PrimitiveShape MakeCylinder(PrimitiveId id, int segments, double radius, double height);
+PrimitiveShape MakePyramid(PrimitiveId id, const Eigen::Vector3d& size);
+PrimitiveShape MakePlane(PrimitiveId id, double sx, double sy);
 
 struct AddPrimitiveResult {
   bool ok = false;
@@ -57,19 +57,19 @@ struct AddPrimitiveResult {
 // its pose, per-corner UVs (the corner's local position projected on the face's first edge
 // and its in-plane normal, in world units) and per-face materials (face index, or 0/1 for
 // caps/sides of a cylinder). Refuses non-positive dimensions or too few segments.
-AddPrimitiveResult AddPrimitive(PolyMesh* mesh, const Primitive& primitive);
+AddPrimitiveResult AddPrimitive(PolyMesh* mesh, const PrimitiveShape& primitive);
 
 // Recomputes the world positions of every vertex of `primitive.id` from its local
 // definitions, parameters and pose, e.g. after the solve changed its dimensions. O(V).
-void UpdatePrimitivePositions(PolyMesh* mesh, const Primitive& primitive);
+void UpdatePrimitivePositions(PolyMesh* mesh, const PrimitiveShape& primitive);
 
 // Sets `top` on the top face of the box `base`: top's footprint (params 0 and 1) becomes the
 // box's (sx, sy) and its pose the box's, raised by sz, so the top's bottom corners coincide
 // with the box's top corners. Call it again whenever the box changes ("one drag moves both").
 // Refuses a base that is not a box and a top kind without a rectangular [0, sx] x [0, sy]
 // footprint (prism, cylinder); `top` is then unchanged.
-bool AttachOnTop(const Primitive& base, Primitive* top, std::string* message);
+bool AttachOnTop(const PrimitiveShape& base, PrimitiveShape* top, std::string* message);
 
-Eigen::Vector3d PrimitiveLocalToWorld(const Primitive& primitive, const Eigen::Vector3d& p_in_primitive);
+Eigen::Vector3d PrimitiveLocalToWorld(const PrimitiveShape& primitive, const Eigen::Vector3d& p_in_primitive);
 
 }  // namespace facet

@@ -19,8 +19,8 @@ namespace {
 
 constexpr double kGeomTol = 1e-9;  // noise-free geometry, metres
 
-std::vector<Primitive> AllKinds() {
-  std::vector<Primitive> p = {MakeBox(1, {2.0, 3.0, 1.5}),     MakeWedge(2, {4.0, 2.0, 1.0}),
+std::vector<PrimitiveShape> AllKinds() {
+  std::vector<PrimitiveShape> p = {MakeBox(1, {2.0, 3.0, 1.5}),     MakeWedge(2, {4.0, 2.0, 1.0}),
                               MakePrism(3, 5, 1.2, 2.0),        MakePyramid(4, {2.0, 2.5, 1.8}),
                               MakeCylinder(5, 12, 0.7, 3.0),    MakePlane(6, 3.0, 2.0)};
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -33,7 +33,7 @@ std::vector<Primitive> AllKinds() {
 struct Expected {
   int v, e, f, euler;
 };
-Expected ExpectedCounts(const Primitive& p) {
+Expected ExpectedCounts(const PrimitiveShape& p) {
   const int n = p.segments;
   switch (p.kind) {
     case PrimitiveKind::kBox: return {8, 12, 6, 2};
@@ -61,7 +61,7 @@ double SignedVolume(const PolyMesh& mesh) {
   return volume;
 }
 
-double ExpectedVolume(const Primitive& p) {
+double ExpectedVolume(const PrimitiveShape& p) {
   const double kPi = 3.14159265358979323846;
   switch (p.kind) {
     case PrimitiveKind::kBox: return p.params[0] * p.params[1] * p.params[2];
@@ -76,7 +76,7 @@ double ExpectedVolume(const Primitive& p) {
 }
 
 TEST_CASE("every primitive kind is a valid oriented manifold with the expected counts") {
-  for (const Primitive& p : AllKinds()) {
+  for (const PrimitiveShape& p : AllKinds()) {
     const std::string kind = PrimitiveKindName(p.kind);
     CAPTURE(kind);
     PolyMesh mesh;
@@ -105,7 +105,7 @@ TEST_CASE("every primitive kind is a valid oriented manifold with the expected c
 TEST_CASE("a scene of several primitives keeps them as separate components") {
   PolyMesh mesh;
   int expected_euler = 0;
-  for (const Primitive& p : AllKinds()) {
+  for (const PrimitiveShape& p : AllKinds()) {
     REQUIRE(AddPrimitive(&mesh, p).ok);
     expected_euler += ExpectedCounts(p).euler;
   }
@@ -117,7 +117,7 @@ TEST_CASE("a scene of several primitives keeps them as separate components") {
 }
 
 TEST_CASE("vertex world positions are the pose applied to local functions of the parameters") {
-  for (Primitive p : AllKinds()) {
+  for (PrimitiveShape p : AllKinds()) {
     const std::string kind = PrimitiveKindName(p.kind);
     CAPTURE(kind);
     PolyMesh mesh;
@@ -139,10 +139,10 @@ TEST_CASE("vertex world positions are the pose applied to local functions of the
 }
 
 TEST_CASE("a wedge attached on top of a box follows the box when it is resized") {
-  Primitive box = MakeBox(1, {2.0, 3.0, 1.5});
+  PrimitiveShape box = MakeBox(1, {2.0, 3.0, 1.5});
   box.rotation = Eigen::Vector3d(0.0, 0.0, 0.7);
   box.translation = Eigen::Vector3d(1.0, -2.0, 0.5);
-  Primitive roof = MakeWedge(2, {1.0, 1.0, 0.8});
+  PrimitiveShape roof = MakeWedge(2, {1.0, 1.0, 0.8});
   std::string message;
   REQUIRE(AttachOnTop(box, &roof, &message));
   PolyMesh mesh;
@@ -169,8 +169,8 @@ TEST_CASE("a wedge attached on top of a box follows the box when it is resized")
   check_shared("after the box changed");
   CHECK((mesh.vertex(w.vertices[4]).position - roof_apex_before).norm() > 0.5);
   CHECK(roof.params[2] == 0.8);  // the roof keeps its own height
-  Primitive cylinder = MakeCylinder(3, 8, 1.0, 1.0);
-  const Primitive cylinder_before = cylinder;
+  PrimitiveShape cylinder = MakeCylinder(3, 8, 1.0, 1.0);
+  const PrimitiveShape cylinder_before = cylinder;
   CHECK_FALSE(AttachOnTop(box, &cylinder, &message));
   CHECK(message.find("footprint") != std::string::npos);
   CHECK(cylinder.params == cylinder_before.params);
@@ -180,7 +180,7 @@ TEST_CASE("AddPrimitive refuses bad parameters and leaves the mesh unchanged") {
   PolyMesh mesh;
   REQUIRE(AddPrimitive(&mesh, MakeBox(1, {1, 1, 1})).ok);
   const PolyMesh before = mesh;
-  for (const Primitive& bad : {MakeBox(2, {1.0, 0.0, 1.0}), MakePrism(3, 2, 1.0, 1.0),
+  for (const PrimitiveShape& bad : {MakeBox(2, {1.0, 0.0, 1.0}), MakePrism(3, 2, 1.0, 1.0),
                                MakeCylinder(4, 8, -1.0, 1.0), MakePlane(5, 1.0, NAN)}) {
     const AddPrimitiveResult r = AddPrimitive(&mesh, bad);
     CAPTURE(r.message);
@@ -294,7 +294,7 @@ TEST_CASE("AddPolygons refuses inconsistent orientation and changes nothing") {
 
 TEST_CASE("triangulation: n - 2 triangles per face, oriented with the face, each mapped once") {
   PolyMesh mesh;
-  for (const Primitive& p : AllKinds()) REQUIRE(AddPrimitive(&mesh, p).ok);
+  for (const PrimitiveShape& p : AllKinds()) REQUIRE(AddPrimitive(&mesh, p).ok);
   const MeshTriangulation t = TriangulateMesh(mesh);
   const FlatTriangles flat = Flatten(mesh, t);
   int expected = 0;

@@ -22,8 +22,8 @@ namespace {
 
 constexpr double kGeomTol = 1e-9;  // noise-free geometry, metres
 
-std::vector<Primitive> AllKinds() {
-  std::vector<Primitive> p = {MakeBox(1, {2.0, 3.0, 1.5}),  MakeWedge(2, {4.0, 2.0, 1.0}),
+std::vector<PrimitiveShape> AllKinds() {
+  std::vector<PrimitiveShape> p = {MakeBox(1, {2.0, 3.0, 1.5}),  MakeWedge(2, {4.0, 2.0, 1.0}),
                               MakePrism(3, 5, 1.2, 2.0),     MakePyramid(4, {2.0, 2.5, 1.8}),
                               MakeCylinder(5, 7, 0.7, 3.0),  MakePlane(6, 3.0, 2.0)};
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -33,7 +33,7 @@ std::vector<Primitive> AllKinds() {
   return p;
 }
 
-PolyMesh MeshOf(const Primitive& p) {
+PolyMesh MeshOf(const PrimitiveShape& p) {
   PolyMesh mesh;
   const AddPrimitiveResult r = AddPrimitive(&mesh, p);
   REQUIRE_MESSAGE(r.ok, r.message);
@@ -52,7 +52,7 @@ std::string FirstProblem(const PolyMesh& mesh) {
   } while (0)
 
 TEST_CASE("E_split then V_delete on every edge of every primitive") {
-  for (const Primitive& p : AllKinds()) {
+  for (const PrimitiveShape& p : AllKinds()) {
     const std::string kind = PrimitiveKindName(p.kind);
     CAPTURE(kind);
     const PolyMesh start = MeshOf(p);
@@ -101,7 +101,7 @@ TEST_CASE("E_split then V_delete on every edge of every primitive") {
 }
 
 TEST_CASE("V_connect then E_delete on every non-adjacent vertex pair of every face") {
-  for (const Primitive& p : AllKinds()) {
+  for (const PrimitiveShape& p : AllKinds()) {
     const std::string kind = PrimitiveKindName(p.kind);
     CAPTURE(kind);
     PolyMesh base = MeshOf(p);
@@ -162,7 +162,7 @@ TEST_CASE("V_connect then E_delete on every non-adjacent vertex pair of every fa
 }
 
 TEST_CASE("E_delete as the forward operator on every interior edge, undone by V_connect") {
-  for (const Primitive& p : AllKinds()) {
+  for (const PrimitiveShape& p : AllKinds()) {
     const std::string kind = PrimitiveKindName(p.kind);
     CAPTURE(kind);
     const PolyMesh start = MeshOf(p);
@@ -191,7 +191,7 @@ TEST_CASE("E_delete as the forward operator on every interior edge, undone by V_
 }
 
 TEST_CASE("after E_split on a box edge at t = 0.3, resizing the box keeps the vertex on that edge at t") {
-  Primitive box = MakeBox(7, {2.0, 3.0, 1.5});
+  PrimitiveShape box = MakeBox(7, {2.0, 3.0, 1.5});
   box.rotation = Eigen::Vector3d(0.2, 0.1, -0.4);
   box.translation = Eigen::Vector3d(1.0, 2.0, 3.0);
   PolyMesh mesh = MeshOf(box);
@@ -203,7 +203,7 @@ TEST_CASE("after E_split on a box edge at t = 0.3, resizing the box keeps the ve
     const VertexId a = m.Origin(h), b = m.Dest(h);
     const ESplitResult split = ESplit(&m, e, kT);
     REQUIRE(split.ok);
-    Primitive resized = box;
+    PrimitiveShape resized = box;
     resized.params.head<3>() = Eigen::Vector3d(5.0, 0.5, 4.0);
     resized.rotation = Eigen::Vector3d(-0.3, 0.6, 0.1);
     resized.translation = Eigen::Vector3d(-2.0, 0.0, 7.0);
@@ -222,7 +222,7 @@ TEST_CASE("after E_split on a box edge at t = 0.3, resizing the box keeps the ve
 }
 
 TEST_CASE("a split of a split stays on the original edge when the primitive changes") {
-  Primitive box = MakeBox(1, {1.0, 1.0, 1.0});
+  PrimitiveShape box = MakeBox(1, {1.0, 1.0, 1.0});
   PolyMesh m = MeshOf(box);
   const HalfedgeId h = PolyMesh::EdgeHalfedge(0, 0);
   const VertexId a = m.Origin(h), b = m.Dest(h);
@@ -351,10 +351,10 @@ std::uint32_t RandomLive(std::mt19937& rng, std::uint32_t end, Pick live) {
   return kNoElement;
 }
 
-Primitive RandomPrimitive(std::mt19937& rng) {
+PrimitiveShape RandomPrimitive(std::mt19937& rng) {
   std::uniform_real_distribution<double> size(0.2, 5.0), angle(-1.0, 1.0);
   std::uniform_int_distribution<int> kind(0, 5), segments(3, 9);
-  Primitive p;
+  PrimitiveShape p;
   switch (kind(rng)) {
     case 0: p = MakeBox(1, {size(rng), size(rng), size(rng)}); break;
     case 1: p = MakeWedge(1, {size(rng), size(rng), size(rng)}); break;
@@ -447,7 +447,7 @@ TEST_CASE("property: random operator sequences followed by their inverses end in
   for (int seed = 1; seed <= kSequences; ++seed) {
     CAPTURE(seed);
     std::mt19937 rng(seed);
-    const Primitive p = RandomPrimitive(rng);
+    const PrimitiveShape p = RandomPrimitive(rng);
     const std::string kind = PrimitiveKindName(p.kind);
     CAPTURE(kind);
     const PolyMesh start = MeshOf(p);

@@ -20,7 +20,7 @@ constexpr int kSegments = 98;  // 98 side quads + 2 caps = 100 faces per primiti
 PolyMesh Scene(int primitives) {
   PolyMesh mesh;
   for (int i = 0; i < primitives; ++i) {
-    Primitive p = MakeCylinder(i + 1, kSegments, 1.0, 3.0);
+    PrimitiveShape p = MakeCylinder(i + 1, kSegments, 1.0, 3.0);
     p.translation = Eigen::Vector3d(3.0 * (i % 10), 3.0 * (i / 10), 0.0);
     AddPrimitive(&mesh, p);
   }
