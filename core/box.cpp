@@ -7,17 +7,6 @@ Eigen::Vector3d BoxCornerLocal(const Eigen::Vector3d& size, int corner) {
           (corner & 4) ? size.z() : 0.0};
 }
 
-Eigen::Vector3d BoxCornerInWorld(const Box& box, int corner) {
-  return RotationFromAngleAxis(box.rotation) * BoxCornerLocal(box.size, corner) + box.translation;
-}
-
-std::array<Eigen::Vector3d, 8> BoxCornersInWorld(const Box& box) {
-  const Eigen::Matrix3d world_from_box = RotationFromAngleAxis(box.rotation);
-  std::array<Eigen::Vector3d, 8> corners;
-  for (int i = 0; i < 8; ++i) corners[i] = world_from_box * BoxCornerLocal(box.size, i) + box.translation;
-  return corners;
-}
-
 const std::array<std::array<int, 4>, 6>& BoxFaces() {
   static const std::array<std::array<int, 4>, 6> kFaces = {{
       {0, 4, 6, 2},  // -X
@@ -37,12 +26,6 @@ const std::array<std::array<int, 2>, 12>& BoxEdges() {
       {0, 4}, {1, 5}, {2, 6}, {3, 7},  // along z
   }};
   return kEdges;
-}
-
-Eigen::Vector3d BoxFaceNormalInWorld(const Box& box, int face) {
-  static const Eigen::Vector3d kLocalNormals[6] = {
-      {-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
-  return RotationFromAngleAxis(box.rotation) * kLocalNormals[face];
 }
 
 }  // namespace facet

@@ -35,6 +35,12 @@ FaceId PolyMesh::NewFace() {
   return static_cast<FaceId>(faces_.size() - 1);
 }
 
+void PolyMesh::GrowIdSpace(std::uint32_t vertex_end, std::uint32_t edge_end, std::uint32_t face_end) {
+  if (vertex_end > vertices_.size()) vertices_.resize(vertex_end);
+  if (2 * static_cast<size_t>(edge_end) > halfedges_.size()) halfedges_.resize(2 * static_cast<size_t>(edge_end));
+  if (face_end > faces_.size()) faces_.resize(face_end);
+}
+
 void PolyMesh::ReviveVertex(VertexId v) {
   assert(v < vertices_.size() && !vertices_[v].alive);
   vertices_[v] = MeshVertex();

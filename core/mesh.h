@@ -133,6 +133,9 @@ class PolyMesh {
   void ReviveVertex(VertexId v);
   void ReviveEdge(EdgeId e);
   void ReviveFace(FaceId f);
+  // Extends the id space with dead slots up to the given ends (never shrinks): for readers
+  // that restore a mesh with its ids, holes included.
+  void GrowIdSpace(std::uint32_t vertex_end, std::uint32_t edge_end, std::uint32_t face_end);
   void KillVertex(VertexId v);
   void KillEdge(EdgeId e);
   void KillFace(FaceId f);

@@ -1,5 +1,6 @@
 // The modeling state of a Facet project: images with their cameras, the user's line
-// segments, the primitives (topology K and parameters) and the constraints F (pins).
+// segments, the primitives (topology K and parameters) and the constraints F (pins and
+// spatial constraints).
 // Plain structs; every object has a stable id and is referred to by it, never by index.
 // Edits go through core/document.h so that each one is undoable.
 #pragma once
@@ -13,6 +14,8 @@
 #include <Eigen/Core>
 
 #include "core/camera.h"
+#include "core/mesh.h"
+#include "core/mesh_primitives.h"
 
 namespace facet {
 
@@ -37,6 +40,9 @@ struct Image {
   PrincipalPointMode principal_point_mode = PrincipalPointMode::kSolve;
   Eigen::Vector2d fixed_principal_point_px = Eigen::Vector2d::Zero();  // for kFixed
   bool pose_locked = false;  // the geometry solve keeps this camera's position
+  // Whether the geometry solve keeps the intrinsics calibration gave (issue 5 frees them).
+  bool focal_locked = true;
+  bool principal_point_locked = true;
 };
 
 // A user-drawn line segment in one image, assigned to a vanishing-point family.
@@ -48,37 +54,89 @@ struct Segment {
   Eigen::Vector2d b_px = Eigen::Vector2d::Zero();
 };
 
-// A box primitive (K_create). Local coordinates run from 0 to size on each axis; corner i
-// has local position (i & 1 ? sx : 0, i & 2 ? sy : 0, i & 4 ? sz : 0). World position of a
-// local point p is RotationFromAngleAxis(rotation) * p + translation (core/box.h).
-struct Box {
+// K_create: a primitive with its own mesh. The shape (kind, parameters, pose) is the
+// Facade-style parameterisation; the mesh is its topology as the K-ops left it, every vertex
+// defined in primitive-local coordinates as a linear function of the parameters
+// (core/mesh.h, LocalDefinition), so world = R(shape.rotation) * C * params + translation.
+// The mesh holds this primitive only (one component), and its vertex ids are what pins and
+// constraints refer to: a box's corner i (core/box.h bit code) is vertex i.
+struct Primitive {
   Id id = kNoId;
   std::string name;
-  Eigen::Vector3d size = Eigen::Vector3d::Ones();         // (sx, sy, sz) in world units
-  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();     // world_from_box, angle-axis
-  Eigen::Vector3d translation = Eigen::Vector3d::Zero();  // world_from_box
-  // Parameters the geometry solve must keep. A locked size component is a known length:
-  // it fixes the scale of the scene.
-  std::array<bool, 3> size_locked = {false, false, false};
+  PrimitiveShape shape;  // shape.id == id
+  PolyMesh mesh;         // world positions cached: UpdatePrimitivePositions after a change
+  // Parameters the geometry solve must keep (by index into shape.params). A locked
+  // dimension is a known length: it fixes the scale of the scene.
+  std::array<bool, kMaxPrimitiveParams> param_locked = {false, false, false, false};
   bool rotation_locked = true;  // aligned with the world axes found by calibration
   bool translation_locked = true;
+  // The box this primitive sits on (AttachOnTop in core/mesh_primitives.h), or kNoId. Its
+  // footprint and pose follow the base's after every change.
+  Id attached_to = kNoId;
 };
 
-// V_proj: a box corner pinned to a pixel of an image.
+// A vertex of a primitive's mesh.
+struct VertexRef {
+  Id primitive_id = kNoId;
+  VertexId vertex = kNoElement;
+  friend bool operator==(const VertexRef&, const VertexRef&) = default;
+};
+
+// V_proj: a model vertex pinned to a pixel of an image.
 struct Pin {
   Id id = kNoId;
   Id image_id = kNoId;
-  Id box_id = kNoId;
-  int corner = 0;  // 0..7, see Box
+  VertexRef vertex;
   Eigen::Vector2d uv_px = Eigen::Vector2d::Zero();
 };
 
+// V_space and edge-to-image-line F-ops: g(v) = 0 over model vertices (issue 5). Which
+// fields a kind reads:
+//   kCoplanar        vertices: 4 or more (a face's vertices, or any set)
+//   kCollinear       vertices: 3 or more
+//   kParallel        vertices: (a0, a1, b0, b1), edge a parallel to edge b
+//   kPerpendicular   vertices: (a0, a1, b0, b1)
+//   kEqualLength     vertices: (a0, a1, b0, b1)
+//   kDistance        vertices: (a, b); value = |b - a| in the project's units (sets the scale)
+//   kFixedPoint      vertices: (a); point = its world position (e.g. the origin)
+//   kAlongAxis       vertices: (a, b); axis = the world axis edge a -> b is parallel to
+//   kEdgeOnImageLine vertices: (a, b); image_id, line_a_px, line_b_px: the edge projects onto
+//                    the image line through those two pixels
+enum class ConstraintKind {
+  kCoplanar = 0,
+  kCollinear,
+  kParallel,
+  kPerpendicular,
+  kEqualLength,
+  kDistance,
+  kFixedPoint,
+  kAlongAxis,
+  kEdgeOnImageLine,
+};
+const char* ConstraintKindName(ConstraintKind kind);  // "coplanar", "collinear", ...
+std::optional<ConstraintKind> ConstraintKindFromName(const std::string& name);
+
+struct Constraint {
+  Id id = kNoId;
+  ConstraintKind kind = ConstraintKind::kCoplanar;
+  std::vector<VertexRef> vertices;
+  double value = 0.0;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  Axis axis = Axis::kZ;
+  Id image_id = kNoId;
+  Eigen::Vector2d line_a_px = Eigen::Vector2d::Zero();
+  Eigen::Vector2d line_b_px = Eigen::Vector2d::Zero();
+};
+
 struct Project {
-  static constexpr int kFormatVersion = 1;
+  // 1: boxes with corner pins (read and migrated); 2: primitives with meshes, vertex pins
+  // and constraints.
+  static constexpr int kFormatVersion = 2;
   std::vector<Image> images;
   std::vector<Segment> segments;
-  std::vector<Box> boxes;
+  std::vector<Primitive> primitives;
   std::vector<Pin> pins;
+  std::vector<Constraint> constraints;
   std::string units = "m";
   Id next_id = 1;  // ids are never reused within a project
 
@@ -88,16 +146,37 @@ struct Project {
   Image* FindImage(Id id);
   const Segment* FindSegment(Id id) const;
   Segment* FindSegment(Id id);
-  const Box* FindBox(Id id) const;
-  Box* FindBox(Id id);
+  const Primitive* FindPrimitive(Id id) const;
+  Primitive* FindPrimitive(Id id);
   const Pin* FindPin(Id id) const;
   Pin* FindPin(Id id);
+  const Constraint* FindConstraint(Id id) const;
+  Constraint* FindConstraint(Id id);
+  // The vertex record a reference names, or null when the primitive or vertex is gone.
+  const MeshVertex* FindVertex(const VertexRef& ref) const;
 };
+
+// World position of a referenced vertex (cached in the mesh); the caller checks FindVertex.
+Eigen::Vector3d VertexInWorld(const Project& project, const VertexRef& ref);
+
+// K_create for the project: a primitive of `shape` with a fresh id (shape.id is replaced),
+// its mesh built and placed. Returns false with a message when the shape is invalid
+// (non-positive dimensions, too few segments); the project is then unchanged.
+bool AddPrimitiveToProject(Project* project, PrimitiveShape shape, const std::string& name, Id* new_id,
+                           std::string* message);
+
+// Recomputes the cached world positions of the primitive's vertices from its shape, after
+// re-applying AttachOnTop when it sits on another primitive. Call after changing a shape.
+void RefreshPrimitive(Project* project, Primitive* primitive);
+// RefreshPrimitive for every primitive, bases before the primitives attached to them.
+void RefreshAllPrimitives(Project* project);
 
 bool operator==(const Camera& a, const Camera& b);
 bool operator==(const Image& a, const Image& b);
 bool operator==(const Segment& a, const Segment& b);
-bool operator==(const Box& a, const Box& b);
+bool operator==(const Primitive& a, const Primitive& b);
+bool operator==(const PrimitiveShape& a, const PrimitiveShape& b);
+bool operator==(const Constraint& a, const Constraint& b);
 bool operator==(const Pin& a, const Pin& b);
 bool operator==(const Project& a, const Project& b);
 

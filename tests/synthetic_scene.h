@@ -3,6 +3,7 @@
 // and its corners projected as pins, optionally with Gaussian pixel noise.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -32,9 +33,9 @@ struct SyntheticSceneOptions {
 };
 
 struct SyntheticScene {
-  Project project;  // one calibrated-or-not image, its segments, the box and 8 pins
+  Project project;  // one calibrated image, its segments, the box primitive and 8 pins
   Camera true_camera;
-  Box true_box;
+  Primitive true_box;  // the box as built, with its mesh (vertex i = corner i)
   Id image_id = kNoId;
   Id box_id = kNoId;
 };
@@ -69,8 +70,6 @@ inline SyntheticScene MakeBoxScene(const SyntheticSceneOptions& o = {}) {
   };
 
   s.true_camera = MakeLookAtCamera(o);
-  s.true_box.size = o.box_size * o.scale;
-  s.true_box.translation = o.box_translation * o.scale;
 
   Project& p = s.project;
   Image image;
@@ -83,13 +82,14 @@ inline SyntheticScene MakeBoxScene(const SyntheticSceneOptions& o = {}) {
   p.images.push_back(image);
   s.image_id = image.id;
 
-  Box box = s.true_box;
-  box.id = p.NewId();
-  box.name = "box";
-  box.size_locked = {false, false, true};  // the height is the known length
-  p.boxes.push_back(box);
-  s.true_box.id = box.id;
-  s.box_id = box.id;
+  PrimitiveShape shape = MakeBox(kNoId, o.box_size * o.scale);
+  shape.translation = o.box_translation * o.scale;
+  Id box_id = kNoId;
+  AddPrimitiveToProject(&p, shape, "box", &box_id, nullptr);
+  Primitive& box = p.primitives.back();
+  box.param_locked = {false, false, true, false};  // the height is the known length
+  s.true_box = box;
+  s.box_id = box_id;
 
   // The 12 edges, then extra lines across the faces, parallel to each axis.
   auto add_segment = [&](Axis axis, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -101,11 +101,12 @@ inline SyntheticScene MakeBoxScene(const SyntheticSceneOptions& o = {}) {
     seg.b_px = jitter(s.true_camera.Project(b));
     p.segments.push_back(seg);
   };
-  const auto corners = BoxCornersInWorld(s.true_box);
+  std::array<Eigen::Vector3d, 8> corners;
+  for (int c = 0; c < 8; ++c) corners[c] = box.mesh.vertex(c).position;
   const auto& edges = BoxEdges();
   for (int e = 0; e < 12; ++e) add_segment(static_cast<Axis>(e / 4), corners[edges[e][0]], corners[edges[e][1]]);
-  const Eigen::Vector3d sz = s.true_box.size;
-  const Eigen::Vector3d t = s.true_box.translation;
+  const Eigen::Vector3d sz = o.box_size * o.scale;
+  const Eigen::Vector3d t = shape.translation;
   for (int k = 1; k <= o.extra_lines_per_axis; ++k) {
     const double f = static_cast<double>(k) / (o.extra_lines_per_axis + 1);
     // x lines on the y = 0 face, y lines on the x = sx face, z lines on both.
@@ -118,8 +119,7 @@ inline SyntheticScene MakeBoxScene(const SyntheticSceneOptions& o = {}) {
     Pin pin;
     pin.id = p.NewId();
     pin.image_id = image.id;
-    pin.box_id = box.id;
-    pin.corner = c;
+    pin.vertex = {box_id, static_cast<VertexId>(c)};
     pin.uv_px = jitter(s.true_camera.Project(corners[c]));
     p.pins.push_back(pin);
   }
