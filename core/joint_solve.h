@@ -1,0 +1,109 @@
+// The joint solve (the paper's equation): cameras and geometry from all constraints at once,
+//   min  sum_j sum_i ||P_j v_i - m_ij||^2  (pins)  + vanishing-line residuals (segments)
+//   s.t. g(v) = 0                          (project.constraints)
+// over the free camera and primitive parameters. Vertices are written in primitive-local
+// coordinates times the primitive's pose (core/mesh.h, LocalDefinition: v = R (C p) + t), so
+// topology edits keep using the primitive parameterisation.
+//
+// Parameters (each block present only when free and used by a residual):
+// - per calibrated image: focal (unless Image::focal_locked), principal point (unless
+//   principal_point_locked), rotation (3, a small rotation applied on the left) and centre (3)
+//   unless pose_locked;
+// - per primitive: each unlocked shape parameter, rotation (unless rotation_locked) and
+//   translation (unless translation_locked).
+// Residuals, all in px so they share one scale:
+// - a pin: projection of its vertex minus the pin's pixel (2);
+// - a segment of a line family: signed distance of each endpoint to the line through the
+//   segment's midpoint and the family's vanishing point K R e_axis (2), which keeps the
+//   camera's rotation tied to the user's lines;
+// - a spatial constraint: g(v) made dimensionless (angles, relative lengths; see
+//   joint_solve.cpp) and enforced by an augmented Lagrangian on the interactive path; the
+//   SLSQP polish (NLopt) then makes them hold as hard equalities.
+// Gauge: world axes come from the calibrated rotations or a locked primitive rotation; the
+// origin from a fixed point, a locked translation or a locked camera centre; the scale from a
+// distance constraint or a locked dimension. When something is left free the solve still
+// runs (LM damping picks the nearest solution) and the summary names it.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/project.h"
+
+namespace facet {
+
+struct JointSolveOptions {
+  int max_iterations = 100;       // LM iterations (the per-frame budget while dragging)
+  double function_tolerance = 1e-14;
+  double gradient_tolerance = 1e-14;
+  double parameter_tolerance = 1e-14;
+  double initial_lambda = 1e-4;
+  bool warm_start = true;         // start from the project's values (interactive path)
+  bool refine_intrinsics = true;  // false keeps every camera's intrinsics whatever the locks
+  bool use_segments = true;       // vanishing-line residuals on cameras with segments
+  // Hard equality polish by NLopt SLSQP after LM, so that coplanar points end up coplanar to
+  // ~1e-9 of the model size. Off on the per-frame path; on when a drag ends or on request.
+  bool polish_constraints = false;
+  double constraint_tolerance = 1e-9;  // relative to the model size
+  // Diagnostics cost an SVD of the Jacobian: on for a full solve, off per frame.
+  bool compute_diagnostics = true;
+
+  bool Check(std::string* error) const;
+};
+
+struct PinDiagnostic {
+  Id pin_id = kNoId;
+  double error_px = 0.0;  // NaN when the pin did not take part
+};
+struct ImageDiagnostic {
+  Id image_id = kNoId;
+  int num_pins = 0;
+  double rms_px = 0.0;
+  double max_px = 0.0;
+};
+struct ConstraintDiagnostic {
+  Id constraint_id = kNoId;
+  // In the constraint's natural unit: project units for coplanar/collinear/distance/fixed
+  // point distances, degrees for parallel/perpendicular/axis, px for edge-on-image-line.
+  double residual = 0.0;
+  std::string unit;
+  bool satisfied = false;  // within the tolerance
+};
+
+struct JointSolveSummary {
+  // Same meanings as core/scene_solve.h: kConverged, kMaxIterations (usable), kNothingToSolve,
+  // kFailed (model left as it was), kInvalidInput.
+  enum class Termination { kConverged, kMaxIterations, kNothingToSolve, kFailed, kInvalidInput };
+  Termination termination = Termination::kInvalidInput;
+  std::string message;
+  std::vector<std::string> warnings;
+  int iterations = 0;
+  double initial_cost = 0.0;  // 0.5 * sum of squared residuals at the start
+  double final_cost = 0.0;
+  int num_residuals = 0;
+  int num_parameters = 0;
+  double reprojection_rms_px = 0.0;  // over the pins that took part
+  double reprojection_max_px = 0.0;
+  std::vector<PinDiagnostic> pins;            // project.pins order
+  std::vector<ImageDiagnostic> images;        // calibrated images with pins
+  std::vector<ConstraintDiagnostic> constraints;  // project.constraints order
+  // Parameters the residuals do not determine (from the rank of the column-scaled Jacobian),
+  // one sentence each: "the box 'house' depth is free: pin a vertex on its back face or add a
+  // second image".
+  std::vector<std::string> undetermined;
+  // Constraints that cannot hold together (their residuals stay large after the solve).
+  std::vector<std::string> conflicts;
+  bool polished = false;
+  double time_ms = 0.0;
+
+  bool IsUsable() const {
+    return termination == Termination::kConverged || termination == Termination::kMaxIterations;
+  }
+};
+const char* JointSolveTerminationName(JointSolveSummary::Termination termination);
+
+// Solves and writes the result to *solved (cameras, primitive shapes and cached vertex
+// positions). When the summary is not usable, *solved is an unchanged copy of `project`.
+JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& options, Project* solved);
+
+}  // namespace facet
