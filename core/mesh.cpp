@@ -88,6 +88,7 @@ namespace {
 bool SameVertex(const MeshVertex& a, const MeshVertex& b) {
   return a.halfedge == b.halfedge && a.primitive == b.primitive && a.local.a == b.local.a &&
          a.local.b == b.local.b && a.local.t == b.local.t && a.local.on_edge == b.local.on_edge &&
+         a.local.free == b.local.free && a.local.offset == b.local.offset &&
          a.position == b.position;
 }
 

@@ -45,15 +45,21 @@ using ParamCoefficients = Eigen::Matrix<double, 3, kMaxPrimitiveParams>;
 // vertex made by E_split on an edge stores its endpoints' definitions (collapsed to their
 // coefficients, by value, so later deletions cannot dangle) and t, so it stays on that
 // edge at the same t whatever the primitive's dimensions become.
+// A free vertex (the issue-5 solve's "free vertices", e.g. a split vertex pinned to a roof
+// ridge above its edge) adds a local offset that the solve estimates:
+// p_in_primitive = Collapsed() * params + offset. For a vertex that is not free the offset
+// stays zero and the vertex follows its definition exactly.
 struct LocalDefinition {
   ParamCoefficients a = ParamCoefficients::Zero();
   ParamCoefficients b = ParamCoefficients::Zero();
   double t = 0.0;
   bool on_edge = false;  // true for a vertex created by E_split
+  bool free = false;     // the solve may move it off its definition through `offset`
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  // primitive-local units
 
   ParamCoefficients Collapsed() const { return (1.0 - t) * a + t * b; }
   Eigen::Vector3d LocalPosition(const PrimitiveParams& params) const {
-    return Collapsed() * params;
+    return Collapsed() * params + offset;
   }
   static LocalDefinition Corner(const ParamCoefficients& c) {
     LocalDefinition d;

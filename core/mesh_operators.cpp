@@ -91,6 +91,9 @@ ESplitResult SplitHalfedge(PolyMesh* mesh, HalfedgeId h0, double t, VertexId reu
     vm.local.b = vb.local.Collapsed();
     vm.local.t = t;
     vm.local.on_edge = true;
+    // Free endpoints keep their current offsets here; the new vertex does not follow later
+    // changes of them (it is not free itself).
+    vm.local.offset = (1.0 - t) * va.local.offset + t * vb.local.offset;
     vm.position = (1.0 - t) * va.position + t * vb.position;
   }
   MeshHalfedge& e0 = mesh->halfedge(g0);
