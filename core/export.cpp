@@ -45,7 +45,7 @@ constexpr int kClampToEdge = 33071;
 
 std::string ValidateMesh(const TexturedMesh& mesh) {
   const size_t n = mesh.positions.size();
-  if (n == 0 || mesh.indices.empty()) return "the mesh is empty (no box to export)";
+  if (n == 0 || mesh.indices.empty()) return "the mesh is empty (no primitive to export)";
   if (mesh.indices.size() % 3 != 0) return "the index count is not a multiple of 3";
   if (mesh.normals.size() != n || mesh.uvs.size() != n) return "normals or UVs do not match the vertex count";
   const size_t triangles = mesh.indices.size() / 3;

@@ -9,7 +9,7 @@
 #include <Eigen/Geometry>
 #include <stb_rect_pack.h>
 
-#include "core/box.h"
+#include "core/mesh_triangulate.h"
 
 namespace facet {
 namespace {
@@ -21,14 +21,45 @@ constexpr std::uint8_t kOutsideGrey = 128;
 constexpr double kMinProjectedAreaPx2 = 16.0;
 constexpr int kMinFaceTexels = 2;
 constexpr int kMinAtlasSize = 16;
-// Face samples tested for occlusion by other boxes, per side.
+// Face samples tested for occlusion by other primitives, per side of the face's rectangle.
 constexpr int kOcclusionSamples = 4;
+// Ends of an occlusion ray that do not count as hits, as a fraction of its length: the ray
+// starts on the face (which may touch a neighbour, e.g. a roof on a box) and ends at the
+// camera centre.
+constexpr double kRayEndMargin = 1e-6;
 
+// A face as the bake sees it: its corners in world, its plane frame and where its vertices
+// and texture go in the TexturedMesh.
 struct FaceGeometry {
-  size_t box_index = 0;
-  int face = 0;
-  std::array<Eigen::Vector3d, 4> corners;  // counter-clockwise from outside, core/box.h
-  Eigen::Vector3d normal;
+  size_t primitive_index = 0;
+  std::vector<Eigen::Vector3d> corners;  // counter-clockwise from outside, FaceHalfedges order
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  // Plane frame: p = origin + s * axis_u + t * axis_v for face coordinates (s, t).
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis_u = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis_v = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector2d> corners_st;           // corners in the face frame
+  Eigen::Vector2d st_min = Eigen::Vector2d::Zero();  // bounding rectangle in the face frame
+  Eigen::Vector2d st_max = Eigen::Vector2d::Zero();
+  std::vector<Eigen::Vector3d> occlusion_samples;  // points on the face, world
+  std::uint32_t first_vertex = 0;                  // in the TexturedMesh
+  size_t first_triangle = 0;
+  size_t triangle_count = 0;
+  bool valid = false;  // false for a degenerate face, which stays untextured
+
+  Eigen::Vector3d InWorld(const Eigen::Vector2d& st) const { return origin + st.x() * axis_u + st.y() * axis_v; }
+  // The bounding rectangle's corners: (s_min, t_min), (s_max, t_min), (s_max, t_max), (s_min, t_max).
+  std::array<Eigen::Vector3d, 4> RectangleInWorld() const {
+    return {InWorld(st_min), InWorld({st_max.x(), st_min.y()}), InWorld(st_max), InWorld({st_min.x(), st_max.y()})};
+  }
+};
+
+// World triangles of one primitive with their bounding box: the occluders of other
+// primitives' faces.
+struct Occluder {
+  std::vector<std::array<Eigen::Vector3d, 3>> triangles;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
 };
 
 // A calibrated camera mapped to the pixels of its loaded photo (which may have been loaded
@@ -57,17 +88,19 @@ struct FaceTexture {
   int y = 0;
 };
 
-double PolygonArea(const std::vector<Eigen::Vector2d>& polygon) {
+double SignedArea(const std::vector<Eigen::Vector2d>& polygon) {
   double twice_area = 0.0;
   for (size_t i = 0; i < polygon.size(); ++i) {
     const Eigen::Vector2d& a = polygon[i];
     const Eigen::Vector2d& b = polygon[(i + 1) % polygon.size()];
     twice_area += a.x() * b.y() - a.y() * b.x();
   }
-  return std::abs(0.5 * twice_area);
+  return 0.5 * twice_area;
 }
 
 // Sutherland-Hodgman against one axis-aligned half-plane: keep coord(axis) * sign <= limit * sign.
+// For a non-convex polygon the result may hold zero-width bridges along the clip line, which
+// leave its area exact.
 std::vector<Eigen::Vector2d> ClipHalfPlane(const std::vector<Eigen::Vector2d>& polygon, int axis, double limit,
                                            double sign) {
   std::vector<Eigen::Vector2d> out;
@@ -82,70 +115,117 @@ std::vector<Eigen::Vector2d> ClipHalfPlane(const std::vector<Eigen::Vector2d>& p
   return out;
 }
 
-// Area of the quad inside the photo's pixel area [-0.5, w - 0.5] x [-0.5, h - 0.5].
-double VisibleArea(const std::array<Eigen::Vector2d, 4>& quad, int width, int height) {
-  std::vector<Eigen::Vector2d> polygon(quad.begin(), quad.end());
+// Area of the polygon inside the photo's pixel area [-0.5, w - 0.5] x [-0.5, h - 0.5].
+double VisibleArea(std::vector<Eigen::Vector2d> polygon, int width, int height) {
   polygon = ClipHalfPlane(polygon, 0, -0.5, -1.0);
   polygon = ClipHalfPlane(polygon, 0, width - 0.5, 1.0);
   polygon = ClipHalfPlane(polygon, 1, -0.5, -1.0);
   polygon = ClipHalfPlane(polygon, 1, height - 0.5, 1.0);
-  return polygon.size() < 3 ? 0.0 : PolygonArea(polygon);
+  return polygon.size() < 3 ? 0.0 : std::abs(SignedArea(polygon));
 }
 
-// Whether the open segment a -> b passes through the inside of the box.
-bool SegmentHitsBox(const Box& box, const Eigen::Matrix3d& box_from_world, const Eigen::Vector3d& a,
-                    const Eigen::Vector3d& b) {
-  const Eigen::Vector3d a_in_box = box_from_world * (a - box.translation);
-  const Eigen::Vector3d d_in_box = box_from_world * (b - a);
-  // Shrink the interval slightly so touching faces and shared corners do not occlude.
-  double lo = 1e-6, hi = 1.0 - 1e-6;
+// Even-odd rule; the polygon may be non-convex.
+bool InsidePolygon(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p) {
+  bool inside = false;
+  for (size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
+    const Eigen::Vector2d& a = polygon[i];
+    const Eigen::Vector2d& b = polygon[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < a.x() + (p.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y())) {
+      inside = !inside;
+    }
+  }
+  return inside;
+}
+
+// Slab test: whether the segment a -> b meets the (slightly grown) box at all.
+bool SegmentMeetsBox(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& lo,
+                     const Eigen::Vector3d& hi) {
+  const Eigen::Vector3d d = b - a;
+  const double grow = 1e-9 * std::max(1.0, (hi - lo).norm());
+  double t_lo = 0.0, t_hi = 1.0;
   for (int k = 0; k < 3; ++k) {
-    const double margin = 1e-9 * std::max(1.0, box.size[k]);
-    if (std::abs(d_in_box[k]) < 1e-15) {
-      if (a_in_box[k] <= margin || a_in_box[k] >= box.size[k] - margin) return false;
+    if (std::abs(d[k]) < 1e-300) {
+      if (a[k] < lo[k] - grow || a[k] > hi[k] + grow) return false;
       continue;
     }
-    double t0 = (margin - a_in_box[k]) / d_in_box[k];
-    double t1 = (box.size[k] - margin - a_in_box[k]) / d_in_box[k];
+    double t0 = (lo[k] - grow - a[k]) / d[k];
+    double t1 = (hi[k] + grow - a[k]) / d[k];
     if (t0 > t1) std::swap(t0, t1);
-    lo = std::max(lo, t0);
-    hi = std::min(hi, t1);
-    if (lo >= hi) return false;
+    t_lo = std::max(t_lo, t0);
+    t_hi = std::min(t_hi, t1);
+    if (t_lo > t_hi) return false;
   }
   return true;
 }
 
-double UnoccludedFraction(const FaceGeometry& face, const Eigen::Vector3d& center, const Project& project,
-                          const std::vector<Eigen::Matrix3d>& box_from_world) {
-  if (project.boxes.size() < 2) return 1.0;  // a convex box never hides its own front faces
+// Moller-Trumbore: whether the segment a -> b crosses the triangle strictly between its
+// ends (kRayEndMargin), so a ray starting on a face that touches the triangle is not hidden.
+bool SegmentHitsTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const std::array<Eigen::Vector3d, 3>& tri) {
+  const Eigen::Vector3d d = b - a;
+  const Eigen::Vector3d e1 = tri[1] - tri[0];
+  const Eigen::Vector3d e2 = tri[2] - tri[0];
+  const Eigen::Vector3d p = d.cross(e2);
+  const double det = e1.dot(p);
+  // A segment in the triangle's plane grazes it: not an occlusion.
+  if (std::abs(det) <= 1e-14 * d.norm() * e1.norm() * e2.norm()) return false;
+  const double inv_det = 1.0 / det;
+  const Eigen::Vector3d s = a - tri[0];
+  const double u = s.dot(p) * inv_det;
+  if (u < 0.0 || u > 1.0) return false;
+  const Eigen::Vector3d q = s.cross(e1);
+  const double v = d.dot(q) * inv_det;
+  if (v < 0.0 || u + v > 1.0) return false;
+  const double t = e2.dot(q) * inv_det;
+  return t > kRayEndMargin && t < 1.0 - kRayEndMargin;
+}
+
+double UnoccludedFraction(const FaceGeometry& face, const Eigen::Vector3d& center,
+                          const std::vector<Occluder>& occluders) {
+  if (face.occlusion_samples.empty()) return 1.0;
   int visible = 0;
-  const Eigen::Vector3d eu = face.corners[1] - face.corners[0];
-  const Eigen::Vector3d ev = face.corners[3] - face.corners[0];
-  for (int i = 0; i < kOcclusionSamples; ++i) {
-    for (int j = 0; j < kOcclusionSamples; ++j) {
-      const Eigen::Vector3d p = face.corners[0] + (i + 0.5) / kOcclusionSamples * eu + (j + 0.5) / kOcclusionSamples * ev;
-      bool hidden = false;
-      for (size_t b = 0; b < project.boxes.size() && !hidden; ++b) {
-        if (b != face.box_index) hidden = SegmentHitsBox(project.boxes[b], box_from_world[b], p, center);
+  for (const Eigen::Vector3d& p : face.occlusion_samples) {
+    bool hidden = false;
+    for (size_t o = 0; o < occluders.size() && !hidden; ++o) {
+      // Only other primitives: a primitive's own faces facing the camera are not hidden by
+      // the rest of it as long as it is convex, which the primitives are up to free vertices.
+      if (o == face.primitive_index || !SegmentMeetsBox(p, center, occluders[o].lo, occluders[o].hi)) continue;
+      for (const auto& tri : occluders[o].triangles) {
+        if (SegmentHitsTriangle(p, center, tri)) {
+          hidden = true;
+          break;
+        }
       }
-      visible += hidden ? 0 : 1;
     }
+    visible += hidden ? 0 : 1;
   }
-  return static_cast<double>(visible) / (kOcclusionSamples * kOcclusionSamples);
+  return static_cast<double>(visible) / static_cast<double>(face.occlusion_samples.size());
 }
 
 // Scores the view of a face: visible projected area times the cosine of the view angle
-// times the unoccluded fraction; 0 when unusable. Also returns the face's size in photo px.
-double ScoreView(const FaceGeometry& face, const PhotoView& view, const Project& project,
-                 const std::vector<Eigen::Matrix3d>& box_from_world, double* length_u_px, double* length_v_px) {
+// times the unoccluded fraction; 0 when unusable. Also returns the size in photo px of the
+// face's bounding rectangle along u and v.
+double ScoreView(const FaceGeometry& face, const PhotoView& view, const std::vector<Occluder>& occluders,
+                 double* length_u_px, double* length_v_px) {
   const Camera& cam = *view.camera;
-  std::array<Eigen::Vector2d, 4> uv;
-  for (int k = 0; k < 4; ++k) {
+  std::vector<Eigen::Vector2d> uv(face.corners.size());
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (size_t k = 0; k < face.corners.size(); ++k) {
     const Eigen::Vector3d p_in_cam = cam.CamFromWorld(face.corners[k]);
     if (!(p_in_cam.z() > 0.0)) return 0.0;
     uv[k] = view.ProjectCam(p_in_cam);
+    centroid += face.corners[k];
   }
-  const Eigen::Vector3d centroid = 0.25 * (face.corners[0] + face.corners[1] + face.corners[2] + face.corners[3]);
+  centroid /= static_cast<double>(face.corners.size());
+  // The rectangle is what gets rectified; its corners lie outside a non-convex or slanted
+  // polygon and, with a camera very close to the plane, may fall behind it: such a view
+  // is skipped rather than sampled through a homography that flips sign.
+  std::array<Eigen::Vector2d, 4> rect;
+  const std::array<Eigen::Vector3d, 4> rect_in_world = face.RectangleInWorld();
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector3d p_in_cam = cam.CamFromWorld(rect_in_world[k]);
+    if (!(p_in_cam.z() > 0.0)) return 0.0;
+    rect[k] = view.ProjectCam(p_in_cam);
+  }
   const Eigen::Vector3d center = cam.CenterInWorld();
   const Eigen::Vector3d to_camera = center - centroid;
   const double distance = to_camera.norm();
@@ -154,9 +234,9 @@ double ScoreView(const FaceGeometry& face, const PhotoView& view, const Project&
   if (!(cosine > 0.0)) return 0.0;
   const double area = VisibleArea(uv, view.photo->width, view.photo->height);
   if (!(area > kMinProjectedAreaPx2)) return 0.0;
-  const double unoccluded = UnoccludedFraction(face, center, project, box_from_world);
-  *length_u_px = std::max((uv[1] - uv[0]).norm(), (uv[2] - uv[3]).norm());
-  *length_v_px = std::max((uv[3] - uv[0]).norm(), (uv[2] - uv[1]).norm());
+  const double unoccluded = UnoccludedFraction(face, center, occluders);
+  *length_u_px = std::max((rect[1] - rect[0]).norm(), (rect[2] - rect[3]).norm());
+  *length_v_px = std::max((rect[3] - rect[0]).norm(), (rect[2] - rect[1]).norm());
   return area * cosine * unoccluded;
 }
 
@@ -184,36 +264,40 @@ void SampleBilinear(const ImageRgba8& photo, double x, double y, std::uint8_t* o
   }
 }
 
-// Texel (i, j) of a w x h face texture sits at face coordinates s = i / (w - 1) and
-// t = (h - 1 - j) / (h - 1): corner 0 bottom-left, corner 1 bottom-right, corner 2 top-right,
-// corner 3 top-left, so the face reads upright (as seen from outside) in the atlas.
-Eigen::Vector2i CornerTexel(int corner, int width, int height) {
-  static constexpr int kI[4] = {0, 1, 1, 0};
-  static constexpr int kJ[4] = {1, 1, 0, 0};
-  return {kI[corner] * (width - 1), kJ[corner] * (height - 1)};
+// Face coordinates (s, t) of texel (i, j) of a w x h face texture: texel (0, 0) is the
+// rectangle's (s_min, t_max) and texel (w - 1, h - 1) its (s_max, t_min), so the face reads
+// upright as seen from outside. Returns the 3x3 map from (i, j, 1) to (s, t, 1).
+Eigen::Matrix3d FaceFromTexel(const FaceGeometry& face, int width, int height) {
+  const Eigen::Vector2d extent = face.st_max - face.st_min;
+  Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+  m(0, 0) = extent.x() / (width - 1);
+  m(0, 2) = face.st_min.x();
+  m(1, 1) = -extent.y() / (height - 1);
+  m(1, 2) = face.st_max.y();
+  m(2, 2) = 1.0;
+  return m;
 }
 
-// Rectifies the face into the atlas by the face-to-photo homography
-// H = K [R | t] [e_u, e_v, c_0; 0, 0, 1], then replicates the border into the padding.
+// Rectifies the face's bounding rectangle into the atlas through the plane-to-photo
+// homography H = P [axis_u, axis_v, origin; 0, 0, 1], then replicates the border into the
+// padding.
 void RasterizeFace(const FaceGeometry& face, const PhotoView& view, const FaceTexture& tex, int padding,
                    ImageRgba8* atlas) {
-  const Camera& cam = *view.camera;
-  const Eigen::Matrix<double, 3, 4> projection = cam.ProjectionMatrix();
+  const Eigen::Matrix<double, 3, 4> projection = view.camera->ProjectionMatrix();
   Eigen::Matrix3d photo_from_face;
-  photo_from_face.col(0) = projection.leftCols<3>() * (face.corners[1] - face.corners[0]);
-  photo_from_face.col(1) = projection.leftCols<3>() * (face.corners[3] - face.corners[0]);
-  photo_from_face.col(2) = projection * face.corners[0].homogeneous();
+  photo_from_face.col(0) = projection.leftCols<3>() * face.axis_u;
+  photo_from_face.col(1) = projection.leftCols<3>() * face.axis_v;
+  photo_from_face.col(2) = projection * face.origin.homogeneous();
   const Eigen::Matrix3d scale = Eigen::Vector3d(view.scale_x, view.scale_y, 1.0).asDiagonal();
-  photo_from_face = scale * photo_from_face;
-
   const int w = tex.packed_width, h = tex.packed_height;
+  const Eigen::Matrix3d photo_from_texel = scale * photo_from_face * FaceFromTexel(face, w, h);
+
   for (int j = 0; j < h; ++j) {
-    const double t = static_cast<double>(h - 1 - j) / (h - 1);
-    for (int i = 0; i < w; ++i) {
-      const double s = static_cast<double>(i) / (w - 1);
-      const Eigen::Vector3d q = photo_from_face * Eigen::Vector3d(s, t, 1.0);
-      SampleBilinear(*view.photo, q.x() / q.z(), q.y() / q.z(), atlas->At(tex.x + i, tex.y + j));
-    }
+    // Incremental along a row: q(i) = q(0) + i * column 0.
+    Eigen::Vector3d q = photo_from_texel * Eigen::Vector3d(0.0, j, 1.0);
+    const Eigen::Vector3d step = photo_from_texel.col(0);
+    std::uint8_t* row = atlas->At(tex.x, tex.y + j);
+    for (int i = 0; i < w; ++i, q += step) SampleBilinear(*view.photo, q.x() / q.z(), q.y() / q.z(), row + 4 * i);
   }
   for (int j = -padding; j < h + padding; ++j) {
     for (int i = -padding; i < w + padding; ++i) {
@@ -265,36 +349,115 @@ double ElapsedMs(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-}  // namespace
+// The face's plane frame, bounding rectangle and occlusion samples; valid stays false for a
+// face without area.
+void SetFaceFrame(const std::vector<std::array<Eigen::Vector3d, 3>>& triangles, FaceGeometry* g) {
+  const size_t n = g->corners.size();
+  if (n < 3 || g->normal.isZero()) return;
+  // Best-fit plane: the Newell normal through the corners' centroid (exact for a planar face).
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : g->corners) centroid += p;
+  centroid /= static_cast<double>(n);
+  // u along the first edge; the longest edge instead when the first one has (almost) no
+  // length in the plane.
+  double radius = 0.0;
+  for (const Eigen::Vector3d& p : g->corners) radius = std::max(radius, (p - centroid).norm());
+  auto in_plane_edge = [&](size_t k) {
+    const Eigen::Vector3d e = g->corners[(k + 1) % n] - g->corners[k];
+    return Eigen::Vector3d(e - e.dot(g->normal) * g->normal);
+  };
+  Eigen::Vector3d u = in_plane_edge(0);
+  if (!(u.norm() > 1e-9 * radius)) {
+    for (size_t k = 1; k < n; ++k) {
+      if (in_plane_edge(k).norm() > u.norm()) u = in_plane_edge(k);
+    }
+  }
+  if (!(u.norm() > 0.0)) return;
+  g->axis_u = u.normalized();
+  g->axis_v = g->normal.cross(g->axis_u);
+  g->origin = centroid;
+  g->corners_st.resize(n);
+  g->st_min = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  g->st_max = -g->st_min;
+  for (size_t k = 0; k < n; ++k) {
+    const Eigen::Vector3d d = g->corners[k] - centroid;
+    g->corners_st[k] = Eigen::Vector2d(d.dot(g->axis_u), d.dot(g->axis_v));
+    g->st_min = g->st_min.cwiseMin(g->corners_st[k]);
+    g->st_max = g->st_max.cwiseMax(g->corners_st[k]);
+  }
+  const Eigen::Vector2d extent = g->st_max - g->st_min;
+  const double size = extent.maxCoeff();
+  if (!(extent.minCoeff() > 1e-12 * size) || !(std::abs(SignedArea(g->corners_st)) > 1e-12 * size * size)) return;
+  g->valid = true;
+  // A grid over the rectangle, kept where it falls inside the polygon; a sliver the grid
+  // misses is sampled at its triangles' centroids instead.
+  for (int i = 0; i < kOcclusionSamples; ++i) {
+    for (int j = 0; j < kOcclusionSamples; ++j) {
+      const Eigen::Vector2d st = g->st_min + Eigen::Vector2d((i + 0.5) / kOcclusionSamples * extent.x(),
+                                                             (j + 0.5) / kOcclusionSamples * extent.y());
+      if (InsidePolygon(g->corners_st, st)) g->occlusion_samples.push_back(g->InWorld(st));
+    }
+  }
+  if (g->occlusion_samples.empty()) {
+    for (const auto& tri : triangles) g->occlusion_samples.push_back((tri[0] + tri[1] + tri[2]) / 3.0);
+  }
+}
 
-TexturedMesh BuildUntexturedMesh(const Project& project) {
+// Builds the untextured mesh and, alongside, the bake's view of every face and the
+// occluders (one per primitive, in project order).
+TexturedMesh BuildMesh(const Project& project, std::vector<FaceGeometry>* geometry, std::vector<Occluder>* occluders) {
   TexturedMesh mesh;
-  const size_t faces = project.boxes.size() * 6;
-  mesh.positions.reserve(faces * 4);
-  mesh.normals.reserve(faces * 4);
-  mesh.uvs.reserve(faces * 4);
-  mesh.indices.reserve(faces * 6);
-  for (const Box& box : project.boxes) {
-    const std::array<Eigen::Vector3d, 8> corners = BoxCornersInWorld(box);
-    for (int f = 0; f < 6; ++f) {
-      const auto base = static_cast<std::uint32_t>(mesh.positions.size());
-      const Eigen::Vector3f normal = BoxFaceNormalInWorld(box, f).cast<float>();
-      for (int k = 0; k < 4; ++k) {
-        mesh.positions.push_back(corners[BoxFaces()[f][k]].cast<float>());
+  for (size_t pi = 0; pi < project.primitives.size(); ++pi) {
+    const Primitive& primitive = project.primitives[pi];
+    const PolyMesh& poly = primitive.mesh;
+    const MeshTriangulation triangulation = TriangulateMesh(poly);
+    Occluder occluder;
+    for (FaceId f = 0; f < poly.FaceIdEnd(); ++f) {
+      if (!poly.IsFace(f)) continue;
+      const std::vector<HalfedgeId> corners = FaceHalfedges(poly, f);
+      FaceGeometry g;
+      g.primitive_index = pi;
+      g.normal = FaceNormal(poly, f);
+      g.first_vertex = static_cast<std::uint32_t>(mesh.positions.size());
+      g.first_triangle = mesh.triangle_face.size();
+      const Eigen::Vector3f normal = g.normal.cast<float>();
+      for (HalfedgeId h : corners) {
+        const Eigen::Vector3d& p = poly.vertex(poly.Origin(h)).position;
+        g.corners.push_back(p);
+        mesh.positions.push_back(p.cast<float>());
         mesh.normals.push_back(normal);
         mesh.uvs.push_back(Eigen::Vector2f::Zero());
       }
-      // The face's corners run counter-clockwise from outside; so do both halves.
-      for (std::uint32_t index : {0u, 1u, 2u, 0u, 2u, 3u}) mesh.indices.push_back(base + index);
-      for (int tri = 0; tri < 2; ++tri) {
-        mesh.triangle_box.push_back(box.id);
+      std::vector<std::array<Eigen::Vector3d, 3>> face_triangles;
+      for (const CornerTriangle& tri : triangulation.by_face[f]) {
+        std::array<Eigen::Vector3d, 3> world;
+        for (int k = 0; k < 3; ++k) {
+          const auto local = std::find(corners.begin(), corners.end(), tri[k]) - corners.begin();
+          mesh.indices.push_back(g.first_vertex + static_cast<std::uint32_t>(local));
+          world[k] = g.corners[local];
+          occluder.lo = occluder.lo.cwiseMin(world[k]);
+          occluder.hi = occluder.hi.cwiseMax(world[k]);
+        }
+        face_triangles.push_back(world);
+        occluder.triangles.push_back(world);
+        mesh.triangle_primitive.push_back(primitive.id);
         mesh.triangle_face.push_back(f);
         mesh.triangle_textured.push_back(0);
       }
+      g.triangle_count = face_triangles.size();
+      if (geometry != nullptr) {
+        SetFaceFrame(face_triangles, &g);
+        geometry->push_back(std::move(g));
+      }
     }
+    if (occluders != nullptr) occluders->push_back(std::move(occluder));
   }
   return mesh;
 }
+
+}  // namespace
+
+TexturedMesh BuildUntexturedMesh(const Project& project) { return BuildMesh(project, nullptr, nullptr); }
 
 bool TextureBakeOptions::Check(std::string* error) const {
   std::string message;
@@ -317,8 +480,10 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<Im
                                     const TextureBakeOptions& options, TexturedMesh* mesh) {
   const auto start = std::chrono::steady_clock::now();
   TextureBakeSummary summary;
-  *mesh = BuildUntexturedMesh(project);
-  const int face_count = static_cast<int>(project.boxes.size() * 6);
+  std::vector<FaceGeometry> geometry;
+  std::vector<Occluder> occluders;
+  *mesh = BuildMesh(project, &geometry, &occluders);
+  const int face_count = static_cast<int>(geometry.size());
   summary.faces_untextured = face_count;
   auto fail = [&](const std::string& message) {
     summary.success = false;
@@ -354,29 +519,14 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<Im
     views.push_back(view);
   }
 
-  std::vector<Eigen::Matrix3d> box_from_world;
-  std::vector<FaceGeometry> geometry;
-  for (size_t b = 0; b < project.boxes.size(); ++b) {
-    const Box& box = project.boxes[b];
-    box_from_world.push_back(RotationFromAngleAxis(box.rotation).transpose());
-    const std::array<Eigen::Vector3d, 8> corners = BoxCornersInWorld(box);
-    for (int f = 0; f < 6; ++f) {
-      FaceGeometry g;
-      g.box_index = b;
-      g.face = f;
-      for (int k = 0; k < 4; ++k) g.corners[k] = corners[BoxFaces()[f][k]];
-      g.normal = BoxFaceNormalInWorld(box, f);
-      geometry.push_back(g);
-    }
-  }
-
   std::vector<FaceTexture> faces(geometry.size());
   std::vector<int> textured;
   for (size_t f = 0; f < geometry.size(); ++f) {
+    if (!geometry[f].valid) continue;
     double best_u = 0.0, best_v = 0.0;
     for (size_t v = 0; v < views.size(); ++v) {
       double length_u = 0.0, length_v = 0.0;
-      const double score = ScoreView(geometry[f], views[v], project, box_from_world, &length_u, &length_v);
+      const double score = ScoreView(geometry[f], views[v], occluders, &length_u, &length_v);
       if (score > faces[f].score) {
         faces[f].score = score;
         faces[f].view = static_cast<int>(v);
@@ -387,7 +537,8 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<Im
     if (faces[f].view < 0) continue;
     auto texels = [&](double length_px) {
       const double n = std::ceil(length_px * options.texels_per_image_px) + 1.0;
-      return static_cast<int>(std::clamp(n, static_cast<double>(kMinFaceTexels), static_cast<double>(options.max_face_texels)));
+      return static_cast<int>(
+          std::clamp(n, static_cast<double>(kMinFaceTexels), static_cast<double>(options.max_face_texels)));
     };
     faces[f].width = texels(best_u);
     faces[f].height = texels(best_v);
@@ -395,7 +546,7 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<Im
   }
   if (textured.empty()) {
     summary.success = true;
-    summary.message = geometry.empty() ? "the project has no boxes"
+    summary.message = geometry.empty() ? "the project has no primitives"
                       : views.empty()  ? "no calibrated image with loaded pixels; the mesh is untextured"
                                        : "no face is seen by a calibrated image; the mesh is untextured";
     summary.time_ms = ElapsedMs(start);
@@ -427,14 +578,15 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<Im
   atlas.pixels.assign(static_cast<size_t>(atlas_width) * atlas_height * 4, 0);
   for (int f : textured) {
     const FaceTexture& t = faces[f];
-    RasterizeFace(geometry[f], views[t.view], t, options.padding_texels, &atlas);
-    for (int k = 0; k < 4; ++k) {
-      const Eigen::Vector2i texel = CornerTexel(k, t.packed_width, t.packed_height);
-      mesh->uvs[f * 4 + k] = Eigen::Vector2f(static_cast<float>((t.x + texel.x() + 0.5) / atlas_width),
-                                             static_cast<float>((t.y + texel.y() + 0.5) / atlas_height));
+    const FaceGeometry& g = geometry[f];
+    RasterizeFace(g, views[t.view], t, options.padding_texels, &atlas);
+    const Eigen::Matrix3d texel_from_face = FaceFromTexel(g, t.packed_width, t.packed_height).inverse();
+    for (size_t k = 0; k < g.corners_st.size(); ++k) {
+      const Eigen::Vector3d texel = texel_from_face * g.corners_st[k].homogeneous();
+      mesh->uvs[g.first_vertex + k] = Eigen::Vector2f(static_cast<float>((t.x + texel.x() + 0.5) / atlas_width),
+                                                      static_cast<float>((t.y + texel.y() + 0.5) / atlas_height));
     }
-    mesh->triangle_textured[f * 2] = 1;
-    mesh->triangle_textured[f * 2 + 1] = 1;
+    for (size_t tri = 0; tri < g.triangle_count; ++tri) mesh->triangle_textured[g.first_triangle + tri] = 1;
   }
 
   summary.success = true;

@@ -1,6 +1,7 @@
 // The model as a triangle mesh with one texture atlas: what the 3D panel draws and the
-// exporters write. Texture per face from the best view, rectified by the inverse of the
-// face-to-image homography, packed into one atlas (stb_rect_pack) with padding.
+// exporters write. Every face of every primitive's mesh (any planar polygon, convex or not)
+// is textured from its best view: the face's bounding rectangle in its own plane is rectified
+// through the plane-to-photo homography and packed into one atlas (stb_rect_pack) with padding.
 #pragma once
 
 #include <cstdint>
@@ -10,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "core/image_io.h"
+#include "core/mesh.h"
 #include "core/project.h"
 
 namespace facet {
@@ -22,15 +24,19 @@ struct TexturedMesh {
   // Atlas coordinates in [0, 1]^2, u right, v down from the atlas' top-left (glTF's convention).
   std::vector<Eigen::Vector2f> uvs;
   std::vector<std::uint32_t> indices;  // triangles, counter-clockwise seen from outside
-  // Per triangle: the box id and face index (0..5, core/box.h) it came from.
-  std::vector<Id> triangle_box;
-  std::vector<int> triangle_face;
+  // Per triangle: the primitive (Project::primitives id) and the face of that primitive's
+  // mesh it came from. A face's triangles are consecutive, in the order of its triangulation
+  // (core/mesh_triangulate.h).
+  std::vector<Id> triangle_primitive;
+  std::vector<FaceId> triangle_face;
   // Per triangle: whether it has texture (faces no image sees keep uv = 0 and no texture).
   std::vector<std::uint8_t> triangle_textured;
   ImageRgba8 atlas;  // empty when no face is textured
 };
 
-// Triangle mesh of all boxes, without texture.
+// Triangle mesh of all primitives' live faces, without texture: per face, one vertex per
+// corner (in FaceHalfedges order) with the face's Newell normal (FaceNormal), and the
+// triangles of TriangulateFace. Faces are in project order, then by face id.
 TexturedMesh BuildUntexturedMesh(const Project& project);
 
 struct TextureBakeOptions {
@@ -55,8 +61,13 @@ struct TextureBakeSummary {
 // Bakes a textured mesh. `photos[i]` holds the pixels of project.images[i] (an empty image
 // for a photo that is not loaded). A face is textured from the calibrated image that sees
 // it best: in front of the camera, facing it, and largest projected area times cosine of
-// the view angle. Boxes other than the face's own hide parts of it (sampled), lowering the
-// score. On failure (bad options, photos.size() != images.size(), atlas overflow) *mesh is the
+// the view angle. Primitives other than the face's own hide parts of it (4 x 4 samples
+// tested against their triangles), lowering the score.
+// Face frame: u along the first edge (face.halfedge) projected into the face's plane, v the
+// in-plane perpendicular (normal x u), so the texture reads upright as seen from outside. A
+// face that is not planar (a solved free vertex) is rectified through its best-fit plane
+// (Newell normal through the corners' centroid): approximate there. A degenerate face (zero
+// area) stays untextured. On failure (bad options, photos.size() != images.size(), atlas overflow) *mesh is the
 // untextured mesh and the summary says why.
 TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<ImageRgba8>& photos,
                                     const TextureBakeOptions& options, TexturedMesh* mesh);
