@@ -10,15 +10,29 @@
 //   principal_point_locked), rotation (3, a small rotation applied on the left) and centre (3)
 //   unless pose_locked;
 // - per primitive: each unlocked shape parameter, rotation (unless rotation_locked) and
-//   translation (unless translation_locked).
+//   translation (unless translation_locked). A primitive attached on a box (attached_to)
+//   takes its footprint and pose from its base, so only its own parameters from index 2 on
+//   are free;
+// - per free vertex (LocalDefinition::free, e.g. an E_split vertex the user marked free to
+//   pin it to a roof ridge off its edge): its local offset (3). A vertex that is not free
+//   stays on its definition. The rule is explicit: the solve never frees a vertex itself.
 // Residuals, all in px so they share one scale:
 // - a pin: projection of its vertex minus the pin's pixel (2);
 // - a segment of a line family: signed distance of each endpoint to the line through the
 //   segment's midpoint and the family's vanishing point K R e_axis (2), which keeps the
 //   camera's rotation tied to the user's lines;
-// - a spatial constraint: g(v) made dimensionless (angles, relative lengths; see
-//   joint_solve.cpp) and enforced by an augmented Lagrangian on the interactive path; the
-//   SLSQP polish (NLopt) then makes them hold as hard equalities.
+// - a spatial constraint: g(v) made dimensionless (sines and cosines of angles, lengths over
+//   the model size S = RMS spread of the used vertices at the start, a distance over its
+//   value, image-line distances over the focal length; core/joint_solve_internal.h lists
+//   each kind) and enforced by an augmented Lagrangian on the interactive path: rows
+//   sqrt(mu) c + lambda / sqrt(mu), mu starting at 1e6 (a relative error of 1e-3 weighs like
+//   1 px); after each inner Levenberg-Marquardt run lambda += mu c, and mu grows tenfold
+//   (up to 1e14) when max |c| fell by less than a factor 4; at most 12 outer rounds, ending
+//   once max |c| <= constraint_tolerance. The SLSQP polish (NLopt) then makes them hold as
+//   hard equalities.
+// Linear algebra: the damped normal equations (J^T J + lambda diag(J^T J)) are assembled into a
+// sparse matrix of fixed pattern and solved by a simplicial LDL^T whose fill-reducing (AMD)
+// ordering and symbolic analysis are computed once per solve.
 // Gauge: world axes come from the calibrated rotations or a locked primitive rotation; the
 // origin from a fixed point, a locked translation or a locked camera centre; the scale from a
 // distance constraint or a locked dimension. When something is left free the solve still
@@ -45,6 +59,9 @@ struct JointSolveOptions {
   // ~1e-9 of the model size. Off on the per-frame path; on when a drag ends or on request.
   bool polish_constraints = false;
   double constraint_tolerance = 1e-9;  // relative to the model size
+  // A constraint whose scale-free residual stays above this after the solve is reported as
+  // not satisfied, and named in `conflicts`.
+  double conflict_tolerance = 1e-6;
   // Diagnostics cost an SVD of the Jacobian: on for a full solve, off per frame.
   bool compute_diagnostics = true;
 
