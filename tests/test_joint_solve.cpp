@@ -1,0 +1,454 @@
+// The joint solve (core/joint_solve.h): analytic Jacobians against central differences,
+// recovery of synthetic scenes (one and several images, several primitives, noise, scale),
+// the paper's pavilion with free ridge vertices, diagnostics and failure safety.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+
+#include <Eigen/Geometry>
+
+#include "core/box.h"
+#include "core/joint_solve.h"
+#include "core/joint_solve_internal.h"
+#include "core/mesh_operators.h"
+#include "tests/synthetic_scene.h"
+
+namespace facet {
+namespace {
+
+using namespace joint_solve_internal;
+using testing::MakeLookAtCamera;
+using testing::SyntheticSceneOptions;
+
+constexpr double kNoiseFreeTolerance = 1e-9;  // relative
+constexpr double kJacobianTolerance = 1e-6;   // relative, per column
+
+// Central differences of every residual with respect to every parameter, through ApplyStep
+// (so rotations are differentiated along their left-multiplied updates).
+Eigen::MatrixXd NumericJacobian(JointProblem problem, const JointState& state) {
+  Eigen::MatrixXd j(problem.num_residuals, problem.num_parameters);
+  Eigen::MatrixXd unused;
+  Eigen::VectorXd plus, minus;
+  JointState stepped;
+  for (int k = 0; k < problem.num_parameters; ++k) {
+    // Steps relative to each parameter's size: focal and lengths are O(1..1000).
+    double h = 1e-6;
+    const std::string& name = problem.parameter_names[k];
+    if (name.find("focal") != std::string::npos || name.find("principal") != std::string::npos) h = 1e-3;
+    Eigen::VectorXd delta = Eigen::VectorXd::Zero(problem.num_parameters);
+    delta(k) = h;
+    ApplyStep(problem, delta, state, &stepped);
+    EvaluateBlocks(&problem, stepped, false);
+    DenseJacobian(problem, &unused, &plus);
+    delta(k) = -h;
+    ApplyStep(problem, delta, state, &stepped);
+    EvaluateBlocks(&problem, stepped, false);
+    DenseJacobian(problem, &unused, &minus);
+    j.col(k) = (plus - minus) / (2.0 * h);
+  }
+  return j;
+}
+
+void CheckJacobian(JointProblem problem, const JointState& state) {
+  REQUIRE(EvaluateBlocks(&problem, state, true));
+  Eigen::MatrixXd analytic;
+  Eigen::VectorXd r;
+  DenseJacobian(problem, &analytic, &r);
+  const Eigen::MatrixXd numeric = NumericJacobian(problem, state);
+  for (int k = 0; k < problem.num_parameters; ++k) {
+    const double err = (analytic.col(k) - numeric.col(k)).norm();
+    const double ref = std::max(analytic.col(k).norm(), 1e-9);
+    INFO("parameter " << k << ": " << problem.parameter_names[k] << ", |J| = " << ref << ", error = " << err);
+    CHECK(err <= kJacobianTolerance * ref);
+  }
+}
+
+// A multi-primitive, multi-image scene: `num_boxes` boxes in a row, cameras on a ring.
+struct Scene {
+  Project truth;
+  std::vector<Id> boxes;
+  std::vector<Id> images;
+};
+
+Scene MakeScene(int num_boxes, int num_images, double scale, double noise_px, unsigned seed = 3) {
+  Scene s;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  Project& p = s.truth;
+  const Eigen::Vector3d center(2.5 * num_boxes, 1.5, 1.0);
+  for (int i = 0; i < num_images; ++i) {
+    SyntheticSceneOptions o;
+    const double angle = -0.9 + 1.8 * i / std::max(1, num_images - 1);
+    const double radius = 10.0 + 2.5 * num_boxes;
+    o.camera_center = center + Eigen::Vector3d(radius * std::sin(angle), -radius * std::cos(angle), 5.0 + i);
+    o.look_at = center;
+    o.scale = scale;
+    o.roll_deg = 2.0 * i - 1.0;
+    o.focal_px = 850.0 + 40.0 * i;
+    Image image;
+    image.id = p.NewId();
+    image.path = "view" + std::to_string(i) + ".png";
+    image.width_px = o.width_px;
+    image.height_px = o.height_px;
+    image.camera = MakeLookAtCamera(o);
+    image.camera_calibrated = true;
+    p.images.push_back(image);
+    s.images.push_back(image.id);
+  }
+  for (int b = 0; b < num_boxes; ++b) {
+    PrimitiveShape shape = MakeBox(kNoId, scale * Eigen::Vector3d(3.0 + 0.5 * b, 2.0 + 0.3 * b, 2.5 - 0.2 * b));
+    shape.translation = scale * Eigen::Vector3d(5.0 * b, 0.4 * b, 0.0);
+    Id id = kNoId;
+    REQUIRE(AddPrimitiveToProject(&p, shape, "box" + std::to_string(b), &id, nullptr));
+    Primitive& box = p.primitives.back();
+    box.param_locked = {false, false, b == 0, false};  // box 0's height fixes the scale
+    box.translation_locked = b == 0;                  // and its position the origin
+    s.boxes.push_back(id);
+  }
+  for (const Image& image : p.images) {
+    for (const Primitive& box : p.primitives) {
+      for (VertexId v = 0; v < 8; ++v) {
+        const Eigen::Vector3d x = box.mesh.vertex(v).position;
+        if (image.camera.CamFromWorld(x).z() <= 0.0) continue;
+        Pin pin;
+        pin.id = p.NewId();
+        pin.image_id = image.id;
+        pin.vertex = {box.id, v};
+        pin.uv_px = image.camera.Project(x) + noise_px * Eigen::Vector2d(noise(rng), noise(rng));
+        p.pins.push_back(pin);
+      }
+    }
+  }
+  return s;
+}
+
+// Moves the free parameters away from the truth: sizes and translations by a few percent,
+// camera centres and rotations, focal lengths.
+Project Perturb(const Project& truth, double fraction) {
+  Project start = truth;
+  for (Image& image : start.images) {
+    Camera& c = image.camera;
+    if (!image.pose_locked) {
+      const Eigen::Matrix3d r = Eigen::AngleAxisd(0.01, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() *
+                                c.cam_from_world_rotation;
+      c.SetPose(r, c.CenterInWorld() * (1.0 + fraction));
+    }
+    if (!image.focal_locked) c.focal_px *= 1.0 + fraction;
+  }
+  for (Primitive& p : start.primitives) {
+    for (int k = 0; k < 3; ++k) {
+      if (!p.param_locked[k]) p.shape.params(k) *= 1.0 + fraction * (k + 1);
+    }
+    if (!p.translation_locked) p.shape.translation += fraction * p.shape.params.head<3>();
+    if (!p.rotation_locked) p.shape.rotation += Eigen::Vector3d(0.01, -0.02, 0.015);
+  }
+  RefreshAllPrimitives(&start);
+  return start;
+}
+
+double MaxRelativeShapeError(const Project& a, const Project& truth) {
+  double err = 0.0;
+  for (size_t i = 0; i < truth.primitives.size(); ++i) {
+    const PrimitiveShape& x = a.primitives[i].shape;
+    const PrimitiveShape& t = truth.primitives[i].shape;
+    const double size = t.params.norm();
+    err = std::max(err, (x.params - t.params).norm() / size);
+    err = std::max(err, (x.translation - t.translation).norm() / size);
+    err = std::max(err, (x.rotation - t.rotation).norm());
+  }
+  return err;
+}
+
+double MaxCameraCentreError(const Project& a, const Project& truth, double size) {
+  double err = 0.0;
+  for (size_t i = 0; i < truth.images.size(); ++i) {
+    err = std::max(err, (a.images[i].camera.CenterInWorld() - truth.images[i].camera.CenterInWorld()).norm() / size);
+  }
+  return err;
+}
+
+TEST_CASE("joint solve: pin residual derivatives match central differences") {
+  CameraState cam;
+  cam.focal_px = 910.0;
+  cam.principal_point_px = {500.0, 380.0};
+  cam.cam_from_world_rotation = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  cam.center_in_world = {-3.0, -8.0, 2.0};
+  const Eigen::Vector3d x = cam.center_in_world + cam.cam_from_world_rotation.transpose() * Eigen::Vector3d(1.0, -0.5, 7.0);
+  const Eigen::Vector2d uv(480.0, 300.0);
+  Eigen::Vector2d r;
+  Eigen::Matrix<double, 2, 3> d_point;
+  Eigen::Matrix<double, 2, 9> d_camera;
+  REQUIRE(PinResidual(cam, x, uv, &r, &d_point, &d_camera));
+  for (int i = 0; i < 3; ++i) {
+    const double h = 1e-6;
+    Eigen::Vector2d rp, rm;
+    PinResidual(cam, x + h * Eigen::Vector3d::Unit(i), uv, &rp, nullptr, nullptr);
+    PinResidual(cam, x - h * Eigen::Vector3d::Unit(i), uv, &rm, nullptr, nullptr);
+    const Eigen::Vector2d fd = (rp - rm) / (2 * h);
+    CAPTURE(i);
+    CHECK((fd - d_point.col(i)).norm() <= kJacobianTolerance * d_point.col(i).norm());
+  }
+  for (int k = 0; k < 9; ++k) {
+    const double h = k < 3 ? 1e-3 : 1e-6;
+    auto moved = [&](double s) {
+      CameraState c = cam;
+      if (k == 0) c.focal_px += s;
+      else if (k < 3) c.principal_point_px(k - 1) += s;
+      else if (k < 6) c.cam_from_world_rotation = RotationFromAngleAxis(s * Eigen::Vector3d::Unit(k - 3)) * c.cam_from_world_rotation;
+      else c.center_in_world(k - 6) += s;
+      Eigen::Vector2d out;
+      PinResidual(c, x, uv, &out, nullptr, nullptr);
+      return out;
+    };
+    const Eigen::Vector2d fd = (moved(h) - moved(-h)) / (2 * h);
+    CAPTURE(k);
+    CHECK((fd - d_camera.col(k)).norm() <= kJacobianTolerance * d_camera.col(k).norm());
+  }
+}
+
+TEST_CASE("joint solve: the whole Jacobian (cameras, segments, primitives, attachment, free vertex) matches central differences") {
+  testing::SyntheticSceneOptions o;
+  testing::SyntheticScene s = testing::MakeBoxScene(o);
+  Project& p = s.project;
+  Image& image = p.images[0];
+  image.focal_locked = false;
+  image.principal_point_locked = false;
+  Primitive& box = p.primitives[0];
+  box.rotation_locked = false;
+  box.translation_locked = false;
+  box.shape.rotation = Eigen::Vector3d(0.02, -0.03, 0.1);
+  box.param_locked = {false, false, false, false};
+  const Id box_id = box.id;
+  // A wedge attached on top of the box, and a free vertex on the box.
+  Id wedge_id = kNoId;
+  REQUIRE(AddPrimitiveToProject(&p, MakeWedge(kNoId, {1.0, 1.0, 1.2}), "roof", &wedge_id, nullptr));
+  p.primitives.back().attached_to = box_id;
+  Primitive& box_again = p.primitives[0];
+  const ESplitResult split = ESplit(&box_again.mesh, PolyMesh::EdgeOf(FindHalfedge(box_again.mesh, 4, 6)), 0.4);
+  REQUIRE(split.ok);
+  box_again.mesh.vertex(split.vertex).local.free = true;
+  box_again.mesh.vertex(split.vertex).local.offset = Eigen::Vector3d(0.1, 0.2, 0.3);
+  RefreshAllPrimitives(&p);
+  for (VertexId v : {VertexId(0), VertexId(3), VertexId(5)}) {
+    Pin pin;
+    pin.id = p.NewId();
+    pin.image_id = image.id;
+    pin.vertex = {wedge_id, v};
+    pin.uv_px = image.camera.Project(p.primitives[1].mesh.vertex(v).position) + Eigen::Vector2d(1.0, -2.0);
+    p.pins.push_back(pin);
+  }
+  Pin free_pin;
+  free_pin.id = p.NewId();
+  free_pin.image_id = image.id;
+  free_pin.vertex = {box_id, split.vertex};
+  free_pin.uv_px = {400.0, 300.0};
+  p.pins.push_back(free_pin);
+
+  JointState state;
+  const JointProblem problem = BuildJointProblem(p, BuildOptions{}, &state);
+  // focal, pp, camera pose; box 3 params + pose; wedge's own height; free vertex.
+  CHECK(problem.num_parameters == 9 + 9 + 1 + 3);
+  CheckJacobian(problem, state);
+}
+
+TEST_CASE("joint solve: one image, noise-free, recovers the box sizes and the camera to 1e-9") {
+  testing::SyntheticScene s = testing::MakeBoxScene({});
+  s.project.images[0].focal_locked = false;
+  const Project truth = s.project;
+  const Project start = Perturb(truth, 0.05);
+  REQUIRE(MaxRelativeShapeError(start, truth) > 0.01);  // not the answer
+  Project solved;
+  JointSolveOptions options;
+  const JointSolveSummary summary = SolveJoint(start, options, &solved);
+  INFO(summary.message);
+  REQUIRE(summary.IsUsable());
+  const double shape_err = MaxRelativeShapeError(solved, truth);
+  const double focal_err = std::abs(solved.images[0].camera.focal_px - truth.images[0].camera.focal_px) / 900.0;
+  CAPTURE(shape_err);
+  CAPTURE(focal_err);
+  CHECK(shape_err <= kNoiseFreeTolerance);
+  CHECK(focal_err <= kNoiseFreeTolerance);
+  CHECK(MaxCameraCentreError(solved, truth, 4.0) <= kNoiseFreeTolerance);
+  CHECK(summary.reprojection_max_px <= 1e-6);
+  CHECK(summary.undetermined.empty());
+  // The cached vertex positions follow the solved shape.
+  const Primitive& box = solved.primitives[0];
+  for (VertexId v = 0; v < 8; ++v) {
+    CHECK((box.mesh.vertex(v).position - truth.primitives[0].mesh.vertex(v).position).norm() <= 1e-8);
+  }
+}
+
+TEST_CASE("joint solve: several images and primitives, noise-free and with 0.5 px noise") {
+  for (double noise_px : {0.0, 0.5}) {
+    Scene scene = MakeScene(3, 3, 1.0, noise_px);
+    const Project start = Perturb(scene.truth, 0.04);
+    REQUIRE(MaxRelativeShapeError(start, scene.truth) > 0.01);
+    Project solved;
+    const JointSolveSummary summary = SolveJoint(start, JointSolveOptions{}, &solved);
+    INFO(summary.message);
+    CAPTURE(noise_px);
+    REQUIRE(summary.IsUsable());
+    const double err = MaxRelativeShapeError(solved, scene.truth);
+    CAPTURE(err);
+    CAPTURE(summary.reprojection_rms_px);
+    CHECK(summary.undetermined.empty());
+    if (noise_px == 0.0) {
+      CHECK(err <= kNoiseFreeTolerance);
+      CHECK(MaxCameraCentreError(solved, scene.truth, 10.0) <= kNoiseFreeTolerance);
+    } else {
+      // Within the noise: a pin's error is a 2D distance, so its RMS is at most sqrt(2) times
+      // the per-coordinate noise (parameters absorb some); shapes within 0.5 px over ~900 px
+      // focal times a margin for the geometry.
+      CHECK(summary.reprojection_rms_px <= std::sqrt(2.0) * noise_px);
+      CHECK(summary.reprojection_rms_px >= 0.5 * noise_px);
+      CHECK(err <= 0.01);
+    }
+  }
+}
+
+TEST_CASE("joint solve: the same scene at x1e-3 and x1e3 solves to the same relative accuracy") {
+  for (double scale : {1e-3, 1.0, 1e3}) {
+    Scene scene = MakeScene(2, 2, scale, 0.0);
+    const Project start = Perturb(scene.truth, 0.04);
+    Project solved;
+    const JointSolveSummary summary = SolveJoint(start, JointSolveOptions{}, &solved);
+    CAPTURE(scale);
+    INFO(summary.message);
+    REQUIRE(summary.IsUsable());
+    const double err = MaxRelativeShapeError(solved, scene.truth);
+    CAPTURE(err);
+    CHECK(err <= kNoiseFreeTolerance);
+    CHECK(MaxCameraCentreError(solved, scene.truth, 10.0 * scale) <= kNoiseFreeTolerance);
+  }
+}
+
+TEST_CASE("joint solve: an undetermined depth is named") {
+  testing::SyntheticScene s = testing::MakeBoxScene({});
+  Project& p = s.project;
+  // Keep only the pins on the y = 0 face (corners 0, 1, 4, 5): the depth sy is then free.
+  std::vector<Pin> kept;
+  for (const Pin& pin : p.pins) {
+    if ((pin.vertex.vertex & 2) == 0) kept.push_back(pin);
+  }
+  p.pins = kept;
+  p.images[0].pose_locked = true;
+  Project solved;
+  const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
+  INFO(summary.message);
+  REQUIRE(summary.IsUsable());
+  REQUIRE(summary.undetermined.size() == 1);
+  MESSAGE(summary.undetermined[0]);
+  CHECK(summary.undetermined[0].find("'box'") != std::string::npos);
+  CHECK(summary.undetermined[0].find("depth (y) (parameter 1) is free") != std::string::npos);
+}
+
+TEST_CASE("joint solve: a failing solve leaves the project unchanged and says why") {
+  testing::SyntheticScene s = testing::MakeBoxScene({});
+  SUBCASE("vertex behind the camera at the start") {
+    Project p = s.project;
+    p.primitives[0].shape.translation = p.images[0].camera.CenterInWorld() + Eigen::Vector3d(10.0, -10.0, 0.0) * 3.0;
+    p.primitives[0].shape.translation.z() = 0.0;
+    // Put the box behind the camera: along minus the viewing direction.
+    const Eigen::Vector3d back = -p.images[0].camera.cam_from_world_rotation.row(2).transpose();
+    p.primitives[0].shape.translation = p.images[0].camera.CenterInWorld() + 5.0 * back;
+    RefreshAllPrimitives(&p);
+    Project solved;
+    const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
+    CHECK(summary.termination == JointSolveSummary::Termination::kFailed);
+    CHECK(summary.message.find("behind") != std::string::npos);
+    CHECK(solved == p);
+  }
+  SUBCASE("non-finite focal length") {
+    Project p = s.project;
+    p.images[0].camera.focal_px = std::numeric_limits<double>::quiet_NaN();
+    p.images[0].focal_locked = false;
+    Project solved;
+    const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
+    MESSAGE(summary.message);
+    CHECK_FALSE(summary.IsUsable());
+    CHECK(solved.images[0].camera.focal_px != solved.images[0].camera.focal_px);  // still NaN: unchanged copy
+    CHECK(solved.primitives == p.primitives);
+  }
+}
+
+// The paper's pavilion: a box pinned in two images; the two top edges across y split at their
+// middles and joined by V_connect; the new vertices, made free, pinned to the ridge above.
+TEST_CASE("joint solve: the pavilion's ridge height is recovered within 1 % at 0.5 px noise") {
+  const Eigen::Vector3d size(4.0, 3.0, 2.5);
+  const double ridge_height = 1.3;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.5);
+  Project p;
+  std::vector<Camera> cameras;
+  for (int i = 0; i < 2; ++i) {
+    SyntheticSceneOptions o;
+    o.camera_center = i == 0 ? Eigen::Vector3d(10.0, -8.0, 6.0) : Eigen::Vector3d(-6.0, -9.0, 7.0);
+    o.look_at = {2.0, 1.5, 2.0};
+    Image image;
+    image.id = p.NewId();
+    image.width_px = o.width_px;
+    image.height_px = o.height_px;
+    image.camera = MakeLookAtCamera(o);
+    image.camera_calibrated = true;
+    p.images.push_back(image);
+    cameras.push_back(image.camera);
+  }
+  Id box_id = kNoId;
+  REQUIRE(AddPrimitiveToProject(&p, MakeBox(kNoId, size), "pavilion", &box_id, nullptr));
+  Primitive& box = p.primitives.back();
+  box.param_locked = {false, false, true, false};  // the wall height is known
+  // Top edges along y: corners 4-6 (x = 0) and 5-7 (x = sx).
+  const ESplitResult s1 = ESplit(&box.mesh, PolyMesh::EdgeOf(FindHalfedge(box.mesh, 4, 6)), 0.5);
+  const ESplitResult s2 = ESplit(&box.mesh, PolyMesh::EdgeOf(FindHalfedge(box.mesh, 5, 7)), 0.5);
+  REQUIRE(s1.ok);
+  REQUIRE(s2.ok);
+  FaceId top = kNoFace;
+  for (FaceId f = 0; f < box.mesh.FaceIdEnd(); ++f) {
+    if (!box.mesh.IsFace(f)) continue;
+    const std::vector<VertexId> vs = FaceVertices(box.mesh, f);
+    if (std::count(vs.begin(), vs.end(), s1.vertex) && std::count(vs.begin(), vs.end(), s2.vertex)) top = f;
+  }
+  REQUIRE(top != kNoFace);
+  REQUIRE(VConnect(&box.mesh, top, s1.vertex, s2.vertex).ok);
+  box.mesh.vertex(s1.vertex).local.free = true;
+  box.mesh.vertex(s2.vertex).local.free = true;
+  const Eigen::Vector3d ridge0(0.0, size.y() / 2, size.z() + ridge_height);
+  const Eigen::Vector3d ridge1(size.x(), size.y() / 2, size.z() + ridge_height);
+  for (int i = 0; i < 2; ++i) {
+    auto pin = [&](VertexId v, const Eigen::Vector3d& x) {
+      Pin q;
+      q.id = p.NewId();
+      q.image_id = p.images[i].id;
+      q.vertex = {box_id, v};
+      q.uv_px = cameras[i].Project(x) + Eigen::Vector2d(noise(rng), noise(rng));
+      p.pins.push_back(q);
+    };
+    for (VertexId v = 0; v < 8; ++v) pin(v, BoxCornerLocal(size, v));
+    pin(s1.vertex, ridge0);
+    pin(s2.vertex, ridge1);
+  }
+  // Start: sizes off, cameras moved, ridge vertices on their edges (offset zero).
+  Primitive& start_box = p.primitives.back();
+  start_box.shape.params.head<2>() *= 1.1;
+  for (Image& image : p.images) {
+    image.camera.SetPose(image.camera.cam_from_world_rotation, image.camera.CenterInWorld() * 1.05);
+  }
+  RefreshAllPrimitives(&p);
+  Project solved;
+  const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
+  INFO(summary.message);
+  REQUIRE(summary.IsUsable());
+  CHECK(summary.undetermined.empty());
+  const Primitive& out = solved.primitives.back();
+  const double h0 = out.mesh.vertex(s1.vertex).position.z() - out.shape.params(2);
+  const double h1 = out.mesh.vertex(s2.vertex).position.z() - out.shape.params(2);
+  CAPTURE(h0);
+  CAPTURE(h1);
+  CAPTURE(summary.reprojection_rms_px);
+  CHECK(std::abs(h0 - ridge_height) <= 0.01 * ridge_height);
+  CHECK(std::abs(h1 - ridge_height) <= 0.01 * ridge_height);
+}
+
+}  // namespace
+}  // namespace facet
