@@ -54,11 +54,35 @@ constexpr int kMaxOuterRounds = 12;
 constexpr int kMaxDiagnosticParameters = 600;  // dense SVD above this costs too much for a full solve
 constexpr double kRankTolerance = 1e-9;        // singular values below this times the largest are zero
 
-// The damped normal equations over a fixed sparse pattern: assembled block by block through
-// precomputed value indices, factorised by a simplicial LDL^T analysed once.
+// The damped normal equations (J^T J + lambda D) delta = -J^T r, D = diag(J^T J) floored.
 class NormalEquations {
  public:
-  bool Init(const JointProblem& problem) {
+  virtual ~NormalEquations() = default;
+  virtual bool Init(const JointProblem& problem) = 0;
+  virtual void Assemble(const JointProblem& problem) = 0;
+  virtual bool Solve(double lambda, Eigen::VectorXd* delta) = 0;
+  const Eigen::VectorXd& gradient() const { return g_; }
+  const Eigen::VectorXd& damping() const { return d_; }
+  double HessianDiagonal(int k) const { return h_diag_(k); }
+
+ protected:
+  // Marquardt's scaling makes the step independent of the units of each parameter; a floor
+  // keeps parameters no residual sees (zero columns) from making the system singular.
+  void SetDamping() {
+    const double max_diag = h_diag_.size() > 0 ? h_diag_.maxCoeff() : 0.0;
+    const double floor = std::max(max_diag * 1e-14, std::numeric_limits<double>::min());
+    d_ = h_diag_.cwiseMax(floor);
+  }
+  Eigen::VectorXd g_;
+  Eigen::VectorXd d_;
+  Eigen::VectorXd h_diag_;
+};
+
+// General sparsity: a fixed sparse pattern assembled through precomputed value indices and
+// factorised by a simplicial LDL^T whose AMD ordering and symbolic analysis are done once.
+class SparseEquations : public NormalEquations {
+ public:
+  bool Init(const JointProblem& problem) override {
     const int n = problem.num_parameters;
     std::vector<Eigen::Triplet<double>> triplets;
     for (int k = 0; k < n; ++k) triplets.emplace_back(k, k, 0.0);
@@ -91,11 +115,12 @@ class NormalEquations {
     damped_ = h_;
     g_.setZero(n);
     d_.setZero(n);
+    h_diag_.setZero(n);
     ldlt_.analyzePattern(damped_);
     return ldlt_.info() == Eigen::Success;
   }
 
-  void Assemble(const JointProblem& problem) {
+  void Assemble(const JointProblem& problem) override {
     double* h = h_.valuePtr();
     std::fill(h, h + h_.nonZeros(), 0.0);
     g_.setZero();
@@ -109,15 +134,11 @@ class NormalEquations {
         for (int j = 0; j <= i; ++j) h[*idx++] += ci.dot(b.jacobian.col(j));
       }
     }
-    double max_diag = 0.0;
-    for (size_t k = 0; k < diagonal_.size(); ++k) max_diag = std::max(max_diag, h[diagonal_[k]]);
-    // Marquardt's scaling makes the step independent of the units of each parameter; a
-    // floor keeps parameters no residual sees (zero columns) from making it singular.
-    const double floor = std::max(max_diag * 1e-14, std::numeric_limits<double>::min());
-    for (size_t k = 0; k < diagonal_.size(); ++k) d_(k) = std::max(h[diagonal_[k]], floor);
+    for (size_t k = 0; k < diagonal_.size(); ++k) h_diag_(k) = h[diagonal_[k]];
+    SetDamping();
   }
 
-  bool Solve(double lambda, Eigen::VectorXd* delta) {
+  bool Solve(double lambda, Eigen::VectorXd* delta) override {
     std::copy(h_.valuePtr(), h_.valuePtr() + h_.nonZeros(), damped_.valuePtr());
     double* v = damped_.valuePtr();
     for (size_t k = 0; k < diagonal_.size(); ++k) v[diagonal_[k]] += lambda * d_(k);
@@ -127,18 +148,211 @@ class NormalEquations {
     return delta->allFinite();
   }
 
-  const Eigen::VectorXd& gradient() const { return g_; }
-  const Eigen::VectorXd& damping() const { return d_; }
-  double HessianDiagonal(int k) const { return h_.valuePtr()[diagonal_[k]]; }
-
  private:
   Eigen::SparseMatrix<double> h_;
   Eigen::SparseMatrix<double> damped_;
   std::vector<int> diagonal_;
   std::vector<std::vector<int>> block_index_;
-  Eigen::VectorXd g_;
-  Eigen::VectorXd d_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt_;
+};
+
+// The bundle-adjustment structure: camera parameters (numbered first) against groups of
+// primitive-side parameters (a primitive with its attached primitives and free vertices,
+// merged when a constraint couples them). Each group's block of J^T J is dense and small and
+// no block couples two groups, so they are eliminated one by one (Schur complement) into a
+// dense reduced camera system. Cost per iteration ~ sum over groups of (group size)^3 plus
+// (cameras seeing it x 9)^2 x group size, plus (9 x cameras)^3: linear in the primitives.
+class SchurEquations : public NormalEquations {
+ public:
+  // The largest group this class accepts; beyond it SparseEquations is used.
+  static constexpr int kMaxGroupSize = 96;
+
+  bool Init(const JointProblem& problem) override {
+    const int n = problem.num_parameters;
+    nc_ = 0;
+    // BuildJointProblem numbers the camera parameters first.
+    for (const CameraBlock& c : problem.cameras) {
+      if (c.focal_offset >= 0) nc_ = std::max(nc_, c.focal_offset + 1);
+      if (c.principal_point_offset >= 0) nc_ = std::max(nc_, c.principal_point_offset + 2);
+      if (c.center_offset >= 0) nc_ = std::max(nc_, c.center_offset + 3);
+    }
+    // Union-find over the primitive-side parameters [nc, n).
+    std::vector<int> parent(n);
+    for (int k = 0; k < n; ++k) parent[k] = k;
+    auto find = [&](int k) {
+      while (parent[k] != k) k = parent[k] = parent[parent[k]];
+      return k;
+    };
+    for (const ResidualBlock& b : problem.blocks) {
+      int first = -1;
+      for (int c : b.cols) {
+        if (c < nc_) continue;
+        if (first < 0) first = c;
+        else parent[find(c)] = find(first);
+      }
+    }
+    group_of_.assign(n, -1);
+    local_.assign(n, -1);
+    std::vector<int> root_group(n, -1);
+    groups_.clear();
+    for (int k = nc_; k < n; ++k) {
+      const int r = find(k);
+      if (root_group[r] < 0) {
+        root_group[r] = static_cast<int>(groups_.size());
+        groups_.emplace_back();
+      }
+      Group& g = groups_[root_group[r]];
+      group_of_[k] = root_group[r];
+      local_[k] = static_cast<int>(g.params.size());
+      g.params.push_back(k);
+      if (static_cast<int>(g.params.size()) > kMaxGroupSize) return false;
+    }
+    // Camera rows of each group's W block.
+    for (const ResidualBlock& b : problem.blocks) {
+      for (int c : b.cols) {
+        if (c >= nc_) continue;
+        for (int p : b.cols) {
+          if (p < nc_) continue;
+          Group& g = groups_[group_of_[p]];
+          if (std::find(g.camera_rows.begin(), g.camera_rows.end(), c) == g.camera_rows.end()) g.camera_rows.push_back(c);
+        }
+      }
+    }
+    for (Group& g : groups_) {
+      std::sort(g.camera_rows.begin(), g.camera_rows.end());
+      const int ng = static_cast<int>(g.params.size());
+      const int kg = static_cast<int>(g.camera_rows.size());
+      g.v.setZero(ng, ng);
+      g.w.setZero(kg, ng);
+      g.y.setZero(ng, kg);
+      g.wy.setZero(kg, kg);
+      g.wg.setZero(kg);
+      g.damped.setZero(ng, ng);
+      g.rhs.setZero(ng);
+      g.llt = Eigen::LLT<Eigen::MatrixXd>(ng);
+    }
+    u_.setZero(nc_, nc_);
+    s_.setZero(nc_, nc_);
+    s_llt_ = Eigen::LLT<Eigen::MatrixXd>(nc_);
+    rhs_c_.setZero(nc_);
+    dc_.setZero(nc_);
+    auto camera_row = [&](const Group& g, int c) {
+      return static_cast<int>(std::lower_bound(g.camera_rows.begin(), g.camera_rows.end(), c) - g.camera_rows.begin());
+    };
+    auto entry = [&](int a, int b) -> double* {
+      if (a < nc_ && b < nc_) return &u_(std::max(a, b), std::min(a, b));
+      if (a >= nc_ && b >= nc_) {
+        Group& g = groups_[group_of_[a]];
+        return &g.v(std::max(local_[a], local_[b]), std::min(local_[a], local_[b]));
+      }
+      const int c = std::min(a, b), p = std::max(a, b);
+      Group& g = groups_[group_of_[p]];
+      return &g.w(camera_row(g, c), local_[p]);
+    };
+    targets_.clear();
+    for (const ResidualBlock& b : problem.blocks) {
+      std::vector<double*> t;
+      t.reserve(b.cols.size() * (b.cols.size() + 1) / 2);
+      for (size_t i = 0; i < b.cols.size(); ++i) {
+        for (size_t j = 0; j <= i; ++j) t.push_back(entry(b.cols[i], b.cols[j]));
+      }
+      targets_.push_back(std::move(t));
+    }
+    diagonal_.resize(n);
+    for (int k = 0; k < n; ++k) diagonal_[k] = entry(k, k);
+    g_.setZero(n);
+    d_.setZero(n);
+    h_diag_.setZero(n);
+    return true;
+  }
+
+  void Assemble(const JointProblem& problem) override {
+    u_.setZero();
+    for (Group& g : groups_) {
+      g.v.setZero();
+      g.w.setZero();
+    }
+    g_.setZero();
+    for (size_t bi = 0; bi < problem.blocks.size(); ++bi) {
+      const ResidualBlock& b = problem.blocks[bi];
+      double* const* t = targets_[bi].data();
+      const int m = static_cast<int>(b.cols.size());
+      for (int i = 0; i < m; ++i) {
+        const auto ci = b.jacobian.col(i);
+        g_(b.cols[i]) += ci.dot(b.residual);
+        for (int j = 0; j <= i; ++j) **t++ += ci.dot(b.jacobian.col(j));
+      }
+    }
+    for (size_t k = 0; k < diagonal_.size(); ++k) h_diag_(k) = *diagonal_[k];
+    SetDamping();
+  }
+
+  bool Solve(double lambda, Eigen::VectorXd* delta) override {
+    delta->resize(static_cast<Eigen::Index>(diagonal_.size()));
+    s_ = u_;
+    for (int k = 0; k < nc_; ++k) s_(k, k) += lambda * d_(k);
+    rhs_c_ = -g_.head(nc_);
+    for (Group& g : groups_) {
+      const int ng = static_cast<int>(g.params.size());
+      g.damped = g.v;
+      for (int i = 0; i < ng; ++i) {
+        g.damped(i, i) += lambda * d_(g.params[i]);
+        g.rhs(i) = g_(g.params[i]);
+      }
+      g.llt.compute(g.damped);
+      if (g.llt.info() != Eigen::Success) return false;
+      g.llt.solveInPlace(g.rhs);  // V^-1 g_p
+      if (g.camera_rows.empty()) continue;
+      g.y = g.w.transpose();
+      g.llt.solveInPlace(g.y);  // V^-1 W^T
+      const int kg = static_cast<int>(g.camera_rows.size());
+      g.wy.noalias() = g.w * g.y;
+      g.wg.noalias() = g.w * g.rhs;
+      for (int b = 0; b < kg; ++b) {
+        const int rb = g.camera_rows[b];
+        rhs_c_(rb) += g.wg(b);
+        for (int a = b; a < kg; ++a) s_(g.camera_rows[a], rb) -= g.wy(a, b);
+      }
+    }
+    if (nc_ > 0) {
+      s_llt_.compute(s_);
+      if (s_llt_.info() != Eigen::Success) return false;
+      dc_ = rhs_c_;
+      s_llt_.solveInPlace(dc_);
+      delta->head(nc_) = dc_;
+    }
+    for (Group& g : groups_) {
+      for (size_t a = 0; a < g.camera_rows.size(); ++a) g.wg(a) = dc_(g.camera_rows[a]);
+      g.rhs.noalias() += g.y * g.wg;
+      for (size_t i = 0; i < g.params.size(); ++i) (*delta)(g.params[i]) = -g.rhs(i);
+    }
+    return delta->allFinite();
+  }
+
+ private:
+  struct Group {
+    std::vector<int> params;       // parameter indices, in local order
+    std::vector<int> camera_rows;  // camera parameters coupled to the group, sorted
+    Eigen::MatrixXd v;             // J_p^T J_p (lower triangle)
+    Eigen::MatrixXd w;             // J_c^T J_p over camera_rows
+    Eigen::MatrixXd y;             // V^-1 W^T
+    Eigen::MatrixXd wy;            // W V^-1 W^T
+    Eigen::VectorXd wg;            // W V^-1 g_p
+    Eigen::MatrixXd damped;
+    Eigen::VectorXd rhs;
+    Eigen::LLT<Eigen::MatrixXd> llt;
+  };
+  int nc_ = 0;
+  std::vector<Group> groups_;
+  std::vector<int> group_of_;
+  std::vector<int> local_;
+  std::vector<std::vector<double*>> targets_;
+  std::vector<double*> diagonal_;
+  Eigen::MatrixXd u_;  // J_c^T J_c (lower triangle)
+  Eigen::MatrixXd s_;  // reduced camera system (lower triangle)
+  Eigen::LLT<Eigen::MatrixXd> s_llt_;
+  Eigen::VectorXd rhs_c_;
+  Eigen::VectorXd dc_;
 };
 
 double TotalCost(const JointProblem& problem) {
@@ -479,8 +693,15 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   summary.initial_cost = ObservationCost(problem);
   const double initial_merit = TotalCost(problem);
 
-  NormalEquations normal;
-  if (!normal.Init(problem)) return finish(Termination::kFailed, "the sparse normal equations could not be analysed");
+  // The Schur complement on primitive groups, unless a constraint makes a group too large.
+  SchurEquations schur;
+  SparseEquations sparse;
+  NormalEquations* normal_ptr = &schur;
+  if (options.linear_solver != JointSolveOptions::LinearSolver::kSchur || !schur.Init(problem)) {
+    normal_ptr = &sparse;
+    if (!sparse.Init(problem)) return finish(Termination::kFailed, "the sparse normal equations could not be analysed");
+  }
+  NormalEquations& normal = *normal_ptr;
   LmState lm;
   lm.lambda = options.initial_lambda;
   JointState trial = state;

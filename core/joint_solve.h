@@ -30,9 +30,15 @@
 //   (up to 1e14) when max |c| fell by less than a factor 4; at most 12 outer rounds, ending
 //   once max |c| <= constraint_tolerance. The SLSQP polish (NLopt) then makes them hold as
 //   hard equalities.
-// Linear algebra: the damped normal equations (J^T J + lambda diag(J^T J)) are assembled into a
-// sparse matrix of fixed pattern and solved by a simplicial LDL^T whose fill-reducing (AMD)
-// ordering and symbolic analysis are computed once per solve.
+// Linear algebra: the damped normal equations (J^T J + lambda diag(J^T J)) delta = -J^T r. By
+// default (kSchur) the primitive-side parameters are grouped (a primitive with the primitives
+// attached to it and its free vertices, merged when a constraint couples them); no residual
+// couples two groups, so each group's small dense block is eliminated on its own and the
+// cameras are solved from the dense reduced camera system (Schur complement): the time per
+// iteration grows linearly with the primitives. A group larger than 96 parameters (e.g. one
+// coplanarity across many primitives) falls back to kSparseLdlt: a sparse matrix of fixed
+// pattern factorised by a simplicial LDL^T whose AMD ordering and symbolic analysis are done
+// once per solve.
 // Gauge: world axes come from the calibrated rotations or a locked primitive rotation; the
 // origin from a fixed point, a locked translation or a locked camera centre; the scale from a
 // distance constraint or a locked dimension. When something is left free the solve still
@@ -64,6 +70,8 @@ struct JointSolveOptions {
   double conflict_tolerance = 1e-6;
   // Diagnostics cost an SVD of the Jacobian: on for a full solve, off per frame.
   bool compute_diagnostics = true;
+  enum class LinearSolver { kSchur, kSparseLdlt };
+  LinearSolver linear_solver = LinearSolver::kSchur;
 
   bool Check(std::string* error) const;
 };

@@ -307,6 +307,23 @@ TEST_CASE("joint solve: several images and primitives, noise-free and with 0.5 p
   }
 }
 
+TEST_CASE("joint solve: the Schur complement and the sparse LDL^T give the same solution") {
+  Scene scene = MakeScene(3, 3, 1.0, 0.5);
+  const Project start = Perturb(scene.truth, 0.04);
+  JointSolveOptions options;
+  options.compute_diagnostics = false;
+  Project by_schur, by_ldlt;
+  const JointSolveSummary a = SolveJoint(start, options, &by_schur);
+  options.linear_solver = JointSolveOptions::LinearSolver::kSparseLdlt;
+  const JointSolveSummary b = SolveJoint(start, options, &by_ldlt);
+  REQUIRE(a.IsUsable());
+  REQUIRE(b.IsUsable());
+  const double difference = MaxRelativeShapeError(by_ldlt, by_schur);
+  CAPTURE(difference);
+  CHECK(difference <= kNoiseFreeTolerance);
+  CHECK(std::abs(a.final_cost - b.final_cost) <= kNoiseFreeTolerance * a.final_cost);
+}
+
 TEST_CASE("joint solve: the same scene at x1e-3 and x1e3 solves to the same relative accuracy") {
   for (double scale : {1e-3, 1.0, 1e3}) {
     Scene scene = MakeScene(2, 2, scale, 0.0);
