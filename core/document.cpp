@@ -78,8 +78,9 @@ void ApplyList(const std::vector<Change<T>>& changes, bool forward, std::vector<
 void ApplyDirection(const Edit& edit, bool forward, Project* project) {
   ApplyList(edit.images, forward, &project->images);
   ApplyList(edit.segments, forward, &project->segments);
-  ApplyList(edit.boxes, forward, &project->boxes);
+  ApplyList(edit.primitives, forward, &project->primitives);
   ApplyList(edit.pins, forward, &project->pins);
+  ApplyList(edit.constraints, forward, &project->constraints);
   const auto& units = forward ? edit.units_after : edit.units_before;
   if (units) project->units = *units;
   const Id next_id = forward ? edit.next_id_after : edit.next_id_before;
@@ -89,7 +90,7 @@ void ApplyDirection(const Edit& edit, bool forward, Project* project) {
 }  // namespace
 
 bool Edit::Empty() const {
-  return images.empty() && segments.empty() && boxes.empty() && pins.empty() && !units_after &&
+  return images.empty() && segments.empty() && primitives.empty() && pins.empty() && constraints.empty() && !units_after &&
          next_id_after == kNoId;
 }
 
@@ -98,8 +99,9 @@ Edit DiffProjects(const std::string& label, const Project& before, const Project
   edit.label = label;
   DiffList(before.images, after.images, &edit.images);
   DiffList(before.segments, after.segments, &edit.segments);
-  DiffList(before.boxes, after.boxes, &edit.boxes);
+  DiffList(before.primitives, after.primitives, &edit.primitives);
   DiffList(before.pins, after.pins, &edit.pins);
+  DiffList(before.constraints, after.constraints, &edit.constraints);
   if (before.units != after.units) {
     edit.units_before = before.units;
     edit.units_after = after.units;

@@ -24,8 +24,9 @@ struct Edit {
   std::string label;  // shown in the history panel, e.g. "Move pin"
   std::vector<Change<Image>> images;
   std::vector<Change<Segment>> segments;
-  std::vector<Change<Box>> boxes;
+  std::vector<Change<Primitive>> primitives;
   std::vector<Change<Pin>> pins;
+  std::vector<Change<Constraint>> constraints;
   std::optional<std::string> units_before, units_after;
   Id next_id_before = kNoId, next_id_after = kNoId;
 

@@ -117,6 +117,65 @@ class Writer {
   std::string error_;
 };
 
+// A mesh is stored record by record with its ids (dead slots stay holes), so a round trip
+// restores the very ids that pins and constraints refer to. No-element links are -1.
+OrderedJson Link(std::uint32_t id) { return id == kNoElement ? OrderedJson(-1) : OrderedJson(id); }
+
+OrderedJson WriteMesh(const PolyMesh& mesh, const std::string& at, Writer* w) {
+  OrderedJson j;
+  j["vertex_id_end"] = mesh.VertexIdEnd();
+  j["edge_id_end"] = mesh.EdgeIdEnd();
+  j["face_id_end"] = mesh.FaceIdEnd();
+  OrderedJson vertices = OrderedJson::array();
+  for (VertexId v = 0; v < mesh.VertexIdEnd(); ++v) {
+    if (!mesh.IsVertex(v)) continue;
+    const MeshVertex& mv = mesh.vertex(v);
+    const std::string vat = Index(Join(at, "vertices"), vertices.size());
+    OrderedJson jv;
+    jv["id"] = v;
+    jv["halfedge"] = Link(mv.halfedge);
+    // Row-major 3x4 coefficients; b only when it differs from a (E_split vertices).
+    jv["a"] = w->Numbers(Join(vat, "a"), mv.local.a.transpose().reshaped());
+    if (mv.local.b != mv.local.a) jv["b"] = w->Numbers(Join(vat, "b"), mv.local.b.transpose().reshaped());
+    jv["t"] = w->Number(Join(vat, "t"), mv.local.t);
+    jv["on_edge"] = mv.local.on_edge;
+    jv["free"] = mv.local.free;
+    jv["offset"] = w->Numbers(Join(vat, "offset"), mv.local.offset);
+    jv["position"] = w->Numbers(Join(vat, "position"), mv.position);
+    vertices.push_back(std::move(jv));
+  }
+  j["vertices"] = std::move(vertices);
+  OrderedJson edges = OrderedJson::array();
+  for (EdgeId e = 0; e < mesh.EdgeIdEnd(); ++e) {
+    if (!mesh.IsEdge(e)) continue;
+    const std::string eat = Index(Join(at, "edges"), edges.size());
+    OrderedJson je;
+    je["id"] = e;
+    OrderedJson sides = OrderedJson::array();
+    for (int side = 0; side < 2; ++side) {
+      const MeshHalfedge& h = mesh.halfedge(PolyMesh::EdgeHalfedge(e, side));
+      OrderedJson jh;
+      jh["origin"] = Link(h.origin);
+      jh["next"] = Link(h.next);
+      jh["prev"] = Link(h.prev);
+      jh["face"] = Link(h.face);
+      jh["uv"] = w->Numbers(Index(Join(eat, "halfedges"), side) + ".uv", h.uv);
+      sides.push_back(std::move(jh));
+    }
+    je["halfedges"] = std::move(sides);
+    edges.push_back(std::move(je));
+  }
+  j["edges"] = std::move(edges);
+  OrderedJson faces = OrderedJson::array();
+  for (FaceId f = 0; f < mesh.FaceIdEnd(); ++f) {
+    if (!mesh.IsFace(f)) continue;
+    const MeshFace& mf = mesh.face(f);
+    faces.push_back(OrderedJson{{"id", f}, {"halfedge", Link(mf.halfedge)}, {"material", mf.material}});
+  }
+  j["faces"] = std::move(faces);
+  return j;
+}
+
 OrderedJson WriteProject(const Project& p, Writer* w) {
   OrderedJson root;
   root["format"] = kFormatName;
@@ -149,6 +208,8 @@ OrderedJson WriteProject(const Project& p, Writer* w) {
     j["fixed_principal_point_px"] =
         w->Numbers(Join(at, "fixed_principal_point_px"), im.fixed_principal_point_px);
     j["pose_locked"] = im.pose_locked;
+    j["focal_locked"] = im.focal_locked;
+    j["principal_point_locked"] = im.principal_point_locked;
     images.push_back(std::move(j));
   }
   root["images"] = std::move(images);
@@ -167,22 +228,26 @@ OrderedJson WriteProject(const Project& p, Writer* w) {
   }
   root["segments"] = std::move(segments);
 
-  OrderedJson boxes = OrderedJson::array();
-  for (size_t i = 0; i < p.boxes.size(); ++i) {
-    const Box& b = p.boxes[i];
-    const std::string at = Index("boxes", i);
+  OrderedJson primitives = OrderedJson::array();
+  for (size_t i = 0; i < p.primitives.size(); ++i) {
+    const Primitive& prim = p.primitives[i];
+    const std::string at = Index("primitives", i);
     OrderedJson j;
-    j["id"] = b.id;
-    j["name"] = w->String(Join(at, "name"), b.name);
-    j["size"] = w->Numbers(Join(at, "size"), b.size);
-    j["rotation"] = w->Numbers(Join(at, "rotation"), b.rotation);
-    j["translation"] = w->Numbers(Join(at, "translation"), b.translation);
-    j["size_locked"] = {b.size_locked[0], b.size_locked[1], b.size_locked[2]};
-    j["rotation_locked"] = b.rotation_locked;
-    j["translation_locked"] = b.translation_locked;
-    boxes.push_back(std::move(j));
+    j["id"] = prim.id;
+    j["name"] = w->String(Join(at, "name"), prim.name);
+    j["kind"] = PrimitiveKindName(prim.shape.kind);
+    j["params"] = w->Numbers(Join(at, "params"), prim.shape.params);
+    j["segments"] = prim.shape.segments;
+    j["rotation"] = w->Numbers(Join(at, "rotation"), prim.shape.rotation);
+    j["translation"] = w->Numbers(Join(at, "translation"), prim.shape.translation);
+    j["param_locked"] = prim.param_locked;
+    j["rotation_locked"] = prim.rotation_locked;
+    j["translation_locked"] = prim.translation_locked;
+    j["attached_to"] = prim.attached_to;
+    j["mesh"] = WriteMesh(prim.mesh, Join(at, "mesh"), w);
+    primitives.push_back(std::move(j));
   }
-  root["boxes"] = std::move(boxes);
+  root["primitives"] = std::move(primitives);
 
   OrderedJson pins = OrderedJson::array();
   for (size_t i = 0; i < p.pins.size(); ++i) {
@@ -190,12 +255,32 @@ OrderedJson WriteProject(const Project& p, Writer* w) {
     OrderedJson j;
     j["id"] = pin.id;
     j["image_id"] = pin.image_id;
-    j["box_id"] = pin.box_id;
-    j["corner"] = pin.corner;
+    j["primitive_id"] = pin.vertex.primitive_id;
+    j["vertex"] = pin.vertex.vertex;
     j["uv_px"] = w->Numbers(Join(Index("pins", i), "uv_px"), pin.uv_px);
     pins.push_back(std::move(j));
   }
   root["pins"] = std::move(pins);
+
+  OrderedJson constraints = OrderedJson::array();
+  for (size_t i = 0; i < p.constraints.size(); ++i) {
+    const Constraint& c = p.constraints[i];
+    const std::string at = Index("constraints", i);
+    OrderedJson j;
+    j["id"] = c.id;
+    j["kind"] = ConstraintKindName(c.kind);
+    OrderedJson refs = OrderedJson::array();
+    for (const VertexRef& ref : c.vertices) refs.push_back({ref.primitive_id, ref.vertex});
+    j["vertices"] = std::move(refs);
+    j["value"] = w->Number(Join(at, "value"), c.value);
+    j["point"] = w->Numbers(Join(at, "point"), c.point);
+    j["axis"] = AxisName(c.axis);
+    j["image_id"] = c.image_id;
+    j["line_a_px"] = w->Numbers(Join(at, "line_a_px"), c.line_a_px);
+    j["line_b_px"] = w->Numbers(Join(at, "line_b_px"), c.line_b_px);
+    constraints.push_back(std::move(j));
+  }
+  root["constraints"] = std::move(constraints);
   return root;
 }
 
@@ -339,7 +424,8 @@ class Reader {
 
 bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
   if (!r->Object(j, at, {"id", "path", "width_px", "height_px", "camera", "camera_calibrated",
-                         "principal_point_mode", "fixed_principal_point_px", "pose_locked"}))
+                         "principal_point_mode", "fixed_principal_point_px", "pose_locked", "focal_locked",
+                         "principal_point_locked"}))
     return false;
   constexpr int kMaxSize = std::numeric_limits<int>::max();
   if (!r->IdField(j, at, "id", &im->id) || !r->String(j, at, "path", &im->path) ||
@@ -377,7 +463,8 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
                    "expected \"solve\", \"center\" or \"fixed\", found \"" + mode + "\"");
   im->principal_point_mode = *parsed_mode;
   return r->Vector<2>(j, at, "fixed_principal_point_px", &im->fixed_principal_point_px) &&
-         r->Bool(j, at, "pose_locked", &im->pose_locked);
+         r->Bool(j, at, "pose_locked", &im->pose_locked) && r->Bool(j, at, "focal_locked", &im->focal_locked) &&
+         r->Bool(j, at, "principal_point_locked", &im->principal_point_locked);
 }
 
 bool ReadSegment(const Json& j, const std::string& at, Reader* r, Segment* s) {
@@ -392,33 +479,210 @@ bool ReadSegment(const Json& j, const std::string& at, Reader* r, Segment* s) {
   return r->Vector<2>(j, at, "a_px", &s->a_px) && r->Vector<2>(j, at, "b_px", &s->b_px);
 }
 
-bool ReadBox(const Json& j, const std::string& at, Reader* r, Box* b) {
-  if (!r->Object(j, at, {"id", "name", "size", "rotation", "translation", "size_locked",
-                         "rotation_locked", "translation_locked"}) ||
-      !r->IdField(j, at, "id", &b->id) || !r->String(j, at, "name", &b->name) ||
-      !r->Vector<3>(j, at, "size", &b->size))
+// A mesh link: -1 (none) or an id below `end`.
+bool ReadLink(const Json& obj, const std::string& obj_path, const char* key, std::uint32_t end, Reader* r,
+              std::uint32_t* out) {
+  const Json* j = r->Field(obj, obj_path, key);
+  if (!j) return false;
+  if (j->is_number_integer() && !j->is_number_unsigned() && j->get<std::int64_t>() == -1) {
+    *out = kNoElement;
+    return true;
+  }
+  if (!j->is_number_unsigned() || j->get<std::uint64_t>() >= end)
+    return r->Fail(Join(obj_path, key), "expected -1 or an id below " + std::to_string(end) + ", found " +
+                                            Reader::Describe(*j));
+  *out = static_cast<std::uint32_t>(j->get<std::uint64_t>());
+  return true;
+}
+
+bool ReadCoefficients(const Json& obj, const std::string& at, const char* key, Reader* r, ParamCoefficients* c) {
+  Eigen::Matrix<double, 12, 1> v;
+  if (!r->Vector<12>(obj, at, key, &v)) return false;
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 4; ++col) (*c)(row, col) = v(row * 4 + col);
+  return true;
+}
+
+bool ReadMesh(const Json& j, const std::string& at, PrimitiveId primitive, Reader* r, PolyMesh* mesh) {
+  constexpr int kMaxIds = 1 << 30;
+  int vertex_end = 0, edge_end = 0, face_end = 0;
+  if (!r->Object(j, at, {"vertex_id_end", "edge_id_end", "face_id_end", "vertices", "edges", "faces"}) ||
+      !r->Int(j, at, "vertex_id_end", 0, kMaxIds, &vertex_end) || !r->Int(j, at, "edge_id_end", 0, kMaxIds, &edge_end) ||
+      !r->Int(j, at, "face_id_end", 0, kMaxIds, &face_end))
     return false;
-  for (int k = 0; k < 3; ++k)
-    if (b->size(k) < 0) return r->Fail(Index(Join(at, "size"), k), "a size cannot be negative");
-  if (!r->Vector<3>(j, at, "rotation", &b->rotation) ||
-      !r->Vector<3>(j, at, "translation", &b->translation))
+  *mesh = PolyMesh();
+  mesh->GrowIdSpace(vertex_end, edge_end, face_end);
+  const std::uint32_t halfedge_end = 2u * static_cast<std::uint32_t>(edge_end);
+  const Json* list = nullptr;
+  if (!r->Array(j, at, "vertices", &list)) return false;
+  for (size_t i = 0; i < list->size(); ++i) {
+    const Json& jv = (*list)[i];
+    const std::string vat = Index(Join(at, "vertices"), i);
+    std::uint32_t id = 0;
+    if (!r->Object(jv, vat, {"id", "halfedge", "a", "b", "t", "on_edge", "free", "offset", "position"}) ||
+        !ReadLink(jv, vat, "id", vertex_end, r, &id))
+      return false;
+    if (id == kNoElement || mesh->IsVertex(id)) return r->Fail(Join(vat, "id"), "missing or duplicate vertex id");
+    mesh->ReviveVertex(id);
+    MeshVertex& v = mesh->vertex(id);
+    v.primitive = primitive;
+    if (!ReadLink(jv, vat, "halfedge", halfedge_end, r, &v.halfedge) || !ReadCoefficients(jv, vat, "a", r, &v.local.a))
+      return false;
+    v.local.b = v.local.a;
+    if (jv.contains("b") && !ReadCoefficients(jv, vat, "b", r, &v.local.b)) return false;
+    if (!r->Double(jv, vat, "t", &v.local.t) || !r->Bool(jv, vat, "on_edge", &v.local.on_edge) ||
+        !r->Bool(jv, vat, "free", &v.local.free) || !r->Vector<3>(jv, vat, "offset", &v.local.offset) ||
+        !r->Vector<3>(jv, vat, "position", &v.position))
+      return false;
+  }
+  if (!r->Array(j, at, "edges", &list)) return false;
+  for (size_t i = 0; i < list->size(); ++i) {
+    const Json& je = (*list)[i];
+    const std::string eat = Index(Join(at, "edges"), i);
+    std::uint32_t id = 0;
+    const Json* sides = nullptr;
+    if (!r->Object(je, eat, {"id", "halfedges"}) || !ReadLink(je, eat, "id", edge_end, r, &id) ||
+        !r->Array(je, eat, "halfedges", &sides))
+      return false;
+    if (id == kNoElement || mesh->IsEdge(id)) return r->Fail(Join(eat, "id"), "missing or duplicate edge id");
+    if (sides->size() != 2) return r->Fail(Join(eat, "halfedges"), "expected 2 half-edges");
+    mesh->ReviveEdge(id);
+    for (int side = 0; side < 2; ++side) {
+      const Json& jh = (*sides)[side];
+      const std::string hat = Index(Join(eat, "halfedges"), side);
+      MeshHalfedge& h = mesh->halfedge(PolyMesh::EdgeHalfedge(id, side));
+      if (!r->Object(jh, hat, {"origin", "next", "prev", "face", "uv"}) ||
+          !ReadLink(jh, hat, "origin", vertex_end, r, &h.origin) || !ReadLink(jh, hat, "next", halfedge_end, r, &h.next) ||
+          !ReadLink(jh, hat, "prev", halfedge_end, r, &h.prev) || !ReadLink(jh, hat, "face", face_end, r, &h.face) ||
+          !r->Vector<2>(jh, hat, "uv", &h.uv))
+        return false;
+    }
+  }
+  if (!r->Array(j, at, "faces", &list)) return false;
+  for (size_t i = 0; i < list->size(); ++i) {
+    const Json& jf = (*list)[i];
+    const std::string fat = Index(Join(at, "faces"), i);
+    std::uint32_t id = 0;
+    if (!r->Object(jf, fat, {"id", "halfedge", "material"}) || !ReadLink(jf, fat, "id", face_end, r, &id)) return false;
+    if (id == kNoElement || mesh->IsFace(id)) return r->Fail(Join(fat, "id"), "missing or duplicate face id");
+    mesh->ReviveFace(id);
+    MeshFace& f = mesh->face(id);
+    f.primitive = primitive;
+    if (!ReadLink(jf, fat, "halfedge", halfedge_end, r, &f.halfedge) ||
+        !r->Int(jf, fat, "material", 0, std::numeric_limits<int>::max(), &f.material))
+      return false;
+  }
+  const std::vector<std::string> problems = Validate(*mesh);
+  if (!problems.empty()) return r->Fail(at, "broken mesh: " + problems.front());
+  return true;
+}
+
+bool ReadPrimitive(const Json& j, const std::string& at, Reader* r, Primitive* prim) {
+  std::string kind;
+  if (!r->Object(j, at, {"id", "name", "kind", "params", "segments", "rotation", "translation", "param_locked",
+                         "rotation_locked", "translation_locked", "attached_to", "mesh"}) ||
+      !r->IdField(j, at, "id", &prim->id) || !r->String(j, at, "name", &prim->name) ||
+      !r->String(j, at, "kind", &kind))
     return false;
-  const Json* locked = r->Field(j, at, "size_locked");
+  PrimitiveShape& shape = prim->shape;
+  shape.id = prim->id;
+  bool known_kind = false;
+  for (PrimitiveKind k : {PrimitiveKind::kBox, PrimitiveKind::kWedge, PrimitiveKind::kPrism, PrimitiveKind::kPyramid,
+                          PrimitiveKind::kCylinder, PrimitiveKind::kPlane}) {
+    if (kind == PrimitiveKindName(k)) shape.kind = k, known_kind = true;
+  }
+  if (!known_kind) return r->Fail(Join(at, "kind"), "unknown primitive kind \"" + kind + "\"");
+  if (!r->Vector<kMaxPrimitiveParams>(j, at, "params", &shape.params) ||
+      !r->Int(j, at, "segments", 0, 100000, &shape.segments) || !r->Vector<3>(j, at, "rotation", &shape.rotation) ||
+      !r->Vector<3>(j, at, "translation", &shape.translation))
+    return false;
+  for (int k = 0; k < kMaxPrimitiveParams; ++k)
+    if (shape.params(k) < 0) return r->Fail(Index(Join(at, "params"), k), "a dimension cannot be negative");
+  const Json* locked = r->Field(j, at, "param_locked");
   if (!locked) return false;
-  const std::string locked_at = Join(at, "size_locked");
-  if (!locked->is_array() || locked->size() != 3)
-    return r->Fail(locked_at, "expected an array of 3 booleans");
-  for (int k = 0; k < 3; ++k)
-    if (!r->Bool((*locked)[k], Index(locked_at, k), &b->size_locked[k])) return false;
-  return r->Bool(j, at, "rotation_locked", &b->rotation_locked) &&
-         r->Bool(j, at, "translation_locked", &b->translation_locked);
+  const std::string locked_at = Join(at, "param_locked");
+  if (!locked->is_array() || locked->size() != kMaxPrimitiveParams)
+    return r->Fail(locked_at, "expected an array of " + std::to_string(kMaxPrimitiveParams) + " booleans");
+  for (int k = 0; k < kMaxPrimitiveParams; ++k)
+    if (!r->Bool((*locked)[k], Index(locked_at, k), &prim->param_locked[k])) return false;
+  if (!r->Bool(j, at, "rotation_locked", &prim->rotation_locked) ||
+      !r->Bool(j, at, "translation_locked", &prim->translation_locked))
+    return false;
+  const Json* attached = r->Field(j, at, "attached_to");
+  if (!attached) return false;
+  if (!attached->is_number_unsigned()) return r->Fail(Join(at, "attached_to"), "expected an id or 0");
+  prim->attached_to = attached->get<std::uint64_t>();
+  const Json* mesh = r->Field(j, at, "mesh");
+  if (!mesh) return false;
+  // "from_shape" builds the primitive's unedited mesh: what files from version 1 (and
+  // hand-written ones) get.
+  if (mesh->is_string() && mesh->get<std::string>() == "from_shape") {
+    prim->mesh = PolyMesh();
+    const AddPrimitiveResult added = AddPrimitive(&prim->mesh, shape);
+    if (!added.ok) return r->Fail(Join(at, "params"), added.message);
+    return true;
+  }
+  return ReadMesh(*mesh, Join(at, "mesh"), prim->id, r, &prim->mesh);
 }
 
 bool ReadPin(const Json& j, const std::string& at, Reader* r, Pin* p) {
-  return r->Object(j, at, {"id", "image_id", "box_id", "corner", "uv_px"}) &&
-         r->IdField(j, at, "id", &p->id) && r->IdField(j, at, "image_id", &p->image_id) &&
-         r->IdField(j, at, "box_id", &p->box_id) && r->Int(j, at, "corner", 0, 7, &p->corner) &&
-         r->Vector<2>(j, at, "uv_px", &p->uv_px);
+  int vertex = 0;
+  if (!(r->Object(j, at, {"id", "image_id", "primitive_id", "vertex", "uv_px"}) &&
+        r->IdField(j, at, "id", &p->id) && r->IdField(j, at, "image_id", &p->image_id) &&
+        r->IdField(j, at, "primitive_id", &p->vertex.primitive_id) &&
+        r->Int(j, at, "vertex", 0, std::numeric_limits<int>::max(), &vertex) &&
+        r->Vector<2>(j, at, "uv_px", &p->uv_px)))
+    return false;
+  p->vertex.vertex = static_cast<VertexId>(vertex);
+  return true;
+}
+
+bool ReadConstraint(const Json& j, const std::string& at, Reader* r, Constraint* c) {
+  std::string kind, axis;
+  const Json* refs = nullptr;
+  if (!r->Object(j, at, {"id", "kind", "vertices", "value", "point", "axis", "image_id", "line_a_px", "line_b_px"}) ||
+      !r->IdField(j, at, "id", &c->id) || !r->String(j, at, "kind", &kind) || !r->Array(j, at, "vertices", &refs))
+    return false;
+  const auto parsed_kind = ConstraintKindFromName(kind);
+  if (!parsed_kind) return r->Fail(Join(at, "kind"), "unknown constraint kind \"" + kind + "\"");
+  c->kind = *parsed_kind;
+  c->vertices.clear();
+  for (size_t i = 0; i < refs->size(); ++i) {
+    const Json& ref = (*refs)[i];
+    const std::string rat = Index(Join(at, "vertices"), i);
+    if (!ref.is_array() || ref.size() != 2 || !ref[0].is_number_unsigned() || !ref[1].is_number_unsigned() ||
+        ref[1].get<std::uint64_t>() >= kNoElement)
+      return r->Fail(rat, "expected [primitive_id, vertex]");
+    c->vertices.push_back({ref[0].get<std::uint64_t>(), static_cast<VertexId>(ref[1].get<std::uint64_t>())});
+  }
+  const Json* image = r->Field(j, at, "image_id");
+  if (!image) return false;
+  if (!image->is_number_unsigned()) return r->Fail(Join(at, "image_id"), "expected an id or 0");
+  c->image_id = image->get<std::uint64_t>();
+  if (!r->Double(j, at, "value", &c->value) || !r->Vector<3>(j, at, "point", &c->point) ||
+      !r->String(j, at, "axis", &axis) || !r->Vector<2>(j, at, "line_a_px", &c->line_a_px) ||
+      !r->Vector<2>(j, at, "line_b_px", &c->line_b_px))
+    return false;
+  const auto parsed_axis = AxisFromName(axis);
+  if (!parsed_axis) return r->Fail(Join(at, "axis"), "expected \"x\", \"y\" or \"z\", found \"" + axis + "\"");
+  c->axis = *parsed_axis;
+  return true;
+}
+
+// How many vertices a constraint kind takes: exactly `min` when `max` == `min`.
+void ConstraintArity(ConstraintKind kind, size_t* min, size_t* max) {
+  constexpr size_t kAny = std::numeric_limits<size_t>::max();
+  switch (kind) {
+    case ConstraintKind::kCoplanar: *min = 4, *max = kAny; return;
+    case ConstraintKind::kCollinear: *min = 3, *max = kAny; return;
+    case ConstraintKind::kParallel:
+    case ConstraintKind::kPerpendicular:
+    case ConstraintKind::kEqualLength: *min = *max = 4; return;
+    case ConstraintKind::kFixedPoint: *min = *max = 1; return;
+    case ConstraintKind::kDistance:
+    case ConstraintKind::kAlongAxis:
+    case ConstraintKind::kEdgeOnImageLine: *min = *max = 2; return;
+  }
 }
 
 template <typename T, typename ReadFn>
@@ -442,15 +706,28 @@ bool CheckReferences(const Project& p, Reader* r) {
     max_id = std::max(max_id, id);
     return true;
   };
-  std::set<Id> image_ids, box_ids;
+  std::set<Id> image_ids;
   for (size_t i = 0; i < p.images.size(); ++i) {
     if (!claim(p.images[i].id, Index("images", i))) return false;
     image_ids.insert(p.images[i].id);
   }
-  for (size_t i = 0; i < p.boxes.size(); ++i) {
-    if (!claim(p.boxes[i].id, Index("boxes", i))) return false;
-    box_ids.insert(p.boxes[i].id);
+  for (size_t i = 0; i < p.primitives.size(); ++i) {
+    if (!claim(p.primitives[i].id, Index("primitives", i))) return false;
   }
+  for (size_t i = 0; i < p.primitives.size(); ++i) {
+    const Id base = p.primitives[i].attached_to;
+    if (base != kNoId && (base == p.primitives[i].id || p.FindPrimitive(base) == nullptr))
+      return r->Fail(Join(Index("primitives", i), "attached_to"), "refers to a missing primitive " + std::to_string(base));
+  }
+  // "vertex 3 of primitive 7", checked against the mesh.
+  auto check_vertex = [&](const VertexRef& ref, const std::string& at) {
+    if (p.FindPrimitive(ref.primitive_id) == nullptr)
+      return r->Fail(at, "refers to a missing primitive " + std::to_string(ref.primitive_id));
+    if (p.FindVertex(ref) == nullptr)
+      return r->Fail(at, "refers to vertex " + std::to_string(ref.vertex) + ", which primitive " +
+                             std::to_string(ref.primitive_id) + " does not have");
+    return true;
+  };
   for (size_t i = 0; i < p.segments.size(); ++i) {
     const std::string at = Index("segments", i);
     if (!claim(p.segments[i].id, at)) return false;
@@ -462,8 +739,22 @@ bool CheckReferences(const Project& p, Reader* r) {
     if (!claim(p.pins[i].id, at)) return false;
     if (!image_ids.count(p.pins[i].image_id))
       return r->Fail(Join(at, "image_id"), "refers to a missing image " + std::to_string(p.pins[i].image_id));
-    if (!box_ids.count(p.pins[i].box_id))
-      return r->Fail(Join(at, "box_id"), "refers to a missing box " + std::to_string(p.pins[i].box_id));
+    if (!check_vertex(p.pins[i].vertex, Join(at, "vertex"))) return false;
+  }
+  for (size_t i = 0; i < p.constraints.size(); ++i) {
+    const Constraint& c = p.constraints[i];
+    const std::string at = Index("constraints", i);
+    if (!claim(c.id, at)) return false;
+    size_t min = 0, max = 0;
+    ConstraintArity(c.kind, &min, &max);
+    if (c.vertices.size() < min || c.vertices.size() > max)
+      return r->Fail(Join(at, "vertices"), std::string("a ") + ConstraintKindName(c.kind) + " constraint takes " +
+                                               (min == max ? std::to_string(min) : std::to_string(min) + " or more") +
+                                               " vertices, found " + std::to_string(c.vertices.size()));
+    for (size_t k = 0; k < c.vertices.size(); ++k)
+      if (!check_vertex(c.vertices[k], Index(Join(at, "vertices"), k))) return false;
+    if (c.kind == ConstraintKind::kEdgeOnImageLine && !image_ids.count(c.image_id))
+      return r->Fail(Join(at, "image_id"), "refers to a missing image " + std::to_string(c.image_id));
   }
   if (p.next_id <= max_id)
     return r->Fail("next_id", "must be greater than every id (" + std::to_string(p.next_id) +
@@ -473,9 +764,78 @@ bool CheckReferences(const Project& p, Reader* r) {
 
 // Migration: each step upgrades a document by one version, in place, so that reading only
 // ever deals with the current layout. kMigrationSteps[k] turns version k + 1 into k + 2.
-// When version 2 arrives: bump Project::kFormatVersion and append the step from 1 to 2 here.
 using MigrationStep = bool (*)(Json* doc, std::string* error);
-constexpr std::array<MigrationStep, Project::kFormatVersion - 1> kMigrationSteps = {};
+
+// Version 1 -> 2: boxes become box primitives with unedited meshes ("from_shape"), whose
+// vertex i is corner i, so a pin's corner becomes its vertex; images gain intrinsics locks
+// (locked: version 1 never refined intrinsics in the solve); constraints start empty.
+// Malformed content is left for the reader, which reports it with its path.
+bool MigrateVersion1To2(Json* doc, std::string* error) {
+  Json& root = *doc;
+  if (root.contains("images") && root["images"].is_array()) {
+    for (Json& image : root["images"]) {
+      if (!image.is_object()) continue;
+      image["focal_locked"] = true;
+      image["principal_point_locked"] = true;
+    }
+  }
+  if (root.contains("boxes")) {
+    if (!root["boxes"].is_array()) {
+      *error = "boxes: expected an array";
+      return false;
+    }
+    Json primitives = Json::array();
+    for (const Json& box : root["boxes"]) {
+      if (!box.is_object()) {
+        primitives.push_back(box);
+        continue;
+      }
+      Json prim;
+      for (const char* key : {"id", "name", "rotation", "translation", "rotation_locked", "translation_locked"})
+        if (box.contains(key)) prim[key] = box[key];
+      prim["kind"] = "box";
+      prim["segments"] = 0;
+      if (box.contains("size") && box["size"].is_array()) {
+        Json params = box["size"];
+        params.push_back(0.0);
+        prim["params"] = params;
+      }
+      if (box.contains("size_locked") && box["size_locked"].is_array()) {
+        Json locked = box["size_locked"];
+        locked.push_back(false);
+        prim["param_locked"] = locked;
+      }
+      prim["attached_to"] = 0;
+      prim["mesh"] = "from_shape";
+      primitives.push_back(std::move(prim));
+    }
+    root.erase("boxes");
+    root["primitives"] = std::move(primitives);
+  }
+  if (root.contains("pins") && root["pins"].is_array()) {
+    for (Json& pin : root["pins"]) {
+      if (!pin.is_object()) continue;
+      if (pin.contains("box_id")) {
+        pin["primitive_id"] = pin["box_id"];
+        pin.erase("box_id");
+      }
+      if (pin.contains("corner")) {
+        const Json& corner = pin["corner"];
+        if (!corner.is_number_integer() || corner.get<std::int64_t>() < 0 || corner.get<std::int64_t>() > 7) {
+          *error = "a pin's corner must be an integer from 0 to 7, found " + corner.dump();
+          return false;
+        }
+        pin["vertex"] = corner;
+        pin.erase("corner");
+      }
+    }
+  }
+  root["constraints"] = Json::array();
+  return true;
+}
+
+// kMigrationSteps[k] turns version k + 1 into k + 2.
+constexpr std::array<MigrationStep, Project::kFormatVersion - 1> kMigrationSteps = {MigrateVersion1To2};
 
 bool MigrateToCurrent(Json* doc, int version, std::string* error) {
   for (int v = version; v < Project::kFormatVersion; ++v) {
@@ -505,11 +865,14 @@ bool ReadProject(Json& root, Reader* r, Project* p) {
   std::string migrate_error;
   if (!MigrateToCurrent(&root, version->get<int>(), &migrate_error)) return r->Fail("", migrate_error);
 
-  if (!r->Object(root, "", {"format", "version", "units", "next_id", "images", "segments", "boxes", "pins"}) ||
+  if (!r->Object(root, "", {"format", "version", "units", "next_id", "images", "segments", "primitives", "pins",
+                            "constraints"}) ||
       !r->String(root, "", "units", &p->units) || !r->IdField(root, "", "next_id", &p->next_id) ||
       !ReadList(root, "images", r, ReadImage, &p->images) ||
       !ReadList(root, "segments", r, ReadSegment, &p->segments) ||
-      !ReadList(root, "boxes", r, ReadBox, &p->boxes) || !ReadList(root, "pins", r, ReadPin, &p->pins))
+      !ReadList(root, "primitives", r, ReadPrimitive, &p->primitives) ||
+      !ReadList(root, "pins", r, ReadPin, &p->pins) ||
+      !ReadList(root, "constraints", r, ReadConstraint, &p->constraints))
     return false;
   return CheckReferences(*p, r);
 }

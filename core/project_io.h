@@ -4,10 +4,13 @@
 // or line/column), and never crashes. Doubles are written in the shortest form that reads
 // back to the same bits, so a save/load round-trip is exact.
 //
-// Layout (version 1): {"format": "facet-project", "version": 1, "units", "next_id", "images",
-// "segments", "boxes", "pins"}; every field of core/project.h is stored, camera rotations as
-// 9 numbers row-major (exact), box rotations as angle-axis. Older versions are upgraded step
-// by step on load (project_io.cpp, kMigrationSteps).
+// Layout (version 2): {"format": "facet-project", "version": 2, "units", "next_id", "images",
+// "segments", "primitives", "pins", "constraints"}; every field of core/project.h is stored,
+// camera rotations as 9 numbers row-major (exact), primitive rotations as angle-axis, each
+// primitive's mesh record by record with its ids (holes included) so that pins and
+// constraints keep naming the same vertices; a mesh may also be "from_shape" (the unedited
+// primitive). Version 1 files (boxes with corner pins) are upgraded on load
+// (project_io.cpp, kMigrationSteps); tests/fixtures/project_v1.facet is one.
 #pragma once
 
 #include <string>

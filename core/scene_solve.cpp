@@ -10,7 +10,6 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
-#include "core/box.h"
 #include "core/camera.h"
 #include "core/scene_solve_internal.h"
 
@@ -55,15 +54,15 @@ void ParameterValues(const SceneProblem& problem, const SceneState& state, Eigen
     const int off = problem.cameras[c].center_offset;
     if (off >= 0) values->segment<3>(off) = state.camera_centers[c];
   }
-  for (size_t b = 0; b < problem.boxes.size(); ++b) {
-    const auto& box = problem.boxes[b];
-    for (int k = 0; k < 3; ++k) {
-      if (box.size_offset[k] >= 0) (*values)(box.size_offset[k]) = state.box_sizes[b](k);
+  for (size_t b = 0; b < problem.primitives.size(); ++b) {
+    const auto& block = problem.primitives[b];
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+      if (block.param_offset[k] >= 0) (*values)(block.param_offset[k]) = state.primitive_params[b](k);
     }
-    if (box.rotation_offset >= 0) {
-      values->segment<3>(box.rotation_offset) = AngleAxisFromRotation(state.box_rotations[b]);
+    if (block.rotation_offset >= 0) {
+      values->segment<3>(block.rotation_offset) = AngleAxisFromRotation(state.primitive_rotations[b]);
     }
-    if (box.translation_offset >= 0) values->segment<3>(box.translation_offset) = state.box_translations[b];
+    if (block.translation_offset >= 0) values->segment<3>(block.translation_offset) = state.primitive_translations[b];
   }
 }
 
@@ -71,8 +70,8 @@ bool StateIsFinite(const SceneState& state) {
   auto finite = [](const auto& items) {
     return std::all_of(items.begin(), items.end(), [](const auto& x) { return x.allFinite(); });
   };
-  return finite(state.camera_centers) && finite(state.box_sizes) && finite(state.box_rotations) &&
-         finite(state.box_translations);
+  return finite(state.camera_centers) && finite(state.primitive_params) && finite(state.primitive_rotations) &&
+         finite(state.primitive_translations);
 }
 
 struct LmResult {
@@ -215,7 +214,7 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
     }
   }
   if (!StateIsFinite(state)) {
-    return finish(SolveTermination::kInvalidInput, "a camera position or box parameter is not finite");
+    return finish(SolveTermination::kInvalidInput, "a camera position or primitive parameter is not finite");
   }
 
   Eigen::VectorXd residuals;
@@ -242,10 +241,10 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
   if (problem.num_parameters == 0) {
     *solved = project;
     return finish(SolveTermination::kNothingToSolve,
-                  "nothing is free: every camera pose and box parameter that the pins touch is locked");
+                  "nothing is free: every camera pose and primitive parameter that the pins touch is locked");
   }
   // A cold start replaces the current values, so only its result has to be finite: a camera
-  // that was just calibrated still sits at the origin, often on a box corner.
+  // that was just calibrated still sits at the origin, often on a primitive's corner.
   if (!options.warm_start) {
     std::string why;
     if (scene_solve_internal::LinearInitialization(problem, &state, &why)) {
@@ -256,7 +255,7 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
   }
   if (!std::isfinite(summary.initial_cost) && !std::isfinite(record_residuals(state))) {
     return finish(SolveTermination::kFailed,
-                  "the reprojection is not finite at the start: a pinned corner lies in the plane of its camera");
+                  "the reprojection is not finite at the start: a pinned vertex lies in the plane of its camera");
   }
 
   const auto lm = RunLevenbergMarquardt(problem, options, &state);
@@ -278,11 +277,11 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
     summary.warnings.push_back(w);
   }
   for (const auto& obs : problem.observations) {
-    const Box& box = solved->boxes[problem.boxes[obs.box].box_index];
+    const Primitive& primitive = solved->primitives[problem.primitives[obs.primitive].primitive_index];
     const Image& image = solved->images[problem.cameras[obs.camera].image_index];
-    if (image.camera.CamFromWorld(BoxCornerInWorld(box, obs.corner)).z() <= 0.0) {
+    if (image.camera.CamFromWorld(primitive.mesh.vertex(solved->pins[obs.pin_index].vertex.vertex).position).z() <= 0.0) {
       summary.warnings.push_back("pin #" + std::to_string(project.pins[obs.pin_index].id) +
-                                 ": the corner lies behind the camera of its image");
+                                 ": the vertex lies behind the camera of its image");
     }
   }
   return finish(lm.termination, lm.message);

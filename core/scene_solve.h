@@ -1,9 +1,9 @@
 // The geometry solve: min over free parameters of sum over pins of ||P_j v_i - m_ij||^2,
-// where v_i is a box corner written in box-local coordinates times the box's pose (Facade
-// style) and P_j the camera of the pin's image. Free parameters: the centre of each
-// calibrated camera whose pose is not locked (intrinsics and rotation come from
-// calibration), and each box's unlocked size components, rotation and translation. A
-// locked box size component is a known length and fixes the scale.
+// where v_i is a primitive's mesh vertex written in primitive-local coordinates times the
+// primitive's pose (Facade style) and P_j the camera of the pin's image. Free parameters:
+// the centre of each calibrated camera whose pose is not locked (intrinsics and rotation come
+// from calibration), and each primitive's unlocked shape parameters, rotation and
+// translation. A locked dimension is a known length and fixes the scale.
 // Levenberg-Marquardt on Eigen with analytic Jacobians, after a linear initialisation.
 #pragma once
 
@@ -24,7 +24,7 @@ struct SceneSolveOptions {
   double parameter_tolerance = 1e-14;
   double initial_lambda = 1e-4;
   // Use the current parameter values as the start (interactive path). When false, a linear
-  // initialisation computes camera centres and box sizes first.
+  // initialisation computes camera centres and primitive dimensions first.
   bool warm_start = false;
 
   bool Check(std::string* error) const;
@@ -42,12 +42,12 @@ const char* SolveTerminationName(SolveTermination termination);
 struct SceneSolveSummary {
   SolveTermination termination = SolveTermination::kInvalidInput;
   std::string message;
-  std::vector<std::string> warnings;  // e.g. "the box depth is not determined by the pins"
+  std::vector<std::string> warnings;  // e.g. "the depth of box #3 is not determined by the pins"
   int iterations = 0;
   double initial_cost = 0.0;  // 0.5 * sum of squared residuals (px^2) at the project's values
   double final_cost = 0.0;
   // Over the pins that took part: root mean square and maximum of the distance (px) between
-  // the projected corner and the pin.
+  // the projected vertex and the pin.
   double reprojection_rms_px = 0.0;
   double reprojection_max_px = 0.0;
   int num_residuals = 0;   // 2 per pin that took part

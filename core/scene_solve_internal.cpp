@@ -7,7 +7,6 @@
 #include <Eigen/Dense>
 #include <Eigen/SVD>
 
-#include "core/box.h"
 #include "core/camera.h"
 
 namespace facet::scene_solve_internal {
@@ -27,7 +26,21 @@ std::string QuotedOrId(const std::string& name, Id id) {
   return label;
 }
 
-std::string BoxLabel(const Box& box) { return QuotedOrId(box.name, box.id); }
+std::string PrimitiveLabel(const Primitive& primitive) {
+  return std::string(PrimitiveKindName(primitive.shape.kind)) + " " + QuotedOrId(primitive.name, primitive.id);
+}
+
+// What a user calls each shape parameter (core/mesh_primitives.h).
+std::string ParamName(PrimitiveKind kind, int k) {
+  switch (kind) {
+    case PrimitiveKind::kPrism:
+    case PrimitiveKind::kCylinder: return k == 0 ? "radius" : "height";
+    default: {
+      static const char* kNames[3] = {"width (x size)", "depth (y size)", "height (z size)"};
+      return k < 3 ? kNames[k] : "parameter " + std::to_string(k);
+    }
+  }
+}
 
 std::string ImageLabel(const Image& image) { return QuotedOrId(image.path, image.id); }
 
@@ -47,38 +60,38 @@ std::string JoinComponents(const std::vector<int>& components) {
 SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
   SceneProblem problem;
   const int num_images = static_cast<int>(project.images.size());
-  const int num_boxes = static_cast<int>(project.boxes.size());
+  const int num_primitives = static_cast<int>(project.primitives.size());
   auto image_index = [&](Id id) {
     for (int i = 0; i < num_images; ++i) if (project.images[i].id == id) return i;
     return -1;
   };
-  auto box_index = [&](Id id) {
-    for (int i = 0; i < num_boxes; ++i) if (project.boxes[i].id == id) return i;
+  auto primitive_index = [&](Id id) {
+    for (int i = 0; i < num_primitives; ++i) if (project.primitives[i].id == id) return i;
     return -1;
   };
 
   // First pass: which pins take part, and which images and boxes they use.
   std::vector<std::pair<int, int>> pin_targets(project.pins.size(), {-1, -1});
-  std::vector<char> image_used(num_images, 0), box_used(num_boxes, 0);
+  std::vector<char> image_used(num_images, 0), primitive_used(num_primitives, 0);
   std::map<int, int> uncalibrated_pin_counts;
   for (size_t p = 0; p < project.pins.size(); ++p) {
     const Pin& pin = project.pins[p];
     const int ii = image_index(pin.image_id);
-    const int bi = box_index(pin.box_id);
+    const int bi = primitive_index(pin.vertex.primitive_id);
     const std::string pin_label = "pin #" + std::to_string(pin.id);
     if (ii < 0) {
       problem.warnings.push_back(pin_label + " refers to a missing image and was skipped");
     } else if (bi < 0) {
-      problem.warnings.push_back(pin_label + " refers to a missing box and was skipped");
-    } else if (pin.corner < 0 || pin.corner > 7) {
-      problem.warnings.push_back(pin_label + " names corner " + std::to_string(pin.corner) +
-                                 ", which is not in 0..7, and was skipped");
+      problem.warnings.push_back(pin_label + " refers to a missing primitive and was skipped");
+    } else if (!project.primitives[bi].mesh.IsVertex(pin.vertex.vertex)) {
+      problem.warnings.push_back(pin_label + " names vertex " + std::to_string(pin.vertex.vertex) +
+                                 ", which its primitive does not have, and was skipped");
     } else if (!project.images[ii].camera_calibrated) {
       ++uncalibrated_pin_counts[ii];
     } else {
       pin_targets[p] = {ii, bi};
       image_used[ii] = 1;
-      box_used[bi] = 1;
+      primitive_used[bi] = 1;
       continue;
     }
     ++problem.num_skipped_pins;
@@ -90,7 +103,7 @@ SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
   }
 
   // Blocks in project order, so that the parameter numbering does not depend on pin order.
-  std::vector<int> camera_of_image(num_images, -1), block_of_box(num_boxes, -1);
+  std::vector<int> camera_of_image(num_images, -1), block_of_primitive(num_primitives, -1);
   int offset = 0;
   auto add_parameters = [&](ParameterKind kind, int block, int count, int first_component) {
     for (int k = 0; k < count; ++k) problem.parameters.push_back({kind, block, first_component + k});
@@ -114,24 +127,32 @@ SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
     problem.cameras.push_back(block);
     state->camera_centers.push_back(image.camera.CenterInWorld());
   }
-  for (int i = 0; i < num_boxes; ++i) {
-    if (!box_used[i]) continue;
-    const Box& box = project.boxes[i];
-    BoxBlock block;
-    block.box_index = i;
-    const int b = static_cast<int>(problem.boxes.size());
-    block_of_box[i] = b;
-    for (int k = 0; k < 3; ++k) {
-      if (!box.size_locked[k]) block.size_offset[k] = add_parameters(ParameterKind::kBoxSize, b, 1, k);
+  for (int i = 0; i < num_primitives; ++i) {
+    if (!primitive_used[i]) continue;
+    const Primitive& primitive = project.primitives[i];
+    PrimitiveBlock block;
+    block.primitive_index = i;
+    const int b = static_cast<int>(problem.primitives.size());
+    block_of_primitive[i] = b;
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+      // A parameter no vertex depends on (unused by the kind) is not a parameter at all.
+      bool used = false;
+      const PolyMesh& mesh = primitive.mesh;
+      for (VertexId v = 0; v < mesh.VertexIdEnd() && !used; ++v) {
+        used = mesh.IsVertex(v) && !mesh.vertex(v).local.Collapsed().col(k).isZero();
+      }
+      if (used && !primitive.param_locked[k]) {
+        block.param_offset[k] = add_parameters(ParameterKind::kPrimitiveParam, b, 1, k);
+      }
     }
-    if (!box.rotation_locked) block.rotation_offset = add_parameters(ParameterKind::kBoxRotation, b, 3, 0);
-    if (!box.translation_locked) {
-      block.translation_offset = add_parameters(ParameterKind::kBoxTranslation, b, 3, 0);
+    if (!primitive.rotation_locked) block.rotation_offset = add_parameters(ParameterKind::kPrimitiveRotation, b, 3, 0);
+    if (!primitive.translation_locked) {
+      block.translation_offset = add_parameters(ParameterKind::kPrimitiveTranslation, b, 3, 0);
     }
-    problem.boxes.push_back(block);
-    state->box_sizes.push_back(box.size);
-    state->box_rotations.push_back(RotationFromAngleAxis(box.rotation));
-    state->box_translations.push_back(box.translation);
+    problem.primitives.push_back(block);
+    state->primitive_params.push_back(primitive.shape.params);
+    state->primitive_rotations.push_back(RotationFromAngleAxis(primitive.shape.rotation));
+    state->primitive_translations.push_back(primitive.shape.translation);
   }
   problem.num_parameters = offset;
 
@@ -141,8 +162,10 @@ SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
     Observation obs;
     obs.pin_index = static_cast<int>(p);
     obs.camera = camera_of_image[ii];
-    obs.box = block_of_box[bi];
-    obs.corner = project.pins[p].corner;
+    obs.primitive = block_of_primitive[bi];
+    const MeshVertex& vertex = project.primitives[bi].mesh.vertex(project.pins[p].vertex.vertex);
+    obs.coefficients = vertex.local.Collapsed();
+    obs.offset = vertex.local.offset;
     obs.uv_px = project.pins[p].uv_px;
     problem.observations.push_back(obs);
   }
@@ -158,10 +181,11 @@ int EvaluateScene(const SceneProblem& problem, const SceneState& state, Eigen::V
   for (size_t o = 0; o < problem.observations.size(); ++o) {
     const Observation& obs = problem.observations[o];
     const CameraBlock& cam = problem.cameras[obs.camera];
-    const BoxBlock& box = problem.boxes[obs.box];
-    const Eigen::Matrix3d& world_from_box = state.box_rotations[obs.box];
-    const Eigen::Vector3d corner_rotated = world_from_box * BoxCornerLocal(state.box_sizes[obs.box], obs.corner);
-    const Eigen::Vector3d corner_in_world = corner_rotated + state.box_translations[obs.box];
+    const PrimitiveBlock& block = problem.primitives[obs.primitive];
+    const Eigen::Matrix3d& world_from_primitive = state.primitive_rotations[obs.primitive];
+    const Eigen::Vector3d corner_rotated =
+        world_from_primitive * (obs.coefficients * state.primitive_params[obs.primitive] + obs.offset);
+    const Eigen::Vector3d corner_in_world = corner_rotated + state.primitive_translations[obs.primitive];
     const Eigen::Vector3d p_in_cam =
         cam.cam_from_world_rotation * (corner_in_world - state.camera_centers[obs.camera]);
     if (!(p_in_cam.z() > 0.0)) ++num_behind;
@@ -176,16 +200,17 @@ int EvaluateScene(const SceneProblem& problem, const SceneState& state, Eigen::V
     const double fz = cam.focal_px * inv_z;
     d_uv_d_cam << fz, 0.0, -fz * p_in_cam.x() * inv_z, 0.0, fz, -fz * p_in_cam.y() * inv_z;
     const Eigen::Matrix<double, 2, 3> d_uv_d_world = d_uv_d_cam * cam.cam_from_world_rotation;
-    auto block = [&](int col) { return jacobian->block<2, 3>(row, col); };
-    if (cam.center_offset >= 0) block(cam.center_offset) = -d_uv_d_world;
-    for (int k = 0; k < 3; ++k) {
-      if (box.size_offset[k] >= 0 && ((obs.corner >> k) & 1)) {
-        jacobian->block<2, 1>(row, box.size_offset[k]) = d_uv_d_world * world_from_box.col(k);
+    auto jblock = [&](int col) { return jacobian->block<2, 3>(row, col); };
+    if (cam.center_offset >= 0) jblock(cam.center_offset) = -d_uv_d_world;
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+      if (block.param_offset[k] >= 0) {
+        jacobian->block<2, 1>(row, block.param_offset[k]) =
+            d_uv_d_world * (world_from_primitive * obs.coefficients.col(k));
       }
     }
     // exp([d]x) R q ~ R q + d x (R q): the derivative with respect to d is -[R q]x.
-    if (box.rotation_offset >= 0) block(box.rotation_offset) = -d_uv_d_world * Skew(corner_rotated);
-    if (box.translation_offset >= 0) block(box.translation_offset) = d_uv_d_world;
+    if (block.rotation_offset >= 0) jblock(block.rotation_offset) = -d_uv_d_world * Skew(corner_rotated);
+    if (block.translation_offset >= 0) jblock(block.translation_offset) = d_uv_d_world;
   }
   return num_behind;
 }
@@ -195,16 +220,18 @@ void ApplySceneStep(const SceneProblem& problem, const Eigen::VectorXd& delta, S
     const int off = problem.cameras[c].center_offset;
     if (off >= 0) state->camera_centers[c] += delta.segment<3>(off);
   }
-  for (size_t b = 0; b < problem.boxes.size(); ++b) {
-    const BoxBlock& box = problem.boxes[b];
-    for (int k = 0; k < 3; ++k) {
-      if (box.size_offset[k] >= 0) state->box_sizes[b](k) += delta(box.size_offset[k]);
+  for (size_t b = 0; b < problem.primitives.size(); ++b) {
+    const PrimitiveBlock& block = problem.primitives[b];
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+      if (block.param_offset[k] >= 0) state->primitive_params[b](k) += delta(block.param_offset[k]);
     }
-    if (box.rotation_offset >= 0) {
-      state->box_rotations[b] =
-          RotationFromAngleAxis(delta.segment<3>(box.rotation_offset)) * state->box_rotations[b];
+    if (block.rotation_offset >= 0) {
+      state->primitive_rotations[b] =
+          RotationFromAngleAxis(delta.segment<3>(block.rotation_offset)) * state->primitive_rotations[b];
     }
-    if (box.translation_offset >= 0) state->box_translations[b] += delta.segment<3>(box.translation_offset);
+    if (block.translation_offset >= 0) {
+      state->primitive_translations[b] += delta.segment<3>(block.translation_offset);
+    }
   }
 }
 
@@ -215,27 +242,28 @@ void WriteSceneState(const SceneProblem& problem, const SceneState& state, Proje
     Camera& camera = project->images[cam.image_index].camera;
     camera.SetPose(camera.cam_from_world_rotation, state.camera_centers[c]);
   }
-  for (size_t b = 0; b < problem.boxes.size(); ++b) {
-    const BoxBlock& block = problem.boxes[b];
-    Box& box = project->boxes[block.box_index];
-    for (int k = 0; k < 3; ++k) {
-      if (block.size_offset[k] >= 0) box.size(k) = state.box_sizes[b](k);
+  for (size_t b = 0; b < problem.primitives.size(); ++b) {
+    const PrimitiveBlock& block = problem.primitives[b];
+    PrimitiveShape& shape = project->primitives[block.primitive_index].shape;
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+      if (block.param_offset[k] >= 0) shape.params(k) = state.primitive_params[b](k);
     }
-    if (block.rotation_offset >= 0) box.rotation = AngleAxisFromRotation(state.box_rotations[b]);
-    if (block.translation_offset >= 0) box.translation = state.box_translations[b];
+    if (block.rotation_offset >= 0) shape.rotation = AngleAxisFromRotation(state.primitive_rotations[b]);
+    if (block.translation_offset >= 0) shape.translation = state.primitive_translations[b];
   }
+  RefreshAllPrimitives(project);
 }
 
 bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::string* why) {
   // Unknowns: free sizes, free box translations, free camera translations t = -R C.
-  std::vector<std::array<int, 3>> size_col(problem.boxes.size(), {-1, -1, -1});
-  std::vector<int> translation_col(problem.boxes.size(), -1), camera_col(problem.cameras.size(), -1);
+  std::vector<std::array<int, kMaxPrimitiveParams>> size_col(problem.primitives.size(), {-1, -1, -1, -1});
+  std::vector<int> translation_col(problem.primitives.size(), -1), camera_col(problem.cameras.size(), -1);
   int n = 0;
-  for (size_t b = 0; b < problem.boxes.size(); ++b) {
-    for (int k = 0; k < 3; ++k) {
-      if (problem.boxes[b].size_offset[k] >= 0) size_col[b][k] = n++;
+  for (size_t b = 0; b < problem.primitives.size(); ++b) {
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+      if (problem.primitives[b].param_offset[k] >= 0) size_col[b][k] = n++;
     }
-    if (problem.boxes[b].translation_offset >= 0) {
+    if (problem.primitives[b].translation_offset >= 0) {
       translation_col[b] = n;
       n += 3;
     }
@@ -264,21 +292,22 @@ bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::s
                                     .normalized();
     const Eigen::Matrix3d ray_cross = Skew(ray);
     const Eigen::Matrix3d m_world = ray_cross * cam.cam_from_world_rotation;
-    const Eigen::Matrix3d& world_from_box = state->box_rotations[obs.box];
-    for (int k = 0; k < 3; ++k) {
-      if (!((obs.corner >> k) & 1)) continue;
-      const Eigen::Vector3d coeff = m_world * world_from_box.col(k);
-      const double size = state->box_sizes[obs.box](k);
-      if (size_col[obs.box][k] >= 0) {
-        a.block<3, 1>(row, size_col[obs.box][k]) = coeff;
+    const Eigen::Matrix3d& world_from_primitive = state->primitive_rotations[obs.primitive];
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+      if (obs.coefficients.col(k).isZero()) continue;
+      const Eigen::Vector3d coeff = m_world * (world_from_primitive * obs.coefficients.col(k));
+      const double value = state->primitive_params[obs.primitive](k);
+      if (size_col[obs.primitive][k] >= 0) {
+        a.block<3, 1>(row, size_col[obs.primitive][k]) += coeff;
       } else {
-        rhs.segment<3>(row) -= coeff * size;
+        rhs.segment<3>(row) -= coeff * value;
       }
     }
-    if (translation_col[obs.box] >= 0) {
-      a.block<3, 3>(row, translation_col[obs.box]) = m_world;
+    rhs.segment<3>(row) -= m_world * (world_from_primitive * obs.offset);
+    if (translation_col[obs.primitive] >= 0) {
+      a.block<3, 3>(row, translation_col[obs.primitive]) = m_world;
     } else {
-      rhs.segment<3>(row) -= m_world * state->box_translations[obs.box];
+      rhs.segment<3>(row) -= m_world * state->primitive_translations[obs.primitive];
     }
     const Eigen::Vector3d t = -cam.cam_from_world_rotation * state->camera_centers[obs.camera];
     if (camera_col[obs.camera] >= 0) {
@@ -287,11 +316,11 @@ bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::s
       rhs.segment<3>(row) -= ray_cross * t;
     }
   }
-  for (size_t b = 0; b < problem.boxes.size(); ++b) {
-    for (int k = 0; k < 3; ++k) {
-      if (size_col[b][k] >= 0) current(size_col[b][k]) = state->box_sizes[b](k);
+  for (size_t b = 0; b < problem.primitives.size(); ++b) {
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+      if (size_col[b][k] >= 0) current(size_col[b][k]) = state->primitive_params[b](k);
     }
-    if (translation_col[b] >= 0) current.segment<3>(translation_col[b]) = state->box_translations[b];
+    if (translation_col[b] >= 0) current.segment<3>(translation_col[b]) = state->primitive_translations[b];
   }
   for (size_t c = 0; c < problem.cameras.size(); ++c) {
     if (camera_col[c] >= 0) {
@@ -343,11 +372,11 @@ bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::s
   }
 
   SceneState trial = *state;
-  for (size_t b = 0; b < problem.boxes.size(); ++b) {
-    for (int k = 0; k < 3; ++k) {
-      if (size_col[b][k] >= 0) trial.box_sizes[b](k) = solution(size_col[b][k]);
+  for (size_t b = 0; b < problem.primitives.size(); ++b) {
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+      if (size_col[b][k] >= 0) trial.primitive_params[b](k) = solution(size_col[b][k]);
     }
-    if (translation_col[b] >= 0) trial.box_translations[b] = solution.segment<3>(translation_col[b]);
+    if (translation_col[b] >= 0) trial.primitive_translations[b] = solution.segment<3>(translation_col[b]);
   }
   for (size_t c = 0; c < problem.cameras.size(); ++c) {
     if (camera_col[c] >= 0) {
@@ -360,10 +389,12 @@ bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::s
     *why = "the linear solution puts " + std::to_string(num_behind) + " pinned corner(s) behind the camera";
     return false;
   }
-  for (size_t b = 0; b < problem.boxes.size(); ++b) {
-    if ((trial.box_sizes[b].array() <= 0.0).any()) {
-      *why = "the linear solution gives a box a size that is not positive";
-      return false;
+  for (size_t b = 0; b < problem.primitives.size(); ++b) {
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+      if (size_col[b][k] >= 0 && !(trial.primitive_params[b](k) > 0.0)) {
+        *why = "the linear solution gives a primitive a dimension that is not positive";
+        return false;
+      }
     }
   }
   if (!residuals.allFinite()) {
@@ -410,13 +441,13 @@ std::vector<std::string> UndeterminedParameterWarnings(const Project& project, c
         case ParameterKind::kCameraCenter:
           value = axis < 0 ? state.camera_centers[info.block](info.component) : (info.component == axis ? 1.0 : 0.0);
           break;
-        case ParameterKind::kBoxTranslation:
-          value = axis < 0 ? state.box_translations[info.block](info.component) : (info.component == axis ? 1.0 : 0.0);
+        case ParameterKind::kPrimitiveTranslation:
+          value = axis < 0 ? state.primitive_translations[info.block](info.component) : (info.component == axis ? 1.0 : 0.0);
           break;
-        case ParameterKind::kBoxSize:
-          value = axis < 0 ? state.box_sizes[info.block](info.component) : 0.0;
+        case ParameterKind::kPrimitiveParam:
+          value = axis < 0 ? state.primitive_params[info.block](info.component) : 0.0;
           break;
-        case ParameterKind::kBoxRotation:
+        case ParameterKind::kPrimitiveRotation:
           break;
       }
       g(j) = value * col_norm(j);
@@ -437,11 +468,11 @@ std::vector<std::string> UndeterminedParameterWarnings(const Project& project, c
     }
   }
   if (scale_free) {
-    warnings.push_back("the scale of the scene is not fixed by the pins: lock a box size whose length you know");
+    warnings.push_back("the scale of the scene is not fixed by the pins: lock a dimension whose length you know");
   }
   if (position_free) {
     warnings.push_back(
-        "the position of the scene is not fixed by the pins: lock the translation of a box or the pose of a camera");
+        "the position of the scene is not fixed by the pins: lock the translation of a primitive or the pose of a camera");
   }
   for (const auto& g : gauges) null_space -= g * (g.transpose() * null_space);
   if (!gauges.empty() && null_space.cols() > 0) {
@@ -461,8 +492,7 @@ std::vector<std::string> UndeterminedParameterWarnings(const Project& project, c
     const ParameterInfo& info = problem.parameters[j];
     free_components[{static_cast<int>(info.kind), info.block}].push_back(info.component);
   }
-  static const char* kSizeNames[3] = {"width (x size)", "depth (y size)", "height (z size)"};
-  static const char* kFaceNames[3] = {"+x side", "back", "top"};
+  static const char* kBoxFaceNames[3] = {"+x side", "back", "top"};
   for (const auto& [key, components] : free_components) {
     const auto kind = static_cast<ParameterKind>(key.first);
     const int block = key.second;
@@ -474,21 +504,24 @@ std::vector<std::string> UndeterminedParameterWarnings(const Project& project, c
                          " not determined by the pins: pin more vertices in this image or lock its pose");
       continue;
     }
-    const Box& box = project.boxes[problem.boxes[block].box_index];
+    const Primitive& primitive = project.primitives[problem.primitives[block].primitive_index];
+    const PrimitiveKind shape_kind = primitive.shape.kind;
     switch (kind) {
-      case ParameterKind::kBoxSize:
+      case ParameterKind::kPrimitiveParam:
         for (int k : components) {
-          warnings.push_back(std::string("the ") + kSizeNames[k] + " of box " + BoxLabel(box) +
-                             " is not determined by the pins: pin a vertex on the " + kFaceNames[k] +
-                             " face or add a second image");
+          const bool boxy = shape_kind != PrimitiveKind::kPrism && shape_kind != PrimitiveKind::kCylinder && k < 3;
+          warnings.push_back("the " + ParamName(shape_kind, k) + " of " + PrimitiveLabel(primitive) +
+                             " is not determined by the pins: pin a vertex on the " +
+                             (boxy ? std::string(kBoxFaceNames[k]) + " face" : "far side") +
+                             " or add a second image");
         }
         break;
-      case ParameterKind::kBoxRotation:
-        warnings.push_back("the rotation of box " + BoxLabel(box) +
+      case ParameterKind::kPrimitiveRotation:
+        warnings.push_back("the rotation of " + PrimitiveLabel(primitive) +
                            " is not determined by the pins: pin more of its vertices or lock its rotation");
         break;
-      case ParameterKind::kBoxTranslation:
-        warnings.push_back("the " + JoinComponents(components) + " position of box " + BoxLabel(box) +
+      case ParameterKind::kPrimitiveTranslation:
+        warnings.push_back("the " + JoinComponents(components) + " position of " + PrimitiveLabel(primitive) +
                            " is not determined by the pins: pin more of its vertices or lock its translation");
         break;
       case ParameterKind::kCameraCenter:

@@ -4,11 +4,12 @@
 //
 // Parameter vector (length SceneProblem::num_parameters), in the order blocks are listed:
 // - a free camera: its centre in world (3, world units), additive update;
-// - a box: each unlocked size component (world units), additive update; if the rotation
-//   is free, 3 components of a small rotation d applied on the left,
-//   world_from_box <- exp([d]x) * world_from_box (radians); if the translation is free, 3
-//   components (world units), additive update.
-// Residuals: 2 per observation, in observation order, project(corner) - uv_px (px).
+// - a primitive: each unlocked shape parameter (world units), additive update; if the
+//   rotation is free, 3 components of a small rotation d applied on the left,
+//   world_from_primitive <- exp([d]x) * world_from_primitive (radians); if the translation is
+//   free, 3 components (world units), additive update.
+// A pinned vertex's local position is C * params + offset (core/mesh.h, LocalDefinition).
+// Residuals: 2 per observation, in observation order, project(vertex) - uv_px (px).
 #pragma once
 
 #include <array>
@@ -29,9 +30,9 @@ struct CameraBlock {
   int center_offset = -1;  // first parameter of the centre; -1 when the pose is locked
 };
 
-struct BoxBlock {
-  int box_index = -1;  // into Project::boxes
-  std::array<int, 3> size_offset = {-1, -1, -1};  // -1 for a locked component
+struct PrimitiveBlock {
+  int primitive_index = -1;  // into Project::primitives
+  std::array<int, kMaxPrimitiveParams> param_offset = {-1, -1, -1, -1};  // -1: locked or unused
   int rotation_offset = -1;
   int translation_offset = -1;
 };
@@ -39,30 +40,32 @@ struct BoxBlock {
 struct Observation {
   int pin_index = -1;  // into Project::pins
   int camera = -1;     // into SceneProblem::cameras
-  int box = -1;        // into SceneProblem::boxes
-  int corner = 0;
+  int primitive = -1;  // into SceneProblem::primitives
+  // The vertex's local definition, collapsed: p_in_primitive = coefficients * params + offset.
+  ParamCoefficients coefficients = ParamCoefficients::Zero();
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
   Eigen::Vector2d uv_px = Eigen::Vector2d::Zero();
 };
 
-enum class ParameterKind { kCameraCenter, kBoxSize, kBoxRotation, kBoxTranslation };
+enum class ParameterKind { kCameraCenter, kPrimitiveParam, kPrimitiveRotation, kPrimitiveTranslation };
 
 struct ParameterInfo {
   ParameterKind kind = ParameterKind::kCameraCenter;
-  int block = -1;     // into SceneProblem::cameras or ::boxes
-  int component = 0;  // 0, 1, 2 for x, y, z
+  int block = -1;     // into SceneProblem::cameras or ::primitives
+  int component = 0;  // x, y, z for vectors; the parameter index for kPrimitiveParam
 };
 
 // The values the solve changes, one entry per block.
 struct SceneState {
   std::vector<Eigen::Vector3d> camera_centers;
-  std::vector<Eigen::Vector3d> box_sizes;
-  std::vector<Eigen::Matrix3d> box_rotations;  // world_from_box
-  std::vector<Eigen::Vector3d> box_translations;
+  std::vector<PrimitiveParams> primitive_params;
+  std::vector<Eigen::Matrix3d> primitive_rotations;  // world_from_primitive
+  std::vector<Eigen::Vector3d> primitive_translations;
 };
 
 struct SceneProblem {
   std::vector<CameraBlock> cameras;  // calibrated cameras that see at least one used pin
-  std::vector<BoxBlock> boxes;       // boxes with at least one used pin
+  std::vector<PrimitiveBlock> primitives;  // primitives with at least one used pin
   std::vector<Observation> observations;
   std::vector<ParameterInfo> parameters;  // size num_parameters
   int num_parameters = 0;
@@ -72,11 +75,11 @@ struct SceneProblem {
 
 // Collects the usable pins of `project` and numbers the free parameters; fills *state with
 // the project's current values. Pins in uncalibrated images, or naming a missing image or
-// box, or a corner outside 0..7, are skipped with a warning.
+// primitive or vertex, are skipped with a warning.
 SceneProblem BuildSceneProblem(const Project& project, SceneState* state);
 
 // Residuals (size 2 * observations) and, when `jacobian` is not null, their derivatives
-// (2 * observations x num_parameters). Returns the number of observations whose corner
+// (2 * observations x num_parameters). Returns the number of observations whose vertex
 // lies on or behind its camera's image plane (their residuals are still computed).
 int EvaluateScene(const SceneProblem& problem, const SceneState& state, Eigen::VectorXd* residuals,
                   Eigen::MatrixXd* jacobian);
@@ -84,19 +87,19 @@ int EvaluateScene(const SceneProblem& problem, const SceneState& state, Eigen::V
 // state <- state "+" delta, with the parameterisation described above.
 void ApplySceneStep(const SceneProblem& problem, const Eigen::VectorXd& delta, SceneState* state);
 
-// Writes the state back into the cameras and boxes of *project (the project the problem was
+// Writes the state back into the cameras and primitives of *project (the project the problem was
 // built from, or a copy of it).
 void WriteSceneState(const SceneProblem& problem, const SceneState& state, Project* project);
 
 // The linear initialisation: with rotations and intrinsics fixed, each observation gives
-// [x]x (R_cam (R_box D_corner s + T) + t) = 0 with x the normalised image ray, linear in the
-// free sizes, box translations and camera translations. Solves it by least squares and
+// [x]x (R_cam (R_prim (C p + o) + T) + t) = 0 with x the normalised image ray, linear in the
+// free parameters p, primitive translations T and camera translations t. Solves it by least squares and
 // writes the result into *state. Returns false (state untouched, *why set) when the system
 // is rank deficient or the solution is not usable.
 bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::string* why);
 
 // Names the parameters that the pins do not determine, from the rank of the column-scaled
-// Jacobian at `state`. One sentence per box or camera; an overall scale or position
+// Jacobian at `state`. One sentence per primitive or camera; an overall scale or position
 // ambiguity of the whole scene is reported once.
 std::vector<std::string> UndeterminedParameterWarnings(const Project& project, const SceneProblem& problem,
                                                        const SceneState& state);
