@@ -71,12 +71,25 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
   if (summary.solve.IsUsable()) {
     *updated = std::move(solved);
   } else {
-    // The solve failed or had nothing to do: keep the calibrated cameras, leave every box as
-    // the edit made it.
+    // The solve failed or had nothing to do: keep the calibrated cameras, leave every
+    // primitive as the edit made it.
     *updated = std::move(calibrated);
     if (summary.solve.termination != SolveTermination::kNothingToSolve) {
       summary.ok = false;
       summary.messages.push_back("Solve: " + summary.solve.message);
+    }
+  }
+
+  if (options.joint_solve && summary.ok) {
+    JointSolveOptions joint_options = options.joint;
+    joint_options.warm_start = true;  // from the geometry solve's result
+    Project joint_solved;
+    summary.joint = SolveJoint(*updated, joint_options, &joint_solved);
+    if (summary.joint.IsUsable()) {
+      *updated = std::move(joint_solved);
+    } else if (summary.joint.termination != JointSolveSummary::Termination::kNothingToSolve) {
+      // The geometry solve's result stands; the joint refinement says why it did not apply.
+      summary.messages.push_back("Joint solve: " + summary.joint.message);
     }
   }
   summary.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -1,6 +1,9 @@
 // What runs after every edit (the paper: "after each operation the system re-solves cameras
-// and geometry"): each image with line families is calibrated from its vanishing points,
-// then the geometry solve fits cameras and boxes to the pins.
+// and geometry"): each image with line families is calibrated from its vanishing points, the
+// geometry solve (linear start + LM over camera centres and primitive parameters) fits the
+// model to the pins, then the joint solve refines everything at once: intrinsics that are not
+// locked, camera rotations against the line families, free vertices and the spatial
+// constraints.
 #pragma once
 
 #include <map>
@@ -8,6 +11,7 @@
 #include <vector>
 
 #include "core/calibrate_vp.h"
+#include "core/joint_solve.h"
 #include "core/project.h"
 #include "core/scene_solve.h"
 
@@ -16,15 +20,18 @@ namespace facet {
 struct ModelUpdateOptions {
   SceneSolveOptions solve;
   bool calibrate = true;  // false keeps every camera's intrinsics and rotation
+  bool joint_solve = true;
+  JointSolveOptions joint;
 };
 
 struct ModelUpdateSummary {
   std::map<Id, VpCalibrationSummary> calibration;  // by image id, images with segments only
   SceneSolveSummary solve;
+  JointSolveSummary joint;  // termination kInvalidInput when it did not run
   std::vector<std::string> messages;  // user-facing: what failed and why
   double time_ms = 0.0;
   // False when a step failed; the project is then left as the edit made it (cameras and
-  // boxes keep their previous values), never half-updated.
+  // primitives keep their previous values), never half-updated.
   bool ok = true;
 };
 
