@@ -489,8 +489,6 @@ std::vector<std::string> UndeterminedParameters(const JointProblem& problem) {
   Eigen::MatrixXd j;
   Eigen::VectorXd r;
   DenseJacobian(problem, &j, &r);
-  std::vector<double> freedom(n, 0.0);
-  int null_dim = 0;
   Eigen::VectorXd norms = j.colwise().norm().transpose();
   const double max_norm = norms.size() > 0 ? norms.maxCoeff() : 0.0;
   for (int k = 0; k < n; ++k) {
@@ -508,28 +506,65 @@ std::vector<std::string> UndeterminedParameters(const JointProblem& problem) {
   Eigen::BDCSVD<Eigen::MatrixXd> svd(padded, Eigen::ComputeThinV);
   const Eigen::VectorXd& sigma = svd.singularValues();
   const double largest = sigma.size() > 0 ? sigma(0) : 0.0;
+  std::vector<int> null_columns;
   for (int s = 0; s < sigma.size(); ++s) {
-    if (sigma(s) > kRankTolerance * largest) continue;
-    ++null_dim;
-    for (int k = 0; k < n; ++k) freedom[k] += svd.matrixV()(k, s) * svd.matrixV()(k, s);
+    if (sigma(s) <= kRankTolerance * largest) null_columns.push_back(s);
   }
-  int named = 0;
+  const int null_dim = static_cast<int>(null_columns.size());
+  if (null_dim == 0) return out;
+  Eigen::MatrixXd null_space(n, null_dim);
+  for (int i = 0; i < null_dim; ++i) null_space.col(i) = svd.matrixV().col(null_columns[i]);
+
+  // Per object (a camera, a primitive, a free vertex: the part of the name before ": "), the
+  // directions inside its own parameters that lie in the null space: moving that object
+  // alone that way changes no residual.
+  std::vector<std::pair<std::string, std::vector<int>>> owners;
   for (int k = 0; k < n; ++k) {
-    if (freedom[k] > 0.5) {
-      out.push_back(problem.parameter_names[k] + " is free: " + Advice(problem.parameter_names[k]));
-      ++named;
+    const std::string& name = problem.parameter_names[k];
+    const std::string owner = name.substr(0, name.find(": "));
+    if (owners.empty() || owners.back().first != owner) owners.push_back({owner, {}});
+    owners.back().second.push_back(k);
+  }
+  std::vector<double> freedom(n, 0.0);
+  for (int k = 0; k < n; ++k) freedom[k] = null_space.row(k).squaredNorm();
+  int alone = 0;
+  std::vector<char> named(n, 0);
+  for (const auto& [owner, params] : owners) {
+    Eigen::MatrixXd restricted(params.size(), null_dim);
+    for (size_t i = 0; i < params.size(); ++i) restricted.row(i) = null_space.row(params[i]);
+    Eigen::JacobiSVD<Eigen::MatrixXd> own(restricted, Eigen::ComputeThinU);
+    for (int d = 0; d < own.singularValues().size(); ++d) {
+      if (own.singularValues()(d) < 0.95) continue;  // not a motion of this object alone
+      ++alone;
+      const Eigen::VectorXd u = own.matrixU().col(d);
+      int dominant = 0;
+      u.cwiseAbs().maxCoeff(&dominant);
+      const std::string& first = problem.parameter_names[params[dominant]];
+      if (std::abs(u(dominant)) > 0.9) {
+        out.push_back(first + " is free: " + Advice(first));
+        named[params[dominant]] = 1;
+        continue;
+      }
+      std::string what;
+      for (size_t i = 0; i < params.size(); ++i) {
+        if (std::abs(u(i)) < 0.3) continue;
+        const std::string& name = problem.parameter_names[params[i]];
+        what += (what.empty() ? "" : ", ") + name.substr(name.find(": ") + 2);
+        named[params[i]] = 1;
+      }
+      out.push_back(owner + ": a combination of " + what + " is free: " + Advice(first));
     }
   }
-  if (null_dim > named) {
+  if (null_dim > alone) {
     std::vector<int> order(n);
     for (int k = 0; k < n; ++k) order[k] = k;
     std::sort(order.begin(), order.end(), [&](int a, int b) { return freedom[a] > freedom[b]; });
     std::ostringstream text;
-    text << null_dim - named << " combined motion(s) of several parameters leave every residual unchanged (e.g. the "
+    text << null_dim - alone << " combined motion(s) of several objects leave every residual unchanged (e.g. the "
          << "scene's scale or position): add a distance or fixed-point constraint or lock a dimension; most involved: ";
     int listed = 0;
     for (int k : order) {
-      if (freedom[k] > 0.5 || freedom[k] < 1e-6 || listed == 4) continue;
+      if (named[k] || freedom[k] < 1e-6 || listed == 4) continue;
       text << (listed++ > 0 ? "; " : "") << problem.parameter_names[k];
     }
     out.push_back(text.str());

@@ -800,8 +800,8 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
   for (const FreeVertexBlock& fb : problem.free_vertices) {
     const Primitive& p = *project.FindPrimitive(fb.ref.primitive_id);
     for (int i = 0; i < 3; ++i) {
-      problem.parameter_names[fb.offset + i] = PrimitiveLabel(p) + ": free vertex " + std::to_string(fb.ref.vertex) +
-                                               " offset " + "xyz"[i];
+      problem.parameter_names[fb.offset + i] = "the free vertex " + std::to_string(fb.ref.vertex) + " of " +
+                                               PrimitiveLabel(p) + ": offset " + "xyz"[i];
     }
   }
   return problem;
