@@ -13,6 +13,7 @@
 
 #include "core/constraint_polish.h"
 #include "core/joint_solve_internal.h"
+#include "core/scene_solve.h"
 
 namespace facet {
 
@@ -53,6 +54,7 @@ constexpr double kMaxConstraintWeight = 1e7;
 constexpr int kMaxOuterRounds = 12;
 constexpr int kMaxDiagnosticParameters = 600;  // dense SVD above this costs too much for a full solve
 constexpr double kRankTolerance = 1e-9;        // singular values below this times the largest are zero
+constexpr int kMaxColdStartParameters = 300;   // the geometry solve's initialisation is dense
 
 // The damped normal equations (J^T J + lambda D) delta = -J^T r, D = diag(J^T J) floored.
 class NormalEquations {
@@ -710,6 +712,24 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   build.use_segments = options.use_segments;
   JointState state;
   JointProblem problem = BuildJointProblem(project, build, &state);
+  // Cold start: the geometry solve's linear initialisation (camera centres and dimensions
+  // with intrinsics and rotations held) gives the start, when the scene is small enough for
+  // its dense algebra; otherwise, or when it fails, the project's values are the start.
+  Project initialised;
+  const Project* start = &project;
+  if (!options.warm_start && problem.num_parameters > 0 && problem.num_parameters <= kMaxColdStartParameters) {
+    SceneSolveOptions scene_options;
+    scene_options.warm_start = false;
+    const SceneSolveSummary init = SolveScene(project, scene_options, &initialised);
+    if (init.IsUsable()) {
+      start = &initialised;
+      state = JointState();
+      problem = BuildJointProblem(initialised, build, &state);
+    } else if (init.termination != SolveTermination::kNothingToSolve) {
+      problem.warnings.push_back("cold start: the geometry solve gave no start (" + init.message +
+                                 "); started from the project's values");
+    }
+  }
   summary.warnings = problem.warnings;
   summary.num_parameters = problem.num_parameters;
   summary.num_residuals = problem.num_residuals;
@@ -808,6 +828,7 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
                                  " parameters exceed the dense limit of " + std::to_string(kMaxDiagnosticParameters));
     }
   }
+  if (start != &project) *solved = *start;
   WriteState(problem, state, solved);
   std::ostringstream text;
   text << "RMS " << summary.reprojection_rms_px << " px over " << summary.pins.size() << " pins after "

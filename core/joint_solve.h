@@ -58,7 +58,10 @@ struct JointSolveOptions {
   double gradient_tolerance = 1e-14;
   double parameter_tolerance = 1e-14;
   double initial_lambda = 1e-4;
-  bool warm_start = true;         // start from the project's values (interactive path)
+  // Start from the project's values (interactive path). When false and the problem has at
+  // most 300 parameters, the geometry solve (core/scene_solve.h, linear initialisation of
+  // camera centres and dimensions) gives the start; initial_cost is then measured there.
+  bool warm_start = true;
   bool refine_intrinsics = true;  // false keeps every camera's intrinsics whatever the locks
   bool use_segments = true;       // vanishing-line residuals on cameras with segments
   // Hard equality polish by NLopt SLSQP after LM, so that coplanar points end up coplanar to

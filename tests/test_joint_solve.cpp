@@ -279,6 +279,31 @@ TEST_CASE("joint solve: one image, noise-free, recovers the box sizes and the ca
   }
 }
 
+TEST_CASE("joint solve: a cold start from far away goes through the geometry solve's initialisation") {
+  Scene scene = MakeScene(2, 2, 1.0, 0.0);
+  Project start = scene.truth;
+  for (Primitive& p : start.primitives) {
+    if (!p.param_locked[0]) p.shape.params(0) *= 1.6;
+    if (!p.param_locked[1]) p.shape.params(1) *= 0.6;
+    if (!p.translation_locked) p.shape.translation += Eigen::Vector3d(2.0, -1.5, 0.5);
+  }
+  for (Image& image : start.images) {
+    image.camera.SetPose(image.camera.cam_from_world_rotation, 0.6 * image.camera.CenterInWorld());
+  }
+  RefreshAllPrimitives(&start);
+  REQUIRE(MaxRelativeShapeError(start, scene.truth) > 0.3);
+  JointSolveOptions options;
+  options.warm_start = false;
+  Project solved;
+  const JointSolveSummary summary = SolveJoint(start, options, &solved);
+  INFO(summary.message);
+  for (const std::string& w : summary.warnings) MESSAGE(w);
+  REQUIRE(summary.IsUsable());
+  const double err = MaxRelativeShapeError(solved, scene.truth);
+  CAPTURE(err);
+  CHECK(err <= kNoiseFreeTolerance);
+}
+
 TEST_CASE("joint solve: several images and primitives, noise-free and with 0.5 px noise") {
   for (double noise_px : {0.0, 0.5}) {
     Scene scene = MakeScene(3, 3, 1.0, noise_px);
