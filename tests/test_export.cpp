@@ -12,6 +12,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/export.h"
+#include "core/mesh_operators.h"
+#include "core/mesh_primitives.h"
 #include "core/textured_mesh.h"
 #include "synthetic_scene.h"
 
@@ -278,7 +280,8 @@ TEST_CASE("GLB: one camera node per calibrated image, at the camera's pose in Y-
   // pixel the Facet camera projects it to.
   const Eigen::Vector2d pp = cam.principal_point_px;
   constexpr double kPixelTolerance = 1e-6;
-  for (const Eigen::Vector3d& corner : facet::BoxCornersInWorld(f.scene.true_box)) {
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d corner = f.scene.true_box.mesh.vertex(c).position;
     const Eigen::Vector3d p_in_gltf_cam = r.transpose() * (YUp(corner) - t);
     REQUIRE(p_in_gltf_cam.z() < 0);
     const Eigen::Vector2d uv(pp.x() + cam.focal_px * p_in_gltf_cam.x() / -p_in_gltf_cam.z(),
@@ -376,6 +379,82 @@ TEST_CASE("OBJ: counts, flipped UVs in [0,1], material and texture side by side"
   std::ifstream plain_mtl(plain_dir / "box.mtl");
   const std::string plain_mtl_text((std::istreambuf_iterator<char>(plain_mtl)), {});
   CHECK(plain_mtl_text.find("map_Kd") == std::string::npos);
+}
+
+TEST_CASE("GLB and OBJ round trip: vertex and triangle counts of a split box and a wedge roof") {
+  Fixture f;
+  f.scene = facet::testing::MakeBoxScene();
+  facet::Project& project = f.scene.project;
+  // E_split two opposite sides of one box face and V_connect them: 7 faces, two of them
+  // with a straight corner.
+  facet::PolyMesh& box = project.primitives[0].mesh;
+  facet::FaceId face = 0;
+  while (!box.IsFace(face)) ++face;
+  const std::vector<facet::HalfedgeId> sides = facet::FaceHalfedges(box, face);
+  const auto a = facet::ESplit(&box, facet::PolyMesh::EdgeOf(sides[0]), 0.5);
+  const auto b = facet::ESplit(&box, facet::PolyMesh::EdgeOf(sides[2]), 0.5);
+  REQUIRE(a.ok);
+  REQUIRE(b.ok);
+  REQUIRE(facet::VConnect(&box, face, a.vertex, b.vertex).ok);
+  // A wedge roof on top of the box.
+  facet::Id roof_id = facet::kNoId;
+  std::string message;
+  REQUIRE(facet::AddPrimitiveToProject(&project, facet::MakeWedge(facet::kNoId, {1.0, 1.0, 1.2}), "roof", &roof_id,
+                                       &message));
+  project.FindPrimitive(roof_id)->attached_to = f.scene.box_id;
+  facet::RefreshAllPrimitives(&project);
+
+  size_t expected_vertices = 0, expected_triangles = 0;
+  for (const facet::Primitive& primitive : project.primitives) {
+    for (facet::FaceId g = 0; g < primitive.mesh.FaceIdEnd(); ++g) {
+      if (!primitive.mesh.IsFace(g)) continue;
+      expected_vertices += facet::FaceDegree(primitive.mesh, g);
+      expected_triangles += facet::FaceDegree(primitive.mesh, g) - 2;
+    }
+  }
+  // Box quads; + 2 for the split face, + 1 for each neighbour given a straight corner; wedge.
+  CHECK(expected_triangles == 12 + 2 + 2 + 8);
+  const auto bake = facet::BakeTexturedMesh(
+      project, {RampPhoto(f.scene.true_camera.width_px, f.scene.true_camera.height_px)}, {}, &f.mesh);
+  REQUIRE_MESSAGE(bake.success, bake.message);
+  REQUIRE(f.mesh.positions.size() == expected_vertices);
+  REQUIRE(f.mesh.indices.size() == 3 * expected_triangles);
+  size_t textured_triangles = 0;
+  for (auto t : f.mesh.triangle_textured) textured_triangles += t;
+  CHECK(textured_triangles > 0);
+  CHECK(textured_triangles < expected_triangles);
+
+  const fs::path dir = TempDir("roundtrip");
+  const auto glb_summary = facet::ExportGlb(f.mesh, project, (dir / "m.glb").string());
+  REQUIRE_MESSAGE(glb_summary.success, glb_summary.message);
+  const Glb glb = ParseGlb(dir / "m.glb");
+  const json& primitives = glb.gltf["meshes"][0]["primitives"];
+  REQUIRE(primitives.size() == 2);
+  size_t glb_triangles = 0, glb_textured = 0;
+  for (const json& p : primitives) {
+    CHECK(glb.gltf["accessors"][p["attributes"]["POSITION"].get<int>()]["count"] == expected_vertices);
+    const size_t n = glb.gltf["accessors"][p["indices"].get<int>()]["count"].get<size_t>() / 3;
+    glb_triangles += n;
+    if (p["attributes"].contains("TEXCOORD_0")) glb_textured += n;
+  }
+  CHECK(glb_triangles == expected_triangles);
+  CHECK(glb_textured == textured_triangles);
+
+  const auto obj_summary = facet::ExportObj(f.mesh, (dir / "m.obj").string());
+  REQUIRE_MESSAGE(obj_summary.success, obj_summary.message);
+  std::ifstream obj(dir / "m.obj");
+  std::string line;
+  size_t v = 0, vt = 0, vn = 0, faces = 0;
+  while (std::getline(obj, line)) {
+    v += line.rfind("v ", 0) == 0;
+    vt += line.rfind("vt ", 0) == 0;
+    vn += line.rfind("vn ", 0) == 0;
+    faces += line.rfind("f ", 0) == 0;
+  }
+  CHECK(v == expected_vertices);
+  CHECK(vt == expected_vertices);
+  CHECK(vn == expected_vertices);
+  CHECK(faces == expected_triangles);
 }
 
 TEST_CASE("export errors: unwritable path, empty or malformed mesh") {
