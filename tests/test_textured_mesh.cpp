@@ -639,6 +639,50 @@ TEST_CASE("bake: a non-convex face (V_connect, then a free vertex moved inside) 
   CheckSolidBake(scene.project, scene.true_camera);
 }
 
+TEST_CASE("bake: a non-planar face (a free vertex moved off its edge) is baked through its best-fit plane") {
+  auto scene = facet::testing::MakeBoxScene();
+  facet::Primitive& box = scene.project.primitives[0];
+  PolyMesh& mesh = box.mesh;
+  const FaceId front = FaceWithNormal(mesh, -Eigen::Vector3d::UnitY());
+  REQUIRE(front != facet::kNoFace);
+  const auto split = facet::ESplit(&mesh, PolyMesh::EdgeOf(facet::FaceHalfedges(mesh, front)[0]), 0.5);
+  REQUIRE_MESSAGE(split.ok, split.message);
+  // Out of the front face's plane by 0.2 (the box is 4 x 3 x 2.5): the front face and its
+  // neighbour across the split edge are no longer planar.
+  constexpr double kBulge = 0.2;
+  MoveVertexLocal(&scene.project, &box, split.vertex,
+                  mesh.vertex(split.vertex).LocalPosition(box.shape.params) - kBulge * Eigen::Vector3d::UnitY());
+  const std::vector<TestFace> faces = SceneFaces(scene.project);
+  const TestFace* bent = nullptr;
+  for (const TestFace& f : faces) {
+    if (f.face == front) bent = &f;
+  }
+  REQUIRE(bent != nullptr);
+  double off_plane = 0.0;
+  for (const auto& p : bent->corners) off_plane = std::max(off_plane, std::abs((p - bent->Centroid()).dot(bent->normal)));
+  CAPTURE(off_plane);
+  REQUIRE(off_plane > 0.05);
+
+  TexturedMesh baked;
+  const auto summary = facet::BakeTexturedMesh(
+      scene.project, {RenderPhoto(faces, scene.true_camera, Paint::kSolid)}, {}, &baked);
+  REQUIRE_MESSAGE(summary.success, summary.message);
+  CHECK(summary.faces_textured == 3);
+  const FaceInAtlas fa = FindFace(baked, *bent);
+  REQUIRE(fa.textured);
+  for (const auto& uv : baked.uvs) CHECK((uv.x() >= 0 && uv.x() <= 1 && uv.y() >= 0 && uv.y() <= 1));
+  // Approximate: the texels are the best-fit plane's, the photo shows the bent face (itself
+  // rendered through a plane here), so only most interior texels carry the face's colour.
+  constexpr int kSolidTolerance = 1;
+  const PaintCheck check = CheckPaint(baked, *bent, fa, scene.true_camera, Paint::kSolid, kSolidTolerance);
+  const double fraction = 1.0 - static_cast<double>(check.mismatched) / check.checked;
+  CAPTURE(check.checked);
+  CAPTURE(fraction);
+  constexpr double kMinMatchingFraction = 0.9;
+  CHECK(check.checked > 1000);
+  CHECK(fraction > kMinMatchingFraction);
+}
+
 TEST_CASE("bake: face texels that fall outside the photo are opaque neutral grey") {
   facet::testing::SyntheticSceneOptions o;
   o.camera_center = {5.0, -1.5, 2.0};  // close enough that the box overflows the frame
