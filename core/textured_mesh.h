@@ -61,14 +61,16 @@ struct TextureBakeSummary {
 // Bakes a textured mesh. `photos[i]` holds the pixels of project.images[i] (an empty image
 // for a photo that is not loaded). A face is textured from the calibrated image that sees
 // it best: in front of the camera, facing it, and largest projected area times cosine of
-// the view angle. Primitives other than the face's own hide parts of it (4 x 4 samples
-// tested against their triangles), lowering the score.
+// the view angle times the fraction of the face no other primitive hides (a 4 x 4 grid over
+// the face's rectangle, kept inside the polygon, each point's ray to the camera centre tested
+// against the other primitives' triangles). A face hidden from every view stays untextured.
 // Face frame: u along the first edge (face.halfedge) projected into the face's plane, v the
-// in-plane perpendicular (normal x u), so the texture reads upright as seen from outside. A
+// in-plane perpendicular (normal x u), so the texture reads upright as seen from outside; the
+// whole bounding rectangle is rectified, and the corners' UVs pick the polygon out of it. A
 // face that is not planar (a solved free vertex) is rectified through its best-fit plane
 // (Newell normal through the corners' centroid): approximate there. A degenerate face (zero
-// area) stays untextured. On failure (bad options, photos.size() != images.size(), atlas overflow) *mesh is the
-// untextured mesh and the summary says why.
+// area) stays untextured. On failure (bad options, photos.size() != images.size(), atlas
+// overflow) *mesh is the untextured mesh and the summary says why.
 TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<ImageRgba8>& photos,
                                     const TextureBakeOptions& options, TexturedMesh* mesh);
 
