@@ -733,6 +733,9 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   summary.warnings = problem.warnings;
   summary.num_parameters = problem.num_parameters;
   summary.num_residuals = problem.num_residuals;
+  if (!StateIsFinite(state)) {
+    return finish(Termination::kInvalidInput, "a camera or primitive of the project has a non-finite value");
+  }
   if (problem.blocks.empty()) return finish(Termination::kNothingToSolve, "no pins, segments or constraints to solve");
   if (problem.num_parameters == 0) {
     EvaluateBlocks(&problem, state, false);
