@@ -188,7 +188,8 @@ double UnoccludedFraction(const FaceGeometry& face, const Eigen::Vector3d& cente
     for (size_t o = 0; o < occluders.size() && !hidden; ++o) {
       // Only other primitives: a primitive's own faces facing the camera are not hidden by
       // the rest of it as long as it is convex, which the primitives are up to free vertices.
-      if (o == face.primitive_index || !SegmentMeetsBox(p, center, occluders[o].lo, occluders[o].hi)) continue;
+      if (o == face.primitive_index || occluders[o].triangles.empty() ||
+          !SegmentMeetsBox(p, center, occluders[o].lo, occluders[o].hi)) continue;
       for (const auto& tri : occluders[o].triangles) {
         if (SegmentHitsTriangle(p, center, tri)) {
           hidden = true;
