@@ -315,8 +315,8 @@ TEST_CASE("joint solve: several images and primitives, noise-free and with 0.5 p
     CAPTURE(noise_px);
     REQUIRE(summary.IsUsable());
     const double err = MaxRelativeShapeError(solved, scene.truth);
-    CAPTURE(err);
-    CAPTURE(summary.reprojection_rms_px);
+    MESSAGE("noise " << noise_px << " px: shape error " << err << " (relative), RMS " << summary.reprojection_rms_px
+                     << " px, " << summary.iterations << " iterations, " << summary.time_ms << " ms");
     CHECK(summary.undetermined.empty());
     if (noise_px == 0.0) {
       CHECK(err <= kNoiseFreeTolerance);
@@ -359,7 +359,7 @@ TEST_CASE("joint solve: the same scene at x1e-3 and x1e3 solves to the same rela
     INFO(summary.message);
     REQUIRE(summary.IsUsable());
     const double err = MaxRelativeShapeError(solved, scene.truth);
-    CAPTURE(err);
+    MESSAGE("scale " << scale << ": shape error " << err << " (relative)");
     CHECK(err <= kNoiseFreeTolerance);
     CHECK(MaxCameraCentreError(solved, scene.truth, 10.0 * scale) <= kNoiseFreeTolerance);
   }
@@ -486,9 +486,8 @@ TEST_CASE("joint solve: the pavilion's ridge height is recovered within 1 % at 0
   const Primitive& out = solved.primitives.back();
   const double h0 = out.mesh.vertex(s1.vertex).position.z() - out.shape.params(2);
   const double h1 = out.mesh.vertex(s2.vertex).position.z() - out.shape.params(2);
-  CAPTURE(h0);
-  CAPTURE(h1);
-  CAPTURE(summary.reprojection_rms_px);
+  MESSAGE("pavilion ridge heights " << h0 << ", " << h1 << " (true " << ridge_height << "), RMS "
+                                     << summary.reprojection_rms_px << " px");
   CHECK(std::abs(h0 - ridge_height) <= 0.01 * ridge_height);
   CHECK(std::abs(h1 - ridge_height) <= 0.01 * ridge_height);
 }
