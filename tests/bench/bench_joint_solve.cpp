@@ -6,6 +6,7 @@
 // same definition as Ceres's) of a solve, its iterations, and the problem's size.
 #include <benchmark/benchmark.h>
 
+#include <cstdint>
 #include <map>
 #include <tuple>
 
@@ -32,8 +33,9 @@ JointSolveOptions FullSolveOptions(bool diagnostics) {
   return o;
 }
 
-JointSolveOptions FrameSolveOptions() {
+JointSolveOptions FrameSolveOptions(JointSolveOptions::LinearSolver linear_solver) {
   JointSolveOptions o = FullSolveOptions(false);
+  o.linear_solver = linear_solver;
   o.max_iterations = facet::testing::kFrameIterations;
   o.warm_start = true;
   return o;
@@ -70,14 +72,14 @@ const Project* ConvergedScene(const JointSceneOptions& size, std::string* error)
 
 // One frame of a drag: pin 0 moved by 2 px (back and forth), then the warm-started solve
 // with the per-frame budget, exactly what the app runs while the mouse moves.
-void RunInteractive(benchmark::State& state, const JointSceneOptions& size) {
+void RunInteractive(benchmark::State& state, const JointSceneOptions& size, JointSolveOptions::LinearSolver linear_solver) {
   std::string error;
   const Project* converged = ConvergedScene(size, &error);
   if (converged == nullptr) {
     state.SkipWithError(error.c_str());
     return;
   }
-  const JointSolveOptions options = FrameSolveOptions();
+  const JointSolveOptions options = FrameSolveOptions(linear_solver);
   // The counters come from one frame outside the timing, the pin moved by +2 px from the
   // converged state, so they do not depend on how many frames the library ran.
   Project current = *converged;
@@ -100,19 +102,31 @@ void RunInteractive(benchmark::State& state, const JointSceneOptions& size) {
   SetCounters(state, frame, first);
 }
 
+JointSolveOptions::LinearSolver LinearSolverArg(std::int64_t arg) {
+  return arg == 0 ? JointSolveOptions::LinearSolver::kSchur : JointSolveOptions::LinearSolver::kSparseLdlt;
+}
+const char* LinearSolverName(std::int64_t arg) { return arg == 0 ? "Schur" : "sparse LDLT"; }
+
+// solver:0 is the default Schur complement on primitive groups, solver:1 the sparse LDL^T
+// of the whole normal equations.
 void BM_JointInteractive(benchmark::State& state) {
-  RunInteractive(state, facet::testing::JointSceneSize(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)),
-                                                       static_cast<int>(state.range(2))));
+  RunInteractive(state,
+                 facet::testing::JointSceneSize(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)),
+                                                static_cast<int>(state.range(2))),
+                 LinearSolverArg(state.range(3)));
+  state.SetLabel(LinearSolverName(state.range(3)));
 }
 BENCHMARK(BM_JointInteractive)
-    ->ArgNames({"primitives", "images", "pins"})
-    ->Args({10, 3, 60})
-    ->Args({100, 10, 1000})
+    ->ArgNames({"primitives", "images", "pins", "solver"})
+    ->ArgsProduct({{10}, {3}, {60}, {0, 1}})
+    ->ArgsProduct({{100}, {10}, {1000}, {0, 1}})
     ->Unit(benchmark::kMillisecond);
 
 // Full solve from the perturbed start (a few % off: sizes, translations, camera centres,
-// 0.3 degree camera rotations) to convergence; diagnostics:1 adds the rank analysis the app
-// runs when a drag ends.
+// 0.3 degree camera rotations) to convergence, the same start Ceres gets (warm_start stays
+// true: the solver's own linear initialisation applies to 300 parameters at most).
+// diagnostics:1 adds the rank analysis the app runs when a drag ends; the solver skips it
+// above 600 parameters and says so in a warning (counter "warnings").
 void BM_JointCold(benchmark::State& state) {
   const JointScene scene = facet::testing::MakeJointScene(facet::testing::JointSceneSize(
       static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), static_cast<int>(state.range(2))));
@@ -129,6 +143,7 @@ void BM_JointCold(benchmark::State& state) {
   SetCounters(state, solved, summary);
   state.counters["converged"] = summary.termination == JointSolveSummary::Termination::kConverged ? 1 : 0;
   state.counters["rms_px"] = summary.reprojection_rms_px;
+  state.counters["warnings"] = static_cast<double>(summary.warnings.size());
 }
 BENCHMARK(BM_JointCold)
     ->ArgNames({"primitives", "images", "pins", "diagnostics"})
@@ -141,7 +156,8 @@ BENCHMARK(BM_JointCold)
 // Growth: the per-frame update for 1 to 1,000 primitives, 10 pins each, about one image per
 // three primitives (2 to 10).
 void BM_JointScaling(benchmark::State& state) {
-  RunInteractive(state, facet::testing::ScalingSceneSize(static_cast<int>(state.range(0))));
+  RunInteractive(state, facet::testing::ScalingSceneSize(static_cast<int>(state.range(0))),
+                 JointSolveOptions::LinearSolver::kSchur);
 }
 BENCHMARK(BM_JointScaling)
     ->ArgName("primitives")
