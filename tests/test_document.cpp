@@ -8,18 +8,26 @@
 #include <vector>
 
 #include "core/document.h"
+#include "core/mesh_extrude.h"
+#include "core/mesh_operators.h"
 #include "core/project.h"
 #include "tests/synthetic_scene.h"
 
 using facet::Axis;
-using facet::Box;
+using facet::Constraint;
+using facet::ConstraintKind;
 using facet::Document;
 using facet::Edit;
 using facet::Image;
 using facet::Pin;
+using facet::PolyMesh;
+using facet::Primitive;
+using facet::PrimitiveShape;
 using facet::PrincipalPointMode;
 using facet::Project;
 using facet::Segment;
+using facet::VertexId;
+using facet::VertexRef;
 
 namespace {
 
@@ -35,14 +43,126 @@ void InsertAtRandom(std::vector<T>* list, const T& item, std::mt19937& rng) {
   list->insert(list->begin() + static_cast<std::ptrdiff_t>(Pick(rng, list->size() + 1)), item);
 }
 
+PrimitiveShape RandomShape(std::mt19937& rng) {
+  const Eigen::Vector3d size(Real(rng, 0.1, 10), Real(rng, 0.1, 10), Real(rng, 0.1, 10));
+  PrimitiveShape shape;
+  switch (Pick(rng, 6)) {
+    case 0: shape = facet::MakeBox(facet::kNoId, size); break;
+    case 1: shape = facet::MakeWedge(facet::kNoId, size); break;
+    case 2: shape = facet::MakePrism(facet::kNoId, 3 + static_cast<int>(Pick(rng, 6)), size.x(), size.y()); break;
+    case 3: shape = facet::MakePyramid(facet::kNoId, size); break;
+    case 4: shape = facet::MakeCylinder(facet::kNoId, 3 + static_cast<int>(Pick(rng, 12)), size.x(), size.y()); break;
+    default: shape = facet::MakePlane(facet::kNoId, size.x(), size.y()); break;
+  }
+  shape.rotation = {Real(rng, -0.5, 0.5), Real(rng, -0.5, 0.5), Real(rng, -3, 3)};
+  shape.translation = {Real(rng, -5, 5), Real(rng, -5, 5), Real(rng, -5, 5)};
+  return shape;
+}
+
+// Live ids below End(), in id order.
+std::vector<VertexId> LiveVertices(const PolyMesh& mesh) {
+  std::vector<VertexId> out;
+  for (VertexId v = 0; v < mesh.VertexIdEnd(); ++v)
+    if (mesh.IsVertex(v)) out.push_back(v);
+  return out;
+}
+std::vector<facet::EdgeId> LiveEdges(const PolyMesh& mesh) {
+  std::vector<facet::EdgeId> out;
+  for (facet::EdgeId e = 0; e < mesh.EdgeIdEnd(); ++e)
+    if (mesh.IsEdge(e)) out.push_back(e);
+  return out;
+}
+std::vector<facet::FaceId> LiveFaces(const PolyMesh& mesh) {
+  std::vector<facet::FaceId> out;
+  for (facet::FaceId f = 0; f < mesh.FaceIdEnd(); ++f)
+    if (mesh.IsFace(f)) out.push_back(f);
+  return out;
+}
+
+VertexRef RandomVertex(const Project& p, std::mt19937& rng) {
+  const Primitive& prim = p.primitives[Pick(rng, p.primitives.size())];
+  const std::vector<VertexId> live = LiveVertices(prim.mesh);
+  return {prim.id, live[Pick(rng, live.size())]};
+}
+
+bool NamesVertexOf(const std::vector<VertexRef>& refs, facet::Id primitive_id, VertexId v) {
+  return std::any_of(refs.begin(), refs.end(),
+                     [&](const VertexRef& r) { return r.primitive_id == primitive_id && r.vertex == v; });
+}
+
+// Removes what refers to a primitive that is gone (pins, constraints, attachments).
+void DropReferencesTo(Project* p, facet::Id id) {
+  std::erase_if(p->pins, [id](const Pin& pin) { return pin.vertex.primitive_id == id; });
+  std::erase_if(p->constraints, [id](const Constraint& c) {
+    return std::any_of(c.vertices.begin(), c.vertices.end(), [id](const VertexRef& r) { return r.primitive_id == id; });
+  });
+  for (Primitive& other : p->primitives)
+    if (other.attached_to == id) other.attached_to = facet::kNoId;
+}
+
+size_t VertexCountOf(ConstraintKind kind, std::mt19937& rng) {
+  switch (kind) {
+    case ConstraintKind::kCoplanar: return 4 + Pick(rng, 3);
+    case ConstraintKind::kCollinear: return 3 + Pick(rng, 2);
+    case ConstraintKind::kParallel:
+    case ConstraintKind::kPerpendicular:
+    case ConstraintKind::kEqualLength: return 4;
+    case ConstraintKind::kFixedPoint: return 1;
+    default: return 2;
+  }
+}
+
+// A K-op on a copy of one primitive's mesh (E_split, V_connect, V_delete of a split vertex
+// nothing refers to, or a face extrusion), written back whole: how the app commits them.
+void RandomKOp(Project* p, std::mt19937& rng) {
+  Primitive& prim = p->primitives[Pick(rng, p->primitives.size())];
+  PolyMesh mesh = prim.mesh;
+  switch (Pick(rng, 4)) {
+    case 0: {
+      const auto edges = LiveEdges(mesh);
+      if (!facet::ESplit(&mesh, edges[Pick(rng, edges.size())], Real(rng, 0.05, 0.95)).ok) return;
+      break;
+    }
+    case 1: {
+      const auto faces = LiveFaces(mesh);
+      const facet::FaceId f = faces[Pick(rng, faces.size())];
+      const std::vector<VertexId> loop = facet::FaceVertices(mesh, f);
+      const size_t n = loop.size();
+      if (n < 4) return;
+      const size_t i = Pick(rng, n), j = (i + 2 + Pick(rng, n - 3)) % n;
+      if (!facet::VConnect(&mesh, f, loop[i], loop[j]).ok) return;
+      break;
+    }
+    case 2: {
+      std::vector<VertexId> candidates;
+      for (VertexId v : LiveVertices(mesh)) {
+        const VertexRef ref{prim.id, v};
+        const bool referenced =
+            std::any_of(p->pins.begin(), p->pins.end(), [&](const Pin& pin) { return pin.vertex == ref; }) ||
+            std::any_of(p->constraints.begin(), p->constraints.end(),
+                        [&](const Constraint& c) { return NamesVertexOf(c.vertices, prim.id, v); });
+        if (mesh.vertex(v).local.on_edge && !referenced) candidates.push_back(v);
+      }
+      if (candidates.empty() || !facet::VDelete(&mesh, candidates[Pick(rng, candidates.size())]).ok) return;
+      break;
+    }
+    default: {
+      const auto faces = LiveFaces(mesh);
+      if (!facet::ExtrudeFace(&mesh, prim.shape, faces[Pick(rng, faces.size())], Real(rng, -1, 1)).ok) return;
+      break;
+    }
+  }
+  prim.mesh = std::move(mesh);
+}
+
 // One random user edit: 1 to 3 insertions, modifications or removals at random positions in
-// any of the four lists (removing an image or a box also removes what refers to it), or a
-// change of units, or an id drawn and left unused.
+// any of the five lists (removing an image or a primitive also removes what refers to it), a
+// K-op on a primitive's mesh, a change of units, or an id drawn and left unused.
 Project RandomEdit(const Project& start, std::mt19937& rng) {
   Project p = start;
   const int ops = 1 + static_cast<int>(Pick(rng, 3));
   for (int op = 0; op < ops; ++op) {
-    switch (Pick(rng, 14)) {
+    switch (Pick(rng, 20)) {
       case 0: {
         Image im;
         im.id = p.NewId();
@@ -65,20 +185,21 @@ Project RandomEdit(const Project& start, std::mt19937& rng) {
         break;
       }
       case 2: {
-        Box b;
-        b.id = p.NewId();
-        b.name = "box" + std::to_string(b.id);
-        b.size = {Real(rng, 0.1, 10), Real(rng, 0.1, 10), Real(rng, 0.1, 10)};
-        InsertAtRandom(&p.boxes, b, rng);
+        facet::Id id = facet::kNoId;
+        std::string message;
+        REQUIRE_MESSAGE(facet::AddPrimitiveToProject(&p, RandomShape(rng), "primitive", &id, &message), message);
+        Primitive added = std::move(p.primitives.back());
+        p.primitives.pop_back();
+        added.name = "primitive " + std::to_string(id);
+        InsertAtRandom(&p.primitives, added, rng);
         break;
       }
       case 3: {
-        if (p.images.empty() || p.boxes.empty()) break;
+        if (p.images.empty() || p.primitives.empty()) break;
         Pin pin;
         pin.id = p.NewId();
         pin.image_id = p.images[Pick(rng, p.images.size())].id;
-        pin.box_id = p.boxes[Pick(rng, p.boxes.size())].id;
-        pin.corner = static_cast<int>(Pick(rng, 8));
+        pin.vertex = RandomVertex(p, rng);
         pin.uv_px = {Real(rng, 0, 1000), Real(rng, 0, 1000)};
         InsertAtRandom(&p.pins, pin, rng);
         break;
@@ -90,6 +211,7 @@ Project RandomEdit(const Project& start, std::mt19937& rng) {
         im.camera.principal_point_px.x() = Real(rng, 0, 100);
         im.camera_calibrated = !im.camera_calibrated;
         im.principal_point_mode = static_cast<PrincipalPointMode>(Pick(rng, 3));
+        im.focal_locked = !im.focal_locked;
         break;
       }
       case 5: {
@@ -100,18 +222,20 @@ Project RandomEdit(const Project& start, std::mt19937& rng) {
         break;
       }
       case 6: {
-        if (p.boxes.empty()) break;
-        Box& b = p.boxes[Pick(rng, p.boxes.size())];
-        b.translation = {Real(rng, -5, 5), Real(rng, -5, 5), Real(rng, -5, 5)};
-        b.size_locked[Pick(rng, 3)] ^= true;
-        b.rotation_locked = !b.rotation_locked;
+        if (p.primitives.empty()) break;
+        Primitive& prim = p.primitives[Pick(rng, p.primitives.size())];
+        prim.shape.translation = {Real(rng, -5, 5), Real(rng, -5, 5), Real(rng, -5, 5)};
+        prim.shape.params[0] *= Real(rng, 0.5, 2.0);
+        prim.param_locked[Pick(rng, 3)] ^= true;
+        prim.rotation_locked = !prim.rotation_locked;
+        facet::RefreshPrimitive(&p, &prim);
         break;
       }
       case 7: {
         if (p.pins.empty()) break;
         Pin& pin = p.pins[Pick(rng, p.pins.size())];
         pin.uv_px.x() = Real(rng, 0, 1000);
-        pin.corner = static_cast<int>(Pick(rng, 8));
+        pin.vertex = RandomVertex(p, rng);
         break;
       }
       case 8: {
@@ -121,6 +245,7 @@ Project RandomEdit(const Project& start, std::mt19937& rng) {
         p.images.erase(p.images.begin() + static_cast<std::ptrdiff_t>(i));
         std::erase_if(p.segments, [id](const Segment& s) { return s.image_id == id; });
         std::erase_if(p.pins, [id](const Pin& pin) { return pin.image_id == id; });
+        std::erase_if(p.constraints, [id](const Constraint& c) { return c.image_id == id; });
         break;
       }
       case 9: {
@@ -129,11 +254,11 @@ Project RandomEdit(const Project& start, std::mt19937& rng) {
         break;
       }
       case 10: {
-        if (p.boxes.empty()) break;
-        const size_t i = Pick(rng, p.boxes.size());
-        const facet::Id id = p.boxes[i].id;
-        p.boxes.erase(p.boxes.begin() + static_cast<std::ptrdiff_t>(i));
-        std::erase_if(p.pins, [id](const Pin& pin) { return pin.box_id == id; });
+        if (p.primitives.empty()) break;
+        const size_t i = Pick(rng, p.primitives.size());
+        const facet::Id id = p.primitives[i].id;
+        p.primitives.erase(p.primitives.begin() + static_cast<std::ptrdiff_t>(i));
+        DropReferencesTo(&p, id);
         break;
       }
       case 11: {
@@ -143,6 +268,56 @@ Project RandomEdit(const Project& start, std::mt19937& rng) {
       }
       case 12: p.units = p.units == "m" ? "ft" : "m"; break;
       case 13: p.NewId(); break;
+      case 14:
+      case 15: {
+        if (p.primitives.empty()) break;
+        RandomKOp(&p, rng);
+        break;
+      }
+      case 16: {
+        if (p.primitives.empty()) break;
+        Constraint c;
+        c.id = p.NewId();
+        c.kind = static_cast<ConstraintKind>(Pick(rng, 9));
+        for (size_t k = VertexCountOf(c.kind, rng); k > 0; --k) c.vertices.push_back(RandomVertex(p, rng));
+        c.value = Real(rng, 0.1, 10);
+        c.point = {Real(rng, -5, 5), Real(rng, -5, 5), Real(rng, -5, 5)};
+        c.axis = static_cast<Axis>(Pick(rng, 3));
+        if (c.kind == ConstraintKind::kEdgeOnImageLine && !p.images.empty()) {
+          c.image_id = p.images[Pick(rng, p.images.size())].id;
+          c.line_a_px = {Real(rng, 0, 1000), Real(rng, 0, 1000)};
+          c.line_b_px = {Real(rng, 0, 1000), Real(rng, 0, 1000)};
+        }
+        InsertAtRandom(&p.constraints, c, rng);
+        break;
+      }
+      case 17: {
+        if (p.constraints.empty()) break;
+        Constraint& c = p.constraints[Pick(rng, p.constraints.size())];
+        c.value = Real(rng, 0.1, 10);
+        c.vertices[Pick(rng, c.vertices.size())] = RandomVertex(p, rng);
+        break;
+      }
+      case 18: {
+        if (p.constraints.empty()) break;
+        p.constraints.erase(p.constraints.begin() + static_cast<std::ptrdiff_t>(Pick(rng, p.constraints.size())));
+        break;
+      }
+      case 19: {
+        // Attach one primitive on a box, or detach it.
+        if (p.primitives.size() < 2) break;
+        Primitive& top = p.primitives[Pick(rng, p.primitives.size())];
+        const Primitive& base = p.primitives[Pick(rng, p.primitives.size())];
+        if (top.attached_to != facet::kNoId) {
+          top.attached_to = facet::kNoId;
+        } else if (base.id != top.id && base.attached_to == facet::kNoId &&
+                   base.shape.kind == facet::PrimitiveKind::kBox &&
+                   facet::AttachOnTop(base.shape, &top.shape, nullptr)) {
+          top.attached_to = base.id;
+          facet::RefreshPrimitive(&p, &top);
+        }
+        break;
+      }
     }
   }
   return p;
@@ -159,7 +334,7 @@ TEST_CASE("random edit sequences: undo all returns the start, redo all returns t
     std::mt19937 rng(seed);
     Document doc(StartProject());
     std::vector<Project> states = {doc.project()};
-    for (int step = 0; step < 60; ++step) {
+    for (int step = 0; step < 80; ++step) {
       const Project next = RandomEdit(doc.project(), rng);
       const bool changed = !(next == doc.project());
       CAPTURE(step);
@@ -255,14 +430,15 @@ TEST_CASE("DiffProjects, ApplyEdit and RevertEdit are exact inverses") {
 TEST_CASE("an edit records only what changed") {
   Project a = StartProject();
   Project b = a;
-  b.boxes[0].name = "renamed";
+  b.primitives[0].name = "renamed";
   b.pins.erase(b.pins.begin() + 3);
   const Edit edit = facet::DiffProjects("two changes", a, b);
   CHECK(edit.images.empty());
   CHECK(edit.segments.empty());
-  REQUIRE(edit.boxes.size() == 1);
-  CHECK(edit.boxes[0].before->name == "box");
-  CHECK(edit.boxes[0].after->name == "renamed");
+  REQUIRE(edit.primitives.size() == 1);
+  CHECK(edit.primitives[0].before->name == "box");
+  CHECK(edit.primitives[0].after->name == "renamed");
+  CHECK(edit.constraints.empty());
   REQUIRE(edit.pins.size() == 1);
   CHECK(edit.pins[0].id == a.pins[3].id);
   CHECK(edit.pins[0].before_index == 3);
@@ -279,7 +455,8 @@ TEST_CASE("committing an identical project records nothing") {
   CHECK_FALSE(doc.dirty());
 
   Project changed = same;
-  changed.boxes[0].size.x() += 1.0;
+  changed.primitives[0].shape.params.x() += 1.0;
+  facet::RefreshPrimitive(&changed, &changed.primitives[0]);
   REQUIRE(doc.Commit("resize", changed));
   REQUIRE(doc.Undo());
   CHECK(doc.CanRedo());
@@ -294,7 +471,7 @@ TEST_CASE("dirty flag: commit, undo, redo, MarkClean and an unreachable saved st
   Document doc(StartProject());
   CHECK_FALSE(doc.dirty());
   Project p = doc.project();
-  p.boxes[0].name = "a";
+  p.primitives[0].name = "a";
   REQUIRE(doc.Commit("rename a", p));
   CHECK(doc.dirty());
   REQUIRE(doc.Undo());
@@ -303,7 +480,7 @@ TEST_CASE("dirty flag: commit, undo, redo, MarkClean and an unreachable saved st
   CHECK(doc.dirty());
   doc.MarkClean();  // saved with name "a"
   CHECK_FALSE(doc.dirty());
-  p.boxes[0].name = "b";
+  p.primitives[0].name = "b";
   REQUIRE(doc.Commit("rename b", p));
   CHECK(doc.dirty());
   REQUIRE(doc.Undo());
@@ -337,13 +514,15 @@ TEST_CASE("dirty flag: commit, undo, redo, MarkClean and an unreachable saved st
 TEST_CASE("a drag previews changes and becomes one history entry") {
   Document doc(StartProject());
   const Project snapshot = doc.project();
-  const Eigen::Vector3d start = snapshot.boxes[0].translation;
+  const Eigen::Vector3d start = snapshot.primitives[0].shape.translation;
   for (int frame = 1; frame <= 30; ++frame) {
-    doc.MutableProjectForPreview()->boxes[0].translation = start + Eigen::Vector3d(0.1 * frame, 0.0, 0.0);
+    Project* preview = doc.MutableProjectForPreview();
+    preview->primitives[0].shape.translation = start + Eigen::Vector3d(0.1 * frame, 0.0, 0.0);
+    facet::RefreshPrimitive(preview, &preview->primitives[0]);
     CHECK(doc.undo_stack().empty());  // previews are not history
   }
   const Project dragged = doc.project();
-  const double moved = (dragged.boxes[0].translation - start).norm();
+  const double moved = (dragged.primitives[0].shape.translation - start).norm();
   CHECK(std::abs(moved - 3.0) < 1e-12);
   REQUIRE(doc.CommitFrom("Move box", snapshot));
   REQUIRE(doc.undo_stack().size() == 1);
@@ -375,11 +554,12 @@ TEST_CASE("a drag previews changes and becomes one history entry") {
 TEST_CASE("CancelPreview restores the snapshot and leaves history alone") {
   Document doc(StartProject());
   Project p = doc.project();
-  p.boxes[0].name = "x";
+  p.primitives[0].name = "x";
   REQUIRE(doc.Commit("rename", p));
   REQUIRE(doc.Undo());
   const Project snapshot = doc.project();
-  doc.MutableProjectForPreview()->boxes[0].size *= 2.0;
+  doc.MutableProjectForPreview()->primitives[0].shape.params *= 2.0;
+  facet::RefreshPrimitive(doc.MutableProjectForPreview(), &doc.MutableProjectForPreview()->primitives[0]);
   doc.MutableProjectForPreview()->segments.pop_back();
   REQUIRE_FALSE(doc.project() == snapshot);
   doc.CancelPreview(snapshot);
@@ -417,4 +597,47 @@ TEST_CASE("reordering a list, with or without other changes, applies and reverts
       CHECK(doc.project() == a);
     }
   }
+}
+
+TEST_CASE("a K-op on a primitive's mesh with a pin on the new vertex is one entry, undone exactly") {
+  Document doc(StartProject());
+  const Project before = doc.project();
+  Project after = before;
+  Primitive& box = after.primitives[0];
+  // E_split on the box's top front edge (corners 4 -> 5, whichever way
+  // the edge's half-edge 2e runs, t = 0.5 is its midpoint), on a copy committed whole.
+  const facet::HalfedgeId h = facet::FindHalfedge(box.mesh, 4, 5);
+  REQUIRE(h != facet::kNoElement);
+  const facet::ESplitResult split = facet::ESplit(&box.mesh, facet::PolyMesh::EdgeOf(h), 0.5);
+  REQUIRE_MESSAGE(split.ok, split.message);
+  Pin pin;
+  pin.id = after.NewId();
+  pin.image_id = after.images[0].id;
+  pin.vertex = {box.id, split.vertex};
+  pin.uv_px = {321.0, 123.0};
+  after.pins.push_back(pin);
+  Constraint c;
+  c.id = after.NewId();
+  c.kind = ConstraintKind::kCollinear;
+  c.vertices = {{box.id, 4}, {box.id, split.vertex}, {box.id, 5}};
+  after.constraints.push_back(c);
+  REQUIRE(doc.Commit("Split edge and pin", after));
+  REQUIRE(doc.undo_stack().size() == 1);
+  const Edit& edit = doc.undo_stack().back();
+  CHECK(edit.primitives.size() == 1);
+  CHECK(edit.pins.size() == 1);
+  CHECK(edit.constraints.size() == 1);
+  CHECK(edit.images.empty());
+  CHECK(edit.segments.empty());
+  CHECK(doc.project().FindVertex(pin.vertex) != nullptr);
+  REQUIRE(doc.Undo());
+  CHECK(doc.project() == before);
+  CHECK(doc.project().FindVertex(pin.vertex) == nullptr);
+  REQUIRE(doc.Redo());
+  CHECK(doc.project() == after);
+  const facet::MeshVertex* v = doc.project().FindVertex(pin.vertex);
+  REQUIRE(v != nullptr);
+  const Eigen::Vector3d expected =
+      0.5 * (facet::VertexInWorld(after, {box.id, 4}) + facet::VertexInWorld(after, {box.id, 5}));
+  CHECK((v->position - expected).norm() < 1e-12 * expected.norm());
 }
