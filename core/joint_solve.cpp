@@ -639,8 +639,10 @@ ConstraintPolishSummary Polish(const JointSolveOptions& options, JointProblem* p
   return s;
 }
 
+// Conflicts are named only after a solve that ran to convergence: a per-frame solve that
+// used its budget may simply not have enforced the constraints yet.
 void FillDiagnostics(const Project& project, const JointSolveOptions& options, const JointProblem& problem,
-                     JointSolveSummary* summary) {
+                     bool name_conflicts, JointSolveSummary* summary) {
   summary->pins.clear();
   for (const Pin& pin : project.pins) summary->pins.push_back({pin.id, std::numeric_limits<double>::quiet_NaN()});
   std::map<int, ImageDiagnostic> per_camera;
@@ -681,7 +683,7 @@ void FillDiagnostics(const Project& project, const JointSolveOptions& options, c
     ConstraintDiagnostic& d = summary->constraints[term.constraint_index];
     d.residual = NaturalConstraintResidual(problem, term, b.raw, &d.unit);
     d.satisfied = b.raw.cwiseAbs().maxCoeff() <= options.conflict_tolerance;
-    if (!d.satisfied) {
+    if (!d.satisfied && name_conflicts) {
       const Constraint& c = project.constraints[term.constraint_index];
       std::ostringstream text;
       text << "constraint " << c.id << " (" << ConstraintKindName(c.kind) << ") is not met: residual " << d.residual
@@ -739,7 +741,7 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   if (problem.blocks.empty()) return finish(Termination::kNothingToSolve, "no pins, segments or constraints to solve");
   if (problem.num_parameters == 0) {
     EvaluateBlocks(&problem, state, false);
-    FillDiagnostics(project, options, problem, &summary);
+    FillDiagnostics(project, options, problem, true, &summary);
     summary.initial_cost = summary.final_cost = ObservationCost(problem);
     return finish(Termination::kNothingToSolve, "every parameter is locked");
   }
@@ -822,7 +824,7 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
     return finish(Termination::kFailed, text.str());
   }
 
-  FillDiagnostics(project, options, problem, &summary);
+  FillDiagnostics(project, options, problem, !budget_used, &summary);
   if (options.compute_diagnostics) {
     if (problem.num_parameters <= kMaxDiagnosticParameters) {
       summary.undetermined = UndeterminedParameters(problem);

@@ -119,7 +119,9 @@ struct JointSolveSummary {
   // one sentence each: "the box 'house' depth is free: pin a vertex on its back face or add a
   // second image".
   std::vector<std::string> undetermined;
-  // Constraints that cannot hold together (their residuals stay large after the solve).
+  // Constraints that cannot hold together (their scale-free residuals stay above
+  // conflict_tolerance after a solve that converged; not named when the iteration budget ran
+  // out, e.g. per frame).
   std::vector<std::string> conflicts;
   bool polished = false;
   double time_ms = 0.0;
