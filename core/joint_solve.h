@@ -71,7 +71,8 @@ struct JointSolveOptions {
   // A constraint whose scale-free residual stays above this after the solve is reported as
   // not satisfied, and named in `conflicts`.
   double conflict_tolerance = 1e-6;
-  // Diagnostics cost an SVD of the Jacobian: on for a full solve, off per frame.
+  // Diagnostics cost a dense SVD of the column-scaled Jacobian: on for a full solve, off per
+  // frame. Above 600 parameters the analysis is skipped with a warning.
   bool compute_diagnostics = true;
   enum class LinearSolver { kSchur, kSparseLdlt };
   LinearSolver linear_solver = LinearSolver::kSchur;
