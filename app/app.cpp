@@ -138,10 +138,23 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
   report["selection"] = {{"segment_id", state.selection.segment_id},
                          {"segment_endpoint", state.selection.segment_endpoint},
                          {"pin_id", state.selection.pin_id},
-                         {"box_id", state.selection.box_id}};
+                         {"primitive_id", state.selection.primitive_id},
+                         {"element",
+                          {{"kind", ElementKindName(state.selection.element.kind)},
+                           {"primitive_id", state.selection.element.primitive_id},
+                           {"id", state.selection.element.element}}}};
+  report["hover"] = {{"kind", ElementKindName(state.hover.kind)},
+                     {"primitive_id", state.hover.primitive_id},
+                     {"id", state.hover.element}};
   report["solve"] = {{"termination", SolveTerminationName(state.last_update.solve.termination)},
                      {"rms_px", state.last_update.solve.reprojection_rms_px},
                      {"max_px", state.last_update.solve.reprojection_max_px}};
+  const JointSolveSummary& joint = state.last_update.joint;
+  report["joint_solve"] = {{"termination", JointSolveTerminationName(joint.termination)},
+                           {"message", joint.message},
+                           {"rms_px", joint.reprojection_rms_px},
+                           {"undetermined", joint.undetermined},
+                           {"conflicts", joint.conflicts}};
   nlohmann::json log = nlohmann::json::array();
   for (const LogEntry& e : state.log) {
     const char* level = e.level == LogLevel::kInfo ? "info" : e.level == LogLevel::kWarning ? "warning" : "error";

@@ -47,9 +47,49 @@ const char* ToolName(Tool tool) {
     case Tool::kLineY: return "Line Y";
     case Tool::kLineZ: return "Line Z";
     case Tool::kPin: return "Pin";
-    case Tool::kAddBox: return "Add box";
+    case Tool::kAddPrimitive: return "Add primitive";
+    case Tool::kSplitEdge: return "Split edge";
+    case Tool::kDeleteVertex: return "Delete vertex";
+    case Tool::kConnectVertices: return "Connect vertices";
+    case Tool::kDeleteEdge: return "Delete edge";
   }
   return "?";
+}
+
+const char* ElementKindName(ElementKind kind) {
+  switch (kind) {
+    case ElementKind::kNone: return "none";
+    case ElementKind::kVertex: return "vertex";
+    case ElementKind::kEdge: return "edge";
+    case ElementKind::kFace: return "face";
+  }
+  return "?";
+}
+
+bool ElementExists(const Project& project, const ElementRef& ref) {
+  const Primitive* primitive = project.FindPrimitive(ref.primitive_id);
+  if (primitive == nullptr) return false;
+  switch (ref.kind) {
+    case ElementKind::kNone: return true;
+    case ElementKind::kVertex: return primitive->mesh.IsVertex(ref.element);
+    case ElementKind::kEdge: return primitive->mesh.IsEdge(ref.element);
+    case ElementKind::kFace: return primitive->mesh.IsFace(ref.element);
+  }
+  return false;
+}
+
+std::string DescribeElement(const Project& project, const ElementRef& ref) {
+  const Primitive* primitive = project.FindPrimitive(ref.primitive_id);
+  std::string text = primitive ? primitive->name : std::string("?");
+  if (ref.kind != ElementKind::kNone) text += std::string(" ") + ElementKindName(ref.kind) + " " + std::to_string(ref.element);
+  return text;
+}
+
+Selection Selection::Of(const ElementRef& element) {
+  Selection selection;
+  selection.primitive_id = element.primitive_id;
+  selection.element = element;
+  return selection;
 }
 
 void AppState::Log(LogLevel level, std::string text) {
@@ -76,7 +116,9 @@ void ResetDocument(AppState* state, Project project, const std::string& path) {
   state->photos.clear();
   state->photo_errors.clear();
   state->last_update = {};
-  state->mesh_boxes.clear();
+  state->mesh_primitives.clear();
+  state->hover = {};
+  state->hover_panel = 0;
   state->mesh_images.clear();
   state->mesh_photo_count = 0;
   state->mesh_texture_stale = false;
@@ -165,6 +207,7 @@ void Undo(AppState* state) {
   if (state->drag_start) CancelDrag(state);
   if (state->document.Undo()) {
     state->Log(LogLevel::kInfo, "Undo");
+    ValidateSelection(state);
     RefreshDiagnostics(state);
   }
 }
@@ -173,8 +216,23 @@ void Redo(AppState* state) {
   if (state->drag_start) return;
   if (state->document.Redo()) {
     state->Log(LogLevel::kInfo, "Redo");
+    ValidateSelection(state);
     RefreshDiagnostics(state);
   }
+}
+
+void ValidateSelection(AppState* state) {
+  const Project& project = state->document.project();
+  Selection& s = state->selection;
+  if (s.segment_id != kNoId && !project.FindSegment(s.segment_id)) {
+    s.segment_id = kNoId;
+    s.segment_endpoint = -1;
+  }
+  if (s.pin_id != kNoId && !project.FindPin(s.pin_id)) s.pin_id = kNoId;
+  if (s.primitive_id != kNoId && !project.FindPrimitive(s.primitive_id)) s.primitive_id = kNoId;
+  if (!s.element.Empty() && !ElementExists(project, s.element)) s.element = {};
+  if (!s.connect_from.Empty() && !ElementExists(project, s.connect_from)) s.connect_from = {};
+  if (!state->hover.Empty() && !ElementExists(project, state->hover)) state->hover = {};
 }
 
 void RefreshDerived(AppState* state) {
@@ -198,11 +256,13 @@ void RefreshDerived(AppState* state) {
     }
   }
 
-  // The mesh depends on the boxes, the cameras and the loaded photos only.
-  const bool inputs_unchanged = state->mesh_boxes == project.boxes && state->mesh_images == project.images &&
+  ValidateSelection(state);
+
+  // The mesh depends on the primitives, the cameras and the loaded photos only.
+  const bool inputs_unchanged = state->mesh_primitives == project.primitives && state->mesh_images == project.images &&
                                 state->mesh_photo_count == state->photos.size() && state->mesh_revision != 0;
   if (inputs_unchanged && (!state->mesh_texture_stale || state->drag_start)) return;
-  state->mesh_boxes = project.boxes;
+  state->mesh_primitives = project.primitives;
   state->mesh_images = project.images;
   state->mesh_photo_count = state->photos.size();
   ++state->mesh_revision;
@@ -213,7 +273,8 @@ void RefreshDerived(AppState* state) {
   if (state->drag_start && !state->mesh.atlas.empty()) {
     TexturedMesh geometry = BuildUntexturedMesh(project);
     if (geometry.positions.size() == state->mesh.positions.size() &&
-        geometry.triangle_box == state->mesh.triangle_box) {
+        geometry.triangle_primitive == state->mesh.triangle_primitive &&
+        geometry.triangle_face == state->mesh.triangle_face) {
       state->mesh.positions = std::move(geometry.positions);
       state->mesh.normals = std::move(geometry.normals);
       state->mesh_texture_stale = true;

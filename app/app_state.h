@@ -13,6 +13,7 @@
 
 #include "core/calibrate_vp.h"
 #include "core/document.h"
+#include "core/mesh_primitives.h"
 #include "core/image_io.h"
 #include "core/model_update.h"
 #include "core/textured_mesh.h"
@@ -20,22 +21,46 @@
 namespace facet::app {
 
 enum class Tool {
-  kSelect,     // pick and drag segment endpoints, pins, boxes
-  kLineX,      // draw a segment of the x family
+  kSelect,           // pick vertices, edges, faces; drag segment endpoints and pins
+  kLineX,            // draw a segment of the x family
   kLineY,
   kLineZ,
-  kPin,        // click a box corner, then click in the image: V_proj
-  kAddBox,     // K_create box
+  kPin,              // click a model vertex, then click in the image: V_proj
+  kAddPrimitive,     // K_create of AppState::add_kind (an action: it adds at once)
+  kSplitEdge,        // E_split: click on an edge, split at the clicked point
+  kDeleteVertex,     // V_delete: click on a vertex made by E_split
+  kConnectVertices,  // V_connect: click two vertices of one face
+  kDeleteEdge,       // E_delete: click on an edge between two faces
 };
 const char* ToolName(Tool tool);
 
+// A vertex, edge or face of a primitive's mesh, by stable ids (core/mesh.h).
+enum class ElementKind { kNone, kVertex, kEdge, kFace };
+const char* ElementKindName(ElementKind kind);  // "vertex", "edge", "face"
+struct ElementRef {
+  ElementKind kind = ElementKind::kNone;
+  Id primitive_id = kNoId;
+  std::uint32_t element = kNoElement;  // VertexId, EdgeId or FaceId by kind
+  bool Empty() const { return kind == ElementKind::kNone; }
+  friend bool operator==(const ElementRef&, const ElementRef&) = default;
+};
+// Whether the primitive and its (live) element exist in the project.
+bool ElementExists(const Project& project, const ElementRef& ref);
+// "box 1 vertex 9" for the log and tooltips.
+std::string DescribeElement(const Project& project, const ElementRef& ref);
+
+// What the user picked; not part of the document, so not undoable. Ids that an undo removes
+// are cleared by ValidateSelection.
 struct Selection {
   Id segment_id = kNoId;
   int segment_endpoint = -1;  // 0 = a, 1 = b, -1 = whole segment
   Id pin_id = kNoId;
-  Id box_id = kNoId;
-  int box_corner = -1;        // for the pin tool: the corner picked in the 3D or image panel
-  bool Empty() const { return segment_id == kNoId && pin_id == kNoId && box_id == kNoId; }
+  Id primitive_id = kNoId;    // the primitive the properties panel edits
+  ElementRef element;         // a vertex, edge or face of it (the pin tool pins a vertex)
+  ElementRef connect_from;    // V_connect: the first vertex clicked
+  bool Empty() const { return segment_id == kNoId && pin_id == kNoId && primitive_id == kNoId; }
+  // Selects an element and its primitive, clearing segment and pin.
+  static Selection Of(const ElementRef& element);
 };
 
 enum class LogLevel { kInfo, kWarning, kError };
@@ -50,7 +75,13 @@ struct AppState {
   std::string project_path;  // empty for an unsaved project
   Selection selection;
   Tool tool = Tool::kSelect;
+  PrimitiveKind add_kind = PrimitiveKind::kBox;  // what kAddPrimitive adds
+  bool add_on_top = true;  // a wedge, pyramid or plane goes on top of the selected box
   Id active_image_id = kNoId;
+  // The element under the mouse in the image or 3D panel (both highlight it), and which
+  // panel set it (0 none, 1 image, 2 3D): a panel clears only its own hover.
+  ElementRef hover;
+  int hover_panel = 0;
 
   // Photos by image id, loaded once (core type; each panel makes its own GL textures).
   std::map<Id, ImageRgba8> photos;
@@ -63,7 +94,7 @@ struct AppState {
   ModelUpdateSummary last_update;   // calibration and solve figures of the last change
   TextureBakeSummary last_bake;
   // What the current mesh was built from, to rebuild it only when that changes.
-  std::vector<Box> mesh_boxes;
+  std::vector<Primitive> mesh_primitives;
   std::vector<Image> mesh_images;
   size_t mesh_photo_count = 0;
   bool mesh_texture_stale = false;  // geometry moved during a drag; texture not re-baked yet
@@ -102,6 +133,9 @@ void CancelDrag(AppState* state);
 
 void Undo(AppState* state);
 void Redo(AppState* state);
+
+// Drops selected ids that are no longer in the project (after undo, redo, a delete).
+void ValidateSelection(AppState* state);
 
 // Loads missing photos and rebuilds the textured mesh when the project changed since the
 // last call. Called once per frame before drawing.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
+#include <sstream>
 
 #include <imgui.h>
 #include <imgui_internal.h>  // the window's title-bar rectangle, for the Dock/Undock button
@@ -12,6 +14,7 @@
 #include <GLFW/glfw3.h>  // key codes only
 
 #include "app/image_panel.h"
+#include "app/model_edits.h"
 #include "app/panels.h"
 #include "app/viewport_panel.h"
 #include "core/export.h"
@@ -368,7 +371,7 @@ void DrawDialogs(AppState* state, ShellState* shell) {
     case Dialog::kAbout:
       ImGui::Text("Facet %s", "0.1");
       ImGui::TextColored(kDimText, "Textured 3D models from uncalibrated photos:");
-      ImGui::TextColored(kDimText, "vanishing-point calibration, box primitives, pins.");
+      ImGui::TextColored(kDimText, "vanishing-point calibration, primitives, K-operators, pins.");
       ImGui::TextColored(kDimText, "After Debevec, Taylor and Malik, SIGGRAPH 1996.");
       ImGui::Spacing();
       if (ImGui::Button("Close", ImVec2(100, 0)) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) CloseDialog(shell);
@@ -423,8 +426,69 @@ std::optional<Tool> ToolFromName(const std::string& name) {
   if (name == "line-y" || name == "liney" || name == "y") return Tool::kLineY;
   if (name == "line-z" || name == "linez" || name == "z") return Tool::kLineZ;
   if (name == "pin") return Tool::kPin;
-  if (name == "add-box" || name == "addbox" || name == "box") return Tool::kAddBox;
+  if (name == "add-primitive" || name == "add-box" || name == "addbox" || name == "box") return Tool::kAddPrimitive;
+  if (name == "split-edge" || name == "e-split") return Tool::kSplitEdge;
+  if (name == "delete-vertex" || name == "v-delete") return Tool::kDeleteVertex;
+  if (name == "connect-vertices" || name == "v-connect") return Tool::kConnectVertices;
+  if (name == "delete-edge" || name == "e-delete") return Tool::kDeleteEdge;
   return std::nullopt;
+}
+
+std::optional<PrimitiveKind> KindFromName(const std::string& name) {
+  for (PrimitiveKind kind : {PrimitiveKind::kBox, PrimitiveKind::kWedge, PrimitiveKind::kPrism, PrimitiveKind::kPyramid,
+                             PrimitiveKind::kCylinder, PrimitiveKind::kPlane}) {
+    if (name == PrimitiveKindName(kind)) return kind;
+  }
+  return std::nullopt;
+}
+
+std::vector<std::string> Words(const std::string& text) {
+  std::istringstream in(text);
+  std::vector<std::string> words;
+  for (std::string w; in >> w;) words.push_back(w);
+  return words;
+}
+
+// "select vertex|edge|face PRIMITIVE_ID ELEMENT_ID" or "select primitive ID" or "select none".
+bool RunSelectCommand(AppState* state, const std::string& arg, std::string* error) {
+  const std::vector<std::string> w = Words(arg);
+  if (w.size() == 1 && w[0] == "none") {
+    state->selection = {};
+    return true;
+  }
+  char* end = nullptr;
+  auto number = [&](const std::string& text, unsigned long long* value) {
+    *value = std::strtoull(text.c_str(), &end, 10);
+    return !text.empty() && *end == '\0';
+  };
+  unsigned long long primitive_id = 0, element = 0;
+  const Project& project = state->document.project();
+  if (w.size() == 2 && w[0] == "primitive" && number(w[1], &primitive_id)) {
+    if (!project.FindPrimitive(primitive_id)) {
+      *error = "select: no primitive " + w[1];
+      return false;
+    }
+    state->selection = {};
+    state->selection.primitive_id = primitive_id;
+    return true;
+  }
+  ElementRef ref;
+  if (w.size() == 3 && number(w[1], &primitive_id) && number(w[2], &element)) {
+    ref.kind = w[0] == "vertex" ? ElementKind::kVertex : w[0] == "edge" ? ElementKind::kEdge
+               : w[0] == "face" ? ElementKind::kFace : ElementKind::kNone;
+    ref.primitive_id = primitive_id;
+    ref.element = static_cast<std::uint32_t>(element);
+  }
+  if (ref.kind == ElementKind::kNone) {
+    *error = "select: expected 'vertex|edge|face PRIMITIVE_ID ELEMENT_ID', 'primitive ID' or 'none'";
+    return false;
+  }
+  if (!ElementExists(project, ref)) {
+    *error = "select: no " + DescribeElement(project, ref);
+    return false;
+  }
+  state->selection = Selection::Of(ref);
+  return true;
 }
 
 }  // namespace
@@ -476,12 +540,55 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   if (name == "tool") {
     const std::optional<Tool> tool = ToolFromName(arg);
     if (!tool) {
-      *error = "unknown tool '" + arg + "' (select, line-x, line-y, line-z, pin, add-box)";
+      *error = "unknown tool '" + arg +
+               "' (select, line-x, line-y, line-z, pin, add-primitive, split-edge, delete-vertex, "
+               "connect-vertices, delete-edge)";
       return false;
     }
-    if (*tool == Tool::kAddBox) AddBox(state);
-    else state->tool = *tool;
+    if (*tool == Tool::kAddPrimitive) {
+      if (arg == "add-box" || arg == "addbox" || arg == "box") state->add_kind = PrimitiveKind::kBox;
+      AddPrimitiveAction(state);
+    } else {
+      SetTool(state, *tool);
+    }
     return true;
+  }
+  if (name == "add") {
+    // add KIND [on-top]
+    const std::vector<std::string> w = Words(arg);
+    const std::optional<PrimitiveKind> kind = w.empty() ? std::nullopt : KindFromName(w[0]);
+    if (!kind || w.size() > 2 || (w.size() == 2 && w[1] != "on-top")) {
+      *error = "add: expected 'KIND [on-top]' with KIND box, wedge, prism, pyramid, cylinder or plane";
+      return false;
+    }
+    Id base = kNoId;
+    if (w.size() == 2) {
+      const Primitive* b = AttachBaseFor(*state, *kind);
+      if (b == nullptr) {
+        *error = "add: 'on-top' needs a selected box and a wedge, pyramid or plane";
+        return false;
+      }
+      base = b->id;
+    }
+    state->add_kind = *kind;
+    if (!AddPrimitiveEdit(state, *kind, base)) {
+      *error = LastLoggedError(*state);
+      return false;
+    }
+    return true;
+  }
+  if (name == "select") return RunSelectCommand(state, arg, error);
+  if (name == "free-vertex" || name == "planar-face") {
+    const ElementRef& e = state->selection.element;
+    const bool vertex = name == "free-vertex";
+    if (e.kind != (vertex ? ElementKind::kVertex : ElementKind::kFace)) {
+      *error = name + ": select a " + (vertex ? "vertex" : "face") + " first";
+      return false;
+    }
+    const bool done = vertex ? ToggleFreeVertexEdit(state, e.primitive_id, e.element)
+                             : TogglePlanarFaceEdit(state, e.primitive_id, e.element);
+    if (!done) *error = LastLoggedError(*state);
+    return done;
   }
   if (name == "select-image") {
     const auto& images = state->document.project().images;
@@ -501,7 +608,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   if (name == "export") {
     const std::string ext = std::filesystem::path(arg).extension().string();
     if (state->mesh.indices.empty()) {
-      *error = "export: there is no model yet (add a box and pin it)";
+      *error = "export: there is no model yet (add a primitive and pin it)";
       return false;
     }
     ExportSummary summary;

@@ -60,7 +60,9 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s);
 std::string WindowTitle(const AppState& state);
 
 // Named app commands shared by the menus, the shortcuts and the input script: undo, redo,
-// save [PATH], open PATH, tool NAME, select-image INDEX, fit, export PATH. Returns false with
+// save [PATH], open PATH, tool NAME, select-image INDEX, fit, export PATH, add KIND [on-top],
+// select vertex|edge|face PRIMITIVE_ID ELEMENT_ID | primitive ID | none, free-vertex,
+// planar-face (app/script.h documents them). Returns false with
 // *error set for unknown commands, bad arguments or a failed save/open/export.
 bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name,
                    const std::vector<std::string>& args, std::string* error);

@@ -13,6 +13,8 @@
 
 #include "app/image_tiles.h"
 #include "app/image_view.h"
+#include "app/model_edits.h"
+#include "app/model_pick.h"
 #include "app/overlay_draw.h"
 
 namespace facet::app {
@@ -23,6 +25,7 @@ constexpr double kPickRadiusPx = 6.0;
 constexpr double kCornerPickRadiusPx = 8.0;
 constexpr double kMinSegmentLengthPx = 3.0;  // shorter new segments are accidental clicks
 constexpr double kDragStartPx = 2.0;         // motion before a press becomes a drag
+constexpr int kImagePanelHover = 1;          // AppState::hover_panel
 
 // GL textures of one photo, and which pixels they were made from.
 struct CachedPhoto {
@@ -38,11 +41,10 @@ struct Interaction {
   int button = 0;
   Id image_id = kNoId;
   bool began = false;        // BeginDrag was called (edit drags) / motion passed the threshold
-  bool place_on_click = false;  // kPlacePin: a release without motion pins the corner there
+  bool place_on_click = false;  // kPlacePin: a release without motion pins the vertex there
   Id target_id = kNoId;      // segment or pin
   int endpoint = -1;
-  Id box_id = kNoId;
-  int corner = -1;
+  VertexRef vertex;  // kPlacePin: the vertex being pinned
   Axis axis = Axis::kX;
   ImVec2 press_screen{0, 0};
   Eigen::Vector2d press_uv = Eigen::Vector2d::Zero();
@@ -145,18 +147,19 @@ bool SegmentResidual(const AppState& state, const Segment& segment, double* resi
   return true;
 }
 
-// The nearest pickable item under the cursor within the pick radius.
-OverlayHover HitTest(const Project& project, const Image& image, const std::vector<ProjectedCorner>& corners,
+// The nearest pickable item under the cursor within the pick radius: pins, then segment
+// endpoints, then the model's vertices, edges and faces (app/model_pick.h), then segments.
+OverlayHover HitTest(const Project& project, const Image& image, const std::vector<ProjectedPrimitive>& model,
                      const ViewTransform& view, ImVec2 mouse, Tool tool) {
   OverlayHover hover;
   const Eigen::Vector2d m = ToEigen(mouse);
   auto screen = [&](const Eigen::Vector2d& uv) { return ToEigen(view.ToScreen(uv.x(), uv.y())); };
-  const bool pick_corners = tool == Tool::kSelect || tool == Tool::kPin;
+  const bool pick_pins = tool == Tool::kSelect || tool == Tool::kPin;
   const bool pick_lines = tool == Tool::kSelect;
   double best = kPickRadiusPx;
   for (const Pin& pin : project.pins) {
-    if (pin.image_id != image.id || !pick_corners) continue;
-    // Pins win ties with the corner they pin: subtract a small bias.
+    if (pin.image_id != image.id || !pick_pins) continue;
+    // Pins win ties with the vertex they pin: subtract a small bias.
     const double d = (screen(pin.uv_px) - m).norm() - 0.5;
     if (d < best) {
       best = d;
@@ -178,20 +181,17 @@ OverlayHover HitTest(const Project& project, const Image& image, const std::vect
       }
     }
   }
-  if (pick_corners && hover.pin_id == kNoId && hover.segment_id == kNoId) {
-    double best_corner = kCornerPickRadiusPx;
-    for (const ProjectedCorner& corner : corners) {
-      if (!corner.in_front) continue;
-      const double d = (screen(corner.uv_px) - m).norm();
-      if (d < best_corner) {
-        best_corner = d;
-        hover = OverlayHover();
-        hover.box_id = corner.box_id;
-        hover.box_corner = corner.corner;
-      }
-    }
+  if (hover.pin_id != kNoId || hover.segment_id != kNoId) return hover;
+  const PickFilter filter = PickFilterOf(tool);
+  const ElementPick pick = PickInImage(project, model, image.camera, view.zoom, ToEigen(view.ToScreen(0.0, 0.0)), m,
+                                       filter, kCornerPickRadiusPx);
+  // Segments win over the model's faces (a line drawn on a face stays pickable).
+  if (!pick.element.Empty() && pick.element.kind != ElementKind::kFace) {
+    hover.element = pick.element;
+    hover.edge_t = pick.t;
+    return hover;
   }
-  if (pick_lines && hover.pin_id == kNoId && hover.segment_id == kNoId && hover.box_id == kNoId) {
+  if (pick_lines) {
     double best_line = kPickRadiusPx;
     for (const Segment& segment : project.segments) {
       if (segment.image_id != image.id) continue;
@@ -203,6 +203,7 @@ OverlayHover HitTest(const Project& project, const Image& image, const std::vect
       }
     }
   }
+  if (hover.segment_id == kNoId) hover.element = pick.element;
   return hover;
 }
 
@@ -223,37 +224,24 @@ std::string DescribeHover(const AppState& state, const OverlayHover& hover) {
     return text;
   }
   if (const Pin* pin = hover.pin_id != kNoId ? project.FindPin(hover.pin_id) : nullptr) {
-    const Box* box = project.FindBox(pin->box_id);
-    std::snprintf(text, sizeof(text), "pin %llu: %s corner %d at (%.1f, %.1f)",
-                  static_cast<unsigned long long>(pin->id), box ? box->name.c_str() : "?", pin->corner,
-                  pin->uv_px.x(), pin->uv_px.y());
+    const std::string vertex =
+        DescribeElement(project, {ElementKind::kVertex, pin->vertex.primitive_id, pin->vertex.vertex});
+    std::snprintf(text, sizeof(text), "pin %llu: %s at (%.1f, %.1f)", static_cast<unsigned long long>(pin->id),
+                  vertex.c_str(), pin->uv_px.x(), pin->uv_px.y());
     return text;
   }
-  if (hover.box_id != kNoId) {
-    const Box* box = project.FindBox(hover.box_id);
-    std::snprintf(text, sizeof(text), "%s corner %d", box ? box->name.c_str() : "box", hover.box_corner);
-    return text;
+  if (!hover.element.Empty()) {
+    std::string description = DescribeElement(project, hover.element);
+    if (hover.element.kind == ElementKind::kVertex) {
+      const Primitive* primitive = project.FindPrimitive(hover.element.primitive_id);
+      if (primitive && primitive->mesh.IsVertex(hover.element.element) &&
+          primitive->mesh.vertex(hover.element.element).local.free) {
+        description += " (free)";
+      }
+    }
+    return description;
   }
   return "";
-}
-
-// The project with (box, corner) pinned at uv in `image_id`, replacing an earlier pin of
-// that corner in that image. Returns the pin's id.
-Id PinCorner(Project* project, Id image_id, Id box_id, int corner, const Eigen::Vector2d& uv_px) {
-  for (Pin& pin : project->pins) {
-    if (pin.image_id == image_id && pin.box_id == box_id && pin.corner == corner) {
-      pin.uv_px = uv_px;
-      return pin.id;
-    }
-  }
-  Pin pin;
-  pin.id = project->NewId();
-  pin.image_id = image_id;
-  pin.box_id = box_id;
-  pin.corner = corner;
-  pin.uv_px = uv_px;
-  project->pins.push_back(pin);
-  return pin.id;
 }
 
 void DeleteSelection(AppState* state) {
@@ -267,6 +255,12 @@ void DeleteSelection(AppState* state) {
     std::erase_if(edited.pins, [&](const Pin& p) { return p.id == selection.pin_id; });
     state->selection = Selection();
     CommitEdit(state, "Delete pin", std::move(edited));
+  } else if (selection.element.kind == ElementKind::kVertex) {
+    DeleteVertexEdit(state, selection.element.primitive_id, selection.element.element);
+  } else if (selection.element.kind == ElementKind::kEdge) {
+    DeleteEdgeEdit(state, selection.element.primitive_id, selection.element.element);
+  } else if (selection.primitive_id != kNoId && selection.element.Empty()) {
+    DeletePrimitiveEdit(state, selection.primitive_id);
   }
 }
 
@@ -297,7 +291,7 @@ void UpdateEditDrag(AppState* state, Interaction* drag, const Eigen::Vector2d& m
       if (Pin* p = edited.FindPin(drag->target_id)) p->uv_px = target;
       break;
     case DragKind::kPlacePin:
-      state->selection.pin_id = PinCorner(&edited, drag->image_id, drag->box_id, drag->corner, target);
+      state->selection.pin_id = PinVertex(&edited, drag->image_id, drag->vertex, target);
       break;
     default:
       return;
@@ -310,7 +304,7 @@ const char* DragLabel(DragKind kind) {
     case DragKind::kMoveEndpoint: return "Move line end";
     case DragKind::kMoveSegment: return "Move line";
     case DragKind::kMovePin: return "Move pin";
-    case DragKind::kPlacePin: return "Pin corner";
+    case DragKind::kPlacePin: return "Pin vertex";
     default: return "Drag";
   }
 }
@@ -336,7 +330,10 @@ void StartLeftPress(AppState* state, PanelState* panel, const Image& image, cons
     drag.axis = AxisOfTool(tool);
     return;
   }
-  if (tool != Tool::kSelect && tool != Tool::kPin) return;
+  if (tool != Tool::kSelect && tool != Tool::kPin) {
+    ApplyToolClick(state, hover.element, hover.edge_t);  // the K-operators act on a press
+    return;
+  }
   if (hover.pin_id != kNoId) {
     const Pin* pin = project.FindPin(hover.pin_id);
     state->selection = Selection();
@@ -363,26 +360,36 @@ void StartLeftPress(AppState* state, PanelState* panel, const Image& image, cons
     }
     return;
   }
-  if (hover.box_id != kNoId) {
-    // Pressing on a projected corner chooses it; dragging from it pins it where released.
-    state->selection = Selection();
-    state->selection.box_id = hover.box_id;
-    state->selection.box_corner = hover.box_corner;
+  const ElementRef chosen = state->selection.element;
+  if (tool == Tool::kPin && hover.element.kind == ElementKind::kVertex && hover.element == chosen) {
+    // The chosen vertex already projects where its pin goes (the solve predicted it): a
+    // click there pins it there.
     drag.kind = DragKind::kPlacePin;
-    drag.box_id = hover.box_id;
-    drag.corner = hover.box_corner;
-    // Start from where the corner is drawn, so that the first motion does not jump.
-    for (const ProjectedCorner& c : ProjectBoxCorners(project, image)) {
-      if (c.box_id == hover.box_id && c.corner == hover.box_corner) drag.grab_offset = c.uv_px - mouse_uv;
+    drag.place_on_click = true;
+    drag.vertex = {chosen.primitive_id, chosen.element};
+    return;
+  }
+  if (hover.element.kind == ElementKind::kVertex) {
+    // Pressing on a projected vertex chooses it; dragging from it pins it where released.
+    state->selection = Selection::Of(hover.element);
+    drag.kind = DragKind::kPlacePin;
+    drag.vertex = {hover.element.primitive_id, hover.element.element};
+    // Start from where the vertex is drawn, so that the first motion does not jump.
+    for (const ProjectedPrimitive& pp : ProjectModel(project, image)) {
+      if (pp.primitive_id == hover.element.primitive_id && hover.element.element < pp.uv_px.size()) {
+        drag.grab_offset = pp.uv_px[hover.element.element] - mouse_uv;
+      }
     }
     return;
   }
-  if (tool == Tool::kPin && state->selection.box_id != kNoId && state->selection.box_corner >= 0 &&
-      project.FindBox(state->selection.box_id)) {
+  if (tool == Tool::kPin && chosen.kind == ElementKind::kVertex && ElementExists(project, chosen)) {
     drag.kind = DragKind::kPlacePin;
     drag.place_on_click = true;
-    drag.box_id = state->selection.box_id;
-    drag.corner = state->selection.box_corner;
+    drag.vertex = {chosen.primitive_id, chosen.element};
+    return;
+  }
+  if (tool == Tool::kSelect && !hover.element.Empty()) {
+    state->selection = Selection::Of(hover.element);
     return;
   }
   if (tool == Tool::kSelect) state->selection = Selection();
@@ -413,15 +420,15 @@ void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& 
       EndDrag(state);
     } else if (drag.kind == DragKind::kPlacePin && drag.place_on_click) {
       Project edited = state->document.project();
-      const Id pin_id = PinCorner(&edited, drag.image_id, drag.box_id, drag.corner, mouse_uv);
+      const Id pin_id = PinVertex(&edited, drag.image_id, drag.vertex, mouse_uv);
       state->selection = Selection();
       state->selection.pin_id = pin_id;
-      state->selection.box_id = drag.box_id;
-      CommitEdit(state, "Pin corner", std::move(edited));
+      state->selection.primitive_id = drag.vertex.primitive_id;
+      CommitEdit(state, "Pin vertex", std::move(edited));
     }
     if (drag.kind == DragKind::kPlacePin && (drag.began || drag.place_on_click)) {
-      // The corner is pinned: the next pin starts by choosing a corner again.
-      state->selection.box_corner = -1;
+      // The vertex is pinned: the next pin starts by choosing a vertex again.
+      state->selection.element = {};
     }
   }
   drag = Interaction();
@@ -507,10 +514,16 @@ std::string ToolHint(const AppState& state) {
     case Tool::kLineZ:
       return std::string("drag to draw a ") + AxisName(AxisOfTool(state.tool)) + " line";
     case Tool::kPin:
-      if (state.selection.box_id != kNoId && state.selection.box_corner >= 0) {
-        return "click to pin corner " + std::to_string(state.selection.box_corner);
+      if (state.selection.element.kind == ElementKind::kVertex) {
+        return "click to pin " + DescribeElement(state.document.project(), state.selection.element);
       }
-      return "click a box corner, then where it is in the photo";
+      return "click a model vertex, then where it is in the photo";
+    case Tool::kSplitEdge: return "click on an edge to split it there (snaps to the middle)";
+    case Tool::kDeleteVertex: return "click on a vertex made by a split to delete it";
+    case Tool::kConnectVertices:
+      return state.selection.connect_from.Empty() ? "click the first vertex of a face"
+                                                  : "click the second vertex on the same face";
+    case Tool::kDeleteEdge: return "click on an edge between two faces to merge them";
     default:
       return "";
   }
@@ -570,7 +583,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   }
 
   const Project& project = state->document.project();
-  const std::vector<ProjectedCorner> corners = ProjectBoxCorners(project, image);
+  const std::vector<ProjectedPrimitive> model = ProjectModel(project, image);
   ViewTransform transform = TransformOf(view);
   Interaction& drag = panel->interaction;
   const bool busy = drag.kind != DragKind::kNone;
@@ -590,7 +603,14 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   panel->last_pointer_uv = mouse_uv;
   panel->last_mouse_screen = io.MousePos;
   OverlayHover hover;
-  if (hovered && !busy) hover = HitTest(project, image, corners, transform, pointer_screen, state->tool);
+  if (hovered && !busy) hover = HitTest(project, image, model, transform, pointer_screen, state->tool);
+  if (hovered && !busy) {
+    state->hover = hover.element;
+    state->hover_panel = kImagePanelHover;
+  } else if (state->hover_panel == kImagePanelHover) {
+    state->hover = {};
+    state->hover_panel = 0;
+  }
 
   // Presses start an interaction; a drag started elsewhere (another panel) blocks edits.
   const bool space_down = ImGui::IsKeyDown(ImGui::GetKeyIndex(ImGuiKey_Space));
@@ -604,7 +624,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
       StartLeftPress(state, panel, image, hover, mouse_uv);
     } else if (ImGui::IsMouseClicked(ImGuiMouseButton_Right)) {
       // The context menu works with every tool, so pick segments as the select tool does.
-      const OverlayHover under = HitTest(project, image, corners, transform, pointer_screen, Tool::kSelect);
+      const OverlayHover under = HitTest(project, image, model, transform, pointer_screen, Tool::kSelect);
       if (under.segment_id != kNoId) {
         panel->context_segment = under.segment_id;
         ImGui::OpenPopup("##segment_menu");
@@ -644,8 +664,9 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
         ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Backspace), false)) {
       DeleteSelection(state);
     }
-    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false) && state->tool == Tool::kPin) {
-      state->selection.box_corner = -1;  // forget the chosen corner
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
+      state->selection.connect_from = {};  // forget V_connect's first vertex
+      if (state->tool == Tool::kPin) state->selection.element = {};  // and the vertex to pin
     }
   }
   DrawSegmentContextMenu(state, panel);
@@ -655,12 +676,14 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   const Project& current = state->document.project();
   const Image* current_image = current.FindImage(image.id);
   if (current_image == nullptr) return;
-  const std::vector<ProjectedCorner> current_corners = ProjectBoxCorners(current, *current_image);
+  const std::vector<ProjectedPrimitive> current_model = ProjectModel(current, *current_image);
   OverlayInput overlay;
   overlay.project = &current;
   overlay.image = current_image;
   overlay.calibration = CalibrationFor(*state, image.id);
-  overlay.corners = &current_corners;
+  overlay.model = &current_model;
+  overlay.tool = state->tool;
+  if (state->hover_panel != kImagePanelHover) overlay.other_hover = state->hover;
   overlay.selection = state->selection;
   overlay.hover = hover;
 

@@ -5,13 +5,11 @@
 #include <cstdio>
 #include <string>
 
-#include "core/box.h"
+#include "core/mesh_triangulate.h"
 
 namespace facet::app {
 namespace {
 
-// Camera-frame depth below which an edge is cut: projecting closer points would explode.
-constexpr double kNearDepth = 1e-6;
 // Screen margin (px) added around the clip rectangle before clipping lines, so that thick
 // lines and handles at the border are not cut visibly short.
 constexpr double kClipMarginPx = 8.0;
@@ -20,6 +18,10 @@ constexpr ImU32 kPinColor = IM_COL32(255, 70, 200, 255);
 constexpr ImU32 kHighlightColor = IM_COL32(255, 255, 255, 255);
 constexpr ImU32 kShadowColor = IM_COL32(0, 0, 0, 200);
 constexpr ImU32 kHorizonColor = IM_COL32(255, 255, 255, 170);
+constexpr ImU32 kSelectedElementColor = IM_COL32(255, 140, 30, 255);
+constexpr ImU32 kSelectedFaceColor = IM_COL32(255, 140, 30, 70);
+constexpr ImU32 kHoveredFaceColor = IM_COL32(255, 255, 255, 45);
+constexpr ImU32 kFreeVertexColor = IM_COL32(80, 230, 255, 255);
 
 Eigen::Vector2d ToScreenD(const ViewTransform& view, const Eigen::Vector2d& uv_px) {
   return {view.origin.x + static_cast<double>(view.zoom) * uv_px.x(),
@@ -119,6 +121,120 @@ void DrawVanishingPoint(ImDrawList* draw_list, Axis axis, const Eigen::Vector3d&
   }
 }
 
+
+// An edge of camera-frame points p-q, cut at the near depth, in screen px; false when it is
+// wholly behind the camera.
+bool ProjectEdge(const Camera& camera, const ViewTransform& view, Eigen::Vector3d p, Eigen::Vector3d q,
+                 Eigen::Vector2d* a, Eigen::Vector2d* b) {
+  if (p.z() < kNearDepth && q.z() < kNearDepth) return false;
+  if (p.z() < kNearDepth) std::swap(p, q);
+  if (q.z() < kNearDepth) q = p + (q - p) * ((p.z() - kNearDepth) / (p.z() - q.z()));
+  auto project_px = [&](const Eigen::Vector3d& x) {
+    return Eigen::Vector2d(camera.focal_px * x.x() / x.z() + camera.principal_point_px.x(),
+                           camera.focal_px * x.y() / x.z() + camera.principal_point_px.y());
+  };
+  *a = ToScreenD(view, project_px(p));
+  *b = ToScreenD(view, project_px(q));
+  return true;
+}
+
+const ProjectedPrimitive* FindProjected(const OverlayInput& input, Id primitive_id) {
+  if (input.model == nullptr) return nullptr;
+  for (const ProjectedPrimitive& pp : *input.model) {
+    if (pp.primitive_id == primitive_id) return &pp;
+  }
+  return nullptr;
+}
+
+// A face filled with a translucent colour, through its triangulation (faces may be concave).
+void FillFace(ImDrawList* draw_list, const Primitive& primitive, const ProjectedPrimitive& pp, FaceId f,
+              const ViewTransform& view, ImU32 color) {
+  const PolyMesh& mesh = primitive.mesh;
+  for (const CornerTriangle& tri : TriangulateFace(mesh, f)) {
+    ImVec2 p[3];
+    for (int i = 0; i < 3; ++i) {
+      const VertexId v = mesh.Origin(tri[i]);
+      if (v >= pp.in_front.size() || !pp.in_front[v]) return;
+      p[i] = ToImVec(ToScreenD(view, pp.uv_px[v]));
+    }
+    draw_list->AddTriangleFilled(p[0], p[1], p[2], color);
+  }
+}
+
+// Every edge of every primitive in the model colour; the selected primitive with a light
+// underlay; the selected and hovered faces filled, edges thickened.
+void DrawModel(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view, const ScreenRect& rect) {
+  const Camera& camera = input.image->camera;
+  const ElementRef& hover = input.hover.element;
+  const ElementRef& selected = input.selection.element;
+  for (const Primitive& primitive : input.project->primitives) {
+    const PolyMesh& mesh = primitive.mesh;
+    const ProjectedPrimitive* pp = FindProjected(input, primitive.id);
+    if (pp != nullptr) {
+      for (const ElementRef* ref : {&selected, &hover, &input.other_hover}) {
+        if (ref->kind != ElementKind::kFace || ref->primitive_id != primitive.id || !mesh.IsFace(ref->element)) continue;
+        FillFace(draw_list, primitive, *pp, ref->element, view,
+                 ref == &selected ? kSelectedFaceColor : kHoveredFaceColor);
+      }
+    }
+    const bool primitive_selected = input.selection.primitive_id == primitive.id;
+    for (EdgeId e = 0; e < mesh.EdgeIdEnd(); ++e) {
+      if (!mesh.IsEdge(e)) continue;
+      Eigen::Vector2d a, b;
+      const Eigen::Vector3d p = camera.CamFromWorld(mesh.vertex(mesh.Origin(2 * e)).position);
+      const Eigen::Vector3d q = camera.CamFromWorld(mesh.vertex(mesh.Dest(2 * e)).position);
+      if (!ProjectEdge(camera, view, p, q, &a, &b)) continue;
+      const ElementRef ref{ElementKind::kEdge, primitive.id, e};
+      const bool is_selected = selected == ref, is_hovered = hover == ref || input.other_hover == ref;
+      if (is_selected) {
+        DrawScreenLine(draw_list, a, b, rect, kSelectedElementColor, kModelEdgeThicknessPx + 4.0f);
+      } else if (is_hovered) {
+        DrawScreenLine(draw_list, a, b, rect, kHighlightColor, kModelEdgeThicknessPx + 4.0f);
+      } else if (primitive_selected) {
+        DrawScreenLine(draw_list, a, b, rect, IM_COL32(255, 255, 255, 160), kModelEdgeThicknessPx + 3.0f);
+      }
+      DrawScreenLine(draw_list, a, b, rect, kModelEdgeColor, kModelEdgeThicknessPx);
+      // Where the split tool would cut the hovered edge.
+      if (is_hovered && hover == ref && input.tool == Tool::kSplitEdge) {
+        const Eigen::Vector3d at = (1.0 - input.hover.edge_t) * mesh.vertex(mesh.Origin(2 * e)).position +
+                                   input.hover.edge_t * mesh.vertex(mesh.Dest(2 * e)).position;
+        const Eigen::Vector3d at_in_cam = camera.CamFromWorld(at);
+        if (at_in_cam.z() > kNearDepth) {
+          const ImVec2 c = ToImVec(ToScreenD(view, camera.Project(at)));
+          draw_list->AddCircleFilled(c, 5.0f, kShadowColor);
+          draw_list->AddCircleFilled(c, 4.0f, kSelectedElementColor);
+        }
+      }
+    }
+  }
+}
+
+// Vertex dots; free vertices as rings; the selected, hovered and V_connect start marked.
+void DrawModelVertices(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view,
+                       const ScreenRect& rect) {
+  for (const ProjectedPrimitive& pp : *input.model) {
+    const Primitive* primitive = input.project->FindPrimitive(pp.primitive_id);
+    if (primitive == nullptr) continue;
+    for (VertexId v = 0; v < pp.in_front.size(); ++v) {
+      if (!pp.in_front[v] || !primitive->mesh.IsVertex(v)) continue;
+      const Eigen::Vector2d p = ToScreenD(view, pp.uv_px[v]);
+      if (!rect.Contains(p, kClipMarginPx)) continue;
+      const ElementRef ref{ElementKind::kVertex, pp.primitive_id, v};
+      const bool hot = input.hover.element == ref || input.other_hover == ref;
+      const bool chosen = input.selection.element == ref || input.selection.connect_from == ref;
+      const ImVec2 c = ToImVec(p);
+      draw_list->AddCircleFilled(c, 4.0f, kShadowColor);
+      if (primitive->mesh.vertex(v).local.free) {
+        draw_list->AddCircle(c, 4.5f, kFreeVertexColor, 0, 2.0f);
+      } else {
+        draw_list->AddCircleFilled(c, 3.0f, kModelEdgeColor);
+      }
+      if (chosen) draw_list->AddCircleFilled(c, 3.0f, kSelectedElementColor);
+      if (hot || chosen) draw_list->AddCircle(c, chosen ? 9.0f : 7.0f, hot ? kHighlightColor : kSelectedElementColor, 0, 2.0f);
+    }
+  }
+}
+
 }  // namespace
 
 ImU32 AxisColor(Axis axis, int alpha) {
@@ -128,25 +244,6 @@ ImU32 AxisColor(Axis axis, int alpha) {
     case Axis::kZ: return IM_COL32(70, 140, 255, alpha);
   }
   return IM_COL32(255, 255, 255, alpha);
-}
-
-std::vector<ProjectedCorner> ProjectBoxCorners(const Project& project, const Image& image) {
-  std::vector<ProjectedCorner> result;
-  if (!image.camera_calibrated) return result;
-  const Camera& camera = image.camera;
-  for (const Box& box : project.boxes) {
-    const std::array<Eigen::Vector3d, 8> corners = BoxCornersInWorld(box);
-    for (int i = 0; i < 8; ++i) {
-      ProjectedCorner projected;
-      projected.box_id = box.id;
-      projected.corner = i;
-      const Eigen::Vector3d p_in_cam = camera.CamFromWorld(corners[i]);
-      projected.in_front = p_in_cam.z() > kNearDepth;
-      if (projected.in_front) projected.uv_px = camera.Project(corners[i]);
-      result.push_back(projected);
-    }
-  }
-  return result;
 }
 
 bool ClipSegmentToRect(Eigen::Vector2d* a, Eigen::Vector2d* b, const Eigen::Vector2d& rect_min,
@@ -238,29 +335,7 @@ void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const V
 
   // The projected model: edges cut at the near depth so that nothing behind the camera
   // projects through the centre.
-  if (options.show_model && image.camera_calibrated) {
-    const Camera& camera = image.camera;
-    for (const Box& box : project.boxes) {
-      const std::array<Eigen::Vector3d, 8> corners = BoxCornersInWorld(box);
-      std::array<Eigen::Vector3d, 8> in_cam;
-      for (int i = 0; i < 8; ++i) in_cam[i] = camera.CamFromWorld(corners[i]);
-      const bool selected = input.selection.box_id == box.id;
-      for (const auto& edge : BoxEdges()) {
-        Eigen::Vector3d p = in_cam[edge[0]], q = in_cam[edge[1]];
-        if (p.z() < kNearDepth && q.z() < kNearDepth) continue;
-        if (p.z() < kNearDepth) std::swap(p, q);
-        if (q.z() < kNearDepth) q = p + (q - p) * ((p.z() - kNearDepth) / (p.z() - q.z()));
-        auto project_px = [&](const Eigen::Vector3d& x) {
-          return Eigen::Vector2d(camera.focal_px * x.x() / x.z() + camera.principal_point_px.x(),
-                                 camera.focal_px * x.y() / x.z() + camera.principal_point_px.y());
-        };
-        const Eigen::Vector2d a = ToScreenD(view, project_px(p));
-        const Eigen::Vector2d b = ToScreenD(view, project_px(q));
-        if (selected) DrawScreenLine(draw_list, a, b, rect, IM_COL32(255, 255, 255, 160), kModelEdgeThicknessPx + 3.0f);
-        DrawScreenLine(draw_list, a, b, rect, kModelEdgeColor, kModelEdgeThicknessPx);
-      }
-    }
-  }
+  if (options.show_model && image.camera_calibrated) DrawModel(draw_list, input, view, rect);
 
   if (options.show_segments) {
     for (const Segment& segment : project.segments) {
@@ -290,19 +365,7 @@ void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const V
     }
   }
 
-  if (options.show_model && input.corners != nullptr) {
-    for (const ProjectedCorner& corner : *input.corners) {
-      if (!corner.in_front) continue;
-      const Eigen::Vector2d p = ToScreenD(view, corner.uv_px);
-      if (!rect.Contains(p, kClipMarginPx)) continue;
-      const bool hot = (input.hover.box_id == corner.box_id && input.hover.box_corner == corner.corner);
-      const bool chosen = (input.selection.box_id == corner.box_id && input.selection.box_corner == corner.corner);
-      const ImVec2 c = ToImVec(p);
-      draw_list->AddCircleFilled(c, 4.0f, kShadowColor);
-      draw_list->AddCircleFilled(c, 3.0f, kModelEdgeColor);
-      if (hot || chosen) draw_list->AddCircle(c, chosen ? 9.0f : 7.0f, kHighlightColor, 0, 2.0f);
-    }
-  }
+  if (options.show_model && input.model != nullptr) DrawModelVertices(draw_list, input, view, rect);
 
   if (options.show_pins) {
     int number = 0;
@@ -311,10 +374,11 @@ void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const V
       ++number;
       const Eigen::Vector2d p = ToScreenD(view, pin.uv_px);
       // The residual: from where the user pinned the corner to where the model puts it.
-      if (input.corners != nullptr) {
-        for (const ProjectedCorner& corner : *input.corners) {
-          if (corner.box_id != pin.box_id || corner.corner != pin.corner || !corner.in_front) continue;
-          DrawScreenLine(draw_list, p, ToScreenD(view, corner.uv_px), rect, kPinColor, 1.5f);
+      if (input.model != nullptr) {
+        for (const ProjectedPrimitive& pp : *input.model) {
+          const VertexId v = pin.vertex.vertex;
+          if (pp.primitive_id != pin.vertex.primitive_id || v >= pp.in_front.size() || !pp.in_front[v]) continue;
+          DrawScreenLine(draw_list, p, ToScreenD(view, pp.uv_px[v]), rect, kPinColor, 1.5f);
         }
       }
       if (!rect.Contains(p, 20.0)) continue;

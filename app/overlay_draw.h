@@ -1,6 +1,6 @@
 // What the image panel draws over a photo, as ImDrawList calls under an image-to-screen
 // transform: line segments by family, vanishing points and the horizon, the projected
-// boxes (12 edges, corners) and the pins with their residual lines. Also the projections
+// primitives (every mesh edge, vertices, the selected and hovered element) and the pins with their residual lines. Also the projections
 // the panel's hit tests share with the drawing, so that what is picked is what is shown.
 #pragma once
 
@@ -12,6 +12,7 @@
 
 #include "app/app_state.h"
 #include "app/image_tiles.h"
+#include "app/model_pick.h"
 
 namespace facet::app {
 
@@ -21,18 +22,6 @@ constexpr float kModelEdgeThicknessPx = 2.0f;
 
 // Colour of a line family (x red, y green, z blue) with the given alpha.
 ImU32 AxisColor(Axis axis, int alpha = 255);
-
-// A box corner seen by an image's camera; uv_px is meaningful only when in_front.
-struct ProjectedCorner {
-  Id box_id = kNoId;
-  int corner = 0;
-  bool in_front = false;
-  Eigen::Vector2d uv_px = Eigen::Vector2d::Zero();
-};
-
-// All box corners of the project projected with `image`'s camera; empty when the camera is
-// not calibrated.
-std::vector<ProjectedCorner> ProjectBoxCorners(const Project& project, const Image& image);
 
 // Clips the segment a-b (screen coordinates in double, so points far outside the float
 // range still clip correctly) to the rectangle [min, max]. Returns false when nothing is left.
@@ -57,15 +46,17 @@ struct OverlayHover {
   Id segment_id = kNoId;
   int segment_endpoint = -1;  // 0 = a, 1 = b, -1 = the segment itself
   Id pin_id = kNoId;
-  Id box_id = kNoId;
-  int box_corner = -1;
+  ElementRef element;  // a vertex, edge or face of the model
+  double edge_t = 0.5;  // for an edge: where E_split would split
 };
 
 struct OverlayInput {
   const Project* project = nullptr;
   const Image* image = nullptr;
   const VpCalibrationSummary* calibration = nullptr;  // may be null
-  const std::vector<ProjectedCorner>* corners = nullptr;  // from ProjectBoxCorners
+  const std::vector<ProjectedPrimitive>* model = nullptr;  // from ProjectModel
+  ElementRef other_hover;  // hovered in the 3D panel: highlighted here too
+  Tool tool = Tool::kSelect;
   Selection selection;
   OverlayHover hover;
 };

@@ -11,6 +11,7 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>  // key codes only: io.KeysDown is indexed by GLFW key codes in both modes
 
+#include "app/model_edits.h"
 #include "core/scene_solve.h"
 
 namespace facet::app {
@@ -30,13 +31,33 @@ struct ToolButton {
   const char* hint;
 };
 constexpr ToolButton kToolButtons[] = {
-    {Tool::kSelect, "Select", "V", GLFW_KEY_V, "Pick and drag segment endpoints, pins and boxes."},
+    {Tool::kSelect, "Select", "V", GLFW_KEY_V,
+     "Pick vertices, edges and faces of the model; drag line ends and pins; drag from a vertex to pin it."},
     {Tool::kLineX, "Line X", "X", GLFW_KEY_X, "Drag in the image to draw a line parallel to the world x axis."},
     {Tool::kLineY, "Line Y", "Y", GLFW_KEY_Y, "Drag in the image to draw a line parallel to the world y axis."},
     {Tool::kLineZ, "Line Z", "Z", GLFW_KEY_Z, "Drag in the image to draw a vertical line (world z)."},
-    {Tool::kPin, "Pin", "P", GLFW_KEY_P, "Pick a box corner, then click where it is in the photo."},
-    {Tool::kAddBox, "Add box", "B", GLFW_KEY_B, "Adds a box; pin its corners to place it."},
+    {Tool::kPin, "Pin", "P", GLFW_KEY_P, "Pick a model vertex, then click where it is in the photo (V_proj)."},
+    {Tool::kAddPrimitive, "Add primitive", "B", GLFW_KEY_B,
+     "Adds a primitive of the kind chosen below (K_create); pin its vertices to place it."},
+    {Tool::kSplitEdge, "Split edge", "E", GLFW_KEY_E,
+     "E_split: click on an edge to add a vertex there (snaps to the middle)."},
+    {Tool::kDeleteVertex, "Delete vertex", "D", GLFW_KEY_D,
+     "V_delete: click on a vertex made by a split to remove it."},
+    {Tool::kConnectVertices, "Connect vertices", "C", GLFW_KEY_C,
+     "V_connect: click two vertices of one face to split the face by a new edge."},
+    {Tool::kDeleteEdge, "Delete edge", "R", GLFW_KEY_R,
+     "E_delete: click on an edge between two faces to merge them."},
 };
+
+// Actions on the selection, beside the tools.
+constexpr int kFreeVertexKey = GLFW_KEY_T;
+constexpr const char* kFreeVertexShortcut = "T";
+constexpr int kPlanarFaceKey = GLFW_KEY_K;
+constexpr const char* kPlanarFaceShortcut = "K";
+
+constexpr PrimitiveKind kPrimitiveKinds[] = {PrimitiveKind::kBox,     PrimitiveKind::kWedge,
+                                             PrimitiveKind::kPrism,   PrimitiveKind::kPyramid,
+                                             PrimitiveKind::kCylinder, PrimitiveKind::kPlane};
 
 // Per-frame UI introspection, not document data: rebuilt every frame.
 std::map<std::string, Rect>& ItemRects() {
@@ -185,73 +206,127 @@ void DrawSolveSection(AppState* state) {
 }
 
 // Takes a copy: the edits below replace the project that a reference would point into.
-void DrawBoxSection(AppState* state, const Box box) {
-  if (!ImGui::CollapsingHeader("Box", ImGuiTreeNodeFlags_DefaultOpen)) return;
-  const Id box_id = box.id;
-  ImGui::PushID("box");
-  std::string name = box.name;
+void DrawPrimitiveSection(AppState* state, const Primitive primitive) {
+  const std::string kind = PrimitiveKindName(primitive.shape.kind);
+  if (!ImGui::CollapsingHeader("Primitive", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  const Id id = primitive.id;
+  ImGui::PushID("primitive");
+  std::string name = primitive.name;
   ImGui::SetNextItemWidth(-FLT_MIN);
   const bool renamed = ImGui::InputTextWithHint("##name", "name", &name);
-  RecordItem("box.name");
-  TrackEdit(state, "Rename box", renamed, [&](Project* p) { p->FindBox(box_id)->name = name; });
+  RecordItem("primitive.name");
+  TrackEdit(state, "Rename " + kind, renamed, [&](Project* p) { p->FindPrimitive(id)->name = name; });
+  LabelValue("Kind", "%s", kind.c_str());
+  if (primitive.shape.segments > 0) {
+    ImGui::SameLine();
+    ImGui::TextColored(kDimText, "(%d sides)", primitive.shape.segments);
+  }
+  LabelValue("Mesh", "%d vertices, %d edges, %d faces", primitive.mesh.NumVertices(), primitive.mesh.NumEdges(),
+             primitive.mesh.NumFaces());
+  const Primitive* base = state->document.project().FindPrimitive(primitive.attached_to);
+  if (primitive.attached_to != kNoId) LabelValue("On top of", "%s", base ? base->name.c_str() : "(missing)");
 
-  double size[3] = {box.size.x(), box.size.y(), box.size.z()};
-  const bool resized = DragDoubles("Size", size, 3, 0.01f, "%.3f");
-  RecordItem("box.size");
-  TrackEdit(state, "Resize box", resized, [&](Project* p) {
-    for (int i = 0; i < 3; ++i) p->FindBox(box_id)->size[i] = std::max(1e-3, size[i]);
-  });
-  double t[3] = {box.translation.x(), box.translation.y(), box.translation.z()};
+  // Parameters by kind, each with its name and its lock (a kept dimension is a known length).
+  const int num_params = NumShapeParams(primitive.shape.kind);
+  const int first_free = primitive.attached_to != kNoId ? 2 : 0;  // the base gives the footprint
+  for (int i = 0; i < num_params; ++i) {
+    ImGui::PushID(i);
+    double value = primitive.shape.params[i];
+    bool locked = primitive.param_locked[i];
+    if (ImGui::Checkbox("##lock", &locked)) {
+      Project edited = state->document.project();
+      edited.FindPrimitive(id)->param_locked[i] = locked;
+      CommitEdit(state, std::string(locked ? "Keep " : "Free ") + ShapeParamName(primitive.shape.kind, i), std::move(edited));
+    }
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Keep while solving: a kept dimension is a known length (the scale)");
+    ImGui::SameLine();
+    ImGui::BeginDisabled(i < first_free);
+    const bool resized = DragDoubles(ShapeParamName(primitive.shape.kind, i), &value, 1, 0.01f, "%.3f");
+    ImGui::EndDisabled();
+    RecordItem("primitive.param." + std::to_string(i));
+    TrackEdit(state, "Resize " + kind, resized, [&](Project* p) {
+      p->FindPrimitive(id)->shape.params[i] = std::max(1e-3, value);
+      RefreshAllPrimitives(p);
+    });
+    ImGui::PopID();
+  }
+  ImGui::BeginDisabled(primitive.attached_to != kNoId);
+  double t[3] = {primitive.shape.translation.x(), primitive.shape.translation.y(), primitive.shape.translation.z()};
   const bool moved = DragDoubles("Position", t, 3, 0.01f, "%.3f");
-  RecordItem("box.position");
-  TrackEdit(state, "Move box", moved, [&](Project* p) {
-    p->FindBox(box_id)->translation = Eigen::Vector3d(t[0], t[1], t[2]);
+  RecordItem("primitive.position");
+  TrackEdit(state, "Move " + kind, moved, [&](Project* p) {
+    p->FindPrimitive(id)->shape.translation = Eigen::Vector3d(t[0], t[1], t[2]);
+    RefreshAllPrimitives(p);
   });
-  double r[3] = {box.rotation.x() * kRadToDeg, box.rotation.y() * kRadToDeg, box.rotation.z() * kRadToDeg};
+  const Eigen::Vector3d& rotation = primitive.shape.rotation;
+  double r[3] = {rotation.x() * kRadToDeg, rotation.y() * kRadToDeg, rotation.z() * kRadToDeg};
   const bool rotated = DragDoubles("Rotation", r, 3, 0.2f, "%.1f deg");
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Angle-axis vector in degrees (world_from_box)");
-  TrackEdit(state, "Rotate box", rotated, [&](Project* p) {
-    p->FindBox(box_id)->rotation = Eigen::Vector3d(r[0], r[1], r[2]) / kRadToDeg;
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Angle-axis vector in degrees (world_from_primitive)");
+  TrackEdit(state, "Rotate " + kind, rotated, [&](Project* p) {
+    p->FindPrimitive(id)->shape.rotation = Eigen::Vector3d(r[0], r[1], r[2]) / kRadToDeg;
+    RefreshAllPrimitives(p);
   });
+  ImGui::EndDisabled();
 
   ImGui::TextColored(kDimText, "Keep while solving");
-  Box locks = box;
-  bool lock_changed = false;
-  const char* size_names[] = {"Size x", "Size y", "Size z"};
-  for (int i = 0; i < 3; ++i) {
-    if (i > 0) ImGui::SameLine();
-    bool v = locks.size_locked[i];
-    if (ImGui::Checkbox(size_names[i], &v)) {
-      locks.size_locked[i] = v;
-      lock_changed = true;
-    }
-  }
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("A kept size is a known length: it fixes the scale");
-  lock_changed |= ImGui::Checkbox("Rotation", &locks.rotation_locked);
+  Primitive locks = primitive;
+  bool lock_changed = ImGui::Checkbox("Rotation", &locks.rotation_locked);
   ImGui::SameLine();
   lock_changed |= ImGui::Checkbox("Position", &locks.translation_locked);
   if (lock_changed) {
     Project edited = state->document.project();
-    *edited.FindBox(box_id) = locks;
-    CommitEdit(state, "Box locks", std::move(edited));
+    *edited.FindPrimitive(id) = locks;
+    CommitEdit(state, "Primitive locks", std::move(edited));
   }
-  if (ImGui::Button("Delete box")) {
-    Project edited = state->document.project();
-    std::erase_if(edited.boxes, [&](const Box& b) { return b.id == box_id; });
-    std::erase_if(edited.pins, [&](const Pin& pin) { return pin.box_id == box_id; });
-    state->selection = {};
-    CommitEdit(state, "Delete box", std::move(edited));
-  }
+  if (ImGui::Button("Delete primitive")) DeletePrimitiveEdit(state, id);
   ImGui::PopID();
+}
+
+// The selected vertex, edge or face of the selected primitive.
+void DrawElementSection(AppState* state, const Primitive& primitive, const ElementRef& element) {
+  const PolyMesh& mesh = primitive.mesh;
+  const std::string title = std::string(ElementKindName(element.kind)) + " " + std::to_string(element.element);
+  if (!ImGui::CollapsingHeader("Element", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  ImGui::TextUnformatted(title.c_str());
+  if (element.kind == ElementKind::kVertex) {
+    const MeshVertex& v = mesh.vertex(element.element);
+    LabelValue("Position", "%.3f, %.3f, %.3f", v.position.x(), v.position.y(), v.position.z());
+    LabelValue("Defined", "%s", v.local.on_edge ? "on an edge (split)" : "primitive corner");
+    if (v.local.free) LabelValue("Offset", "%.3f, %.3f, %.3f", v.local.offset.x(), v.local.offset.y(), v.local.offset.z());
+    bool free = v.local.free;
+    char label[64];
+    std::snprintf(label, sizeof(label), "Free vertex (%s)", kFreeVertexShortcut);
+    if (ImGui::Checkbox(label, &free)) ToggleFreeVertexEdit(state, element.primitive_id, element.element);
+    RecordItem("element.free");
+    if (ImGui::IsItemHovered()) {
+      ImGui::SetTooltip("Let the solve move this vertex off its definition (e.g. a ridge above a face) (%s)",
+                        kFreeVertexShortcut);
+    }
+    int pins = 0;
+    for (const Pin& pin : state->document.project().pins) pins += pin.vertex == VertexRef{primitive.id, element.element};
+    LabelValue("Pins", "%d", pins);
+  } else if (element.kind == ElementKind::kEdge) {
+    const VertexId a = mesh.Origin(2 * element.element), b = mesh.Dest(2 * element.element);
+    LabelValue("Vertices", "%u - %u", a, b);
+    LabelValue("Length", "%.3f", (mesh.vertex(b).position - mesh.vertex(a).position).norm());
+  } else if (element.kind == ElementKind::kFace) {
+    LabelValue("Vertices", "%d", FaceDegree(mesh, element.element));
+    const Eigen::Vector3d n = FaceNormal(mesh, element.element);
+    LabelValue("Normal", "%.2f, %.2f, %.2f", n.x(), n.y(), n.z());
+    char label[64];
+    std::snprintf(label, sizeof(label), "Keep planar (%s)", kPlanarFaceShortcut);
+    if (ImGui::Button(label)) TogglePlanarFaceEdit(state, element.primitive_id, element.element);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("A coplanarity constraint on the face's vertices (toggle)");
+  }
 }
 
 void DrawPinSection(AppState* state, const Pin pin) {
   if (!ImGui::CollapsingHeader("Pin", ImGuiTreeNodeFlags_DefaultOpen)) return;
   const Project& project = state->document.project();
   const Id pin_id = pin.id;
-  const Box* box = project.FindBox(pin.box_id);
-  LabelValue("Box", "%s", box ? box->name.c_str() : "(missing)");
-  LabelValue("Corner", "%d", pin.corner);
+  const Primitive* primitive = project.FindPrimitive(pin.vertex.primitive_id);
+  LabelValue("Primitive", "%s", primitive ? primitive->name.c_str() : "(missing)");
+  LabelValue("Vertex", "%u", pin.vertex.vertex);
   ImGui::PushID("pin");
   double uv[2] = {pin.uv_px.x(), pin.uv_px.y()};
   const bool moved = DragDoubles("Pixel", uv, 2, 0.25f, "%.2f");
@@ -299,6 +374,28 @@ void DrawSegmentSection(AppState* state, const Segment segment) {
       ++index;
     }
   }
+}
+
+// The kind of primitive the Add primitive tool adds, and "on top of the selected box".
+void DrawAddPrimitiveOptions(AppState* state, float width) {
+  ImGui::Indent(8.0f);
+  ImGui::SetNextItemWidth(width - 8.0f);
+  if (ImGui::BeginCombo("##add_kind", PrimitiveKindName(state->add_kind))) {
+    for (PrimitiveKind kind : kPrimitiveKinds) {
+      if (ImGui::Selectable(PrimitiveKindName(kind), kind == state->add_kind)) state->add_kind = kind;
+    }
+    ImGui::EndCombo();
+  }
+  RecordItem("tool.add_kind");
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Kind of primitive that Add primitive (B) adds");
+  const Primitive* base = state->add_kind != PrimitiveKind::kBox ? AttachBaseFor(*state, state->add_kind) : nullptr;
+  if (base != nullptr) {
+    const std::string label = "on top of '" + base->name + "'";
+    ImGui::Checkbox(label.c_str(), &state->add_on_top);
+    RecordItem("tool.add_on_top");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("AttachOnTop: its footprint and pose follow the box");
+  }
+  ImGui::Unindent(8.0f);
 }
 
 std::string StemOf(const std::string& path) {
@@ -362,7 +459,24 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
     if (ImGui::MenuItem(undo_label.c_str(), "Ctrl+Z", false, !undo.empty())) Undo(state);
     if (ImGui::MenuItem(redo_label.c_str(), "Ctrl+Shift+Z", false, !redo.empty())) Redo(state);
     ImGui::Separator();
-    if (ImGui::MenuItem("Add box", "B")) AddBox(state);
+    if (ImGui::BeginMenu("Add primitive")) {
+      for (PrimitiveKind kind : kPrimitiveKinds) {
+        if (ImGui::MenuItem(PrimitiveKindName(kind), kind == state->add_kind ? "B" : nullptr)) {
+          AddPrimitiveEdit(state, kind, kNoId);
+          state->add_kind = kind;
+        }
+      }
+      ImGui::EndMenu();
+    }
+    const Primitive* base = state->document.project().FindPrimitive(state->selection.primitive_id);
+    for (PrimitiveKind kind : {PrimitiveKind::kWedge, PrimitiveKind::kPyramid}) {
+      const std::string label = std::string("Add ") + PrimitiveKindName(kind) + " on top" +
+                                (base ? " of '" + base->name + "'" : std::string());
+      if (ImGui::MenuItem(label.c_str(), nullptr, false, AttachBaseFor(*state, kind) != nullptr)) {
+        AddPrimitiveEdit(state, kind, base->id);
+      }
+    }
+    ImGui::Separator();
     if (ImGui::MenuItem("Solve")) SolveNow(state);
     ImGui::EndMenu();
   }
@@ -388,15 +502,28 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
   }
   // Right-aligned status: tool and solve quality.
   const SceneSolveSummary& s = state->last_update.solve;
+  const Project& project = state->document.project();
   char status[160];
   if (s.IsUsable()) {
-    std::snprintf(status, sizeof(status), "%s   |   RMS %.2f px   |   %zu boxes, %zu pins", ToolName(state->tool),
-                  s.reprojection_rms_px, state->document.project().boxes.size(), state->document.project().pins.size());
+    std::snprintf(status, sizeof(status), "%s   |   RMS %.2f px   |   %zu primitives, %zu pins", ToolName(state->tool),
+                  s.reprojection_rms_px, project.primitives.size(), project.pins.size());
   } else {
-    std::snprintf(status, sizeof(status), "%s   |   %zu boxes, %zu pins", ToolName(state->tool),
-                  state->document.project().boxes.size(), state->document.project().pins.size());
+    std::snprintf(status, sizeof(status), "%s   |   %zu primitives, %zu pins", ToolName(state->tool),
+                  project.primitives.size(), project.pins.size());
   }
   const float w = ImGui::CalcTextSize(status).x;
+  // The last refusal or failure, for a few seconds, left of the status.
+  constexpr double kErrorShownS = 6.0;
+  if (!state->log.empty() && state->log.back().level == LogLevel::kError &&
+      state->time_s - state->log.back().time_s < kErrorShownS) {
+    const std::string& text = state->log.back().text;
+    const float error_w = ImGui::CalcTextSize(text.c_str()).x;
+    const float right = ImGui::GetWindowWidth() - w - ImGui::GetStyle().ItemSpacing.x * 6;
+    if (error_w < right - ImGui::GetCursorPosX()) {
+      ImGui::SameLine(right - error_w);
+      ImGui::TextColored(kErrorText, "%s", text.c_str());
+    }
+  }
   ImGui::SameLine(ImGui::GetWindowWidth() - w - ImGui::GetStyle().ItemSpacing.x * 2);
   ImGui::TextColored(kDimText, "%s", status);
   ImGui::EndMainMenuBar();
@@ -408,31 +535,31 @@ void HandleToolShortcuts(AppState* state) {
   if (io.WantTextInput || io.KeyCtrl || io.KeyAlt || io.KeySuper) return;
   for (const ToolButton& b : kToolButtons) {
     if (!ImGui::IsKeyPressed(b.key, false)) continue;
-    if (b.tool == Tool::kAddBox) {
-      AddBox(state);
+    if (b.tool == Tool::kAddPrimitive) {
+      AddPrimitiveAction(state);
     } else {
-      state->tool = b.tool;
+      SetTool(state, b.tool);
     }
+  }
+  const ElementRef& element = state->selection.element;
+  if (ImGui::IsKeyPressed(kFreeVertexKey, false) && element.kind == ElementKind::kVertex) {
+    ToggleFreeVertexEdit(state, element.primitive_id, element.element);
+  }
+  if (ImGui::IsKeyPressed(kPlanarFaceKey, false) && element.kind == ElementKind::kFace) {
+    TogglePlanarFaceEdit(state, element.primitive_id, element.element);
   }
 }
 
-void AddBox(AppState* state) {
-  Project edited = state->document.project();
-  Box box;
-  box.id = edited.NewId();
-  box.name = "box " + std::to_string(edited.boxes.size() + 1);
-  // Beside the last box, so a new box does not hide inside an existing one.
-  if (!edited.boxes.empty()) {
-    const Box& last = edited.boxes.back();
-    box.size = last.size;
-    box.translation = last.translation + Eigen::Vector3d(last.size.x() * 1.25, 0, 0);
-  }
-  box.size_locked = {false, false, edited.boxes.empty()};
-  edited.boxes.push_back(box);
-  state->selection = {};
-  state->selection.box_id = box.id;
-  CommitEdit(state, "Add box", std::move(edited));
-  state->tool = Tool::kPin;
+void SetTool(AppState* state, Tool tool) {
+  if (tool != state->tool) state->selection.connect_from = {};
+  state->tool = tool;
+}
+
+void AddPrimitiveAction(AppState* state) {
+  const Primitive* base = state->add_on_top ? AttachBaseFor(*state, state->add_kind) : nullptr;
+  // "On top" is for roofs: a new box always goes beside the others.
+  if (base != nullptr && state->add_kind == PrimitiveKind::kBox) base = nullptr;
+  if (AddPrimitiveEdit(state, state->add_kind, base ? base->id : kNoId)) state->tool = Tool::kPin;
 }
 
 void SolveNow(AppState* state) { CommitEdit(state, "Solve", state->document.project()); }
@@ -446,10 +573,10 @@ void DrawToolsPanel(AppState* state) {
     char label[64];
     std::snprintf(label, sizeof(label), "%s##tool", b.label);
     if (ImGui::Button(label, button_size)) {
-      if (b.tool == Tool::kAddBox) {
-        AddBox(state);
+      if (b.tool == Tool::kAddPrimitive) {
+        AddPrimitiveAction(state);
       } else {
-        state->tool = b.tool;
+        SetTool(state, b.tool);
       }
     }
     if (active) ImGui::PopStyleColor();
@@ -463,6 +590,29 @@ void DrawToolsPanel(AppState* state) {
                                           ImGui::GetColorU32(kDimText), b.shortcut);
     }
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s (%s)", b.hint, b.shortcut);
+    if (b.tool == Tool::kAddPrimitive) DrawAddPrimitiveOptions(state, width);
+  }
+  ImGui::Spacing();
+  ImGui::Separator();
+  ImGui::Spacing();
+  const ElementRef& element = state->selection.element;
+  ImGui::BeginDisabled(element.kind != ElementKind::kVertex);
+  char free_label[64];
+  std::snprintf(free_label, sizeof(free_label), "Free vertex##action");
+  if (ImGui::Button(free_label, button_size)) ToggleFreeVertexEdit(state, element.primitive_id, element.element);
+  ImGui::EndDisabled();
+  RecordItem("action.free_vertex");
+  if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) {
+    ImGui::SetTooltip("Toggle: the solve may move the selected vertex off its definition (%s)", kFreeVertexShortcut);
+  }
+  ImGui::BeginDisabled(element.kind != ElementKind::kFace);
+  if (ImGui::Button("Keep face planar##action", button_size)) {
+    TogglePlanarFaceEdit(state, element.primitive_id, element.element);
+  }
+  ImGui::EndDisabled();
+  RecordItem("action.planar_face");
+  if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) {
+    ImGui::SetTooltip("Toggle a coplanarity constraint on the selected face's vertices (%s)", kPlanarFaceShortcut);
   }
   ImGui::Spacing();
   ImGui::Separator();
@@ -484,12 +634,22 @@ void DrawPropertiesPanel(AppState* state) {
   DrawImageSection(state);
   DrawSolveSection(state);
   const Project& project = state->document.project();
-  if (const Box* box = project.FindBox(state->selection.box_id)) DrawBoxSection(state, *box);
+  if (const Primitive* primitive = project.FindPrimitive(state->selection.primitive_id)) {
+    const Primitive copy = *primitive;
+    DrawPrimitiveSection(state, copy);
+    const ElementRef element = state->selection.element;
+    if (!element.Empty() && ElementExists(state->document.project(), element) && element.primitive_id == copy.id) {
+      if (const Primitive* current = state->document.project().FindPrimitive(copy.id)) {
+        const Primitive again = *current;
+        DrawElementSection(state, again, element);
+      }
+    }
+  }
   if (const Pin* pin = project.FindPin(state->selection.pin_id)) DrawPinSection(state, *pin);
   if (const Segment* seg = project.FindSegment(state->selection.segment_id)) DrawSegmentSection(state, *seg);
   if (state->selection.Empty()) {
     ImGui::Spacing();
-    ImGui::TextColored(kDimText, "Select a box, pin or line to edit it.");
+    ImGui::TextColored(kDimText, "Select a primitive, pin or line to edit it.");
   }
 }
 

@@ -13,9 +13,10 @@ namespace facet::app {
 
 // The main menu bar (File, Edit, View, Help). Returns the bar's height in px.
 float DrawMenuBar(AppState* state, ShellState* shell);
-// Tool buttons with their shortcuts, Add box and Solve.
+// Tool buttons with their shortcuts, the kind to add, the selection actions and Solve.
 void DrawToolsPanel(AppState* state);
-// Active image, calibration and solve figures, and the selected box, pin or segment.
+// Active image, calibration and solve figures, and the selected primitive (and its vertex,
+// edge or face), pin or segment.
 void DrawPropertiesPanel(AppState* state);
 // The undo stack; clicking an entry undoes or redoes to it.
 void DrawHistoryPanel(AppState* state);
@@ -23,15 +24,19 @@ void DrawHistoryPanel(AppState* state);
 void DrawLogPanel(AppState* state);
 
 // Screen rectangles of the shell panels' main widgets in the last frame, by name (e.g.
-// "tool.Pin", "box.size", "box.name", "history.2"), for the render report and tests.
+// "tool.Pin", "primitive.param.0", "primitive.name", "history.2"), for the render report and tests.
 const std::map<std::string, Rect>& LastItemRects();
 // Starts a new frame's record (DrawFrame calls it).
 void ClearItemRects();
 
-// Tool shortcuts (V, X, Y, Z, P, B) when no text field is active and no modifier is down.
+// Tool shortcuts (V, X, Y, Z, P, B, E, D, C, R) and the selection actions (T: free vertex,
+// K: keep face planar) when no text field is active and no modifier is down.
 void HandleToolShortcuts(AppState* state);
-// Adds a unit box (K_create) as one history entry and selects it.
-void AddBox(AppState* state);
+// Switches tool (forgetting V_connect's first vertex).
+void SetTool(AppState* state, Tool tool);
+// K_create of state->add_kind as one history entry, on top of the selected box when the kind
+// allows it and add_on_top holds; selects it and switches to the pin tool.
+void AddPrimitiveAction(AppState* state);
 // Re-runs calibration and the geometry solve on the current project (one history entry
 // when the solve changes anything).
 void SolveNow(AppState* state);

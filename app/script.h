@@ -12,7 +12,16 @@
 //   type TEXT                     text characters for the active text field (1 frame)
 //   hold|release shift|ctrl|alt   keep a modifier down / let it go
 //   command NAME [ARGS]           undo, redo, save PATH, open PATH, tool NAME,
-//                                 select-image INDEX, fit, export PATH
+//                                 select-image INDEX, fit, export PATH, and for the model:
+//                                   add KIND [on-top]  K_create (box, wedge, prism, pyramid,
+//                                                      cylinder, plane), on the selected box
+//                                   select vertex|edge|face PRIMITIVE_ID ELEMENT_ID,
+//                                   select primitive ID, select none
+//                                   free-vertex        toggle the selected vertex's freedom
+//                                   planar-face        toggle the selected face's coplanarity
+//                                 Tool names: select, line-x, line-y, line-z, pin,
+//                                 add-primitive (adds at once), split-edge, delete-vertex,
+//                                 connect-vertices, delete-edge
 //   screenshot PATH               write a PNG of the frame just rendered
 #pragma once
 

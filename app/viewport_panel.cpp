@@ -1,6 +1,6 @@
 // The 3D panel. GL resources are rebuilt only when what they show changes: the mesh and
-// atlas on a new mesh_revision, the line geometry (box outlines, frustums, grid, axes) when
-// boxes, calibrated cameras or highlights change, a photo texture once per photo. Each frame
+// atlas on a new mesh_revision, the line geometry (mesh outlines, frustums, grid, axes) when
+// primitives, calibrated cameras or the selected primitive change, a photo texture once per photo. Each frame
 // renders those buffers into an offscreen target shown as an ImGui image.
 #include "app/viewport_panel.h"
 
@@ -20,7 +20,9 @@
 
 #include "app/gl_camera.h"
 #include "app/orbit_camera.h"
-#include "core/box.h"
+#include "app/model_edits.h"
+#include "app/model_pick.h"
+#include "app/viewport_shaders.h"
 
 namespace facet::app {
 namespace {
@@ -30,124 +32,13 @@ constexpr int kMsaaSamplesHardware = 4;
 constexpr int kMaxPhotoTextureSide = 1024;
 constexpr float kPickRadiusPx = 8.0f;
 constexpr float kClickSlopPx = 4.0f;
+constexpr int kViewportHover = 2;  // AppState::hover_panel
 constexpr const char* kHelpText = "drag: orbit \xc2\xb7 right-drag: pan \xc2\xb7 wheel: zoom \xc2\xb7 F: frame";
-
-// ---------------------------------------------------------------------------------------
-// Shaders
-
-constexpr const char* kMeshVertexShader = R"(#version 330 core
-layout(location = 0) in vec3 a_position;
-layout(location = 1) in vec3 a_normal;
-layout(location = 2) in vec2 a_uv;
-layout(location = 3) in float a_textured;
-uniform mat4 u_clip_from_world;
-out vec3 v_position;
-out vec3 v_normal;
-out vec2 v_uv;
-out float v_textured;
-void main() {
-  v_position = a_position;
-  v_normal = a_normal;
-  v_uv = a_uv;
-  v_textured = a_textured;
-  gl_Position = u_clip_from_world * vec4(a_position, 1.0);
-}
-)";
-
-// Textured faces show the atlas nearly unlit (it already holds the photo's shading); the
-// others are a neutral grey lit by a headlight plus a fixed key light, so that faces of a
-// box differ in tone from any viewpoint.
-constexpr const char* kMeshFragmentShader = R"(#version 330 core
-in vec3 v_position;
-in vec3 v_normal;
-in vec2 v_uv;
-in float v_textured;
-uniform sampler2D u_atlas;
-uniform int u_use_texture;
-uniform vec3 u_eye;
-out vec4 frag_color;
-void main() {
-  vec3 n = normalize(v_normal);
-  vec3 to_eye = normalize(u_eye - v_position);
-  if (dot(n, to_eye) < 0.0) n = -n;
-  float head = max(dot(n, to_eye), 0.0);
-  float key = max(dot(n, normalize(vec3(0.45, 0.3, 0.85))), 0.0);
-  float light = 0.25 + 0.5 * head + 0.25 * key;
-  if (u_use_texture != 0 && v_textured > 0.5) {
-    vec3 albedo = texture(u_atlas, v_uv).rgb;
-    frag_color = vec4(albedo * (0.8 + 0.2 * light), 1.0);
-  } else {
-    frag_color = vec4(vec3(0.70, 0.71, 0.72) * light, 1.0);
-  }
-}
-)";
-
-constexpr const char* kLineVertexShader = R"(#version 330 core
-layout(location = 0) in vec3 a_position;
-layout(location = 1) in vec4 a_color;
-uniform mat4 u_clip_from_world;
-out vec4 v_color;
-out vec3 v_position;
-void main() {
-  v_color = a_color;
-  v_position = a_position;
-  gl_Position = u_clip_from_world * vec4(a_position, 1.0);
-}
-)";
-
-// The grid fades out towards its rim and, line family by line family, with distance from
-// the eye (minor lines sooner), so that it never ends in a hard edge nor turns to moire.
-constexpr const char* kLineFragmentShader = R"(#version 330 core
-in vec4 v_color;
-in vec3 v_position;
-uniform int u_fade;
-uniform vec3 u_fade_center;
-uniform float u_fade_radius;
-uniform vec3 u_eye;
-uniform float u_fade_eye_distance;
-uniform int u_lighten_dark;
-out vec4 frag_color;
-void main() {
-  float alpha = v_color.a;
-  vec3 rgb = v_color.rgb;
-  // Outlines are dark to read on the mesh; with the mesh hidden they must read on the background.
-  if (u_lighten_dark != 0 && max(rgb.r, max(rgb.g, rgb.b)) < 0.2) rgb = vec3(0.85);
-  if (u_fade != 0) {
-    float rim = length(v_position.xy - u_fade_center.xy) / u_fade_radius;
-    alpha *= 1.0 - smoothstep(0.55, 1.0, rim);
-    float eye = length(v_position - u_eye) / u_fade_eye_distance;
-    alpha *= 1.0 - smoothstep(0.4, 1.0, eye);
-  }
-  if (alpha <= 0.002) discard;
-  frag_color = vec4(rgb, alpha);
-}
-)";
-
-constexpr const char* kPhotoVertexShader = R"(#version 330 core
-layout(location = 0) in vec3 a_position;
-layout(location = 1) in vec2 a_uv;
-uniform mat4 u_clip_from_world;
-out vec2 v_uv;
-void main() {
-  v_uv = a_uv;
-  gl_Position = u_clip_from_world * vec4(a_position, 1.0);
-}
-)";
-
-constexpr const char* kPhotoFragmentShader = R"(#version 330 core
-in vec2 v_uv;
-uniform sampler2D u_photo;
-uniform float u_alpha;
-out vec4 frag_color;
-void main() {
-  frag_color = vec4(texture(u_photo, v_uv).rgb, u_alpha);
-}
-)";
 
 // ---------------------------------------------------------------------------------------
 // Vertex formats
 
-struct MeshVertex {
+struct GpuMeshVertex {
   float position[3];
   float normal[3];
   float uv[2];
@@ -198,10 +89,10 @@ struct PhotoTexture {
 
 // What the line and photo geometry was built from; rebuilt when any of it differs.
 struct SceneKey {
-  std::vector<Box> boxes;
+  std::vector<Primitive> primitives;
   std::vector<Image> images;
   Id active_image_id = kNoId;
-  Id selected_box_id = kNoId;
+  Id selected_primitive_id = kNoId;
   Id photo_view_image_id = kNoId;
   bool operator==(const SceneKey&) const = default;
 };
@@ -246,16 +137,11 @@ struct GlResources {
 
 // Scene measures that size the grid, the frustums and the framing.
 struct SceneMeasure {
-  SceneBounds bounds;             // boxes and camera centres
-  double size = 1.0;              // diagonal of the boxes (or of everything when no box)
+  SceneBounds bounds;             // primitives and camera centres
+  double size = 1.0;              // diagonal of the primitives (or of everything when none)
   double frustum_depth = 0.3;     // world units from apex to image plane (at most)
   double grid_minor = 0.1, grid_major = 1.0, grid_half_extent = 5.0;
   Eigen::Vector3d grid_center = Eigen::Vector3d::Zero();
-};
-
-struct CornerRef {
-  Id box_id = kNoId;
-  int corner = -1;
 };
 
 // Everything the panel keeps between frames. It lives here, not in AppState, because it is
@@ -269,7 +155,7 @@ struct PanelState {
   bool show_texture = true, show_mesh = true, show_wireframe = true, show_cameras = true, show_grid = true;
   bool left_pressed_here = false;
   ImVec2 left_press_pos;
-  CornerRef hovered_corner;
+  ElementPick hovered;  // the element under the mouse (also in AppState::hover)
   bool frame_requested = false;
   Id view_from_photo_requested = kNoId;
 };
@@ -323,13 +209,13 @@ void SetupPhotoAttributes() {
 
 void SetupMeshAttributes() {
   glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(MeshVertex), reinterpret_cast<void*>(offsetof(MeshVertex, position)));
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex), reinterpret_cast<void*>(offsetof(GpuMeshVertex, position)));
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(MeshVertex), reinterpret_cast<void*>(offsetof(MeshVertex, normal)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex), reinterpret_cast<void*>(offsetof(GpuMeshVertex, normal)));
   glEnableVertexAttribArray(2);
-  glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(MeshVertex), reinterpret_cast<void*>(offsetof(MeshVertex, uv)));
+  glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex), reinterpret_cast<void*>(offsetof(GpuMeshVertex, uv)));
   glEnableVertexAttribArray(3);
-  glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, sizeof(MeshVertex), reinterpret_cast<void*>(offsetof(MeshVertex, textured)));
+  glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex), reinterpret_cast<void*>(offsetof(GpuMeshVertex, textured)));
 }
 
 bool InitGl(GlResources* gl) {
@@ -416,7 +302,7 @@ void ReleaseGl(GlResources* gl) {
 
 void UploadMesh(const TexturedMesh& mesh, std::uint64_t revision, std::uint64_t atlas_revision, GlResources* gl) {
   // Triangles are expanded to their own vertices so that "textured" can be per triangle.
-  std::vector<MeshVertex> vertices;
+  std::vector<GpuMeshVertex> vertices;
   const size_t triangle_count = mesh.indices.size() / 3;
   vertices.reserve(triangle_count * 3);
   const bool has_normals = mesh.normals.size() == mesh.positions.size();
@@ -430,7 +316,7 @@ void UploadMesh(const TexturedMesh& mesh, std::uint64_t revision, std::uint64_t 
     face_normal = face_normal.norm() > 0 ? face_normal.normalized() : Eigen::Vector3f::UnitZ();
     const bool textured = has_atlas && has_uvs && t < mesh.triangle_textured.size() && mesh.triangle_textured[t] != 0;
     for (std::uint32_t i : idx) {
-      MeshVertex v{};
+      GpuMeshVertex v{};
       const Eigen::Vector3f& p = mesh.positions[i];
       const Eigen::Vector3f n = has_normals ? mesh.normals[i] : face_normal;
       v.position[0] = p.x(), v.position[1] = p.y(), v.position[2] = p.z();
@@ -441,7 +327,7 @@ void UploadMesh(const TexturedMesh& mesh, std::uint64_t revision, std::uint64_t 
     }
   }
   glBindBuffer(GL_ARRAY_BUFFER, gl->mesh_vbo);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(MeshVertex)),
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(GpuMeshVertex)),
                vertices.empty() ? nullptr : vertices.data(), GL_STATIC_DRAW);
   gl->mesh_vertex_count = static_cast<GLsizei>(vertices.size());
   // During a drag only positions change; the atlas is uploaded only when it is new.
@@ -484,8 +370,10 @@ void UpdatePhotoTextures(const AppState& state, GlResources* gl) {
 SceneMeasure MeasureScene(const Project& project) {
   SceneMeasure m;
   Eigen::AlignedBox3d box_bounds;
-  for (const Box& box : project.boxes) {
-    for (const Eigen::Vector3d& c : BoxCornersInWorld(box)) box_bounds.extend(c);
+  for (const Primitive& primitive : project.primitives) {
+    for (VertexId v = 0; v < primitive.mesh.VertexIdEnd(); ++v) {
+      if (primitive.mesh.IsVertex(v)) box_bounds.extend(primitive.mesh.vertex(v).position);
+    }
   }
   Eigen::AlignedBox3d all_bounds = box_bounds;
   for (const Image& image : project.images) {
@@ -559,12 +447,15 @@ void BuildSceneGeometry(const AppState& state, const SceneMeasure& measure, Id p
   auto begin_range = [&](DrawRange* range) { range->first = static_cast<GLint>(lines.size()); };
   auto end_range = [&](DrawRange* range) { range->count = static_cast<GLsizei>(lines.size()) - range->first; };
 
-  // Box outlines: the twelve edges, so faces show as quads without triangle diagonals.
+  // Outlines: the meshes' edges, so polygons show without their triangles' diagonals.
   begin_range(&gl->box_edges);
-  for (const Box& box : project.boxes) {
-    const std::array<Eigen::Vector3d, 8> corners = BoxCornersInWorld(box);
-    const Rgba& color = box.id == state.selection.box_id ? kSelectedBoxEdgeColor : kBoxEdgeColor;
-    for (const auto& edge : BoxEdges()) PushLine(&lines, corners[edge[0]], corners[edge[1]], color);
+  for (const Primitive& primitive : project.primitives) {
+    const PolyMesh& mesh = primitive.mesh;
+    const Rgba& color = primitive.id == state.selection.primitive_id ? kSelectedBoxEdgeColor : kBoxEdgeColor;
+    for (EdgeId e = 0; e < mesh.EdgeIdEnd(); ++e) {
+      if (!mesh.IsEdge(e)) continue;
+      PushLine(&lines, mesh.vertex(mesh.Origin(2 * e)).position, mesh.vertex(mesh.Dest(2 * e)).position, color);
+    }
   }
   end_range(&gl->box_edges);
 
@@ -824,75 +715,21 @@ void RenderScene(const AppState& state, const PanelState& panel, const ViewSetup
 // ---------------------------------------------------------------------------------------
 // Interaction
 
-CornerRef NearestCorner(const Project& project, const ViewSetup& view, ImVec2 mouse_in_panel, float radius_px) {
-  CornerRef best;
-  float best_d2 = radius_px * radius_px;
-  for (const Box& box : project.boxes) {
-    const std::array<Eigen::Vector3d, 8> corners = BoxCornersInWorld(box);
-    for (int i = 0; i < 8; ++i) {
-      ImVec2 px;
-      if (!PanelPixelOf(view, corners[i], &px)) continue;
-      const float dx = px.x - mouse_in_panel.x, dy = px.y - mouse_in_panel.y;
-      const float d2 = dx * dx + dy * dy;
-      if (d2 <= best_d2) {
-        best_d2 = d2;
-        best = {box.id, i};
-      }
-    }
-  }
-  return best;
-}
-
-// Where the ray origin + t * direction (0 <= t <= 1) enters the box, or +infinity.
-double RayBoxEntry(const Box& box, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) {
-  // Slab test in the box's own frame, where it spans [0, size].
-  const Eigen::Matrix3d box_from_world = RotationFromAngleAxis(box.rotation).transpose();
-  const Eigen::Vector3d o = box_from_world * (origin - box.translation);
-  const Eigen::Vector3d d = box_from_world * direction;
-  double t0 = 0.0, t1 = 1.0;
-  for (int a = 0; a < 3 && t0 <= t1; ++a) {
-    if (std::abs(d[a]) < 1e-15) {
-      if (o[a] < 0.0 || o[a] > box.size[a]) return std::numeric_limits<double>::infinity();
-      continue;
-    }
-    double ta = (0.0 - o[a]) / d[a], tb = (box.size[a] - o[a]) / d[a];
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-  }
-  return t0 <= t1 ? t0 : std::numeric_limits<double>::infinity();
-}
-
-// Whether a world point is hidden from the eye by a box (its own box's faces excepted:
-// a corner lies on them).
-bool HiddenByBoxes(const Project& project, const Eigen::Vector3d& eye, const Eigen::Vector3d& p_in_world) {
-  constexpr double kOnSurface = 1e-4;  // fraction of the eye-point distance
-  for (const Box& box : project.boxes) {
-    if (RayBoxEntry(box, eye, p_in_world - eye) < 1.0 - kOnSurface) return true;
-  }
-  return false;
-}
-
-// The box under a panel pixel (nearest along the view ray), or kNoId.
-Id BoxUnderPixel(const Project& project, const ViewSetup& view, ImVec2 pixel_in_panel) {
-  // Unproject the pixel at the near and far planes with the same matrices the frame used.
+// The pick ray of a panel pixel, unprojected with the same matrices the frame used.
+PickRay RayOf(const ViewSetup& view, ImVec2 pixel_in_panel) {
+  PickRay ray;
   const Eigen::Matrix4d world_from_clip = view.clip_from_world.inverse();
   const double ndc_x = 2.0 * pixel_in_panel.x / view.width_px - 1.0;
   const double ndc_y = 1.0 - 2.0 * pixel_in_panel.y / view.height_px;
   const Eigen::Vector4d near_h = world_from_clip * Eigen::Vector4d(ndc_x, ndc_y, -1.0, 1.0);
   const Eigen::Vector4d far_h = world_from_clip * Eigen::Vector4d(ndc_x, ndc_y, 1.0, 1.0);
-  const Eigen::Vector3d origin = near_h.head<3>() / near_h.w();
-  const Eigen::Vector3d direction = far_h.head<3>() / far_h.w() - origin;
-  Id best = kNoId;
-  double best_t = std::numeric_limits<double>::infinity();
-  for (const Box& box : project.boxes) {
-    const double t = RayBoxEntry(box, origin, direction);
-    if (t < best_t) {
-      best_t = t;
-      best = box.id;
-    }
-  }
-  return best;
+  ray.origin = near_h.head<3>() / near_h.w();
+  ray.direction = (far_h.head<3>() / far_h.w() - ray.origin).normalized();
+  ray.clip_from_world = view.clip_from_world;
+  ray.width_px = view.width_px;
+  ray.height_px = view.height_px;
+  ray.mouse_px = Eigen::Vector2d(pixel_in_panel.x, pixel_in_panel.y);
+  return ray;
 }
 
 bool FramePressed(const ImGuiIO& io) {
@@ -952,36 +789,74 @@ void DrawToolbar(AppState* state, PanelState* panel, const SceneMeasure& measure
   if (ImGui::BeginPopup("##viewport_show")) {
     ImGui::Checkbox("Mesh", &panel->show_mesh);
     ImGui::Checkbox("Texture", &panel->show_texture);
-    ImGui::Checkbox("Box edges", &panel->show_wireframe);
+    ImGui::Checkbox("Mesh edges", &panel->show_wireframe);
     ImGui::Checkbox("Cameras and photos", &panel->show_cameras);
     ImGui::Checkbox("Ground grid", &panel->show_grid);
     ImGui::EndPopup();
   }
 }
 
-void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup& view, ImVec2 origin, ImVec2 size) {
+void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup& view, ImVec2 origin, ImVec2 size,
+                 ImVec2 view_scale) {
   ImDrawList* draw = ImGui::GetWindowDrawList();
   draw->PushClipRect(origin, ImVec2(origin.x + size.x, origin.y + size.y), true);
   const Project& project = state.document.project();
 
-  // Corner markers: hovered as a ring, selected as a filled dot; faint where a box hides them.
-  auto corner_pos = [&](const CornerRef& ref, ImVec2* out, int* alpha) {
-    const Box* box = project.FindBox(ref.box_id);
-    if (!box || ref.corner < 0 || ref.corner > 7) return false;
-    const Eigen::Vector3d corner = BoxCornerInWorld(*box, ref.corner);
+  // The selected, hovered and V_connect-start elements: faces tinted, edges thick, vertices
+  // as dots and rings (drawn over the rendered picture, so hidden ones show too).
+  auto to_screen = [&](const Eigen::Vector3d& p, ImVec2* out) {
     ImVec2 px;
-    if (!PanelPixelOf(view, corner, &px)) return false;
-    *out = ImVec2(origin.x + px.x, origin.y + px.y);
-    *alpha = HiddenByBoxes(project, view.eye, corner) ? 100 : 255;
+    if (!PanelPixelOf(view, p, &px)) return false;
+    *out = ImVec2(origin.x + px.x / view_scale.x, origin.y + px.y / view_scale.y);
     return true;
   };
-  ImVec2 p;
-  int alpha = 255;
-  if (corner_pos({state.selection.box_id, state.selection.box_corner}, &p, &alpha)) {
-    draw->AddCircleFilled(p, 5.5f, IM_COL32(255, 160, 40, alpha));
-    draw->AddCircle(p, 6.5f, IM_COL32(20, 20, 20, alpha), 0, 1.5f);
+  auto draw_element = [&](const ElementRef& ref, ImU32 color, bool strong) {
+    const Primitive* primitive = project.FindPrimitive(ref.primitive_id);
+    if (primitive == nullptr || !ElementExists(project, ref)) return;
+    const PolyMesh& mesh = primitive->mesh;
+    ImVec2 a, b;
+    switch (ref.kind) {
+      case ElementKind::kVertex:
+        if (!to_screen(mesh.vertex(ref.element).position, &a)) return;
+        if (strong) draw->AddCircleFilled(a, 5.5f, color);
+        draw->AddCircle(a, strong ? 6.5f : 8.0f, strong ? IM_COL32(20, 20, 20, 255) : color, 0, strong ? 1.5f : 2.0f);
+        break;
+      case ElementKind::kEdge:
+        if (!to_screen(mesh.vertex(mesh.Origin(2 * ref.element)).position, &a) ||
+            !to_screen(mesh.vertex(mesh.Dest(2 * ref.element)).position, &b)) {
+          return;
+        }
+        draw->AddLine(a, b, color, strong ? 4.0f : 3.0f);
+        break;
+      case ElementKind::kFace: {
+        std::vector<ImVec2> polygon;
+        for (VertexId v : FaceVertices(mesh, ref.element)) {
+          if (!to_screen(mesh.vertex(v).position, &a)) return;
+          polygon.push_back(a);
+        }
+        const ImU32 fill = (color & ~IM_COL32_A_MASK) | IM_COL32(0, 0, 0, strong ? 80 : 50);
+        // Faces are convex or nearly (K-ops keep convex parts convex); the outline is exact.
+        draw->AddConvexPolyFilled(polygon.data(), static_cast<int>(polygon.size()), fill);
+        draw->AddPolyline(polygon.data(), static_cast<int>(polygon.size()), color, ImDrawFlags_Closed, 2.0f);
+        break;
+      }
+      case ElementKind::kNone: break;
+    }
+  };
+  const ImU32 kSelectedColor = IM_COL32(255, 160, 40, 255);
+  const ImU32 kHoverColor = IM_COL32(255, 235, 90, 255);
+  draw_element(state.selection.element, kSelectedColor, true);
+  if (!(state.selection.connect_from == state.selection.element)) draw_element(state.selection.connect_from, kSelectedColor, true);
+  if (!(state.hover == state.selection.element)) draw_element(state.hover, kHoverColor, false);
+  // Free vertices: cyan rings, so that the user sees what the solve may move.
+  for (const Primitive& primitive : project.primitives) {
+    for (VertexId v = 0; v < primitive.mesh.VertexIdEnd(); ++v) {
+      ImVec2 p;
+      if (primitive.mesh.IsVertex(v) && primitive.mesh.vertex(v).local.free && to_screen(primitive.mesh.vertex(v).position, &p)) {
+        draw->AddCircle(p, 4.5f, IM_COL32(80, 230, 255, 255), 0, 2.0f);
+      }
+    }
   }
-  if (corner_pos(panel.hovered_corner, &p, &alpha)) draw->AddCircle(p, 8.0f, IM_COL32(255, 235, 90, alpha), 0, 2.0f);
 
   // Help and counts in the bottom-left corner.
   char counts[128];
@@ -1039,7 +914,7 @@ void DrawViewportPanel(AppState* state) {
   const ImVec2 origin = ImGui::GetCursorScreenPos();
 
   // Frame the model when a project shows up (first frame, another file, first content).
-  const bool has_content = !project.boxes.empty() || std::any_of(project.images.begin(), project.images.end(), Drawable);
+  const bool has_content = !project.primitives.empty() || std::any_of(project.images.begin(), project.images.end(), Drawable);
   if (!panel.framed_once || panel.framed_project_path != state->project_path || (has_content && !panel.had_content)) {
     if (panel.orbit.photo_image_id == kNoId) OrbitFrame(&panel.orbit, measure.bounds, width_px, height_px);
     panel.framed_once = true;
@@ -1088,17 +963,25 @@ void DrawViewportPanel(AppState* state) {
   }
 
   const ViewSetup view = MakeView(panel.orbit, measure, width_px, height_px);
-  panel.hovered_corner = hovered && !ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx)
-                             ? NearestCorner(project, view, mouse_px, kPickRadiusPx * scale_x)
-                             : CornerRef();
+  // Hover and clicks: the element under the cursor for the current tool (select picks
+  // everything); a click (not a drag) applies the tool to it, or clears the selection.
+  const PickFilter filter = PickFilterOf(state->tool);
+  const bool picking = hovered && !ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) &&
+                       (filter.vertices || filter.edges || filter.faces);
+  panel.hovered = picking ? PickByRay(project, RayOf(view, mouse_px), filter, kPickRadiusPx * scale_x) : ElementPick();
+  if (hovered) {
+    state->hover = panel.hovered.element;
+    state->hover_panel = kViewportHover;
+  } else if (state->hover_panel == kViewportHover) {
+    state->hover = {};
+    state->hover_panel = 0;
+  }
   if (panel.left_pressed_here && ImGui::IsMouseReleased(ImGuiMouseButton_Left)) {
     panel.left_pressed_here = false;
     const float dx = io.MousePos.x - panel.left_press_pos.x, dy = io.MousePos.y - panel.left_press_pos.y;
-    if (dx * dx + dy * dy <= kClickSlopPx * kClickSlopPx && hovered) {
-      // A corner within reach, else the box under the cursor (no corner), else nothing.
-      const CornerRef picked = NearestCorner(project, view, mouse_px, kPickRadiusPx * scale_x);
-      state->selection.box_id = picked.box_id != kNoId ? picked.box_id : BoxUnderPixel(project, view, mouse_px);
-      state->selection.box_corner = picked.corner;
+    if (dx * dx + dy * dy <= kClickSlopPx * kClickSlopPx && hovered && !state->drag_start) {
+      const ElementPick picked = PickByRay(project, RayOf(view, mouse_px), filter, kPickRadiusPx * scale_x);
+      if (!ApplyToolClick(state, picked.element, picked.t) && state->tool == Tool::kSelect) state->selection = {};
     }
   }
 
@@ -1106,7 +989,10 @@ void DrawViewportPanel(AppState* state) {
   const SavedGlState saved = SavedGlState::Capture();
   if (!gl.mesh_uploaded || gl.mesh_revision != state->mesh_revision) UploadMesh(state->mesh, state->mesh_revision, state->atlas_revision, &gl);
   UpdatePhotoTextures(*state, &gl);
-  SceneKey key{project.boxes, project.images, state->active_image_id, state->selection.box_id, panel.orbit.photo_image_id};
+  // The project may have changed above (a tool click): read it again.
+  const Project& current = state->document.project();
+  SceneKey key{current.primitives, current.images, state->active_image_id, state->selection.primitive_id,
+               panel.orbit.photo_image_id};
   if (!gl.scene_built || !(key == gl.scene_key)) {
     BuildSceneGeometry(*state, measure, panel.orbit.photo_image_id, &gl);
     gl.scene_key = std::move(key);
@@ -1125,7 +1011,7 @@ void DrawViewportPanel(AppState* state) {
   // A GL texture's first row is the bottom of the picture: flip V.
   ImGui::GetWindowDrawList()->AddImage(ToImTexture(gl.target.color_texture()), origin,
                                        ImVec2(origin.x + size.x, origin.y + size.y), ImVec2(0, 1), ImVec2(1, 0));
-  DrawOverlay(*state, panel, view, origin, size);
+  DrawOverlay(*state, panel, view, origin, size, ImVec2(scale_x, scale_y));
 }
 
 void RequestViewportFrame() { Panel().frame_requested = true; }

@@ -19,6 +19,8 @@
 #include <opencv2/core.hpp>
 #include <Eigen/Core>
 
+#include "core/project.h"
+
 namespace facet::testing {
 
 namespace fs = std::filesystem;
@@ -110,6 +112,13 @@ inline bool ModelColorNear(const cv::Mat& shot, const Eigen::Vector2d& s, int ra
     }
   }
   return false;
+}
+
+// The world positions of a box primitive's eight corners (its mesh vertices 0..7).
+inline std::array<Eigen::Vector3d, 8> BoxCorners(const facet::Primitive& box) {
+  std::array<Eigen::Vector3d, 8> corners;
+  for (int c = 0; c < 8; ++c) corners[c] = box.mesh.vertex(static_cast<facet::VertexId>(c)).position;
+  return corners;
 }
 
 }  // namespace facet::testing

@@ -134,8 +134,9 @@ TEST_CASE("solve re-solves a perturbed project, writes it and prints its summary
   auto scene = MakeBoxScene();
   facet::Project& p = scene.project;
   // Move the box size and camera well away from the truth: the command starts cold anyway.
-  p.boxes[0].size.x() *= 1.4;
-  p.boxes[0].size.y() *= 0.6;
+  p.primitives[0].shape.params.x() *= 1.4;
+  p.primitives[0].shape.params.y() *= 0.6;
+  facet::RefreshAllPrimitives(&p);
   p.images[0].camera.SetPose(p.images[0].camera.cam_from_world_rotation, Eigen::Vector3d(1, 2, 3));
   REQUIRE(facet::SaveProject(p, dir / "in.facet").empty());
 
@@ -151,8 +152,9 @@ TEST_CASE("solve re-solves a perturbed project, writes it and prints its summary
   const facet::ProjectLoadResult solved = facet::LoadProject(dir / "out.facet");
   REQUIRE(solved.ok());
   constexpr double kRelativeTolerance = 1e-9;
-  const Eigen::Vector3d size = solved.project.boxes[0].size;
-  CHECK((size - scene.true_box.size).norm() < kRelativeTolerance * scene.true_box.size.norm());
+  const facet::PrimitiveParams size = solved.project.primitives[0].shape.params;
+  const facet::PrimitiveParams& true_size = scene.true_box.shape.params;
+  CHECK((size - true_size).norm() < kRelativeTolerance * true_size.norm());
 
   const CliResult missing = RunFacet(dir, "solve '" + (dir / "nope.facet") + "' -o '" + (dir / "x.facet") + "'");
   CHECK(missing.exit_code != 0);
@@ -196,8 +198,8 @@ TEST_CASE("calibrate --points recovers a camera from known 3D points") {
   nlohmann::json points = nlohmann::json::array();
   for (int i = 0; i < 8; ++i) {
     for (double f : {0.0, 0.5}) {
-      const Eigen::Vector3d x = facet::BoxCornerInWorld(scene.true_box, i) * (1.0 - f) +
-                                facet::BoxCornerInWorld(scene.true_box, 7 - i) * f * 0.5;
+      const auto& mesh = scene.true_box.mesh;
+      const Eigen::Vector3d x = mesh.vertex(i).position * (1.0 - f) + mesh.vertex(7 - i).position * f * 0.5;
       const Eigen::Vector2d uv = truth.Project(x);
       points.push_back({{"xyz", {x.x(), x.y(), x.z()}}, {"uv", {uv.x(), uv.y()}}});
     }

@@ -4,6 +4,8 @@
 // the pin tool. Positions on screen come from the render report's image-to-screen transform.
 #include <doctest/doctest.h>
 
+#include <array>
+
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -326,11 +328,12 @@ TEST_CASE("image panel: Escape cancels an endpoint drag; Delete removes the sele
   CHECK(deleted.at("undo_stack").size() == 1);
 }
 
-TEST_CASE("image panel: the pin tool pins a clicked box corner where the next click lands") {
+TEST_CASE("image panel: the pin tool pins a clicked box vertex where the next click lands") {
   TempDir dir("pin");
   const Fixture f = WriteFixture(dir, false, false);
   const View view = ViewFromReport(Render(dir, f, "start", ""));
-  const auto corners = facet::BoxCornersInWorld(f.scene.true_box);
+  std::array<Eigen::Vector3d, 8> corners;  // the box mesh's vertex i is corner i
+  for (int c = 0; c < 8; ++c) corners[c] = f.scene.true_box.mesh.vertex(static_cast<facet::VertexId>(c)).position;
   // The corner farthest on screen from the others.
   int best = -1;
   double best_gap = -1;
@@ -354,8 +357,8 @@ TEST_CASE("image panel: the pin tool pins a clicked box corner where the next cl
   const facet::Project project = ProjectFromReport(report);
   REQUIRE(project.pins.size() == 1);
   const facet::Pin& pin = project.pins.front();
-  CHECK(pin.box_id == f.scene.box_id);
-  CHECK(pin.corner == best);
+  CHECK(pin.vertex.primitive_id == f.scene.box_id);
+  CHECK(pin.vertex.vertex == static_cast<facet::VertexId>(best));
   CHECK(pin.image_id == f.scene.image_id);
   CHECK((pin.uv_px - view.ToImage(target)).norm() < 0.01 / view.zoom);
   CHECK(report.at("undo_stack").size() == 1);

@@ -40,12 +40,13 @@ TEST_CASE("sample render: all panels are present and the projected box is drawn 
   const facet::ProjectLoadResult sample = facet::LoadProject(kSample);
   REQUIRE(sample.ok());
   const facet::Camera& camera = sample.project.images[0].camera;
-  const facet::Box& box = sample.project.boxes[0];
+  // The sample (a v1 file) migrates to one box primitive whose vertex i is corner i.
+  const auto corners = BoxCorners(sample.project.primitives.at(0));
   const View view = ViewFromReport(report);
   int samples = 0, drawn = 0, control_drawn = 0;
   for (const auto& edge : facet::BoxEdges()) {
-    const Eigen::Vector2d a = camera.Project(facet::BoxCornerInWorld(box, edge[0]));
-    const Eigen::Vector2d b = camera.Project(facet::BoxCornerInWorld(box, edge[1]));
+    const Eigen::Vector2d a = camera.Project(corners[edge[0]]);
+    const Eigen::Vector2d b = camera.Project(corners[edge[1]]);
     const Eigen::Vector2d dir_px = (b - a).normalized();
     const Eigen::Vector2d normal(-dir_px.y(), dir_px.x());
     for (double t = 0.2; t <= 0.8; t += 0.1) {
@@ -80,7 +81,7 @@ TEST_CASE("sample render: dragging a pin re-solves the box as one history entry;
   // The top-right corner's pin (corner 5), away from the other pins and the lines.
   const facet::Pin* pin = nullptr;
   for (const auto& p : sample.project.pins)
-    if (p.corner == 5) pin = &p;
+    if (p.vertex.vertex == 5) pin = &p;
   REQUIRE(pin != nullptr);
   const Eigen::Vector2d from = view.ToScreen(pin->uv_px);
   REQUIRE(view.Inside(from, 20.0));
@@ -104,7 +105,8 @@ TEST_CASE("sample render: dragging a pin re-solves the box as one history entry;
   const Eigen::Vector2d moved = dragged.project.FindPin(pin->id)->uv_px - pin->uv_px;
   CHECK(std::abs(moved.x() - 24.0 / view.zoom) <= 1.0 / view.zoom);
   CHECK(std::abs(moved.y() + 16.0 / view.zoom) <= 1.0 / view.zoom);
-  const double width_change = std::abs(dragged.project.boxes[0].size.x() - sample.project.boxes[0].size.x());
+  const double width_change =
+      std::abs(dragged.project.primitives[0].shape.params.x() - sample.project.primitives[0].shape.params.x());
   CAPTURE(width_change);
   CHECK(width_change > 1e-3);
 

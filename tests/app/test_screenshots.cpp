@@ -23,6 +23,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/box.h"
+#include "core/mesh.h"
 #include "core/project_io.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
@@ -55,13 +56,14 @@ cv::Mat MakePhoto(const SyntheticScene& scene, bool with_box) {
   if (with_box) {
     const cv::Scalar face_colors[] = {{200, 90, 170}, {70, 200, 230}, {230, 230, 90},
                                       {120, 120, 240}, {40, 140, 255}, {250, 250, 250}};
-    const auto corners = facet::BoxCornersInWorld(scene.true_box);
+    const auto corners = BoxCorners(scene.true_box);
     const Eigen::Vector3d eye = cam.CenterInWorld();
     for (int f = 0; f < 6; ++f) {
       const auto& face = facet::BoxFaces()[f];
       Eigen::Vector3d centre = Eigen::Vector3d::Zero();
       for (int c : face) centre += corners[c] / 4.0;
-      if (facet::BoxFaceNormalInWorld(scene.true_box, f).dot(eye - centre) <= 0) continue;
+      // The box mesh's face f is BoxFaces()[f] (core/mesh_primitives.h builds them in order).
+      if (facet::FaceNormal(scene.true_box.mesh, static_cast<facet::FaceId>(f)).dot(eye - centre) <= 0) continue;
       std::vector<cv::Point> poly;
       for (int c : face) {
         const Eigen::Vector2d uv = cam.Project(corners[c]);
@@ -88,7 +90,7 @@ Fixture WriteFixture(const TempDir& dir, bool with_box, bool with_pins) {
   f.scene = MakeBoxScene();
   facet::Project& p = f.scene.project;
   p.segments.clear();
-  if (!with_box) p.boxes.clear();
+  if (!with_box) p.primitives.clear();
   if (!with_box || !with_pins) p.pins.clear();
   f.photo_path = dir / "synthetic.png";
   REQUIRE(cv::imwrite(f.photo_path, MakePhoto(f.scene, with_box)));
@@ -242,7 +244,7 @@ TEST_CASE("render: the projected box edges land on the photo's box edges") {
   const cv::Mat photo = cv::imread(f.photo_path, cv::IMREAD_COLOR);
   const View view = ViewFromReport(ReadJson(dir / "report.json"));
   const facet::Camera& cam = f.scene.true_camera;
-  const auto corners = facet::BoxCornersInWorld(f.scene.true_box);
+  const auto corners = BoxCorners(f.scene.true_box);
 
   // The model colour must be drawn within kEdgeRadiusPx of every sampled point of the 12
   // projected edges, and the photo must change colour across the visible (outline) edges
@@ -486,8 +488,7 @@ TEST_CASE("render: a property drag is one undo entry; clicking the first history
   const View view = ViewFromReport(ReadJson(dir / "start.json"));
 
   // Select the box by pressing on its projected corner 4 (in front, on the outline).
-  const Eigen::Vector2d corner =
-      view.ToScreen(f.scene.true_camera.Project(facet::BoxCornerInWorld(f.scene.true_box, 4)));
+  const Eigen::Vector2d corner = view.ToScreen(f.scene.true_camera.Project(BoxCorners(f.scene.true_box)[4]));
   REQUIRE(view.Inside(corner, 10.0));
   std::ostringstream select;
   select << "frames 2\nclick left " << corner.x() << " " << corner.y() << "\nframes 2\n";
@@ -497,10 +498,12 @@ TEST_CASE("render: a property drag is one undo entry; clicking the first history
   REQUIRE(run.exit_code == 0);
   const nlohmann::json selected = ReadJson(dir / "selected.json");
   INFO("selection: " << selected.at("selection").dump() << " items: " << selected.at("items").dump());
-  REQUIRE(selected.at("selection").at("box_id").get<facet::Id>() == f.scene.box_id);
-  REQUIRE(selected.at("items").contains("box.size"));
-  const auto& size_item = selected.at("items").at("box.size");
-  const double grab_x = size_item.at("x").get<double>() + 20.0;  // inside the first (x) component
+  REQUIRE(selected.at("selection").at("primitive_id").get<facet::Id>() == f.scene.box_id);
+  CHECK(selected.at("selection").at("element").at("kind").get<std::string>() == "vertex");
+  CHECK(selected.at("selection").at("element").at("id").get<int>() == 4);
+  REQUIRE(selected.at("items").contains("primitive.param.0"));
+  const auto& size_item = selected.at("items").at("primitive.param.0");
+  const double grab_x = size_item.at("x").get<double>() + 20.0;  // inside the size x field
   const double grab_y = size_item.at("y").get<double>() + size_item.at("h").get<double>() / 2;
 
   // Drag the size's x component 40 px to the right over ten frames, then key p (pin tool).
@@ -517,15 +520,17 @@ TEST_CASE("render: a property drag is one undo entry; clicking the first history
   CHECK(edited.at("tool").get<std::string>() == "Pin");
   const facet::ProjectLoadResult after = facet::ProjectFromJson(edited.at("project").dump());
   REQUIRE(after.ok());
-  const facet::Box* box = after.project.FindBox(f.scene.box_id);
+  const facet::Primitive* box = after.project.FindPrimitive(f.scene.box_id);
   REQUIRE(box != nullptr);
   // ImGui's drag speed here is 0.01 per px: 40 px is about 0.4 (a few px go to the drag threshold).
-  const double grown = box->size.x() - f.scene.true_box.size.x();
+  const facet::PrimitiveParams& size = box->shape.params;
+  const facet::PrimitiveParams& true_size = f.scene.true_box.shape.params;
+  const double grown = size.x() - true_size.x();
   CAPTURE(grown);
   CHECK(grown > 0.2);
   CHECK(grown < 0.45);
-  CHECK(box->size.y() == f.scene.true_box.size.y());
-  CHECK(box->size.z() == f.scene.true_box.size.z());
+  CHECK(size.y() == true_size.y());
+  CHECK(size.z() == true_size.z());
 
   // Clicking history entry 0 ("Opened") undoes back to the file's project.
   const auto& first = edited.at("items").at("history.0");

@@ -1,0 +1,286 @@
+#include "app/model_edits.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <limits>
+
+#include "core/mesh_operators.h"
+
+namespace facet::app {
+namespace {
+
+// Logs a refusal: the core's message as an error (the status bar shows the last one).
+bool Refuse(AppState* state, const std::string& what, const std::string& message) {
+  state->Log(LogLevel::kError, what + ": " + message);
+  return false;
+}
+
+// A copy of the project and the named primitive in it, or null (and a logged error).
+Primitive* EditablePrimitive(AppState* state, Project* edited, Id primitive_id, const std::string& what) {
+  *edited = state->document.project();
+  Primitive* primitive = edited->FindPrimitive(primitive_id);
+  if (primitive == nullptr) Refuse(state, what, "the primitive is gone");
+  return primitive;
+}
+
+bool NamesVertex(const std::vector<VertexRef>& refs, const VertexRef& v) {
+  return std::find(refs.begin(), refs.end(), v) != refs.end();
+}
+
+}  // namespace
+
+PrimitiveShape DefaultShape(PrimitiveKind kind) {
+  switch (kind) {
+    case PrimitiveKind::kBox: return MakeBox(kNoId, Eigen::Vector3d::Ones());
+    case PrimitiveKind::kWedge: return MakeWedge(kNoId, Eigen::Vector3d(1.0, 1.0, 0.5));
+    case PrimitiveKind::kPyramid: return MakePyramid(kNoId, Eigen::Vector3d(1.0, 1.0, 0.5));
+    case PrimitiveKind::kPrism: return MakePrism(kNoId, 6, 0.5, 1.0);
+    case PrimitiveKind::kCylinder: return MakeCylinder(kNoId, 16, 0.5, 1.0);
+    case PrimitiveKind::kPlane: return MakePlane(kNoId, 1.0, 1.0);
+  }
+  return MakeBox(kNoId, Eigen::Vector3d::Ones());
+}
+
+int NumShapeParams(PrimitiveKind kind) {
+  switch (kind) {
+    case PrimitiveKind::kPrism:
+    case PrimitiveKind::kCylinder:
+    case PrimitiveKind::kPlane: return 2;
+    default: return 3;
+  }
+}
+
+const char* ShapeParamName(PrimitiveKind kind, int index) {
+  switch (kind) {
+    case PrimitiveKind::kPrism:
+    case PrimitiveKind::kCylinder: return index == 0 ? "Radius" : "Height";
+    case PrimitiveKind::kPyramid:
+    case PrimitiveKind::kWedge: return index == 0 ? "Size x" : index == 1 ? "Size y" : "Height";
+    default: return index == 0 ? "Size x" : index == 1 ? "Size y" : "Size z";
+  }
+}
+
+bool CanAttachOnTop(PrimitiveKind kind) {
+  return kind == PrimitiveKind::kWedge || kind == PrimitiveKind::kPyramid || kind == PrimitiveKind::kPlane ||
+         kind == PrimitiveKind::kBox;
+}
+
+const Primitive* AttachBaseFor(const AppState& state, PrimitiveKind kind) {
+  const Primitive* base = state.document.project().FindPrimitive(state.selection.primitive_id);
+  if (base == nullptr || base->shape.kind != PrimitiveKind::kBox || !CanAttachOnTop(kind)) return nullptr;
+  return base;
+}
+
+bool AddPrimitiveEdit(AppState* state, PrimitiveKind kind, Id base_id) {
+  Project edited = state->document.project();
+  PrimitiveShape shape = DefaultShape(kind);
+  const bool first = edited.primitives.empty();
+  if (!first && base_id == kNoId) {
+    // Beside everything there is, so that a new primitive does not hide inside another.
+    double max_x = -std::numeric_limits<double>::infinity();
+    for (const Primitive& p : edited.primitives) {
+      for (VertexId v = 0; v < p.mesh.VertexIdEnd(); ++v) {
+        if (p.mesh.IsVertex(v)) max_x = std::max(max_x, p.mesh.vertex(v).position.x());
+      }
+    }
+    const Primitive& last = edited.primitives.back();
+    shape.translation = Eigen::Vector3d(max_x + 0.25, last.shape.translation.y(), last.shape.translation.z());
+  }
+  int count = 1;
+  for (const Primitive& p : edited.primitives) count += p.shape.kind == kind;
+  const std::string name = std::string(PrimitiveKindName(kind)) + " " + std::to_string(count);
+  Id id = kNoId;
+  std::string message;
+  if (!AddPrimitiveToProject(&edited, shape, name, &id, &message)) return Refuse(state, "Add " + name, message);
+  Primitive* primitive = edited.FindPrimitive(id);
+  // The first primitive fixes origin and scale: its position and last dimension are kept.
+  primitive->translation_locked = first;
+  if (first) primitive->param_locked[NumShapeParams(kind) - 1] = true;
+  std::string label = "Add " + std::string(PrimitiveKindName(kind));
+  if (base_id != kNoId) {
+    const Primitive* base = edited.FindPrimitive(base_id);
+    if (base == nullptr) return Refuse(state, label, "the base primitive is gone");
+    PrimitiveShape attached = primitive->shape;
+    if (!AttachOnTop(base->shape, &attached, &message)) return Refuse(state, label + " on top", message);
+    primitive->attached_to = base_id;
+    label += " on top";
+    RefreshPrimitive(&edited, primitive);
+  }
+  state->selection = Selection();
+  state->selection.primitive_id = id;
+  CommitEdit(state, label, std::move(edited));
+  return true;
+}
+
+bool DeletePrimitiveEdit(AppState* state, Id primitive_id) {
+  Project edited = state->document.project();
+  const Primitive* primitive = edited.FindPrimitive(primitive_id);
+  if (primitive == nullptr) return Refuse(state, "Delete primitive", "the primitive is gone");
+  const std::string label = "Delete " + std::string(PrimitiveKindName(primitive->shape.kind));
+  std::erase_if(edited.primitives, [&](const Primitive& p) { return p.id == primitive_id; });
+  std::erase_if(edited.pins, [&](const Pin& pin) { return pin.vertex.primitive_id == primitive_id; });
+  std::erase_if(edited.constraints, [&](const Constraint& c) {
+    return std::any_of(c.vertices.begin(), c.vertices.end(), [&](const VertexRef& v) { return v.primitive_id == primitive_id; });
+  });
+  for (Primitive& p : edited.primitives) {
+    if (p.attached_to == primitive_id) p.attached_to = kNoId;
+  }
+  state->selection = Selection();
+  CommitEdit(state, label, std::move(edited));
+  return true;
+}
+
+bool SplitEdgeEdit(AppState* state, Id primitive_id, EdgeId edge, double t) {
+  Project edited;
+  Primitive* primitive = EditablePrimitive(state, &edited, primitive_id, "Split edge");
+  if (primitive == nullptr) return false;
+  const ESplitResult result = ESplit(&primitive->mesh, edge, t);
+  if (!result.ok) return Refuse(state, "Split edge", result.message);
+  UpdatePrimitivePositions(&primitive->mesh, primitive->shape);
+  state->selection = Selection::Of({ElementKind::kVertex, primitive_id, result.vertex});
+  CommitEdit(state, "Split edge", std::move(edited));
+  return true;
+}
+
+bool DeleteVertexEdit(AppState* state, Id primitive_id, VertexId vertex) {
+  Project edited;
+  Primitive* primitive = EditablePrimitive(state, &edited, primitive_id, "Delete vertex");
+  if (primitive == nullptr) return false;
+  const VDeleteResult result = VDelete(&primitive->mesh, vertex);
+  if (!result.ok) return Refuse(state, "Delete vertex", result.message);
+  const VertexRef ref{primitive_id, vertex};
+  std::erase_if(edited.pins, [&](const Pin& pin) { return pin.vertex == ref; });
+  std::erase_if(edited.constraints, [&](const Constraint& c) { return NamesVertex(c.vertices, ref); });
+  state->selection = Selection::Of({ElementKind::kEdge, primitive_id, result.kept_edge});
+  CommitEdit(state, "Delete vertex", std::move(edited));
+  return true;
+}
+
+bool ConnectVerticesEdit(AppState* state, Id primitive_id, VertexId a, VertexId b) {
+  Project edited;
+  Primitive* primitive = EditablePrimitive(state, &edited, primitive_id, "Connect vertices");
+  if (primitive == nullptr) return false;
+  const PolyMesh& mesh = primitive->mesh;
+  if (!mesh.IsVertex(a) || !mesh.IsVertex(b)) return Refuse(state, "Connect vertices", "a vertex is gone");
+  // The face both lie on; with several (adjacent vertices), the core refuses on the first.
+  FaceId face = kNoFace;
+  for (FaceId f = 0; f < mesh.FaceIdEnd() && face == kNoFace; ++f) {
+    if (!mesh.IsFace(f)) continue;
+    const std::vector<VertexId> vs = FaceVertices(mesh, f);
+    if (std::count(vs.begin(), vs.end(), a) && std::count(vs.begin(), vs.end(), b)) face = f;
+  }
+  if (face == kNoFace) {
+    return Refuse(state, "Connect vertices",
+                  "vertices " + std::to_string(a) + " and " + std::to_string(b) + " do not lie on one face");
+  }
+  const VConnectResult result = VConnect(&primitive->mesh, face, a, b);
+  if (!result.ok) return Refuse(state, "Connect vertices", result.message);
+  state->selection = Selection::Of({ElementKind::kEdge, primitive_id, result.edge});
+  CommitEdit(state, "Connect vertices", std::move(edited));
+  return true;
+}
+
+bool DeleteEdgeEdit(AppState* state, Id primitive_id, EdgeId edge) {
+  Project edited;
+  Primitive* primitive = EditablePrimitive(state, &edited, primitive_id, "Delete edge");
+  if (primitive == nullptr) return false;
+  const EDeleteResult result = EDelete(&primitive->mesh, edge);
+  if (!result.ok) return Refuse(state, "Delete edge", result.message);
+  state->selection = Selection::Of({ElementKind::kFace, primitive_id, result.kept_face});
+  CommitEdit(state, "Delete edge", std::move(edited));
+  return true;
+}
+
+bool ToggleFreeVertexEdit(AppState* state, Id primitive_id, VertexId vertex) {
+  Project edited;
+  Primitive* primitive = EditablePrimitive(state, &edited, primitive_id, "Free vertex");
+  if (primitive == nullptr) return false;
+  if (!primitive->mesh.IsVertex(vertex)) return Refuse(state, "Free vertex", "the vertex is gone");
+  LocalDefinition& local = primitive->mesh.vertex(vertex).local;
+  local.free = !local.free;
+  if (!local.free) local.offset = Eigen::Vector3d::Zero();
+  UpdatePrimitivePositions(&primitive->mesh, primitive->shape);
+  const std::string label = local.free ? "Free vertex" : "Fix vertex";
+  state->selection = Selection::Of({ElementKind::kVertex, primitive_id, vertex});
+  CommitEdit(state, label, std::move(edited));
+  return true;
+}
+
+bool TogglePlanarFaceEdit(AppState* state, Id primitive_id, FaceId face) {
+  Project edited;
+  Primitive* primitive = EditablePrimitive(state, &edited, primitive_id, "Planar face");
+  if (primitive == nullptr) return false;
+  if (!primitive->mesh.IsFace(face)) return Refuse(state, "Planar face", "the face is gone");
+  std::vector<VertexRef> vertices;
+  for (VertexId v : FaceVertices(primitive->mesh, face)) vertices.push_back({primitive_id, v});
+  if (vertices.size() < 4) return Refuse(state, "Planar face", "a triangle is always planar");
+  auto same = [&](const Constraint& c) { return c.kind == ConstraintKind::kCoplanar && c.vertices == vertices; };
+  const size_t before = edited.constraints.size();
+  std::erase_if(edited.constraints, same);
+  std::string label = "Unconstrain face";
+  if (edited.constraints.size() == before) {
+    Constraint c;
+    c.id = edited.NewId();
+    c.kind = ConstraintKind::kCoplanar;
+    c.vertices = vertices;
+    edited.constraints.push_back(c);
+    label = "Keep face planar";
+  }
+  CommitEdit(state, label, std::move(edited));
+  return true;
+}
+
+Id PinVertex(Project* project, Id image_id, const VertexRef& vertex, const Eigen::Vector2d& uv_px) {
+  for (Pin& pin : project->pins) {
+    if (pin.image_id == image_id && pin.vertex == vertex) {
+      pin.uv_px = uv_px;
+      return pin.id;
+    }
+  }
+  Pin pin;
+  pin.id = project->NewId();
+  pin.image_id = image_id;
+  pin.vertex = vertex;
+  pin.uv_px = uv_px;
+  project->pins.push_back(pin);
+  return pin.id;
+}
+
+bool ApplyToolClick(AppState* state, const ElementRef& picked, double t) {
+  switch (state->tool) {
+    case Tool::kSelect:
+    case Tool::kPin:
+      if (picked.Empty()) return false;
+      state->selection = Selection::Of(picked);
+      return true;
+    case Tool::kSplitEdge:
+      if (picked.kind != ElementKind::kEdge) return false;
+      SplitEdgeEdit(state, picked.primitive_id, picked.element, t);
+      return true;
+    case Tool::kDeleteVertex:
+      if (picked.kind != ElementKind::kVertex) return false;
+      DeleteVertexEdit(state, picked.primitive_id, picked.element);
+      return true;
+    case Tool::kDeleteEdge:
+      if (picked.kind != ElementKind::kEdge) return false;
+      DeleteEdgeEdit(state, picked.primitive_id, picked.element);
+      return true;
+    case Tool::kConnectVertices: {
+      if (picked.kind != ElementKind::kVertex) return false;
+      const ElementRef from = state->selection.connect_from;
+      if (from.Empty() || from.primitive_id != picked.primitive_id || from == picked) {
+        state->selection = Selection::Of(picked);
+        state->selection.connect_from = from == picked ? ElementRef() : picked;
+        return true;
+      }
+      if (!ConnectVerticesEdit(state, picked.primitive_id, from.element, picked.element)) {
+        state->selection = Selection::Of(picked);  // start again from the second vertex
+        state->selection.connect_from = picked;
+      }
+      return true;
+    }
+    default: return false;
+  }
+}
+
+}  // namespace facet::app

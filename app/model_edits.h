@@ -1,0 +1,56 @@
+// The model edits the tools, menus and script commands share: K_create of a primitive (alone
+// or attached on top of a box), the paper's K-operators on a primitive's mesh, freeing a
+// vertex, a planar-face constraint and vertex pins. Each is one undoable document edit with a
+// label, followed by the re-solve (CommitEdit); a refusal logs the core's message as an error
+// (shown in the log and the status bar) and changes nothing. Each returns whether it edited.
+#pragma once
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "app/app_state.h"
+
+namespace facet::app {
+
+// Default parameters of a new primitive of `kind` (unit size; 8 sides for prism/cylinder).
+PrimitiveShape DefaultShape(PrimitiveKind kind);
+// Names of the kind's parameters in shape.params order, and how many it has.
+int NumShapeParams(PrimitiveKind kind);
+const char* ShapeParamName(PrimitiveKind kind, int index);
+// Whether a primitive of `kind` can sit on top of a box (AttachOnTop).
+bool CanAttachOnTop(PrimitiveKind kind);
+// The selected primitive when it is a box that a new `kind` can sit on, or null.
+const Primitive* AttachBaseFor(const AppState& state, PrimitiveKind kind);
+
+// K_create: adds a primitive of `kind`, on top of `base_id` (a box) when given, selects it.
+// The first primitive of a project gets its last dimension locked (a known length for scale).
+bool AddPrimitiveEdit(AppState* state, PrimitiveKind kind, Id base_id);
+
+// Deletes a primitive with its pins and the constraints naming it; primitives attached to it
+// stay where they are, detached.
+bool DeletePrimitiveEdit(AppState* state, Id primitive_id);
+
+// E_split on an edge at parameter t in (0, 1) from the origin of half-edge 2 * edge.
+bool SplitEdgeEdit(AppState* state, Id primitive_id, EdgeId edge, double t);
+// V_delete; pins and constraints naming the vertex go with it (in the same edit).
+bool DeleteVertexEdit(AppState* state, Id primitive_id, VertexId vertex);
+// V_connect between two vertices of one face of the primitive (the face is found).
+bool ConnectVerticesEdit(AppState* state, Id primitive_id, VertexId a, VertexId b);
+// E_delete.
+bool DeleteEdgeEdit(AppState* state, Id primitive_id, EdgeId edge);
+// Toggles LocalDefinition::free; un-freeing puts the vertex back on its definition.
+bool ToggleFreeVertexEdit(AppState* state, Id primitive_id, VertexId vertex);
+// A kCoplanar constraint on the face's vertices ("keep this face planar"), or its removal
+// when the same constraint exists.
+bool TogglePlanarFaceEdit(AppState* state, Id primitive_id, FaceId face);
+
+// Pins `vertex` at uv in the image (replacing its earlier pin there). Returns the pin id.
+Id PinVertex(Project* project, Id image_id, const VertexRef& vertex, const Eigen::Vector2d& uv_px);
+
+// Runs the current tool's action on a picked element (the image and 3D panels call it on a
+// click): the operators, selection and V_connect's two-click state. `t` is the picked edge
+// parameter. Returns true when the click was consumed.
+bool ApplyToolClick(AppState* state, const ElementRef& picked, double t);
+
+}  // namespace facet::app
