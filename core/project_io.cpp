@@ -805,7 +805,7 @@ bool MigrateVersion1To2(Json* doc, std::string* error) {
         locked.push_back(false);
         prim["param_locked"] = locked;
       }
-      prim["attached_to"] = 0;
+      prim["attached_to"] = 0u;  // unsigned: the reader takes ids as unsigned integers
       prim["mesh"] = "from_shape";
       primitives.push_back(std::move(prim));
     }
