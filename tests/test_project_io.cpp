@@ -16,6 +16,7 @@
 #include <functional>
 #include <limits>
 #include <random>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -24,16 +25,20 @@
 #include <nlohmann/json.hpp>
 
 #include "core/camera.h"
+#include "core/mesh_extrude.h"
+#include "core/mesh_operators.h"
 #include "core/project.h"
 #include "core/project_io.h"
 #include "tests/synthetic_scene.h"
 
 namespace fs = std::filesystem;
 using facet::Axis;
-using facet::Box;
+using facet::Constraint;
 using facet::Id;
 using facet::Image;
 using facet::Pin;
+using facet::PolyMesh;
+using facet::Primitive;
 using facet::PrincipalPointMode;
 using facet::Project;
 using facet::Segment;
@@ -78,8 +83,66 @@ std::uint64_t Bits(double v) {
   return b;
 }
 
-// Every field away from its default, several images, segments on each axis, boxes with all
-// 32 lock combinations, pins on every corner.
+// The K-ops leave a mesh with holes in its id space: E_split, V_delete of another split
+// vertex, V_connect then E_delete, a kept V_connect, an extrusion, and a free vertex with a
+// solved offset. Returns the split vertex that was kept (free) and the extruded face's new
+// vertices.
+struct Operated {
+  facet::VertexId free_vertex = facet::kNoElement;
+  std::vector<facet::VertexId> extruded;
+};
+Operated OperateOn(Project* project, Primitive* prim) {
+  PolyMesh& mesh = prim->mesh;
+  Operated out;
+  const facet::ESplitResult kept = facet::ESplit(&mesh, 0, 0.3);
+  REQUIRE_MESSAGE(kept.ok, kept.message);
+  out.free_vertex = kept.vertex;
+  const facet::ESplitResult removed = facet::ESplit(&mesh, 1, 0.6);
+  REQUIRE_MESSAGE(removed.ok, removed.message);
+  const facet::VDeleteResult deleted = facet::VDelete(&mesh, removed.vertex);
+  REQUIRE_MESSAGE(deleted.ok, deleted.message);
+  facet::FaceId quad = facet::kNoFace;
+  for (facet::FaceId f = 0; f < mesh.FaceIdEnd() && quad == facet::kNoFace; ++f)
+    if (mesh.IsFace(f) && facet::FaceDegree(mesh, f) >= 4) quad = f;
+  REQUIRE(quad != facet::kNoFace);
+  std::vector<facet::VertexId> loop = facet::FaceVertices(mesh, quad);
+  const facet::VConnectResult temporary = facet::VConnect(&mesh, quad, loop[0], loop[2]);
+  REQUIRE_MESSAGE(temporary.ok, temporary.message);
+  const facet::EDeleteResult merged = facet::EDelete(&mesh, temporary.edge);
+  REQUIRE_MESSAGE(merged.ok, merged.message);
+  loop = facet::FaceVertices(mesh, merged.kept_face);
+  REQUIRE(loop.size() >= 4);
+  const facet::VConnectResult connect = facet::VConnect(&mesh, merged.kept_face, loop[1], loop[3]);
+  REQUIRE_MESSAGE(connect.ok, connect.message);
+  const facet::ExtrudeResult extruded = facet::ExtrudeFace(&mesh, prim->shape, connect.new_face, 0.375);
+  REQUIRE_MESSAGE(extruded.ok, extruded.message);
+  out.extruded = extruded.new_vertices;
+  mesh.vertex(out.free_vertex).local.free = true;
+  mesh.vertex(out.free_vertex).local.offset = Eigen::Vector3d(0.01, -0.02, 1.0 / 3.0);
+  facet::RefreshPrimitive(project, prim);
+  const auto problems = facet::Validate(mesh);
+  REQUIRE_MESSAGE(problems.empty(), problems.front());
+  REQUIRE(mesh.VertexIdEnd() > static_cast<std::uint32_t>(mesh.NumVertices()));
+  REQUIRE(mesh.EdgeIdEnd() > static_cast<std::uint32_t>(mesh.NumEdges()));
+  REQUIRE(mesh.FaceIdEnd() > static_cast<std::uint32_t>(mesh.NumFaces()));
+  return out;
+}
+
+facet::PrimitiveShape ShapeOfKind(int k) {
+  switch (k % 6) {
+    case 0: return facet::MakeBox(facet::kNoId, {1.0, 2.5, 0.75});
+    case 1: return facet::MakeWedge(facet::kNoId, {2.0, 1.5, 0.5});
+    case 2: return facet::MakePrism(facet::kNoId, 5, 1.25, 2.0);
+    case 3: return facet::MakePyramid(facet::kNoId, {2.0, 2.5, 1.75});
+    case 4: return facet::MakeCylinder(facet::kNoId, 7, 0.5, 3.0);
+    default: return facet::MakePlane(facet::kNoId, 3.0, 2.0);
+  }
+}
+
+// Every field away from its default: several images, segments on each axis, primitives of
+// every kind with all lock combinations, one operated primitive of each kind (id holes, free
+// vertex, extrusion), an attachment, pins on corners and on K-op vertices, and a constraint
+// of every kind.
 Project MakeFullProject() {
   Project p;
   p.units = "ft";
@@ -100,6 +163,8 @@ Project MakeFullProject() {
     im.principal_point_mode = static_cast<PrincipalPointMode>(i);
     im.fixed_principal_point_px = {12.5 + i, 8.25};
     im.pose_locked = i == 2;
+    im.focal_locked = i != 0;
+    im.principal_point_locked = i == 1;
     p.images.push_back(im);
   }
   for (int i = 0; i < 3; ++i) {
@@ -116,25 +181,72 @@ Project MakeFullProject() {
     }
   }
   for (int mask = 0; mask < 32; ++mask) {
-    Box b;
-    b.id = p.NewId();
-    b.name = mask == 5 ? "Turm \xC3\xBC \"quoted\" \\ tab\t \xE2\x98\x83" : "box " + std::to_string(mask);
-    b.size = {1.0 + 0.1 * mask, 2.5, 0.75};
-    b.rotation = {0.01 * mask, -0.2, 0.3};
-    b.translation = {static_cast<double>(mask), -0.5 * mask, 0.125};
-    b.size_locked = {(mask & 1) != 0, (mask & 2) != 0, (mask & 4) != 0};
-    b.rotation_locked = (mask & 8) != 0;
-    b.translation_locked = (mask & 16) != 0;
-    p.boxes.push_back(b);
+    facet::PrimitiveShape shape = ShapeOfKind(mask);
+    shape.params[0] += 0.1 * mask;
+    shape.rotation = {0.01 * mask, -0.2, 0.3};
+    shape.translation = {static_cast<double>(mask), -0.5 * mask, 0.125};
+    const std::string name = mask == 5 ? "Turm \xC3\xBC \"quoted\" \\ tab\t \xE2\x98\x83" : "primitive " + std::to_string(mask);
+    std::string message;
+    REQUIRE_MESSAGE(facet::AddPrimitiveToProject(&p, shape, name, nullptr, &message), message);
+    Primitive& prim = p.primitives.back();
+    prim.param_locked = {(mask & 1) != 0, (mask & 2) != 0, (mask & 4) != 0, mask % 3 == 0};
+    prim.rotation_locked = (mask & 8) != 0;
+    prim.translation_locked = (mask & 16) != 0;
+  }
+  // A wedge roof on box 0.
+  REQUIRE(p.primitives[1].shape.kind == facet::PrimitiveKind::kWedge);
+  REQUIRE(facet::AttachOnTop(p.primitives[0].shape, &p.primitives[1].shape, nullptr));
+  p.primitives[1].attached_to = p.primitives[0].id;
+  facet::RefreshPrimitive(&p, &p.primitives[1]);
+  std::vector<Operated> operated;
+  for (int k = 0; k < 6; ++k) {
+    facet::PrimitiveShape shape = ShapeOfKind(k);
+    shape.translation = {-3.0 * k, 2.0, 0.0};
+    shape.rotation = {0.0, 0.0, 0.25 * k};
+    REQUIRE(facet::AddPrimitiveToProject(&p, shape, "operated " + std::to_string(k), nullptr, nullptr));
+    operated.push_back(OperateOn(&p, &p.primitives.back()));
   }
   for (int c = 0; c < 10; ++c) {
     Pin pin;
     pin.id = p.NewId();
     pin.image_id = p.images[c % 3].id;
-    pin.box_id = p.boxes[c * 3].id;
-    pin.corner = c % 8;
+    pin.vertex = {p.primitives[c * 3].id, static_cast<facet::VertexId>(c % 5)};
     pin.uv_px = {100.5 * c + 0.1, -17.25 + 1.0 / (c + 3)};
     p.pins.push_back(pin);
+  }
+  for (int k = 0; k < 6; ++k) {
+    const facet::Id id = p.primitives[32 + k].id;
+    for (facet::VertexId v : {operated[k].free_vertex, operated[k].extruded[0]}) {
+      Pin pin;
+      pin.id = p.NewId();
+      pin.image_id = p.images[k % 3].id;
+      pin.vertex = {id, v};
+      pin.uv_px = {7.5 * k, 1.0 / (k + 7)};
+      p.pins.push_back(pin);
+    }
+  }
+  const facet::Id a = p.primitives[32].id, b = p.primitives[35].id;
+  const auto& x = operated[0].extruded;
+  for (int kind = 0; kind <= static_cast<int>(facet::ConstraintKind::kEdgeOnImageLine); ++kind) {
+    Constraint c;
+    c.id = p.NewId();
+    c.kind = static_cast<facet::ConstraintKind>(kind);
+    switch (c.kind) {
+      case facet::ConstraintKind::kCoplanar: c.vertices = {{a, x[0]}, {a, x[1]}, {a, x[2]}, {a, 0}, {b, 0}}; break;
+      case facet::ConstraintKind::kCollinear: c.vertices = {{a, 0}, {a, operated[0].free_vertex}, {a, 1}}; break;
+      case facet::ConstraintKind::kFixedPoint: c.vertices = {{b, 4}}; break;
+      case facet::ConstraintKind::kDistance:
+      case facet::ConstraintKind::kAlongAxis:
+      case facet::ConstraintKind::kEdgeOnImageLine: c.vertices = {{a, 2}, {b, operated[3].free_vertex}}; break;
+      default: c.vertices = {{a, 0}, {a, 1}, {b, 2}, {b, 3}}; break;
+    }
+    c.value = 2.5 + kind / 7.0;
+    c.point = {0.1 * kind, -1.0 / 3.0, 4.0};
+    c.axis = static_cast<Axis>(kind % 3);
+    c.image_id = c.kind == facet::ConstraintKind::kEdgeOnImageLine ? p.images[2].id : facet::kNoId;
+    c.line_a_px = {10.25 * kind, 3.0};
+    c.line_b_px = {-1.5, 1e3 / 7.0};
+    p.constraints.push_back(c);
   }
   p.next_id += 17;
   return p;
@@ -157,17 +269,20 @@ Project MakeSmallProject() {
   s.a_px = {1.5, 2.5};
   s.b_px = {3.5, 400.125};
   p.segments.push_back(s);
-  Box b;
-  b.id = p.NewId();
-  b.name = "b";
-  p.boxes.push_back(b);
+  facet::Id box_id = facet::kNoId;
+  REQUIRE(facet::AddPrimitiveToProject(&p, facet::MakeBox(facet::kNoId, {1.0, 2.0, 3.0}), "b", &box_id, nullptr));
   Pin pin;
   pin.id = p.NewId();
   pin.image_id = im.id;
-  pin.box_id = b.id;
-  pin.corner = 6;
+  pin.vertex = {box_id, 6};
   pin.uv_px = {10.0, 20.0};
   p.pins.push_back(pin);
+  Constraint c;
+  c.id = p.NewId();
+  c.kind = facet::ConstraintKind::kDistance;
+  c.vertices = {{box_id, 0}, {box_id, 6}};
+  c.value = 4.5;
+  p.constraints.push_back(c);
   return p;
 }
 
@@ -237,27 +352,52 @@ TEST_CASE("each single field is written and read back") {
       {"image.principal_point_mode", [](Project& p) { p.images[0].principal_point_mode = PrincipalPointMode::kFixed; }},
       {"image.fixed_principal_point_px", [](Project& p) { p.images[2].fixed_principal_point_px.y() = 99.0; }},
       {"image.pose_locked", [](Project& p) { p.images[0].pose_locked = true; }},
+      {"image.focal_locked", [](Project& p) { p.images[0].focal_locked = true; }},
+      {"image.principal_point_locked", [](Project& p) { p.images[0].principal_point_locked = true; }},
       {"segment.id", [](Project& p) { p.segments[1].id = p.NewId(); }},
       {"segment.image_id", [](Project& p) { p.segments[0].image_id = p.images[2].id; }},
       {"segment.axis", [](Project& p) { p.segments[0].axis = Axis::kY; }},
       {"segment.a_px", [](Project& p) { p.segments[0].a_px.y() = 0.5; }},
       {"segment.b_px", [](Project& p) { p.segments[0].b_px.x() = 0.5; }},
-      {"box.name", [](Project& p) { p.boxes[3].name = "renamed"; }},
-      {"box.size", [](Project& p) { p.boxes[3].size.z() = 9.0; }},
-      {"box.rotation", [](Project& p) { p.boxes[3].rotation.x() = 1.0; }},
-      {"box.translation", [](Project& p) { p.boxes[3].translation.y() = 1.0; }},
-      {"box.size_locked[0]", [](Project& p) { p.boxes[0].size_locked[0] = true; }},
-      {"box.size_locked[1]", [](Project& p) { p.boxes[0].size_locked[1] = true; }},
-      {"box.size_locked[2]", [](Project& p) { p.boxes[0].size_locked[2] = true; }},
-      {"box.rotation_locked", [](Project& p) { p.boxes[0].rotation_locked = true; }},
-      {"box.translation_locked", [](Project& p) { p.boxes[0].translation_locked = true; }},
+      {"primitive.name", [](Project& p) { p.primitives[3].name = "renamed"; }},
+      {"primitive.kind", [](Project& p) { p.primitives[6].shape.kind = facet::PrimitiveKind::kWedge; }},
+      {"primitive.params", [](Project& p) { p.primitives[3].shape.params.z() = 9.0; }},
+      {"primitive.params[3]", [](Project& p) { p.primitives[3].shape.params[3] = 0.5; }},
+      {"primitive.segments", [](Project& p) { p.primitives[2].shape.segments = 9; }},
+      {"primitive.rotation", [](Project& p) { p.primitives[3].shape.rotation.x() = 1.0; }},
+      {"primitive.translation", [](Project& p) { p.primitives[3].shape.translation.y() = 1.0; }},
+      {"primitive.param_locked[0]", [](Project& p) { p.primitives[0].param_locked[0] = true; }},
+      {"primitive.param_locked[1]", [](Project& p) { p.primitives[0].param_locked[1] = true; }},
+      {"primitive.param_locked[2]", [](Project& p) { p.primitives[0].param_locked[2] = true; }},
+      {"primitive.param_locked[3]", [](Project& p) { p.primitives[1].param_locked[3] = true; }},
+      {"primitive.rotation_locked", [](Project& p) { p.primitives[0].rotation_locked = true; }},
+      {"primitive.translation_locked", [](Project& p) { p.primitives[0].translation_locked = true; }},
+      {"primitive.attached_to", [](Project& p) { p.primitives[1].attached_to = p.primitives[6].id; }},
+      {"vertex.a", [](Project& p) { p.primitives[32].mesh.vertex(0).local.a(1, 1) = 0.5; }},
+      {"vertex.b", [](Project& p) { p.primitives[32].mesh.vertex(0).local.b(2, 2) = 0.25; }},
+      {"vertex.t", [](Project& p) { p.primitives[32].mesh.vertex(0).local.t = 0.125; }},
+      {"vertex.on_edge", [](Project& p) { p.primitives[32].mesh.vertex(1).local.on_edge = true; }},
+      {"vertex.free", [](Project& p) { p.primitives[32].mesh.vertex(1).local.free = true; }},
+      {"vertex.offset", [](Project& p) { p.primitives[33].mesh.vertex(2).local.offset.y() = -0.75; }},
+      {"vertex.position", [](Project& p) { p.primitives[34].mesh.vertex(3).position.z() += 1e-9; }},
+      {"halfedge.uv", [](Project& p) { p.primitives[35].mesh.halfedge(5).uv.x() = 2.0 / 3.0; }},
+      {"face.material", [](Project& p) { p.primitives[36].mesh.face(0).material = 42; }},
       {"pin.image_id", [](Project& p) { p.pins[0].image_id = p.images[2].id; }},
-      {"pin.box_id", [](Project& p) { p.pins[0].box_id = p.boxes[31].id; }},
-      {"pin.corner", [](Project& p) { p.pins[0].corner = 7; }},
+      {"pin.primitive_id", [](Project& p) { p.pins[0].vertex.primitive_id = p.primitives[31].id; }},
+      {"pin.vertex", [](Project& p) { p.pins[0].vertex.vertex = 3; }},
       {"pin.uv_px", [](Project& p) { p.pins[0].uv_px.x() = -1.0; }},
+      {"constraint.kind", [](Project& p) { p.constraints[2].kind = facet::ConstraintKind::kEqualLength; }},
+      {"constraint.vertices", [](Project& p) { p.constraints[2].vertices[1].vertex = 3; }},
+      {"constraint.vertices.primitive", [](Project& p) { p.constraints[5].vertices[0].primitive_id = p.primitives[0].id; }},
+      {"constraint.value", [](Project& p) { p.constraints[5].value = 1e-3; }},
+      {"constraint.point", [](Project& p) { p.constraints[6].point.z() = -4.0; }},
+      {"constraint.axis", [](Project& p) { p.constraints[7].axis = Axis::kX; }},
+      {"constraint.image_id", [](Project& p) { p.constraints[8].image_id = p.images[0].id; }},
+      {"constraint.line_a_px", [](Project& p) { p.constraints[8].line_a_px.y() = 0.5; }},
+      {"constraint.line_b_px", [](Project& p) { p.constraints[8].line_b_px.x() = 0.5; }},
   };
   for (const auto& [name, edit] : edits) {
-    CAPTURE(name);
+    INFO("edit: " << name);
     Project changed = base;
     edit(changed);
     REQUIRE_FALSE(changed == base);
@@ -319,8 +459,10 @@ TEST_CASE("doubles round-trip bit-exactly") {
     s.b_px = {values[i + 1], values[i]};
     p.segments.push_back(s);
   }
-  p.boxes[0].size = {std::abs(values[1]), std::abs(values[7]), DBL_MAX};  // sizes are >= 0
-  p.boxes[0].translation = {values[2], values[5], values[14]};
+  // Shape values only: the mesh keeps its cached positions, which the file stores as they are.
+  p.primitives[0].shape.params = {std::abs(values[1]), std::abs(values[7]), DBL_MAX, 5e-324};  // >= 0
+  p.primitives[0].shape.translation = {values[2], values[5], values[14]};
+  p.primitives[0].mesh.vertex(3).local.offset = {values[3], values[9], values[11]};
 
   const std::string text = facet::ProjectToJson(p);
   const facet::ProjectLoadResult r = facet::ProjectFromJson(text);
@@ -340,10 +482,12 @@ TEST_CASE("doubles round-trip bit-exactly") {
   CHECK(mismatches == 0);
   // -0.0 == 0.0, so check the sign bit on its own: segment 1 holds values[2] = -0.0.
   CHECK(std::signbit(r.project.segments[1].a_px.x()));
-  CHECK(std::signbit(r.project.boxes[0].translation.x()));
+  CHECK(std::signbit(r.project.primitives[0].shape.translation.x()));
   for (int k = 0; k < 3; ++k) {
-    CHECK(Bits(r.project.boxes[0].size(k)) == Bits(p.boxes[0].size(k)));
-    CHECK(Bits(r.project.boxes[0].translation(k)) == Bits(p.boxes[0].translation(k)));
+    CHECK(Bits(r.project.primitives[0].shape.params(k)) == Bits(p.primitives[0].shape.params(k)));
+    CHECK(Bits(r.project.primitives[0].shape.translation(k)) == Bits(p.primitives[0].shape.translation(k)));
+    CHECK(Bits(r.project.primitives[0].mesh.vertex(3).local.offset(k)) ==
+          Bits(p.primitives[0].mesh.vertex(3).local.offset(k)));
   }
   CHECK(r.project == p);
 }
@@ -362,11 +506,18 @@ TEST_CASE("NaN and infinity are refused with the field's path, and nothing is wr
   }
   {
     Project p = MakeFullProject();
-    p.boxes[4].translation.z() = -std::numeric_limits<double>::infinity();
+    p.primitives[4].shape.translation.z() = -std::numeric_limits<double>::infinity();
     const std::string error = facet::SaveProject(p, path);
     INFO(error);
-    CHECK(error.find("boxes[4].translation[2]") != std::string::npos);
+    CHECK(error.find("primitives[4].translation[2]") != std::string::npos);
     CHECK(error.find("infinity") != std::string::npos);
+  }
+  {
+    Project p = MakeFullProject();
+    p.primitives[33].mesh.vertex(2).local.offset.x() = std::numeric_limits<double>::quiet_NaN();
+    const std::string error = facet::SaveProject(p, path);
+    INFO(error);
+    CHECK(error.find("primitives[33].mesh.vertices[2].offset[0]") != std::string::npos);
   }
   {
     Project p = MakeFullProject();
@@ -384,15 +535,20 @@ TEST_CASE("a project that would not load back is not saved, and the old file sta
   const std::string path = dir / "p.facet";
   WriteFile(path, "old contents");
   Project p = MakeFullProject();
-  p.pins[2].box_id = p.next_id + 100;
+  p.pins[2].vertex.primitive_id = p.next_id + 100;
   const std::string error = facet::SaveProject(p, path);
   INFO(error);
-  CHECK(error.find("pins[2].box_id") != std::string::npos);
+  CHECK(error.find("pins[2].vertex") != std::string::npos);
   Project q = MakeFullProject();
-  q.boxes[1].name = "bad \xFF utf-8";
+  q.primitives[1].name = "bad \xFF utf-8";
   const std::string error2 = facet::SaveProject(q, path);
   INFO(error2);
-  CHECK(error2.find("boxes[1].name") != std::string::npos);
+  CHECK(error2.find("primitives[1].name") != std::string::npos);
+  Project r = MakeFullProject();
+  r.constraints[0].vertices[0].vertex = 999;  // a vertex the primitive does not have
+  const std::string error3 = facet::SaveProject(r, path);
+  INFO(error3);
+  CHECK(error3.find("constraints[0].vertices[0]") != std::string::npos);
   CHECK(ReadFile(path) == "old contents");
   CHECK(ListDir(dir.path) == std::set<std::string>{"p.facet"});
 }
@@ -470,7 +626,7 @@ TEST_CASE("version: newer files are refused clearly, bad versions are errors") {
   Json j = SmallJson();
   j["version"] = 7;
   const facet::ProjectLoadResult r = facet::ProjectFromJson(j.dump());
-  CHECK(r.error == "version: written by a newer Facet: version 7, this build reads up to 1");
+  CHECK(r.error == "version: written by a newer Facet: version 7, this build reads up to 2");
   j["version"] = 0;
   CheckErrorNames(j.dump(), "version: expected a positive integer");
   j["version"] = -3;
@@ -486,7 +642,7 @@ TEST_CASE("version: newer files are refused clearly, bad versions are errors") {
 }
 
 namespace {
-// Every value in the tree with its path as the loader names it ("boxes[0].size[1]").
+// Every value in the tree with its path as the loader names it ("primitives[0].params[1]").
 void CollectPaths(const Json& j, const Json::json_pointer& ptr, const std::string& name,
                   std::vector<std::pair<Json::json_pointer, std::string>>* out) {
   if (!name.empty()) out->push_back({ptr, name});
@@ -507,8 +663,14 @@ TEST_CASE("every missing field and every wrong type is an error naming its path"
   CollectPaths(good, Json::json_pointer(), "", &paths);
   REQUIRE(paths.size() > 50);
   int missing_cases = 0, type_cases = 0;
-  for (const auto& [ptr, name] : paths) {
-    CAPTURE(name);
+  // A constraint's vertex reference [primitive_id, vertex] is read as one value: errors inside
+  // it name the reference.
+  const std::regex inside_reference(R"((constraints\[\d+\]\.vertices\[\d+\])\[\d+\])");
+  for (const auto& [ptr, name_in_tree] : paths) {
+    std::smatch match;
+    const std::string name =
+        std::regex_match(name_in_tree, match, inside_reference) ? match[1].str() : name_in_tree;
+    CAPTURE(name_in_tree);
     const bool in_object = good.at(ptr.parent_pointer()).is_object();
     if (in_object) {
       Json removed = good;
@@ -532,7 +694,8 @@ TEST_CASE("every missing field and every wrong type is an error naming its path"
     if (good.at(ptr).is_array() && !good.at(ptr).empty() && good.at(ptr)[0].is_primitive()) {
       wrong.at(ptr) = good.at(ptr);
       wrong.at(ptr).push_back(good.at(ptr)[0]);
-      CheckErrorNames(wrong.dump(), name + ": expected an array of");
+      // "expected an array of 3 numbers", or "expected [primitive_id, vertex]".
+      CheckErrorNames(wrong.dump(), name + ": expected ");
     }
     ++type_cases;
   }
@@ -546,28 +709,46 @@ TEST_CASE("out-of-range values and bad references name their location") {
     edit(j);
     return j.dump(2);
   };
-  CheckErrorNames(with([](Json& j) { j["pins"][3]["corner"] = 8; }),
-                  "pins[3].corner: expected an integer from 0 to 7, found 8");
-  CheckErrorNames(with([](Json& j) { j["pins"][3]["corner"] = -1; }), "pins[3].corner");
-  CheckErrorNames(with([](Json& j) { j["boxes"][2]["size"][1] = -0.5; }),
-                  "boxes[2].size[1]: a size cannot be negative");
-  CheckErrorNames(with([](Json& j) { j["boxes"][2]["size"] = {1.0, 2.0}; }),
-                  "boxes[2].size: expected an array of 3 numbers");
+  CheckErrorNames(with([](Json& j) { j["pins"][3]["vertex"] = 8; }),
+                  "pins[3].vertex: refers to vertex 8, which primitive");
+  CheckErrorNames(with([](Json& j) { j["pins"][3]["vertex"] = -1; }), "pins[3].vertex");
+  CheckErrorNames(with([](Json& j) { j["primitives"][2]["params"][1] = -0.5; }),
+                  "primitives[2].params[1]: a dimension cannot be negative");
+  CheckErrorNames(with([](Json& j) { j["primitives"][2]["params"] = {1.0, 2.0}; }),
+                  "primitives[2].params: expected an array of 4 numbers");
+  CheckErrorNames(with([](Json& j) { j["primitives"][2]["kind"] = "sphere"; }),
+                  "primitives[2].kind: unknown primitive kind \"sphere\"");
+  CheckErrorNames(with([](Json& j) { j["primitives"][1]["attached_to"] = 9999; }),
+                  "primitives[1].attached_to: refers to a missing primitive");
+  CheckErrorNames(with([](Json& j) { j["primitives"][1]["attached_to"] = j["primitives"][1]["id"]; }),
+                  "primitives[1].attached_to");
+  CheckErrorNames(with([](Json& j) { j["constraints"][0]["kind"] = "tangent"; }),
+                  "constraints[0].kind: unknown constraint kind");
+  CheckErrorNames(with([](Json& j) { j["constraints"][8]["image_id"] = 9999; }),
+                  "constraints[8].image_id: refers to a missing image");
+  CheckErrorNames(with([](Json& j) { j["constraints"][1]["vertices"][0] = {1, 2, 3}; }),
+                  "constraints[1].vertices[0]: expected [primitive_id, vertex]");
+  CheckErrorNames(with([](Json& j) { j["constraints"][1]["vertices"][2][0] = j["images"][0]["id"]; }),
+                  "constraints[1].vertices[2]: refers to a missing primitive");
   CheckErrorNames(with([](Json& j) { j["segments"][4]["axis"] = "w"; }), "segments[4].axis");
   CheckErrorNames(with([](Json& j) { j["segments"][4]["axis"] = "X"; }), "segments[4].axis");
   CheckErrorNames(with([](Json& j) { j["images"][1]["principal_point_mode"] = "auto"; }),
                   "images[1].principal_point_mode");
-  CheckErrorNames(with([](Json& j) { j["boxes"][7]["id"] = j["boxes"][2]["id"]; }), "boxes[7].id: duplicate id");
+  CheckErrorNames(with([](Json& j) { j["primitives"][7]["id"] = j["primitives"][2]["id"]; }),
+                  "primitives[7].id: duplicate id");
+  CheckErrorNames(with([](Json& j) { j["constraints"][3]["id"] = j["pins"][0]["id"]; }),
+                  "constraints[3].id: duplicate id");
   CheckErrorNames(with([](Json& j) { j["pins"][0]["id"] = j["images"][0]["id"]; }), "pins[0].id: duplicate id");
   CheckErrorNames(with([](Json& j) { j["segments"][3]["image_id"] = 9999; }),
                   "segments[3].image_id: refers to a missing image");
-  CheckErrorNames(with([](Json& j) { j["pins"][5]["image_id"] = j["boxes"][0]["id"]; }),
+  CheckErrorNames(with([](Json& j) { j["pins"][5]["image_id"] = j["primitives"][0]["id"]; }),
                   "pins[5].image_id: refers to a missing image");
-  CheckErrorNames(with([](Json& j) { j["pins"][5]["box_id"] = j["images"][0]["id"]; }),
-                  "pins[5].box_id: refers to a missing box");
-  CheckErrorNames(with([](Json& j) { j["next_id"] = j["pins"].back()["id"]; }), "next_id: must be greater");
-  CheckErrorNames(with([](Json& j) { j["boxes"][0]["id"] = 0; }), "boxes[0].id: expected a positive integer id");
-  CheckErrorNames(with([](Json& j) { j["boxes"][0]["id"] = -4; }), "boxes[0].id");
+  CheckErrorNames(with([](Json& j) { j["pins"][5]["primitive_id"] = j["images"][0]["id"]; }),
+                  "pins[5].vertex: refers to a missing primitive");
+  CheckErrorNames(with([](Json& j) { j["next_id"] = j["constraints"].back()["id"]; }), "next_id: must be greater");
+  CheckErrorNames(with([](Json& j) { j["primitives"][0]["id"] = 0; }),
+                  "primitives[0].id: expected a positive integer id");
+  CheckErrorNames(with([](Json& j) { j["primitives"][0]["id"] = -4; }), "primitives[0].id");
   CheckErrorNames(with([](Json& j) { j["images"][0]["width_px"] = -1; }), "images[0].width_px");
   CheckErrorNames(with([](Json& j) { j["images"][0]["width_px"] = 3000000000ull; }), "images[0].width_px");
   CheckErrorNames(with([](Json& j) { j["images"][2]["camera"]["focal_px"] = 0.0; }),
@@ -592,7 +773,7 @@ TEST_CASE("out-of-range values and bad references name their location") {
 
 TEST_CASE("unknown fields are warnings, not errors") {
   Json j = SmallJson();
-  j["boxes"][0]["colour"] = "red";
+  j["primitives"][0]["colour"] = "red";
   j["future_section"] = Json::array();
   const facet::ProjectLoadResult r = facet::ProjectFromJson(j.dump());
   INFO(r.error);
@@ -601,7 +782,7 @@ TEST_CASE("unknown fields are warnings, not errors") {
   REQUIRE(r.warnings.size() == 2);
   const std::string all = r.warnings[0] + "\n" + r.warnings[1];
   INFO(all);
-  CHECK(all.find("boxes[0].colour: unknown field ignored") != std::string::npos);
+  CHECK(all.find("primitives[0].colour: unknown field ignored") != std::string::npos);
   CHECK(all.find("future_section: unknown field ignored") != std::string::npos);
 }
 
@@ -729,7 +910,131 @@ TEST_CASE("image paths resolve against the project file's folder") {
     CHECK(facet::ResolveImagePath("/a/d/e/q.facet", p.images[i].path) == before[i]);
 }
 
-TEST_CASE("the version-1 fixture keeps loading") {
+TEST_CASE("operated meshes round-trip exactly, id holes, free vertices and constraints included") {
+  const Project p = MakeFullProject();
+  int with_holes = 0;
+  for (const Primitive& prim : p.primitives)
+    if (prim.mesh.VertexIdEnd() > static_cast<std::uint32_t>(prim.mesh.NumVertices())) ++with_holes;
+  REQUIRE(with_holes == 6);
+  REQUIRE(p.constraints.size() == 9);
+  CheckRoundTrip(p);
+  const facet::ProjectLoadResult r = facet::ProjectFromJson(facet::ProjectToJson(p));
+  REQUIRE(r.ok());
+  for (size_t i = 0; i < p.primitives.size(); ++i) {
+    CAPTURE(i);
+    const PolyMesh& a = p.primitives[i].mesh;
+    const PolyMesh& b = r.project.primitives[i].mesh;
+    CHECK(a.VertexIdEnd() == b.VertexIdEnd());
+    CHECK(a.EdgeIdEnd() == b.EdgeIdEnd());
+    CHECK(a.FaceIdEnd() == b.FaceIdEnd());
+    for (facet::VertexId v = 0; v < a.VertexIdEnd(); ++v) CHECK(a.IsVertex(v) == b.IsVertex(v));
+  }
+  // The loaded meshes keep working: new ids continue after the holes, never reusing them.
+  Project loaded = r.project;
+  PolyMesh& mesh = loaded.primitives[32].mesh;
+  const std::uint32_t end = mesh.VertexIdEnd();
+  const facet::ESplitResult split = facet::ESplit(&mesh, mesh.EdgeIdEnd() - 1, 0.5);
+  REQUIRE_MESSAGE(split.ok, split.message);
+  CHECK(split.vertex == end);
+  CHECK(facet::Validate(mesh).empty());
+}
+
+TEST_CASE("a mesh written as \"from_shape\" is the primitive's unedited mesh") {
+  const Project p = MakeSmallProject();
+  Json j = Json::parse(facet::ProjectToJson(p));
+  j["primitives"][0]["mesh"] = "from_shape";
+  const facet::ProjectLoadResult r = facet::ProjectFromJson(j.dump());
+  INFO(r.error);
+  REQUIRE(r.ok());
+  CHECK(r.project == p);
+}
+
+TEST_CASE("malformed mesh content is an error naming its JSON path") {
+  const Project full = MakeFullProject();
+  const Json base = Json::parse(facet::ProjectToJson(full));
+  // The operated box (primitives[32]) has holes in its ids: find a dead half-edge id.
+  const PolyMesh& mesh = full.primitives[32].mesh;
+  facet::HalfedgeId dead = facet::kNoElement;
+  for (facet::HalfedgeId h = 0; h < 2 * mesh.EdgeIdEnd() && dead == facet::kNoElement; ++h)
+    if (!mesh.IsHalfedge(h)) dead = h;
+  REQUIRE(dead != facet::kNoElement);
+  facet::VertexId dead_vertex = facet::kNoElement;
+  for (facet::VertexId v = 0; v < mesh.VertexIdEnd() && dead_vertex == facet::kNoElement; ++v)
+    if (!mesh.IsVertex(v)) dead_vertex = v;
+  REQUIRE(dead_vertex != facet::kNoElement);
+  auto with = [&](const std::function<void(Json&)>& edit) {
+    Json j = base;
+    edit(j);
+    return j.dump(1);
+  };
+  const std::string at = "primitives[32].mesh";
+  SUBCASE("a link to a dead half-edge (dangling)") {
+    CheckErrorNames(with([&](Json& j) { j["primitives"][32]["mesh"]["edges"][3]["halfedges"][0]["next"] = dead; }),
+                    at + ": broken mesh: ");
+  }
+  SUBCASE("a link beyond the id space") {
+    CheckErrorNames(with([&](Json& j) { j["primitives"][32]["mesh"]["edges"][3]["halfedges"][1]["prev"] = 100000; }),
+                    at + ".edges[3].halfedges[1].prev: expected -1 or an id below");
+  }
+  SUBCASE("a face pointing at a dead half-edge") {
+    CheckErrorNames(with([&](Json& j) { j["primitives"][32]["mesh"]["faces"][0]["halfedge"] = dead; }),
+                    at + ": broken mesh: ");
+  }
+  SUBCASE("a duplicate vertex, edge or face id") {
+    CheckErrorNames(with([&](Json& j) {
+                      auto& v = j["primitives"][32]["mesh"]["vertices"];
+                      v[4]["id"] = v[1]["id"];
+                    }),
+                    at + ".vertices[4].id: missing or duplicate vertex id");
+    CheckErrorNames(with([&](Json& j) {
+                      auto& e = j["primitives"][32]["mesh"]["edges"];
+                      e[5]["id"] = e[2]["id"];
+                    }),
+                    at + ".edges[5].id: missing or duplicate edge id");
+    CheckErrorNames(with([&](Json& j) {
+                      auto& f = j["primitives"][32]["mesh"]["faces"];
+                      f[3]["id"] = f[0]["id"];
+                    }),
+                    at + ".faces[3].id: missing or duplicate face id");
+  }
+  SUBCASE("a broken face loop (two next links swapped)") {
+    CheckErrorNames(with([&](Json& j) {
+                      auto& e = j["primitives"][32]["mesh"]["edges"];
+                      std::swap(e[0]["halfedges"][0]["next"], e[4]["halfedges"][1]["next"]);
+                    }),
+                    at + ": broken mesh: ");
+  }
+  SUBCASE("a half-edge whose face disagrees with its loop") {
+    CheckErrorNames(with([&](Json& j) {
+                      auto& h = j["primitives"][32]["mesh"]["edges"][0]["halfedges"][0]["face"];
+                      h = h.get<int>() == 0 ? 1 : 0;
+                    }),
+                    at + ": broken mesh: ");
+  }
+  SUBCASE("a pin or a constraint naming a vertex that is gone") {
+    Json j = base;
+    size_t pin_index = 0;
+    for (; pin_index < full.pins.size(); ++pin_index)
+      if (full.pins[pin_index].vertex.primitive_id == full.primitives[32].id) break;
+    REQUIRE(pin_index < full.pins.size());
+    j["pins"][pin_index]["vertex"] = dead_vertex;
+    CheckErrorNames(j.dump(), "pins[" + std::to_string(pin_index) + "].vertex: refers to vertex " +
+                                  std::to_string(dead_vertex) + ", which primitive " +
+                                  std::to_string(full.primitives[32].id) + " does not have");
+    CheckErrorNames(with([&](Json& j2) { j2["constraints"][4]["vertices"][1][1] = dead_vertex; }),
+                    "constraints[4].vertices[1]: refers to vertex " + std::to_string(dead_vertex));
+  }
+  SUBCASE("a constraint with the wrong number of vertices") {
+    CheckErrorNames(with([](Json& j) { j["constraints"][2]["vertices"].erase(3); }),
+                    "constraints[2].vertices: a parallel constraint takes 4 vertices, found 3");
+    CheckErrorNames(with([](Json& j) { j["constraints"][0]["vertices"] = Json::array({{1, 0}, {1, 1}, {1, 2}}); }),
+                    "constraints[0].vertices: a coplanar constraint takes 4 or more vertices, found 3");
+    CheckErrorNames(with([](Json& j) { j["constraints"][6]["vertices"].push_back(j["constraints"][6]["vertices"][0]); }),
+                    "constraints[6].vertices: a fixed_point constraint takes 1 vertices, found 2");
+  }
+}
+
+TEST_CASE("the version-1 fixture keeps loading: boxes become box primitives, corner pins vertex pins") {
   // tests/fixtures/project_v1.facet is frozen: never regenerate it. If it stops loading,
   // a migration step is missing.
   const std::string path = std::string(FACET_SOURCE_DIR) + "/tests/fixtures/project_v1.facet";
@@ -754,22 +1059,89 @@ TEST_CASE("the version-1 fixture keeps loading") {
   CHECK(p.images[1].fixed_principal_point_px == Eigen::Vector2d(960.0, 540.0));
   CHECK(p.images[1].pose_locked);
   CHECK_FALSE(p.images[1].camera_calibrated);
+  // Version 1 never refined intrinsics in the solve.
+  for (const Image& im : p.images) {
+    CHECK(im.focal_locked);
+    CHECK(im.principal_point_locked);
+  }
   REQUIRE(p.segments.size() == 3);
   CHECK(p.segments[0].axis == Axis::kX);
   CHECK(p.segments[1].axis == Axis::kY);
   CHECK(p.segments[2].axis == Axis::kZ);
   CHECK(p.segments[2].b_px == Eigen::Vector2d(1800.0, 2900.75));
-  REQUIRE(p.boxes.size() == 2);
-  CHECK(p.boxes[0].name == "building");
-  CHECK(p.boxes[0].size == Eigen::Vector3d(12.0, 8.5, 6.25));
-  CHECK(p.boxes[0].size_locked == std::array<bool, 3>{false, false, true});
-  CHECK(p.boxes[1].rotation == Eigen::Vector3d(0.0, 0.0, 0.7853981633974483));
-  CHECK_FALSE(p.boxes[1].rotation_locked);
-  CHECK_FALSE(p.boxes[1].translation_locked);
+  REQUIRE(p.primitives.size() == 2);
+  for (const Primitive& prim : p.primitives) {
+    CHECK(prim.shape.kind == facet::PrimitiveKind::kBox);
+    CHECK(prim.shape.id == prim.id);
+    CHECK(prim.attached_to == facet::kNoId);
+    CHECK(prim.mesh.NumVertices() == 8);
+    CHECK(prim.mesh.NumEdges() == 12);
+    CHECK(prim.mesh.NumFaces() == 6);
+    CHECK(facet::Validate(prim.mesh).empty());
+  }
+  CHECK(p.primitives[0].id == 6);
+  CHECK(p.primitives[0].name == "building");
+  CHECK(p.primitives[0].shape.params == Eigen::Vector4d(12.0, 8.5, 6.25, 0.0));
+  CHECK(p.primitives[0].param_locked == std::array<bool, 4>{false, false, true, false});
+  CHECK(p.primitives[0].rotation_locked);
+  CHECK(p.primitives[1].id == 7);
+  CHECK(p.primitives[1].shape.rotation == Eigen::Vector3d(0.0, 0.0, 0.7853981633974483));
+  CHECK(p.primitives[1].shape.translation == Eigen::Vector3d(12.0, 1.0, 0.0));
+  CHECK_FALSE(p.primitives[1].rotation_locked);
+  CHECK_FALSE(p.primitives[1].translation_locked);
+  CHECK(p.constraints.empty());
   REQUIRE(p.pins.size() == 3);
-  CHECK(p.pins[2].box_id == 7);
-  CHECK(p.pins[2].corner == 7);
+  CHECK(p.pins[2].vertex == facet::VertexRef{7, 7});
   CHECK(p.pins[2].uv_px == Eigen::Vector2d(1234.5, 876.25));
+  // Corner pins became vertex pins at the right world positions (core/box.h bit code:
+  // corner c is (c & 1, c >> 1 & 1, c >> 2 & 1) * size, then the box's pose).
+  constexpr double kPositionTolerance = 1e-12;  // a few roundings of ~10 m coordinates
+  const double s = std::sqrt(0.5);
+  const Eigen::Vector3d expected[3] = {
+      Eigen::Vector3d(0.0, 0.0, 0.0),                                    // box 6, corner 0
+      Eigen::Vector3d(12.0, 0.0, 6.25),                                  // box 6, corner 5
+      Eigen::Vector3d(12.0 + s * 3.0 - s * 2.0, 1.0 + s * 3.0 + s * 2.0, 2.5)};  // box 7 (45 deg), corner 7
+  for (int i = 0; i < 3; ++i) {
+    CAPTURE(i);
+    REQUIRE(p.FindVertex(p.pins[i].vertex) != nullptr);
+    const double error = (facet::VertexInWorld(p, p.pins[i].vertex) - expected[i]).norm();
+    CAPTURE(error);
+    CHECK(error < kPositionTolerance);
+  }
   // The photos are not in the repository: the project still opens, with warnings.
   CHECK(r.warnings.size() == 2);
+
+  // Saving writes version 2, which loads back equal.
+  TempDir dir;
+  const std::string saved = dir / "upgraded.facet";
+  REQUIRE(facet::SaveProject(p, saved) == "");
+  const Json j = Json::parse(ReadFile(saved));
+  CHECK(j["version"] == 2);
+  CHECK_FALSE(j.contains("boxes"));
+  CHECK(j["primitives"].size() == 2);
+  CHECK(j["pins"][2]["vertex"] == 7);
+  CHECK_FALSE(j["pins"][2].contains("corner"));
+  const facet::ProjectLoadResult again = facet::LoadProject(saved);
+  INFO(again.error);
+  REQUIRE(again.ok());
+  CHECK(again.project == p);
+}
+
+TEST_CASE("version-1 content errors still name their location") {
+  Json j = Json::parse(ReadFile(std::string(FACET_SOURCE_DIR) + "/tests/fixtures/project_v1.facet"));
+  {
+    Json bad = j;
+    bad["pins"][1]["corner"] = 8;
+    CheckErrorNames(bad.dump(), "corner must be an integer from 0 to 7, found 8");
+  }
+  {
+    Json bad = j;
+    bad["boxes"][0]["size"][1] = -2.0;
+    CheckErrorNames(bad.dump(), "primitives[0].params[1]: a dimension cannot be negative");
+  }
+  {
+    Json bad = j;
+    bad["pins"][0]["box_id"] = 99;
+    CheckErrorNames(bad.dump(), "pins[0].vertex: refers to a missing primitive 99");
+  }
 }
