@@ -71,9 +71,9 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
   if (summary.solve.IsUsable()) {
     *updated = std::move(solved);
   } else {
-    // The solve failed or had nothing to do: keep the calibrated cameras, leave every
-    // primitive as the edit made it.
-    *updated = std::move(calibrated);
+    // Nothing to do keeps the calibrated cameras; a failure leaves the whole project as the
+    // edit made it (model_update.h: never half-updated).
+    *updated = summary.solve.termination == SolveTermination::kNothingToSolve ? std::move(calibrated) : edited;
     if (summary.solve.termination != SolveTermination::kNothingToSolve) {
       summary.ok = false;
       summary.messages.push_back("Solve: " + summary.solve.message);
