@@ -1,6 +1,7 @@
-// The bundled sample project (assets/samples/leuven): it loads, its stored solution is what
-// the model update computes from its lines and pins, and the box it fits lies on the
-// building's edges in the photo.
+// The bundled sample project (assets/samples/leuven, a version-1 file): it loads (its box
+// migrates to a box primitive with vertex pins), its stored solution is what calibration and
+// the geometry solve compute from its lines and pins, the full model update (with the joint
+// solve) stays on it, and the box it fits lies on the building's edges in the photo.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -38,7 +39,7 @@ double MeanGradientAlong(const cv::Mat& gradient, const Eigen::Vector2d& a, cons
 
 }  // namespace
 
-TEST_CASE("the Leuven sample loads with three line families, a box and its pins") {
+TEST_CASE("the Leuven sample loads with three line families, a box primitive and its pins") {
   const facet::ProjectLoadResult loaded = facet::LoadProject(kSamplePath);
   INFO(loaded.error);
   REQUIRE(loaded.ok());
@@ -48,16 +49,23 @@ TEST_CASE("the Leuven sample loads with three line families, a box and its pins"
   int per_axis[3] = {0, 0, 0};
   for (const auto& s : p.segments) ++per_axis[static_cast<int>(s.axis)];
   for (int count : per_axis) CHECK(count >= 2);
-  REQUIRE(p.boxes.size() == 1);
+  REQUIRE(p.primitives.size() == 1);
+  CHECK(p.primitives[0].shape.kind == facet::PrimitiveKind::kBox);
+  CHECK(p.primitives[0].mesh.NumVertices() == 8);
   CHECK(p.pins.size() >= 4);
+  for (const facet::Pin& pin : p.pins) CHECK(p.FindVertex(pin.vertex) != nullptr);
   CHECK(p.images[0].camera_calibrated);
+  // Version 1 never refined intrinsics in the solve: the migration locks them.
+  CHECK(p.images[0].focal_locked);
+  CHECK(p.images[0].principal_point_locked);
 }
 
-TEST_CASE("the sample's stored solution is what the model update computes") {
+TEST_CASE("the sample's stored solution is what calibration and the geometry solve compute") {
   const facet::ProjectLoadResult loaded = facet::LoadProject(kSamplePath);
   REQUIRE(loaded.ok());
   facet::ModelUpdateOptions options;
   options.solve.warm_start = false;
+  options.joint_solve = false;  // the pipeline that wrote the version-1 file
   facet::Project updated;
   const facet::ModelUpdateSummary summary = facet::UpdateModel(loaded.project, options, &updated);
   INFO(summary.solve.message);
@@ -69,9 +77,9 @@ TEST_CASE("the sample's stored solution is what the model update computes") {
   // Both solves converge to the same minimum; 1e-6 relative leaves room for the tolerances
   // at which LM stops.
   constexpr double kRelativeTolerance = 1e-6;
-  const facet::Box& stored = loaded.project.boxes[0];
-  const facet::Box& solved = updated.boxes[0];
-  CHECK((stored.size - solved.size).norm() < kRelativeTolerance * stored.size.norm());
+  const Eigen::Vector4d stored = loaded.project.primitives[0].shape.params;
+  const Eigen::Vector4d solved = updated.primitives[0].shape.params;
+  CHECK((stored - solved).norm() < kRelativeTolerance * stored.norm());
   const Eigen::Vector3d stored_center = loaded.project.images[0].camera.CenterInWorld();
   CHECK((stored_center - updated.images[0].camera.CenterInWorld()).norm() < kRelativeTolerance * stored_center.norm());
 
@@ -87,6 +95,32 @@ TEST_CASE("the sample's stored solution is what the model update computes") {
   CHECK(focal_error < kMaxFocalError);
 }
 
+TEST_CASE("the full model update with the joint solve stays on the sample's solution") {
+  const facet::ProjectLoadResult loaded = facet::LoadProject(kSamplePath);
+  REQUIRE(loaded.ok());
+  facet::ModelUpdateOptions options;
+  options.solve.warm_start = false;
+  facet::Project updated;
+  const facet::ModelUpdateSummary summary = facet::UpdateModel(loaded.project, options, &updated);
+  INFO(summary.solve.message << " / " << summary.joint.message);
+  REQUIRE(summary.ok);
+  REQUIRE(summary.joint.IsUsable());
+  // The joint solve also fits the rotation to the lines and the pins together, so it moves a
+  // little: its pin RMS stays at the user's click accuracy, and the box changes by a few
+  // percent at most (the reference is the stored geometry-only solution).
+  constexpr double kMaxSampleRmsPx = 2.0;
+  constexpr double kMaxRelativeChange = 0.05;
+  const Eigen::Vector4d stored = loaded.project.primitives[0].shape.params;
+  const double change = (updated.primitives[0].shape.params - stored).norm() / stored.norm();
+  MESSAGE("Leuven sample, joint solve: pin RMS " << summary.joint.reprojection_rms_px << " px (geometry solve "
+                                                 << summary.solve.reprojection_rms_px << " px), box change "
+                                                 << 100.0 * change << " %");
+  CHECK(summary.joint.reprojection_rms_px < kMaxSampleRmsPx);
+  CHECK(change < kMaxRelativeChange);
+  // Intrinsics stay locked (version-1 semantics).
+  CHECK(updated.images[0].camera.focal_px == summary.calibration.at(updated.images[0].id).focal_px);
+}
+
 TEST_CASE("the sample box's projected front-face edges lie on edges of the photo") {
   const facet::ProjectLoadResult loaded = facet::LoadProject(kSamplePath);
   REQUIRE(loaded.ok());
@@ -99,14 +133,14 @@ TEST_CASE("the sample box's projected front-face edges lie on edges of the photo
   cv::magnitude(gx, gy, gradient);
 
   const facet::Camera& camera = p.images[0].camera;
-  const facet::Box& box = p.boxes[0];
+  const facet::PolyMesh& box = p.primitives[0].mesh;  // vertex i is corner i
   // The front face (-Y, facing the camera): its four edges are on the building's outline and
   // on a timber beam.
   const auto& face = facet::BoxFaces()[2];
   double on_edges = 0.0, beside_edges = 0.0, left_edge_contrast = 0.0;
   for (int k = 0; k < 4; ++k) {
-    const Eigen::Vector2d a = camera.Project(facet::BoxCornerInWorld(box, face[k]));
-    const Eigen::Vector2d b = camera.Project(facet::BoxCornerInWorld(box, face[(k + 1) % 4]));
+    const Eigen::Vector2d a = camera.Project(box.vertex(face[k]).position);
+    const Eigen::Vector2d b = camera.Project(box.vertex(face[(k + 1) % 4]).position);
     // Best response within a pixel of the projected edge, against 8 px to either side.
     double on = 0.0;
     for (double d : {-1.0, 0.0, 1.0}) on = std::max(on, MeanGradientAlong(gradient, a, b, d));

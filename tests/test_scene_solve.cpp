@@ -12,8 +12,9 @@
 
 #include <Eigen/Dense>
 
-#include "core/box.h"
 #include "core/camera.h"
+#include "core/mesh_extrude.h"
+#include "core/mesh_operators.h"
 #include "core/project.h"
 #include "core/scene_solve.h"
 #include "core/scene_solve_internal.h"
@@ -47,12 +48,15 @@ std::string AllWarnings(const SceneSolveSummary& summary) {
   return out;
 }
 
+Eigen::Vector3d Size(const Primitive& primitive) { return primitive.shape.params.head<3>(); }
+
 // Moves the free box sizes (x, y) and the camera centre well away from the truth, by amounts
 // relative to the scene's scale so that every scale sees the same problem.
 void PerturbSizeAndCamera(SyntheticScene* scene, double scale) {
-  Box& box = scene->project.boxes[0];
-  box.size.x() *= 1.3;
-  box.size.y() *= 0.75;
+  Primitive& box = scene->project.primitives[0];
+  box.shape.params.x() *= 1.3;
+  box.shape.params.y() *= 0.75;
+  RefreshPrimitive(&scene->project, &box);
   Camera& camera = scene->project.images[0].camera;
   camera.SetPose(camera.cam_from_world_rotation, camera.CenterInWorld() + scale * Eigen::Vector3d(1.2, -0.8, 0.6));
 }
@@ -73,9 +77,8 @@ void AddSecondImage(SyntheticScene* scene, const SyntheticSceneOptions& options)
     Pin pin;
     pin.id = scene->project.NewId();
     pin.image_id = image.id;
-    pin.box_id = scene->box_id;
-    pin.corner = c;
-    pin.uv_px = image.camera.Project(BoxCornerInWorld(scene->true_box, c));
+    pin.vertex = {scene->box_id, static_cast<VertexId>(c)};
+    pin.uv_px = image.camera.Project(scene->true_box.mesh.vertex(c).position);
     scene->project.pins.push_back(pin);
   }
 }
@@ -84,13 +87,14 @@ TEST_CASE("analytic Jacobian matches central finite differences for every parame
   SyntheticSceneOptions options;
   SyntheticScene scene = MakeBoxScene(options);
   AddSecondImage(&scene, options);
-  Box& box = scene.project.boxes[0];
-  box.size_locked = {false, false, false};
+  Primitive& box = scene.project.primitives[0];
+  box.param_locked = {false, false, false, false};
   box.rotation_locked = false;
   box.translation_locked = false;
   // A generic state, away from the truth, so that no derivative vanishes by symmetry.
-  box.rotation = Eigen::Vector3d(0.2, -0.1, 0.3);
-  box.translation = Eigen::Vector3d(0.3, -0.2, 0.1);
+  box.shape.rotation = Eigen::Vector3d(0.2, -0.1, 0.3);
+  box.shape.translation = Eigen::Vector3d(0.3, -0.2, 0.1);
+  RefreshPrimitive(&scene.project, &box);
   scene.project.images[1].pose_locked = false;
 
   internal::SceneState state;
@@ -111,7 +115,7 @@ TEST_CASE("analytic Jacobian matches central finite differences for every parame
   for (int j = 0; j < problem.num_parameters; ++j) {
     const auto kind = problem.parameters[j].kind;
     ++kinds_seen[static_cast<int>(kind)];
-    const double h = kind == internal::ParameterKind::kBoxRotation ? kAngleStep : kLengthStep;
+    const double h = kind == internal::ParameterKind::kPrimitiveRotation ? kAngleStep : kLengthStep;
     Eigen::VectorXd delta = Eigen::VectorXd::Zero(problem.num_parameters);
     Eigen::VectorXd r_plus, r_minus;
     internal::SceneState plus = state, minus = state;
@@ -133,9 +137,9 @@ TEST_CASE("analytic Jacobian matches central finite differences for every parame
     CHECK(error < kRelativeTolerance);
   }
   CHECK(kinds_seen[static_cast<int>(internal::ParameterKind::kCameraCenter)] == 6);
-  CHECK(kinds_seen[static_cast<int>(internal::ParameterKind::kBoxSize)] == 3);
-  CHECK(kinds_seen[static_cast<int>(internal::ParameterKind::kBoxRotation)] == 3);
-  CHECK(kinds_seen[static_cast<int>(internal::ParameterKind::kBoxTranslation)] == 3);
+  CHECK(kinds_seen[static_cast<int>(internal::ParameterKind::kPrimitiveParam)] == 3);
+  CHECK(kinds_seen[static_cast<int>(internal::ParameterKind::kPrimitiveRotation)] == 3);
+  CHECK(kinds_seen[static_cast<int>(internal::ParameterKind::kPrimitiveTranslation)] == 3);
 }
 
 TEST_CASE("noise-free: box size and camera centre are recovered from a far start, cold and warm") {
@@ -146,14 +150,14 @@ TEST_CASE("noise-free: box size and camera centre are recovered from a far start
     SyntheticScene scene = MakeBoxScene();
     PerturbSizeAndCamera(&scene, 1.0);
     const Eigen::Vector3d true_center = scene.true_camera.CenterInWorld();
-    REQUIRE(RelativeError(scene.project.boxes[0].size, scene.true_box.size) > 0.1);
+    REQUIRE(RelativeError(Size(scene.project.primitives[0]), Size(scene.true_box)) > 0.1);
     REQUIRE(RelativeError(CameraCenter(scene.project), true_center) > 0.1);
 
     SceneSolveOptions options;
     options.warm_start = warm_start;
     Project solved;
     const SceneSolveSummary summary = SolveScene(scene.project, options, &solved);
-    const double size_error = RelativeError(solved.boxes[0].size, scene.true_box.size);
+    const double size_error = RelativeError(Size(solved.primitives[0]), Size(scene.true_box));
     const double center_error = RelativeError(CameraCenter(solved), true_center);
     INFO(summary.message, " ", AllWarnings(summary));
     CAPTURE(summary.iterations);
@@ -174,7 +178,10 @@ TEST_CASE("noise-free: box size and camera centre are recovered from a far start
     CHECK(summary.final_cost < summary.initial_cost);
     CHECK(summary.warnings.empty());
     // The locked height is the known length and must not move.
-    CHECK(solved.boxes[0].size.z() == scene.project.boxes[0].size.z());
+    CHECK(solved.primitives[0].shape.params.z() == scene.project.primitives[0].shape.params.z());
+    // The cached vertex positions follow the solved shape: corner 6 is (sx, sy, sz).
+    CHECK((solved.primitives[0].mesh.vertex(6).position - scene.true_box.mesh.vertex(6).position).norm() <
+          kRelativeTolerance * Size(scene.true_box).norm());
     REQUIRE(summary.pin_residuals_px.size() == solved.pins.size());
     for (double e : summary.pin_residuals_px) CHECK(e < kRmsTolerancePx);
   }
@@ -197,7 +204,7 @@ TEST_CASE("noise-free: two images with free centres are recovered") {
     const SceneSolveSummary summary = SolveScene(scene.project, options, &solved);
     INFO(summary.message, " ", AllWarnings(summary));
     REQUIRE(summary.IsUsable());
-    const double size_error = RelativeError(solved.boxes[0].size, scene.true_box.size);
+    const double size_error = RelativeError(Size(solved.primitives[0]), Size(scene.true_box));
     const double center_1_error = RelativeError(CameraCenter(solved), scene.true_camera.CenterInWorld());
     const double center_2_error = RelativeError(solved.images[1].camera.CenterInWorld(), true_center_2);
     CAPTURE(size_error);
@@ -219,15 +226,16 @@ TEST_CASE("noise-free: free rotation and translation with the camera pose locked
     scene_options.box_translation = {0.5, -0.3, 0.2};
     SyntheticScene scene = MakeBoxScene(scene_options);
     scene.project.images[0].pose_locked = true;
-    Box& box = scene.project.boxes[0];
+    Primitive& box = scene.project.primitives[0];
     box.rotation_locked = false;
     box.translation_locked = false;
-    box.size.x() *= 1.2;
-    box.size.y() *= 0.85;
-    box.rotation = Eigen::Vector3d(0.05, -0.08, 0.1);
-    box.translation += Eigen::Vector3d(0.3, -0.2, 0.1);
-    REQUIRE(RotationErrorRad(box.rotation, scene.true_box.rotation) > 0.1);
-    REQUIRE(RelativeError(box.translation, scene.true_box.translation) > 0.3);
+    box.shape.params.x() *= 1.2;
+    box.shape.params.y() *= 0.85;
+    box.shape.rotation = Eigen::Vector3d(0.05, -0.08, 0.1);
+    box.shape.translation += Eigen::Vector3d(0.3, -0.2, 0.1);
+    RefreshPrimitive(&scene.project, &box);
+    REQUIRE(RotationErrorRad(box.shape.rotation, scene.true_box.shape.rotation) > 0.1);
+    REQUIRE(RelativeError(box.shape.translation, scene.true_box.shape.translation) > 0.3);
 
     SceneSolveOptions options;
     options.warm_start = warm_start;
@@ -236,10 +244,11 @@ TEST_CASE("noise-free: free rotation and translation with the camera pose locked
     INFO(summary.message, " ", AllWarnings(summary));
     REQUIRE(summary.IsUsable());
     CHECK(summary.num_parameters == 8);
-    const double size_error = RelativeError(solved.boxes[0].size, scene.true_box.size);
-    const double angle_error = RotationErrorRad(solved.boxes[0].rotation, scene.true_box.rotation);
+    const Primitive& solved_box = solved.primitives[0];
+    const double size_error = RelativeError(Size(solved_box), Size(scene.true_box));
+    const double angle_error = RotationErrorRad(solved_box.shape.rotation, scene.true_box.shape.rotation);
     const double translation_error =
-        (solved.boxes[0].translation - scene.true_box.translation).norm() / scene.true_box.size.norm();
+        (solved_box.shape.translation - scene.true_box.shape.translation).norm() / Size(scene.true_box).norm();
     CAPTURE(size_error);
     CAPTURE(angle_error);
     CAPTURE(translation_error);
@@ -289,8 +298,8 @@ TEST_CASE("0.5 px noise: errors agree with the Jacobian covariance and the RMS w
     const Eigen::Vector3d center_error = CameraCenter(solved) - scene.true_camera.CenterInWorld();
     for (int j = 0; j < n; ++j) {
       const auto& info = problem.parameters[j];
-      error(j) = info.kind == internal::ParameterKind::kBoxSize
-                     ? solved.boxes[0].size(info.component) - scene.true_box.size(info.component)
+      error(j) = info.kind == internal::ParameterKind::kPrimitiveParam
+                     ? solved.primitives[0].shape.params(info.component) - scene.true_box.shape.params(info.component)
                      : center_error(info.component);
       const double sigma = std::sqrt(covariance(j, j));
       CAPTURE(j);
@@ -335,14 +344,14 @@ TEST_CASE("the same scene at x1e-3 and x1e3 gives the same relative accuracy and
       scene_options.scale = scale;
       SyntheticScene scene = MakeBoxScene(scene_options);
       PerturbSizeAndCamera(&scene, scale);
-      REQUIRE(RelativeError(scene.project.boxes[0].size, scene.true_box.size) > 0.1);
+      REQUIRE(RelativeError(Size(scene.project.primitives[0]), Size(scene.true_box)) > 0.1);
       SceneSolveOptions options;
       options.warm_start = warm_start;
       Project solved;
       const SceneSolveSummary summary = SolveScene(scene.project, options, &solved);
       INFO(summary.message, " ", AllWarnings(summary));
       REQUIRE(summary.IsUsable());
-      const double size_error = RelativeError(solved.boxes[0].size, scene.true_box.size);
+      const double size_error = RelativeError(Size(solved.primitives[0]), Size(scene.true_box));
       const double center_error = RelativeError(CameraCenter(solved), scene.true_camera.CenterInWorld());
       CAPTURE(size_error);
       CAPTURE(center_error);
@@ -368,7 +377,7 @@ TEST_CASE("two pins in one image leave the box depth undetermined, and the warni
   // but say nothing about the depth.
   std::vector<Pin> kept;
   for (const Pin& pin : scene.project.pins) {
-    if (pin.corner == 0 || pin.corner == 5) kept.push_back(pin);
+    if (pin.vertex.vertex == 0 || pin.vertex.vertex == 5) kept.push_back(pin);
   }
   scene.project.pins = kept;
   Project solved;
@@ -384,7 +393,7 @@ TEST_CASE("two pins in one image leave the box depth undetermined, and the warni
 TEST_CASE("a scene with no known length or no fixed position says so") {
   SUBCASE("scale") {
     SyntheticScene scene = MakeBoxScene();
-    scene.project.boxes[0].size_locked = {false, false, false};
+    scene.project.primitives[0].param_locked = {false, false, false, false};
     Project solved;
     const SceneSolveSummary summary = SolveScene(scene.project, SceneSolveOptions(), &solved);
     INFO(summary.message, " ", AllWarnings(summary));
@@ -396,7 +405,7 @@ TEST_CASE("a scene with no known length or no fixed position says so") {
   }
   SUBCASE("position") {
     SyntheticScene scene = MakeBoxScene();
-    scene.project.boxes[0].translation_locked = false;
+    scene.project.primitives[0].translation_locked = false;
     Project solved;
     const SceneSolveSummary summary = SolveScene(scene.project, SceneSolveOptions(), &solved);
     INFO(summary.message, " ", AllWarnings(summary));
@@ -418,7 +427,7 @@ TEST_CASE("degenerate inputs: nothing to solve, bad pins and bad options leave t
   }
   SUBCASE("everything locked") {
     scene.project.images[0].pose_locked = true;
-    scene.project.boxes[0].size_locked = {true, true, true};
+    scene.project.primitives[0].param_locked = {true, true, true, true};
     Project solved;
     const SceneSolveSummary summary = SolveScene(scene.project, SceneSolveOptions(), &solved);
     CHECK(summary.termination == SolveTermination::kNothingToSolve);
@@ -443,7 +452,7 @@ TEST_CASE("degenerate inputs: nothing to solve, bad pins and bad options leave t
   }
   SUBCASE("warm start: a pinned corner at the camera centre fails and leaves the project unchanged") {
     Camera& camera = scene.project.images[0].camera;
-    camera.SetPose(camera.cam_from_world_rotation, BoxCornerInWorld(scene.project.boxes[0], 0));
+    camera.SetPose(camera.cam_from_world_rotation, scene.project.primitives[0].mesh.vertex(0).position);
     SceneSolveOptions warm;
     warm.warm_start = true;
     Project solved;
@@ -457,7 +466,7 @@ TEST_CASE("degenerate inputs: nothing to solve, bad pins and bad options leave t
     // After calibration the camera still sits at the world origin, which is where the first
     // box's corner 0 usually is; the linear initialisation does not need a valid start.
     Camera& camera = scene.project.images[0].camera;
-    camera.SetPose(camera.cam_from_world_rotation, BoxCornerInWorld(scene.project.boxes[0], 0));
+    camera.SetPose(camera.cam_from_world_rotation, scene.project.primitives[0].mesh.vertex(0).position);
     Project solved;
     const SceneSolveSummary summary = SolveScene(scene.project, SceneSolveOptions(), &solved);
     INFO(summary.message);
@@ -485,19 +494,31 @@ TEST_CASE("degenerate inputs: nothing to solve, bad pins and bad options leave t
     CHECK(HasWarningContaining(summary, "'raw.png' skipped: the image is not calibrated"));
     CHECK(std::isnan(summary.pin_residuals_px.back()));
   }
-  SUBCASE("a pin naming a missing box is skipped with a warning") {
+  SUBCASE("a pin naming a missing primitive is skipped with a warning") {
     Pin pin = scene.project.pins[0];
     pin.id = scene.project.NewId();
-    pin.box_id = scene.project.NewId();
+    pin.vertex.primitive_id = scene.project.NewId();
     scene.project.pins.push_back(pin);
     Project solved;
     const SceneSolveSummary summary = SolveScene(scene.project, SceneSolveOptions(), &solved);
     INFO(AllWarnings(summary));
     REQUIRE(summary.IsUsable());
     CHECK(summary.num_skipped_pins == 1);
-    CHECK(HasWarningContaining(summary, "pin #" + std::to_string(pin.id) + " refers to a missing box"));
+    CHECK(HasWarningContaining(summary, "pin #" + std::to_string(pin.id) + " refers to a missing primitive"));
     CHECK(std::isnan(summary.pin_residuals_px.back()));
     CHECK(summary.time_ms > 0.0);
+  }
+  SUBCASE("a pin naming a vertex its primitive does not have is skipped with a warning") {
+    Pin pin = scene.project.pins[0];
+    pin.id = scene.project.NewId();
+    pin.vertex.vertex = 99;
+    scene.project.pins.push_back(pin);
+    Project solved;
+    const SceneSolveSummary summary = SolveScene(scene.project, SceneSolveOptions(), &solved);
+    INFO(AllWarnings(summary));
+    REQUIRE(summary.IsUsable());
+    CHECK(summary.num_skipped_pins == 1);
+    CHECK(HasWarningContaining(summary, "pin #" + std::to_string(pin.id) + " names vertex 99"));
   }
   SUBCASE("bad options") {
     SceneSolveOptions options;
@@ -550,6 +571,65 @@ TEST_CASE("interactive path: warm-started solves while one pin is dragged a pixe
   MESSAGE("warm-started solve (1 box, 8 pins, 5 parameters, max 5 iterations): median ",
           call_ms[kNumCalls / 2] * 1000.0, " us per call, 90th percentile ", call_ms[kNumCalls * 9 / 10] * 1000.0,
           " us; worst RMS during the drag ", worst_rms_px, " px");
+}
+
+TEST_CASE("pins on vertices made by E_split and by an extrusion take part; the box is recovered") {
+  constexpr double kRelativeTolerance = 1e-9;
+  constexpr double kExtrusion = 0.5;
+  SyntheticScene scene = MakeBoxScene();
+  // The same K-ops on the project's box and on the true box give the same ids.
+  Primitive& box = scene.project.primitives[0];
+  Primitive& truth = scene.true_box;
+  VertexId split_vertex = kNoElement;
+  std::vector<VertexId> extruded;
+  for (Primitive* p : {&box, &truth}) {
+    const HalfedgeId top_front = FindHalfedge(p->mesh, 4, 5);  // (0, 0, sz) -> (sx, 0, sz)
+    REQUIRE(top_front != kNoElement);
+    const ESplitResult split = ESplit(&p->mesh, PolyMesh::EdgeOf(top_front), 0.5);
+    REQUIRE_MESSAGE(split.ok, split.message);
+    const ExtrudeResult x = ExtrudeFace(&p->mesh, p->shape, 1, kExtrusion);  // the +X face
+    REQUIRE_MESSAGE(x.ok, x.message);
+    split_vertex = split.vertex;
+    extruded = x.new_vertices;
+  }
+  REQUIRE(box.mesh == truth.mesh);
+  // Only the -X corners stay pinned: the width comes from the new vertices alone.
+  std::erase_if(scene.project.pins, [](const Pin& pin) { return (pin.vertex.vertex & 1) != 0; });
+  std::vector<VertexId> added = extruded;
+  added.push_back(split_vertex);
+  for (VertexId v : added) {
+    Pin pin;
+    pin.id = scene.project.NewId();
+    pin.image_id = scene.image_id;
+    pin.vertex = {scene.box_id, v};
+    pin.uv_px = scene.true_camera.Project(truth.mesh.vertex(v).position);
+    scene.project.pins.push_back(pin);
+  }
+  PerturbSizeAndCamera(&scene, 1.0);
+  REQUIRE(RelativeError(Size(scene.project.primitives[0]), Size(truth)) > 0.1);
+  for (const bool warm_start : {false, true}) {
+    CAPTURE(warm_start);
+    SceneSolveOptions options;
+    options.warm_start = warm_start;
+    Project solved;
+    const SceneSolveSummary summary = SolveScene(scene.project, options, &solved);
+    INFO(summary.message, " ", AllWarnings(summary));
+    REQUIRE(summary.IsUsable());
+    CHECK(summary.num_residuals == 2 * 9);
+    const double size_error = RelativeError(Size(solved.primitives[0]), Size(truth));
+    const double center_error = RelativeError(CameraCenter(solved), scene.true_camera.CenterInWorld());
+    CAPTURE(size_error);
+    CAPTURE(center_error);
+    CHECK(size_error < kRelativeTolerance);
+    CHECK(center_error < kRelativeTolerance);
+    CHECK(summary.reprojection_rms_px < 1e-6);
+    // The extruded vertices sit kExtrusion beyond the solved +X face.
+    const PolyMesh& mesh = solved.primitives[0].mesh;
+    for (size_t i = 0; i < extruded.size(); ++i) {
+      const double x = mesh.vertex(extruded[i]).position.x();
+      CHECK(std::abs(x - (solved.primitives[0].shape.params.x() + kExtrusion)) < kRelativeTolerance * 10.0);
+    }
+  }
 }
 
 }  // namespace
