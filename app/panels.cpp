@@ -203,6 +203,24 @@ void DrawSolveSection(AppState* state) {
   if (!s.message.empty()) WrappedColored(usable ? ImGui::GetStyleColorVec4(ImGuiCol_Text) : kDimText, s.message);
   for (const std::string& w : s.warnings) WrappedColored(kWarningText, w);
   for (const std::string& m : state->last_update.messages) WrappedColored(kWarningText, m);
+
+  // The joint solve refines everything at once (free vertices, constraints, intrinsics).
+  const JointSolveSummary& j = state->last_update.joint;
+  if (j.termination == JointSolveSummary::Termination::kInvalidInput && j.message.empty()) return;
+  ImGui::Spacing();
+  ImGui::TextColored(kDimText, "Joint solve");
+  ImGui::Separator();
+  ImGui::TextColored(j.IsUsable() ? kGoodText : kDimText, "%s", JointSolveTerminationName(j.termination));
+  if (j.IsUsable()) {
+    LabelValue("Iterations", "%d", j.iterations);
+    LabelValue("RMS", "%.3f px", j.reprojection_rms_px);
+    LabelValue("Max", "%.3f px", j.reprojection_max_px);
+    LabelValue("Residuals", "%d (%d parameters)", j.num_residuals, j.num_parameters);
+  }
+  if (!j.message.empty()) WrappedColored(kDimText, j.message);
+  for (const std::string& w : j.undetermined) WrappedColored(kWarningText, w);
+  for (const std::string& w : j.conflicts) WrappedColored(kErrorText, w);
+  for (const std::string& w : j.warnings) WrappedColored(kWarningText, w);
 }
 
 // Takes a copy: the edits below replace the project that a reference would point into.
@@ -502,11 +520,14 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
   }
   // Right-aligned status: tool and solve quality.
   const SceneSolveSummary& s = state->last_update.solve;
+  const JointSolveSummary& joint = state->last_update.joint;
   const Project& project = state->document.project();
   char status[160];
-  if (s.IsUsable()) {
+  if (s.IsUsable() || joint.IsUsable()) {
+    // The joint solve, when it ran, is the final word (it also fits free vertices).
+    const double rms_px = joint.IsUsable() ? joint.reprojection_rms_px : s.reprojection_rms_px;
     std::snprintf(status, sizeof(status), "%s   |   RMS %.2f px   |   %zu primitives, %zu pins", ToolName(state->tool),
-                  s.reprojection_rms_px, project.primitives.size(), project.pins.size());
+                  rms_px, project.primitives.size(), project.pins.size());
   } else {
     std::snprintf(status, sizeof(status), "%s   |   %zu primitives, %zu pins", ToolName(state->tool),
                   project.primitives.size(), project.pins.size());
