@@ -5,6 +5,8 @@
 #include <opencv2/calib3d.hpp>
 
 #include "core/calibrate_vp.h"
+#include "core/mesh_extrude.h"
+#include "core/mesh_primitives.h"
 #include "core/model_update.h"
 #include "core/scene_solve.h"
 #include "core/textured_mesh.h"
@@ -73,9 +75,9 @@ void BM_OpenCvSolvePnPReference(benchmark::State& state) {
   const auto scene = MakeBoxScene(o);
   std::vector<cv::Point3d> object;
   std::vector<cv::Point2d> image;
-  const auto corners = facet::BoxCornersInWorld(scene.true_box);
   for (const auto& pin : scene.project.pins) {
-    object.emplace_back(corners[pin.corner].x(), corners[pin.corner].y(), corners[pin.corner].z());
+    const Eigen::Vector3d& corner = scene.true_box.mesh.vertex(pin.vertex.vertex).position;
+    object.emplace_back(corner.x(), corner.y(), corner.z());
     image.emplace_back(pin.uv_px.x(), pin.uv_px.y());
   }
   const Eigen::Matrix3d k = scene.true_camera.K();
@@ -100,6 +102,44 @@ void BM_BakeTexture(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_BakeTexture)->Unit(benchmark::kMillisecond);
+
+// Push/pull: one extrusion of a quad and its undo, on a cylinder of range(0) segments (the
+// mesh grows, the changed region does not): the time must stay flat. The mesh is reset every
+// 1,000 iterations, outside the timing, because undone ids stay as dead slots.
+void BM_ExtrudeQuadAndUndo(benchmark::State& state) {
+  const facet::PrimitiveShape shape = facet::MakeCylinder(1, static_cast<int>(state.range(0)), 1.0, 2.0);
+  facet::PolyMesh start;
+  facet::AddPrimitive(&start, shape);
+  facet::PolyMesh mesh = start;
+  const facet::FaceId side_face = 2;  // a quad between the caps
+  int since_reset = 0;
+  for (auto _ : state) {
+    const facet::ExtrudeResult x = facet::ExtrudeFace(&mesh, shape, side_face, 0.25);
+    benchmark::DoNotOptimize(facet::UndoExtrudeFace(&mesh, x, nullptr));
+    if (++since_reset == 1000) {
+      state.PauseTiming();
+      mesh = start;
+      since_reset = 0;
+      state.ResumeTiming();
+    }
+  }
+  state.counters["faces"] = static_cast<double>(start.NumFaces());
+}
+BENCHMARK(BM_ExtrudeQuadAndUndo)->Arg(16)->Arg(1024)->Arg(16384)->Unit(benchmark::kMicrosecond);
+
+// Extruding the n-gon cap: the work grows with the face's degree, as it must.
+void BM_ExtrudeCap(benchmark::State& state) {
+  const facet::PrimitiveShape shape = facet::MakeCylinder(1, static_cast<int>(state.range(0)), 1.0, 2.0);
+  facet::PolyMesh start;
+  facet::AddPrimitive(&start, shape);
+  for (auto _ : state) {
+    state.PauseTiming();
+    facet::PolyMesh mesh = start;
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(facet::ExtrudeFace(&mesh, shape, 1, 0.25));
+  }
+}
+BENCHMARK(BM_ExtrudeCap)->Arg(16)->Arg(256)->Arg(4096)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
