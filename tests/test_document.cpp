@@ -329,6 +329,9 @@ Project StartProject() { return facet::testing::MakeBoxScene().project; }
 }  // namespace
 
 TEST_CASE("random edit sequences: undo all returns the start, redo all returns the end") {
+  // What the sequences exercised, so that a generator that stopped producing K-ops or
+  // constraints would fail here rather than pass vacuously.
+  int topology_edits = 0, constraint_edits = 0, primitive_insertions = 0;
   for (unsigned seed = 1; seed <= 40; ++seed) {
     CAPTURE(seed);
     std::mt19937 rng(seed);
@@ -340,7 +343,16 @@ TEST_CASE("random edit sequences: undo all returns the start, redo all returns t
       CAPTURE(step);
       REQUIRE(doc.Commit("edit " + std::to_string(step), next) == changed);
       REQUIRE(doc.project() == next);
-      if (changed) states.push_back(next);
+      if (!changed) continue;
+      states.push_back(next);
+      const Edit& edit = doc.undo_stack().back();
+      for (const auto& c : edit.primitives) {
+        if (c.before && c.after && c.before->mesh.NumVertices() + c.before->mesh.NumFaces() !=
+                                       c.after->mesh.NumVertices() + c.after->mesh.NumFaces())
+          ++topology_edits;
+        if (!c.before) ++primitive_insertions;
+      }
+      constraint_edits += static_cast<int>(edit.constraints.size());
     }
     REQUIRE(doc.undo_stack().size() + 1 == states.size());
     REQUIRE(states.size() > 30);
@@ -361,6 +373,11 @@ TEST_CASE("random edit sequences: undo all returns the start, redo all returns t
     CHECK_FALSE(doc.Redo());
     CHECK(doc.project() == states.back());
   }
+  MESSAGE(topology_edits << " K-op edits, " << constraint_edits << " constraint changes, " << primitive_insertions
+                         << " primitives added");
+  CHECK(topology_edits > 100);
+  CHECK(constraint_edits > 100);
+  CHECK(primitive_insertions > 100);
 }
 
 TEST_CASE("random commits, undos, redos and saves follow a model of the history") {
