@@ -47,8 +47,9 @@ using ParamCoefficients = Eigen::Matrix<double, 3, kMaxPrimitiveParams>;
 // edge at the same t whatever the primitive's dimensions become.
 // A free vertex (the issue-5 solve's "free vertices", e.g. a split vertex pinned to a roof
 // ridge above its edge) adds a local offset that the solve estimates:
-// p_in_primitive = Collapsed() * params + offset. For a vertex that is not free the offset
-// stays zero and the vertex follows its definition exactly.
+// p_in_primitive = Collapsed() * params + offset. For a vertex that is not free the offset is
+// fixed: zero for primitive corners, the push/pull displacement for extruded vertices
+// (core/mesh_extrude.h), so the vertex follows its definition exactly.
 struct LocalDefinition {
   ParamCoefficients a = ParamCoefficients::Zero();
   ParamCoefficients b = ParamCoefficients::Zero();

@@ -2,13 +2,15 @@
 // local position is a linear function of the primitive's parameters (LocalDefinition), and
 // world = R * local + t with R from the angle-axis `rotation` (core/conventions.h).
 //
-// A scene is one PolyMesh holding any number of primitives as disjoint components; vertices
+// A PolyMesh may hold any number of primitives as disjoint components (a project keeps one
+// mesh per primitive, core/project.h); vertices
 // and faces carry their primitive's id. Faces are counter-clockwise seen from outside, so
 // FaceNormal points outwards. Local frame: Z up; boxes, wedges, pyramids and planes span
 // [0, sx] x [0, sy] from the local origin; prisms and cylinders are centred on the local Z axis.
 //
 // Attachment is a pose/footprint rule (AttachOnTop) re-applied after each change of the
-// base; the mesh keeps the primitives as separate components. Not done yet: face extrusion.
+// base; the mesh keeps the primitives as separate components. Face extrusion is in
+// core/mesh_extrude.h.
 #pragma once
 
 #include <string>

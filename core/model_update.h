@@ -36,7 +36,7 @@ struct ModelUpdateSummary {
 };
 
 // `edited` is the project after the user's edit; *updated receives it with re-solved cameras
-// and boxes.
+// and primitives.
 ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& options, Project* updated);
 
 }  // namespace facet

@@ -31,7 +31,7 @@ struct ProjectLoadResult {
 // UTF-8 is replaced, so check CheckProjectSavable first (SaveProject does).
 std::string ProjectToJson(const Project& project);
 // Empty when every number is finite and every text valid UTF-8, else the first offending
-// field by JSON path, e.g. "boxes[0].size[1]: NaN cannot be saved ...".
+// field by JSON path, e.g. "primitives[0].params[1]: NaN cannot be saved ...".
 std::string CheckProjectSavable(const Project& project);
 // Parses and validates; the error names a line/column (syntax) or a JSON path (content).
 ProjectLoadResult ProjectFromJson(const std::string& text);
