@@ -127,6 +127,14 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
                           {"origin_y", view.origin_y},
                           {"zoom", view.zoom},
                           {"rect", RectJson({view.rect_x, view.rect_y, view.rect_w, view.rect_h})}};
+  const ViewportReport viewport = LastViewportReport();
+  if (viewport.drawn) {
+    report["viewport"] = {{"origin_x", viewport.origin_x},
+                          {"origin_y", viewport.origin_y},
+                          {"width_px", viewport.width_px},
+                          {"height_px", viewport.height_px},
+                          {"clip_from_world", viewport.clip_from_world}};
+  }
   nlohmann::json undo = nlohmann::json::array(), redo = nlohmann::json::array();
   for (const Edit& e : state.document.undo_stack()) undo.push_back(e.label);
   for (const Edit& e : state.document.redo_stack()) redo.push_back(e.label);

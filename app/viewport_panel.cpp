@@ -158,6 +158,7 @@ struct PanelState {
   ElementPick hovered;  // the element under the mouse (also in AppState::hover)
   bool frame_requested = false;
   Id view_from_photo_requested = kNoId;
+  ViewportReport report;
 };
 
 // Created on first use and deleted by ShutdownViewportPanel while the context is current; a
@@ -963,6 +964,12 @@ void DrawViewportPanel(AppState* state) {
   }
 
   const ViewSetup view = MakeView(panel.orbit, measure, width_px, height_px);
+  panel.report.drawn = true;
+  panel.report.origin_x = origin.x;
+  panel.report.origin_y = origin.y;
+  panel.report.width_px = width_px;
+  panel.report.height_px = height_px;
+  for (int i = 0; i < 16; ++i) panel.report.clip_from_world[i] = view.clip_from_world.data()[i];
   // Hover and clicks: the element under the cursor for the current tool (select picks
   // everything); a click (not a drag) applies the tool to it, or clears the selection.
   const PickFilter filter = PickFilterOf(state->tool);
@@ -1015,6 +1022,8 @@ void DrawViewportPanel(AppState* state) {
 }
 
 void RequestViewportFrame() { Panel().frame_requested = true; }
+
+ViewportReport LastViewportReport() { return Panel().report; }
 
 void RequestViewportViewFromPhoto(Id image_id) { Panel().view_from_photo_requested = image_id; }
 

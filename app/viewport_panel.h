@@ -3,6 +3,8 @@
 // camera as a frustum with its photo on the image plane, ground grid and world axes.
 #pragma once
 
+#include <array>
+
 #include "app/app_state.h"
 
 namespace facet::app {
@@ -13,6 +15,16 @@ namespace facet::app {
 // projected box corner picks it, a click on a box face picks the box, elsewhere clears both).
 // Mouse and the F key act only while the panel is hovered or being dragged.
 void DrawViewportPanel(AppState* state);
+// The last frame's view, for the render report and tests: a world point X shows at panel
+// pixel ((ndc.x + 1) / 2 * width_px, (1 - ndc.y) / 2 * height_px) with ndc = clip_from_world X
+// (divided by w), i.e. at screen (origin + that / framebuffer scale).
+struct ViewportReport {
+  bool drawn = false;
+  float origin_x = 0, origin_y = 0;  // screen position of the panel's top-left
+  int width_px = 0, height_px = 0;   // framebuffer px
+  std::array<double, 16> clip_from_world{};  // column-major
+};
+ViewportReport LastViewportReport();
 // Frees GL resources (before the context goes away).
 void ShutdownViewportPanel();
 

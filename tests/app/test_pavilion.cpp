@@ -98,11 +98,11 @@ struct Fixture {
 Fixture WriteFixture(const TempDir& dir) {
   Fixture f;
   f.camera = PavilionCamera();
-  REQUIRE(cv::imwrite(dir / "pavilion.png", MakePhoto(f.camera)));
+  REQUIRE(cv::imwrite(dir / "photo.png", MakePhoto(f.camera)));
   facet::Project p;
   facet::Image image;
   image.id = p.NewId();
-  image.path = "pavilion.png";
+  image.path = "photo.png";
   image.width_px = f.camera.width_px;
   image.height_px = f.camera.height_px;
   image.camera.width_px = f.camera.width_px;
@@ -350,4 +350,119 @@ TEST_CASE("pavilion: undo clears a selection it removes; a refused operator says
   CAPTURE(last.dump());
   CHECK(last.at("level").get<std::string>() == "error");
   CHECK(last.at("text").get<std::string>().rfind("Delete vertex: ", 0) == 0);
+}
+
+namespace {
+
+// The 3D panel's projection from the report: screen px of a world point, and the eye.
+struct Viewport3d {
+  Eigen::Matrix4d clip_from_world;
+  double origin_x = 0, origin_y = 0, width_px = 1, height_px = 1;
+  Eigen::Vector2d ToScreen(const Eigen::Vector3d& x) const {
+    const Eigen::Vector4d clip = clip_from_world * x.homogeneous();
+    return {origin_x + (clip.x() / clip.w() + 1.0) * 0.5 * width_px,
+            origin_y + (1.0 - clip.y() / clip.w()) * 0.5 * height_px};
+  }
+  // The eye: the point with clip x = y = w = 0.
+  Eigen::Vector3d Eye() const {
+    Eigen::Matrix3d a;
+    Eigen::Vector3d b;
+    int r = 0;
+    for (int row : {0, 1, 3}) {
+      a.row(r) = clip_from_world.block<1, 3>(row, 0);
+      b(r++) = -clip_from_world(row, 3);
+    }
+    return a.colPivHouseholderQr().solve(b);
+  }
+};
+
+Viewport3d ViewportFromReport(const nlohmann::json& report) {
+  const auto& v = report.at("viewport");
+  Viewport3d out;
+  const std::vector<double> m = v.at("clip_from_world").get<std::vector<double>>();
+  REQUIRE(m.size() == 16);
+  out.clip_from_world = Eigen::Map<const Eigen::Matrix4d>(m.data());
+  out.origin_x = v.at("origin_x").get<double>();
+  out.origin_y = v.at("origin_y").get<double>();
+  out.width_px = v.at("width_px").get<double>();
+  out.height_px = v.at("height_px").get<double>();
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("pavilion: the 3D panel picks a vertex, an edge and a face by ray, with hover") {
+  TempDir dir("pavilion_3d");
+  const Fixture f = WriteFixture(dir);
+  const View view = ViewFromReport(Render(dir, f, "start", "frames 2\n"));
+  std::ostringstream s;
+  s << "frames 2\ncommand add box\nframes 1\ncommand tool pin\n";
+  for (int c : {0, 1, 3, 4, 5, 6, 7}) {
+    s << "command select vertex " << f.box_id << " " << c << "\nclick left " << Fmt(Click(view, f, Corner(c)))
+      << "\nframes 1\n";
+  }
+  // F over the 3D panel frames the model (the view was framed when the box came, before the
+  // pins moved the camera away).
+  const nlohmann::json before = Render(dir, f, "before", s.str());
+  const auto& panel = before.at("panels").at("3D");
+  const Eigen::Vector2d panel_centre(panel.at("x").get<double>() + panel.at("w").get<double>() / 2,
+                                     panel.at("y").get<double>() + panel.at("h").get<double>() / 2);
+  s << "command tool select\ncommand select none\nmove " << Fmt(panel_centre) << "\nframes 1\nkey f\nframes 3\n";
+  const nlohmann::json placed = Render(dir, f, "placed", s.str());
+  const Viewport3d viewport = ViewportFromReport(placed);
+  const facet::ProjectLoadResult loaded = facet::ProjectFromJson(placed.at("project").dump());
+  REQUIRE(loaded.ok());
+  const facet::Primitive& box = loaded.project.primitives.at(0);
+  const Eigen::Vector3d eye = viewport.Eye();
+  auto inside_panel = [&](const Eigen::Vector2d& p) {
+    return p.x() > panel.at("x").get<double>() + 10 && p.y() > panel.at("y").get<double>() + 40 &&
+           p.x() < panel.at("x").get<double>() + panel.at("w").get<double>() - 10 &&
+           p.y() < panel.at("y").get<double>() + panel.at("h").get<double>() - 60;
+  };
+
+  // Targets: the box corner nearest the eye (never hidden), the middle of an edge at that
+  // corner, and the centre of a face turned towards the eye.
+  int near_corner = 0;
+  for (int c = 1; c < 8; ++c) {
+    if ((box.mesh.vertex(c).position - eye).norm() < (box.mesh.vertex(near_corner).position - eye).norm()) near_corner = c;
+  }
+  const facet::HalfedgeId h = box.mesh.vertex(near_corner).halfedge;
+  const facet::EdgeId edge = facet::PolyMesh::EdgeOf(h);
+  const Eigen::Vector3d edge_mid = 0.5 * (box.mesh.vertex(box.mesh.Origin(h)).position + box.mesh.vertex(box.mesh.Dest(h)).position);
+  facet::FaceId face = facet::kNoFace;
+  Eigen::Vector3d face_centre = Eigen::Vector3d::Zero();
+  double best_facing = 0.0;
+  for (facet::FaceId fid = 0; fid < box.mesh.FaceIdEnd(); ++fid) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    const auto vs = facet::FaceVertices(box.mesh, fid);
+    for (facet::VertexId v : vs) c += box.mesh.vertex(v).position / static_cast<double>(vs.size());
+    const double facing = facet::FaceNormal(box.mesh, fid).dot((eye - c).normalized());
+    if (facing > best_facing && inside_panel(viewport.ToScreen(c))) {
+      best_facing = facing;
+      face = fid;
+      face_centre = c;
+    }
+  }
+  REQUIRE(face != facet::kNoFace);
+
+  struct Target {
+    const char* kind;
+    facet::Id element;
+    Eigen::Vector3d at;
+  };
+  for (const Target& target : {Target{"vertex", static_cast<facet::Id>(near_corner), box.mesh.vertex(near_corner).position},
+                               Target{"edge", edge, edge_mid}, Target{"face", face, face_centre}}) {
+    CAPTURE(target.kind);
+    const Eigen::Vector2d p = viewport.ToScreen(target.at);
+    REQUIRE(inside_panel(p));
+    const std::string name = std::string("pick_") + target.kind;
+    const nlohmann::json report =
+        Render(dir, f, name, s.str() + "move " + Fmt(p) + "\nframes 2\nclick left " + Fmt(p) + "\nframes 2\n");
+    INFO("hover " << report.at("hover").dump() << ", selection " << report.at("selection").dump());
+    CHECK(report.at("hover").at("kind").get<std::string>() == target.kind);
+    CHECK(report.at("hover").at("id").get<facet::Id>() == target.element);
+    CHECK(report.at("selection").at("element").at("kind").get<std::string>() == target.kind);
+    CHECK(report.at("selection").at("element").at("id").get<facet::Id>() == target.element);
+    CHECK(report.at("undo_stack") == placed.at("undo_stack"));  // selecting is not an edit
+  }
 }
