@@ -106,7 +106,8 @@ struct PlumbLineSummary {
   double k1_std = 0.0;
   double k2_std = 0.0;
   double noise_sigma_px = 0.0;  // residual standard deviation per constraint, px
-  // Straightness: RMS over all input points of the distance to their line (each polyline's
+  // Straightness: RMS over the points of all polylines that constrain anything (not free
+  // 2-point polylines, which are always straight) of the distance to their line (each polyline's
   // own best-fit line, or for a family the line through its vanishing point and the
   // polyline's centroid, H&Z 8.6.1), before (k = 0) and after undistortion, in px of the
   // undistorted image.
