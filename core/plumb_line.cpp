@@ -141,8 +141,21 @@ Eigen::Vector2d Centroid(const std::vector<Eigen::Vector2d>& points) {
   return sum / static_cast<double>(points.size());
 }
 
-// Signed distances (conditioned units) of every point to its line, in residual order.
-Eigen::VectorXd Residuals(const Problem& problem, const State& state) {
+// How far the undistortion stretches the image at p across a line of unit normal n: the
+// norm of D^T n with D the (symmetric) Jacobian of UndistortConditioned at p.
+double StretchAcross(const Eigen::Vector2d& p, const Eigen::Vector2d& normal, double k1, double k2) {
+  const double r2 = p.squaredNorm();
+  const double f = 1.0 + r2 * (k1 + r2 * k2);
+  const double f_prime = k1 + 2.0 * r2 * k2;
+  return (f * normal + 2.0 * f_prime * p.dot(normal) * p).norm();
+}
+
+// Signed distances (conditioned units) of every point to its line, in residual order. With
+// in_observed_units each distance is divided by the local stretch of the undistortion across
+// the line, which turns it into (to first order) a distance in the observed image, where the
+// clicking noise lives: the least-squares fit is then maximum-likelihood for isotropic pixel
+// noise, and the edges, which the model stretches or shrinks, get their fair weight.
+Eigen::VectorXd Residuals(const Problem& problem, const State& state, bool in_observed_units = true) {
   Eigen::VectorXd residuals(problem.num_residuals);
   std::vector<Eigen::Vector2d> undistorted;
   for (const auto& polyline : problem.polylines) {
@@ -150,21 +163,28 @@ Eigen::VectorXd Residuals(const Problem& problem, const State& state) {
     undistorted.clear();
     for (const auto& p : polyline.points) undistorted.push_back(UndistortConditioned(p, state.k1, state.k2));
     const Eigen::Vector2d centroid = Centroid(undistorted);
+    Eigen::Vector2d normal;
+    double offset = 0.0;  // the line is normal . x = offset
     if (polyline.family_slot < 0) {
-      const Eigen::Vector2d normal = Perpendicular(LineDirection(undistorted, centroid));
-      for (size_t i = 0; i < undistorted.size(); ++i) {
-        residuals(polyline.first_residual + i) = normal.dot(undistorted[i] - centroid);
-      }
+      normal = Perpendicular(LineDirection(undistorted, centroid));
+      offset = normal.dot(centroid);
     } else {
       // Line through the vanishing point and the centroid (H&Z 8.6.1 with the midpoint).
       const Eigen::Vector3d line =
           state.vanishing_points[polyline.family_slot].cross(Eigen::Vector3d(centroid.x(), centroid.y(), 1.0));
       const double norm = line.head<2>().norm();
-      for (size_t i = 0; i < undistorted.size(); ++i) {
-        residuals(polyline.first_residual + i) =
-            norm > 0.0 ? line.dot(Eigen::Vector3d(undistorted[i].x(), undistorted[i].y(), 1.0)) / norm
-                       : std::numeric_limits<double>::infinity();
+      if (norm == 0.0) {
+        residuals.segment(polyline.first_residual, polyline.num_residuals).setConstant(
+            std::numeric_limits<double>::infinity());
+        continue;
       }
+      normal = line.head<2>() / norm;
+      offset = -line.z() / norm;
+    }
+    for (size_t i = 0; i < undistorted.size(); ++i) {
+      double distance = normal.dot(undistorted[i]) - offset;
+      if (in_observed_units) distance /= StretchAcross(polyline.points[i], normal, state.k1, state.k2);
+      residuals(polyline.first_residual + i) = distance;
     }
   }
   return residuals;
@@ -250,6 +270,19 @@ int Minimise(const Problem& problem, const ActiveSet& active, int max_iterations
   return accepted;
 }
 
+// Pseudo-inverse of a symmetric positive semi-definite matrix: eigenvalues below a relative
+// threshold (directions the data do not determine) are dropped rather than inverted.
+Eigen::MatrixXd PseudoInverseSymmetric(const Eigen::MatrixXd& matrix) {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(matrix);
+  const Eigen::VectorXd& values = eigen.eigenvalues();
+  const double threshold = 1e-14 * std::max(values.cwiseAbs().maxCoeff(), 1e-300);
+  Eigen::VectorXd inverse_values = Eigen::VectorXd::Zero(values.size());
+  for (Eigen::Index i = 0; i < values.size(); ++i) {
+    if (values(i) > threshold) inverse_values(i) = 1.0 / values(i);
+  }
+  return eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
+}
+
 // Reduced (Schur complement) information of the k parameters: the vanishing points are
 // nuisance parameters whose freedom must not be mistaken for information about k.
 Eigen::MatrixXd ReducedInformation(const Eigen::MatrixXd& jacobian, int num_k) {
@@ -257,8 +290,7 @@ Eigen::MatrixXd ReducedInformation(const Eigen::MatrixXd& jacobian, int num_k) {
   const int num_v = static_cast<int>(normal.rows()) - num_k;
   Eigen::MatrixXd reduced = normal.topLeftCorner(num_k, num_k);
   if (num_v > 0) {
-    const Eigen::MatrixXd vv_inverse =
-        normal.bottomRightCorner(num_v, num_v).completeOrthogonalDecomposition().pseudoInverse();
+    const Eigen::MatrixXd vv_inverse = PseudoInverseSymmetric(normal.bottomRightCorner(num_v, num_v));
     reduced -= normal.topRightCorner(num_k, num_v) * vv_inverse * normal.bottomLeftCorner(num_v, num_k);
   }
   return reduced;
@@ -481,7 +513,7 @@ PlumbLineSummary EstimateRadialDistortion(const std::vector<PlumbLine>& lines, c
   vanishing_only.k1 = false;
   vanishing_only.num_families = problem.num_families;
   summary.iterations += Minimise(problem, vanishing_only, options.max_iterations, &state);
-  summary.initial_rms_px = scale * Rms(Residuals(problem, state), num_points);
+  summary.initial_rms_px = scale * Rms(Residuals(problem, state, false), num_points);
 
   // Information about k at the start, net of the vanishing points' freedom.
   ActiveSet active;
@@ -515,6 +547,7 @@ PlumbLineSummary EstimateRadialDistortion(const std::vector<PlumbLine>& lines, c
 
   summary.iterations += Minimise(problem, active, options.max_iterations, &state);
   const Eigen::VectorXd residuals = Residuals(problem, state);
+  const Eigen::VectorXd distances = Residuals(problem, state, false);
   if (!residuals.allFinite()) {
     summary.message = "the fit diverged (a vanishing point coincides with a polyline's centroid); k = 0";
     return finish(summary);
@@ -525,18 +558,18 @@ PlumbLineSummary EstimateRadialDistortion(const std::vector<PlumbLine>& lines, c
   const Eigen::MatrixXd jacobian = NumericJacobian(problem, state, active);
   const Eigen::MatrixXd reduced = ReducedInformation(jacobian, num_k);
   const double variance = dof > 0 ? residuals.squaredNorm() / dof : 0.0;
-  const Eigen::MatrixXd covariance = variance * reduced.completeOrthogonalDecomposition().pseudoInverse();
+  const Eigen::MatrixXd covariance = variance * PseudoInverseSymmetric(reduced);
   summary.noise_sigma_px = scale * std::sqrt(variance);
   summary.k1_std = std::sqrt(std::max(covariance(0, 0), 0.0));
   summary.k2_std = active.k2 ? std::sqrt(std::max(covariance(1, 1), 0.0)) : 0.0;
   summary.distortion.k1 = state.k1;
   summary.distortion.k2 = state.k2;
-  summary.final_rms_px = scale * Rms(residuals, num_points);
+  summary.final_rms_px = scale * Rms(distances, num_points);
   for (size_t i = 0; i < problem.polylines.size(); ++i) {
     const auto& polyline = problem.polylines[i];
     if (polyline.num_residuals == 0) continue;
     summary.line_rms_px[i] =
-        scale * Rms(residuals.segment(polyline.first_residual, polyline.num_residuals), polyline.num_residuals);
+        scale * Rms(distances.segment(polyline.first_residual, polyline.num_residuals), polyline.num_residuals);
   }
   int max_family = -1;
   for (int family : family_of_slot) max_family = std::max(max_family, family);

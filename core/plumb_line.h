@@ -105,7 +105,8 @@ struct PlumbLineSummary {
   // variance (k2_std = 0 when k2 was not estimated).
   double k1_std = 0.0;
   double k2_std = 0.0;
-  double noise_sigma_px = 0.0;  // residual standard deviation per constraint, px
+  // Residual standard deviation per constraint, in px of the observed image (see the cost).
+  double noise_sigma_px = 0.0;
   // Straightness: RMS over the points of all polylines that constrain anything (not free
   // 2-point polylines, which are always straight) of the distance to their line (each polyline's
   // own best-fit line, or for a family the line through its vanishing point and the
@@ -127,7 +128,10 @@ struct PlumbLineSummary {
 // Estimates k1 (and k2 when asked) from the polylines, starting from k = 0, by
 // Levenberg-Marquardt over k and, per family, the vanishing point on the unit sphere; the
 // free line of each polyline without a family is eliminated in closed form (smallest
-// eigenvector of its 2x2 scatter matrix). Jacobian by central differences (2 to 8
+// eigenvector of its 2x2 scatter matrix). Cost: the sum over points of the squared distance
+// of the undistorted point to its line, divided by the local stretch of the undistortion
+// across that line, i.e. to first order the distance in the observed image where the
+// clicking noise is (maximum likelihood for isotropic pixel noise). Jacobian by central differences (2 to 8
 // parameters). Fails with k = 0 and a message on: bad options, non-finite points, a
 // polyline with fewer than 2 points, fewer than (number of coefficients + 1) independent
 // constraints, or lines that carry no distortion information (all through the centre, where
