@@ -34,6 +34,10 @@ constexpr double kPrincipalPointPriorSigma = 0.05;
 // accepted only if its residuals stay near those of free vanishing points.
 constexpr double kMaxJointRmsRatio = 2.0;
 constexpr double kJointRmsSlackPx = 0.1;
+// Smallest segment noise (conditioned units) assumed when weighting the priors.
+constexpr double kNoiseFloor = 3e-8;
+// Rounds of refitting without the flagged segments and flagging again.
+constexpr int kMaxOutlierRounds = 5;
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
@@ -80,6 +84,13 @@ Eigen::Matrix3d NearestRotation(const Eigen::Matrix3d& m) {
   Eigen::Matrix3d u = svd.matrixU();
   if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) *= -1.0;
   return u * svd.matrixV().transpose();
+}
+
+// [d]x: the matrix of the cross product d x (.).
+Eigen::Matrix3d Cross(const Eigen::Vector3d& d) {
+  Eigen::Matrix3d m;
+  m << 0.0, -d.z(), d.y(), d.z(), 0.0, -d.x(), -d.y(), d.x(), 0.0;
+  return m;
 }
 
 // One segment of the joint fit in conditioned coordinates, with the constants of its signed
@@ -168,20 +179,71 @@ struct JointProblem {
     if (focal_prior_weight > 0) (*out)(i++) = focal_prior_weight * (c.f - focal_prior);
   }
 
-  // Central differences: at most 6 columns, each two residual evaluations over the segments.
+  // Analytic Jacobian (exact to rounding, which matters where only a weak prior fixes a
+  // direction). With v = K d, d = R e_axis and the left increment d' = d + w x d:
+  // dv/dlog f = f (d_x, d_y, 0), dv/dc = d_z I_2 (top rows), dv/dw = -K [d]x.
   void Jacobian(const JointCamera& c, Eigen::MatrixXd* jacobian) const {
-    constexpr double kStep = 1e-7;
     const int p = NumParams();
-    jacobian->resize(NumResiduals(), p);
-    Eigen::VectorXd plus, minus;
-    for (int j = 0; j < p; ++j) {
-      Eigen::VectorXd delta = Eigen::VectorXd::Zero(p);
-      delta(j) = kStep;
-      Residuals(Apply(c, delta), &plus);
-      delta(j) = -kStep;
-      Residuals(Apply(c, delta), &minus);
-      jacobian->col(j) = (plus - minus) / (2 * kStep);
+    jacobian->setZero(NumResiduals(), p);
+    const int rotation_column = p - 3;
+    Eigen::Matrix3d k = Eigen::Matrix3d::Identity();
+    k(0, 0) = k(1, 1) = c.f;
+    k(0, 2) = c.pp.x();
+    k(1, 2) = c.pp.y();
+    std::array<Eigen::Matrix<double, 3, Eigen::Dynamic>, 3> dv_dparams;
+    for (int a = 0; a < 3; ++a) {
+      const Eigen::Vector3d d = c.r.col(a);
+      Eigen::Matrix<double, 3, Eigen::Dynamic>& m = dv_dparams[a];
+      m.setZero(3, p);
+      int col = 0;
+      if (solve_focal) m.col(col++) << c.f * d.x(), c.f * d.y(), 0.0;
+      if (solve_pp) {
+        m(0, col++) = d.z();
+        m(1, col++) = d.z();
+      }
+      m.rightCols<3>() = -k * Cross(d);
     }
+    const Eigen::Matrix3d vps = k * c.r;
+    int i = 0;
+    for (const JointSegment& s : segments) {
+      const Eigen::Vector3d v = vps.col(s.axis);
+      const Eigen::Vector2d mv = s.m_cross * v;
+      const double n = mv.norm();
+      if (n > 0.0) {
+        const Eigen::RowVector3d dr_dv = s.g.transpose() / n - (s.g.dot(v) / (n * n * n)) * (mv.transpose() * s.m_cross);
+        jacobian->row(i) = dr_dv * dv_dparams[s.axis];
+      }
+      ++i;
+    }
+    if (use_horizon) {
+      const Eigen::Vector3d d = c.r.col(2);
+      const Eigen::Vector2d e = d.head<2>();
+      const double n = e.norm();
+      for (const Eigen::Vector2d& point : horizon) {
+        if (n > 0.0) {
+          const Eigen::Vector2d q = point - c.pp;
+          const double r = (q.dot(e) + c.f * d.z()) / n;
+          Eigen::RowVector3d dr_dd;
+          dr_dd.head<2>() = (q / n - r * e / (n * n)).transpose();
+          dr_dd(2) = c.f / n;
+          int col = 0;
+          if (solve_focal) (*jacobian)(i, col++) = c.f * d.z() / n;
+          if (solve_pp) {
+            (*jacobian)(i, col++) = -e.x() / n;
+            (*jacobian)(i, col++) = -e.y() / n;
+          }
+          jacobian->block<1, 3>(i, rotation_column) = -dr_dd * Cross(d);
+        }
+        ++i;
+      }
+    }
+    if (pp_prior_weight > 0) {
+      const int col = solve_focal ? 1 : 0;
+      (*jacobian)(i, col) = pp_prior_weight;
+      (*jacobian)(i + 1, col + 1) = pp_prior_weight;
+      i += 2;
+    }
+    if (focal_prior_weight > 0) (*jacobian)(i++, 0) = focal_prior_weight * c.f;
   }
 };
 
@@ -302,6 +364,11 @@ bool VpCalibrationOptions::Check(std::string* error) const {
   if (use_horizon && (!horizon_px.allFinite() || (horizon_px.head<2>() - horizon_px.tail<2>()).norm() <
                                                      1e-6 * std::max(width_px, height_px))) {
     *error = "the horizon needs two distinct finite points";
+    return false;
+  }
+  if (warm_start && (!(warm_start_focal_px > 0.0) || !std::isfinite(warm_start_focal_px) ||
+                     !warm_start_principal_point_px.allFinite() || !warm_start_rotation.allFinite())) {
+    *error = "the warm start needs a finite positive focal length, principal point and rotation";
     return false;
   }
   if (!(outlier_threshold_sigmas > 0.0) || !(outlier_floor_px >= 0.0)) {
@@ -487,6 +554,12 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
                   "in the image)",
                   start);
   }
+  // No two finite vanishing points (one family, or one at infinity with the principal point
+  // given): the segments say nothing about f, so a prior is all there is and f is held there.
+  const bool focal_prior_only = focal_prior && std::isnan(f_squared);
+  if (focal_prior_only)
+    summary.warnings.push_back("the segments do not fix the focal length; it is the prior's (" +
+                               Fmt(options.focal_prior_px) + " +- " + Fmt(options.focal_prior_std_px) + " px)");
   const std::string no_real_focal =
       "the vanishing points give no real focal length (f^2 = " + Fmt(f_squared * scale_px * scale_px) +
       " px^2 <= 0): the vanishing-point triangle is obtuse or the families are not mutually orthogonal; check the "
@@ -497,6 +570,10 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
     // The prior is the better start when the vanishing points alone give no focal length.
     f_squared = known_f * known_f;
     started_from_center = started_from_center || mode == PrincipalPointMode::kSolve;
+  }
+  if (options.warm_start && !(f_squared > 0.0)) {
+    f_squared = std::pow(options.warm_start_focal_px / scale_px, 2);
+    started_from_center = false;
   }
   if (!std::isfinite(f_squared)) return Fail(summary, "the focal length is not finite (numerical failure)", start);
   if (f_squared <= 0.0) return Fail(summary, no_real_focal, start);
@@ -547,7 +624,7 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
   // weighted against the noise the segments show, decides where the data leave the
   // principal point loose (a vanishing point far away).
   JointProblem problem;
-  problem.solve_focal = !focal_fixed;
+  problem.solve_focal = !focal_fixed && !focal_prior_only;
   problem.solve_pp = mode == PrincipalPointMode::kSolve;
   for (int a = 0; a < 3; ++a)
     for (size_t k = 0; k < family_segments[a].size(); ++k) {
@@ -559,16 +636,17 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
   // Noise of the segments (conditioned) from the free vanishing points, each of which took
   // 2 degrees of freedom; the floor only avoids a zero weight for exact data.
   const double independent_rms_px = std::sqrt(independent_sum_sq / num_segments);
-  const double noise_px =
-      std::max(std::sqrt(independent_sum_sq / std::max(1, num_segments - 2 * num_families)), 1e-9);
-  const double noise = noise_px / scale_px;
+  // The floor (3e-8 of the conditioning scale, ~1e-5 px) keeps the prior rows from vanishing
+  // against exact data, which would leave a direction only a prior fixes numerically singular.
+  const double noise =
+      std::max(std::sqrt(independent_sum_sq / std::max(1, num_segments - 2 * num_families)) / scale_px, kNoiseFloor);
   if (problem.solve_pp && options.principal_point_prior_std_px >= 0.0) {
     const double prior_std_px = options.principal_point_prior_std_px > 0.0
                                     ? options.principal_point_prior_std_px
                                     : kPrincipalPointPriorSigma * scale_px;
     problem.pp_prior_weight = noise / (prior_std_px / scale_px);
   }
-  if (focal_prior) {
+  if (problem.solve_focal && focal_prior) {
     problem.focal_prior = options.focal_prior_px / scale_px;
     problem.focal_prior_weight = noise / (options.focal_prior_std_px / scale_px);
   }
@@ -578,58 +656,54 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
   camera.f = f;
   camera.pp = pp;
   camera.r = rotation;
+  if (options.warm_start) {
+    if (problem.solve_focal) camera.f = options.warm_start_focal_px / scale_px;
+    if (problem.solve_pp) camera.pp = (options.warm_start_principal_point_px - center_px) / scale_px;
+    camera.r = NearestRotation(options.warm_start_rotation);
+  }
   summary.joint_fit_iterations = RefineJointly(problem, &camera);
 
-  // Flags segments against a camera: robust sigma from the median absolute residual.
-  auto flag_outliers = [&](const JointCamera& c) {
+  // Flags every segment against the camera with the threshold from the residuals of the
+  // segments it was fitted to: a robust sigma from their median absolute residual.
+  const JointProblem full_problem = problem;
+  auto flag_outliers = [&](const JointProblem& fitted) {
     Eigen::VectorXd r;
-    problem.Residuals(c, &r);
-    std::vector<double> abs_px(num_segments);
-    for (int i = 0; i < num_segments; ++i) abs_px[i] = std::abs(r(i)) * scale_px;
+    fitted.Residuals(camera, &r);
+    std::vector<double> abs_px(fitted.segments.size());
+    for (size_t i = 0; i < fitted.segments.size(); ++i) abs_px[i] = std::abs(r(i)) * scale_px;
     const double threshold_px =
         std::max(options.outlier_threshold_sigmas * 1.4826 * Median(abs_px), options.outlier_floor_px);
-    std::vector<bool> flagged(num_segments);
-    for (int i = 0; i < num_segments; ++i) flagged[i] = abs_px[i] > threshold_px;
     summary.outlier_threshold_px = threshold_px;
+    full_problem.Residuals(camera, &r);
+    std::vector<bool> flagged(num_segments);
+    for (int i = 0; i < num_segments; ++i) flagged[i] = std::abs(r(i)) * scale_px > threshold_px;
     return flagged;
   };
-  std::vector<bool> flagged = flag_outliers(camera);
-  const int num_flagged = static_cast<int>(std::count(flagged.begin(), flagged.end(), true));
-  JointProblem full_problem = problem;
-  if (options.refit_without_outliers && num_flagged > 0) {
-    // Each family keeps at least its two best segments, so no family disappears.
-    Eigen::VectorXd r;
-    problem.Residuals(camera, &r);
-    std::array<std::vector<std::pair<double, int>>, 3> by_family;
-    for (int i = 0; i < num_segments; ++i) by_family[problem.segments[i].axis].push_back({std::abs(r(i)), i});
-    std::vector<bool> keep(num_segments);
-    for (int a = 0; a < 3; ++a) {
-      std::sort(by_family[a].begin(), by_family[a].end());
-      for (size_t k = 0; k < by_family[a].size(); ++k)
-        keep[by_family[a][k].second] = k < 2 || !flagged[by_family[a][k].second];
+  std::vector<bool> flagged = flag_outliers(problem);
+  if (options.refit_without_outliers) {
+    // Refit without the flagged segments and flag again against the new camera, until the
+    // set is stable: a wrong segment drags its neighbours over the threshold in the first
+    // fit, and they come back once it is gone. Each family keeps its two best segments.
+    std::vector<bool> removed(num_segments, false);
+    for (int round = 0; round < kMaxOutlierRounds && flagged != removed; ++round) {
+      Eigen::VectorXd r;
+      full_problem.Residuals(camera, &r);
+      std::array<std::vector<std::pair<double, int>>, 3> by_family;
+      for (int i = 0; i < num_segments; ++i) by_family[full_problem.segments[i].axis].push_back({std::abs(r(i)), i});
+      for (int a = 0; a < 3; ++a) {
+        std::sort(by_family[a].begin(), by_family[a].end());
+        for (size_t k = 0; k < by_family[a].size(); ++k) {
+          const int i = by_family[a][k].second;
+          removed[i] = k >= 2 && flagged[i];
+        }
+      }
+      problem.segments.clear();
+      for (int i = 0; i < num_segments; ++i)
+        if (!removed[i]) problem.segments.push_back(full_problem.segments[i]);
+      summary.joint_fit_iterations += RefineJointly(problem, &camera);
+      summary.refitted_without_outliers = std::count(removed.begin(), removed.end(), true) > 0;
+      flagged = flag_outliers(problem);
     }
-    JointProblem inliers = problem;
-    inliers.segments.clear();
-    for (int i = 0; i < num_segments; ++i)
-      if (keep[i]) inliers.segments.push_back(problem.segments[i]);
-    summary.joint_fit_iterations += RefineJointly(inliers, &camera);
-    problem = inliers;
-    summary.refitted_without_outliers = true;
-    flagged = [&] {
-      // The threshold from the inliers' residuals, applied to every segment.
-      Eigen::VectorXd ri;
-      problem.Residuals(camera, &ri);
-      std::vector<double> abs_px(problem.segments.size());
-      for (size_t i = 0; i < problem.segments.size(); ++i) abs_px[i] = std::abs(ri(i)) * scale_px;
-      const double threshold_px =
-          std::max(options.outlier_threshold_sigmas * 1.4826 * Median(abs_px), options.outlier_floor_px);
-      summary.outlier_threshold_px = threshold_px;
-      Eigen::VectorXd rf;
-      full_problem.Residuals(camera, &rf);
-      std::vector<bool> out(num_segments);
-      for (int i = 0; i < num_segments; ++i) out[i] = std::abs(rf(i)) * scale_px > threshold_px;
-      return out;
-    }();
   }
   summary.segment_is_outlier.assign(segments.size(), false);
   for (int i = 0; i < num_segments; ++i)
@@ -646,16 +720,24 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
     const int num_params = problem.NumParams();
     summary.degrees_of_freedom = problem.NumResiduals() - num_params;
     const double nan = std::nan("");
-    summary.focal_std_px = focal_fixed ? 0.0 : nan;
+    summary.focal_std_px = focal_fixed ? 0.0 : focal_prior_only ? options.focal_prior_std_px : nan;
     summary.principal_point_std_px = problem.solve_pp ? Eigen::Vector2d(nan, nan) : Eigen::Vector2d::Zero();
     summary.residual_sigma_px = nan;
     for (int a = 0; a < 3; ++a) summary.vanishing_direction_std_deg[a] = present[a] || one_family_mode ? nan : 0.0;
-    const Eigen::MatrixXd jtj = jacobian.transpose() * jacobian;
-    const Eigen::FullPivLU<Eigen::MatrixXd> lu(jtj);
+    // Information: the segment rows scaled by the sigma their residuals show, the prior rows
+    // (weighted noise / prior std) by the noise they were weighted with, so that a prior
+    // contributes exactly 1 / std^2 whatever the residuals.
+    const int num_data = static_cast<int>(problem.segments.size()) + (problem.use_horizon ? 2 : 0);
+    const double sigma_squared =
+        std::max(r.head(num_data).squaredNorm() / std::max(1, summary.degrees_of_freedom), 1e-300);
+    const Eigen::MatrixXd data_jacobian = jacobian.topRows(num_data);
+    const Eigen::MatrixXd prior_jacobian = jacobian.bottomRows(jacobian.rows() - num_data);
+    const Eigen::MatrixXd information = data_jacobian.transpose() * data_jacobian / sigma_squared +
+                                        prior_jacobian.transpose() * prior_jacobian / (noise * noise);
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(information);
     if (summary.degrees_of_freedom > 0 && lu.isInvertible()) {
-      const double sigma_squared = r.squaredNorm() / summary.degrees_of_freedom;
       summary.residual_sigma_px = std::sqrt(sigma_squared) * scale_px;
-      const Eigen::MatrixXd covariance = sigma_squared * lu.inverse();
+      const Eigen::MatrixXd covariance = lu.inverse();
       int k = 0;
       if (problem.solve_focal) summary.focal_std_px = camera.f * scale_px * std::sqrt(covariance(k, k)), ++k;
       if (problem.solve_pp) {
@@ -667,9 +749,7 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
       for (int a = 0; a < 3; ++a) {
         if (summary.vanishing_direction_std_deg[a] == 0.0) continue;
         // d' = exp(w) d ~ d + w x d = d - [d]x w.
-        const Eigen::Vector3d d = camera.r.col(a);
-        Eigen::Matrix3d cross;
-        cross << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
+        const Eigen::Matrix3d cross = Cross(camera.r.col(a));
         summary.vanishing_direction_std_deg[a] =
             std::sqrt(std::max(0.0, (cross * rotation_covariance * cross.transpose()).trace())) * kRadToDeg;
       }
@@ -775,7 +855,7 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
     const Eigen::Vector2d& c = summary.principal_point_px;
     if (c.x() < 0 || c.y() < 0 || c.x() > options.width_px - 1 || c.y() > options.height_px - 1)
       summary.warnings.push_back("the solved principal point (" + Fmt(c.x()) + ", " + Fmt(c.y()) +
-                                 ") lies outside the image; the vanishing points are probably inaccurate");
+                                 ") lies outside the image: a cropped photo, or inaccurate vanishing points");
   }
 
   summary.success = true;

@@ -46,6 +46,15 @@ struct VpCalibrationOptions {
   bool use_horizon = false;
   Eigen::Vector4d horizon_px = Eigen::Vector4d::Zero();
 
+  // Warm start: begin the joint fit at this camera instead of the closed form (e.g. the
+  // previous result while the user drags a segment). The principal point is used only when
+  // it is solved, the focal length only when it is not fixed; the rotation's column signs
+  // do not matter.
+  bool warm_start = false;
+  double warm_start_focal_px = 0.0;
+  Eigen::Vector2d warm_start_principal_point_px = Eigen::Vector2d::Zero();
+  Eigen::Matrix3d warm_start_rotation = Eigen::Matrix3d::Identity();  // cam_from_world
+
   // Outliers: a segment whose residual exceeds max(outlier_threshold_sigmas * 1.4826 *
   // median |residual|, outlier_floor_px) is flagged (1.4826 * median |r| estimates the
   // noise sigma robustly; the floor keeps near-exact data from flagging rounding).
@@ -85,11 +94,16 @@ struct VpCalibrationSummary {
   Eigen::Vector2d closed_form_principal_point_px = Eigen::Vector2d::Zero();
   int joint_fit_iterations = 0;
 
-  // Uncertainty of the joint fit, first order: covariance = sigma^2 (J^T J)^-1 at the
-  // solution, J the Jacobian of the (prior-augmented) residuals, sigma^2 = sum of squared
-  // residuals / degrees_of_freedom with degrees_of_freedom = residuals - parameters (a prior
-  // counts as residuals, so it both adds a row and constrains). focal_std_px is 0 with a
-  // fixed focal length; principal_point_std_px is 0 unless the principal point is solved.
+  // Uncertainty of the joint fit, first order: covariance = (J_d^T J_d / sigma^2 + J_p^T J_p)^-1
+  // at the solution, i.e. sigma^2 (J^T J)^-1 with the segment (and horizon) rows J_d at the
+  // noise sigma their residuals show and the prior rows J_p (principal point, focal length)
+  // in units of their own std. sigma^2 = sum of squared segment and horizon residuals /
+  // degrees_of_freedom, degrees_of_freedom = those residuals + prior residuals - parameters.
+  // focal_std_px is 0 with a fixed focal length, the prior's std when the segments cannot
+  // fix f (one family, or no two finite vanishing points; f is then the prior's value);
+  // principal_point_std_px is 0 unless the
+  // principal point is solved; all are NaN (with a warning) when degrees_of_freedom <= 0 or
+  // the fit leaves a parameter undetermined.
   double focal_std_px = 0.0;
   Eigen::Vector2d principal_point_std_px = Eigen::Vector2d::Zero();
   double residual_sigma_px = 0.0;  // sigma above, in px
