@@ -2,10 +2,15 @@
 // "three orthogonal vanishing points"). Each vanishing point is fitted by least squares over
 // all segments of its family (2 or more); the focal length and principal point follow from
 // the orthocentre construction with three vanishing points, or the focal length alone from
-// two with the principal point given; the rotation from the vanishing directions. That
-// closed form then starts a joint least-squares fit of focal length, principal point (with
-// a weak, noise-weighted prior at the image centre) and rotation to all segments, which
-// keeps the three directions orthogonal.
+// two with the principal point given; the rotation from the vanishing directions (with one
+// horizontal family, from it and the horizon). That closed form (or a warm start) then
+// starts a joint maximum-likelihood fit of focal length, principal point and rotation to all
+// segments (each residual the distance of a segment's endpoints to the line through its
+// midpoint and the camera's vanishing point), which keeps the three directions orthogonal.
+// Optional Gaussian priors: the principal point at the image centre (when solved) and the
+// focal length (e.g. from EXIF, core/exif.h). Segments whose residual is far above the
+// robust noise level are flagged, and the fit is repeated without them. The summary carries
+// first-order standard deviations from the fit's covariance and degeneracy figures.
 // Reference: Hartley & Zisserman, Multiple View Geometry, 2nd ed., sections 8.6 and 8.8.
 #pragma once
 
