@@ -155,11 +155,15 @@ double StretchAcross(const Eigen::Vector2d& p, const Eigen::Vector2d& normal, do
 // the line, which turns it into (to first order) a distance in the observed image, where the
 // clicking noise lives: the least-squares fit is then maximum-likelihood for isotropic pixel
 // noise, and the edges, which the model stretches or shrinks, get their fair weight.
-Eigen::VectorXd Residuals(const Problem& problem, const State& state, bool in_observed_units = true) {
-  Eigen::VectorXd residuals(problem.num_residuals);
+// only_family_slot >= 0 evaluates that family's polylines alone (the others' entries are
+// zero), for the vanishing-point columns of the Jacobian.
+Eigen::VectorXd Residuals(const Problem& problem, const State& state, bool in_observed_units = true,
+                          int only_family_slot = -1) {
+  Eigen::VectorXd residuals = Eigen::VectorXd::Zero(problem.num_residuals);
   std::vector<Eigen::Vector2d> undistorted;
   for (const auto& polyline : problem.polylines) {
     if (polyline.num_residuals == 0) continue;
+    if (only_family_slot >= 0 && polyline.family_slot != only_family_slot) continue;
     undistorted.clear();
     for (const auto& p : polyline.points) undistorted.push_back(UndistortConditioned(p, state.k1, state.k2));
     const Eigen::Vector2d centroid = Centroid(undistorted);
@@ -215,11 +219,14 @@ Eigen::MatrixXd NumericJacobian(const Problem& problem, const State& state, cons
   const int n = active.Size();
   Eigen::MatrixXd jacobian(problem.num_residuals, n);
   Eigen::VectorXd delta = Eigen::VectorXd::Zero(n);
+  const int num_k = (active.k1 ? 1 : 0) + (active.k2 ? 1 : 0);
   for (int j = 0; j < n; ++j) {
+    // A vanishing point moves its own family's residuals only.
+    const int slot = j < num_k ? -1 : (j - num_k) / 2;
     delta(j) = kDerivativeStep;
-    const Eigen::VectorXd plus = Residuals(problem, Apply(state, active, delta));
+    const Eigen::VectorXd plus = Residuals(problem, Apply(state, active, delta), true, slot);
     delta(j) = -kDerivativeStep;
-    const Eigen::VectorXd minus = Residuals(problem, Apply(state, active, delta));
+    const Eigen::VectorXd minus = Residuals(problem, Apply(state, active, delta), true, slot);
     delta(j) = 0.0;
     jacobian.col(j) = (plus - minus) / (2.0 * kDerivativeStep);
   }

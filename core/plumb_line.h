@@ -131,8 +131,9 @@ struct PlumbLineSummary {
 // eigenvector of its 2x2 scatter matrix). Cost: the sum over points of the squared distance
 // of the undistorted point to its line, divided by the local stretch of the undistortion
 // across that line, i.e. to first order the distance in the observed image where the
-// clicking noise is (maximum likelihood for isotropic pixel noise). Jacobian by central differences (2 to 8
-// parameters). Fails with k = 0 and a message on: bad options, non-finite points, a
+// clicking noise is (maximum likelihood for isotropic pixel noise). Jacobian by central
+// differences over k and the vanishing points (each of which moves only its own family's
+// residuals). Fails with k = 0 and a message on: bad options, non-finite points, a
 // polyline with fewer than 2 points, fewer than (number of coefficients + 1) independent
 // constraints, or lines that carry no distortion information (all through the centre, where
 // radial distortion keeps them straight).
