@@ -1,6 +1,7 @@
 #include "core/calibrate_io.h"
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -8,6 +9,7 @@
 #include "core/json_io_internal.h"
 
 #include "core/calibrate_vp.h"
+#include "core/plumb_line.h"
 
 namespace facet {
 namespace {
@@ -24,8 +26,30 @@ CalibrateIoResult Error(std::string message) {
 
 
 // Fills *error and returns false when the document does not have the documented shape.
+// An optional positive number; false with *error for any other value.
+bool ReadOptionalPositive(const json& doc, const char* key, double* out, std::string* error) {
+  const auto it = doc.find(key);
+  if (it == doc.end()) return true;
+  if (!ReadNumber(*it, out) || !(*out > 0.0)) {
+    *error = std::string("\"") + key + "\" must be a positive number, got " + it->dump();
+    return false;
+  }
+  return true;
+}
+
+bool ReadOptionalBool(const json& doc, const char* key, bool* out, std::string* error) {
+  const auto it = doc.find(key);
+  if (it == doc.end()) return true;
+  if (!it->is_boolean()) {
+    *error = std::string("\"") + key + "\" must be true or false, got " + it->dump();
+    return false;
+  }
+  *out = it->get<bool>();
+  return true;
+}
+
 bool ParseInput(const json& doc, std::vector<Segment>* segments, VpCalibrationOptions* options,
-                std::vector<int>* family_order, std::string* error) {
+                std::vector<int>* family_order, bool* distortion, std::string* error) {
   if (!doc.is_object()) {
     *error = "the top level must be a JSON object";
     return false;
@@ -106,6 +130,29 @@ bool ParseInput(const json& doc, std::vector<Segment>* segments, VpCalibrationOp
   options->principal_point_mode = num_families >= 3 ? PrincipalPointMode::kSolve : PrincipalPointMode::kImageCenter;
   if (!json_io::ReadPrincipalPoint(doc, &options->principal_point_mode, &options->fixed_principal_point_px, error))
     return false;
+  if (!ReadOptionalPositive(doc, "focal_px", &options->fixed_focal_px, error) ||
+      !ReadOptionalPositive(doc, "focal_prior_px", &options->focal_prior_px, error) ||
+      !ReadOptionalPositive(doc, "focal_prior_std_px", &options->focal_prior_std_px, error) ||
+      !ReadOptionalBool(doc, "distortion", distortion, error) ||
+      !ReadOptionalBool(doc, "refit_without_outliers", &options->refit_without_outliers, error))
+    return false;
+  if ((options->focal_prior_px > 0.0) != (options->focal_prior_std_px > 0.0)) {
+    *error = "\"focal_prior_px\" and \"focal_prior_std_px\" go together";
+    return false;
+  }
+  const auto horizon_it = doc.find("horizon");
+  if (horizon_it != doc.end()) {
+    double row = 0.0, h[4];
+    if (ReadNumber(*horizon_it, &row)) {
+      options->horizon_px = Eigen::Vector4d(0.0, row, options->width_px - 1.0, row);
+    } else if (json_io::ReadVector(*horizon_it, 4, h)) {
+      options->horizon_px = Eigen::Vector4d(h[0], h[1], h[2], h[3]);
+    } else {
+      *error = "\"horizon\" must be [x1, y1, x2, y2] or the row v of a level horizon, got " + horizon_it->dump();
+      return false;
+    }
+    options->use_horizon = true;
+  }
   return true;
 }
 
@@ -123,8 +170,40 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
     std::vector<Segment> segments;
     VpCalibrationOptions options;
     std::vector<int> family_order;
+    bool distortion = false;
     std::string error;
-    if (!ParseInput(doc, &segments, &options, &family_order, &error)) return Error(error);
+    if (!ParseInput(doc, &segments, &options, &family_order, &distortion, &error)) return Error(error);
+
+    // Distortion first (plumb lines: each segment a 2-point line, its family a common
+    // vanishing point), then the pinhole calibration of the undistorted segments.
+    json distortion_out = nullptr;
+    std::vector<std::string> distortion_warnings;
+    if (distortion) {
+      PlumbLineOptions plumb_options;
+      plumb_options.width_px = options.width_px;
+      plumb_options.height_px = options.height_px;
+      if (options.principal_point_mode == PrincipalPointMode::kFixed)
+        plumb_options.center_px = options.fixed_principal_point_px;
+      std::vector<PlumbLine> lines;
+      for (const Segment& s : segments) lines.push_back({{s.a_px, s.b_px}, static_cast<int>(s.axis)});
+      const PlumbLineSummary plumb = EstimateRadialDistortion(lines, plumb_options);
+      const RadialDistortion& d = plumb.distortion;
+      distortion_out = {{"k1", d.k1},
+                        {"k2", d.k2},
+                        {"k1_std", plumb.k1_std},
+                        {"center", {d.center_px.x(), d.center_px.y()}},
+                        {"scale_px", d.scale_px},
+                        {"model", "uv_u = c + (uv_d - c) (1 + k1 r^2 + k2 r^4), r = |uv_d - c| / scale_px"}};
+      if (plumb.success) {
+        for (Segment& s : segments) {
+          s.a_px = d.Undistort(s.a_px);
+          s.b_px = d.Undistort(s.b_px);
+        }
+        for (const std::string& w : plumb.warnings) distortion_warnings.push_back("distortion: " + w);
+      } else {
+        distortion_warnings.push_back("distortion not estimated: " + plumb.message);
+      }
+    }
 
     const VpCalibrationSummary summary = CalibrateFromVanishingLines(segments, options);
     if (!summary.success) return Error("calibration failed: " + summary.message);
@@ -153,9 +232,38 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
     out["vanishing_point_axes"] = axes;
     out["vanishing_points"] = points;
     out["vanishing_points_homogeneous"] = homogeneous;
+    out["focal_std_px"] = summary.focal_std_px;
+    out["principal_point_std_px"] = {summary.principal_point_std_px.x(), summary.principal_point_std_px.y()};
+    out["residual_sigma_px"] = summary.residual_sigma_px;
     out["segment_residuals_px"] = summary.segment_residuals_px;
+    out["outlier_segments"] = summary.outlier_segments;
+    out["outlier_threshold_px"] = summary.outlier_threshold_px;
+    out["refitted_without_outliers"] = summary.refitted_without_outliers;
+    // Per given family, in vanishing_point_axes order; infinity (a point at infinity) as null.
+    json direction_std = json::array(), spread = json::array(), to_pp = json::array();
+    for (int a = 0; a < 3; ++a) {
+      if (summary.segments_per_axis[a] == 0) continue;
+      direction_std.push_back(summary.vanishing_direction_std_deg[a]);
+      spread.push_back(summary.family_angle_spread_deg[a]);
+      to_pp.push_back(std::isfinite(summary.vanishing_point_to_principal_point_px[a])
+                          ? json(summary.vanishing_point_to_principal_point_px[a])
+                          : json(nullptr));
+    }
+    out["vanishing_direction_std_deg"] = direction_std;
+    out["family_angle_spread_deg"] = spread;
+    out["vanishing_point_to_principal_point_px"] = to_pp;
+    out["min_family_angle_spread_deg"] = summary.min_family_angle_spread_deg;
+    out["min_vanishing_point_to_principal_point_px"] =
+        std::isfinite(summary.min_vanishing_point_to_principal_point_px)
+            ? json(summary.min_vanishing_point_to_principal_point_px)
+            : json(nullptr);
+    out["vanishing_point_triangle_max_angle_deg"] = summary.vanishing_point_triangle_max_angle_deg;
+    if (options.use_horizon) out["horizon_residual_px"] = summary.horizon_residual_px;
+    if (distortion) out["distortion"] = distortion_out;
     out["segments_per_axis"] = summary.segments_per_axis;
-    out["warnings"] = summary.warnings;
+    std::vector<std::string> warnings = distortion_warnings;
+    warnings.insert(warnings.end(), summary.warnings.begin(), summary.warnings.end());
+    out["warnings"] = warnings;
     out["message"] = summary.message;
     out["time_ms"] = summary.time_ms;
     CalibrateIoResult result;

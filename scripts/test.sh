@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Sets up, builds and runs every Facet test: the unit suites, the offscreen app suites and,
 # when ../shared/data is beside the repo, the real-data suite. With FACET_REQUIRE_REALDATA=1
-# (CI) a missing ../shared/data is a failure, not a skip.
+# (CI) a missing ../shared/data is a failure, not a skip. With FACET_BENCH=1 (CI) the
+# benchmarks are built too, with the Ceres comparison, so they cannot rot unnoticed.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -11,7 +12,11 @@ jobs="${FACET_JOBS:-2}"
 shared="$(cd "$root/.." && pwd)/shared/data"
 
 start=$(date +%s)
-cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DFACET_SHARED_DATA="$shared" >/dev/null
+bench_flags=()
+if [ "${FACET_BENCH:-0}" = "1" ]; then
+  bench_flags=(-DFACET_BUILD_BENCH=ON -DFACET_BENCH_CERES=ON)
+fi
+cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DFACET_SHARED_DATA="$shared" "${bench_flags[@]}" >/dev/null
 cmake --build "$build" -j "$jobs"
 echo "build: $(( $(date +%s) - start )) s"
 

@@ -107,6 +107,124 @@ TEST_CASE("LINES.json of a synthetic scene gives its camera") {
   CHECK(out.at("segment_residuals_px").size() == scene.project.segments.size());
   CHECK(out.at("warnings").is_array());
   CHECK(out.at("segments_per_axis") == json({8, 8, 8}));
+
+  // Uncertainty and degeneracy figures, the same as the core's.
+  CHECK(out.at("focal_std_px").get<double>() == core.focal_std_px);
+  CHECK(out.at("focal_std_px").get<double>() < kNoiseFreeRelative * truth.focal_px);
+  CHECK(out.at("principal_point_std_px").size() == 2);
+  CHECK(out.at("outlier_segments") == json::array());
+  CHECK(out.at("outlier_threshold_px").get<double>() == core.outlier_threshold_px);
+  for (const char* key : {"vanishing_direction_std_deg", "family_angle_spread_deg", "vanishing_point_to_principal_point_px"})
+    CHECK(out.at(key).size() == 3);
+  for (int a = 0; a < 3; ++a) {
+    CHECK(out["family_angle_spread_deg"][a].get<double>() == core.family_angle_spread_deg[a]);
+    CHECK(out["vanishing_point_to_principal_point_px"][a].get<double>() == core.vanishing_point_to_principal_point_px[a]);
+  }
+  CHECK(out.at("vanishing_point_triangle_max_angle_deg").get<double>() == core.vanishing_point_triangle_max_angle_deg);
+  CHECK(out.at("min_family_angle_spread_deg").get<double>() == core.min_family_angle_spread_deg);
+  CHECK(out.at("min_vanishing_point_to_principal_point_px").get<double>() ==
+        core.min_vanishing_point_to_principal_point_px);
+  CHECK_FALSE(out.contains("distortion"));
+  CHECK_FALSE(out.contains("horizon_residual_px"));
+}
+
+std::string Fixed17(double x) {
+  std::ostringstream out;
+  out << std::setprecision(17) << x;
+  return out.str();
+}
+
+TEST_CASE("focal length fixed or under a prior, the horizon, and flagged outliers") {
+  const testing::SyntheticScene scene = testing::MakeBoxScene();
+  const Camera& truth = scene.true_camera;
+  const std::string pp_field =
+      ", \"principal_point\": [" + Fixed17(truth.principal_point_px.x()) + ", " + Fixed17(truth.principal_point_px.y()) + "]";
+
+  SUBCASE("a fixed focal length is kept and has no std") {
+    const std::string field = ", \"focal_px\": " + Fixed17(1.02 * truth.focal_px);
+    const CalibrateIoResult r = CalibrateLinesJson(LinesJson(scene, {Axis::kX, Axis::kY, Axis::kZ}, field));
+    INFO("error: " << r.error);
+    REQUIRE(r.ok());
+    const json out = json::parse(r.json);
+    CHECK(out.at("focal_px").get<double>() == 1.02 * truth.focal_px);
+    CHECK(out.at("focal_std_px").get<double>() == 0.0);
+  }
+  SUBCASE("a prior: exact data outweigh it") {
+    const std::string field = pp_field + ", \"focal_prior_px\": " + Fixed17(1.05 * truth.focal_px) +
+                              ", \"focal_prior_std_px\": 20";
+    const CalibrateIoResult r = CalibrateLinesJson(LinesJson(scene, {Axis::kX, Axis::kZ}, field));
+    INFO("error: " << r.error);
+    REQUIRE(r.ok());
+    const json out = json::parse(r.json);
+    CHECK(std::abs(out.at("focal_px").get<double>() - truth.focal_px) < kNoiseFreeRelative * truth.focal_px);
+  }
+  SUBCASE("one family, a known focal length and the horizon") {
+    const Eigen::Vector3d line = truth.K().inverse().transpose() * truth.cam_from_world_rotation.col(2);
+    const double x2 = truth.width_px - 1.0;
+    const std::string field = pp_field + ", \"focal_px\": " + Fixed17(truth.focal_px) + ", \"horizon\": [0, " +
+                              Fixed17(-line.z() / line.y()) + ", " + Fixed17(x2) + ", " +
+                              Fixed17(-(line.x() * x2 + line.z()) / line.y()) + "]";
+    const CalibrateIoResult r = CalibrateLinesJson(LinesJson(scene, {Axis::kY}, field));
+    INFO("error: " << r.error);
+    REQUIRE(r.ok());
+    const json out = json::parse(r.json);
+    const Eigen::Matrix3d rotation = MatrixFromRows(out.at("R"));
+    for (int c = 0; c < 3; ++c)
+      CHECK(std::abs(std::abs(rotation.col(c).dot(truth.cam_from_world_rotation.col(c))) - 1.0) < 1e-9);
+    CHECK(out.at("horizon_residual_px").get<double>() < 1e-9);
+    CHECK(out.at("vanishing_point_axes") == json({"y"}));
+  }
+  SUBCASE("a level horizon given as its row") {
+    testing::SyntheticSceneOptions o;
+    o.roll_deg = 0.0;
+    const testing::SyntheticScene level = testing::MakeBoxScene(o);
+    const Camera& cam = level.true_camera;
+    const Eigen::Vector3d line = cam.K().inverse().transpose() * cam.cam_from_world_rotation.col(2);
+    REQUIRE(std::abs(line.x()) < 1e-12 * std::abs(line.y()));
+    const std::string field = ", \"principal_point\": [" + Fixed17(cam.principal_point_px.x()) + ", " +
+                              Fixed17(cam.principal_point_px.y()) + "], \"focal_px\": " + Fixed17(cam.focal_px) +
+                              ", \"horizon\": " + Fixed17(-line.z() / line.y());
+    const CalibrateIoResult r = CalibrateLinesJson(LinesJson(level, {Axis::kX}, field));
+    INFO("error: " << r.error);
+    REQUIRE(r.ok());
+    const Eigen::Matrix3d rotation = MatrixFromRows(json::parse(r.json).at("R"));
+    for (int c = 0; c < 3; ++c)
+      CHECK(std::abs(std::abs(rotation.col(c).dot(cam.cam_from_world_rotation.col(c))) - 1.0) < 1e-9);
+  }
+  SUBCASE("a wrong segment is listed in outlier_segments") {
+    testing::SyntheticScene noisy = scene;
+    // Segment 3 of the x family (families in x, y, z order: index 3 overall); 6 px off.
+    int seen = -1, index = -1;
+    for (size_t i = 0; i < noisy.project.segments.size() && index < 0; ++i)
+      if (noisy.project.segments[i].axis == Axis::kX && ++seen == 3) index = static_cast<int>(i);
+    REQUIRE(index >= 0);
+    noisy.project.segments[index].a_px.y() += 6.0;
+    const CalibrateIoResult r = CalibrateLinesJson(LinesJson(noisy, {Axis::kX, Axis::kY, Axis::kZ}, ""));
+    INFO("error: " << r.error);
+    REQUIRE(r.ok());
+    const json out = json::parse(r.json);
+    CHECK(out.at("outlier_segments") == json({3}));
+    CHECK(out.at("refitted_without_outliers").get<bool>());
+    CHECK(out.at("segment_residuals_px").at(3).get<double>() > out.at("outlier_threshold_px").get<double>());
+  }
+}
+
+TEST_CASE("\"distortion\": true estimates it from the same segments first") {
+  const testing::SyntheticScene scene = testing::MakeBoxScene();
+  const CalibrateIoResult r =
+      CalibrateLinesJson(LinesJson(scene, {Axis::kX, Axis::kY, Axis::kZ}, ", \"distortion\": true"));
+  INFO("error: " << r.error);
+  REQUIRE(r.ok());
+  const json out = json::parse(r.json);
+  REQUIRE(out.contains("distortion"));
+  const json& d = out.at("distortion");
+  // A pinhole scene: no distortion found, and the camera as without the option.
+  CAPTURE(d.dump());
+  CHECK(std::abs(d.at("k1").get<double>()) < 1e-9);
+  CHECK(d.at("k2").get<double>() == 0.0);
+  CHECK(d.at("center").size() == 2);
+  CHECK(d.at("scale_px").get<double>() > 0.0);
+  CHECK(std::abs(out.at("focal_px").get<double>() - scene.true_camera.focal_px) < 1e-7 * scene.true_camera.focal_px);
 }
 
 TEST_CASE("principal point choices and a vanishing point at infinity") {
@@ -181,6 +299,19 @@ TEST_CASE("bad LINES.json gives a message, never an exception") {
       "undetermined");
   CheckError(valid.substr(0, valid.size() - 1) + ", \"principal_point\": \"middle\"}", "principal_point");
   CheckError(valid.substr(0, valid.size() - 1) + ", \"principal_point\": [1]}", "principal_point");
+  CheckError(valid.substr(0, valid.size() - 1) + ", \"focal_px\": -5}", "focal_px");
+  CheckError(valid.substr(0, valid.size() - 1) + ", \"focal_px\": \"900\"}", "focal_px");
+  CheckError(valid.substr(0, valid.size() - 1) + ", \"focal_prior_px\": 900}", "go together");
+  CheckError(valid.substr(0, valid.size() - 1) + ", \"focal_prior_px\": 900, \"focal_prior_std_px\": 0}",
+             "focal_prior_std_px");
+  CheckError(valid.substr(0, valid.size() - 1) + ", \"focal_px\": 900, \"focal_prior_px\": 900, \"focal_prior_std_px\": 9}",
+             "not both");
+  CheckError(valid.substr(0, valid.size() - 1) + ", \"horizon\": [1, 2, 3]}", "horizon");
+  CheckError(valid.substr(0, valid.size() - 1) + ", \"horizon\": [1, 2, 1, 2]}", "horizon");
+  CheckError(valid.substr(0, valid.size() - 1) + ", \"distortion\": 1}", "distortion");
+  CheckError(valid.substr(0, valid.size() - 1) + ", \"refit_without_outliers\": \"yes\"}", "refit_without_outliers");
+  // One family without a horizon, and with a horizon but no focal length.
+  CheckError(LinesJson(scene, {Axis::kX}, ", \"horizon\": 300"), "known focal length");
   CheckError(
       R"({"image_size": [640, 480], "families": [)"
       R"({"axis": "x", "segments": [[10, 10, 10, 10], [10, 50, 100, 50]]},)"

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/calibrate_vp.h"
+#include "core/plumb_line.h"
 
 namespace facet {
 namespace {
@@ -22,8 +23,18 @@ namespace fs = std::filesystem;
 const fs::path kDataDir = fs::path(FACET_SHARED_DATA) / "yorkurbandb-train";
 constexpr int kWidthPx = 640;
 constexpr int kHeightPx = 480;
-// The issue's baseline for least squares over all segments with three vanishing points.
-constexpr double kMaxMedianFocalErrorPercent = 2.5;
+// The figures this calibration reaches (defaults: endpoint-distance cost, outliers flagged
+// and refitted without, principal-point prior of 2.5 % of the larger side at the centre),
+// with a small margin: solved 1.55 % median / 6.55 % p90, centred 2.04 % / 4.43 %. The
+// issue's targets (1 % / 5 %) are NOT met: the labelled segments, fitted with the true K,
+// give vanishing directions 1.44 deg (median) from orthogonal (printed below), and the
+// photos show barrel distortion (k1 ~ 0.02 from the plumb lines); neither an orthogonal
+// pinhole fit can absorb.
+constexpr double kMaxMedianFocalErrorPercentSolved = 1.6;
+constexpr double kMaxP90FocalErrorPercentSolved = 6.8;
+constexpr double kMaxMedianFocalErrorPercentCentred = 2.1;
+constexpr double kMaxP90FocalErrorPercentCentred = 4.6;
+constexpr double kMaxMedianPrincipalPointErrorPx = 17.5;
 
 // Lines of numbers of a text file, skipping '#' comments.
 std::vector<std::vector<double>> ReadNumberRows(const fs::path& path) {
@@ -110,20 +121,36 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
   std::sort(folders.begin(), folders.end());
   CHECK(folders.size() == 51);
 
-  Figures solve, center;
+  Figures solve, center, undistorted;
   std::vector<double> closed_form_errors_percent;  // the three-point closed form alone
   int closed_form_failures = 0;
   int two_family_images = 0;  // a photo whose labels use only two of the three vanishing points
   for (const fs::path& folder : folders) {
     const std::string id = folder.filename().string();
     const std::vector<Segment> segments = ReadSegments(folder / (id + "_lines.txt"));
-    for (auto* figures : {&solve, &center}) {
+    // Radial distortion from the same segments (core/plumb_line.h), for the third variant.
+    std::vector<Segment> undistorted_segments = segments;
+    {
+      PlumbLineOptions plumb_options;
+      plumb_options.width_px = kWidthPx;
+      plumb_options.height_px = kHeightPx;
+      std::vector<PlumbLine> lines;
+      for (const Segment& s : segments) lines.push_back({{s.a_px, s.b_px}, static_cast<int>(s.axis)});
+      const PlumbLineSummary plumb = EstimateRadialDistortion(lines, plumb_options);
+      if (plumb.success)
+        for (Segment& s : undistorted_segments) {
+          s.a_px = plumb.distortion.Undistort(s.a_px);
+          s.b_px = plumb.distortion.Undistort(s.b_px);
+        }
+    }
+    for (auto* figures : {&solve, &center, &undistorted}) {
       VpCalibrationOptions options;
       options.width_px = kWidthPx;
       options.height_px = kHeightPx;
       options.principal_point_mode =
-          figures == &solve ? PrincipalPointMode::kSolve : PrincipalPointMode::kImageCenter;
-      const VpCalibrationSummary s = CalibrateFromVanishingLines(segments, options);
+          figures == &center ? PrincipalPointMode::kImageCenter : PrincipalPointMode::kSolve;
+      const VpCalibrationSummary s =
+          CalibrateFromVanishingLines(figures == &undistorted ? undistorted_segments : segments, options);
       if (!s.success) {
         figures->failures.push_back(id + ": " + s.message);
         continue;
@@ -141,8 +168,10 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
     }
   }
 
-  for (auto* figures : {&solve, &center}) {
-    const std::string name = figures == &solve ? "3 VPs, principal point solved" : "3 VPs, principal point at image centre";
+  for (auto* figures : {&solve, &center, &undistorted}) {
+    const std::string name = figures == &solve     ? "3 VPs, principal point solved"
+                             : figures == &center ? "3 VPs, principal point at image centre"
+                                                  : "3 VPs, principal point solved, after plumb-line undistortion";
     std::ostringstream failures;
     for (const auto& f : figures->failures) failures << "\n  " << f;
     INFO(name << ": images without a usable result:" << failures.str());
@@ -163,7 +192,38 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
                                                          << "): focal error median "
                                                          << Percentile(closed_form_errors_percent, 0.5) << " %, p90 "
                                                          << Percentile(closed_form_errors_percent, 0.9) << " %");
-  CHECK(Percentile(solve.focal_errors_percent, 0.5) <= kMaxMedianFocalErrorPercent);
+  CHECK(Percentile(solve.focal_errors_percent, 0.5) <= kMaxMedianFocalErrorPercentSolved);
+  CHECK(Percentile(solve.focal_errors_percent, 0.9) <= kMaxP90FocalErrorPercentSolved);
+  CHECK(Percentile(center.focal_errors_percent, 0.5) <= kMaxMedianFocalErrorPercentCentred);
+  CHECK(Percentile(center.focal_errors_percent, 0.9) <= kMaxP90FocalErrorPercentCentred);
+  CHECK(Percentile(solve.pp_errors_px, 0.5) <= kMaxMedianPrincipalPointErrorPx);
+
+  // How far the labels themselves are from the Manhattan assumption: the ground-truth
+  // vanishing directions (fitted to these segments with the true K, README) deviate from
+  // orthogonality by this much; an orthogonal fit cannot do better than the focal error that
+  // deviation implies.
+  std::vector<double> orthogonality_deg;
+  for (const fs::path& folder : folders) {
+    const std::string id = folder.filename().string();
+    std::ifstream in(folder / (id + "_gt.txt"));
+    REQUIRE_MESSAGE(in.good(), "cannot open the ground truth of " << id);
+    std::string line;
+    while (std::getline(in, line) && line != "vp_dir_cam") {
+    }
+    Eigen::Matrix3d v;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) in >> v(r, c);
+    REQUIRE(in.good());
+    double worst = 0.0;
+    for (int a = 0; a < 3; ++a)
+      for (int b = a + 1; b < 3; ++b)
+        worst = std::max(worst, std::asin(std::min(1.0, std::abs(v.col(a).normalized().dot(v.col(b).normalized())))) *
+                                    180.0 / M_PI);
+    orthogonality_deg.push_back(worst);
+  }
+  MESSAGE("ground-truth vanishing directions from orthogonal (worst pair per image): median "
+          << Percentile(orthogonality_deg, 0.5) << " deg, p90 " << Percentile(orthogonality_deg, 0.9) << " deg");
+  CHECK(Percentile(orthogonality_deg, 0.5) > 0.5);
 }
 
 }  // namespace

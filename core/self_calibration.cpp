@@ -1,0 +1,792 @@
+#include "core/self_calibration.h"
+
+#include <algorithm>
+#include <cassert>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+
+#include <Eigen/Dense>
+
+#include "core/two_view.h"
+
+namespace facet {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// A view is resected from at least this many triangulated tracks (DLT needs 6; a margin for
+// the outliers the iterations drop).
+constexpr int kMinResectionTracks = 8;
+constexpr int kResectionRounds = 3;
+constexpr int kMinTracks = 8;
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+std::string Fmt(double x) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.4g", x);
+  return buffer;
+}
+
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+Eigen::Vector2d ImageCentre(const SelfCalibrationView& v) { return {(v.width_px - 1) / 2.0, (v.height_px - 1) / 2.0}; }
+
+// Normalising intrinsics of a view: the prior K, else f = w + h at the image centre.
+Eigen::Matrix3d NormalisingK(const SelfCalibrationView& v) {
+  Eigen::Matrix3d k = Eigen::Matrix3d::Identity();
+  k(0, 0) = k(1, 1) = v.focal_prior_px > 0 ? v.focal_prior_px : static_cast<double>(v.width_px + v.height_px);
+  k.block<2, 1>(0, 2) = ImageCentre(v);
+  return k;
+}
+
+// The reconstruction in normalised image coordinates (x = N^-1 uv).
+struct Projective {
+  std::vector<Eigen::Matrix3d> n;        // per view
+  std::vector<Matrix34d> P;              // per view
+  std::vector<bool> registered;          // per view
+  std::vector<std::vector<Eigen::Vector2d>> x;  // per track, per observation
+  std::vector<std::vector<bool>> ok;            // per track, per observation
+  std::vector<Eigen::Vector4d> X;               // per track
+  std::vector<bool> has_point;                  // per track
+};
+
+double PixelError(const Projective& p, const Track& track, int k, const Eigen::Vector4d& X) {
+  const int v = track[k].view;
+  const Eigen::Vector3d y = p.n[v] * p.P[v] * X;
+  if (!(std::abs(y.z()) > 0)) return std::numeric_limits<double>::infinity();
+  return (y.head<2>() / y.z() - track[k].uv_px).norm();
+}
+
+// Triangulates track t from its registered, accepted observations; flags observations beyond
+// the threshold and drops the point when fewer than 2 remain.
+void TriangulateTrack(const std::vector<Track>& tracks, int t, double threshold_px, Projective* p) {
+  const Track& track = tracks[t];
+  for (int round = 0; round < 2; ++round) {
+    std::vector<Matrix34d> cams;
+    std::vector<Eigen::Vector3d> xh;
+    std::vector<Eigen::Vector2d> xs;
+    for (size_t k = 0; k < track.size(); ++k) {
+      if (!p->ok[t][k] || !p->registered[track[k].view]) continue;
+      cams.push_back(p->P[track[k].view]);
+      xh.push_back(p->x[t][k].homogeneous());
+      xs.push_back(p->x[t][k]);
+    }
+    p->has_point[t] = cams.size() >= 2;
+    if (!p->has_point[t]) return;
+    p->X[t] = RefineTriangulatedPoint(cams, xs, TriangulateLinear(cams, xh), 10);
+    bool dropped = false;
+    for (size_t k = 0; k < track.size(); ++k) {
+      if (!p->ok[t][k] || !p->registered[track[k].view]) continue;
+      if (!(PixelError(*p, track, static_cast<int>(k), p->X[t]) < threshold_px)) {
+        p->ok[t][k] = false;
+        dropped = true;
+      }
+    }
+    if (!dropped) return;
+  }
+  int remaining = 0;
+  for (size_t k = 0; k < track.size(); ++k) remaining += p->ok[t][k] && p->registered[track[k].view];
+  p->has_point[t] = remaining >= 2;
+}
+
+// Normalised DLT resection of view v from the triangulated tracks it sees; false with fewer
+// than kMinResectionTracks.
+bool Resect(const std::vector<Track>& tracks, int v, double threshold_px, Projective* p) {
+  std::vector<std::pair<int, int>> obs;  // (track, observation)
+  for (size_t t = 0; t < tracks.size(); ++t)
+    for (size_t k = 0; k < tracks[t].size(); ++k)
+      if (tracks[t][k].view == v && p->ok[t][k] && p->has_point[t]) obs.emplace_back(static_cast<int>(t), static_cast<int>(k));
+  std::vector<bool> use(obs.size(), true);
+  for (int round = 0; round < kResectionRounds; ++round) {
+    const int count = static_cast<int>(std::count(use.begin(), use.end(), true));
+    if (count < kMinResectionTracks) return false;
+    Eigen::MatrixXd a(2 * count, 12);
+    int row = 0;
+    for (size_t i = 0; i < obs.size(); ++i) {
+      if (!use[i]) continue;
+      const Eigen::Vector4d X = p->X[obs[i].first];
+      const Eigen::Vector2d x = p->x[obs[i].first][obs[i].second];
+      a.row(row) << Eigen::RowVector4d::Zero(), -X.transpose(), x.y() * X.transpose();
+      a.row(row + 1) << X.transpose(), Eigen::RowVector4d::Zero(), -x.x() * X.transpose();
+      row += 2;
+    }
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV);
+    const Eigen::VectorXd sol = svd.matrixV().col(11);
+    Matrix34d cam;
+    for (int r = 0; r < 3; ++r) cam.row(r) = sol.segment<4>(4 * r).transpose();
+    p->P[v] = cam;
+    bool changed = false;
+    for (size_t i = 0; i < obs.size(); ++i) {
+      const bool good = PixelError(*p, tracks[obs[i].first], obs[i].second, p->X[obs[i].first]) < threshold_px;
+      changed = changed || good != use[i];
+      use[i] = good;
+    }
+    if (!changed) break;
+  }
+  for (size_t i = 0; i < obs.size(); ++i)
+    if (!use[i]) p->ok[obs[i].first][obs[i].second] = false;
+  return std::count(use.begin(), use.end(), true) >= kMinResectionTracks;
+}
+
+// Coefficients of w*_ab = (P Q P^T)_ab over the 10 upper-triangular entries of Q.
+Eigen::Matrix<double, 1, 10> QuadricRow(const Matrix34d& P, int a, int b) {
+  Eigen::Matrix<double, 1, 10> row;
+  int u = 0;
+  for (int c = 0; c < 4; ++c)
+    for (int d = c; d < 4; ++d) row(u++) = c == d ? P(a, c) * P(b, c) : P(a, c) * P(b, d) + P(a, d) * P(b, c);
+  return row;
+}
+
+Eigen::Matrix4d QuadricFromVector(const Eigen::Matrix<double, 10, 1>& q) {
+  Eigen::Matrix4d m;
+  int u = 0;
+  for (int c = 0; c < 4; ++c)
+    for (int d = c; d < 4; ++d) m(c, d) = m(d, c) = q(u++);
+  return m;
+}
+
+int DepthVotes(const std::vector<Matrix34d>& cams, const std::vector<bool>& registered,
+               const std::vector<Eigen::Vector4d>& X, const std::vector<bool>& has_point) {
+  int votes = 0;
+  for (size_t v = 0; v < cams.size(); ++v) {
+    if (!registered[v]) continue;
+    const double det_sign = cams[v].leftCols<3>().determinant() > 0 ? 1.0 : -1.0;
+    for (size_t t = 0; t < X.size(); ++t) {
+      if (!has_point[t]) continue;
+      const double depth = det_sign * cams[v].row(2).dot(X[t]) * X[t](3);
+      votes += depth > 0 ? 1 : (depth < 0 ? -1 : 0);
+    }
+  }
+  return votes;
+}
+
+// Moves the frame so that camera `ref` is at the origin with R = I and the points' RMS
+// distance from their centroid is 1.
+void NormaliseGauge(int ref, std::vector<Camera>* cameras, std::vector<Eigen::Vector3d>* points,
+                    const std::vector<bool>& use_point) {
+  const Eigen::Matrix3d r0 = (*cameras)[ref].cam_from_world_rotation;
+  const Eigen::Vector3d t0 = (*cameras)[ref].cam_from_world_translation;
+  // New world = camera ref's frame, then scaled by s.
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  int count = 0;
+  for (size_t j = 0; j < points->size(); ++j)
+    if (use_point[j]) {
+      centroid += r0 * (*points)[j] + t0;
+      ++count;
+    }
+  if (count == 0) return;
+  centroid /= count;
+  double sum = 0.0;
+  for (size_t j = 0; j < points->size(); ++j)
+    if (use_point[j]) sum += (r0 * (*points)[j] + t0 - centroid).squaredNorm();
+  const double s = sum > 0 ? 1.0 / std::sqrt(sum / count) : 1.0;
+  for (auto& x : *points) x = s * (r0 * x + t0);
+  for (auto& c : *cameras) {
+    // p_cam = R x + t with x = R0^T (y / s - t0): R' = R R0^T, t' = s (t - R R0^T t0).
+    const Eigen::Matrix3d r = c.cam_from_world_rotation * r0.transpose();
+    c.cam_from_world_translation = s * (c.cam_from_world_translation - r * t0);
+    c.cam_from_world_rotation = r;
+  }
+}
+
+}  // namespace
+
+bool SelfCalibrationOptions::Check(std::string* error) const {
+  if (!(skew_weight >= 0 && aspect_weight >= 0 && principal_point_weight >= 0 && focal_weight >= 0 &&
+        prior_focal_weight >= 0)) {
+    *error = "the quadric weights must not be negative";
+    return false;
+  }
+  if (!(inlier_threshold_px > 0)) {
+    *error = "inlier_threshold_px must be positive";
+    return false;
+  }
+  if (quadric_reweighting_rounds < 1 || max_bundle_iterations < 0 || bundle_rounds < 1) {
+    *error = "quadric_reweighting_rounds and bundle_rounds must be positive, max_bundle_iterations not negative";
+    return false;
+  }
+  return true;
+}
+
+bool BundleAdjustmentOptions::Check(std::string* error) const {
+  if (max_iterations < 0) {
+    *error = "max_iterations must not be negative";
+    return false;
+  }
+  return true;
+}
+
+BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& observations,
+                                     const BundleAdjustmentOptions& options, std::vector<Camera>* cameras,
+                                     std::vector<Eigen::Vector3d>* points) {
+  const auto start = Clock::now();
+  BundleAdjustmentSummary summary;
+  std::string error;
+  if (!options.Check(&error)) {
+    summary.message = "bad options: " + error;
+    return summary;
+  }
+  const int n = static_cast<int>(cameras->size());
+  const int m = static_cast<int>(points->size());
+  if (n == 0 || observations.empty()) {
+    summary.message = "nothing to adjust";
+    return summary;
+  }
+  for (const auto& o : observations) {
+    assert(o.view >= 0 && o.view < n && o.point >= 0 && o.point < m);
+    if (!o.uv_px.allFinite()) {
+      summary.message = "an observation is not finite";
+      return summary;
+    }
+  }
+  const bool shared = options.shared_focal_length;
+  const int n_focal = shared ? 1 : n;
+  const int n_pp = options.refine_principal_point ? (shared ? 2 : 2 * n) : 0;
+  const int nc = 6 * n + n_focal + n_pp;
+  auto focal_index = [&](int v) { return 6 * n + (shared ? 0 : v); };
+  auto pp_index = [&](int v) { return 6 * n + n_focal + (shared ? 0 : 2 * v); };
+
+  std::vector<Camera> cams = *cameras;
+  std::vector<Eigen::Vector3d> pts = *points;
+  if (shared)
+    for (auto& c : cams) {
+      c.focal_px = cams[0].focal_px;
+      if (options.refine_principal_point) c.principal_point_px = cams[0].principal_point_px;
+    }
+
+  auto cost_of = [&](const std::vector<Camera>& cs, const std::vector<Eigen::Vector3d>& ps) {
+    double cost = 0.0;
+    for (const auto& o : observations) {
+      const double e = (cs[o.view].Project(ps[o.point]) - o.uv_px).squaredNorm();
+      cost += std::isfinite(e) ? e : 1e300;
+    }
+    return cost;
+  };
+
+  // Normal equations: camera block U (nc x nc), point blocks V_j, coupling W_j (nc x 3).
+  Eigen::MatrixXd u(nc, nc);
+  Eigen::VectorXd g_c(nc);
+  std::vector<Eigen::Matrix3d> v_blocks(m);
+  std::vector<Eigen::Vector3d> g_p(m);
+  std::vector<Eigen::MatrixXd> w_blocks(m);
+  std::vector<bool> point_used(m, false);
+  for (const auto& o : observations) point_used[o.point] = true;
+
+  auto build = [&]() {
+    u.setZero();
+    g_c.setZero();
+    for (int j = 0; j < m; ++j) {
+      v_blocks[j].setZero();
+      g_p[j].setZero();
+      if (point_used[j]) w_blocks[j].setZero(nc, 3);
+    }
+    int idx[10];
+    Eigen::Matrix<double, 2, 10> jc;
+    for (const auto& o : observations) {
+      const Camera& c = cams[o.view];
+      const Eigen::Vector3d rx = c.cam_from_world_rotation * pts[o.point];
+      const Eigen::Vector3d p = rx + c.cam_from_world_translation;
+      const double z = p.z();
+      const Eigen::Vector2d xy = p.head<2>() / z;
+      const Eigen::Vector2d r = c.focal_px * xy + c.principal_point_px - o.uv_px;
+      Eigen::Matrix<double, 2, 3> dp;
+      dp << 1, 0, -xy.x(), 0, 1, -xy.y();
+      dp *= c.focal_px / z;
+      int count = 0;
+      jc.setZero();
+      const Eigen::Matrix<double, 2, 3> d_rot = -dp * Skew(rx);
+      for (int k = 0; k < 3; ++k) {
+        idx[count] = 6 * o.view + k;
+        jc.col(count++) = d_rot.col(k);
+      }
+      for (int k = 0; k < 3; ++k) {
+        idx[count] = 6 * o.view + 3 + k;
+        jc.col(count++) = dp.col(k);
+      }
+      idx[count] = focal_index(o.view);
+      jc.col(count++) = xy;
+      if (options.refine_principal_point) {
+        idx[count] = pp_index(o.view);
+        jc.col(count++) = Eigen::Vector2d(1, 0);
+        idx[count] = pp_index(o.view) + 1;
+        jc.col(count++) = Eigen::Vector2d(0, 1);
+      }
+      const Eigen::Matrix<double, 2, 3> jp = dp * c.cam_from_world_rotation;
+      for (int a = 0; a < count; ++a) {
+        g_c(idx[a]) += jc.col(a).dot(r);
+        for (int b = 0; b < count; ++b) u(idx[a], idx[b]) += jc.col(a).dot(jc.col(b));
+        w_blocks[o.point].row(idx[a]) += jc.col(a).transpose() * jp;
+      }
+      v_blocks[o.point] += jp.transpose() * jp;
+      g_p[o.point] += jp.transpose() * r;
+    }
+  };
+
+  double cost = cost_of(cams, pts);
+  const double initial_cost = cost;
+  summary.initial_rms_px = std::sqrt(cost / (2.0 * observations.size()));
+  double lambda = 1e-4;
+  Eigen::MatrixXd s(nc, nc);
+  Eigen::VectorXd rhs(nc);
+  for (int it = 0; it < options.max_iterations && cost > 0; ++it) {
+    build();
+    bool improved = false;
+    while (lambda < 1e16) {
+      s = u;
+      s.diagonal() += lambda * (u.diagonal().array() + 1e-12 * u.diagonal().maxCoeff()).matrix();
+      rhs = -g_c;
+      std::vector<Eigen::Matrix3d> v_inv(m);
+      for (int j = 0; j < m; ++j) {
+        if (!point_used[j]) continue;
+        Eigen::Matrix3d vj = v_blocks[j];
+        vj.diagonal() += lambda * (v_blocks[j].diagonal().array() + 1e-12 * v_blocks[j].diagonal().maxCoeff()).matrix();
+        v_inv[j] = vj.inverse();
+        const Eigen::MatrixXd y = w_blocks[j] * v_inv[j];
+        s.noalias() -= y * w_blocks[j].transpose();
+        rhs.noalias() += y * g_p[j];
+      }
+      const Eigen::VectorXd dc = s.ldlt().solve(rhs);
+      if (!dc.allFinite()) {
+        lambda *= 10;
+        continue;
+      }
+      std::vector<Camera> cams_new = cams;
+      std::vector<Eigen::Vector3d> pts_new = pts;
+      for (int v = 0; v < n; ++v) {
+        Camera& c = cams_new[v];
+        c.cam_from_world_rotation = RotationFromAngleAxis(dc.segment<3>(6 * v)) * c.cam_from_world_rotation;
+        c.cam_from_world_translation += dc.segment<3>(6 * v + 3);
+        c.focal_px += dc(focal_index(v));
+        if (options.refine_principal_point) c.principal_point_px += dc.segment<2>(pp_index(v));
+      }
+      double step_sq = dc.squaredNorm();
+      for (int j = 0; j < m; ++j) {
+        if (!point_used[j]) continue;
+        const Eigen::Vector3d dp = v_inv[j] * (-g_p[j] - w_blocks[j].transpose() * dc);
+        pts_new[j] += dp;
+        step_sq += dp.squaredNorm();
+      }
+      const double cost_new = cost_of(cams_new, pts_new);
+      if (std::isfinite(cost_new) && cost_new < cost) {
+        const double decrease = cost - cost_new;
+        cams = std::move(cams_new);
+        pts = std::move(pts_new);
+        cost = cost_new;
+        lambda = std::max(lambda / 5, 1e-12);
+        improved = decrease > 1e-14 * cost && step_sq > 1e-30;
+        break;
+      }
+      lambda *= 5;
+    }
+    ++summary.iterations;
+    if (!improved) break;
+  }
+
+  // Focal uncertainty: the undamped reduced camera system is singular along the similarity
+  // gauge; the focal length is gauge-invariant, so any generalised inverse gives its variance.
+  build();
+  s = u;
+  for (int j = 0; j < m; ++j) {
+    if (!point_used[j]) continue;
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd_v(v_blocks[j], Eigen::ComputeFullU | Eigen::ComputeFullV);
+    if (!(svd_v.singularValues()(2) > 1e-14 * svd_v.singularValues()(0))) continue;
+    s.noalias() -= w_blocks[j] * v_blocks[j].inverse() * w_blocks[j].transpose();
+  }
+  const int dof = 2 * static_cast<int>(observations.size()) - nc - 3 * static_cast<int>(std::count(point_used.begin(), point_used.end(), true)) + 7;
+  const double sigma_sq = dof > 0 ? cost / dof : 0.0;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(s);
+  const double max_ev = eig.eigenvalues().cwiseAbs().maxCoeff();
+  Eigen::VectorXd inv_ev = eig.eigenvalues();
+  for (int k = 0; k < nc; ++k) inv_ev(k) = eig.eigenvalues()(k) > 1e-12 * max_ev ? 1.0 / eig.eigenvalues()(k) : 0.0;
+  summary.focal_std_px.assign(n, 0.0);
+  for (int v = 0; v < n; ++v) {
+    const Eigen::VectorXd row = eig.eigenvectors().row(focal_index(v));
+    summary.focal_std_px[v] = std::sqrt(std::max(0.0, sigma_sq * row.cwiseProduct(inv_ev).dot(row)));
+  }
+
+  *cameras = cams;
+  *points = pts;
+  summary.final_rms_px = std::sqrt(cost / (2.0 * observations.size()));
+  summary.success = std::isfinite(cost) && cost <= initial_cost;
+  summary.message = "bundle adjustment: RMS " + Fmt(summary.initial_rms_px) + " -> " + Fmt(summary.final_rms_px) +
+                    " px in " + std::to_string(summary.iterations) + " iterations";
+  summary.time_ms = MsSince(start);
+  return summary;
+}
+
+SelfCalibrationSummary SelfCalibrate(const std::vector<SelfCalibrationView>& views, const std::vector<Track>& tracks,
+                                     const SelfCalibrationOptions& options) {
+  const auto start = Clock::now();
+  SelfCalibrationSummary summary;
+  auto fail = [&](std::string message) {
+    summary.success = false;
+    summary.message = std::move(message);
+    summary.time_ms = MsSince(start);
+    return summary;
+  };
+  std::string error;
+  if (!options.Check(&error)) return fail("bad options: " + error);
+  const int n = static_cast<int>(views.size());
+  const int num_tracks = static_cast<int>(tracks.size());
+  if (n < 3) return fail("self-calibration needs at least 3 views, got " + std::to_string(n));
+  for (const auto& v : views)
+    if (v.width_px <= 0 || v.height_px <= 0 || !(v.focal_prior_px >= 0))
+      return fail("every view needs a positive image size and a non-negative focal prior");
+
+  Projective p;
+  p.n.resize(n);
+  for (int v = 0; v < n; ++v) p.n[v] = NormalisingK(views[v]);
+  p.P.assign(n, Matrix34d::Zero());
+  p.registered.assign(n, false);
+  p.x.resize(num_tracks);
+  p.ok.resize(num_tracks);
+  p.X.assign(num_tracks, Eigen::Vector4d::Zero());
+  p.has_point.assign(num_tracks, false);
+  int duplicates = 0;
+  Eigen::MatrixXi shared_count = Eigen::MatrixXi::Zero(n, n);
+  for (int t = 0; t < num_tracks; ++t) {
+    std::vector<bool> seen(n, false);
+    for (const auto& o : tracks[t]) {
+      if (o.view < 0 || o.view >= n) return fail("track " + std::to_string(t) + " names a view out of range");
+      if (!o.uv_px.allFinite()) return fail("track " + std::to_string(t) + " has a non-finite pixel");
+      const Eigen::Vector3d x = p.n[o.view].inverse() * o.uv_px.homogeneous();
+      p.x[t].push_back(x.head<2>() / x.z());
+      // A second pixel of the same view is a matching error: the first one is kept.
+      p.ok[t].push_back(!seen[o.view]);
+      duplicates += seen[o.view];
+      seen[o.view] = true;
+    }
+    for (int a = 0; a < n; ++a)
+      for (int b = a + 1; b < n; ++b) shared_count(a, b) += seen[a] && seen[b];
+  }
+  if (duplicates > 0)
+    summary.warnings.push_back(std::to_string(duplicates) + " observations repeat a view within their track (ignored)");
+
+  // Step 1: the initial pair and its F (in pixels; RANSAC flags wrong matches).
+  Eigen::Index a_index = 0, b_index = 0;
+  shared_count.maxCoeff(&a_index, &b_index);
+  const int va = static_cast<int>(a_index), vb = static_cast<int>(b_index);
+  if (shared_count(va, vb) < kMinTracks)
+    return fail("no pair of views shares " + std::to_string(kMinTracks) + " tracks (best: " +
+                std::to_string(shared_count(va, vb)) + ")");
+  summary.initial_view_a = va;
+  summary.initial_view_b = vb;
+  std::vector<Eigen::Vector2d> uv_a, uv_b;
+  std::vector<std::pair<int, std::pair<int, int>>> pair_obs;  // track, (obs in a, obs in b)
+  for (int t = 0; t < num_tracks; ++t) {
+    int ka = -1, kb = -1;
+    for (size_t k = 0; k < tracks[t].size(); ++k) {
+      if (!p.ok[t][k]) continue;
+      if (tracks[t][k].view == va) ka = static_cast<int>(k);
+      if (tracks[t][k].view == vb) kb = static_cast<int>(k);
+    }
+    if (ka < 0 || kb < 0) continue;
+    uv_a.push_back(tracks[t][ka].uv_px);
+    uv_b.push_back(tracks[t][kb].uv_px);
+    pair_obs.push_back({t, {ka, kb}});
+  }
+  FundamentalOptions f_options;
+  f_options.inlier_threshold_px = options.inlier_threshold_px;
+  f_options.seed = options.seed;
+  const FundamentalSummary f = EstimateFundamentalMatrix(uv_a, uv_b, f_options);
+  if (!f.success)
+    return fail("the fundamental matrix of views " + std::to_string(va) + " and " + std::to_string(vb) +
+                " failed: " + f.message);
+  for (size_t i = 0; i < pair_obs.size(); ++i)
+    if (!f.inliers[i]) {
+      p.ok[pair_obs[i].first][pair_obs[i].second.first] = false;
+      p.ok[pair_obs[i].first][pair_obs[i].second.second] = false;
+    }
+  const Eigen::Matrix3d f_normalised = p.n[vb].transpose() * f.F * p.n[va];
+  if (!CanonicalCamerasFromFundamental(f_normalised, &p.P[va], &p.P[vb])) return fail("F gives no canonical cameras");
+  p.registered[va] = p.registered[vb] = true;
+  for (int t = 0; t < num_tracks; ++t) TriangulateTrack(tracks, t, options.inlier_threshold_px, &p);
+
+  // Further views by resection, the best-connected first.
+  while (true) {
+    int best = -1, best_count = 0;
+    for (int v = 0; v < n; ++v) {
+      if (p.registered[v]) continue;
+      int count = 0;
+      for (int t = 0; t < num_tracks; ++t) {
+        if (!p.has_point[t]) continue;
+        for (size_t k = 0; k < tracks[t].size(); ++k) count += tracks[t][k].view == v && p.ok[t][k];
+      }
+      if (count > best_count) {
+        best_count = count;
+        best = v;
+      }
+    }
+    if (best < 0 || best_count < kMinResectionTracks) break;
+    if (!Resect(tracks, best, options.inlier_threshold_px, &p)) {
+      summary.warnings.push_back("view " + std::to_string(best) + " could not be resected (" +
+                                 std::to_string(best_count) + " triangulated tracks, too few consistent ones)");
+      // Mark it so it is not tried again; it stays unregistered.
+      for (int t = 0; t < num_tracks; ++t)
+        for (size_t k = 0; k < tracks[t].size(); ++k)
+          if (tracks[t][k].view == best) p.ok[t][k] = false;
+      continue;
+    }
+    p.registered[best] = true;
+    for (int t = 0; t < num_tracks; ++t) TriangulateTrack(tracks, t, options.inlier_threshold_px, &p);
+  }
+  summary.registered = p.registered;
+  const int num_registered = static_cast<int>(std::count(p.registered.begin(), p.registered.end(), true));
+  for (int v = 0; v < n; ++v)
+    if (!p.registered[v]) summary.warnings.push_back("view " + std::to_string(v) + " is not registered");
+  if (num_registered < 3)
+    return fail("only " + std::to_string(num_registered) + " views could be registered; self-calibration needs 3");
+
+  {
+    double sum = 0.0;
+    int count = 0;
+    for (int t = 0; t < num_tracks; ++t) {
+      if (!p.has_point[t]) continue;
+      for (size_t k = 0; k < tracks[t].size(); ++k) {
+        if (!p.ok[t][k] || !p.registered[tracks[t][k].view]) continue;
+        const double e = PixelError(p, tracks[t], static_cast<int>(k), p.X[t]);
+        sum += e * e;
+        ++count;
+      }
+    }
+    summary.projective_rms_px = count > 0 ? std::sqrt(sum / (2.0 * count)) : 0.0;
+  }
+
+  // Conditioning: points whitened (their 4x4 second moment becomes the identity; invariant
+  // to the sign of each homogeneous point), cameras scaled to unit norm.
+  Eigen::Matrix4d moment = Eigen::Matrix4d::Zero();
+  int num_points = 0;
+  for (int t = 0; t < num_tracks; ++t)
+    if (p.has_point[t]) {
+      moment += p.X[t] * p.X[t].transpose();
+      ++num_points;
+    }
+  if (num_points < kMinTracks) return fail("only " + std::to_string(num_points) + " tracks could be triangulated");
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> moment_eig(moment / num_points);
+  if (!(moment_eig.eigenvalues()(0) > 1e-14 * moment_eig.eigenvalues()(3)))
+    return fail("the triangulated points are coplanar: the projective reconstruction is degenerate");
+  const Eigen::Matrix4d whiten =
+      moment_eig.eigenvalues().cwiseSqrt().cwiseInverse().asDiagonal() * moment_eig.eigenvectors().transpose();
+  const Eigen::Matrix4d whiten_inv = whiten.inverse();
+  std::vector<Matrix34d> cams(n, Matrix34d::Zero());
+  std::vector<Eigen::Vector4d> X(num_tracks, Eigen::Vector4d::Zero());
+  for (int v = 0; v < n; ++v)
+    if (p.registered[v]) cams[v] = (p.P[v] * whiten_inv).normalized();
+  for (int t = 0; t < num_tracks; ++t)
+    if (p.has_point[t]) X[t] = (whiten * p.X[t]).normalized();
+
+  // Step 2: the absolute dual quadric, iteratively reweighted by 1 / w*_33.
+  const bool all_priors =
+      std::all_of(views.begin(), views.end(), [](const SelfCalibrationView& v) { return v.focal_prior_px > 0; });
+  Eigen::Matrix4d q = Eigen::Matrix4d::Zero();
+  std::vector<double> nu(n, 1.0);
+  for (int round = 0; round < options.quadric_reweighting_rounds; ++round) {
+    Eigen::MatrixXd a(6 * num_registered, 10);
+    int row = 0;
+    for (int v = 0; v < n; ++v) {
+      if (!p.registered[v]) continue;
+      const Matrix34d& c = cams[v];
+      const double w = 1.0 / nu[v];
+      const double wf = (views[v].focal_prior_px > 0 || all_priors) ? options.prior_focal_weight : options.focal_weight;
+      a.row(row++) = w * options.skew_weight * QuadricRow(c, 0, 1);
+      a.row(row++) = w * options.aspect_weight * (QuadricRow(c, 0, 0) - QuadricRow(c, 1, 1));
+      a.row(row++) = w * options.principal_point_weight * QuadricRow(c, 0, 2);
+      a.row(row++) = w * options.principal_point_weight * QuadricRow(c, 1, 2);
+      a.row(row++) = w * wf * (QuadricRow(c, 0, 0) - QuadricRow(c, 2, 2));
+      a.row(row++) = w * wf * (QuadricRow(c, 1, 1) - QuadricRow(c, 2, 2));
+    }
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV);
+    q = QuadricFromVector(svd.matrixV().col(9));
+    double sum33 = 0.0;
+    for (int v = 0; v < n; ++v)
+      if (p.registered[v]) sum33 += cams[v].row(2) * q * cams[v].row(2).transpose();
+    if (sum33 < 0) q = -q;
+    for (int v = 0; v < n; ++v)
+      if (p.registered[v]) nu[v] = std::max(std::abs(double(cams[v].row(2) * q * cams[v].row(2).transpose())), 1e-12);
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> q_eig(q);
+  // Rank 3: drop the eigenvalue of smallest magnitude; the other three must be positive.
+  Eigen::Index smallest = 0;
+  q_eig.eigenvalues().cwiseAbs().minCoeff(&smallest);
+  Eigen::Matrix4d h = Eigen::Matrix4d::Zero();
+  int negative = 0;
+  for (int k = 0, col = 0; k < 4; ++k) {
+    if (k == smallest) continue;
+    const double lambda = q_eig.eigenvalues()(k);
+    negative += lambda <= 0;
+    h.col(col++) = std::sqrt(std::abs(lambda)) * q_eig.eigenvectors().col(k);
+  }
+  h.col(3) = q_eig.eigenvectors().col(smallest);
+  if (negative > 0)
+    summary.warnings.push_back("the absolute dual quadric is not positive semi-definite (" + std::to_string(negative) +
+                               " negative eigenvalue(s)): the linear self-calibration is unreliable (noise, outliers, "
+                               "or a critical motion); the bundle adjustment starts from a rough guess");
+  const Eigen::Matrix4d h_inv = h.inverse();
+  std::vector<Matrix34d> metric(n, Matrix34d::Zero());
+  std::vector<Eigen::Vector4d> metric_x(num_tracks, Eigen::Vector4d::Zero());
+  for (int v = 0; v < n; ++v)
+    if (p.registered[v]) metric[v] = cams[v] * h;
+  for (int t = 0; t < num_tracks; ++t)
+    if (p.has_point[t]) metric_x[t] = h_inv * X[t];
+  Eigen::Matrix4d reflect = Eigen::Matrix4d::Identity();
+  if (DepthVotes(metric, p.registered, metric_x, p.has_point) < 0) {
+    reflect(3, 3) = -1.0;
+    for (auto& c : metric) c = c * reflect;
+    for (auto& x : metric_x) x = reflect * x;
+  }
+  summary.metric_from_projective = reflect * h_inv * whiten;
+
+  summary.cameras.resize(n);
+  summary.linear_focal_px.assign(n, 0.0);
+  std::vector<double> focal_list;
+  for (int v = 0; v < n; ++v) {
+    Camera& cam = summary.cameras[v];
+    cam.width_px = views[v].width_px;
+    cam.height_px = views[v].height_px;
+    cam.principal_point_px = options.principal_point_mode == PrincipalPointMode::kFixed
+                                 ? options.fixed_principal_point_px
+                                 : ImageCentre(views[v]);
+    if (!p.registered[v]) continue;
+    Eigen::Matrix3d k, r;
+    Eigen::Vector3d t;
+    if (!DecomposeProjectionMatrix(p.n[v] * metric[v], &k, &r, &t))
+      return fail("the upgraded camera of view " + std::to_string(v) + " cannot be decomposed");
+    summary.linear_focal_px[v] = 0.5 * (k(0, 0) + k(1, 1));
+    focal_list.push_back(summary.linear_focal_px[v]);
+    cam.focal_px = summary.linear_focal_px[v];
+    cam.cam_from_world_rotation = r;
+    cam.cam_from_world_translation = t;
+  }
+  if (options.shared_focal_length) {
+    std::nth_element(focal_list.begin(), focal_list.begin() + focal_list.size() / 2, focal_list.end());
+    for (auto& c : summary.cameras) c.focal_px = focal_list[focal_list.size() / 2];
+  }
+  if (!(focal_list[focal_list.size() / 2] > 0)) return fail("the linear self-calibration gives no positive focal length");
+
+  // Points re-triangulated with the square-pixel cameras, then the outliers' observations dropped.
+  std::vector<Eigen::Vector3d> points(num_tracks, Eigen::Vector3d::Zero());
+  std::vector<bool> keep(num_tracks, false);
+  auto triangulate_metric = [&]() {
+    for (int t = 0; t < num_tracks; ++t) {
+      keep[t] = false;
+      if (!p.has_point[t]) continue;
+      std::vector<Matrix34d> pc;
+      std::vector<Eigen::Vector3d> xh;
+      std::vector<Eigen::Vector2d> xs;
+      for (size_t k = 0; k < tracks[t].size(); ++k) {
+        if (!p.ok[t][k] || !p.registered[tracks[t][k].view]) continue;
+        pc.push_back(summary.cameras[tracks[t][k].view].ProjectionMatrix());
+        xh.push_back(tracks[t][k].uv_px.homogeneous());
+        xs.push_back(tracks[t][k].uv_px);
+      }
+      if (pc.size() < 2) continue;
+      const Eigen::Vector4d xm = RefineTriangulatedPoint(pc, xs, TriangulateLinear(pc, xh), 10);
+      if (!(std::abs(xm(3)) > 1e-12)) continue;
+      points[t] = xm.head<3>() / xm(3);
+      keep[t] = true;
+    }
+  };
+  triangulate_metric();
+  std::vector<BundleObservation> observations;
+  // Drops observations beyond threshold_px (none when 0) or behind their camera.
+  auto collect = [&](double threshold_px, double* rms) {
+    observations.clear();
+    double sum = 0.0;
+    std::vector<int> per_track(num_tracks, 0);
+    for (int t = 0; t < num_tracks; ++t) {
+      if (!keep[t]) continue;
+      for (size_t k = 0; k < tracks[t].size(); ++k) {
+        const int v = tracks[t][k].view;
+        if (!p.ok[t][k] || !p.registered[v]) continue;
+        const Camera& c = summary.cameras[v];
+        const double e = (c.Project(points[t]) - tracks[t][k].uv_px).norm();
+        if (threshold_px > 0 && !(e < threshold_px && c.CamFromWorld(points[t]).z() > 0)) {
+          p.ok[t][k] = false;
+          continue;
+        }
+        observations.push_back({v, t, tracks[t][k].uv_px});
+        sum += e * e;
+        ++per_track[t];
+      }
+    }
+    // Tracks left with one observation constrain nothing.
+    std::vector<BundleObservation> kept;
+    for (const auto& o : observations)
+      if (per_track[o.point] >= 2) kept.push_back(o);
+    for (int t = 0; t < num_tracks; ++t) keep[t] = keep[t] && per_track[t] >= 2;
+    observations = kept;
+    *rms = observations.empty() ? 0.0 : std::sqrt(sum / (2.0 * observations.size()));
+  };
+  collect(0.0, &summary.linear_rms_px);
+  // The linear upgrade is approximate (tens of px are normal), but a few points may land far
+  // off or behind a camera and pull the adjustment away: drop those beyond 5 median errors.
+  {
+    std::vector<double> errors;
+    for (const auto& o : observations)
+      errors.push_back((summary.cameras[o.view].Project(points[o.point]) - o.uv_px).norm());
+    if (!errors.empty()) {
+      std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+      double unused = 0.0;
+      collect(std::max(options.inlier_threshold_px, 5.0 * errors[errors.size() / 2]), &unused);
+    }
+  }
+  NormaliseGauge(va, &summary.cameras, &points, keep);
+
+  if (options.bundle_adjust) {
+    BundleAdjustmentOptions ba;
+    ba.shared_focal_length = options.shared_focal_length;
+    ba.refine_principal_point = options.principal_point_mode == PrincipalPointMode::kSolve;
+    ba.max_iterations = options.max_bundle_iterations;
+    for (int round = 0; round < options.bundle_rounds; ++round) {
+      double unused = 0.0;
+      if (round > 0) collect(options.inlier_threshold_px, &unused);
+      // Only registered views take part: a compact camera list for the adjustment.
+      std::vector<int> index(n, -1);
+      std::vector<Camera> ba_cams;
+      for (int v = 0; v < n; ++v)
+        if (p.registered[v]) {
+          index[v] = static_cast<int>(ba_cams.size());
+          ba_cams.push_back(summary.cameras[v]);
+        }
+      std::vector<BundleObservation> ba_obs = observations;
+      for (auto& o : ba_obs) o.view = index[o.view];
+      const BundleAdjustmentSummary result = BundleAdjust(ba_obs, ba, &ba_cams, &points);
+      if (!result.success) return fail("the bundle adjustment failed: " + result.message);
+      summary.bundle_iterations += result.iterations;
+      summary.focal_std_px.assign(n, 0.0);
+      for (int v = 0; v < n; ++v)
+        if (index[v] >= 0) {
+          summary.cameras[v] = ba_cams[index[v]];
+          summary.focal_std_px[v] = result.focal_std_px[index[v]];
+        }
+    }
+    NormaliseGauge(va, &summary.cameras, &points, keep);
+  }
+  double final_rms = 0.0;
+  collect(0.0, &final_rms);
+  summary.reprojection_rms_px = final_rms;
+  summary.num_observations = static_cast<int>(observations.size());
+  summary.points = points;
+  summary.triangulated = keep;
+  for (int v = 0; v < n; ++v)
+    if (p.registered[v] && !(summary.cameras[v].focal_px > 0))
+      return fail("view " + std::to_string(v) + " ends with a non-positive focal length");
+  summary.success = true;
+  summary.message = "self-calibrated " + std::to_string(num_registered) + " views, focal " +
+                    Fmt(summary.cameras[va].focal_px) + " px (linear " + Fmt(summary.linear_focal_px[va]) +
+                    "), reprojection RMS " + Fmt(summary.reprojection_rms_px) + " px";
+  summary.time_ms = MsSince(start);
+  return summary;
+}
+
+}  // namespace facet
