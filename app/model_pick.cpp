@@ -101,23 +101,42 @@ double ClosestEdgeParameter(const Eigen::Vector3d& a, const Eigen::Vector3d& b, 
 ElementPick PickInImage(const Project& project, const std::vector<ProjectedPrimitive>& projected,
                         const Camera& camera, double zoom, const Eigen::Vector2d& origin_screen,
                         const Eigen::Vector2d& mouse_screen, const PickFilter& filter, double radius_px) {
-  ElementPick best;
   auto screen = [&](const Eigen::Vector2d& uv) -> Eigen::Vector2d { return origin_screen + zoom * uv; };
   const Eigen::Vector3d eye = camera.CenterInWorld();
+  const Eigen::Vector2d mouse_uv = (mouse_screen - origin_screen) / zoom;
+  // Candidates on the back of a primitive (every face beside them turned away) lose to a
+  // front face under the cursor: a click on a face the user sees never picks what it hides.
+  struct Candidate {
+    ElementPick pick;
+    bool front = false;
+  };
+  Candidate vertex_pick, edge_pick;
   double best_vertex = radius_px, best_edge = radius_px, best_face_depth = kInfinity;
-  ElementPick vertex_pick, edge_pick, face_pick;
+  ElementPick face_pick;
   for (const ProjectedPrimitive& pp : projected) {
     const Primitive* primitive = project.FindPrimitive(pp.primitive_id);
     if (primitive == nullptr) continue;
     const PolyMesh& mesh = primitive->mesh;
+    std::vector<char> front(mesh.FaceIdEnd(), 0);
+    for (FaceId f = 0; f < mesh.FaceIdEnd(); ++f) {
+      if (mesh.IsFace(f)) front[f] = FaceNormal(mesh, f).dot(eye - FaceCentroid(mesh, f)) > 0.0;
+    }
+    auto front_halfedge = [&](HalfedgeId h) { return mesh.IsBoundary(h) || front[mesh.Face(h)]; };
     if (filter.vertices) {
       for (VertexId v = 0; v < pp.uv_px.size(); ++v) {
         if (!pp.in_front[v]) continue;
         const double d = (screen(pp.uv_px[v]) - mouse_screen).norm();
-        if (d < best_vertex) {
-          best_vertex = d;
-          vertex_pick.element = {ElementKind::kVertex, pp.primitive_id, v};
-          vertex_pick.distance_px = d;
+        if (d >= best_vertex) continue;
+        best_vertex = d;
+        vertex_pick.pick.element = {ElementKind::kVertex, pp.primitive_id, v};
+        vertex_pick.pick.distance_px = d;
+        vertex_pick.front = false;
+        const HalfedgeId first = mesh.vertex(v).halfedge;
+        HalfedgeId h = first;
+        for (int guard = 0; guard < 1000; ++guard) {
+          vertex_pick.front = vertex_pick.front || front_halfedge(h);
+          h = mesh.Next(PolyMesh::Twin(h));
+          if (h == first) break;
         }
       }
     }
@@ -127,42 +146,40 @@ ElementPick PickInImage(const Project& project, const std::vector<ProjectedPrimi
         const VertexId a = mesh.Origin(2 * e), b = mesh.Dest(2 * e);
         if (!pp.in_front[a] || !pp.in_front[b]) continue;
         const double d = DistanceToSegment(mouse_screen, screen(pp.uv_px[a]), screen(pp.uv_px[b]));
-        if (d < best_edge) {
-          best_edge = d;
-          edge_pick.element = {ElementKind::kEdge, pp.primitive_id, e};
-          edge_pick.distance_px = d;
-          const Eigen::Vector2d mouse_uv = (mouse_screen - origin_screen) / zoom;
-          edge_pick.t = ClosestEdgeParameter(mesh.vertex(a).position, mesh.vertex(b).position, eye,
-                                             camera.RayDirectionInWorld(mouse_uv));
-          const Eigen::Vector2d mid = screen(camera.Project(0.5 * (mesh.vertex(a).position + mesh.vertex(b).position)));
-          if ((mid - mouse_screen).norm() <= kMidpointSnapPx) edge_pick.t = 0.5;
-        }
+        if (d >= best_edge) continue;
+        best_edge = d;
+        edge_pick.pick.element = {ElementKind::kEdge, pp.primitive_id, e};
+        edge_pick.pick.distance_px = d;
+        edge_pick.front = front_halfedge(2 * e) || front_halfedge(2 * e + 1);
+        edge_pick.pick.t = ClosestEdgeParameter(mesh.vertex(a).position, mesh.vertex(b).position, eye,
+                                                camera.RayDirectionInWorld(mouse_uv));
+        const Eigen::Vector2d mid = screen(camera.Project(0.5 * (mesh.vertex(a).position + mesh.vertex(b).position)));
+        if ((mid - mouse_screen).norm() <= kMidpointSnapPx) edge_pick.pick.t = 0.5;
       }
     }
-    if (filter.faces) {
-      for (FaceId f = 0; f < mesh.FaceIdEnd(); ++f) {
-        if (!mesh.IsFace(f)) continue;
-        const Eigen::Vector3d centroid = FaceCentroid(mesh, f);
-        if (FaceNormal(mesh, f).dot(eye - centroid) <= 0.0) continue;  // back-facing
-        std::vector<Eigen::Vector2d> polygon;
-        bool visible = true;
-        for (VertexId v : FaceVertices(mesh, f)) {
-          if (!pp.in_front[v]) visible = false;
-          polygon.push_back(screen(pp.uv_px[v]));
-        }
-        if (!visible || !PointInPolygon(mouse_screen, polygon)) continue;
-        const double depth = camera.CamFromWorld(centroid).z();
-        if (depth < best_face_depth) {
-          best_face_depth = depth;
-          face_pick.element = {ElementKind::kFace, pp.primitive_id, f};
-        }
+    // Faces are looked for whatever the filter: a front face under the cursor hides back
+    // vertices and edges.
+    for (FaceId f = 0; f < mesh.FaceIdEnd(); ++f) {
+      if (!mesh.IsFace(f) || !front[f]) continue;
+      std::vector<Eigen::Vector2d> polygon;
+      bool visible = true;
+      for (VertexId v : FaceVertices(mesh, f)) {
+        if (!pp.in_front[v]) visible = false;
+        polygon.push_back(screen(pp.uv_px[v]));
+      }
+      if (!visible || !PointInPolygon(mouse_screen, polygon)) continue;
+      const double depth = camera.CamFromWorld(FaceCentroid(mesh, f)).z();
+      if (depth < best_face_depth) {
+        best_face_depth = depth;
+        face_pick.element = {ElementKind::kFace, pp.primitive_id, f};
       }
     }
   }
-  if (!vertex_pick.element.Empty()) return vertex_pick;
-  if (!edge_pick.element.Empty()) return edge_pick;
-  if (!face_pick.element.Empty()) return face_pick;
-  return best;
+  const bool covered = !face_pick.element.Empty();
+  if (!vertex_pick.pick.element.Empty() && (vertex_pick.front || !covered)) return vertex_pick.pick;
+  if (!edge_pick.pick.element.Empty() && (edge_pick.front || !covered)) return edge_pick.pick;
+  if (filter.faces) return face_pick;
+  return {};
 }
 
 bool ProjectToPanel(const PickRay& ray, const Eigen::Vector3d& p_in_world, Eigen::Vector2d* px) {

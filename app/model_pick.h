@@ -5,7 +5,9 @@
 // Priorities: a vertex within the radius wins over an edge within the radius, which wins over
 // a face under the point; among faces the one nearest the camera wins. Only front-facing
 // faces are picked (their outward normal towards the camera), so a click on a box picks the
-// face the user sees.
+// face the user sees. In an image, a vertex or edge on the back of a primitive (all faces
+// beside it turned away) is picked only where no front face covers the cursor; in the 3D
+// panel the ray's first hit hides what lies behind it.
 #pragma once
 
 #include <vector>

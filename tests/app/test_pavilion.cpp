@@ -466,3 +466,30 @@ TEST_CASE("pavilion: the 3D panel picks a vertex, an edge and a face by ray, wit
     CHECK(report.at("undo_stack") == placed.at("undo_stack"));  // selecting is not an edit
   }
 }
+
+TEST_CASE("pavilion: a wedge added on top of the selected box takes its footprint and stands on its top face") {
+  TempDir dir("pavilion_wedge");
+  const Fixture f = WriteFixture(dir);
+  std::ostringstream s;
+  s << "frames 2\ncommand add box\nframes 1\n"
+    << "command select primitive " << f.box_id << "\ncommand add wedge on-top\nframes 2\n";
+  const nlohmann::json report = Render(dir, f, "wedge", s.str());
+  INFO("log:\n" << LogText(report));
+  const facet::ProjectLoadResult loaded = facet::ProjectFromJson(report.at("project").dump());
+  REQUIRE(loaded.ok());
+  const facet::Project& p = loaded.project;
+  REQUIRE(p.primitives.size() == 2);
+  const facet::Primitive& box = p.primitives[0];
+  const facet::Primitive& wedge = p.primitives[1];
+  CHECK(wedge.shape.kind == facet::PrimitiveKind::kWedge);
+  CHECK(wedge.attached_to == box.id);
+  CHECK(report.at("undo_stack").back().get<std::string>() == "Add wedge on top");
+  CHECK(report.at("selection").at("primitive_id").get<facet::Id>() == wedge.id);
+  constexpr double kTolerance = 1e-12;
+  // The wedge's footprint is the box's and it stands on the box's top (z = box height).
+  CHECK(std::abs(wedge.shape.params[0] - box.shape.params[0]) <= kTolerance);
+  CHECK(std::abs(wedge.shape.params[1] - box.shape.params[1]) <= kTolerance);
+  double min_z = 1e300;
+  for (facet::VertexId v = 0; v < wedge.mesh.VertexIdEnd(); ++v) min_z = std::min(min_z, wedge.mesh.vertex(v).position.z());
+  CHECK(std::abs(min_z - (box.shape.translation.z() + box.shape.params[2])) <= kTolerance);
+}
