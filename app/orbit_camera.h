@@ -24,7 +24,7 @@ struct OrbitCamera {
   Camera photo_camera;
 };
 
-// A bounding sphere of what the panel should show (boxes and camera centres).
+// A bounding sphere of what the panel should show (primitives, or camera centres).
 struct SceneBounds {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();
   double radius = 1.0;  // > 0

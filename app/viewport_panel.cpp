@@ -138,6 +138,7 @@ struct GlResources {
 // Scene measures that size the grid, the frustums and the framing.
 struct SceneMeasure {
   SceneBounds bounds;             // primitives and camera centres
+  SceneBounds frame_bounds;       // what Frame shows: the primitives (everything when none)
   double size = 1.0;              // diagonal of the primitives (or of everything when none)
   double frustum_depth = 0.3;     // world units from apex to image plane (at most)
   double grid_minor = 0.1, grid_major = 1.0, grid_half_extent = 5.0;
@@ -385,6 +386,12 @@ SceneMeasure MeasureScene(const Project& project) {
   m.bounds.radius = std::max(0.5 * all_bounds.diagonal().norm(), 1e-3);
   if (box_bounds.isEmpty() && all_bounds.diagonal().norm() < 1e-9) m.bounds.radius = 1.0;
   m.size = box_bounds.isEmpty() ? 2.0 * m.bounds.radius : std::max(box_bounds.diagonal().norm(), 1e-3);
+  m.frame_bounds = m.bounds;
+  if (!box_bounds.isEmpty()) {
+    m.frame_bounds.center = box_bounds.center();
+    constexpr double kFrameMargin = 1.2;  // room around the model, for its outline and handles
+    m.frame_bounds.radius = std::max(kFrameMargin * 0.5 * box_bounds.diagonal().norm(), 1e-3);
+  }
   m.frustum_depth = 0.2 * m.size;
 
   // Grid steps are powers of ten: 4 to 40 minor cells across the scene, major every ten.
@@ -754,8 +761,8 @@ std::string ImageLabel(const Project& project, const Image& image) {
 
 void DrawToolbar(AppState* state, PanelState* panel, const SceneMeasure& measure, int width_px, int height_px) {
   const Project& project = state->document.project();
-  if (ImGui::SmallButton("Frame")) OrbitFrame(&panel->orbit, measure.bounds, width_px, height_px);
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Frame the whole model (F, or double-click)");
+  if (ImGui::SmallButton("Frame")) OrbitFrame(&panel->orbit, measure.frame_bounds, width_px, height_px);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Frame the model's primitives (F, or double-click)");
   ImGui::SameLine();
   std::string preview = "View from photo";
   if (panel->orbit.photo_image_id != kNoId) {
@@ -917,7 +924,7 @@ void DrawViewportPanel(AppState* state) {
   // Frame the model when a project shows up (first frame, another file, first content).
   const bool has_content = !project.primitives.empty() || std::any_of(project.images.begin(), project.images.end(), Drawable);
   if (!panel.framed_once || panel.framed_project_path != state->project_path || (has_content && !panel.had_content)) {
-    if (panel.orbit.photo_image_id == kNoId) OrbitFrame(&panel.orbit, measure.bounds, width_px, height_px);
+    if (panel.orbit.photo_image_id == kNoId) OrbitFrame(&panel.orbit, measure.frame_bounds, width_px, height_px);
     panel.framed_once = true;
     panel.framed_project_path = state->project_path;
   }
@@ -954,7 +961,7 @@ void DrawViewportPanel(AppState* state) {
   if (hovered && io.MouseWheel != 0.0f) OrbitZoom(&panel.orbit, io.MouseWheel, width_px, height_px);
   if ((hovered && ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) || ((hovered || active) && FramePressed(io)) ||
       panel.frame_requested) {
-    OrbitFrame(&panel.orbit, measure.bounds, width_px, height_px);
+    OrbitFrame(&panel.orbit, measure.frame_bounds, width_px, height_px);
   }
   panel.frame_requested = false;
   if (panel.view_from_photo_requested != kNoId) {

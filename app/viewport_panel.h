@@ -29,8 +29,8 @@ ViewportReport LastViewportReport();
 void ShutdownViewportPanel();
 
 // Requests carried out by the next DrawViewportPanel, for menus, shortcuts and the input
-// script: frame the whole model (boxes and camera centres), or look through the camera of
-// a calibrated image (ignored when it is not calibrated).
+// script: frame the model (its primitives; the camera centres when there are none), or look
+// through the camera of a calibrated image (ignored when it is not calibrated).
 void RequestViewportFrame();
 void RequestViewportViewFromPhoto(Id image_id);
 
