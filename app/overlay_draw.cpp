@@ -146,15 +146,32 @@ const ProjectedPrimitive* FindProjected(const OverlayInput& input, Id primitive_
   return nullptr;
 }
 
-// A face filled with a translucent colour, through its triangulation (faces may be concave).
+// A face filled with a translucent colour: as one polygon when its projection is convex (no
+// seams between triangles), else through its triangulation (faces may be concave).
 void FillFace(ImDrawList* draw_list, const Primitive& primitive, const ProjectedPrimitive& pp, FaceId f,
               const ViewTransform& view, ImU32 color) {
   const PolyMesh& mesh = primitive.mesh;
+  std::vector<ImVec2> polygon;
+  for (VertexId v : FaceVertices(mesh, f)) {
+    if (v >= pp.in_front.size() || !pp.in_front[v]) return;
+    polygon.push_back(ToImVec(ToScreenD(view, pp.uv_px[v])));
+  }
+  int positive = 0, negative = 0;
+  const size_t n = polygon.size();
+  for (size_t i = 0; i < n; ++i) {
+    const ImVec2 a = polygon[i], b = polygon[(i + 1) % n], c = polygon[(i + 2) % n];
+    const float cross = (b.x - a.x) * (c.y - b.y) - (b.y - a.y) * (c.x - b.x);
+    positive += cross > 0.0f;
+    negative += cross < 0.0f;
+  }
+  if (positive == 0 || negative == 0) {
+    draw_list->AddConvexPolyFilled(polygon.data(), static_cast<int>(n), color);
+    return;
+  }
   for (const CornerTriangle& tri : TriangulateFace(mesh, f)) {
     ImVec2 p[3];
     for (int i = 0; i < 3; ++i) {
       const VertexId v = mesh.Origin(tri[i]);
-      if (v >= pp.in_front.size() || !pp.in_front[v]) return;
       p[i] = ToImVec(ToScreenD(view, pp.uv_px[v]));
     }
     draw_list->AddTriangleFilled(p[0], p[1], p[2], color);

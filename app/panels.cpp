@@ -351,9 +351,17 @@ void DrawPinSection(AppState* state, const Pin pin) {
   RecordItem("pin.uv");
   TrackEdit(state, "Move pin", moved, [&](Project* p) { p->FindPin(pin_id)->uv_px = Eigen::Vector2d(uv[0], uv[1]); });
   ImGui::PopID();
+  // The joint solve's figure when it ran (it also fits free vertices), else the geometry solve's.
+  const Project& current = state->document.project();
+  if (state->last_update.joint.IsUsable()) {
+    for (const PinDiagnostic& d : state->last_update.joint.pins) {
+      if (d.pin_id == pin_id && std::isfinite(d.error_px)) LabelValue("Residual", "%.3f px", d.error_px);
+    }
+    return;
+  }
   const auto& residuals = state->last_update.solve.pin_residuals_px;
-  for (size_t i = 0; i < project.pins.size() && i < residuals.size(); ++i) {
-    if (project.pins[i].id == pin_id && std::isfinite(residuals[i])) LabelValue("Residual", "%.3f px", residuals[i]);
+  for (size_t i = 0; i < current.pins.size() && i < residuals.size(); ++i) {
+    if (current.pins[i].id == pin_id && std::isfinite(residuals[i])) LabelValue("Residual", "%.3f px", residuals[i]);
   }
 }
 
