@@ -52,6 +52,7 @@ const char* ToolName(Tool tool) {
     case Tool::kDeleteVertex: return "Delete vertex";
     case Tool::kConnectVertices: return "Connect vertices";
     case Tool::kDeleteEdge: return "Delete edge";
+    case Tool::kPushPull: return "Push/pull";
   }
   return "?";
 }

@@ -31,6 +31,7 @@ enum class Tool {
   kDeleteVertex,     // V_delete: click on a vertex made by E_split
   kConnectVertices,  // V_connect: click two vertices of one face
   kDeleteEdge,       // E_delete: click on an edge between two faces
+  kPushPull,         // push/pull: extrude the selected face by a typed distance
 };
 const char* ToolName(Tool tool);
 
@@ -77,6 +78,10 @@ struct AppState {
   Tool tool = Tool::kSelect;
   PrimitiveKind add_kind = PrimitiveKind::kBox;  // what kAddPrimitive adds
   bool add_on_top = true;  // a wedge, pyramid or plane goes on top of the selected box
+  // Push/pull: the distance field's value (project units) and the face it was defaulted for;
+  // a newly selected face gets the default again (and the field the keyboard focus).
+  double push_pull_distance = 0.0;
+  ElementRef push_pull_face;
   Id active_image_id = kNoId;
   // The element under the mouse in the image or 3D panel (both highlight it), and which
   // panel set it (0 none, 1 image, 2 3D): a panel clears only its own hover.

@@ -1,9 +1,11 @@
 #include "app/model_edits.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <limits>
 
+#include "core/mesh_extrude.h"
 #include "core/mesh_operators.h"
 
 namespace facet::app {
@@ -230,6 +232,31 @@ bool TogglePlanarFaceEdit(AppState* state, Id primitive_id, FaceId face) {
   return true;
 }
 
+bool PushPullFaceEdit(AppState* state, Id primitive_id, FaceId face, double distance) {
+  Project edited;
+  Primitive* primitive = EditablePrimitive(state, &edited, primitive_id, "Push/pull face");
+  if (primitive == nullptr) return false;
+  const ExtrudeResult result = ExtrudeFace(&primitive->mesh, primitive->shape, face, distance);
+  if (!result.ok) return Refuse(state, "Push/pull face", result.message);
+  state->selection = Selection::Of({ElementKind::kFace, primitive_id, face});
+  CommitEdit(state, "Push/pull face", std::move(edited));
+  return true;
+}
+
+double DefaultPushPullDistance(const Primitive& primitive) {
+  constexpr double kFraction = 0.1;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -lo;
+  const PolyMesh& mesh = primitive.mesh;
+  for (VertexId v = 0; v < mesh.VertexIdEnd(); ++v) {
+    if (!mesh.IsVertex(v)) continue;
+    lo = lo.cwiseMin(mesh.vertex(v).position);
+    hi = hi.cwiseMax(mesh.vertex(v).position);
+  }
+  const double size = (hi - lo).maxCoeff();
+  return std::isfinite(size) && size > 0.0 ? kFraction * size : kFraction;
+}
+
 Id PinVertex(Project* project, Id image_id, const VertexRef& vertex, const Eigen::Vector2d& uv_px) {
   for (Pin& pin : project->pins) {
     if (pin.image_id == image_id && pin.vertex == vertex) {
@@ -279,6 +306,11 @@ bool ApplyToolClick(AppState* state, const ElementRef& picked, double t) {
       }
       return true;
     }
+    case Tool::kPushPull:
+      // Picks a face (the tools panel then offers its distance and Extrude).
+      if (picked.kind != ElementKind::kFace) return false;
+      state->selection = Selection::Of(picked);
+      return true;
     default: return false;
   }
 }

@@ -1,6 +1,6 @@
 // The model edits the tools, menus and script commands share: K_create of a primitive (alone
 // or attached on top of a box), the paper's K-operators on a primitive's mesh, freeing a
-// vertex, a planar-face constraint and vertex pins. Each is one undoable document edit with a
+// vertex, a planar-face constraint, push/pull of a face and vertex pins. Each is one undoable document edit with a
 // label, followed by the re-solve (CommitEdit); a refusal logs the core's message as an error
 // (shown in the log and the status bar) and changes nothing. Each returns whether it edited.
 #pragma once
@@ -44,6 +44,13 @@ bool ToggleFreeVertexEdit(AppState* state, Id primitive_id, VertexId vertex);
 // A kCoplanar constraint on the face's vertices ("keep this face planar"), or its removal
 // when the same constraint exists.
 bool TogglePlanarFaceEdit(AppState* state, Id primitive_id, FaceId face);
+
+// Push/pull: extrudes the face by `distance` project units along its outward normal (a
+// negative distance pushes it in), core/mesh_extrude.h; the face stays selected.
+bool PushPullFaceEdit(AppState* state, Id primitive_id, FaceId face, double distance);
+// The push/pull distance a face starts with: 10 % of the primitive's size (the largest side
+// of its bounding box), or 0.1 for an empty mesh.
+double DefaultPushPullDistance(const Primitive& primitive);
 
 // Pins `vertex` at uv in the image (replacing its earlier pin there). Returns the pin id.
 Id PinVertex(Project* project, Id image_id, const VertexRef& vertex, const Eigen::Vector2d& uv_px);

@@ -47,6 +47,8 @@ constexpr ToolButton kToolButtons[] = {
      "V_connect: click two vertices of one face to split the face by a new edge."},
     {Tool::kDeleteEdge, "Delete edge", "R", GLFW_KEY_R,
      "E_delete: click on an edge between two faces to merge them."},
+    {Tool::kPushPull, "Push/pull", "U", GLFW_KEY_U,
+     "Push/pull: select a face, type a distance (negative pushes in) and press Enter or Extrude."},
 };
 
 // Actions on the selection, beside the tools.
@@ -424,6 +426,43 @@ void DrawAddPrimitiveOptions(AppState* state, float width) {
   ImGui::Unindent(8.0f);
 }
 
+// Push/pull's distance field and Extrude button, for the selected face. A newly selected face
+// (or the tool just chosen) gets the default distance and the keyboard focus, so that typing
+// a value and Enter extrudes, as in SketchUp.
+void DrawPushPullOptions(AppState* state, float width) {
+  ImGui::Indent(8.0f);
+  const ElementRef face = state->selection.element;
+  const Project& project = state->document.project();
+  const Primitive* primitive = face.kind == ElementKind::kFace && ElementExists(project, face)
+                                   ? project.FindPrimitive(face.primitive_id)
+                                   : nullptr;
+  if (primitive == nullptr) {
+    state->push_pull_face = {};
+    ImGui::TextColored(kDimText, "Select a face to push or pull.");
+    ImGui::Unindent(8.0f);
+    return;
+  }
+  const bool fresh = state->push_pull_face != face;
+  if (fresh) {
+    state->push_pull_face = face;
+    state->push_pull_distance = DefaultPushPullDistance(*primitive);
+    ImGui::SetKeyboardFocusHere();
+  }
+  ImGui::SetNextItemWidth(width - 8.0f);
+  const bool entered = ImGui::InputDouble("##push_pull_distance", &state->push_pull_distance, 0.0, 0.0, "%.4g",
+                                          ImGuiInputTextFlags_EnterReturnsTrue);
+  RecordItem("tool.push_pull_distance");
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Distance along the face's normal, project units (negative: in)");
+  const bool clicked = ImGui::Button("Extrude##push_pull", ImVec2(width - 8.0f, 0.0f));
+  RecordItem("tool.push_pull_extrude");
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Extrude %s (Enter in the field)", DescribeElement(project, face).c_str());
+  if (entered || clicked) {
+    const Id primitive_id = face.primitive_id;
+    PushPullFaceEdit(state, primitive_id, face.element, state->push_pull_distance);
+  }
+  ImGui::Unindent(8.0f);
+}
+
 std::string StemOf(const std::string& path) {
   if (path.empty()) return "model";
   return std::filesystem::path(path).replace_extension().string();
@@ -581,6 +620,7 @@ void HandleToolShortcuts(AppState* state) {
 
 void SetTool(AppState* state, Tool tool) {
   if (tool != state->tool) state->selection.connect_from = {};
+  if (tool != state->tool) state->push_pull_face = {};  // the distance field gets the focus again
   state->tool = tool;
 }
 
@@ -620,6 +660,7 @@ void DrawToolsPanel(AppState* state) {
     }
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s (%s)", b.hint, b.shortcut);
     if (b.tool == Tool::kAddPrimitive) DrawAddPrimitiveOptions(state, width);
+    if (b.tool == Tool::kPushPull && active) DrawPushPullOptions(state, width);
   }
   ImGui::Spacing();
   ImGui::Separator();
