@@ -431,6 +431,7 @@ std::optional<Tool> ToolFromName(const std::string& name) {
   if (name == "delete-vertex" || name == "v-delete") return Tool::kDeleteVertex;
   if (name == "connect-vertices" || name == "v-connect") return Tool::kConnectVertices;
   if (name == "delete-edge" || name == "e-delete") return Tool::kDeleteEdge;
+  if (name == "push-pull" || name == "extrude") return Tool::kPushPull;
   return std::nullopt;
 }
 
@@ -542,7 +543,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     if (!tool) {
       *error = "unknown tool '" + arg +
                "' (select, line-x, line-y, line-z, pin, add-primitive, split-edge, delete-vertex, "
-               "connect-vertices, delete-edge)";
+               "connect-vertices, delete-edge, push-pull)";
       return false;
     }
     if (*tool == Tool::kAddPrimitive) {

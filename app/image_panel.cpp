@@ -524,6 +524,10 @@ std::string ToolHint(const AppState& state) {
       return state.selection.connect_from.Empty() ? "click the first vertex of a face"
                                                   : "click the second vertex on the same face";
     case Tool::kDeleteEdge: return "click on an edge between two faces to merge them";
+    case Tool::kPushPull:
+      return state.selection.element.kind == ElementKind::kFace
+                 ? "type the distance in the tools panel, then Extrude (Enter)"
+                 : "click a face to push or pull it";
     default:
       return "";
   }

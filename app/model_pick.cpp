@@ -70,6 +70,7 @@ PickFilter PickFilterOf(Tool tool) {
     case Tool::kConnectVertices: return {true, false, false};
     case Tool::kSplitEdge:
     case Tool::kDeleteEdge: return {false, true, false};
+    case Tool::kPushPull: return {false, false, true};
     default: return {false, false, false};
   }
 }

@@ -21,7 +21,7 @@
 //                                   planar-face        toggle the selected face's coplanarity
 //                                 Tool names: select, line-x, line-y, line-z, pin,
 //                                 add-primitive (adds at once), split-edge, delete-vertex,
-//                                 connect-vertices, delete-edge
+//                                 connect-vertices, delete-edge, push-pull
 //   screenshot PATH               write a PNG of the frame just rendered
 #pragma once
 

@@ -11,6 +11,7 @@
 
 #include "core/camera.h"
 #include "core/vanishing_point.h"
+#include "core/solver_util_internal.h"
 
 namespace facet {
 namespace {
@@ -41,11 +42,7 @@ constexpr int kMaxOutlierRounds = 5;
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
-std::string Fmt(double x) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.6g", x);
-  return buffer;
-}
+std::string Fmt(double x) { return internal::FormatNumber(x, 6); }
 
 std::string FamilyName(int axis) { return std::string("family ") + AxisName(static_cast<Axis>(axis)); }
 

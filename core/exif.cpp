@@ -1,4 +1,5 @@
 #include "core/exif.h"
+#include "core/solver_util_internal.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -15,11 +16,7 @@ namespace {
 // A full-frame 35 mm sensor is 36 mm wide.
 constexpr double kFullFrameWidthMm = 36.0;
 
-std::string Fmt(double x) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.6g", x);
-  return buffer;
-}
+std::string Fmt(double x) { return internal::FormatNumber(x, 6); }
 
 ExifFocal NotFound(std::string message) {
   ExifFocal result;

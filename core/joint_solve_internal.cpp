@@ -9,6 +9,7 @@
 
 #include "core/camera.h"
 #include "core/mesh_primitives.h"
+#include "core/solver_util_internal.h"
 
 namespace facet::joint_solve_internal {
 
@@ -16,12 +17,7 @@ namespace {
 
 constexpr double kMinDepth = 1e-12;  // relative to the distance from the camera centre
 
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return s;
-}
-
+using internal::Skew;
 int LargestComponent(const Eigen::Vector3d& v) {
   int k = 0;
   v.cwiseAbs().maxCoeff(&k);

@@ -1,4 +1,5 @@
 #include "core/projective_upgrade.h"
+#include "core/solver_util_internal.h"
 
 #include <algorithm>
 #include <chrono>
@@ -19,22 +20,10 @@ constexpr double kIndependentDirectionsRatio = 1e-9;
 // |pi . C1| / (|pi| |C1|) below which the plane at infinity passes through camera 1's centre.
 constexpr double kPlaneThroughCentre = 1e-12;
 
-double MsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using internal::MsSince;
+std::string Fmt(double x) { return internal::FormatNumber(x, 4); }
 
-std::string Fmt(double x) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.4g", x);
-  return buffer;
-}
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
+using internal::Skew;
 Eigen::Vector4d Canonical(Eigen::Vector4d x) {
   const double n = x.norm();
   if (!(n > 0)) return Eigen::Vector4d::Zero();

@@ -8,16 +8,12 @@
 #include <Eigen/SVD>
 
 #include "core/camera.h"
+#include "core/solver_util_internal.h"
 
 namespace facet::scene_solve_internal {
 namespace {
 
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
-
+using internal::Skew;
 // Built by appending: GCC 12 reports a false -Wrestrict on "literal" + std::string.
 std::string QuotedOrId(const std::string& name, Id id) {
   std::string label = name.empty() ? "#" : "'";

@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 
 #include "core/two_view.h"
+#include "core/solver_util_internal.h"
 
 namespace facet {
 namespace {
@@ -23,22 +24,10 @@ constexpr int kMinResectionTracks = 8;
 constexpr int kResectionRounds = 3;
 constexpr int kMinTracks = 8;
 
-double MsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using internal::MsSince;
+std::string Fmt(double x) { return internal::FormatNumber(x, 4); }
 
-std::string Fmt(double x) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.4g", x);
-  return buffer;
-}
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
+using internal::Skew;
 Eigen::Vector2d ImageCentre(const SelfCalibrationView& v) { return {(v.width_px - 1) / 2.0, (v.height_px - 1) / 2.0}; }
 
 // Normalising intrinsics of a view: the prior K, else f = w + h at the image centre.

@@ -12,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/camera.h"
+#include "core/solver_util_internal.h"
 
 namespace facet {
 namespace {
@@ -30,22 +31,10 @@ constexpr double kSamePointPx = 1e-6;
 // lucky-looking sample ending the search.
 constexpr int kMinRansacIterations = 100;
 
-double MsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using internal::MsSince;
+std::string Fmt(double x) { return internal::FormatNumber(x, 4); }
 
-std::string Fmt(double x) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.4g", x);
-  return buffer;
-}
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
+using internal::Skew;
 Eigen::Matrix<double, 9, 1> VecRowMajor(const Eigen::Matrix3d& m) {
   Eigen::Matrix<double, 9, 1> v;
   for (int r = 0; r < 3; ++r)
