@@ -82,6 +82,11 @@ struct AppState {
   // a newly selected face gets the default again (and the field the keyboard focus).
   double push_pull_distance = 0.0;
   ElementRef push_pull_face;
+  // Constraint builder (properties panel): the known-length field (project units), and the
+  // first edge of a two-edge kind (parallel, perpendicular, equal length) awaiting its second.
+  double constraint_length = 1.0;
+  ElementRef constraint_first_edge;
+  std::optional<ConstraintKind> constraint_first_kind;
   Id active_image_id = kNoId;
   // The element under the mouse in the image or 3D panel (both highlight it), and which
   // panel set it (0 none, 1 image, 2 3D): a panel clears only its own hover.

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
+#include <sstream>
 
 #include "core/mesh_extrude.h"
 #include "core/mesh_operators.h"
@@ -230,6 +232,182 @@ bool TogglePlanarFaceEdit(AppState* state, Id primitive_id, FaceId face) {
   }
   CommitEdit(state, label, std::move(edited));
   return true;
+}
+
+namespace {
+
+// The two vertices of an edge element (a -> b of half-edge 2 * edge), or false.
+bool EdgeVertices(const Project& project, const ElementRef& edge, VertexRef* a, VertexRef* b) {
+  if (edge.kind != ElementKind::kEdge || !ElementExists(project, edge)) return false;
+  const PolyMesh& mesh = project.FindPrimitive(edge.primitive_id)->mesh;
+  *a = {edge.primitive_id, mesh.Origin(2 * edge.element)};
+  *b = {edge.primitive_id, mesh.Dest(2 * edge.element)};
+  return true;
+}
+
+// Adds `c` (a fresh id) unless an equal constraint (kind, vertices, value, axis) exists.
+bool AddConstraint(AppState* state, Constraint c, const std::string& label) {
+  Project edited = state->document.project();
+  for (const Constraint& old : edited.constraints) {
+    if (old.kind == c.kind && old.vertices == c.vertices && old.value == c.value && old.axis == c.axis) {
+      return Refuse(state, label, "the same constraint exists already");
+    }
+  }
+  c.id = edited.NewId();
+  edited.constraints.push_back(c);
+  CommitEdit(state, label, std::move(edited));
+  state->Log(LogLevel::kInfo, label + ": constraint " + std::to_string(c.id) + " added");
+  return true;
+}
+
+}  // namespace
+
+std::string ConstraintEditLabel(ConstraintKind kind) {
+  switch (kind) {
+    case ConstraintKind::kAlongAxis: return "Along axis";
+    case ConstraintKind::kDistance: return "Known length";
+    case ConstraintKind::kParallel: return "Parallel";
+    case ConstraintKind::kPerpendicular: return "Perpendicular";
+    case ConstraintKind::kEqualLength: return "Equal length";
+    case ConstraintKind::kFixedPoint: return "Fix vertex";
+    default: return std::string("Constrain ") + ConstraintKindName(kind);
+  }
+}
+
+std::string DescribeVertex(const Project& project, const VertexRef& ref) {
+  const Primitive* p = project.FindPrimitive(ref.primitive_id);
+  const std::string name = p != nullptr ? p->name : "primitive " + std::to_string(ref.primitive_id);
+  return name + " v" + std::to_string(ref.vertex);
+}
+
+bool ConstrainAlongAxisEdit(AppState* state, const ElementRef& edge, Axis axis) {
+  const std::string label = std::string("Along ") + AxisName(axis);
+  Constraint c;
+  c.kind = ConstraintKind::kAlongAxis;
+  c.axis = axis;
+  c.vertices.resize(2);
+  if (!EdgeVertices(state->document.project(), edge, &c.vertices[0], &c.vertices[1])) {
+    return Refuse(state, label, "select an edge first");
+  }
+  return AddConstraint(state, c, label);
+}
+
+bool ConstrainLengthEdit(AppState* state, const ElementRef& edge, double length) {
+  const std::string label = "Known length";
+  if (!std::isfinite(length) || length <= 0.0) return Refuse(state, label, "the length must be positive");
+  Constraint c;
+  c.kind = ConstraintKind::kDistance;
+  c.value = length;
+  c.vertices.resize(2);
+  if (!EdgeVertices(state->document.project(), edge, &c.vertices[0], &c.vertices[1])) {
+    return Refuse(state, label, "select an edge first");
+  }
+  return AddConstraint(state, c, label);
+}
+
+bool ConstrainEdgePairEdit(AppState* state, ConstraintKind kind, const ElementRef& first, const ElementRef& second) {
+  const std::string label = ConstraintEditLabel(kind);
+  if (kind != ConstraintKind::kParallel && kind != ConstraintKind::kPerpendicular &&
+      kind != ConstraintKind::kEqualLength) {
+    return Refuse(state, label, "not a two-edge constraint");
+  }
+  if (first == second) return Refuse(state, label, "pick two different edges");
+  Constraint c;
+  c.kind = kind;
+  c.vertices.resize(4);
+  const Project& project = state->document.project();
+  if (!EdgeVertices(project, first, &c.vertices[0], &c.vertices[1]) ||
+      !EdgeVertices(project, second, &c.vertices[2], &c.vertices[3])) {
+    return Refuse(state, label, "an edge is gone");
+  }
+  return AddConstraint(state, c, label);
+}
+
+bool FixVertexEdit(AppState* state, const ElementRef& vertex) {
+  const std::string label = "Fix vertex";
+  const Project& project = state->document.project();
+  if (vertex.kind != ElementKind::kVertex || !ElementExists(project, vertex)) {
+    return Refuse(state, label, "select a vertex first");
+  }
+  Constraint c;
+  c.kind = ConstraintKind::kFixedPoint;
+  c.vertices = {VertexRef{vertex.primitive_id, vertex.element}};
+  c.point = VertexInWorld(project, c.vertices[0]);
+  return AddConstraint(state, c, label);
+}
+
+bool RemoveConstraintEdit(AppState* state, Id constraint_id) {
+  Project edited = state->document.project();
+  const size_t before = edited.constraints.size();
+  std::erase_if(edited.constraints, [&](const Constraint& c) { return c.id == constraint_id; });
+  if (edited.constraints.size() == before) return Refuse(state, "Remove constraint", "the constraint is gone");
+  CommitEdit(state, "Remove constraint", std::move(edited));
+  return true;
+}
+
+bool ConstraintPairStep(AppState* state, ConstraintKind kind) {
+  const ElementRef edge = state->selection.element;
+  const std::string label = ConstraintEditLabel(kind);
+  if (edge.kind != ElementKind::kEdge) return Refuse(state, label, "select an edge first");
+  const bool pending = state->constraint_first_kind == kind && ElementExists(state->document.project(),
+                                                                              state->constraint_first_edge);
+  if (!pending) {
+    state->constraint_first_edge = edge;
+    state->constraint_first_kind = kind;
+    state->Log(LogLevel::kInfo, label + ": first edge " + DescribeElement(state->document.project(), edge) +
+                                    "; select the second edge and click again");
+    return true;
+  }
+  if (edge == state->constraint_first_edge) return Refuse(state, label, "pick a second, different edge");
+  const ElementRef first = state->constraint_first_edge;
+  const bool done = ConstrainEdgePairEdit(state, kind, first, edge);
+  if (done) {
+    state->constraint_first_edge = ElementRef();
+    state->constraint_first_kind.reset();
+  }
+  return done;
+}
+
+bool RunConstrainCommand(AppState* state, const std::string& arg, std::string* error) {
+  std::istringstream in(arg);
+  std::string kind;
+  in >> kind;
+  std::string value_text;
+  in >> value_text;
+  const ElementRef e = state->selection.element;
+  bool done = false;
+  if (kind == "along-x" || kind == "along-y" || kind == "along-z") {
+    done = ConstrainAlongAxisEdit(state, e, *AxisFromName(kind.substr(6)));
+  } else if (kind == "length") {
+    char* end = nullptr;
+    const double v = std::strtod(value_text.c_str(), &end);
+    if (value_text.empty() || *end != '\0') {
+      *error = "constrain length: needs a number (project units)";
+      return false;
+    }
+    done = ConstrainLengthEdit(state, e, v);
+  } else if (kind == "parallel" || kind == "perpendicular" || kind == "equal-length") {
+    const ConstraintKind k = kind == "parallel"        ? ConstraintKind::kParallel
+                             : kind == "perpendicular" ? ConstraintKind::kPerpendicular
+                                                       : ConstraintKind::kEqualLength;
+    done = ConstraintPairStep(state, k);
+  } else if (kind == "fix") {
+    done = FixVertexEdit(state, e);
+  } else if (kind == "remove") {
+    char* end = nullptr;
+    const long long id = std::strtoll(value_text.c_str(), &end, 10);
+    if (value_text.empty() || *end != '\0') {
+      *error = "constrain remove: needs a constraint id";
+      return false;
+    }
+    done = RemoveConstraintEdit(state, static_cast<Id>(id));
+  } else {
+    *error = "constrain: unknown kind '" + kind +
+             "' (along-x, along-y, along-z, length VALUE, parallel, perpendicular, equal-length, fix, remove ID)";
+    return false;
+  }
+  if (!done) *error = state->log.empty() ? "constrain: refused" : state->log.back().text;
+  return done;
 }
 
 bool PushPullFaceEdit(AppState* state, Id primitive_id, FaceId face, double distance) {

@@ -45,6 +45,31 @@ bool ToggleFreeVertexEdit(AppState* state, Id primitive_id, VertexId vertex);
 // when the same constraint exists.
 bool TogglePlanarFaceEdit(AppState* state, Id primitive_id, FaceId face);
 
+// Spatial constraints (issue 5, core/project.h Constraint). Each adds one constraint as one
+// edit; the joint solve then enforces it. Edges are ElementRefs of kind kEdge (vertices a -> b
+// of half-edge 2 * edge); a refusal (a missing element, the same edge twice, a length <= 0,
+// a constraint already there) is logged and changes nothing.
+// kAlongAxis: the edge parallel to a world axis.
+bool ConstrainAlongAxisEdit(AppState* state, const ElementRef& edge, Axis axis);
+// kDistance: the edge's length is `length` project units (it sets the scale).
+bool ConstrainLengthEdit(AppState* state, const ElementRef& edge, double length);
+// kParallel, kPerpendicular or kEqualLength between two distinct edges.
+bool ConstrainEdgePairEdit(AppState* state, ConstraintKind kind, const ElementRef& first, const ElementRef& second);
+// kFixedPoint at the vertex's current world position.
+bool FixVertexEdit(AppState* state, const ElementRef& vertex);
+// Removes one constraint ("Remove constraint").
+bool RemoveConstraintEdit(AppState* state, Id constraint_id);
+// The builder's two-click step for a two-edge kind with the selected edge: the first call
+// stores it (state->constraint_first_edge), a call with a different edge selected adds the
+// constraint and clears the stored one. Returns whether it stored or edited.
+bool ConstraintPairStep(AppState* state, ConstraintKind kind);
+// "box 1 v3" for a constraint row.
+std::string DescribeVertex(const Project& project, const VertexRef& ref);
+// The label of a builder button's edit ("Along x", "Known length", "Parallel", ...).
+std::string ConstraintEditLabel(ConstraintKind kind);
+// The script command `constrain KIND [VALUE]` on the current selection (app/script.h).
+bool RunConstrainCommand(AppState* state, const std::string& arg, std::string* error);
+
 // Push/pull: extrudes the face by `distance` project units along its outward normal (a
 // negative distance pushes it in), core/mesh_extrude.h; the face stays selected.
 bool PushPullFaceEdit(AppState* state, Id primitive_id, FaceId face, double distance);

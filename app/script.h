@@ -19,6 +19,13 @@
 //                                   select primitive ID, select none
 //                                   free-vertex        toggle the selected vertex's freedom
 //                                   planar-face        toggle the selected face's coplanarity
+//                                   constrain KIND [VALUE]  a spatial constraint on the
+//                                                      selection: along-x|y|z, length VALUE
+//                                                      (edge); parallel, perpendicular,
+//                                                      equal-length (first call stores the
+//                                                      edge, second adds); fix (vertex);
+//                                                      remove ID. Dispatched by
+//                                                      RunConstrainCommand (app/model_edits.h)
 //                                 Tool names: select, line-x, line-y, line-z, pin,
 //                                 add-primitive (adds at once), split-edge, delete-vertex,
 //                                 connect-vertices, delete-edge, push-pull
