@@ -579,6 +579,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     return true;
   }
   if (name == "select") return RunSelectCommand(state, arg, error);
+  if (name == "constrain") return RunConstrainCommand(state, arg, error);
   if (name == "free-vertex" || name == "planar-face") {
     const ElementRef& e = state->selection.element;
     const bool vertex = name == "free-vertex";

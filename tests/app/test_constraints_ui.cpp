@@ -164,3 +164,39 @@ TEST_CASE("constraint builder: known length and along-axis on a box edge, saved,
   CHECK(removed.project.constraints.empty());
   CHECK(report2.at("undo_stack").back().dump().find("Remove constraint") != std::string::npos);
 }
+
+TEST_CASE("constrain script command: two-edge parallel and a fixed point, saved with the right vertices") {
+  TempDir dir("constraints_cmd");
+  facet::Project empty;
+  const facet::Id box_id = empty.next_id;
+  const std::string project_path = dir / "empty.facet";
+  REQUIRE(facet::SaveProject(empty, project_path) == "");
+  // A box's edges 0 and 1 (core/box.h order: both along x) and its vertex 0.
+  std::ostringstream s;
+  s << "frames 2\ncommand add box\nframes 1\ncommand tool select\nframes 1\n";
+  s << "command select edge " << box_id << " 0\nframes 1\ncommand constrain parallel\nframes 1\n";
+  s << "command select edge " << box_id << " 1\nframes 1\ncommand constrain parallel\nframes 2\n";
+  s << "command select vertex " << box_id << " 0\nframes 1\ncommand constrain fix\nframes 2\n";
+  s << "command save " << (dir / "after.facet") << "\nframes 1\n";
+  WriteText(dir / "script.txt", s.str());
+  const RunResult run = RunRender(dir, "'" + project_path + "' -o '" + (dir / "out.png") + "' --script '" +
+                                           (dir / "script.txt") + "' --report '" + (dir / "report.json") + "'");
+  INFO("stderr: " << run.stderr_text);
+  REQUIRE(run.exit_code == 0);
+  const facet::ProjectLoadResult after = facet::LoadProject(dir / "after.facet");
+  REQUIRE(after.ok());
+  REQUIRE(after.project.constraints.size() == 2);
+  const facet::Constraint& parallel = after.project.constraints[0];
+  CHECK(parallel.kind == facet::ConstraintKind::kParallel);
+  REQUIRE(parallel.vertices.size() == 4);
+  const facet::PolyMesh& mesh = after.project.primitives.at(0).mesh;
+  CHECK(parallel.vertices[0] == facet::VertexRef{box_id, mesh.Origin(0)});
+  CHECK(parallel.vertices[1] == facet::VertexRef{box_id, mesh.Dest(0)});
+  CHECK(parallel.vertices[2] == facet::VertexRef{box_id, mesh.Origin(2)});
+  CHECK(parallel.vertices[3] == facet::VertexRef{box_id, mesh.Dest(2)});
+  const facet::Constraint& fixed = after.project.constraints[1];
+  CHECK(fixed.kind == facet::ConstraintKind::kFixedPoint);
+  REQUIRE(fixed.vertices.size() == 1);
+  CHECK(fixed.vertices[0] == facet::VertexRef{box_id, 0});
+  CHECK((fixed.point - mesh.vertex(0).position).norm() < 1e-12);
+}
