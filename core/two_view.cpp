@@ -27,9 +27,19 @@ constexpr double kNullSpaceRatio = 1e-10;
 constexpr double kCollinearSpreadRatio = 1e-7;
 // Two matches closer than this (px, in both images) are the same click.
 constexpr double kSamePointPx = 1e-6;
-// RANSAC always tries at least this many samples: cheap, and guards against an early
-// lucky-looking sample ending the search.
-constexpr int kMinRansacIterations = 100;
+// RANSAC draws at least this many samples. The adaptive count log(1 - p) / log(1 - w^7)
+// falls to 1 once one sample's F explains every match, but that w is measured on a single
+// 7-point model; a few more samples let MSAC choose among several all-inlier models, so an
+// ill-conditioned sample (points bunched in one part of the image, whose F extrapolates
+// badly) does not end the search alone. Missing a borderline match is not a reason for
+// more samples: the final inlier set is decided on the refined F.
+constexpr int kMinRansacIterations = 5;
+// Rounds of fit -> re-classify on the refined F; more than two changes of the inlier set
+// means it oscillates between borderline matches, and the last fitted set is kept.
+constexpr int kMaxInlierRounds = 3;
+// Flagged matches within this many thresholds of the refined F are tried back in (see
+// EstimateFundamentalMatrix); wrong clicks lie farther and cost no refit.
+constexpr double kReadmitFactor = 2.0;
 
 using internal::MsSince;
 std::string Fmt(double x) { return internal::FormatNumber(x, 4); }
@@ -562,26 +572,52 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
     return fail("fewer than 7 matches agree on one fundamental matrix (" + std::to_string(Count(inliers)) +
                 " within " + Fmt(options.inlier_threshold_px) + " px)");
 
-  // Linear estimate and refinement on the inliers; the refined F may take back or drop a
-  // borderline match, so repeat until the inlier set settles.
+  // Linear estimate and refinement on the inliers. The RANSAC flags come from one sample's
+  // F, which noise in its 7 matches tilts; the refined F decides the final set, and a
+  // changed set is fitted again.
   Eigen::Matrix3d f_linear, f_final;
-  for (int round = 0; round < 4; ++round) {
-    const Points in1 = Select(uv1, inliers), in2 = Select(uv2, inliers);
-    if (!LinearFundamental(in1, in2, &f_linear, &error)) return fail(error);
-    f_final = f_linear;
-    summary.refine_iterations = 0;
+  int refine_iterations = 0;
+  auto fit = [&](const std::vector<bool>& flags, Eigen::Matrix3d* linear, Eigen::Matrix3d* refined, int* iterations) {
+    const Points in1 = Select(uv1, flags), in2 = Select(uv2, flags);
+    if (!LinearFundamental(in1, in2, linear, &error)) return false;
+    *refined = *linear;
+    *iterations = 0;
     if (options.refine) {
       const internal::OrthonormalFundamental start_state =
-          internal::OrthonormalFundamental::FromF(f_linear, NormalizingTransform(in1), NormalizingTransform(in2));
-      f_final = MinimizeSymmetricEpipolar<7>(start_state, in1, in2, options.max_refine_iterations,
-                                             &summary.refine_iterations)
-                    .F();
+          internal::OrthonormalFundamental::FromF(*linear, NormalizingTransform(in1), NormalizingTransform(in2));
+      *refined = MinimizeSymmetricEpipolar<7>(start_state, in1, in2, options.max_refine_iterations, iterations).F();
     }
-    if (!(options.use_ransac && n > 8)) break;
+    return true;
+  };
+  const bool robust = options.use_ransac && n > 8;
+  for (int round = 0; round < kMaxInlierRounds; ++round) {
+    if (!fit(inliers, &f_linear, &f_final, &refine_iterations)) return fail(error);
+    if (!robust) break;
     const std::vector<bool> updated = Classify(f_final, uv1, uv2, options.inlier_threshold_px);
-    if (updated == inliers || Count(updated) < 7) break;
+    if (updated == inliers || Count(updated) < 7 || round + 1 == kMaxInlierRounds) break;
     inliers = updated;
   }
+  // A true match far from the others has leverage: F fitted without it may extrapolate past
+  // the threshold there. A flagged match within kReadmitFactor thresholds is fitted back in,
+  // and kept when the refit F holds it and every inlier within the threshold.
+  if (robust) {
+    for (int i = 0; i < n; ++i) {
+      if (inliers[i] || MatchSquaredError(f_final, uv1[i], uv2[i]) >=
+                            std::pow(kReadmitFactor * options.inlier_threshold_px, 2))
+        continue;
+      std::vector<bool> trial = inliers;
+      trial[i] = true;
+      Eigen::Matrix3d trial_linear, trial_final;
+      int trial_iterations = 0;
+      if (!fit(trial, &trial_linear, &trial_final, &trial_iterations)) continue;
+      if (Classify(trial_final, uv1, uv2, options.inlier_threshold_px) != trial) continue;
+      inliers = trial;
+      f_linear = trial_linear;
+      f_final = trial_final;
+      refine_iterations = trial_iterations;
+    }
+  }
+  summary.refine_iterations = refine_iterations;
 
   summary.F = NormalizeFundamental(f_final);
   summary.inliers = inliers;

@@ -232,6 +232,60 @@ TEST_CASE("10 % wrong matches are flagged") {
   CHECK(precision >= 0.9);
 }
 
+TEST_CASE("the adaptive RANSAC stop draws far fewer samples than 100 on clean matches, and still flags wrong clicks") {
+  constexpr double kNoisePx = 0.5;
+  constexpr int kNumPoints = 40;
+  // The former fixed floor; an adaptive stop on all-inlier matches needs a handful.
+  constexpr int kOldFloor = 100;
+  constexpr int kFewSamples = 20;
+  for (unsigned seed = 1; seed <= 10; ++seed) {
+    SceneOptions o;
+    o.noise_px = kNoisePx;
+    o.num_points = kNumPoints;
+    o.seed = seed;
+    TwoViewScene s = MakeScene(o);
+    const FundamentalSummary clean = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
+    REQUIRE_MESSAGE(clean.success, clean.message);
+    CAPTURE(seed);
+    CAPTURE(clean.ransac_iterations);
+    CHECK(clean.ransac_iterations >= 1);
+    CHECK(clean.ransac_iterations <= kFewSamples);
+    CHECK(clean.ransac_iterations < kOldFloor / 5);
+    CHECK(clean.num_inliers == kNumPoints);
+
+    // 30 % wrong clicks: w^7 = 0.08, so 99.99 % confidence needs ~110 samples.
+    std::mt19937 rng(200 + seed);
+    std::uniform_real_distribution<double> u(0.0, 1280.0), v(0.0, 960.0);
+    std::vector<bool> is_outlier(kNumPoints, false);
+    for (int i = 0; i < kNumPoints; i += 3) {
+      if (std::count(is_outlier.begin(), is_outlier.end(), true) == 3 * kNumPoints / 10) break;
+      do {
+        s.uv2[i] = {u(rng), v(rng)};
+      } while (std::abs(SymmetricEpipolarDistances(s.F, s.uv1[i], s.uv2[i])(0)) < 20.0);
+      is_outlier[i] = true;
+    }
+    const FundamentalSummary dirty = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
+    REQUIRE_MESSAGE(dirty.success, dirty.message);
+    CAPTURE(dirty.ransac_iterations);
+    CAPTURE(dirty.num_inliers);
+    CAPTURE(dirty.symmetric_epipolar_rms_px);
+    CHECK(dirty.ransac_iterations > 3 * clean.ransac_iterations);
+    int missed = 0, lost = 0;
+    for (int i = 0; i < kNumPoints; ++i) {
+      missed += is_outlier[i] && dirty.inliers[i];
+      lost += !is_outlier[i] && !dirty.inliers[i];
+    }
+    CHECK(missed == 0);
+    CHECK(lost == 0);
+    CHECK(dirty.symmetric_epipolar_rms_px < 2.0 * kNoisePx);
+    // Seeded: the same input gives the same samples and answer.
+    const FundamentalSummary again = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
+    CHECK(again.ransac_iterations == dirty.ransac_iterations);
+    CHECK(again.inliers == dirty.inliers);
+    CHECK(MaxAbsDiff(again.F, dirty.F) == 0.0);
+  }
+}
+
 // Points of the scene in front of both cameras of a pose (depths by least squares).
 int InFront(const TwoViewScene& s, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   int count = 0;
