@@ -367,7 +367,11 @@ void DrawConstraintsSection(AppState* state) {
       text += v;
     }
     text += ":";
-    for (const VertexRef& v : c.vertices) text += " " + DescribeVertex(project, v);
+    // Appended in two steps: GCC 12 reports a false -Wrestrict on " " + std::string.
+    for (const VertexRef& v : c.vertices) {
+      text += ' ';
+      text += DescribeVertex(project, v);
+    }
     const ConstraintDiagnostic* d = nullptr;
     for (const ConstraintDiagnostic& diag : diagnostics) {
       if (diag.constraint_id == c.id) d = &diag;
