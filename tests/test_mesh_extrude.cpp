@@ -21,40 +21,16 @@
 #include "core/mesh_operators.h"
 #include "core/mesh_primitives.h"
 #include "core/mesh_triangulate.h"
+#include "tests/mesh_test_util.h"
 
 namespace facet {
 namespace {
 
 constexpr double kGeomTol = 1e-9;  // noise-free geometry, scene units ~1 to 10
 
-std::vector<PrimitiveShape> AllKinds() {
-  std::vector<PrimitiveShape> p = {MakeBox(1, {2.0, 3.0, 1.5}), MakeWedge(2, {4.0, 2.0, 1.0}),
-                                   MakePrism(3, 5, 1.2, 2.0),   MakePyramid(4, {2.0, 2.5, 1.8}),
-                                   MakeCylinder(5, 7, 0.7, 3.0), MakePlane(6, 3.0, 2.0)};
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    p[i].rotation = Eigen::Vector3d(0.1 * i, -0.2, 0.3);
-    p[i].translation = Eigen::Vector3d(5.0 * i, 1.0, -2.0);
-  }
-  return p;
-}
-
-PolyMesh MeshOf(const PrimitiveShape& p) {
-  PolyMesh mesh;
-  const AddPrimitiveResult r = AddPrimitive(&mesh, p);
-  REQUIRE_MESSAGE(r.ok, r.message);
-  return mesh;
-}
-
-std::string FirstProblem(const PolyMesh& mesh) {
-  const auto report = Validate(mesh);
-  return report.empty() ? std::string() : report.front();
-}
-
-#define CHECK_VALID(mesh)                           \
-  do {                                              \
-    const std::string problem = FirstProblem(mesh); \
-    CHECK_MESSAGE(problem.empty(), problem);        \
-  } while (0)
+using testing::AllKinds;
+using testing::MeshOf;
+using testing::FirstProblem;
 
 TEST_CASE("extruding every face of every primitive, out and in: counts, geometry, exact inverse") {
   for (const PrimitiveShape& p : AllKinds()) {
