@@ -12,17 +12,25 @@ namespace {
 // frame never stalls; the full solve runs on release.
 constexpr int kDragIterationsPerFrame = 5;
 
+// A commit or a released drag: full solves, the SLSQP polish so constraints hold exactly,
+// and the diagnostics the properties panel shows.
 ModelUpdateOptions FullUpdateOptions() {
   ModelUpdateOptions options;
   options.solve.warm_start = true;
   options.solve.max_iterations = 100;
+  options.joint.polish_constraints = true;
   return options;
 }
 
+// One drag frame: both solves on the per-frame budget, no polish, and no diagnostics (their
+// SVD of the Jacobian is the expensive part and the panel shows them after release).
 ModelUpdateOptions DragUpdateOptions() {
   ModelUpdateOptions options;
   options.solve.warm_start = true;
   options.solve.max_iterations = kDragIterationsPerFrame;
+  options.joint.max_iterations = kDragIterationsPerFrame;
+  options.joint.compute_diagnostics = false;
+  options.joint.polish_constraints = false;
   return options;
 }
 
