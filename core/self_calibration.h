@@ -13,8 +13,8 @@
 // 1. Projective reconstruction, in image coordinates normalised by N_i (the prior K_i when
 //    given, else f = w + h at the image centre): F of the pair of views sharing the most
 //    tracks (core/two_view.h, RANSAC), canonical cameras, triangulation; every further view
-//    is resected by normalised DLT on the triangulated tracks it sees (iteratively dropping
-//    observations beyond the inlier threshold), and new tracks are triangulated. The frame is
+//    is resected by DLT on the triangulated tracks it sees (points whitened, MSAC over 6-point
+//    samples, then refitted on the inliers), and new tracks are triangulated. The frame is
 //    then normalised (points centred, unit RMS) for conditioning.
 // 2. The absolute dual quadric Q (4x4 symmetric, rank 3): with w*_i = P_i Q P_i^T in the
 //    normalised coordinates, the linear equations of Pollefeys et al. (IJCV 2004, "Visual
