@@ -374,13 +374,12 @@ SelfCalibrationResult SelfCalibrateImages(const Project& project, const std::vec
   std::vector<double> sum_sq(n, 0.0);
   std::vector<int> count(n, 0);
   for (size_t t = 0; t < tracks.size(); ++t) {
+    if (!sc.triangulated[t]) continue;  // a track left out says nothing of one click alone
     for (const auto& [v, pin] : track_pins[t]) {
       if (!sc.registered[v]) continue;
       const Camera& camera = sc.cameras[v];
-      const double error = sc.triangulated[t] && camera.CamFromWorld(sc.points[t]).z() > 0
-                               ? (camera.Project(sc.points[t]) - pin->uv_px).norm()
-                               : std::numeric_limits<double>::infinity();
-      if (!sc.triangulated[t]) continue;  // a track left out says nothing of this click alone
+      const double error = camera.CamFromWorld(sc.points[t]).z() > 0 ? (camera.Project(sc.points[t]) - pin->uv_px).norm()
+                                                                     : std::numeric_limits<double>::infinity();
       if (error > options.wrong_click_threshold_px) {
         result.flagged[v].push_back(pin->id);
       } else {
@@ -511,11 +510,8 @@ MultiViewInitSummary CalibrateImagesFromPins(const Project& project, const Multi
     summary.images.push_back(std::move(report));
   }
 
-  auto fail = [&](int i, const std::string& reason) {
-    MultiViewImageReport& report = summary.images[i];
-    report.message = resection_notes[i] + (reason.empty() ? "" : "; " + reason);
-    summary.messages.push_back(Quoted(project.images[i]) + ": " + report.message);
-  };
+  // Why each later path did not apply, appended to the resection note.
+  auto fail = [&](int i, const std::string& reason) { resection_notes[i] += "; " + reason; };
   auto apply_two_views = [&](int ia, int ib) {
     // Image a is the calibrated one when there is one (it keeps its pose).
     if (out->images[ib].camera_calibrated) std::swap(ia, ib);
@@ -581,21 +577,29 @@ MultiViewInitSummary CalibrateImagesFromPins(const Project& project, const Multi
     }
   } else if (left.size() == 2) {
     apply_two_views(left[0], left[1]);
-  } else if (left.size() == 1) {
-    // Pair it with the image (calibrated, or resected above) it shares the most vertices with.
+  }
+  // Whatever is still uncalibrated pairs with the calibrated image (at input, or initialised
+  // above) it shares the most pinned vertices with.
+  for (const int i : left) {
+    if (out->images[i].camera_calibrated) continue;
     int best = -1, best_shared = 0;
     for (int j = 0; j < static_cast<int>(project.images.size()); ++j) {
-      if (j == left[0] || !out->images[j].camera_calibrated) continue;
-      const int shared = shared_vertices(left[0], j);
+      if (j == i || !out->images[j].camera_calibrated) continue;
+      const int shared = shared_vertices(i, j);
       if (shared > best_shared) {
         best = j;
         best_shared = shared;
       }
     }
-    if (best < 0)
-      fail(left[0], "no other calibrated image shares a pinned vertex with it");
-    else
-      apply_two_views(left[0], best);
+    if (best >= 0)
+      apply_two_views(i, best);
+    else if (left.size() == 1)
+      fail(i, "no calibrated image shares a pinned vertex with it");
+  }
+  for (const int i : left) {
+    if (out->images[i].camera_calibrated) continue;
+    summary.images[i].message = resection_notes[i];
+    summary.messages.push_back(Quoted(project.images[i]) + ": " + resection_notes[i]);
   }
 
   for (const auto& report : summary.images) summary.num_initialized += report.initialized ? 1 : 0;

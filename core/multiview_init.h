@@ -14,9 +14,10 @@
 //     the model's world frame. A pin whose reprojection error stays above
 //     wrong_click_threshold_px is dropped and the camera refitted (one at a time, worst first,
 //     while enough points remain); dropped pins are reported as wrong clicks.
-// (b) Two views: the images not resected, when exactly two are left (or one, paired with the
-//     image it shares the most pinned vertices with). Correspondences are the vertices pinned
-//     in both; 7 or more give F (core/two_view.h, RANSAC flags wrong clicks); the intrinsics
+// (b) Two views: the images not resected, when exactly two are left; then each image still
+//     uncalibrated (after (b) or (c), or alone) with the calibrated image, at input or
+//     initialised here, it shares the most pinned vertices with. Correspondences are the
+//     vertices pinned in both; 7 or more give F (core/two_view.h, RANSAC flags wrong clicks); the intrinsics
 //     (a calibrated image's own; else focal_px_by_image, e.g. EXIF; else
 //     default_focal_factor x the larger image side, principal point at the centre) give E and
 //     the relative pose with the cheirality check. The baseline is fixed as in "Gauge" below.

@@ -397,6 +397,47 @@ TEST_CASE("two views, keep-first-camera gauge: image 0 stays where it was") {
   CHECK(std::abs(baseline / true_baseline - 1.0) < kExactTol);
 }
 
+TEST_CASE("a chain: image 1 resected from image 0, image 2 (no known vertex) paired with image 1") {
+  // Image 0 (calibrated) pins box 0 only; image 1 pins every box; image 2 pins the extra boxes
+  // only, none of them known, so it takes two views with image 1 once that is resected. The
+  // resected camera stays, image 2 is placed relative to it and the baseline scaled to the
+  // (true) model: exact.
+  SceneSpec spec;
+  spec.num_views = 3;
+  spec.extra_boxes = 3;
+  spec.principal_point_offset_px = Eigen::Vector2d::Zero();
+  Scene s = MakeScene(spec);
+  Project& p = s.project;
+  const Id id0 = p.images[0].id, id2 = p.images[2].id;
+  p.pins.erase(std::remove_if(p.pins.begin(), p.pins.end(),
+                              [&](const Pin& pin) {
+                                const bool box0 = pin.vertex.primitive_id == s.box_ids[0];
+                                return (pin.image_id == id0 && !box0) || (pin.image_id == id2 && box0);
+                              }),
+               p.pins.end());
+  REQUIRE(PinsIn(p, id2) >= 8);
+  MultiViewInitOptions options;
+  options.focal_px_by_image[id2] = s.truth[2].focal_px;
+  Project out;
+  const MultiViewInitSummary summary = CalibrateImagesFromPins(p, options, &out);
+  INFO(Messages(summary));
+  REQUIRE(summary.images[1].path == MultiViewInitPath::kResection);
+  REQUIRE(summary.images[2].path == MultiViewInitPath::kTwoView);
+  CHECK(summary.images[2].num_known_pins == 0);
+  CHECK(summary.images[2].partner_image_id == p.images[1].id);
+  CHECK(summary.images[1].initialized);  // by the resection, not moved by the pair
+  for (int i : {1, 2}) {
+    CAPTURE(i);
+    const CameraErrors e = Compare(out.images[i].camera, s.truth[i]);
+    CAPTURE(e.focal_rel);
+    CAPTURE(e.rotation_rad);
+    CAPTURE(e.translation_rel);
+    CHECK(e.focal_rel < kExactTol);
+    CHECK(e.rotation_rad < kExactTol);
+    CHECK(e.translation_rel < kExactTol);
+  }
+}
+
 // First-order standard deviations (rad) of the relative pose that two views with these true
 // matches determine under pixel noise sigma: the Jacobian J of the symmetric epipolar residuals
 // (core/two_view.h) with respect to the pose's 5 parameters (rotation 3, baseline direction 2;
