@@ -446,26 +446,49 @@ BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& obser
     if (!improved) break;
   }
 
-  // Focal uncertainty: the undamped reduced camera system is singular along the similarity
-  // gauge; the focal length is gauge-invariant, so any generalised inverse gives its variance.
+  // Focal uncertainty: sigma^2 (residual over degrees of freedom) times the focal entry of
+  // the inverse of the undamped reduced camera system S. S is singular along the 7 directions
+  // of the similarity gauge, known in closed form for this parameterisation (left rotation
+  // increments, additive translations): a world rotation w moves each camera by
+  // (dr, dt) = (-R w, 0), a world translation u by (0, -R u), a scale e by (0, e t). They
+  // have no focal or principal-point part, so with G an orthonormal basis of them,
+  // (S + G G^T)^-1 - G G^T is the pseudo-inverse and its focal entry is that of
+  // (S + G G^T)^-1. Everything is Jacobi-scaled first (rotations in rad, translations in scene
+  // units and focal lengths in px differ by orders of magnitude): a plain eigenvalue cut on
+  // the unscaled S took the weakly determined focal direction for gauge.
   build();
   s = u;
   for (int j = 0; j < m; ++j) {
     if (!point_used[j]) continue;
-    Eigen::JacobiSVD<Eigen::Matrix3d> svd_v(v_blocks[j], Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd_v(v_blocks[j]);
     if (!(svd_v.singularValues()(2) > 1e-14 * svd_v.singularValues()(0))) continue;
     s.noalias() -= w_blocks[j] * v_blocks[j].inverse() * w_blocks[j].transpose();
   }
-  const int dof = 2 * static_cast<int>(observations.size()) - nc - 3 * static_cast<int>(std::count(point_used.begin(), point_used.end(), true)) + 7;
+  const int num_points_used = static_cast<int>(std::count(point_used.begin(), point_used.end(), true));
+  const int dof = 2 * static_cast<int>(observations.size()) - (nc + 3 * num_points_used - 7);
   const double sigma_sq = dof > 0 ? cost / dof : 0.0;
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(s);
-  const double max_ev = eig.eigenvalues().cwiseAbs().maxCoeff();
-  Eigen::VectorXd inv_ev = eig.eigenvalues();
-  for (int k = 0; k < nc; ++k) inv_ev(k) = eig.eigenvalues()(k) > 1e-12 * max_ev ? 1.0 / eig.eigenvalues()(k) : 0.0;
+  Eigen::VectorXd scale(nc);
+  for (int k = 0; k < nc; ++k) scale(k) = s(k, k) > 0 ? 1.0 / std::sqrt(s(k, k)) : 1.0;
+  Eigen::MatrixXd gauge = Eigen::MatrixXd::Zero(nc, 7);
+  for (int v = 0; v < n; ++v) {
+    const Eigen::Matrix3d& r = cams[v].cam_from_world_rotation;
+    gauge.block<3, 3>(6 * v, 0) = -r;
+    gauge.block<3, 3>(6 * v + 3, 3) = -r;
+    gauge.block<3, 1>(6 * v + 3, 6) = cams[v].cam_from_world_translation;
+  }
+  // In scaled coordinates y = x / scale the gauge directions are scale^-1 * g.
+  gauge = scale.cwiseInverse().asDiagonal() * gauge;
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(gauge);
+  const Eigen::MatrixXd basis = qr.householderQ() * Eigen::MatrixXd::Identity(nc, 7);
+  const Eigen::MatrixXd s_scaled = scale.asDiagonal() * s * scale.asDiagonal() + basis * basis.transpose();
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(s_scaled);
   summary.focal_std_px.assign(n, 0.0);
   for (int v = 0; v < n; ++v) {
-    const Eigen::VectorXd row = eig.eigenvectors().row(focal_index(v));
-    summary.focal_std_px[v] = std::sqrt(std::max(0.0, sigma_sq * row.cwiseProduct(inv_ev).dot(row)));
+    const int f = focal_index(v);
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(nc);
+    e(f) = 1.0;
+    const double variance = sigma_sq * scale(f) * scale(f) * ldlt.solve(e)(f);
+    summary.focal_std_px[v] = std::isfinite(variance) ? std::sqrt(std::max(0.0, variance)) : 0.0;
   }
 
   *cameras = cams;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -220,6 +221,54 @@ TEST_CASE("with 0.5 px noise and 5 % wrong observations the focal length is with
     CAPTURE(pp_error_px);
     CHECK(e.max_rotation_deg < 2.0 * pp_error_px / s.cameras[0].focal_px * 180.0 / M_PI + 0.1);
     CHECK(e.structure_rel < 0.01);
+  }
+}
+
+TEST_CASE("the reported focal standard deviation matches the spread of the estimate over noise seeds") {
+  // One geometry, fresh 0.5 px noise per seed: the adjustment's covariance predicts the spread
+  // of the focal estimate over the seeds (the model is exact, so there is no bias to add).
+  constexpr int kSeeds = 60;
+  constexpr double kNoisePx = 0.5;
+  // The sample standard deviation of 60 draws is itself uncertain by ~1 / sqrt(2 * 59) = 9 %.
+  constexpr double kStdRelTol = 0.25;
+  MultiViewOptions o;
+  o.num_views = 6;
+  o.num_points = 150;
+  const MultiViewScene s = MakeMultiViewScene(o);
+  const double true_focal = s.cameras[0].focal_px;
+  for (PrincipalPointMode mode : {PrincipalPointMode::kImageCenter, PrincipalPointMode::kSolve}) {
+    SelfCalibrationOptions options;
+    options.principal_point_mode = mode;
+    std::vector<double> focal, reported;
+    for (int seed = 0; seed < kSeeds; ++seed) {
+      std::mt19937 rng(1000 + seed);
+      std::normal_distribution<double> noise(0.0, kNoisePx);
+      std::vector<Track> tracks = s.tracks;
+      for (Track& t : tracks)
+        for (auto& obs : t) obs.uv_px += Eigen::Vector2d(noise(rng), noise(rng));
+      const SelfCalibrationSummary r = SelfCalibrate(s.views, tracks, options);
+      REQUIRE_MESSAGE(r.success, r.message);
+      focal.push_back(r.cameras[0].focal_px);
+      reported.push_back(r.focal_std_px[0]);
+    }
+    double mean = 0.0, reported_rms = 0.0;
+    for (int k = 0; k < kSeeds; ++k) {
+      mean += focal[k] / kSeeds;
+      reported_rms += reported[k] * reported[k] / kSeeds;
+    }
+    reported_rms = std::sqrt(reported_rms);
+    double spread = 0.0;
+    for (double f : focal) spread += (f - mean) * (f - mean) / (kSeeds - 1);
+    spread = std::sqrt(spread);
+    const double ratio = reported_rms / spread;
+    const std::string mode_name = mode == PrincipalPointMode::kSolve ? "solved" : "at the centre";
+    MESSAGE("principal point " << mode_name << ": focal over " << kSeeds << " seeds: mean "
+                                    << mean << " px (truth " << true_focal << "), observed std " << spread
+                                    << " px, reported std " << reported_rms << " px, ratio " << ratio);
+    CHECK(spread > 0);
+    CHECK(std::abs(ratio - 1.0) < kStdRelTol);
+    // The mean is unbiased within the standard error of the mean (4 sigma).
+    CHECK(std::abs(mean - true_focal) < 4.0 * spread / std::sqrt(static_cast<double>(kSeeds)));
   }
 }
 
