@@ -309,6 +309,7 @@ struct SelfCalibrationResult {
   std::vector<bool> registered;
   std::vector<Camera> cameras;  // world
   std::vector<double> rms_px;
+  std::vector<double> focal_std_px;
   std::vector<std::vector<Id>> flagged;
   std::vector<bool> guessed;
 };
@@ -370,6 +371,8 @@ SelfCalibrationResult SelfCalibrateImages(const Project& project, const std::vec
       ChooseGauge(recon_points, model_points, sc.cameras[first], images[first]->camera, options.gauge, &gauge);
 
   result.registered = sc.registered;
+  result.focal_std_px = sc.focal_std_px;
+  result.focal_std_px.resize(n, 0.0);
   result.cameras.resize(n);
   std::vector<double> sum_sq(n, 0.0);
   std::vector<int> count(n, 0);
@@ -570,6 +573,7 @@ MultiViewInitSummary CalibrateImagesFromPins(const Project& project, const Multi
       report.initialized = true;
       report.residual_px = r.rms_px[v];
       report.focal_px = r.cameras[v].focal_px;
+      report.focal_std_px = r.focal_std_px[v];
       report.focal_guessed = r.guessed[v];
       report.flagged_pins = r.flagged[v];
       report.warnings = r.warnings;

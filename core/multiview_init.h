@@ -102,7 +102,9 @@ struct MultiViewImageReport {
   // symmetric epipolar RMS (core/two_view.h) of the final relative pose.
   double residual_px = 0.0;
   double focal_px = 0.0;       // of the initialised camera
-  double focal_std_px = 0.0;   // resection: one-sigma from the DLT refinement; 0 otherwise
+  // One-sigma focal uncertainty (px): resection from the DLT refinement, self-calibration from
+  // its bundle adjustment; 0 for two views (the focal length is given or guessed there).
+  double focal_std_px = 0.0;
   bool focal_guessed = false;  // two views / self-calibration started from default_focal_factor
   std::vector<Id> flagged_pins;  // wrong clicks in this image, by pin id
   std::string message;           // one line: what was done, or why nothing could be

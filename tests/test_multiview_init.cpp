@@ -562,6 +562,48 @@ TEST_CASE("three uncalibrated views: self-calibration recovers the focal length"
   }
 }
 
+TEST_CASE("four views with 0.5 px noise and a wrong click: self-calibration within the noise, the click flagged") {
+  // The focal length within 4 of the bundle adjustment's own standard deviations, which must be
+  // a small fraction of it; the residual at the noise (a 2-D distance: RMS about sqrt(2) sigma).
+  constexpr double kNoisePx = 0.5;
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    CAPTURE(seed);
+    SceneSpec spec;
+    spec.num_views = 4;
+    spec.first_calibrated = false;
+    spec.extra_boxes = 3;
+    spec.noise_px = kNoisePx;
+    spec.seed = seed;
+    spec.principal_point_offset_px = Eigen::Vector2d::Zero();
+    Scene s = MakeScene(spec);
+    Pin* wrong = nullptr;
+    for (Pin& pin : s.project.pins)
+      if (pin.image_id == s.project.images[2].id && !wrong) wrong = &pin;
+    REQUIRE(wrong != nullptr);
+    wrong->uv_px += Eigen::Vector2d(-30.0, 28.0);
+    const Id wrong_id = wrong->id;
+    Project out;
+    const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, {}, &out);
+    INFO(Messages(summary));
+    for (int i = 0; i < 4; ++i) {
+      CAPTURE(i);
+      const MultiViewImageReport& report = summary.images[i];
+      REQUIRE(report.path == MultiViewInitPath::kSelfCalibration);
+      const double focal_error_px = std::abs(out.images[i].camera.focal_px - s.truth[i].focal_px);
+      MESSAGE("self-calibration 0.5 px, seed " << seed << ", view " << i << ": focal error " << focal_error_px
+                                               << " px (std " << report.focal_std_px << "), RMS " << report.residual_px
+                                               << " px, flagged " << report.flagged_pins.size());
+      CHECK(report.focal_std_px > 0.0);
+      CHECK(report.focal_std_px < 0.02 * s.truth[i].focal_px);
+      CHECK(focal_error_px < 4.0 * report.focal_std_px);
+      CHECK(report.residual_px < 1.5 * std::sqrt(2.0) * kNoisePx);
+      if (i == 2) {
+        CHECK(std::find(report.flagged_pins.begin(), report.flagged_pins.end(), wrong_id) != report.flagged_pins.end());
+      }
+    }
+  }
+}
+
 TEST_CASE("refusals: too few pins, too few shared vertices, collinear pins; the project is unchanged") {
   SUBCASE("4 non-coplanar pins on known vertices") {
     Scene s = MakeScene({});
@@ -689,6 +731,7 @@ TEST_CASE("integration: after resection the model update solves with the second 
   box.shape.params.x() *= 1.3;
   box.shape.params.y() *= 0.75;
   RefreshPrimitive(&initialised, &box);
+  REQUIRE((box.shape.params.head<3>() - s.project.primitives[0].shape.params.head<3>()).norm() > 0.5);
 
   Project updated;
   const ModelUpdateSummary summary = UpdateModel(initialised, ModelUpdateOptions(), &updated);
@@ -710,6 +753,46 @@ TEST_CASE("integration: after resection the model update solves with the second 
   CHECK(size_error < kExactTol);
   CHECK(e1.rotation_rad < kExactTol);
   CHECK(e1.translation_rel < kExactTol);
+}
+
+TEST_CASE("integration: two views and self-calibration, then the model update solves with every image") {
+  // Two views with the focal length given, or three self-calibrated; then the user edits box 0
+  // and the update recovers it from the initialised cameras' pins alone (no line families).
+  constexpr double kRmsTolPx = 1e-6;
+  for (const int num_views : {2, 3}) {
+    CAPTURE(num_views);
+    SceneSpec spec;
+    spec.num_views = num_views;
+    spec.first_calibrated = false;
+    spec.extra_boxes = 3;
+    spec.principal_point_offset_px = Eigen::Vector2d::Zero();
+    Scene s = MakeScene(spec);
+    const MultiViewInitOptions options = num_views == 2 ? KnownFocal(s) : MultiViewInitOptions();
+    Project initialised;
+    const MultiViewInitSummary init = CalibrateImagesFromPins(s.project, options, &initialised);
+    INFO(Messages(init));
+    REQUIRE(init.num_initialized == num_views);
+    Primitive& box = initialised.primitives[0];
+    box.shape.params.x() *= 1.3;
+    box.shape.params.y() *= 0.75;
+    RefreshPrimitive(&initialised, &box);
+    REQUIRE((box.shape.params.head<3>() - s.project.primitives[0].shape.params.head<3>()).norm() > 0.5);
+
+    Project updated;
+    const ModelUpdateSummary summary = UpdateModel(initialised, ModelUpdateOptions(), &updated);
+    INFO("solve: " << summary.solve.message << "; joint: " << summary.joint.message);
+    REQUIRE(summary.ok);
+    REQUIRE(summary.joint.IsUsable());
+    CHECK(summary.solve.num_skipped_pins == 0);
+    CHECK(static_cast<int>(summary.joint.images.size()) == num_views);
+    const Eigen::Vector3d size = updated.primitives[0].shape.params.head<3>();
+    const Eigen::Vector3d true_size = s.project.primitives[0].shape.params.head<3>();
+    const double size_error = (size - true_size).norm() / true_size.norm();
+    MESSAGE("integration " << num_views << " views: joint RMS " << summary.joint.reprojection_rms_px << " px, size "
+                           << size_error);
+    CHECK(summary.joint.reprojection_rms_px < kRmsTolPx);
+    CHECK(size_error < kExactTol);
+  }
 }
 
 }  // namespace
