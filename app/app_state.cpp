@@ -61,6 +61,8 @@ const char* ToolName(Tool tool) {
     case Tool::kConnectVertices: return "Connect vertices";
     case Tool::kDeleteEdge: return "Delete edge";
     case Tool::kPushPull: return "Push/pull";
+    case Tool::kMove: return "Move";
+    case Tool::kLinePin: return "Line pin";
   }
   return "?";
 }

@@ -32,6 +32,8 @@ enum class Tool {
   kConnectVertices,  // V_connect: click two vertices of one face
   kDeleteEdge,       // E_delete: click on an edge between two faces
   kPushPull,         // push/pull: extrude the selected face by a typed distance
+  kMove,             // V_op: drag a vertex or a primitive in the 3D panel (app/move_tool.h)
+  kLinePin,          // pin the selected edge to a line drawn in the image (kEdgeOnImageLine)
 };
 const char* ToolName(Tool tool);
 

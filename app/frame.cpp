@@ -15,6 +15,8 @@
 
 #include "app/image_panel.h"
 #include "app/model_edits.h"
+#include "app/move_tool.h"
+#include "app/panel_image.h"
 #include "app/panels.h"
 #include "app/viewport_panel.h"
 #include "core/export.h"
@@ -432,6 +434,8 @@ std::optional<Tool> ToolFromName(const std::string& name) {
   if (name == "connect-vertices" || name == "v-connect") return Tool::kConnectVertices;
   if (name == "delete-edge" || name == "e-delete") return Tool::kDeleteEdge;
   if (name == "push-pull" || name == "extrude") return Tool::kPushPull;
+  if (name == "move") return Tool::kMove;
+  if (name == "line-pin") return Tool::kLinePin;
   return std::nullopt;
 }
 
@@ -543,7 +547,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     if (!tool) {
       *error = "unknown tool '" + arg +
                "' (select, line-x, line-y, line-z, pin, add-primitive, split-edge, delete-vertex, "
-               "connect-vertices, delete-edge, push-pull)";
+               "connect-vertices, delete-edge, push-pull, move, line-pin)";
       return false;
     }
     if (*tool == Tool::kAddPrimitive) {
@@ -580,6 +584,10 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   }
   if (name == "select") return RunSelectCommand(state, arg, error);
   if (name == "constrain") return RunConstrainCommand(state, arg, error);
+  if (name == "select-add") return RunSelectAddCommand(state, arg, error);
+  if (name == "line-pin") return RunLinePinCommand(state, arg, error);
+  if (name == "calibration") return RunCalibrationCommand(state, arg, error);
+  if (name == "move-selection") return RunMoveCommand(state, arg, error);
   if (name == "free-vertex" || name == "planar-face") {
     const ElementRef& e = state->selection.element;
     const bool vertex = name == "free-vertex";

@@ -15,6 +15,7 @@
 #include "app/image_view.h"
 #include "app/model_edits.h"
 #include "app/model_pick.h"
+#include "app/overlay_calibration.h"
 #include "app/overlay_draw.h"
 
 namespace facet::app {
@@ -704,6 +705,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   draw_list->AddRect(ImVec2(image_min.x - 1, image_min.y - 1), ImVec2(image_max.x + 1, image_max.y + 1),
                      IM_COL32(0, 0, 0, 255));
   DrawImageOverlays(draw_list, overlay, transform, rect_min, rect_max, panel->overlay);
+  DrawCalibrationOverlay(draw_list, *state, image, transform, rect_min, rect_max, hovered ? &mouse_uv : nullptr);
   if (drag.kind == DragKind::kNewSegment) {
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, IM_COL32(0, 0, 0, 200), 4.0f);
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, AxisColor(drag.axis), 2.0f);

@@ -493,4 +493,14 @@ bool ApplyToolClick(AppState* state, const ElementRef& picked, double t) {
   }
 }
 
+bool RunSelectAddCommand(AppState* /*state*/, const std::string& arg, std::string* error) {
+  *error = "select-add: not available yet ('" + arg + "')";
+  return false;
+}
+
+bool RunLinePinCommand(AppState* /*state*/, const std::string& arg, std::string* error) {
+  *error = "line-pin: not available yet ('" + arg + "')";
+  return false;
+}
+
 }  // namespace facet::app

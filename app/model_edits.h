@@ -70,6 +70,13 @@ std::string ConstraintEditLabel(ConstraintKind kind);
 // The script command `constrain KIND [VALUE]` on the current selection (app/script.h).
 bool RunConstrainCommand(AppState* state, const std::string& arg, std::string* error);
 
+// The script command `select-add KIND PRIMITIVE_ID ELEMENT_ID`: adds an element to the
+// selection (multi-selection for coplanar/collinear on vertex sets).
+bool RunSelectAddCommand(AppState* state, const std::string& arg, std::string* error);
+// The script command `line-pin ARGS`: the selected edge on a line in an image
+// (ConstraintKind::kEdgeOnImageLine).
+bool RunLinePinCommand(AppState* state, const std::string& arg, std::string* error);
+
 // Push/pull: extrudes the face by `distance` project units along its outward normal (a
 // negative distance pushes it in), core/mesh_extrude.h; the face stays selected.
 bool PushPullFaceEdit(AppState* state, Id primitive_id, FaceId face, double distance);

@@ -12,16 +12,16 @@
 #include <GLFW/glfw3.h>  // key codes only: io.KeysDown is indexed by GLFW key codes in both modes
 
 #include "app/model_edits.h"
+#include "app/panel_constraints.h"
+#include "app/panel_image.h"
+#include "app/panel_util.h"
 #include "core/scene_solve.h"
 
 namespace facet::app {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / M_PI;
-const ImVec4 kDimText(0.55f, 0.57f, 0.62f, 1.0f);
-const ImVec4 kWarningText(0.98f, 0.78f, 0.30f, 1.0f);
-const ImVec4 kErrorText(1.00f, 0.42f, 0.40f, 1.0f);
-const ImVec4 kGoodText(0.45f, 0.85f, 0.50f, 1.0f);
+constexpr int kFreeVertexKey = GLFW_KEY_T;
+constexpr int kPlanarFaceKey = GLFW_KEY_K;
 
 struct ToolButton {
   Tool tool;
@@ -49,181 +49,15 @@ constexpr ToolButton kToolButtons[] = {
      "E_delete: click on an edge between two faces to merge them."},
     {Tool::kPushPull, "Push/pull", "U", GLFW_KEY_U,
      "Push/pull: select a face, type a distance (negative pushes in) and press Enter or Extrude."},
+    {Tool::kMove, "Move", "M", GLFW_KEY_M,
+     "V_op: drag a vertex or a primitive in the 3D panel; the solve starts from where you leave it."},
+    {Tool::kLinePin, "Line pin", "L", GLFW_KEY_L,
+     "Select an edge, then drag in the image along the line it lies on (edge on image line)."},
 };
-
-// Actions on the selection, beside the tools.
-constexpr int kFreeVertexKey = GLFW_KEY_T;
-constexpr const char* kFreeVertexShortcut = "T";
-constexpr int kPlanarFaceKey = GLFW_KEY_K;
-constexpr const char* kPlanarFaceShortcut = "K";
 
 constexpr PrimitiveKind kPrimitiveKinds[] = {PrimitiveKind::kBox,     PrimitiveKind::kWedge,
                                              PrimitiveKind::kPrism,   PrimitiveKind::kPyramid,
                                              PrimitiveKind::kCylinder, PrimitiveKind::kPlane};
-
-// Per-frame UI introspection, not document data: rebuilt every frame.
-std::map<std::string, Rect>& ItemRects() {
-  static std::map<std::string, Rect> rects;
-  return rects;
-}
-
-void RecordItem(const std::string& name) {
-  const ImVec2 min = ImGui::GetItemRectMin(), size = ImGui::GetItemRectSize();
-  ItemRects()[name] = {min.x, min.y, size.x, size.y};
-}
-
-ImVec4 AxisColor(Axis axis) {
-  switch (axis) {
-    case Axis::kX: return ImVec4(0.95f, 0.35f, 0.32f, 1.0f);
-    case Axis::kY: return ImVec4(0.40f, 0.85f, 0.40f, 1.0f);
-    case Axis::kZ: return ImVec4(0.40f, 0.60f, 1.00f, 1.0f);
-  }
-  return ImVec4(1, 1, 1, 1);
-}
-
-void LabelValue(const char* label, const char* fmt, ...) IM_FMTARGS(2);
-void LabelValue(const char* label, const char* fmt, ...) {
-  ImGui::TextColored(kDimText, "%s", label);
-  ImGui::SameLine(ImGui::GetFontSize() * 7.5f);
-  va_list args;
-  va_start(args, fmt);
-  ImGui::TextV(fmt, args);
-  va_end(args);
-}
-
-void WrappedColored(const ImVec4& color, const std::string& text) {
-  ImGui::PushStyleColor(ImGuiCol_Text, color);
-  ImGui::TextWrapped("%s", text.c_str());
-  ImGui::PopStyleColor();
-}
-
-// The undo pattern for continuous widgets: activation snapshots the project, every change
-// previews the edited copy, deactivation after an edit records the whole interaction as one
-// history entry. `changed` is the widget's return value; `apply` edits a project copy.
-void TrackEdit(AppState* state, const std::string& label, bool changed, const std::function<void(Project*)>& apply) {
-  if (ImGui::IsItemActivated()) BeginDrag(state, label);
-  if (changed) {
-    Project edited = state->document.project();
-    apply(&edited);
-    if (state->drag_start) {
-      UpdateDrag(state, std::move(edited));
-    } else {
-      CommitEdit(state, label, std::move(edited));
-    }
-  }
-  if (ImGui::IsItemDeactivatedAfterEdit()) {
-    EndDrag(state);
-  } else if (ImGui::IsItemDeactivated()) {
-    CancelDrag(state);
-  }
-}
-
-bool DragDoubles(const char* label, double* values, int count, float speed, const char* format) {
-  return ImGui::DragScalarN(label, ImGuiDataType_Double, values, count, speed, nullptr, nullptr, format);
-}
-
-void DrawImageSection(AppState* state) {
-  if (!state->ActiveImage()) {
-    ImGui::TextColored(kDimText, "No image in the project.");
-    return;
-  }
-  // A copy: the edits below replace the project that a pointer would point into.
-  const Image active_image = *state->ActiveImage();
-  const Image* image = &active_image;
-  const Id image_id = image->id;
-  if (!ImGui::CollapsingHeader("Image", ImGuiTreeNodeFlags_DefaultOpen)) return;
-  LabelValue("Path", "%s", image->path.c_str());
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", image->path.c_str());
-  LabelValue("Size", "%d x %d px", image->width_px, image->height_px);
-  if (auto err = state->photo_errors.find(image_id); err != state->photo_errors.end()) {
-    WrappedColored(kErrorText, err->second);
-  }
-  const Camera& cam = image->camera;
-  LabelValue("Calibrated", "%s", image->camera_calibrated ? "yes" : "no");
-  LabelValue("Focal", "%.1f px", cam.focal_px);
-  LabelValue("Principal pt", "%.1f, %.1f px", cam.principal_point_px.x(), cam.principal_point_px.y());
-  if (image->camera_calibrated) {
-    const Eigen::Vector3d c = cam.CenterInWorld();
-    LabelValue("Centre", "%.3f, %.3f, %.3f", c.x(), c.y(), c.z());
-  }
-
-  int mode = static_cast<int>(image->principal_point_mode);
-  const char* modes[] = {"Solve (3 VPs)", "Image centre", "Fixed"};
-  ImGui::SetNextItemWidth(-FLT_MIN);
-  if (ImGui::Combo("##pp_mode", &mode, modes, 3)) {
-    Project edited = state->document.project();
-    edited.FindImage(image_id)->principal_point_mode = static_cast<PrincipalPointMode>(mode);
-    CommitEdit(state, "Principal point mode", std::move(edited));
-  }
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("How calibration treats the principal point");
-  bool pose_locked = image->pose_locked;
-  if (ImGui::Checkbox("Lock camera position", &pose_locked)) {
-    Project edited = state->document.project();
-    edited.FindImage(image_id)->pose_locked = pose_locked;
-    CommitEdit(state, pose_locked ? "Lock camera" : "Unlock camera", std::move(edited));
-  }
-
-  ImGui::Spacing();
-  ImGui::TextColored(kDimText, "Vanishing-point calibration");
-  ImGui::Separator();
-  const auto cal = state->last_update.calibration.find(image_id);
-  if (cal == state->last_update.calibration.end()) {
-    ImGui::TextColored(kDimText, "No line families drawn in this image.");
-  } else {
-    const VpCalibrationSummary& c = cal->second;
-    ImGui::TextColored(c.success ? kGoodText : kErrorText, "%s", c.success ? "Calibrated" : "Failed");
-    LabelValue("Segments", " ");
-    for (int a = 0; a < 3; ++a) {
-      ImGui::SameLine();
-      ImGui::TextColored(AxisColor(static_cast<Axis>(a)), "%s %d", AxisName(static_cast<Axis>(a)), c.segments_per_axis[a]);
-    }
-    if (c.success) {
-      LabelValue("Focal", "%.1f px", c.focal_px);
-      LabelValue("Principal pt", "%.1f, %.1f px", c.principal_point_px.x(), c.principal_point_px.y());
-    }
-    if (!c.message.empty()) WrappedColored(c.success ? ImGui::GetStyleColorVec4(ImGuiCol_Text) : kErrorText, c.message);
-    for (const std::string& w : c.warnings) WrappedColored(kWarningText, w);
-  }
-}
-
-void DrawSolveSection(AppState* state) {
-  if (!ImGui::CollapsingHeader("Geometry solve", ImGuiTreeNodeFlags_DefaultOpen)) return;
-  const SceneSolveSummary& s = state->last_update.solve;
-  const bool usable = s.IsUsable();
-  const bool nothing = s.termination == SolveTermination::kNothingToSolve;
-  ImGui::TextColored(usable ? kGoodText : (nothing ? kDimText : kErrorText), "%s",
-                     SolveTerminationName(s.termination));
-  if (usable) {
-    LabelValue("Iterations", "%d", s.iterations);
-    LabelValue("RMS", "%.3f px", s.reprojection_rms_px);
-    LabelValue("Max", "%.3f px", s.reprojection_max_px);
-    LabelValue("Residuals", "%d (%d parameters)", s.num_residuals, s.num_parameters);
-  }
-  LabelValue("Time", "%.2f ms", s.time_ms);
-  LabelValue("Update", "%.2f ms", state->last_update.time_ms);
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Calibration and solve after the last change");
-  if (!s.message.empty()) WrappedColored(usable ? ImGui::GetStyleColorVec4(ImGuiCol_Text) : kDimText, s.message);
-  for (const std::string& w : s.warnings) WrappedColored(kWarningText, w);
-  for (const std::string& m : state->last_update.messages) WrappedColored(kWarningText, m);
-
-  // The joint solve refines everything at once (free vertices, constraints, intrinsics).
-  const JointSolveSummary& j = state->last_update.joint;
-  if (j.termination == JointSolveSummary::Termination::kInvalidInput && j.message.empty()) return;
-  ImGui::Spacing();
-  ImGui::TextColored(kDimText, "Joint solve");
-  ImGui::Separator();
-  ImGui::TextColored(j.IsUsable() ? kGoodText : kDimText, "%s", JointSolveTerminationName(j.termination));
-  if (j.IsUsable()) {
-    LabelValue("Iterations", "%d", j.iterations);
-    LabelValue("RMS", "%.3f px", j.reprojection_rms_px);
-    LabelValue("Max", "%.3f px", j.reprojection_max_px);
-    LabelValue("Residuals", "%d (%d parameters)", j.num_residuals, j.num_parameters);
-  }
-  if (!j.message.empty()) WrappedColored(kDimText, j.message);
-  for (const std::string& w : j.undetermined) WrappedColored(kWarningText, w);
-  for (const std::string& w : j.conflicts) WrappedColored(kErrorText, w);
-  for (const std::string& w : j.warnings) WrappedColored(kWarningText, w);
-}
 
 // Takes a copy: the edits below replace the project that a reference would point into.
 void DrawPrimitiveSection(AppState* state, const Primitive primitive) {
@@ -300,138 +134,6 @@ void DrawPrimitiveSection(AppState* state, const Primitive primitive) {
   }
   if (ImGui::Button("Delete primitive")) DeletePrimitiveEdit(state, id);
   ImGui::PopID();
-}
-
-// The constraint builder for a selected edge: one-edge kinds at once, two-edge kinds in two
-// clicks (the first stores the edge, the second, with another edge selected, adds).
-void DrawEdgeConstraintBuilder(AppState* state, const ElementRef& element) {
-  ImGui::Spacing();
-  ImGui::TextColored(kDimText, "Constrain edge");
-  for (const Axis axis : {Axis::kX, Axis::kY, Axis::kZ}) {
-    const std::string label = std::string("Along ") + AxisName(axis);
-    if (axis != Axis::kX) ImGui::SameLine();
-    if (ImGui::Button(label.c_str())) ConstrainAlongAxisEdit(state, element, axis);
-    RecordItem(std::string("constraint.along_") + AxisName(axis));
-  }
-  ImGui::SetNextItemWidth(ImGui::GetFontSize() * 6.0f);
-  ImGui::InputDouble("##constraint_length", &state->constraint_length, 0.0, 0.0, "%.4g");
-  RecordItem("constraint.length_value");
-  ImGui::SameLine();
-  const std::string length_label = "Known length (" + state->document.project().units + ")";
-  if (ImGui::Button(length_label.c_str())) ConstrainLengthEdit(state, element, state->constraint_length);
-  RecordItem("constraint.length");
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("The edge's length in project units: sets the scale");
-  const std::pair<ConstraintKind, const char*> pairs[] = {{ConstraintKind::kParallel, "parallel"},
-                                                          {ConstraintKind::kPerpendicular, "perpendicular"},
-                                                          {ConstraintKind::kEqualLength, "equal_length"}};
-  bool first_button = true;
-  for (const auto& [kind, key] : pairs) {
-    if (!first_button) ImGui::SameLine();
-    first_button = false;
-    const std::string label = ConstraintEditLabel(kind);
-    if (ImGui::Button(label.c_str())) ConstraintPairStep(state, kind);
-    RecordItem(std::string("constraint.") + key);
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Click with the first edge selected, then with the second");
-  }
-  const Project& project = state->document.project();
-  if (state->constraint_first_kind && ElementExists(project, state->constraint_first_edge)) {
-    ImGui::TextColored(kWarningText, "%s: first edge: %s", ConstraintEditLabel(*state->constraint_first_kind).c_str(),
-                       DescribeElement(project, state->constraint_first_edge).c_str());
-    ImGui::SameLine();
-    if (ImGui::SmallButton("Cancel##constraint_pair")) {
-      state->constraint_first_kind.reset();
-      state->constraint_first_edge = ElementRef();
-    }
-  }
-}
-
-// One row per constraint: kind, vertices, residual of the last joint solve, remove.
-void DrawConstraintsSection(AppState* state) {
-  const Project& project = state->document.project();
-  const std::string title = "Constraints (" + std::to_string(project.constraints.size()) + ")###Constraints";
-  if (!ImGui::CollapsingHeader(title.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) return;
-  if (project.constraints.empty()) {
-    ImGui::TextColored(kDimText, "None: select an edge or vertex to add one.");
-    return;
-  }
-  const std::vector<Constraint> constraints = project.constraints;  // the remove edit replaces them
-  const std::vector<ConstraintDiagnostic>& diagnostics = state->last_update.joint.constraints;
-  for (size_t i = 0; i < constraints.size(); ++i) {
-    const Constraint& c = constraints[i];
-    ImGui::PushID(static_cast<int>(c.id));
-    std::string text = ConstraintKindName(c.kind);
-    if (c.kind == ConstraintKind::kAlongAxis) text += std::string(" ") + AxisName(c.axis);
-    if (c.kind == ConstraintKind::kDistance) {
-      char v[48];
-      std::snprintf(v, sizeof(v), " %.4g %s", c.value, project.units.c_str());
-      text += v;
-    }
-    text += ":";
-    // Appended in two steps: GCC 12 reports a false -Wrestrict on " " + std::string.
-    for (const VertexRef& v : c.vertices) {
-      text += ' ';
-      text += DescribeVertex(project, v);
-    }
-    const ConstraintDiagnostic* d = nullptr;
-    for (const ConstraintDiagnostic& diag : diagnostics) {
-      if (diag.constraint_id == c.id) d = &diag;
-    }
-    if (ImGui::SmallButton("x")) RemoveConstraintEdit(state, c.id);
-    RecordItem("constraint.remove." + std::to_string(i));
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Remove constraint");
-    ImGui::SameLine();
-    ImGui::TextWrapped("%s", text.c_str());
-    if (d != nullptr) {
-      ImGui::SameLine();
-      ImGui::TextColored(d->satisfied ? kGoodText : kErrorText, "%.3g %s", d->residual, d->unit.c_str());
-    } else {
-      ImGui::SameLine();
-      ImGui::TextColored(kDimText, "(not solved)");
-    }
-    ImGui::PopID();
-  }
-}
-
-// The selected vertex, edge or face of the selected primitive.
-void DrawElementSection(AppState* state, const Primitive& primitive, const ElementRef& element) {
-  const PolyMesh& mesh = primitive.mesh;
-  const std::string title = std::string(ElementKindName(element.kind)) + " " + std::to_string(element.element);
-  if (!ImGui::CollapsingHeader("Element", ImGuiTreeNodeFlags_DefaultOpen)) return;
-  ImGui::TextUnformatted(title.c_str());
-  if (element.kind == ElementKind::kVertex) {
-    const MeshVertex& v = mesh.vertex(element.element);
-    LabelValue("Position", "%.3f, %.3f, %.3f", v.position.x(), v.position.y(), v.position.z());
-    LabelValue("Defined", "%s", v.local.on_edge ? "on an edge (split)" : "primitive corner");
-    if (v.local.free) LabelValue("Offset", "%.3f, %.3f, %.3f", v.local.offset.x(), v.local.offset.y(), v.local.offset.z());
-    bool free = v.local.free;
-    char label[64];
-    std::snprintf(label, sizeof(label), "Free vertex (%s)", kFreeVertexShortcut);
-    if (ImGui::Checkbox(label, &free)) ToggleFreeVertexEdit(state, element.primitive_id, element.element);
-    RecordItem("element.free");
-    if (ImGui::IsItemHovered()) {
-      ImGui::SetTooltip("Let the solve move this vertex off its definition (e.g. a ridge above a face) (%s)",
-                        kFreeVertexShortcut);
-    }
-    if (ImGui::Button("Fix at origin")) FixVertexEdit(state, element);
-    RecordItem("constraint.fix");
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("A fixed-point constraint at the vertex's current position");
-    int pins = 0;
-    for (const Pin& pin : state->document.project().pins) pins += pin.vertex == VertexRef{primitive.id, element.element};
-    LabelValue("Pins", "%d", pins);
-  } else if (element.kind == ElementKind::kEdge) {
-    const VertexId a = mesh.Origin(2 * element.element), b = mesh.Dest(2 * element.element);
-    LabelValue("Vertices", "%u - %u", a, b);
-    LabelValue("Length", "%.3f", (mesh.vertex(b).position - mesh.vertex(a).position).norm());
-    DrawEdgeConstraintBuilder(state, element);
-  } else if (element.kind == ElementKind::kFace) {
-    LabelValue("Vertices", "%d", FaceDegree(mesh, element.element));
-    const Eigen::Vector3d n = FaceNormal(mesh, element.element);
-    LabelValue("Normal", "%.2f, %.2f, %.2f", n.x(), n.y(), n.z());
-    char label[64];
-    std::snprintf(label, sizeof(label), "Keep planar (%s)", kPlanarFaceShortcut);
-    if (ImGui::Button(label)) TogglePlanarFaceEdit(state, element.primitive_id, element.element);
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("A coplanarity constraint on the face's vertices (toggle)");
-  }
 }
 
 void DrawPinSection(AppState* state, const Pin pin) {

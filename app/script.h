@@ -26,9 +26,19 @@
 //                                                      edge, second adds); fix (vertex);
 //                                                      remove ID. Dispatched by
 //                                                      RunConstrainCommand (app/model_edits.h)
+//                                   select-add vertex|edge|face PRIMITIVE_ID ELEMENT_ID
+//                                                      add to the selection (RunSelectAddCommand)
+//                                   line-pin ARGS      the selected edge on an image line
+//                                                      (RunLinePinCommand, app/model_edits.h)
+//                                   calibration KEY VALUE  the active image's calibration
+//                                                      modes (RunCalibrationCommand,
+//                                                      app/panel_image.h)
+//                                   move-selection ARGS  V_op on the selected vertex or
+//                                                      primitive (RunMoveCommand,
+//                                                      app/move_tool.h)
 //                                 Tool names: select, line-x, line-y, line-z, pin,
 //                                 add-primitive (adds at once), split-edge, delete-vertex,
-//                                 connect-vertices, delete-edge, push-pull
+//                                 connect-vertices, delete-edge, push-pull, move, line-pin
 //   screenshot PATH               write a PNG of the frame just rendered
 #pragma once
 

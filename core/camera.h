@@ -14,6 +14,11 @@ struct Camera {
   Eigen::Vector2d principal_point_px = Eigen::Vector2d::Zero();
   Eigen::Matrix3d cam_from_world_rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d cam_from_world_translation = Eigen::Vector3d::Zero();
+  // Radial lens distortion, OpenCV's model (radial part): for p_in_cam = (X, Y, Z), Z > 0,
+  // x = X / Z, y = Y / Z, r^2 = x^2 + y^2, d = 1 + k1 r^2 + k2 r^4, uv = (f x d + cx, f y d + cy).
+  // Zero for a pinhole camera (the default).
+  double k1 = 0.0;
+  double k2 = 0.0;
 
   // 3x3 intrinsic matrix.
   Eigen::Matrix3d K() const;

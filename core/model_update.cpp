@@ -11,6 +11,16 @@ VpCalibrationOptions CalibrationOptionsFor(const Image& image) {
   options.height_px = image.height_px;
   options.principal_point_mode = image.principal_point_mode;
   options.fixed_principal_point_px = image.fixed_principal_point_px;
+  switch (image.focal_mode) {
+    case FocalMode::kSolve: break;
+    case FocalMode::kFixed: options.fixed_focal_px = image.fixed_focal_px; break;
+    case FocalMode::kPrior:
+      options.focal_prior_px = image.focal_prior_px;
+      options.focal_prior_std_px = image.focal_prior_std_px;
+      break;
+  }
+  options.use_horizon = image.use_horizon;
+  options.horizon_px = image.horizon_px;
   return options;
 }
 

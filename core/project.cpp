@@ -21,6 +21,22 @@ std::optional<Axis> AxisFromName(const std::string& name) {
   return std::nullopt;
 }
 
+const char* FocalModeName(FocalMode mode) {
+  switch (mode) {
+    case FocalMode::kSolve: return "solve";
+    case FocalMode::kFixed: return "fixed";
+    case FocalMode::kPrior: return "prior";
+  }
+  return "?";
+}
+
+std::optional<FocalMode> FocalModeFromName(const std::string& name) {
+  if (name == "solve") return FocalMode::kSolve;
+  if (name == "fixed") return FocalMode::kFixed;
+  if (name == "prior") return FocalMode::kPrior;
+  return std::nullopt;
+}
+
 namespace {
 template <typename T>
 T* FindById(std::vector<T>& items, Id id) {
@@ -132,7 +148,7 @@ bool operator==(const Camera& a, const Camera& b) {
   return a.width_px == b.width_px && a.height_px == b.height_px && a.focal_px == b.focal_px &&
          a.principal_point_px == b.principal_point_px &&
          a.cam_from_world_rotation == b.cam_from_world_rotation &&
-         a.cam_from_world_translation == b.cam_from_world_translation;
+         a.cam_from_world_translation == b.cam_from_world_translation && a.k1 == b.k1 && a.k2 == b.k2;
 }
 bool operator==(const Image& a, const Image& b) {
   return a.id == b.id && a.path == b.path && a.width_px == b.width_px &&
@@ -140,7 +156,11 @@ bool operator==(const Image& a, const Image& b) {
          a.camera_calibrated == b.camera_calibrated &&
          a.principal_point_mode == b.principal_point_mode &&
          a.fixed_principal_point_px == b.fixed_principal_point_px && a.pose_locked == b.pose_locked &&
-         a.focal_locked == b.focal_locked && a.principal_point_locked == b.principal_point_locked;
+         a.focal_locked == b.focal_locked && a.principal_point_locked == b.principal_point_locked &&
+         a.focal_mode == b.focal_mode && a.fixed_focal_px == b.fixed_focal_px &&
+         a.focal_prior_px == b.focal_prior_px && a.focal_prior_std_px == b.focal_prior_std_px &&
+         a.use_horizon == b.use_horizon && a.horizon_px == b.horizon_px &&
+         a.estimate_distortion == b.estimate_distortion && a.distortion_locked == b.distortion_locked;
 }
 bool operator==(const Segment& a, const Segment& b) {
   return a.id == b.id && a.image_id == b.image_id && a.axis == b.axis && a.a_px == b.a_px &&

@@ -29,6 +29,12 @@ std::optional<Axis> AxisFromName(const std::string& name);  // inverse of AxisNa
 
 // How single-image calibration treats the principal point.
 enum class PrincipalPointMode { kSolve = 0, kImageCenter = 1, kFixed = 2 };
+// How single-image calibration treats the focal length: solved from the vanishing points,
+// a known lens (fixed_focal_px), or solved with a Gaussian prior (focal_prior_px +- std, e.g.
+// from the photo's EXIF, core/exif.h).
+enum class FocalMode { kSolve = 0, kFixed = 1, kPrior = 2 };
+const char* FocalModeName(FocalMode mode);                           // "solve", "fixed", "prior"
+std::optional<FocalMode> FocalModeFromName(const std::string& name);  // inverse of FocalModeName
 
 struct Image {
   Id id = kNoId;
@@ -39,10 +45,23 @@ struct Image {
   bool camera_calibrated = false;  // true once calibration produced intrinsics and rotation
   PrincipalPointMode principal_point_mode = PrincipalPointMode::kSolve;
   Eigen::Vector2d fixed_principal_point_px = Eigen::Vector2d::Zero();  // for kFixed
+  FocalMode focal_mode = FocalMode::kSolve;
+  double fixed_focal_px = 0.0;      // for FocalMode::kFixed
+  double focal_prior_px = 0.0;      // for FocalMode::kPrior
+  double focal_prior_std_px = 0.0;  // for FocalMode::kPrior
+  // The horizon, two points (x1, y1, x2, y2) in px on the image of the horizontal plane at
+  // infinity: with a known focal length it lets one horizontal line family fix the rotation
+  // (VpCalibrationOptions::horizon_px).
+  bool use_horizon = false;
+  Eigen::Vector4d horizon_px = Eigen::Vector4d::Zero();
+  // Estimate radial distortion (camera.k1, k2) from the image's straight lines (plumb-line,
+  // core/plumb_line.h) before the vanishing-point calibration.
+  bool estimate_distortion = false;
   bool pose_locked = false;  // the geometry solve keeps this camera's position
   // Whether the geometry solve keeps the intrinsics calibration gave (issue 5 frees them).
   bool focal_locked = true;
   bool principal_point_locked = true;
+  bool distortion_locked = true;  // the joint solve keeps camera.k1, k2
 };
 
 // A user-drawn line segment in one image, assigned to a vanishing-point family.

@@ -202,6 +202,8 @@ OrderedJson WriteProject(const Project& p, Writer* w) {
     cam["rotation"] = w->Matrix(Join(cam_at, "rotation"), im.camera.cam_from_world_rotation);
     cam["translation"] =
         w->Numbers(Join(cam_at, "translation"), im.camera.cam_from_world_translation);
+    cam["k1"] = w->Number(Join(cam_at, "k1"), im.camera.k1);
+    cam["k2"] = w->Number(Join(cam_at, "k2"), im.camera.k2);
     j["camera"] = std::move(cam);
     j["camera_calibrated"] = im.camera_calibrated;
     j["principal_point_mode"] = PrincipalPointModeName(im.principal_point_mode);
@@ -210,6 +212,14 @@ OrderedJson WriteProject(const Project& p, Writer* w) {
     j["pose_locked"] = im.pose_locked;
     j["focal_locked"] = im.focal_locked;
     j["principal_point_locked"] = im.principal_point_locked;
+    j["focal_mode"] = FocalModeName(im.focal_mode);
+    j["fixed_focal_px"] = w->Number(Join(at, "fixed_focal_px"), im.fixed_focal_px);
+    j["focal_prior_px"] = w->Number(Join(at, "focal_prior_px"), im.focal_prior_px);
+    j["focal_prior_std_px"] = w->Number(Join(at, "focal_prior_std_px"), im.focal_prior_std_px);
+    j["use_horizon"] = im.use_horizon;
+    j["horizon_px"] = w->Numbers(Join(at, "horizon_px"), im.horizon_px);
+    j["estimate_distortion"] = im.estimate_distortion;
+    j["distortion_locked"] = im.distortion_locked;
     images.push_back(std::move(j));
   }
   root["images"] = std::move(images);
@@ -425,7 +435,9 @@ class Reader {
 bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
   if (!r->Object(j, at, {"id", "path", "width_px", "height_px", "camera", "camera_calibrated",
                          "principal_point_mode", "fixed_principal_point_px", "pose_locked", "focal_locked",
-                         "principal_point_locked"}))
+                         "principal_point_locked", "focal_mode", "fixed_focal_px", "focal_prior_px",
+                         "focal_prior_std_px", "use_horizon", "horizon_px", "estimate_distortion",
+                         "distortion_locked"}))
     return false;
   constexpr int kMaxSize = std::numeric_limits<int>::max();
   if (!r->IdField(j, at, "id", &im->id) || !r->String(j, at, "path", &im->path) ||
@@ -435,7 +447,7 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
   const Json* cam = r->Field(j, at, "camera");
   const std::string cam_at = Join(at, "camera");
   if (!cam || !r->Object(*cam, cam_at, {"width_px", "height_px", "focal_px", "principal_point_px",
-                                        "rotation", "translation"}))
+                                        "rotation", "translation", "k1", "k2"}))
     return false;
   Camera& c = im->camera;
   if (!r->Int(*cam, cam_at, "width_px", 0, kMaxSize, &c.width_px) ||
@@ -444,6 +456,11 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
       !r->Vector<2>(*cam, cam_at, "principal_point_px", &c.principal_point_px) ||
       !r->Matrix(*cam, cam_at, "rotation", &c.cam_from_world_rotation) ||
       !r->Vector<3>(*cam, cam_at, "translation", &c.cam_from_world_translation))
+    return false;
+  // Distortion and the calibration modes came after the first version-2 files: absent means
+  // the defaults (a pinhole camera, focal solved, no horizon).
+  if ((cam->contains("k1") && !r->Double(*cam, cam_at, "k1", &c.k1)) ||
+      (cam->contains("k2") && !r->Double(*cam, cam_at, "k2", &c.k2)))
     return false;
   if (!(c.focal_px > 0)) return r->Fail(Join(cam_at, "focal_px"), "must be positive");
   // A loose tolerance: solvers leave rounding-level drift, a corrupted file is far off.
@@ -462,9 +479,36 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
     return r->Fail(Join(at, "principal_point_mode"),
                    "expected \"solve\", \"center\" or \"fixed\", found \"" + mode + "\"");
   im->principal_point_mode = *parsed_mode;
-  return r->Vector<2>(j, at, "fixed_principal_point_px", &im->fixed_principal_point_px) &&
-         r->Bool(j, at, "pose_locked", &im->pose_locked) && r->Bool(j, at, "focal_locked", &im->focal_locked) &&
-         r->Bool(j, at, "principal_point_locked", &im->principal_point_locked);
+  if (!r->Vector<2>(j, at, "fixed_principal_point_px", &im->fixed_principal_point_px) ||
+      !r->Bool(j, at, "pose_locked", &im->pose_locked) || !r->Bool(j, at, "focal_locked", &im->focal_locked) ||
+      !r->Bool(j, at, "principal_point_locked", &im->principal_point_locked))
+    return false;
+  if (j.contains("focal_mode")) {
+    std::string focal_mode;
+    if (!r->String(j, at, "focal_mode", &focal_mode)) return false;
+    const auto parsed_focal_mode = FocalModeFromName(focal_mode);
+    if (!parsed_focal_mode)
+      return r->Fail(Join(at, "focal_mode"),
+                     "expected \"solve\", \"fixed\" or \"prior\", found \"" + focal_mode + "\"");
+    im->focal_mode = *parsed_focal_mode;
+  }
+  const auto optional_double = [&](const char* key, double* out) {
+    return !j.contains(key) || r->Double(j, at, key, out);
+  };
+  const auto optional_bool = [&](const char* key, bool* out) { return !j.contains(key) || r->Bool(j, at, key, out); };
+  if (!optional_double("fixed_focal_px", &im->fixed_focal_px) ||
+      !optional_double("focal_prior_px", &im->focal_prior_px) ||
+      !optional_double("focal_prior_std_px", &im->focal_prior_std_px) ||
+      !optional_bool("use_horizon", &im->use_horizon) ||
+      (j.contains("horizon_px") && !r->Vector<4>(j, at, "horizon_px", &im->horizon_px)) ||
+      !optional_bool("estimate_distortion", &im->estimate_distortion) ||
+      !optional_bool("distortion_locked", &im->distortion_locked))
+    return false;
+  if (im->focal_mode == FocalMode::kFixed && !(im->fixed_focal_px > 0))
+    return r->Fail(Join(at, "fixed_focal_px"), "must be positive when focal_mode is \"fixed\"");
+  if (im->focal_mode == FocalMode::kPrior && !(im->focal_prior_px > 0 && im->focal_prior_std_px > 0))
+    return r->Fail(Join(at, "focal_prior_px"), "a prior needs focal_prior_px > 0 and focal_prior_std_px > 0");
+  return true;
 }
 
 bool ReadSegment(const Json& j, const std::string& at, Reader* r, Segment* s) {

@@ -165,6 +165,16 @@ Project MakeFullProject() {
     im.pose_locked = i == 2;
     im.focal_locked = i != 0;
     im.principal_point_locked = i == 1;
+    im.camera.k1 = -0.123456789012345 * i;
+    im.camera.k2 = 0.0456 * i;
+    im.focal_mode = static_cast<facet::FocalMode>(i);
+    im.fixed_focal_px = 1234.5 + i;
+    im.focal_prior_px = 2345.25 + i;
+    im.focal_prior_std_px = 117.0 / 3.0;
+    im.use_horizon = i == 2;
+    im.horizon_px = {0.5, 480.25 + i, 3999.0, 470.125};
+    im.estimate_distortion = i == 1;
+    im.distortion_locked = i != 1;
     p.images.push_back(im);
   }
   for (int i = 0; i < 3; ++i) {
@@ -354,6 +364,16 @@ TEST_CASE("each single field is written and read back") {
       {"image.pose_locked", [](Project& p) { p.images[0].pose_locked = true; }},
       {"image.focal_locked", [](Project& p) { p.images[0].focal_locked = true; }},
       {"image.principal_point_locked", [](Project& p) { p.images[0].principal_point_locked = true; }},
+      {"camera.k1", [](Project& p) { p.images[0].camera.k1 = 0.01; }},
+      {"camera.k2", [](Project& p) { p.images[0].camera.k2 = 0.01; }},
+      {"image.focal_mode", [](Project& p) { p.images[0].focal_mode = facet::FocalMode::kPrior; }},
+      {"image.fixed_focal_px", [](Project& p) { p.images[0].fixed_focal_px += 1.0; }},
+      {"image.focal_prior_px", [](Project& p) { p.images[0].focal_prior_px += 1.0; }},
+      {"image.focal_prior_std_px", [](Project& p) { p.images[0].focal_prior_std_px += 1.0; }},
+      {"image.use_horizon", [](Project& p) { p.images[0].use_horizon = true; }},
+      {"image.horizon_px", [](Project& p) { p.images[0].horizon_px.w() = 1.0; }},
+      {"image.estimate_distortion", [](Project& p) { p.images[0].estimate_distortion = true; }},
+      {"image.distortion_locked", [](Project& p) { p.images[0].distortion_locked = false; }},
       {"segment.id", [](Project& p) { p.segments[1].id = p.NewId(); }},
       {"segment.image_id", [](Project& p) { p.segments[0].image_id = p.images[2].id; }},
       {"segment.axis", [](Project& p) { p.segments[0].axis = Axis::kY; }},
@@ -656,6 +676,47 @@ void CollectPaths(const Json& j, const Json::json_pointer& ptr, const std::strin
 }
 }  // namespace
 
+TEST_CASE("a version-2 file written before distortion and the focal modes loads with their defaults") {
+  Json old = SmallJson();
+  for (Json& image : old["images"]) {
+    for (const char* key : {"focal_mode", "fixed_focal_px", "focal_prior_px", "focal_prior_std_px", "use_horizon",
+                            "horizon_px", "estimate_distortion", "distortion_locked"})
+      image.erase(key);
+    image["camera"].erase("k1");
+    image["camera"].erase("k2");
+  }
+  const facet::ProjectLoadResult r = facet::ProjectFromJson(old.dump());
+  INFO(r.error);
+  REQUIRE(r.ok());
+  const facet::Image defaults;
+  for (const facet::Image& im : r.project.images) {
+    CHECK(im.camera.k1 == 0.0);
+    CHECK(im.camera.k2 == 0.0);
+    CHECK(im.focal_mode == defaults.focal_mode);
+    CHECK(im.fixed_focal_px == defaults.fixed_focal_px);
+    CHECK(im.focal_prior_px == defaults.focal_prior_px);
+    CHECK(im.focal_prior_std_px == defaults.focal_prior_std_px);
+    CHECK(im.use_horizon == defaults.use_horizon);
+    CHECK(im.horizon_px == defaults.horizon_px);
+    CHECK(im.estimate_distortion == defaults.estimate_distortion);
+    CHECK(im.distortion_locked == defaults.distortion_locked);
+  }
+}
+
+TEST_CASE("a fixed focal or a focal prior without a positive value is an error naming the field") {
+  Json fixed = SmallJson();
+  fixed["images"][0]["focal_mode"] = "fixed";
+  fixed["images"][0]["fixed_focal_px"] = 0.0;
+  CheckErrorNames(fixed.dump(), "images[0].fixed_focal_px: must be positive");
+  Json prior = SmallJson();
+  prior["images"][0]["focal_mode"] = "prior";
+  prior["images"][0]["focal_prior_std_px"] = -1.0;
+  CheckErrorNames(prior.dump(), "images[0].focal_prior_px: a prior needs");
+  Json unknown = SmallJson();
+  unknown["images"][0]["focal_mode"] = "guess";
+  CheckErrorNames(unknown.dump(), "images[0].focal_mode: expected \"solve\", \"fixed\" or \"prior\"");
+}
+
 TEST_CASE("every missing field and every wrong type is an error naming its path") {
   const Json good = SmallJson();
   REQUIRE(facet::ProjectFromJson(good.dump()).ok());
@@ -672,7 +733,12 @@ TEST_CASE("every missing field and every wrong type is an error naming its path"
         std::regex_match(name_in_tree, match, inside_reference) ? match[1].str() : name_in_tree;
     CAPTURE(name_in_tree);
     const bool in_object = good.at(ptr.parent_pointer()).is_object();
-    if (in_object) {
+    // Fields added within version 2 (distortion, focal and horizon modes) may be absent:
+    // files written before them load with the defaults (tested below).
+    static const std::regex optional_field(
+        R"(images\[\d+\]\.(camera\.k1|camera\.k2|focal_mode|fixed_focal_px|focal_prior_px|focal_prior_std_px|)"
+        R"(use_horizon|horizon_px|estimate_distortion|distortion_locked))");
+    if (in_object && !std::regex_match(name_in_tree, optional_field)) {
       Json removed = good;
       removed.at(ptr.parent_pointer()).erase(ptr.back());
       CheckErrorNames(removed.dump(), name + ": missing field");

@@ -1,0 +1,18 @@
+// Calibration overlays of the image panel that teach what the solver sees: the user's horizon
+// (the 1-VP + horizon mode) and epipolar lines between images (core/multiview_init.h).
+#pragma once
+
+#include <imgui.h>
+
+#include "app/app_state.h"
+#include "app/image_tiles.h"
+
+namespace facet::app {
+
+// Draws over `image` in the screen rectangle [clip_min, clip_max], after the model overlays.
+// `mouse_uv` is the cursor in the image's pixels when it is over the view (else null).
+void DrawCalibrationOverlay(ImDrawList* draw_list, const AppState& state, const Image& image,
+                            const ViewTransform& view, ImVec2 clip_min, ImVec2 clip_max,
+                            const Eigen::Vector2d* mouse_uv);
+
+}  // namespace facet::app
