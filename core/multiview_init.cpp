@@ -505,6 +505,10 @@ MultiViewInitSummary CalibrateImagesFromPins(const Project& project, const Multi
                              r.message + ")";
         left.push_back(static_cast<int>(i));
       }
+    } else if (known_pins.empty()) {
+      resection_notes[i] = "none of its " + std::to_string(pins[i].size()) +
+                           " pins is on a vertex pinned in a calibrated image (resection needs 6, or 4 on one face)";
+      left.push_back(static_cast<int>(i));
     } else {
       resection_notes[i] =
           std::to_string(known_pins.size()) + " pins on known vertices; resection needs 6, or 4 on one face";
@@ -581,6 +585,21 @@ MultiViewInitSummary CalibrateImagesFromPins(const Project& project, const Multi
     }
   } else if (left.size() == 2) {
     apply_two_views(left[0], left[1]);
+  }
+  // Self-calibration failed for all: the pair sharing the most vertices may still do.
+  const bool none_initialised = std::none_of(left.begin(), left.end(), [&](int i) { return out->images[i].camera_calibrated; });
+  if (left.size() >= 3 && none_initialised) {
+    int best_a = -1, best_b = -1, best_shared = 0;
+    for (size_t a = 0; a < left.size(); ++a)
+      for (size_t b = a + 1; b < left.size(); ++b) {
+        const int shared = shared_vertices(left[a], left[b]);
+        if (shared > best_shared) {
+          best_a = left[a];
+          best_b = left[b];
+          best_shared = shared;
+        }
+      }
+    if (best_a >= 0) apply_two_views(best_a, best_b);
   }
   // Whatever is still uncalibrated pairs with the calibrated image (at input, or initialised
   // above) it shares the most pinned vertices with.

@@ -23,7 +23,8 @@
 //     the relative pose with the cheirality check. The baseline is fixed as in "Gauge" below.
 // (c) Self-calibration: three or more images left are self-calibrated together
 //     (core/self_calibration.h) from the tracks of their pinned vertices, focal priors as in
-//     (b) when given in focal_px_by_image.
+//     (b) when given in focal_px_by_image. When it initialises none of them, the two that
+//     share the most vertices take (b), and the others pair with calibrated images as above.
 //
 // Gauge (two views and self-calibration fix the reconstruction only up to a similarity):
 // - (b) with a calibrated partner: that camera stays where it is, the other is placed

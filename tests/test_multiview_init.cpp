@@ -219,7 +219,8 @@ TEST_CASE("resection: 8 and 6 non-coplanar pins on known corners recover K, R, t
       const CameraErrors e = Compare(out.images[1].camera, s.truth[1]);
       MESSAGE("resection scale " << scale << ", " << num_pins << " pins: focal " << e.focal_rel << ", pp "
                                  << e.principal_point_px << " px, rotation " << e.rotation_rad << " rad, t "
-                                 << e.translation_rel << ", RMS " << report.residual_px << " px");
+                                 << e.translation_rel << ", RMS " << report.residual_px << " px, "
+                                 << summary.time_ms << " ms");
       CHECK(e.focal_rel < kExactTol);
       CHECK(e.principal_point_px / s.truth[1].focal_px < kExactTol);
       CHECK(e.rotation_rad < kExactTol);
@@ -356,7 +357,8 @@ TEST_CASE("two views, known focal length, noise-free: relative pose exact, align
   const CameraErrors e0 = Compare(out.images[0].camera, s.truth[0]);
   const CameraErrors e1 = Compare(out.images[1].camera, s.truth[1]);
   MESSAGE("two views noise-free: rotation " << rotation_error << " rad, direction " << direction_error
-                                            << " rad; absolute t " << e0.translation_rel << ", " << e1.translation_rel);
+                                            << " rad; absolute t " << e0.translation_rel << ", " << e1.translation_rel << "; "
+                                            << summary.time_ms << " ms");
   CHECK(rotation_error < kExactTol);
   CHECK(direction_error < kExactTol);
   CHECK(e0.rotation_rad < kExactTol);
@@ -552,7 +554,8 @@ TEST_CASE("three uncalibrated views: self-calibration recovers the focal length"
     CHECK(report.focal_guessed);
     const CameraErrors e = Compare(out.images[i].camera, s.truth[i]);
     MESSAGE("self-calibration view " << i << ": focal " << e.focal_rel << ", rotation " << e.rotation_rad
-                                     << " rad, t " << e.translation_rel << ", RMS " << report.residual_px << " px");
+                                     << " rad, t " << e.translation_rel << ", RMS " << report.residual_px << " px, "
+                                     << summary.time_ms << " ms");
     // The start is not the answer: the guessed 1.2 x 1024 px is 37 % off.
     REQUIRE(std::abs(1.2 * 1024 / s.truth[i].focal_px - 1.0) > 0.3);
     CHECK(e.focal_rel < kFocalTol);
@@ -602,6 +605,31 @@ TEST_CASE("four views with 0.5 px noise and a wrong click: self-calibration with
       }
     }
   }
+}
+
+TEST_CASE("three uncalibrated views, one with 5 pins: self-calibration fails, two views take the other pair") {
+  SceneSpec spec;
+  spec.num_views = 3;
+  spec.first_calibrated = false;
+  spec.extra_boxes = 3;
+  spec.principal_point_offset_px = Eigen::Vector2d::Zero();
+  Scene s = MakeScene(spec);
+  KeepCorners(&s, s.project.images[2].id, {0, 1, 2, 4, 7});
+  Project out;
+  const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, KnownFocal(s), &out);
+  INFO(Messages(summary));
+  CHECK(summary.images[0].path == MultiViewInitPath::kTwoView);
+  CHECK(summary.images[1].path == MultiViewInitPath::kTwoView);
+  CHECK(summary.images[2].path == MultiViewInitPath::kNone);
+  CHECK_FALSE(out.images[2].camera_calibrated);
+  CHECK(out.images[2] == s.project.images[2]);
+  REQUIRE(summary.messages.size() == 1);
+  CHECK(summary.messages[0].find("self-calibration") != std::string::npos);
+  CHECK(summary.messages[0].find("5 vertices pinned in both") != std::string::npos);
+  const auto [r_true, t_true] = Relative(s.truth[0], s.truth[1]);
+  const auto [r_est, t_est] = Relative(out.images[0].camera, out.images[1].camera);
+  CHECK(RotationErrorRad(r_est, r_true) < kExactTol);
+  CHECK(AngleRad(t_est, t_true) < kExactTol);
 }
 
 TEST_CASE("refusals: too few pins, too few shared vertices, collinear pins; the project is unchanged") {
