@@ -101,7 +101,17 @@ Similarity3d ChooseGauge(const std::vector<Eigen::Vector3d>& recon, const std::v
   return KeepCameraSimilarity(first_in_recon, first_in_world, SpreadScale(recon, model));
 }
 
-// Intrinsics for an image: its own when calibrated, else the given or guessed focal length and
+// The focal length known for an uncalibrated image (options, then the image's fixed focal
+// length or prior), or 0.
+double KnownFocalPx(const Image& image, const MultiViewInitOptions& options) {
+  const auto given = options.focal_px_by_image.find(image.id);
+  if (given != options.focal_px_by_image.end()) return given->second;
+  if (image.focal_mode == FocalMode::kFixed && image.fixed_focal_px > 0.0) return image.fixed_focal_px;
+  if (image.focal_mode == FocalMode::kPrior && image.focal_prior_px > 0.0) return image.focal_prior_px;
+  return 0.0;
+}
+
+// Intrinsics for an image: its own when calibrated, else the known or guessed focal length and
 // the principal point its mode asks for (the centre when solved: two views cannot).
 Camera IntrinsicsFor(const Image& image, const MultiViewInitOptions& options, bool* guessed) {
   *guessed = false;
@@ -109,10 +119,8 @@ Camera IntrinsicsFor(const Image& image, const MultiViewInitOptions& options, bo
   Camera camera;
   camera.width_px = image.width_px;
   camera.height_px = image.height_px;
-  const auto given = options.focal_px_by_image.find(image.id);
-  if (given != options.focal_px_by_image.end()) {
-    camera.focal_px = given->second;
-  } else {
+  camera.focal_px = KnownFocalPx(image, options);
+  if (!(camera.focal_px > 0.0)) {
     camera.focal_px = options.default_focal_factor * std::max(image.width_px, image.height_px);
     *guessed = true;
   }
@@ -200,6 +208,12 @@ struct TwoViewResult {
   bool guessed_a = false, guessed_b = false;
 };
 
+// The pixel a pinhole camera would see: a calibrated image's distortion removed (its K is
+// known); an uncalibrated image is taken as pinhole.
+Eigen::Vector2d PinholePixel(const Image& image, const Eigen::Vector2d& uv_px) {
+  return image.camera_calibrated ? image.camera.UndistortPixel(uv_px) : uv_px;
+}
+
 Eigen::Vector3d TriangulateEuclidean(const Camera& a, const Camera& b, const Eigen::Vector2d& uv_a,
                                      const Eigen::Vector2d& uv_b, bool* ok) {
   const std::vector<Matrix34d> cameras = {a.ProjectionMatrix(), b.ProjectionMatrix()};
@@ -225,8 +239,8 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
     if (it == in_b.end()) continue;
     match_a.push_back(pin);
     match_b.push_back(it->second);
-    uv_a.push_back(pin->uv_px);
-    uv_b.push_back(it->second->uv_px);
+    uv_a.push_back(PinholePixel(image_a, pin->uv_px));
+    uv_b.push_back(PinholePixel(image_b, it->second->uv_px));
   }
   result.pair.num_correspondences = static_cast<int>(uv_a.size());
   if (uv_a.size() < 7) {
@@ -326,11 +340,8 @@ SelfCalibrationResult SelfCalibrateImages(const Project& project, const std::vec
   for (int v = 0; v < n; ++v) {
     views[v].width_px = images[v]->width_px;
     views[v].height_px = images[v]->height_px;
-    const auto given = options.focal_px_by_image.find(images[v]->id);
-    if (given != options.focal_px_by_image.end()) {
-      views[v].focal_prior_px = given->second;
-      result.guessed[v] = false;
-    }
+    views[v].focal_prior_px = KnownFocalPx(*images[v], options);
+    result.guessed[v] = !(views[v].focal_prior_px > 0.0);
   }
   // Tracks of the vertices pinned in two or more of the images.
   std::map<VertexKey, std::vector<std::pair<int, const Pin*>>> by_vertex;

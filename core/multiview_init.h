@@ -18,12 +18,13 @@
 //     uncalibrated (after (b) or (c), or alone) with the calibrated image, at input or
 //     initialised here, it shares the most pinned vertices with. Correspondences are the
 //     vertices pinned in both; 7 or more give F (core/two_view.h, RANSAC flags wrong clicks); the intrinsics
-//     (a calibrated image's own; else focal_px_by_image, e.g. EXIF; else
-//     default_focal_factor x the larger image side, principal point at the centre) give E and
+//     (a calibrated image's own; else focal_px_by_image, e.g. EXIF; else the image's
+//     fixed_focal_px (FocalMode::kFixed) or focal_prior_px (kPrior); else default_focal_factor
+//     x the larger image side; principal point at the centre unless kFixed) give E and
 //     the relative pose with the cheirality check. The baseline is fixed as in "Gauge" below.
 // (c) Self-calibration: three or more images left are self-calibrated together
-//     (core/self_calibration.h) from the tracks of their pinned vertices, focal priors as in
-//     (b) when given in focal_px_by_image. When it initialises none of them, the two that
+//     (core/self_calibration.h) from the tracks of their pinned vertices, with the known focal
+//     lengths of (b) (not the guess) as single-image priors. When it initialises none of them, the two that
 //     share the most vertices take (b), and the others pair with calibrated images as above.
 //
 // Gauge (two views and self-calibration fix the reconstruction only up to a similarity):
@@ -37,6 +38,9 @@
 //   the first image (project order) keeps its current pose, the scale is the spread ratio
 //   above (1 when the model has no spread).
 // The geometry solve (core/scene_solve.h) then moves camera centres and the model together.
+//
+// Distortion: pins of a calibrated image are undistorted with its camera (Camera::k1, k2);
+// an uncalibrated image is taken as a pinhole, and its initialised camera has k1 = k2 = 0.
 //
 // Degenerate input (too few pins, collinear or coincident pins, a failed F or pose) leaves
 // that image uncalibrated with a message naming the count needed. *out is always a copy of
@@ -66,7 +70,8 @@ struct MultiViewInitOptions {
   // A resection pin farther than this from its reprojection is a wrong click (also the
   // F RANSAC inlier threshold of (b) and the self-calibration's).
   double wrong_click_threshold_px = 3.0;
-  // Focal length in px of images without one (the EXIF value, core/exif.h), by image id.
+  // Focal length in px of uncalibrated images (the EXIF value, core/exif.h), by image id; it
+  // takes precedence over the image's own focal mode.
   std::map<Id, double> focal_px_by_image;
   // Otherwise the two-view guess: this factor times the larger image side (a normal lens).
   double default_focal_factor = 1.2;
@@ -106,7 +111,7 @@ struct MultiViewImageReport {
   // One-sigma focal uncertainty (px): resection from the DLT refinement, self-calibration from
   // its bundle adjustment; 0 for two views (the focal length is given or guessed there).
   double focal_std_px = 0.0;
-  bool focal_guessed = false;  // two views / self-calibration started from default_focal_factor
+  bool focal_guessed = false;  // two views: default_focal_factor; self-calibration: no prior
   std::vector<Id> flagged_pins;  // wrong clicks in this image, by pin id
   std::string message;           // one line: what was done, or why nothing could be
   std::vector<std::string> warnings;

@@ -369,6 +369,33 @@ TEST_CASE("two views, known focal length, noise-free: relative pose exact, align
   CHECK(out.images[1].camera_calibrated);
 }
 
+TEST_CASE("two views take the focal length from the image's focal mode (fixed, or the prior's value)") {
+  for (const FocalMode mode : {FocalMode::kFixed, FocalMode::kPrior}) {
+    CAPTURE(FocalModeName(mode));
+    SceneSpec spec;
+    spec.first_calibrated = false;
+    spec.extra_boxes = 3;
+    spec.principal_point_offset_px = Eigen::Vector2d::Zero();
+    Scene s = MakeScene(spec);
+    for (size_t i = 0; i < 2; ++i) {
+      Image& image = s.project.images[i];
+      image.focal_mode = mode;
+      (mode == FocalMode::kFixed ? image.fixed_focal_px : image.focal_prior_px) = s.truth[i].focal_px;
+      image.focal_prior_std_px = 50.0;
+    }
+    Project out;
+    const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, {}, &out);
+    INFO(Messages(summary));
+    REQUIRE(summary.images[1].path == MultiViewInitPath::kTwoView);
+    CHECK_FALSE(summary.images[1].focal_guessed);
+    const auto [r_true, t_true] = Relative(s.truth[0], s.truth[1]);
+    const auto [r_est, t_est] = Relative(out.images[0].camera, out.images[1].camera);
+    CHECK(std::abs(out.images[1].camera.focal_px / s.truth[1].focal_px - 1.0) < kExactTol);
+    CHECK(RotationErrorRad(r_est, r_true) < kExactTol);
+    CHECK(AngleRad(t_est, t_true) < kExactTol);
+  }
+}
+
 TEST_CASE("two views, keep-first-camera gauge: image 0 stays where it was") {
   SceneSpec spec;
   spec.first_calibrated = false;
