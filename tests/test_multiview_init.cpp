@@ -850,5 +850,51 @@ TEST_CASE("integration: two views and self-calibration, then the model update so
   }
 }
 
+TEST_CASE("the recommended wiring: VP calibration and geometry solve, then pins initialise image 1, then the update") {
+  // The edit leaves image 0's camera and the box away from the truth, so the model's vertex
+  // positions are wrong before the geometry solve: resection must use the solved model.
+  constexpr double kRmsTolPx = 1e-6;
+  Scene s = MakeScene({});
+  Image& image0 = s.project.images[0];
+  image0.camera.focal_px *= 1.2;
+  image0.camera.SetPose(RotationFromAngleAxis(Eigen::Vector3d(0.05, -0.03, 0.08)) * image0.camera.cam_from_world_rotation,
+                        image0.camera.CenterInWorld() + Eigen::Vector3d(1.2, -0.8, 0.6));
+  Primitive& box = s.project.primitives[0];
+  box.shape.params.x() *= 1.3;
+  box.shape.params.y() *= 0.75;
+  RefreshPrimitive(&s.project, &box);
+  const Eigen::Vector3d true_size = MakeScene({}).project.primitives[0].shape.params.head<3>();
+  REQUIRE((box.shape.params.head<3>() - true_size).norm() > 0.5);
+
+  // 1. VP calibration and the geometry solve (image 1's pins skipped).
+  ModelUpdateOptions first;
+  first.joint_solve = false;
+  Project solved;
+  const ModelUpdateSummary step1 = UpdateModel(s.project, first, &solved);
+  REQUIRE(step1.ok);
+  CHECK(step1.solve.num_skipped_pins == PinsIn(s.project, s.project.images[1].id));
+  // 2. Pins initialise image 1 against the solved model.
+  Project initialised;
+  const MultiViewInitSummary init = CalibrateImagesFromPins(solved, {}, &initialised);
+  INFO(Messages(init));
+  REQUIRE(init.images[1].path == MultiViewInitPath::kResection);
+  // 3. The update with every image.
+  Project updated;
+  const ModelUpdateSummary step3 = UpdateModel(initialised, ModelUpdateOptions(), &updated);
+  INFO("solve: " << step3.solve.message << "; joint: " << step3.joint.message);
+  REQUIRE(step3.ok);
+  REQUIRE(step3.joint.IsUsable());
+  CHECK(step3.solve.num_skipped_pins == 0);
+  const double size_error = (updated.primitives[0].shape.params.head<3>() - true_size).norm() / true_size.norm();
+  const CameraErrors e1 = Compare(updated.images[1].camera, s.truth[1]);
+  MESSAGE("wiring: resection RMS " << init.images[1].residual_px << " px, joint RMS "
+                                   << step3.joint.reprojection_rms_px << " px, size " << size_error << ", camera 1 "
+                                   << e1.rotation_rad << " rad, t " << e1.translation_rel);
+  CHECK(step3.joint.reprojection_rms_px < kRmsTolPx);
+  CHECK(size_error < kExactTol);
+  CHECK(e1.rotation_rad < kExactTol);
+  CHECK(e1.translation_rel < kExactTol);
+}
+
 }  // namespace
 }  // namespace facet
