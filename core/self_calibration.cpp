@@ -265,6 +265,10 @@ bool SelfCalibrationOptions::Check(std::string* error) const {
     *error = "inlier_threshold_px must be positive";
     return false;
   }
+  if (!(principal_point_prior_std >= 0)) {
+    *error = "principal_point_prior_std must not be negative";
+    return false;
+  }
   if (quadric_reweighting_rounds < 1 || max_bundle_iterations < 0 || bundle_rounds < 1) {
     *error = "quadric_reweighting_rounds and bundle_rounds must be positive, max_bundle_iterations not negative";
     return false;
@@ -275,6 +279,10 @@ bool SelfCalibrationOptions::Check(std::string* error) const {
 bool BundleAdjustmentOptions::Check(std::string* error) const {
   if (max_iterations < 0) {
     *error = "max_iterations must not be negative";
+    return false;
+  }
+  if (!(principal_point_prior_std_px >= 0) || !(observation_std_px > 0)) {
+    *error = "principal_point_prior_std_px must not be negative and observation_std_px must be positive";
     return false;
   }
   return true;
@@ -318,12 +326,27 @@ BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& obser
       if (options.refine_principal_point) c.principal_point_px = cams[0].principal_point_px;
     }
 
-  auto cost_of = [&](const std::vector<Camera>& cs, const std::vector<Eigen::Vector3d>& ps) {
+  // The principal-point prior, in the units of the pixel residuals: weight
+  // (observation_std / prior_std)^2 on the squared distance from the image centre.
+  const bool pp_prior = options.refine_principal_point && options.principal_point_prior_std_px > 0;
+  const double pp_weight =
+      pp_prior ? std::pow(options.observation_std_px / options.principal_point_prior_std_px, 2) : 0.0;
+  std::vector<Eigen::Vector2d> pp_prior_px;
+  for (const auto& c : cams) pp_prior_px.emplace_back((c.width_px - 1) / 2.0, (c.height_px - 1) / 2.0);
+  const int num_pp_priors = pp_prior ? n_pp : 0;
+
+  auto reprojection_cost = [&](const std::vector<Camera>& cs, const std::vector<Eigen::Vector3d>& ps) {
     double cost = 0.0;
     for (const auto& o : observations) {
       const double e = (cs[o.view].Project(ps[o.point]) - o.uv_px).squaredNorm();
       cost += std::isfinite(e) ? e : 1e300;
     }
+    return cost;
+  };
+  auto cost_of = [&](const std::vector<Camera>& cs, const std::vector<Eigen::Vector3d>& ps) {
+    double cost = reprojection_cost(cs, ps);
+    if (pp_prior)
+      for (int v = 0; v < (shared ? 1 : n); ++v) cost += pp_weight * (cs[v].principal_point_px - pp_prior_px[v]).squaredNorm();
     return cost;
   };
 
@@ -384,11 +407,17 @@ BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& obser
       v_blocks[o.point] += jp.transpose() * jp;
       g_p[o.point] += jp.transpose() * r;
     }
+    if (pp_prior)
+      for (int v = 0; v < (shared ? 1 : n); ++v)
+        for (int k = 0; k < 2; ++k) {
+          u(pp_index(v) + k, pp_index(v) + k) += pp_weight;
+          g_c(pp_index(v) + k) += pp_weight * (cams[v].principal_point_px(k) - pp_prior_px[v](k));
+        }
   };
 
   double cost = cost_of(cams, pts);
   const double initial_cost = cost;
-  summary.initial_rms_px = std::sqrt(cost / (2.0 * observations.size()));
+  summary.initial_rms_px = std::sqrt(reprojection_cost(cams, pts) / (2.0 * observations.size()));
   double lambda = 1e-4;
   Eigen::MatrixXd s(nc, nc);
   Eigen::VectorXd rhs(nc);
@@ -465,7 +494,7 @@ BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& obser
     s.noalias() -= w_blocks[j] * v_blocks[j].inverse() * w_blocks[j].transpose();
   }
   const int num_points_used = static_cast<int>(std::count(point_used.begin(), point_used.end(), true));
-  const int dof = 2 * static_cast<int>(observations.size()) - (nc + 3 * num_points_used - 7);
+  const int dof = 2 * static_cast<int>(observations.size()) + num_pp_priors - (nc + 3 * num_points_used - 7);
   const double sigma_sq = dof > 0 ? cost / dof : 0.0;
   Eigen::VectorXd scale(nc);
   for (int k = 0; k < nc; ++k) scale(k) = s(k, k) > 0 ? 1.0 / std::sqrt(s(k, k)) : 1.0;
@@ -493,7 +522,7 @@ BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& obser
 
   *cameras = cams;
   *points = pts;
-  summary.final_rms_px = std::sqrt(cost / (2.0 * observations.size()));
+  summary.final_rms_px = std::sqrt(reprojection_cost(cams, pts) / (2.0 * observations.size()));
   summary.success = std::isfinite(cost) && cost <= initial_cost;
   summary.message = "bundle adjustment: RMS " + Fmt(summary.initial_rms_px) + " -> " + Fmt(summary.final_rms_px) +
                     " px in " + std::to_string(summary.iterations) + " iterations";
@@ -530,6 +559,7 @@ SelfCalibrationSummary SelfCalibrate(const std::vector<SelfCalibrationView>& vie
   p.X.assign(num_tracks, Eigen::Vector4d::Zero());
   p.has_point.assign(num_tracks, false);
   int duplicates = 0;
+  std::vector<std::vector<bool>> duplicate(num_tracks);  // per track, per observation
   Eigen::MatrixXi shared_count = Eigen::MatrixXi::Zero(n, n);
   for (int t = 0; t < num_tracks; ++t) {
     std::vector<bool> seen(n, false);
@@ -540,6 +570,7 @@ SelfCalibrationSummary SelfCalibrate(const std::vector<SelfCalibrationView>& vie
       p.x[t].push_back(x.head<2>() / x.z());
       // A second pixel of the same view is a matching error: the first one is kept.
       p.ok[t].push_back(!seen[o.view]);
+      duplicate[t].push_back(seen[o.view]);
       duplicates += seen[o.view];
       seen[o.view] = true;
     }
@@ -819,14 +850,66 @@ SelfCalibrationSummary SelfCalibrate(const std::vector<SelfCalibrationView>& vie
   }
   NormaliseGauge(va, &summary.cameras, &points, keep);
 
+  // The inliers are decided again on the adjusted metric cameras: observations flagged on the
+  // rough projective or linear cameras are admitted back when they fit within the threshold,
+  // and tracks lost there are triangulated again. The final set must not depend on early,
+  // less accurate stages (on the temple, ten observations flagged early moved the focal length
+  // by 1.5 %).
+  auto readmit = [&]() {
+    for (int t = 0; t < num_tracks; ++t) {
+      std::vector<int> candidates;
+      for (size_t k = 0; k < tracks[t].size(); ++k)
+        if (!duplicate[t][k] && p.registered[tracks[t][k].view]) candidates.push_back(static_cast<int>(k));
+      if (candidates.size() < 2) continue;
+      auto refine = [&](const std::vector<int>& use) {
+        std::vector<Matrix34d> pc;
+        std::vector<Eigen::Vector3d> xh;
+        std::vector<Eigen::Vector2d> xs;
+        for (int k : use) {
+          pc.push_back(summary.cameras[tracks[t][k].view].ProjectionMatrix());
+          xh.push_back(tracks[t][k].uv_px.homogeneous());
+          xs.push_back(tracks[t][k].uv_px);
+        }
+        const Eigen::Vector4d start = keep[t] ? points[t].homogeneous().normalized() : TriangulateLinear(pc, xh);
+        const Eigen::Vector4d xm = RefineTriangulatedPoint(pc, xs, start, 10);
+        if (!(std::abs(xm(3)) > 1e-12)) return false;
+        points[t] = xm.head<3>() / xm(3);
+        return true;
+      };
+      auto classify = [&]() {
+        std::vector<int> inliers;
+        for (int k : candidates) {
+          const Camera& c = summary.cameras[tracks[t][k].view];
+          const double e = (c.Project(points[t]) - tracks[t][k].uv_px).norm();
+          if (e < options.inlier_threshold_px && c.CamFromWorld(points[t]).z() > 0) inliers.push_back(k);
+        }
+        return inliers;
+      };
+      if (!keep[t] && !refine(candidates)) continue;
+      std::vector<int> inliers = classify();
+      if (inliers.size() >= 2 && refine(inliers)) inliers = classify();
+      for (int k : candidates) p.ok[t][k] = false;
+      for (int k : inliers) p.ok[t][k] = true;
+      keep[t] = inliers.size() >= 2;
+    }
+  };
+
   if (options.bundle_adjust) {
     BundleAdjustmentOptions ba;
     ba.shared_focal_length = options.shared_focal_length;
     ba.refine_principal_point = options.principal_point_mode == PrincipalPointMode::kSolve;
+    ba.principal_point_prior_std_px =
+        options.principal_point_prior_std * std::max(views[va].width_px, views[va].height_px);
     ba.max_iterations = options.max_bundle_iterations;
+    // The prior's weight needs the pixel noise: the residual RMS of the round before (of the
+    // linear upgrade in the first round, which only makes the prior weaker there).
+    double rms_px = summary.linear_rms_px;
     for (int round = 0; round < options.bundle_rounds; ++round) {
-      double unused = 0.0;
-      if (round > 0) collect(options.inlier_threshold_px, &unused);
+      if (round > 0) {
+        readmit();
+        collect(options.inlier_threshold_px, &rms_px);
+      }
+      ba.observation_std_px = std::max(rms_px, 1e-3);
       // Only registered views take part: a compact camera list for the adjustment.
       std::vector<int> index(n, -1);
       std::vector<Camera> ba_cams;
@@ -839,6 +922,7 @@ SelfCalibrationSummary SelfCalibrate(const std::vector<SelfCalibrationView>& vie
       for (auto& o : ba_obs) o.view = index[o.view];
       const BundleAdjustmentSummary result = BundleAdjust(ba_obs, ba, &ba_cams, &points);
       if (!result.success) return fail("the bundle adjustment failed: " + result.message);
+      rms_px = result.final_rms_px;
       summary.bundle_iterations += result.iterations;
       summary.focal_std_px.assign(n, 0.0);
       for (int v = 0; v < n; ++v)

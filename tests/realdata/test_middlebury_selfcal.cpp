@@ -1,7 +1,10 @@
 // Self-calibration on the Middlebury temple (sparse ring): SIFT matches from OpenCV stand in
 // for the user's clicks among 6 consecutive views (about 23 degrees apart); the focal length
 // and relative rotations are compared with the dataset's calibration (templeSR_par.txt,
-// P = K [R | t]). Issue 3's target: the focal length within 2 %.
+// P = K [R | t]). Issue 3's target: the focal length within 2 %. The data set itself limits
+// what is reachable: a bundle adjustment started from the true cameras on the same kind of
+// tracks settles 1.0 % (these 6 views) to 1.7 % (15 views of the ring) above the calibrated
+// focal length, so this pinhole fit and the calibration differ by about that much.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -141,11 +144,9 @@ TEST_CASE("Middlebury temple: self-calibrated focal length from SIFT tracks in 6
   REQUIRE(tracks.size() >= 100);
 
   const double true_focal = 0.5 * (truth.at(names[0]).K(0, 0) + truth.at(names[0]).K(1, 1));
-  // The issue's 2 % is NOT reached yet: with the principal point held at the image centre (19
-  // px off the truth) the focal length comes out 2.6 % long and the rotations within 0.9 deg;
-  // solving the principal point on this narrow (24 deg), near-planar ring drifts it hundreds
-  // of px, so that mode is not asserted. The bounds below are what is reached, with a margin.
-  for (PrincipalPointMode mode : {PrincipalPointMode::kImageCenter}) {
+  // Both principal-point modes a user can pick: held at the image centre (17 px off the truth
+  // here), or solved under the default weak prior at the centre (std 2.5 % of the image).
+  for (PrincipalPointMode mode : {PrincipalPointMode::kImageCenter, PrincipalPointMode::kSolve}) {
     SelfCalibrationOptions options;
     options.principal_point_mode = mode;
     const SelfCalibrationSummary r = SelfCalibrate(views, tracks, options);
@@ -167,20 +168,22 @@ TEST_CASE("Middlebury temple: self-calibrated focal length from SIFT tracks in 6
       max_rotation_deg = std::max(max_rotation_deg, e);
       rotations += " " + std::to_string(v) + ":" + std::to_string(e);
     }
-    const bool solved = mode == PrincipalPointMode::kSolve;
-    MESSAGE("principal point " << std::string(solved ? "solved" : "at the centre") << ": " << r.message << "; focal "
-                               << r.cameras[ref].focal_px << " px +- " << r.focal_std_px[ref] << " (truth " << true_focal
-                               << ", error " << 100 * focal_error << " %), linear " << r.linear_focal_px[ref]
-                               << " px; principal point " << r.cameras[ref].principal_point_px.transpose() << " (truth "
-                               << g0.K(0, 2) << " " << g0.K(1, 2) << "); rotation errors to view " << ref
-                               << " (deg):" << rotations << "; " << r.num_observations << " observations, "
-                               << r.time_ms << " ms");
+    const std::string mode_name = mode == PrincipalPointMode::kSolve ? "solved" : "at the centre";
+    const double focal_std_px = r.focal_std_px[ref];
+    MESSAGE("principal point " << mode_name << ": " << r.message << "; focal " << r.cameras[ref].focal_px
+                               << " px +- " << focal_std_px << " (truth " << true_focal << "), linear "
+                               << r.linear_focal_px[ref] << " px; principal point "
+                               << r.cameras[ref].principal_point_px.transpose() << " (truth " << g0.K(0, 2) << " "
+                               << g0.K(1, 2) << "); rotation errors to view " << ref << " (deg):" << rotations << "; "
+                               << r.num_observations << " observations, " << r.time_ms << " ms");
+    MESSAGE("focal error " << 100 * focal_error << " % (" << focal_error * true_focal / focal_std_px
+                           << " reported sigma); issue target " << 100 * kFocalTolerance << " %");
     // Every view registers (templeSR0006 used to fail a plain DLT resection on 6 wrong tracks).
     CHECK(registered == n);
-    // Measured: 2.6 % and 0.88 deg (target kFocalTolerance = 2 %).
-    MESSAGE("focal error " << 100 * focal_error << " %; issue target " << 100 * kFocalTolerance << " % "
-                           << std::string(std::abs(focal_error) < kFocalTolerance ? "met" : "not met"));
-    CHECK(std::abs(focal_error) < 0.05);
+    // Measured: +1.71 % (centre) and +1.91 % (solved, prior), each +- 1.05 % reported.
+    CHECK(std::abs(focal_error) < kFocalTolerance);
+    // The reported uncertainty is honest: the error is within 3 of its sigmas.
+    CHECK(std::abs(focal_error) * true_focal < 3.0 * focal_std_px);
     CHECK(max_rotation_deg < 1.5);
     CHECK(r.reprojection_rms_px < 1.0);
   }
