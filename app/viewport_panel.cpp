@@ -22,6 +22,7 @@
 #include "app/orbit_camera.h"
 #include "app/model_edits.h"
 #include "app/model_pick.h"
+#include "app/move_tool.h"
 #include "app/viewport_shaders.h"
 
 namespace facet::app {
@@ -880,6 +881,13 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
   draw->AddText(ImVec2(box_min.x + 4.0f, box_min.y + 2.0f), IM_COL32(230, 230, 230, 230), counts);
   draw->AddText(ImVec2(box_min.x + 4.0f, box_min.y + 2.0f + line_h + 2.0f), IM_COL32(200, 200, 200, 200), kHelpText);
 
+  if (state.tool == Tool::kMove) {  // the Move tool's help, or what the drag did
+    const std::string hint = MoveToolHint();
+    const ImVec2 hint_min(box_min.x, box_min.y - line_h - 8.0f);
+    const ImVec2 hint_size = ImGui::CalcTextSize(hint.c_str());
+    draw->AddRectFilled(hint_min, ImVec2(hint_min.x + hint_size.x + 8.0f, box_min.y - 2.0f), IM_COL32(0, 0, 0, 140), 3.0f);
+    draw->AddText(ImVec2(hint_min.x + 4.0f, hint_min.y + 2.0f), IM_COL32(255, 210, 60, 255), hint.c_str());
+  }
   if (panel.orbit.photo_image_id != kNoId) {
     if (const Image* image = project.FindImage(panel.orbit.photo_image_id)) {
       const std::string label = "Viewing from " + ImageLabel(project, *image);
@@ -947,11 +955,13 @@ void DrawViewportPanel(AppState* state) {
   const ImVec2 mouse(io.MousePos.x - origin.x, io.MousePos.y - origin.y);
   const ImVec2 mouse_px(mouse.x * scale_x, mouse.y * scale_y);
   const ImVec2 delta_px(io.MouseDelta.x * scale_x, io.MouseDelta.y * scale_y);
-  if (ImGui::IsItemActivated() && ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+  const bool left_pressed = ImGui::IsItemActivated() && ImGui::IsMouseClicked(ImGuiMouseButton_Left);
+  if (left_pressed) {
     panel.left_pressed_here = true;
     panel.left_press_pos = io.MousePos;
   }
-  if (active && ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) && (delta_px.x != 0 || delta_px.y != 0)) {
+  if (active && !MoveToolOwnsMouse() && ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) &&
+      (delta_px.x != 0 || delta_px.y != 0)) {
     OrbitRotate(&panel.orbit, delta_px.x, delta_px.y, width_px, height_px);
   }
   if (active && (ImGui::IsMouseDragging(ImGuiMouseButton_Right, 1.0f) || ImGui::IsMouseDragging(ImGuiMouseButton_Middle, 1.0f)) &&
@@ -979,7 +989,18 @@ void DrawViewportPanel(AppState* state) {
   for (int i = 0; i < 16; ++i) panel.report.clip_from_world[i] = view.clip_from_world.data()[i];
   // Hover and clicks: the element under the cursor for the current tool (select picks
   // everything); a click (not a drag) applies the tool to it, or clears the selection.
-  const PickFilter filter = PickFilterOf(state->tool);
+  const PickFilter filter = state->tool == Tool::kMove ? MoveToolPickFilter() : PickFilterOf(state->tool);
+  // V_op: a press on an element drags it (app/move_tool.h); elsewhere the left drag orbits.
+  if (state->tool == Tool::kMove || MoveToolOwnsMouse()) {
+    MoveToolInput move;
+    move.ray = RayOf(view, mouse_px);
+    move.pressed = left_pressed && hovered;
+    if (move.pressed) move.pressed_on = PickByRay(project, move.ray, filter, kPickRadiusPx * scale_x);
+    move.released = ImGui::IsMouseReleased(ImGuiMouseButton_Left);
+    move.shift = io.KeyShift;
+    move.cancel = ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false);
+    MoveToolFrame(state, move);
+  }
   const bool picking = hovered && !ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) &&
                        (filter.vertices || filter.edges || filter.faces);
   panel.hovered = picking ? PickByRay(project, RayOf(view, mouse_px), filter, kPickRadiusPx * scale_x) : ElementPick();
