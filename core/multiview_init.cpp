@@ -73,7 +73,8 @@ Similarity3d KeepCameraSimilarity(const Camera& in_recon, const Camera& in_world
   sim.scale = scale;
   const Eigen::Matrix3d& rw = in_world.cam_from_world_rotation;
   sim.rotation = rw.transpose() * in_recon.cam_from_world_rotation;
-  sim.translation = rw.transpose() * (scale * in_recon.cam_from_world_translation - in_world.cam_from_world_translation);
+  sim.translation =
+      rw.transpose() * (scale * in_recon.cam_from_world_translation - in_world.cam_from_world_translation);
   return sim;
 }
 
@@ -392,8 +393,9 @@ SelfCalibrationResult SelfCalibrateImages(const Project& project, const std::vec
     for (const auto& [v, pin] : track_pins[t]) {
       if (!sc.registered[v]) continue;
       const Camera& camera = sc.cameras[v];
-      const double error = camera.CamFromWorld(sc.points[t]).z() > 0 ? (camera.Project(sc.points[t]) - pin->uv_px).norm()
-                                                                     : std::numeric_limits<double>::infinity();
+      const bool in_front = camera.CamFromWorld(sc.points[t]).z() > 0;
+      const double error = in_front ? (camera.Project(sc.points[t]) - pin->uv_px).norm()
+                                    : std::numeric_limits<double>::infinity();
       if (error > options.wrong_click_threshold_px) {
         result.flagged[v].push_back(pin->id);
       } else {
@@ -598,7 +600,8 @@ MultiViewInitSummary CalibrateImagesFromPins(const Project& project, const Multi
     apply_two_views(left[0], left[1]);
   }
   // Self-calibration failed for all: the pair sharing the most vertices may still do.
-  const bool none_initialised = std::none_of(left.begin(), left.end(), [&](int i) { return out->images[i].camera_calibrated; });
+  const bool none_initialised =
+      std::none_of(left.begin(), left.end(), [&](int i) { return out->images[i].camera_calibrated; });
   if (left.size() >= 3 && none_initialised) {
     int best_a = -1, best_b = -1, best_shared = 0;
     for (size_t a = 0; a < left.size(); ++a)

@@ -17,15 +17,17 @@
 // (b) Two views: the images not resected, when exactly two are left; then each image still
 //     uncalibrated (after (b) or (c), or alone) with the calibrated image, at input or
 //     initialised here, it shares the most pinned vertices with. Correspondences are the
-//     vertices pinned in both; 7 or more give F (core/two_view.h, RANSAC flags wrong clicks); the intrinsics
-//     (a calibrated image's own; else focal_px_by_image, e.g. EXIF; else the image's
-//     fixed_focal_px (FocalMode::kFixed) or focal_prior_px (kPrior); else default_focal_factor
-//     x the larger image side; principal point at the centre unless kFixed) give E and
-//     the relative pose with the cheirality check. The baseline is fixed as in "Gauge" below.
+//     vertices pinned in both; 7 or more give F (core/two_view.h, RANSAC flags wrong
+//     clicks). The intrinsics (a calibrated image's own; else focal_px_by_image, e.g. EXIF;
+//     else the image's fixed_focal_px (FocalMode::kFixed) or focal_prior_px (kPrior); else
+//     default_focal_factor x the larger image side; principal point at the centre unless
+//     kFixed) give E and the relative pose with the cheirality check. The baseline is fixed
+//     as in "Gauge" below.
 // (c) Self-calibration: three or more images left are self-calibrated together
-//     (core/self_calibration.h) from the tracks of their pinned vertices, with the known focal
-//     lengths of (b) (not the guess) as single-image priors. When it initialises none of them, the two that
-//     share the most vertices take (b), and the others pair with calibrated images as above.
+//     (core/self_calibration.h) from the tracks of their pinned vertices, with the known
+//     focal lengths of (b) (not the guess) as single-image priors. When it initialises none
+//     of them, the two that share the most vertices take (b), and the others pair with
+//     calibrated images as above.
 //
 // Gauge (two views and self-calibration fix the reconstruction only up to a similarity):
 // - (b) with a calibrated partner: that camera stays where it is, the other is placed
@@ -38,6 +40,10 @@
 //   the first image (project order) keeps its current pose, the scale is the spread ratio
 //   above (1 when the model has no spread).
 // The geometry solve (core/scene_solve.h) then moves camera centres and the model together.
+//
+// When to call: after the geometry solve of the calibrated images. Resection and the gauge
+// read the model's cached vertex positions, which are right only once solved; on a stale
+// model resection fits a wrong camera (and may flag good pins as wrong clicks).
 //
 // Distortion: pins of a calibrated image are undistorted with its camera (Camera::k1, k2);
 // an uncalibrated image is taken as a pinhole, and its initialised camera has k1 = k2 = 0.

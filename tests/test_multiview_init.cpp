@@ -129,7 +129,8 @@ Scene MakeScene(const SceneSpec& spec) {
 }
 
 int PinsIn(const Project& p, Id image_id) {
-  return static_cast<int>(std::count_if(p.pins.begin(), p.pins.end(), [&](const Pin& pin) { return pin.image_id == image_id; }));
+  return static_cast<int>(
+      std::count_if(p.pins.begin(), p.pins.end(), [&](const Pin& pin) { return pin.image_id == image_id; }));
 }
 
 // Keeps only the pins of image_id on the given corners of box 0 (other images untouched).
@@ -177,7 +178,8 @@ std::pair<Eigen::Matrix3d, Eigen::Vector3d> Relative(const Camera& a, const Came
 
 std::string Messages(const MultiViewInitSummary& s) {
   std::string out = s.message;
-  for (const auto& r : s.images) out += "\n  " + r.image_path + " [" + MultiViewInitPathName(r.path) + "]: " + r.message;
+  for (const auto& r : s.images)
+    out += "\n  " + r.image_path + " [" + MultiViewInitPathName(r.path) + "]: " + r.message;
   for (const auto& m : s.messages) out += "\n  ! " + m;
   return out;
 }
@@ -324,7 +326,8 @@ TEST_CASE("resection with 0.5 px noise: within the noise") {
 
 MultiViewInitOptions KnownFocal(const Scene& s) {
   MultiViewInitOptions options;
-  for (size_t i = 0; i < s.project.images.size(); ++i) options.focal_px_by_image[s.project.images[i].id] = s.truth[i].focal_px;
+  for (size_t i = 0; i < s.project.images.size(); ++i)
+    options.focal_px_by_image[s.project.images[i].id] = s.truth[i].focal_px;
   return options;
 }
 
@@ -357,8 +360,8 @@ TEST_CASE("two views, known focal length, noise-free: relative pose exact, align
   const CameraErrors e0 = Compare(out.images[0].camera, s.truth[0]);
   const CameraErrors e1 = Compare(out.images[1].camera, s.truth[1]);
   MESSAGE("two views noise-free: rotation " << rotation_error << " rad, direction " << direction_error
-                                            << " rad; absolute t " << e0.translation_rel << ", " << e1.translation_rel << "; "
-                                            << summary.time_ms << " ms");
+                                            << " rad; absolute t " << e0.translation_rel << ", "
+                                            << e1.translation_rel << "; " << summary.time_ms << " ms");
   CHECK(rotation_error < kExactTol);
   CHECK(direction_error < kExactTol);
   CHECK(e0.rotation_rad < kExactTol);
@@ -670,8 +673,8 @@ TEST_CASE("refusals: too few pins, too few shared vertices, collinear pins; the 
     CHECK(summary.num_initialized == 0);
     CHECK(summary.images[1].path == MultiViewInitPath::kNone);
     REQUIRE(summary.messages.size() == 1);
-    CHECK(summary.messages[0].rfind("image 'view1.png': 4 pins on known vertices; resection needs 6, or 4 on one face", 0) ==
-          0);
+    const std::string expected = "image 'view1.png': 4 pins on known vertices; resection needs 6, or 4 on one face";
+    CHECK(summary.messages[0].rfind(expected, 0) == 0);
     CHECK(out == s.project);
   }
   SUBCASE("two uncalibrated images sharing 5 vertices") {
@@ -857,7 +860,8 @@ TEST_CASE("the recommended wiring: VP calibration and geometry solve, then pins 
   Scene s = MakeScene({});
   Image& image0 = s.project.images[0];
   image0.camera.focal_px *= 1.2;
-  image0.camera.SetPose(RotationFromAngleAxis(Eigen::Vector3d(0.05, -0.03, 0.08)) * image0.camera.cam_from_world_rotation,
+  const Eigen::Matrix3d tilt = RotationFromAngleAxis(Eigen::Vector3d(0.05, -0.03, 0.08));
+  image0.camera.SetPose(tilt * image0.camera.cam_from_world_rotation,
                         image0.camera.CenterInWorld() + Eigen::Vector3d(1.2, -0.8, 0.6));
   Primitive& box = s.project.primitives[0];
   box.shape.params.x() *= 1.3;
