@@ -176,6 +176,10 @@ LmResult RunLevenbergMarquardt(const SceneProblem& problem, const SceneSolveOpti
 
 }  // namespace
 
+// Above this many parameters the geometry solve's dense LM would cost more than a frame
+// (~n^2 x residuals flops per iteration): it then gives its start and the joint solve refines.
+constexpr int kMaxDenseParameters = 120;
+
 SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& options, Project* solved) {
   assert(solved != nullptr && solved != &project);
   const auto start = std::chrono::steady_clock::now();
@@ -245,8 +249,8 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
   }
   // A cold start replaces the current values, so only its result has to be finite: a camera
   // that was just calibrated still sits at the origin, often on a primitive's corner.
+  std::string why;
   if (!options.warm_start) {
-    std::string why;
     if (scene_solve_internal::LinearInitialization(problem, &state, &why)) {
       summary.linear_initialization_used = true;
     } else {
@@ -255,9 +259,25 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
   }
   if (!std::isfinite(summary.initial_cost) && !std::isfinite(record_residuals(state))) {
     return finish(SolveTermination::kFailed,
-                  "the reprojection is not finite at the start: a pinned vertex lies in the plane of its camera");
+                  std::string("the reprojection is not finite at the start: a pinned vertex lies in the plane of its camera") +
+                      (why.empty() ? "" : ", and the linear initialisation found no start (" + why + ")"));
   }
 
+  // This LM and the rank analysis below are dense (n^2 work per residual): above
+  // kMaxDenseParameters the geometry solve stops at its start (the linear initialisation on a
+  // cold start) and leaves the refinement to the joint solve's sparse LM, which UpdateModel
+  // runs next (core/model_update.h) and which is exact on the same residuals.
+  if (problem.num_parameters > kMaxDenseParameters) {
+    if (!StateIsFinite(state)) return finish(SolveTermination::kFailed, "the linear start is not finite");
+    summary.final_cost = record_residuals(state);
+    if (!std::isfinite(summary.final_cost))
+      return finish(SolveTermination::kFailed, "the reprojection is not finite at the linear start");
+    *solved = project;
+    scene_solve_internal::WriteSceneState(problem, state, solved);
+    return finish(SolveTermination::kMaxIterations,
+                  std::string(summary.linear_initialization_used ? "linear start only" : "start kept") + ": " +
+                      std::to_string(problem.num_parameters) + " parameters are refined by the joint solve");
+  }
   const auto lm = RunLevenbergMarquardt(problem, options, &state);
   summary.iterations = lm.iterations;
   if (lm.termination == SolveTermination::kFailed) return finish(lm.termination, lm.message);

@@ -4,7 +4,11 @@
 // the centre of each calibrated camera whose pose is not locked (intrinsics and rotation come
 // from calibration), and each primitive's unlocked shape parameters, rotation and
 // translation. A locked dimension is a known length and fixes the scale.
-// Levenberg-Marquardt on Eigen with analytic Jacobians, after a linear initialisation.
+// Levenberg-Marquardt on Eigen with analytic Jacobians, after a linear initialisation. The LM
+// is dense: above 120 parameters the solve returns its start (the linear initialisation when
+// cold, kMaxIterations, "refined by the joint solve") and core/joint_solve.h's sparse LM,
+// which UpdateModel runs next, refines it. The linear initialisation itself switches from a
+// dense SVD to the Schur complement over primitive blocks above 300 unknowns.
 #pragma once
 
 #include <string>

@@ -250,7 +250,279 @@ void WriteSceneState(const SceneProblem& problem, const SceneState& state, Proje
   RefreshAllPrimitives(project);
 }
 
-bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::string* why) {
+namespace {
+
+// The rows of observation `o` of the linear system: A_o x = rhs_o, 3 rows, over the columns
+// named by size_col / translation_col / camera_col (-1: fixed, moved to the right-hand side).
+struct LinearRows {
+  Eigen::Matrix<double, 3, Eigen::Dynamic> primitive;  // columns of the observation's primitive, in order
+  Eigen::Matrix3d camera = Eigen::Matrix3d::Zero();    // columns of its camera (when free)
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+};
+
+using SizeColumns = std::vector<std::array<int, kMaxPrimitiveParams>>;
+
+// The free columns of primitive b in order: its sizes, then its translation.
+std::vector<int> PrimitiveColumns(const SizeColumns& size_col, const std::vector<int>& translation_col, size_t b) {
+  std::vector<int> cols;
+  for (int k = 0; k < kMaxPrimitiveParams; ++k)
+    if (size_col[b][k] >= 0) cols.push_back(size_col[b][k]);
+  if (translation_col[b] >= 0)
+    for (int i = 0; i < 3; ++i) cols.push_back(translation_col[b] + i);
+  return cols;
+}
+
+LinearRows ObservationRows(const SceneProblem& problem, const SceneState& state, const SizeColumns& size_col,
+                           const std::vector<int>& translation_col, const std::vector<int>& camera_col,
+                           const Observation& obs) {
+  const CameraBlock& cam = problem.cameras[obs.camera];
+  LinearRows rows;
+  int num_cols = 0;
+  for (int k = 0; k < kMaxPrimitiveParams; ++k) num_cols += size_col[obs.primitive][k] >= 0 ? 1 : 0;
+  if (translation_col[obs.primitive] >= 0) num_cols += 3;
+  rows.primitive = Eigen::Matrix<double, 3, Eigen::Dynamic>::Zero(3, num_cols);
+  const Eigen::Vector3d ray = Eigen::Vector3d((obs.uv_px.x() - cam.principal_point_px.x()) / cam.focal_px,
+                                              (obs.uv_px.y() - cam.principal_point_px.y()) / cam.focal_px, 1.0)
+                                  .normalized();
+  const Eigen::Matrix3d ray_cross = Skew(ray);
+  const Eigen::Matrix3d m_world = ray_cross * cam.cam_from_world_rotation;
+  const Eigen::Matrix3d& world_from_primitive = state.primitive_rotations[obs.primitive];
+  int col = 0;
+  for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+    const bool free = size_col[obs.primitive][k] >= 0;
+    if (obs.coefficients.col(k).isZero()) {
+      col += free ? 1 : 0;
+      continue;
+    }
+    const Eigen::Vector3d coeff = m_world * (world_from_primitive * obs.coefficients.col(k));
+    if (free) {
+      rows.primitive.col(col++) = coeff;
+    } else {
+      rows.rhs -= coeff * state.primitive_params[obs.primitive](k);
+    }
+  }
+  rows.rhs -= m_world * (world_from_primitive * obs.offset);
+  if (translation_col[obs.primitive] >= 0) {
+    rows.primitive.block<3, 3>(0, col) = m_world;
+  } else {
+    rows.rhs -= m_world * state.primitive_translations[obs.primitive];
+  }
+  const Eigen::Vector3d t = -cam.cam_from_world_rotation * state.camera_centers[obs.camera];
+  if (camera_col[obs.camera] >= 0) {
+    rows.camera = ray_cross;
+  } else {
+    rows.rhs -= ray_cross * t;
+  }
+  return rows;
+}
+
+// Above this many unknowns the linear start uses the Schur complement instead of a dense SVD.
+constexpr int kDenseLinearInitMaxUnknowns = 300;
+
+bool SolveLinearInitDense(const SceneProblem& problem, const SceneState& state, const SizeColumns& size_col,
+                          const std::vector<int>& translation_col, const std::vector<int>& camera_col, int n,
+                          const Eigen::VectorXd& current, Eigen::VectorXd* solution_out, std::string* why) {
+  const int m = 3 * static_cast<int>(problem.observations.size());
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(m, n);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
+  for (size_t o = 0; o < problem.observations.size(); ++o) {
+    const Observation& obs = problem.observations[o];
+    const int row = 3 * static_cast<int>(o);
+    const LinearRows rows = ObservationRows(problem, state, size_col, translation_col, camera_col, obs);
+    const std::vector<int> cols = PrimitiveColumns(size_col, translation_col, obs.primitive);
+    for (size_t j = 0; j < cols.size(); ++j) a.block<3, 1>(row, cols[j]) += rows.primitive.col(j);
+    if (camera_col[obs.camera] >= 0) a.block<3, 3>(row, camera_col[obs.camera]) = rows.camera;
+    rhs.segment<3>(row) = rows.rhs;
+  }
+  // Column scaling makes the rank test independent of the units.
+  Eigen::VectorXd col_norm = a.colwise().norm();
+  for (int j = 0; j < n; ++j) {
+    if (col_norm(j) == 0.0) {
+      *why = "the linear system is rank deficient (a free parameter appears in no pin)";
+      return false;
+    }
+  }
+  const Eigen::MatrixXd a_scaled = a * col_norm.cwiseInverse().asDiagonal();
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(a_scaled, Eigen::ComputeThinU | Eigen::ComputeFullV);
+  const Eigen::VectorXd& sigma = svd.singularValues();
+  constexpr double kRankTolerance = 1e-10;
+  const double threshold = kRankTolerance * sigma(0);
+  int rank = 0;
+  for (int i = 0; i < sigma.size(); ++i) rank += sigma(i) > threshold ? 1 : 0;
+
+  const bool homogeneous = rhs.norm() == 0.0;
+  if (!homogeneous) {
+    if (rank < n) {
+      *why = "the linear system is rank deficient (rank " + std::to_string(rank) + " of " + std::to_string(n) + ")";
+      return false;
+    }
+    *solution_out = col_norm.cwiseInverse().asDiagonal() * svd.solve(rhs);
+  } else {
+    // No known length: the solution is the null vector, with the scale of the current values.
+    if (rank != n - 1) {
+      *why = "the homogeneous linear system has a null space of dimension " + std::to_string(n - rank);
+      return false;
+    }
+    const Eigen::VectorXd v = col_norm.cwiseInverse().asDiagonal() * svd.matrixV().col(n - 1);
+    const double alpha = v.dot(current) / v.squaredNorm();
+    if (!(std::abs(alpha) > 0.0)) {
+      *why = "no known length and the current values give no scale";
+      return false;
+    }
+    *solution_out = alpha * v;
+  }
+  return true;
+}
+
+// The same least-squares problem through its normal equations, column-scaled: each primitive's
+// small block U_b (sizes + translation) is eliminated, leaving the reduced camera system
+// S = V - sum_b W_b^T U_b^-1 W_b (3 per free camera). A block or S with an eigenvalue below
+// kSchurRankTolerance (relative, on the unit-diagonal scaled normal matrix) is rank deficient.
+// With no known length the system is homogeneous and its null vector is S's, back-substituted.
+bool SolveLinearInitSchur(const SceneProblem& problem, const SceneState& state, const SizeColumns& size_col,
+                          const std::vector<int>& translation_col, const std::vector<int>& camera_col, int n,
+                          const Eigen::VectorXd& current, Eigen::VectorXd* solution_out, std::string* why) {
+  constexpr double kSchurRankTolerance = 1e-12;
+  const size_t num_primitives = problem.primitives.size();
+  std::vector<LinearRows> all_rows;
+  all_rows.reserve(problem.observations.size());
+  Eigen::VectorXd col_sq = Eigen::VectorXd::Zero(n);
+  std::vector<std::vector<int>> cols_of(num_primitives);
+  for (size_t b = 0; b < num_primitives; ++b) cols_of[b] = PrimitiveColumns(size_col, translation_col, b);
+  bool homogeneous = true;
+  for (const Observation& obs : problem.observations) {
+    all_rows.push_back(ObservationRows(problem, state, size_col, translation_col, camera_col, obs));
+    const LinearRows& rows = all_rows.back();
+    const std::vector<int>& cols = cols_of[obs.primitive];
+    for (size_t j = 0; j < cols.size(); ++j) col_sq(cols[j]) += rows.primitive.col(j).squaredNorm();
+    if (camera_col[obs.camera] >= 0) {
+      for (int i = 0; i < 3; ++i) col_sq(camera_col[obs.camera] + i) += rows.camera.col(i).squaredNorm();
+    }
+    homogeneous = homogeneous && rows.rhs.squaredNorm() == 0.0;
+  }
+  for (int j = 0; j < n; ++j) {
+    if (col_sq(j) == 0.0) {
+      *why = "the linear system is rank deficient (a free parameter appears in no pin)";
+      return false;
+    }
+  }
+  const Eigen::VectorXd inv_scale = col_sq.cwiseSqrt().cwiseInverse();
+
+  // Free cameras get consecutive 3-blocks of the reduced system.
+  std::vector<int> reduced_of_camera(problem.cameras.size(), -1);
+  int num_reduced = 0;
+  for (size_t c = 0; c < problem.cameras.size(); ++c)
+    if (camera_col[c] >= 0) reduced_of_camera[c] = 3 * (num_reduced++);
+  const int r = 3 * num_reduced;
+
+  struct PrimitiveSystem {
+    Eigen::MatrixXd u;                                  // U_b
+    Eigen::VectorXd b;                                  // primitive part of A^T rhs
+    std::vector<std::pair<int, Eigen::MatrixXd>> w;     // (reduced offset, W_bc)
+  };
+  std::vector<PrimitiveSystem> prim(num_primitives);
+  for (size_t b = 0; b < num_primitives; ++b) {
+    const int nb = static_cast<int>(cols_of[b].size());
+    prim[b].u = Eigen::MatrixXd::Zero(nb, nb);
+    prim[b].b = Eigen::VectorXd::Zero(nb);
+  }
+  Eigen::MatrixXd s = Eigen::MatrixXd::Zero(r, r);
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(r);
+  for (size_t o = 0; o < problem.observations.size(); ++o) {
+    const Observation& obs = problem.observations[o];
+    const std::vector<int>& cols = cols_of[obs.primitive];
+    Eigen::MatrixXd ap = all_rows[o].primitive;
+    for (size_t j = 0; j < cols.size(); ++j) ap.col(j) *= inv_scale(cols[j]);
+    PrimitiveSystem& ps = prim[obs.primitive];
+    ps.u.noalias() += ap.transpose() * ap;
+    ps.b.noalias() += ap.transpose() * all_rows[o].rhs;
+    const int rc = reduced_of_camera[obs.camera];
+    if (rc < 0) continue;
+    Eigen::Matrix3d ac = all_rows[o].camera;
+    for (int i = 0; i < 3; ++i) ac.col(i) *= inv_scale(camera_col[obs.camera] + i);
+    s.block<3, 3>(rc, rc).noalias() += ac.transpose() * ac;
+    g.segment<3>(rc).noalias() += ac.transpose() * all_rows[o].rhs;
+    auto it = std::find_if(ps.w.begin(), ps.w.end(), [rc](const auto& e) { return e.first == rc; });
+    if (it == ps.w.end()) {
+      ps.w.emplace_back(rc, Eigen::MatrixXd::Zero(cols.size(), 3));
+      it = ps.w.end() - 1;
+    }
+    it->second.noalias() += ap.transpose() * ac;
+  }
+
+  // Eliminate each primitive block: S -= W^T U^-1 W, g -= W^T U^-1 b.
+  std::vector<Eigen::LDLT<Eigen::MatrixXd>> u_factor(num_primitives);
+  for (size_t b = 0; b < num_primitives; ++b) {
+    const PrimitiveSystem& ps = prim[b];
+    if (ps.u.rows() == 0) continue;
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(ps.u, Eigen::EigenvaluesOnly);
+    if (!(eig.eigenvalues()(0) > kSchurRankTolerance * eig.eigenvalues().maxCoeff())) {
+      *why = "the linear system is rank deficient (the pins do not fix primitive " +
+             std::to_string(problem.primitives[b].primitive_index + 1) + " on their own)";
+      return false;
+    }
+    u_factor[b].compute(ps.u);
+    const Eigen::VectorXd u_inv_b = u_factor[b].solve(ps.b);
+    for (const auto& [ri, wi] : ps.w) {
+      const Eigen::MatrixXd u_inv_wi = u_factor[b].solve(wi);
+      g.segment<3>(ri).noalias() -= wi.transpose() * u_inv_b;
+      for (const auto& [rj, wj] : ps.w) s.block<3, 3>(rj, ri).noalias() -= wj.transpose() * u_inv_wi;
+    }
+  }
+
+  Eigen::VectorXd cameras = Eigen::VectorXd::Zero(r);
+  if (r > 0) {
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(s);
+    const Eigen::VectorXd& ev = eig.eigenvalues();
+    const double threshold = kSchurRankTolerance * std::max(1.0, ev.maxCoeff());
+    int rank = 0;
+    for (int i = 0; i < r; ++i) rank += ev(i) > threshold ? 1 : 0;
+    if (!homogeneous) {
+      if (rank < r) {
+        *why = "the linear system is rank deficient (camera positions: rank " + std::to_string(rank) + " of " +
+               std::to_string(r) + ")";
+        return false;
+      }
+      cameras = eig.eigenvectors() * (eig.eigenvectors().transpose() * g).cwiseQuotient(ev);
+    } else {
+      if (rank != r - 1) {
+        *why = "the homogeneous linear system has a null space of dimension " + std::to_string(r - rank);
+        return false;
+      }
+      cameras = eig.eigenvectors().col(0);
+    }
+  } else if (homogeneous) {
+    *why = "no known length and no free camera: the linear system has no scale";
+    return false;
+  }
+
+  Eigen::VectorXd scaled(n);
+  for (size_t b = 0; b < num_primitives; ++b) {
+    const PrimitiveSystem& ps = prim[b];
+    if (ps.u.rows() == 0) continue;
+    Eigen::VectorXd rhs_b = homogeneous ? Eigen::VectorXd::Zero(ps.b.size()) : ps.b;
+    for (const auto& [ri, wi] : ps.w) rhs_b.noalias() -= wi * cameras.segment<3>(ri);
+    const Eigen::VectorXd x_b = u_factor[b].solve(rhs_b);
+    for (size_t j = 0; j < cols_of[b].size(); ++j) scaled(cols_of[b][j]) = x_b(static_cast<int>(j));
+  }
+  for (size_t c = 0; c < problem.cameras.size(); ++c)
+    if (camera_col[c] >= 0) scaled.segment<3>(camera_col[c]) = cameras.segment<3>(reduced_of_camera[c]);
+  Eigen::VectorXd solution = inv_scale.cwiseProduct(scaled);
+  if (homogeneous) {
+    const double alpha = solution.dot(current) / solution.squaredNorm();
+    if (!(std::abs(alpha) > 0.0)) {
+      *why = "no known length and the current values give no scale";
+      return false;
+    }
+    solution *= alpha;
+  }
+  *solution_out = std::move(solution);
+  return true;
+}
+
+}  // namespace
+
+bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::string* why, LinearInitMethod method) {
   // Unknowns: free sizes, free box translations, free camera translations t = -R C.
   std::vector<std::array<int, kMaxPrimitiveParams>> size_col(problem.primitives.size(), {-1, -1, -1, -1});
   std::vector<int> translation_col(problem.primitives.size(), -1), camera_col(problem.cameras.size(), -1);
@@ -275,43 +547,7 @@ bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::s
     return false;
   }
 
-  const int m = 3 * static_cast<int>(problem.observations.size());
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(m, n);
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
   Eigen::VectorXd current(n);
-  for (size_t o = 0; o < problem.observations.size(); ++o) {
-    const Observation& obs = problem.observations[o];
-    const CameraBlock& cam = problem.cameras[obs.camera];
-    const int row = 3 * static_cast<int>(o);
-    const Eigen::Vector3d ray = Eigen::Vector3d((obs.uv_px.x() - cam.principal_point_px.x()) / cam.focal_px,
-                                                (obs.uv_px.y() - cam.principal_point_px.y()) / cam.focal_px, 1.0)
-                                    .normalized();
-    const Eigen::Matrix3d ray_cross = Skew(ray);
-    const Eigen::Matrix3d m_world = ray_cross * cam.cam_from_world_rotation;
-    const Eigen::Matrix3d& world_from_primitive = state->primitive_rotations[obs.primitive];
-    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
-      if (obs.coefficients.col(k).isZero()) continue;
-      const Eigen::Vector3d coeff = m_world * (world_from_primitive * obs.coefficients.col(k));
-      const double value = state->primitive_params[obs.primitive](k);
-      if (size_col[obs.primitive][k] >= 0) {
-        a.block<3, 1>(row, size_col[obs.primitive][k]) += coeff;
-      } else {
-        rhs.segment<3>(row) -= coeff * value;
-      }
-    }
-    rhs.segment<3>(row) -= m_world * (world_from_primitive * obs.offset);
-    if (translation_col[obs.primitive] >= 0) {
-      a.block<3, 3>(row, translation_col[obs.primitive]) = m_world;
-    } else {
-      rhs.segment<3>(row) -= m_world * state->primitive_translations[obs.primitive];
-    }
-    const Eigen::Vector3d t = -cam.cam_from_world_rotation * state->camera_centers[obs.camera];
-    if (camera_col[obs.camera] >= 0) {
-      a.block<3, 3>(row, camera_col[obs.camera]) = ray_cross;
-    } else {
-      rhs.segment<3>(row) -= ray_cross * t;
-    }
-  }
   for (size_t b = 0; b < problem.primitives.size(); ++b) {
     for (int k = 0; k < kMaxPrimitiveParams; ++k) {
       if (size_col[b][k] >= 0) current(size_col[b][k]) = state->primitive_params[b](k);
@@ -324,44 +560,18 @@ bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::s
     }
   }
 
-  // Column scaling makes the rank test independent of the units.
-  Eigen::VectorXd col_norm = a.colwise().norm();
-  for (int j = 0; j < n; ++j) {
-    if (col_norm(j) == 0.0) {
-      *why = "the linear system is rank deficient (a free parameter appears in no pin)";
-      return false;
-    }
-  }
-  const Eigen::MatrixXd a_scaled = a * col_norm.cwiseInverse().asDiagonal();
-  Eigen::BDCSVD<Eigen::MatrixXd> svd(a_scaled, Eigen::ComputeThinU | Eigen::ComputeFullV);
-  const Eigen::VectorXd& sigma = svd.singularValues();
-  constexpr double kRankTolerance = 1e-10;
-  const double threshold = kRankTolerance * sigma(0);
-  int rank = 0;
-  for (int i = 0; i < sigma.size(); ++i) rank += sigma(i) > threshold ? 1 : 0;
-
+  // Each observation's 3 rows touch one primitive's columns and one camera's: the dense SVD is
+  // exact and names the rank for small systems, the Schur complement over the primitive blocks
+  // keeps large scenes (hundreds of primitives) linear in their size.
   Eigen::VectorXd solution;
-  const bool homogeneous = rhs.norm() == 0.0;
-  if (!homogeneous) {
-    if (rank < n) {
-      *why = "the linear system is rank deficient (rank " + std::to_string(rank) + " of " + std::to_string(n) + ")";
-      return false;
-    }
-    solution = col_norm.cwiseInverse().asDiagonal() * svd.solve(rhs);
-  } else {
-    // No known length: the solution is the null vector, with the scale of the current values.
-    if (rank != n - 1) {
-      *why = "the homogeneous linear system has a null space of dimension " + std::to_string(n - rank);
-      return false;
-    }
-    const Eigen::VectorXd v = col_norm.cwiseInverse().asDiagonal() * svd.matrixV().col(n - 1);
-    const double alpha = v.dot(current) / v.squaredNorm();
-    if (!(std::abs(alpha) > 0.0)) {
-      *why = "no known length and the current values give no scale";
-      return false;
-    }
-    solution = alpha * v;
-  }
+  const bool dense = method == LinearInitMethod::kDense ||
+                     (method == LinearInitMethod::kAuto && n <= kDenseLinearInitMaxUnknowns);
+  const bool solved = dense
+                          ? SolveLinearInitDense(problem, *state, size_col, translation_col, camera_col, n, current,
+                                                 &solution, why)
+                          : SolveLinearInitSchur(problem, *state, size_col, translation_col, camera_col, n, current,
+                                                 &solution, why);
+  if (!solved) return false;
   if (!solution.allFinite()) {
     *why = "the linear solution is not finite";
     return false;

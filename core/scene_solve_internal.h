@@ -95,8 +95,12 @@ void WriteSceneState(const SceneProblem& problem, const SceneState& state, Proje
 // [x]x (R_cam (R_prim (C p + o) + T) + t) = 0 with x the normalised image ray, linear in the
 // free parameters p, primitive translations T and camera translations t. Solves it by least squares and
 // writes the result into *state. Returns false (state untouched, *why set) when the system
-// is rank deficient or the solution is not usable.
-bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::string* why);
+// is rank deficient or the solution is not usable. kAuto takes a dense SVD up to 300 unknowns
+// and the Schur complement over the primitive blocks (reduced camera system) above, so that a
+// cold start of hundreds of primitives stays in milliseconds; the others force one (tests).
+enum class LinearInitMethod { kAuto, kDense, kSchur };
+bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::string* why,
+                          LinearInitMethod method = LinearInitMethod::kAuto);
 
 // Names the parameters that the pins do not determine, from the rank of the column-scaled
 // Jacobian at `state`. One sentence per primitive or camera; an overall scale or position
