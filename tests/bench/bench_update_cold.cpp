@@ -64,4 +64,46 @@ BENCHMARK(BM_UpdateModelCold)
     ->Args({100, 10, 1000})
     ->Unit(benchmark::kMillisecond);
 
+// One drag frame of the app as a whole (app/app_state.cpp DragUpdateOptions: calibration,
+// the geometry solve and the joint solve, each warm on the 5-iteration budget, no diagnostics),
+// after the scene converged, with one pin moved by 2 px: what the user waits for per frame,
+// not only the joint solve that bench_joint_solve times.
+void BM_UpdateModelDragFrame(benchmark::State& state) {
+  const facet::testing::JointScene scene = facet::testing::MakeJointScene(facet::testing::JointSceneSize(
+      static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), static_cast<int>(state.range(2))));
+  facet::ModelUpdateOptions full;
+  full.calibrate = false;
+  full.joint.compute_diagnostics = false;
+  facet::Project converged;
+  const facet::ModelUpdateSummary first = facet::UpdateModel(scene.start, full, &converged);
+  if (!first.ok) {
+    state.SkipWithError("the scene did not converge");
+    return;
+  }
+  facet::Project dragged = converged;
+  dragged.pins[0].uv_px += Eigen::Vector2d(2.0, 0.0);
+  facet::ModelUpdateOptions frame;
+  frame.solve.warm_start = true;
+  frame.solve.max_iterations = 5;
+  frame.joint.max_iterations = 5;
+  frame.joint.compute_diagnostics = false;
+  facet::ModelUpdateSummary summary;
+  facet::Project updated;
+  for (auto _ : state) {
+    summary = facet::UpdateModel(dragged, frame, &updated);
+    if (!summary.ok) {
+      state.SkipWithError("update failed");
+      return;
+    }
+  }
+  state.counters["geometry_ms"] = summary.solve.time_ms;
+  state.counters["joint_ms"] = summary.joint.time_ms;
+  state.counters["rms_px"] = summary.joint.reprojection_rms_px;
+}
+BENCHMARK(BM_UpdateModelDragFrame)
+    ->ArgNames({"primitives", "images", "pins"})
+    ->Args({10, 3, 60})
+    ->Args({100, 10, 1000})
+    ->Unit(benchmark::kMillisecond);
+
 }  // namespace
