@@ -1,5 +1,7 @@
 // Calibration overlays of the image panel that teach what the solver sees: the user's horizon
-// (the 1-VP + horizon mode) and epipolar lines between images (core/multiview_init.h).
+// (the 1-VP + horizon mode, dashed and labelled "horizon (given)", distinct from the fitted
+// horizon app/overlay_draw.h draws), the segments the calibration flagged as outliers
+// (crossed out), and epipolar lines between images (core/multiview_init.h, not drawn yet).
 #pragma once
 
 #include <imgui.h>

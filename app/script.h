@@ -31,8 +31,15 @@
 //                                   line-pin ARGS      the selected edge on an image line
 //                                                      (RunLinePinCommand, app/model_edits.h)
 //                                   calibration KEY VALUE  the active image's calibration
-//                                                      modes (RunCalibrationCommand,
-//                                                      app/panel_image.h)
+//                                                      modes, each one undoable edit
+//                                                      (RunCalibrationCommand,
+//                                                      app/panel_image.h):
+//                                                      principal-point solve|center|
+//                                                      fixed X Y; focal solve|fixed F|
+//                                                      prior F STD|exif (px); horizon
+//                                                      off|level V|X1 Y1 X2 Y2 (px);
+//                                                      distortion on|off (estimate from
+//                                                      lines); distortion-lock on|off
 //                                   move-selection ARGS  V_op on the selected vertex or
 //                                                      primitive (RunMoveCommand,
 //                                                      app/move_tool.h)
