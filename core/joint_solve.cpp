@@ -177,6 +177,7 @@ class SchurEquations : public NormalEquations {
       if (c.focal_offset >= 0) nc_ = std::max(nc_, c.focal_offset + 1);
       if (c.principal_point_offset >= 0) nc_ = std::max(nc_, c.principal_point_offset + 2);
       if (c.center_offset >= 0) nc_ = std::max(nc_, c.center_offset + 3);
+      if (c.distortion_offset >= 0) nc_ = std::max(nc_, c.distortion_offset + 2);
     }
     // Union-find over the primitive-side parameters [nc, n).
     std::vector<int> parent(n);
@@ -382,7 +383,7 @@ double MaxConstraintViolation(const JointProblem& problem) {
 bool StateIsFinite(const JointState& state) {
   for (const CameraState& c : state.cameras) {
     if (!std::isfinite(c.focal_px) || !c.principal_point_px.allFinite() || !c.cam_from_world_rotation.allFinite() ||
-        !c.center_in_world.allFinite()) {
+        !c.center_in_world.allFinite() || !std::isfinite(c.k1) || !std::isfinite(c.k2)) {
       return false;
     }
   }

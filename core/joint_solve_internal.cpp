@@ -129,20 +129,91 @@ int ConstraintRows(ConstraintKind kind, int n) {
   return 0;
 }
 
-// Projection of p_in_cam and its derivative (2 x 3); false on or behind the camera.
+// Projection of p_in_cam through the distortion and its derivatives (2 x 3, and 2 x 2 with
+// respect to k1, k2 when d_k is given); false on or behind the camera.
 bool ProjectInCamera(const CameraState& camera, const Eigen::Vector3d& p_in_cam, double depth_floor,
-                     Eigen::Vector2d* uv_px, Eigen::Matrix<double, 2, 3>* d_p) {
+                     Eigen::Vector2d* uv_px, Eigen::Matrix<double, 2, 3>* d_p, Eigen::Matrix<double, 2, 2>* d_k) {
   const double z = p_in_cam.z();
   if (!(z > depth_floor)) return false;
   const double inv_z = 1.0 / z;
   const double x = p_in_cam.x() * inv_z;
   const double y = p_in_cam.y() * inv_z;
-  *uv_px = camera.focal_px * Eigen::Vector2d(x, y) + camera.principal_point_px;
-  if (d_p != nullptr) {
-    const double fz = camera.focal_px * inv_z;
-    *d_p << fz, 0.0, -fz * x, 0.0, fz, -fz * y;
+  const double f = camera.focal_px;
+  if (camera.k1 == 0.0 && camera.k2 == 0.0) {
+    *uv_px = f * Eigen::Vector2d(x, y) + camera.principal_point_px;
+    if (d_p != nullptr) {
+      const double fz = f * inv_z;
+      *d_p << fz, 0.0, -fz * x, 0.0, fz, -fz * y;
+    }
+  } else {
+    const Eigen::Vector2d xy(x, y);
+    const double r2 = xy.squaredNorm();
+    const double d = 1.0 + r2 * (camera.k1 + camera.k2 * r2);
+    *uv_px = f * d * xy + camera.principal_point_px;
+    if (d_p != nullptr) {
+      // d(xy d)/d xy = d I + 2 (k1 + 2 k2 r^2) xy xy^T, times d xy / d p.
+      const Eigen::Matrix2d j = d * Eigen::Matrix2d::Identity() + 2.0 * (camera.k1 + 2.0 * camera.k2 * r2) * xy * xy.transpose();
+      Eigen::Matrix<double, 2, 3> d_xy;
+      d_xy << inv_z, 0.0, -x * inv_z, 0.0, inv_z, -y * inv_z;
+      d_p->noalias() = f * j * d_xy;
+    }
+  }
+  if (d_k != nullptr) {
+    const Eigen::Vector2d xy(x, y);
+    const double r2 = xy.squaredNorm();
+    d_k->col(0) = f * r2 * xy;
+    d_k->col(1) = f * r2 * r2 * xy;
   }
   return true;
+}
+
+// A drawn (distorted) pixel undistorted with the camera's f, c, k (Camera::UndistortPixel)
+// and its derivative with respect to (focal, cx, cy, k1, k2), by the implicit function
+// theorem on D(x_u) = x_d, D(x) = x (1 + k1 r^2 + k2 r^4), x_d = (uv - c) / f.
+Eigen::Vector2d UndistortDrawnPixel(const CameraState& camera, const Eigen::Vector2d& uv_px,
+                                    Eigen::Matrix<double, 2, 5>* d_camera) {
+  const double f = camera.focal_px;
+  const Eigen::Vector2d xd = (uv_px - camera.principal_point_px) / f;
+  const Eigen::Vector2d xu = UndistortNormalized(xd, camera.k1, camera.k2);
+  if (d_camera != nullptr) {
+    const double r2 = xu.squaredNorm();
+    const double d = 1.0 + r2 * (camera.k1 + camera.k2 * r2);
+    const Eigen::Matrix2d j = d * Eigen::Matrix2d::Identity() + 2.0 * (camera.k1 + 2.0 * camera.k2 * r2) * xu * xu.transpose();
+    const Eigen::Matrix2d j_inv = j.inverse();
+    d_camera->col(0) = xu - j_inv * xd;
+    d_camera->middleCols<2>(1) = Eigen::Matrix2d::Identity() - j_inv;
+    d_camera->col(3) = -f * j_inv * (r2 * xu);
+    d_camera->col(4) = -f * j_inv * (r2 * r2 * xu);
+  }
+  return f * xu + camera.principal_point_px;
+}
+
+// Signed distance of point p to the line through a and b, all in px: ((a x b) . p) / |(a x b)_xy|
+// in homogeneous coordinates, and its derivatives with respect to a, b and p.
+double LineDistance(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& p,
+                    Eigen::RowVector2d* d_a, Eigen::RowVector2d* d_b, Eigen::RowVector2d* d_p) {
+  const Eigen::Vector3d ah(a.x(), a.y(), 1.0), bh(b.x(), b.y(), 1.0), ph(p.x(), p.y(), 1.0);
+  const Eigen::Vector3d n = ah.cross(bh);
+  const double m = n.head<2>().norm();
+  if (!(m > 0.0)) {
+    if (d_a) d_a->setZero();
+    if (d_b) d_b->setZero();
+    if (d_p) d_p->setZero();
+    return 0.0;
+  }
+  const double num = n.dot(ph);
+  const Eigen::RowVector2d u = n.head<2>().transpose() / m;  // d m / d n_xy
+  if (d_p != nullptr) *d_p = n.head<2>().transpose() / m;
+  if (d_a != nullptr) {
+    // n = a x b: d n / d a = -[b]x; d num / d a = (b x p)^T.
+    const Eigen::Matrix3d dn = -Skew(bh);
+    *d_a = (bh.cross(ph)).head<2>().transpose() / m - (num / (m * m)) * (u * dn.topLeftCorner<2, 2>());
+  }
+  if (d_b != nullptr) {
+    const Eigen::Matrix3d dn = Skew(ah);
+    *d_b = (ph.cross(ah)).head<2>().transpose() / m - (num / (m * m)) * (u * dn.topLeftCorner<2, 2>());
+  }
+  return num / m;
 }
 
 }  // namespace
@@ -158,12 +229,12 @@ int NumShapeParams(PrimitiveKind kind) {
 
 bool PinResidual(const CameraState& camera, const Eigen::Vector3d& point, const Eigen::Vector2d& uv_px,
                  Eigen::Vector2d* residual, Eigen::Matrix<double, 2, 3>* d_point,
-                 Eigen::Matrix<double, 2, 9>* d_camera) {
+                 Eigen::Matrix<double, 2, 9>* d_camera, Eigen::Matrix<double, 2, 2>* d_distortion) {
   const Eigen::Vector3d rel = point - camera.center_in_world;
   const Eigen::Vector3d p = camera.cam_from_world_rotation * rel;
   Eigen::Vector2d uv;
   Eigen::Matrix<double, 2, 3> d_p;
-  if (!ProjectInCamera(camera, p, kMinDepth * rel.norm(), &uv, &d_p)) return false;
+  if (!ProjectInCamera(camera, p, kMinDepth * rel.norm(), &uv, &d_p, d_distortion)) return false;
   *residual = uv - uv_px;
   if (d_point != nullptr) d_point->noalias() = d_p * camera.cam_from_world_rotation;
   if (d_camera != nullptr) {
@@ -196,6 +267,52 @@ double SegmentResidual(const CameraState& camera, const Eigen::Vector3d& segment
     Eigen::Matrix3d k;
     k << f, 0.0, c.x(), 0.0, f, c.y(), 0.0, 0.0, 1.0;
     d_camera->tail<3>() = -d_v * k * Skew(q);
+  }
+  return num / n;
+}
+
+double DistortedSegmentResidual(const CameraState& camera, const Eigen::Vector2d& a_px, const Eigen::Vector2d& b_px,
+                                int axis, Eigen::Matrix<double, 1, 8>* d_camera) {
+  const bool with_jacobian = d_camera != nullptr;
+  Eigen::Matrix<double, 2, 5> da, db;
+  const Eigen::Vector2d a = UndistortDrawnPixel(camera, a_px, with_jacobian ? &da : nullptr);
+  const Eigen::Vector2d b = UndistortDrawnPixel(camera, b_px, with_jacobian ? &db : nullptr);
+  const Eigen::Vector3d q = camera.cam_from_world_rotation.col(axis);
+  const double f = camera.focal_px;
+  const Eigen::Vector2d& c = camera.principal_point_px;
+  const Eigen::Vector3d v(f * q.x() + c.x() * q.z(), f * q.y() + c.y() * q.z(), q.z());
+  // r = l . A / |l_xy| with l = M x v, M = (mid, 1), A = (a, 1): the distance of a to the line
+  // through the midpoint and the vanishing point.
+  const Eigen::Vector2d mid = 0.5 * (a + b);
+  const Eigen::Vector3d mh(mid.x(), mid.y(), 1.0), ah(a.x(), a.y(), 1.0);
+  const Eigen::Vector3d l = mh.cross(v);
+  const double n = l.head<2>().norm();
+  if (!(n > 0.0)) {
+    if (with_jacobian) d_camera->setZero();
+    return 0.0;
+  }
+  const double num = l.dot(ah);
+  if (with_jacobian) {
+    const Eigen::RowVector2d u = l.head<2>().transpose() / n;
+    // dl = -[v]x dM + [M]x dv.
+    const Eigen::Matrix3d dl_dm = -Skew(v);
+    const Eigen::Matrix3d dl_dv = Skew(mh);
+    auto dr_dl = [&](const Eigen::Matrix3d& dl) -> Eigen::RowVector3d {
+      return ah.transpose() * dl / n - (num / (n * n)) * (u * dl.topRows<2>());
+    };
+    const Eigen::RowVector3d d_v = dr_dl(dl_dv);
+    const Eigen::RowVector2d d_mid = dr_dl(dl_dm).head<2>();
+    const Eigen::RowVector2d d_a = l.head<2>().transpose() / n + 0.5 * d_mid;
+    const Eigen::RowVector2d d_b = 0.5 * d_mid;
+    const Eigen::Matrix<double, 1, 5> through_points = d_a * da + d_b * db;  // f, cx, cy, k1, k2
+    (*d_camera)(0) = d_v(0) * q.x() + d_v(1) * q.y() + through_points(0);
+    (*d_camera)(1) = d_v(0) * q.z() + through_points(1);
+    (*d_camera)(2) = d_v(1) * q.z() + through_points(2);
+    Eigen::Matrix3d k;
+    k << f, 0.0, c.x(), 0.0, f, c.y(), 0.0, 0.0, 1.0;
+    d_camera->segment<3>(3) = -d_v * k * Skew(q);
+    (*d_camera)(6) = through_points(3);
+    (*d_camera)(7) = through_points(4);
   }
   return num / n;
 }
@@ -340,7 +457,32 @@ bool ConstraintResidual(const ConstraintTerm& term, const std::vector<Eigen::Vec
       return true;
     }
     case ConstraintKind::kEdgeOnImageLine: {
-      if (d_camera != nullptr) d_camera->setZero(term.num_rows, 9);
+      if (d_camera != nullptr) d_camera->setZero(term.num_rows, 11);
+      if (camera->k1 != 0.0 || camera->k2 != 0.0 || term.undistort_line) {
+        // The line is drawn on the photo: undistort its points, then measure the pinhole
+        // projections of the edge's endpoints against it.
+        CameraState pinhole = *camera;
+        pinhole.k1 = pinhole.k2 = 0.0;
+        Eigen::Matrix<double, 2, 5> da, db;
+        const Eigen::Vector2d a = UndistortDrawnPixel(*camera, term.line_a_px, &da);
+        const Eigen::Vector2d b = UndistortDrawnPixel(*camera, term.line_b_px, &db);
+        for (int i = 0; i < 2; ++i) {
+          Eigen::Vector2d uv;
+          Eigen::Matrix<double, 2, 3> d_point;
+          Eigen::Matrix<double, 2, 9> d_cam;
+          if (!PinResidual(pinhole, points[i], Eigen::Vector2d::Zero(), &uv, &d_point, &d_cam)) return false;
+          Eigen::RowVector2d g_a, g_b, g_p;
+          (*residual)(i) = LineDistance(a, b, uv, &g_a, &g_b, &g_p) / s;
+          if (d_points != nullptr) dp(i, i) = g_p * d_point / s;
+          if (d_camera != nullptr) {
+            d_camera->block<1, 9>(i, 0) = g_p * d_cam / s;
+            const Eigen::Matrix<double, 1, 5> through_line = (g_a * da + g_b * db) / s;
+            d_camera->block<1, 3>(i, 0) += through_line.head<3>();
+            d_camera->block<1, 2>(i, 9) = through_line.tail<2>();
+          }
+        }
+        return true;
+      }
       for (int i = 0; i < 2; ++i) {
         Eigen::Vector2d r;
         Eigen::Matrix<double, 2, 3> d_point;
@@ -349,7 +491,7 @@ bool ConstraintResidual(const ConstraintTerm& term, const std::vector<Eigen::Vec
         const Eigen::RowVector2d l = term.line_px.head<2>().transpose() / s;
         (*residual)(i) = (term.line_px.head<2>().dot(r) + term.line_px.z()) / s;
         if (d_points != nullptr) dp(i, i) = l * d_point;
-        if (d_camera != nullptr) d_camera->row(i) = l * d_cam;
+        if (d_camera != nullptr) d_camera->block<1, 9>(i, 0) = l * d_cam;
       }
       return true;
     }
@@ -417,8 +559,8 @@ std::vector<int> VertexColumns(const JointProblem& problem, const VertexTerm& te
   return cols;
 }
 
-std::array<int, 9> CameraParameterColumns(const CameraBlock& camera) {
-  std::array<int, 9> cols;
+std::array<int, 11> CameraParameterColumns(const CameraBlock& camera) {
+  std::array<int, 11> cols;
   cols.fill(-1);
   auto set = [&](int first, int offset, int count) {
     if (offset < 0) return;
@@ -428,6 +570,7 @@ std::array<int, 9> CameraParameterColumns(const CameraBlock& camera) {
   set(1, camera.principal_point_offset, 2);
   set(3, camera.rotation_offset, 3);
   set(6, camera.center_offset, 3);
+  set(9, camera.distortion_offset, 2);
   return cols;
 }
 
@@ -440,9 +583,11 @@ int AddColumn(ResidualBlock* block, int parameter) {
   return static_cast<int>(block->cols.size()) - 1;
 }
 
-void AddCameraColumns(const CameraBlock& camera, int num_camera_params, ResidualBlock* block) {
-  const std::array<int, 9> params = CameraParameterColumns(camera);
-  for (int i = 0; i < num_camera_params; ++i) {
+// with_centre false: a segment, which the camera centre does not move.
+void AddCameraColumns(const CameraBlock& camera, bool with_centre, ResidualBlock* block) {
+  const std::array<int, 11> params = CameraParameterColumns(camera);
+  for (int i = 0; i < 11; ++i) {
+    if (!with_centre && i >= 6 && i < 9) continue;
     block->camera_cols[i] = params[i] >= 0 ? AddColumn(block, params[i]) : -1;
   }
 }
@@ -460,7 +605,7 @@ void SizeBlock(ResidualBlock* block) {
   block->raw.setZero(block->num_rows);
   block->points.assign(block->vertices.size(), Eigen::Vector3d::Zero());
   block->d_points.setZero(block->num_rows, 3 * static_cast<Eigen::Index>(block->vertices.size()));
-  block->d_camera.setZero(block->num_rows, 9);
+  block->d_camera.setZero(block->num_rows, 11);
 }
 
 }  // namespace
@@ -530,7 +675,8 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
     const Image& image = project.images[i];
     if (!image.camera_calibrated) continue;
     const bool intrinsics_or_rotation_free =
-        !image.pose_locked || (options.refine_intrinsics && (!image.focal_locked || !image.principal_point_locked));
+        !image.pose_locked || (options.refine_intrinsics && (!image.focal_locked || !image.principal_point_locked ||
+                                                             !image.distortion_locked));
     bool has_segments = false;
     if (options.use_segments && intrinsics_or_rotation_free) {
       for (const Segment& s : project.segments) has_segments = has_segments || s.image_id == image.id;
@@ -548,6 +694,10 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
       block.center_offset = next + 3;
       next += 6;
     }
+    if (options.refine_intrinsics && !image.distortion_locked) {
+      block.distortion_offset = next;
+      next += 2;
+    }
     camera_of_image[i] = static_cast<int>(problem.cameras.size());
     problem.cameras.push_back(block);
     const Camera& cam = image.camera;
@@ -556,6 +706,8 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
     cs.principal_point_px = cam.principal_point_px;
     cs.cam_from_world_rotation = cam.cam_from_world_rotation;
     cs.center_in_world = cam.CenterInWorld();
+    cs.k1 = cam.k1;
+    cs.k2 = cam.k2;
     state->cameras.push_back(cs);
   }
   if (options.use_segments) {
@@ -563,7 +715,9 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
       const int im = find_image(project.segments[i].image_id);
       if (im < 0 || camera_of_image[im] < 0) continue;
       const CameraBlock& cb = problem.cameras[camera_of_image[im]];
-      if (cb.focal_offset < 0 && cb.principal_point_offset < 0 && cb.rotation_offset < 0) continue;
+      if (cb.focal_offset < 0 && cb.principal_point_offset < 0 && cb.rotation_offset < 0 && cb.distortion_offset < 0) {
+        continue;
+      }
       if ((project.segments[i].b_px - project.segments[i].a_px).norm() <= 0.0) continue;
       used_segments.push_back(static_cast<int>(i));
     }
@@ -662,7 +816,7 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
     block.camera = camera_of_image[find_image(pin.image_id)];
     block.num_rows = 2;
     block.uv_px = pin.uv_px;
-    AddCameraColumns(problem.cameras[block.camera], 9, &block);
+    AddCameraColumns(problem.cameras[block.camera], true, &block);
     AddVertexColumns(problem, vertex_lookup.at({pin.vertex.primitive_id, pin.vertex.vertex}), &block);
     SizeBlock(&block);
     problem.blocks.push_back(std::move(block));
@@ -678,7 +832,9 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
     const Eigen::Vector2d mid = 0.5 * (seg.a_px + seg.b_px);
     block.segment_g = Eigen::Vector3d(seg.a_px.x(), seg.a_px.y(), 1.0).cross(Eigen::Vector3d(mid.x(), mid.y(), 1.0));
     block.segment_m << 0.0, -1.0, mid.y(), 1.0, 0.0, -mid.x();
-    AddCameraColumns(problem.cameras[block.camera], 6, &block);
+    block.segment_a_px = seg.a_px;
+    block.segment_b_px = seg.b_px;
+    AddCameraColumns(problem.cameras[block.camera], false, &block);
     SizeBlock(&block);
     problem.blocks.push_back(std::move(block));
   }
@@ -741,6 +897,9 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
         const Eigen::Vector3d b(c.line_b_px.x(), c.line_b_px.y(), 1.0);
         const Eigen::Vector3d line = a.cross(b);
         term.line_px = line / line.head<2>().norm();
+        term.line_a_px = c.line_a_px;
+        term.line_b_px = c.line_b_px;
+        term.undistort_line = problem.cameras[term.camera].distortion_offset >= 0;
         term.camera = camera_of_image[find_image(c.image_id)];
         term.scale = state->cameras[term.camera].focal_px;
         break;
@@ -758,7 +917,7 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
     block.num_rows = term.num_rows;
     if (term.camera >= 0) {
       block.camera = term.camera;
-      AddCameraColumns(problem.cameras[term.camera], 9, &block);
+      AddCameraColumns(problem.cameras[term.camera], true, &block);
     }
     for (int v : term.vertices) AddVertexColumns(problem, v, &block);
     SizeBlock(&block);
@@ -770,11 +929,12 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
 
   // Names for diagnostics.
   problem.parameter_names.assign(problem.num_parameters, "");
-  const char* const kCamera[9] = {"focal length", "principal point u", "principal point v", "rotation about x",
-                                  "rotation about y", "rotation about z", "position x", "position y", "position z"};
+  const char* const kCamera[11] = {"focal length",     "principal point u", "principal point v", "rotation about x",
+                                   "rotation about y", "rotation about z",  "position x",        "position y",
+                                   "position z",       "distortion k1",     "distortion k2"};
   for (const CameraBlock& cb : problem.cameras) {
-    const std::array<int, 9> cols = CameraParameterColumns(cb);
-    for (int i = 0; i < 9; ++i) {
+    const std::array<int, 11> cols = CameraParameterColumns(cb);
+    for (int i = 0; i < 11; ++i) {
       if (cols[i] >= 0) problem.parameter_names[cols[i]] = ImageLabel(project.images[cb.image_index]) + ": " + kCamera[i];
     }
   }
@@ -815,8 +975,10 @@ bool EvaluateBlocks(JointProblem* problem, const JointState& state, bool with_ja
         Eigen::Vector2d r;
         Eigen::Matrix<double, 2, 3> d_point;
         Eigen::Matrix<double, 2, 9> d_cam;
+        Eigen::Matrix<double, 2, 2> d_k;
+        const bool k_free = block.camera_cols[9] >= 0 || block.camera_cols[10] >= 0;
         if (!PinResidual(state.cameras[block.camera], v.position, block.uv_px, &r, &d_point,
-                         with_jacobian ? &d_cam : nullptr)) {
+                         with_jacobian ? &d_cam : nullptr, with_jacobian && k_free ? &d_k : nullptr)) {
           ok = false;
           block.residual.setZero();
           continue;
@@ -826,14 +988,33 @@ bool EvaluateBlocks(JointProblem* problem, const JointState& state, bool with_ja
           for (int i = 0; i < 9; ++i) {
             if (block.camera_cols[i] >= 0) block.jacobian.col(block.camera_cols[i]) = d_cam.col(i);
           }
+          for (int i = 0; i < 2 && k_free; ++i) {
+            if (block.camera_cols[9 + i] >= 0) block.jacobian.col(block.camera_cols[9 + i]) = d_k.col(i);
+          }
           const std::vector<int>& map = block.vertex_cols[0];
           for (size_t j = 0; j < map.size(); ++j) block.jacobian.col(map[j]).noalias() += d_point * v.jacobian.col(j);
         }
         break;
       }
       case BlockKind::kSegment: {
+        const CameraState& camera = state.cameras[block.camera];
+        if (camera.k1 != 0.0 || camera.k2 != 0.0 || block.camera_cols[9] >= 0) {
+          Eigen::Matrix<double, 1, 8> d_cam;
+          const double r = DistortedSegmentResidual(camera, block.segment_a_px, block.segment_b_px, block.axis,
+                                                    with_jacobian ? &d_cam : nullptr);
+          block.residual << r, -r;
+          if (with_jacobian) {
+            for (int i = 0; i < 8; ++i) {
+              const int col = block.camera_cols[i < 6 ? i : i + 3];
+              if (col < 0) continue;
+              block.jacobian(0, col) = d_cam(i);
+              block.jacobian(1, col) = -d_cam(i);
+            }
+          }
+          break;
+        }
         Eigen::Matrix<double, 1, 6> d_cam;
-        const double r = SegmentResidual(state.cameras[block.camera], block.segment_g, block.segment_m, block.axis,
+        const double r = SegmentResidual(camera, block.segment_g, block.segment_m, block.axis,
                                          with_jacobian ? &d_cam : nullptr);
         block.residual << r, -r;
         if (with_jacobian) {
@@ -865,7 +1046,7 @@ bool EvaluateBlocks(JointProblem* problem, const JointState& state, bool with_ja
             }
           }
           if (camera != nullptr) {
-            for (int i = 0; i < 9; ++i) {
+            for (int i = 0; i < 11; ++i) {
               if (block.camera_cols[i] >= 0) block.jacobian.col(block.camera_cols[i]) += block.d_camera.col(i);
             }
           }
@@ -890,6 +1071,10 @@ void ApplyStep(const JointProblem& problem, const Eigen::VectorXd& delta, const 
       cs.cam_from_world_rotation = RotationFromAngleAxis(delta.segment<3>(cb.rotation_offset)) * cs.cam_from_world_rotation;
     }
     if (cb.center_offset >= 0) cs.center_in_world += delta.segment<3>(cb.center_offset);
+    if (cb.distortion_offset >= 0) {
+      cs.k1 += delta(cb.distortion_offset);
+      cs.k2 += delta(cb.distortion_offset + 1);
+    }
   }
   for (size_t p = 0; p < problem.primitives.size(); ++p) {
     const PrimitiveBlock& pb = problem.primitives[p];
@@ -927,6 +1112,8 @@ void WriteState(const JointProblem& problem, const JointState& state, Project* p
     cam.focal_px = cs.focal_px;
     cam.principal_point_px = cs.principal_point_px;
     cam.SetPose(cs.cam_from_world_rotation, cs.center_in_world);
+    cam.k1 = cs.k1;
+    cam.k2 = cs.k2;
   }
   for (size_t p = 0; p < problem.primitives.size(); ++p) {
     const PrimitiveBlock& pb = problem.primitives[p];

@@ -5,7 +5,9 @@
 //
 // Parameter vector (length JointProblem::num_parameters), blocks in this order per object:
 // - camera: focal (px), principal point (2, px), rotation (3: d in cam_from_world <-
-//   exp([d]x) * cam_from_world, radians), centre in world (3, world units);
+//   exp([d]x) * cam_from_world, radians), centre in world (3, world units), radial distortion
+//   k1, k2 (2, Camera's model; only when Image::distortion_locked is false and intrinsics
+//   are refined);
 // - primitive: each unlocked shape parameter it owns (world units), rotation (3: d in
 //   world_from_primitive <- exp([d]x) * world_from_primitive), translation (3);
 // - free vertex (LocalDefinition::free): its local offset (3, primitive-local units).
@@ -17,9 +19,14 @@
 // It owns only its parameters from index 2 on; its own pose is not a parameter.
 //
 // Residual blocks, each a few rows with a dense Jacobian over its own parameter columns:
-// - pin (2 rows, px): project(vertex) - uv_px;
+// - pin (2 rows, px): project(vertex) - uv_px, through the camera's distortion;
 // - segment (2 rows, px): signed distance of each endpoint to the line through the segment's
-//   midpoint and the vanishing point K R e_axis (the second is minus the first);
+//   midpoint and the vanishing point K R e_axis (the second is minus the first). The user
+//   draws on the distorted photo, so with distortion the endpoints are first undistorted with
+//   the current f, principal point and k (Camera::UndistortPixel), derivatives included;
+// - an edge-on-image-line constraint likewise undistorts its two line points and projects
+//   the edge's endpoints through the pinhole part.
+// Camera derivatives are ordered (focal, principal point 2, rotation 3, centre 3, k1, k2): 11.
 // - constraint: scale-free residual c (ConstraintTerm below), multiplied by sqrt(mu) and
 //   shifted by lambda / mu for the augmented Lagrangian (JointProblem::constraint_weight
 //   and ConstraintTerm::multiplier).
@@ -44,6 +51,8 @@ struct CameraState {
   Eigen::Vector2d principal_point_px = Eigen::Vector2d::Zero();
   Eigen::Matrix3d cam_from_world_rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d center_in_world = Eigen::Vector3d::Zero();
+  double k1 = 0.0;
+  double k2 = 0.0;
 };
 
 struct PrimitiveState {
@@ -65,6 +74,7 @@ struct CameraBlock {
   int principal_point_offset = -1;
   int rotation_offset = -1;
   int center_offset = -1;
+  int distortion_offset = -1;  // k1, k2
 };
 
 struct PrimitiveBlock {
@@ -118,6 +128,11 @@ struct ConstraintTerm {
   std::array<int, 2> kept_components = {0, 1};  // kCollinear / kParallel / kAlongAxis
   int camera = -1;               // kEdgeOnImageLine
   Eigen::Vector3d line_px = Eigen::Vector3d::Zero();  // normalised image line (a, b, c), a^2 + b^2 = 1
+  Eigen::Vector2d line_a_px = Eigen::Vector2d::Zero();  // the line's points on the photo (distorted)
+  Eigen::Vector2d line_b_px = Eigen::Vector2d::Zero();
+  // The camera's k is a parameter: take the undistorted-line path even at k = 0 so that the
+  // derivatives with respect to k are there.
+  bool undistort_line = false;
   Eigen::Vector3d point = Eigen::Vector3d::Zero();    // kFixedPoint target
   double scale = 1.0;            // the divisor of the residual
   int num_rows = 0;
@@ -136,13 +151,15 @@ struct ResidualBlock {
   // VertexTerm::cols.
   std::vector<int> vertices;
   std::vector<std::vector<int>> vertex_cols;
-  // Block column of each camera derivative (focal, principal point 2, rotation 3, centre 3),
-  // -1 when that camera parameter is not free.
-  std::array<int, 9> camera_cols = {-1, -1, -1, -1, -1, -1, -1, -1, -1};
+  // Block column of each camera derivative (focal, principal point 2, rotation 3, centre 3,
+  // k1, k2), -1 when that camera parameter is not free.
+  std::array<int, 11> camera_cols = {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1};
   Eigen::Vector2d uv_px = Eigen::Vector2d::Zero();  // a pin's pixel
   // Segment data (px): the line constants of the residual g.v / |M v|.
   Eigen::Vector3d segment_g = Eigen::Vector3d::Zero();
   Eigen::Matrix<double, 2, 3> segment_m = Eigen::Matrix<double, 2, 3>::Zero();
+  Eigen::Vector2d segment_a_px = Eigen::Vector2d::Zero();  // the endpoints as drawn (distorted)
+  Eigen::Vector2d segment_b_px = Eigen::Vector2d::Zero();
   int axis = 0;
   // Evaluated values (weighted for constraints), and the unweighted constraint residual.
   Eigen::VectorXd residual;
@@ -189,23 +206,31 @@ bool EvaluateBlocks(JointProblem* problem, const JointState& state, bool with_ja
 
 // The unweighted scale-free residual of one constraint term and its derivative with respect
 // to its points (rows x 3n, n = term.vertices.size()) and, for kEdgeOnImageLine, the camera's
-// free parameters in block order (focal, principal point, rotation, centre; rows x 9, full).
+// parameters in block order (focal, principal point, rotation, centre, k1, k2; rows x 11,
+// full). With camera k1 = k2 = 0 and !undistort_line the line is term.line_px (fixed at build);
+// otherwise the line through the undistorted term.line_a_px, line_b_px.
 // Returns false when an edge-on-line endpoint lies on or behind the camera.
 bool ConstraintResidual(const ConstraintTerm& term, const std::vector<Eigen::Vector3d>& points,
                         const CameraState* camera, Eigen::VectorXd* residual, Eigen::MatrixXd* d_points,
                         Eigen::MatrixXd* d_camera);
 
-// Pin residual (px) and its derivatives with respect to the world point and to the camera
-// (focal, principal point, rotation, centre: 2 x 9). Returns false when the point lies on or
-// behind the camera.
+// Pin residual (px, through the distortion) and its derivatives with respect to the world
+// point, the camera (focal, principal point, rotation, centre: 2 x 9) and, when asked, the
+// distortion (k1, k2: 2 x 2). Returns false when the point lies on or behind the camera.
 bool PinResidual(const CameraState& camera, const Eigen::Vector3d& point, const Eigen::Vector2d& uv_px,
                  Eigen::Vector2d* residual, Eigen::Matrix<double, 2, 3>* d_point,
-                 Eigen::Matrix<double, 2, 9>* d_camera);
+                 Eigen::Matrix<double, 2, 9>* d_camera, Eigen::Matrix<double, 2, 2>* d_distortion = nullptr);
 
-// Segment residual (px, endpoint a) and its derivative with respect to the camera's focal,
+// Segment residual (px, endpoint a) of a pinhole camera (k ignored) from the line constants
+// built from the drawn endpoints, and its derivative with respect to the camera's focal,
 // principal point and rotation (1 x 6).
 double SegmentResidual(const CameraState& camera, const Eigen::Vector3d& segment_g,
                        const Eigen::Matrix<double, 2, 3>& segment_m, int axis, Eigen::Matrix<double, 1, 6>* d_camera);
+// The same from the drawn (distorted) endpoints, undistorted with the camera's k first;
+// derivative with respect to (focal, principal point 2, rotation 3, k1, k2) (1 x 8). Equals
+// SegmentResidual when k1 = k2 = 0.
+double DistortedSegmentResidual(const CameraState& camera, const Eigen::Vector2d& a_px, const Eigen::Vector2d& b_px,
+                                int axis, Eigen::Matrix<double, 1, 8>* d_camera);
 
 // state <- state "+" delta.
 void ApplyStep(const JointProblem& problem, const Eigen::VectorXd& delta, const JointState& state,

@@ -1,6 +1,8 @@
 #include "core/model_update.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
 namespace facet {
 namespace {
@@ -24,6 +26,91 @@ VpCalibrationOptions CalibrationOptionsFor(const Image& image) {
   return options;
 }
 
+// The segments with their endpoints mapped (distorted photo px -> pinhole px).
+template <typename Map>
+std::vector<Segment> MapSegments(const std::vector<Segment>& segments, const Map& map) {
+  std::vector<Segment> out = segments;
+  for (Segment& s : out) {
+    s.a_px = map(s.a_px);
+    s.b_px = map(s.b_px);
+  }
+  return out;
+}
+
+// Distance from `center_px` to the farthest image corner (pixel centres at integers).
+double MaxRadiusPx(const Image& image, const Eigen::Vector2d& center_px) {
+  double r = 0.0;
+  for (double u : {-0.5, image.width_px - 0.5}) {
+    for (double v : {-0.5, image.height_px - 0.5}) r = std::max(r, (Eigen::Vector2d(u, v) - center_px).norm());
+  }
+  return r;
+}
+
+// The plumb-line estimate from an image's segments: each segment a 2-point polyline whose
+// family is its axis, so the three families' vanishing points carry the information.
+PlumbLineSummary EstimateDistortion(const Image& image, const std::vector<Segment>& segments) {
+  std::vector<PlumbLine> lines;
+  for (const Segment& s : segments) lines.push_back({{s.a_px, s.b_px}, static_cast<int>(s.axis)});
+  PlumbLineOptions options;
+  options.width_px = image.width_px;
+  options.height_px = image.height_px;
+  if (image.principal_point_mode == PrincipalPointMode::kFixed) options.center_px = image.fixed_principal_point_px;
+  options.estimate_k2 = true;
+  return EstimateRadialDistortion(lines, options);
+}
+
+// The camera's OpenCV k1, k2 for a plumb-line model at this focal length (the conversion
+// depends on f: to first order k1_cv = -k1 (s / f)^2).
+void SetOpenCvDistortion(const Image& image, const RadialDistortion& plumb, double focal_px, Camera* camera) {
+  const OpenCvRadialCoefficients k =
+      OpenCvFromRadialDistortion(plumb, focal_px, MaxRadiusPx(image, plumb.center_px), /*fit_k2=*/true);
+  camera->k1 = k.k1;
+  camera->k2 = k.k2;
+}
+
+// Calibrates one image from its segments. The segments are drawn on the photo, so they are
+// straightened first: by the plumb-line model when distortion is estimated, else by the
+// camera's own k (when non-zero). Both depend on the focal length the calibration finds, so
+// the calibration runs twice: once to get f (and the principal point), once more with the
+// segments undistorted by the camera model at that f. *camera receives k1, k2 (the other
+// fields are the caller's to set from the summary).
+VpCalibrationSummary CalibrateImage(const Image& image, const std::vector<Segment>& segments,
+                                    const VpCalibrationOptions& options, const PlumbLineSummary* plumb,
+                                    Camera* camera) {
+  camera->width_px = image.width_px;
+  camera->height_px = image.height_px;
+  auto refine = [&](VpCalibrationSummary first) {
+    if (!first.IsUsable()) return first;
+    camera->focal_px = first.focal_px;
+    camera->principal_point_px = first.principal_point_px;
+    VpCalibrationSummary again = CalibrateFromVanishingLines(
+        MapSegments(segments, [&](const Eigen::Vector2d& uv) { return camera->UndistortPixel(uv); }), options);
+    return again.IsUsable() ? again : first;
+  };
+  if (plumb != nullptr && plumb->IsUsable()) {
+    const RadialDistortion& d = plumb->distortion;
+    VpCalibrationSummary vp = CalibrateFromVanishingLines(
+        MapSegments(segments, [&](const Eigen::Vector2d& uv) { return d.Undistort(uv); }), options);
+    if (!vp.IsUsable()) return vp;
+    SetOpenCvDistortion(image, d, vp.focal_px, camera);
+    vp = refine(std::move(vp));
+    SetOpenCvDistortion(image, d, vp.focal_px, camera);
+    return vp;
+  }
+  if (!camera->HasDistortion()) return CalibrateFromVanishingLines(segments, options);
+  // k from the file: it refers to the camera's focal length, so a camera never calibrated
+  // gets f from the raw segments first.
+  if (!image.camera_calibrated) {
+    const VpCalibrationSummary pinhole = CalibrateFromVanishingLines(segments, options);
+    if (pinhole.IsUsable()) {
+      camera->focal_px = pinhole.focal_px;
+      camera->principal_point_px = pinhole.principal_point_px;
+    }
+  }
+  return refine(CalibrateFromVanishingLines(
+      MapSegments(segments, [&](const Eigen::Vector2d& uv) { return camera->UndistortPixel(uv); }), options));
+}
+
 // A warm start can stall far from the answer (e.g. the first solve after calibration, when
 // the camera still sits at the origin); a cold start is linear plus a few iterations, so it
 // is cheap enough to try whenever the warm result looks wrong.
@@ -42,7 +129,16 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
       for (const Segment& s : calibrated.segments)
         if (s.image_id == image.id) segments.push_back(s);
       if (segments.empty()) continue;
-      VpCalibrationSummary vp = CalibrateFromVanishingLines(segments, CalibrationOptionsFor(image));
+      const PlumbLineSummary* plumb = nullptr;
+      if (image.estimate_distortion) {
+        PlumbLineSummary& estimate = summary.distortion[image.id] = EstimateDistortion(image, segments);
+        if (!estimate.IsUsable()) {
+          summary.messages.push_back("Image '" + image.path + "': distortion not estimated: " + estimate.message);
+        }
+        plumb = &estimate;
+      }
+      Camera camera = image.camera;
+      VpCalibrationSummary vp = CalibrateImage(image, segments, CalibrationOptionsFor(image), plumb, &camera);
       if (vp.IsUsable()) {
         // Calibration fixes intrinsics and rotation; the camera keeps its centre, which the
         // geometry solve then moves.
@@ -51,6 +147,8 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
         image.camera.height_px = image.height_px;
         image.camera.focal_px = vp.focal_px;
         image.camera.principal_point_px = vp.principal_point_px;
+        image.camera.k1 = camera.k1;
+        image.camera.k2 = camera.k2;
         image.camera.SetPose(vp.cam_from_world_rotation, center);
         image.camera_calibrated = true;
       } else {
@@ -59,6 +157,9 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
       summary.calibration[image.id] = std::move(vp);
     }
   }
+
+  // Cameras of images without line families (from pins: core/multiview_init.h) are
+  // initialised here, after the vanishing-point calibration and before the geometry solve.
 
   SceneSolveOptions solve_options = options.solve;
   Project solved;

@@ -1,5 +1,7 @@
 // What runs after every edit (the paper: "after each operation the system re-solves cameras
-// and geometry"): each image with line families is calibrated from its vanishing points, the
+// and geometry"): each image with line families is calibrated from its vanishing points (after
+// a plumb-line estimate of its radial distortion when Image::estimate_distortion is set; the
+// segments are undistorted with the camera's k1, k2 whenever those are non-zero), the
 // geometry solve (linear start + LM over camera centres and primitive parameters) fits the
 // model to the pins, then the joint solve refines everything at once: intrinsics that are not
 // locked, camera rotations against the line families, free vertices and the spatial
@@ -12,6 +14,7 @@
 
 #include "core/calibrate_vp.h"
 #include "core/joint_solve.h"
+#include "core/plumb_line.h"
 #include "core/project.h"
 #include "core/scene_solve.h"
 
@@ -26,6 +29,10 @@ struct ModelUpdateOptions {
 
 struct ModelUpdateSummary {
   std::map<Id, VpCalibrationSummary> calibration;  // by image id, images with segments only
+  // By image id, images with estimate_distortion and segments only. The estimate is in the
+  // plumb-line model (core/plumb_line.h); the camera's k1, k2 are its OpenCV conversion with
+  // the calibrated focal length.
+  std::map<Id, PlumbLineSummary> distortion;
   SceneSolveSummary solve;
   JointSolveSummary joint;  // termination kInvalidInput when it did not run
   std::vector<std::string> messages;  // user-facing: what failed and why

@@ -162,7 +162,12 @@ SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
     const MeshVertex& vertex = project.primitives[bi].mesh.vertex(project.pins[p].vertex.vertex);
     obs.coefficients = vertex.local.Collapsed();
     obs.offset = vertex.local.offset;
-    obs.uv_px = project.pins[p].uv_px;
+    // The geometry solve holds the intrinsics, distortion included, so a pin on a distorted
+    // photo is undistorted once here: the linear start and LM then work on the pinhole image,
+    // whose residual vanishes exactly where the photo's does (it is measured in undistorted px,
+    // a local rescaling of at most a few percent inside the image; the joint solve that follows
+    // measures in the photo's px).
+    obs.uv_px = project.images[ii].camera.UndistortPixel(project.pins[p].uv_px);
     problem.observations.push_back(obs);
   }
   return problem;

@@ -71,9 +71,12 @@ struct PhotoView {
   double scale_x = 1.0;
   double scale_y = 1.0;
 
+  // Photo pixel of a camera-frame point, through the camera's distortion.
   Eigen::Vector2d ProjectCam(const Eigen::Vector3d& p_in_cam) const {
-    return {(camera->focal_px * p_in_cam.x() / p_in_cam.z() + camera->principal_point_px.x()) * scale_x,
-            (camera->focal_px * p_in_cam.y() / p_in_cam.z() + camera->principal_point_px.y()) * scale_y};
+    Eigen::Vector2d xy(p_in_cam.x() / p_in_cam.z(), p_in_cam.y() / p_in_cam.z());
+    if (camera->HasDistortion()) xy = camera->DistortNormalized(xy);
+    return {(camera->focal_px * xy.x() + camera->principal_point_px.x()) * scale_x,
+            (camera->focal_px * xy.y() + camera->principal_point_px.y()) * scale_y};
   }
 };
 
@@ -281,7 +284,8 @@ Eigen::Matrix3d FaceFromTexel(const FaceGeometry& face, int width, int height) {
 
 // Rectifies the face's bounding rectangle into the atlas through the plane-to-photo
 // homography H = P [axis_u, axis_v, origin; 0, 0, 1], then replicates the border into the
-// padding.
+// padding. With lens distortion the homography gives the pinhole pixel of each texel, which
+// is then distorted (Camera::DistortPixel, a polynomial: cheap per texel) before sampling.
 void RasterizeFace(const FaceGeometry& face, const PhotoView& view, const FaceTexture& tex, int padding,
                    ImageRgba8* atlas) {
   const Eigen::Matrix<double, 3, 4> projection = view.camera->ProjectionMatrix();
@@ -293,7 +297,18 @@ void RasterizeFace(const FaceGeometry& face, const PhotoView& view, const FaceTe
   const int w = tex.packed_width, h = tex.packed_height;
   const Eigen::Matrix3d photo_from_texel = scale * photo_from_face * FaceFromTexel(face, w, h);
 
-  for (int j = 0; j < h; ++j) {
+  if (view.camera->HasDistortion()) {
+    const Eigen::Matrix3d pinhole_from_texel = photo_from_face * FaceFromTexel(face, w, h);
+    for (int j = 0; j < h; ++j) {
+      std::uint8_t* row = atlas->At(tex.x, tex.y + j);
+      for (int i = 0; i < w; ++i) {
+        const Eigen::Vector3d q = pinhole_from_texel * Eigen::Vector3d(i, j, 1.0);
+        const Eigen::Vector2d uv = view.camera->DistortPixel(q.hnormalized());
+        SampleBilinear(*view.photo, uv.x() * view.scale_x, uv.y() * view.scale_y, row + 4 * i);
+      }
+    }
+  }
+  for (int j = 0; j < h && !view.camera->HasDistortion(); ++j) {
     // Incremental along a row: q(i) = q(0) + i * column 0.
     Eigen::Vector3d q = photo_from_texel * Eigen::Vector3d(0.0, j, 1.0);
     const Eigen::Vector3d step = photo_from_texel.col(0);
