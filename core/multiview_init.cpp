@@ -131,6 +131,11 @@ Camera IntrinsicsFor(const Image& image, const MultiViewInitOptions& options, bo
   return camera;
 }
 
+bool IsFinite(const Camera& camera) {
+  return std::isfinite(camera.focal_px) && camera.focal_px > 0.0 && camera.principal_point_px.allFinite() &&
+         camera.cam_from_world_rotation.allFinite() && camera.cam_from_world_translation.allFinite();
+}
+
 void SetCamera(Image* image, Camera camera) {
   camera.width_px = image->width_px;
   camera.height_px = image->height_px;
@@ -174,6 +179,10 @@ ResectionResult Resect(const Project& project, const Image& image, const std::ve
     const auto worst = std::max_element(dlt.residuals_px.begin(), dlt.residuals_px.end());
     const int min_points = dlt.planar ? 4 : 6;
     // A wrong click is dropped only while one redundant point remains to confirm the refit.
+    if (!IsFinite(dlt.camera)) {
+      result.message = "the resection gave a non-finite camera";
+      return result;
+    }
     if (worst == dlt.residuals_px.end() || *worst <= options.wrong_click_threshold_px ||
         static_cast<int>(points.size()) - 1 < min_points + 1) {
       if (worst != dlt.residuals_px.end() && *worst > options.wrong_click_threshold_px)
@@ -307,6 +316,10 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
   }
   result.camera_a = MoveCamera(recon_a, world_from_recon);
   result.camera_b = MoveCamera(recon_b, world_from_recon);
+  if (!IsFinite(result.camera_a) || !IsFinite(result.camera_b)) {
+    result.message = "two views of " + Quoted(image_a) + " and " + Quoted(image_b) + " gave a non-finite camera";
+    return result;
+  }
   result.rms_px = pose.symmetric_epipolar_rms_px;
   result.ok = true;
   result.message = "two views with " + Quoted(image_a) + " and " + Quoted(image_b) + ": " +
@@ -407,6 +420,7 @@ SelfCalibrationResult SelfCalibrateImages(const Project& project, const std::vec
   for (int v = 0; v < n; ++v) {
     if (!sc.registered[v]) continue;
     result.cameras[v] = MoveCamera(sc.cameras[v], world_from_recon);
+    if (!IsFinite(result.cameras[v])) result.registered[v] = false;
     result.rms_px[v] = count[v] > 0 ? std::sqrt(sum_sq[v] / count[v]) : 0.0;
   }
   result.ok = true;
