@@ -103,6 +103,50 @@ Selection Selection::Of(const ElementRef& element) {
   return selection;
 }
 
+std::vector<ElementRef> SelectedElements(const Selection& selection) {
+  std::vector<ElementRef> all;
+  if (!selection.element.Empty()) all.push_back(selection.element);
+  for (const ElementRef& e : selection.extra) {
+    if (!e.Empty()) all.push_back(e);
+  }
+  return all;
+}
+
+bool IsSelected(const Selection& selection, const ElementRef& ref) {
+  if (ref.Empty()) return false;
+  return selection.element == ref || std::find(selection.extra.begin(), selection.extra.end(), ref) != selection.extra.end();
+}
+
+void ToggleSelected(Selection* selection, const ElementRef& ref) {
+  if (ref.Empty()) return;
+  if (selection->element.Empty()) {
+    *selection = Selection::Of(ref);
+    return;
+  }
+  if (selection->element == ref) {
+    if (selection->extra.empty()) {
+      *selection = Selection();
+      return;
+    }
+    selection->element = selection->extra.front();
+    selection->extra.erase(selection->extra.begin());
+    selection->primitive_id = selection->element.primitive_id;
+    return;
+  }
+  auto it = std::find(selection->extra.begin(), selection->extra.end(), ref);
+  if (it != selection->extra.end()) {
+    selection->extra.erase(it);
+  } else {
+    selection->extra.push_back(ref);
+  }
+}
+
+bool AddSelected(Selection* selection, const ElementRef& ref) {
+  if (ref.Empty() || IsSelected(*selection, ref)) return false;
+  ToggleSelected(selection, ref);
+  return true;
+}
+
 void AppState::Log(LogLevel level, std::string text) {
   if (level != LogLevel::kInfo) std::fprintf(stderr, "facet: %s\n", text.c_str());
   log.push_back({level, std::move(text), time_s});
@@ -242,8 +286,22 @@ void ValidateSelection(AppState* state) {
   if (s.pin_id != kNoId && !project.FindPin(s.pin_id)) s.pin_id = kNoId;
   if (s.primitive_id != kNoId && !project.FindPrimitive(s.primitive_id)) s.primitive_id = kNoId;
   if (!s.element.Empty() && !ElementExists(project, s.element)) s.element = {};
+  std::erase_if(s.extra, [&](const ElementRef& e) { return e.Empty() || !ElementExists(project, e); });
+  if (s.element.Empty() && !s.extra.empty()) {
+    // The main element went with an undo: the next one takes its place.
+    s.element = s.extra.front();
+    s.extra.erase(s.extra.begin());
+    s.primitive_id = s.element.primitive_id;
+  }
   if (!s.connect_from.Empty() && !ElementExists(project, s.connect_from)) s.connect_from = {};
   if (!state->hover.Empty() && !ElementExists(project, state->hover)) state->hover = {};
+  // The builder's pending first edge: gone with its element, or with the selection.
+  if (state->constraint_first_kind &&
+      (!ElementExists(project, state->constraint_first_edge) || (s.Empty() && s.element.Empty()))) {
+    state->constraint_first_kind.reset();
+    state->constraint_first_edge = {};
+  }
+  if (!state->constraint_first_kind) state->constraint_first_edge = {};
 }
 
 void RefreshDerived(AppState* state) {

@@ -60,11 +60,26 @@ struct Selection {
   Id pin_id = kNoId;
   Id primitive_id = kNoId;    // the primitive the properties panel edits
   ElementRef element;         // a vertex, edge or face of it (the pin tool pins a vertex)
+  // Multi-selection (Shift+click, `select-add`): further vertices, edges or faces, of any
+  // primitives, in the order they were added; never `element` itself, never twice. The
+  // constraint builder reads element + extra (SelectedElements).
+  std::vector<ElementRef> extra;
   ElementRef connect_from;    // V_connect: the first vertex clicked
   bool Empty() const { return segment_id == kNoId && pin_id == kNoId && primitive_id == kNoId; }
-  // Selects an element and its primitive, clearing segment and pin.
+  // Selects an element and its primitive, clearing segment, pin and the multi-selection.
   static Selection Of(const ElementRef& element);
 };
+
+// The selected elements: `element` (when set) first, then `extra`.
+std::vector<ElementRef> SelectedElements(const Selection& selection);
+// Whether `ref` is the selection's element or one of its extra elements.
+bool IsSelected(const Selection& selection, const ElementRef& ref);
+// Shift+click: adds `ref` to the selection, or removes it when it is selected already (the
+// first extra element then becomes the main one). A selection without an element (none, a
+// segment, a pin, a whole primitive) becomes Selection::Of(ref). An empty ref does nothing.
+void ToggleSelected(Selection* selection, const ElementRef& ref);
+// `select-add`: adds `ref` unless it is selected already. Returns whether it added.
+bool AddSelected(Selection* selection, const ElementRef& ref);
 
 enum class LogLevel { kInfo, kWarning, kError };
 struct LogEntry {
@@ -146,7 +161,9 @@ void CancelDrag(AppState* state);
 void Undo(AppState* state);
 void Redo(AppState* state);
 
-// Drops selected ids that are no longer in the project (after undo, redo, a delete).
+// Drops selected ids that are no longer in the project (after undo, redo, a delete),
+// including the multi-selection's; forgets the constraint builder's stored first edge when
+// its element is gone or nothing is selected any more.
 void ValidateSelection(AppState* state);
 
 // Loads missing photos and rebuilds the textured mesh when the project changed since the

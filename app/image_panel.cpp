@@ -35,7 +35,7 @@ struct CachedPhoto {
   TiledTexture texture;
 };
 
-enum class DragKind { kNone, kPan, kNewSegment, kMoveEndpoint, kMoveSegment, kMovePin, kPlacePin };
+enum class DragKind { kNone, kPan, kNewSegment, kMoveEndpoint, kMoveSegment, kMovePin, kPlacePin, kLinePin };
 
 struct Interaction {
   DragKind kind = DragKind::kNone;
@@ -46,6 +46,11 @@ struct Interaction {
   Id target_id = kNoId;      // segment or pin
   int endpoint = -1;
   VertexRef vertex;  // kPlacePin: the vertex being pinned
+  ElementRef press_element;  // kLinePin: the element under the press (a click selects it)
+  double press_edge_t = 0.5;
+  // Shift+press on a pin (select tool): a click toggles the pinned vertex in the
+  // multi-selection, a drag moves the pin (fine pointing) and leaves the selection alone.
+  ElementRef toggle_on_click;
   Axis axis = Axis::kX;
   ImVec2 press_screen{0, 0};
   Eigen::Vector2d press_uv = Eigen::Vector2d::Zero();
@@ -331,14 +336,25 @@ void StartLeftPress(AppState* state, PanelState* panel, const Image& image, cons
     drag.axis = AxisOfTool(tool);
     return;
   }
+  if (tool == Tool::kLinePin) {
+    // A drag draws the photo's line for the selected edge; a click selects an edge.
+    drag.kind = DragKind::kLinePin;
+    drag.press_element = hover.element;
+    drag.press_edge_t = hover.edge_t;
+    return;
+  }
   if (tool != Tool::kSelect && tool != Tool::kPin) {
-    ApplyToolClick(state, hover.element, hover.edge_t);  // the K-operators act on a press
+    ApplyToolClick(state, hover.element, hover.edge_t, false);  // the K-operators act on a press
     return;
   }
   if (hover.pin_id != kNoId) {
     const Pin* pin = project.FindPin(hover.pin_id);
-    state->selection = Selection();
-    state->selection.pin_id = hover.pin_id;
+    if (tool == Tool::kSelect && ImGui::GetIO().KeyShift) {
+      drag.toggle_on_click = {ElementKind::kVertex, pin->vertex.primitive_id, pin->vertex.vertex};
+    } else {
+      state->selection = Selection();
+      state->selection.pin_id = hover.pin_id;
+    }
     drag.kind = DragKind::kMovePin;
     drag.target_id = hover.pin_id;
     drag.grab_offset = pin->uv_px - mouse_uv;
@@ -359,6 +375,11 @@ void StartLeftPress(AppState* state, PanelState* panel, const Image& image, cons
       drag.original_a = segment->a_px;
       drag.original_b = segment->b_px;
     }
+    return;
+  }
+  if (tool == Tool::kSelect && ImGui::GetIO().KeyShift) {
+    // Shift+click: the multi-selection (a click on nothing keeps it).
+    ApplyToolClick(state, hover.element, hover.edge_t, true);
     return;
   }
   const ElementRef chosen = state->selection.element;
@@ -416,8 +437,19 @@ void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& 
       state->selection.segment_id = segment.id;
       CommitEdit(state, std::string("Add ") + AxisName(drag.axis) + " line", std::move(edited));
     }
+  } else if (drag.kind == DragKind::kLinePin) {
+    const double length_px = (mouse_uv - drag.press_uv).norm() * pointer_px_per_image_px;
+    if (length_px >= kMinSegmentLengthPx) {
+      LinePinEdit(state, state->selection.element, drag.image_id, drag.press_uv, mouse_uv);
+    } else {
+      ApplyToolClick(state, drag.press_element, drag.press_edge_t, false);
+    }
   } else if (IsEditDrag(drag.kind)) {
-    if (drag.began) {
+    if (!drag.began && !drag.toggle_on_click.Empty()) {
+      if (ElementExists(state->document.project(), drag.toggle_on_click)) {
+        ToggleSelected(&state->selection, drag.toggle_on_click);
+      }
+    } else if (drag.began) {
       EndDrag(state);
     } else if (drag.kind == DragKind::kPlacePin && drag.place_on_click) {
       Project edited = state->document.project();
@@ -525,6 +557,18 @@ std::string ToolHint(const AppState& state) {
       return state.selection.connect_from.Empty() ? "click the first vertex of a face"
                                                   : "click the second vertex on the same face";
     case Tool::kDeleteEdge: return "click on an edge between two faces to merge them";
+    case Tool::kLinePin:
+      if (state.selection.element.kind == ElementKind::kEdge) {
+        return "drag along the photo's line of " + DescribeElement(state.document.project(), state.selection.element) +
+               " to pin it there (Shift: fine); click another edge to choose it";
+      }
+      return "click a model edge, then drag along its line in the photo";
+    case Tool::kSelect:
+      if (!state.selection.extra.empty()) {
+        return std::to_string(SelectedElements(state.selection).size()) +
+               " selected: Shift+click adds or removes, Esc clears; constraints in the properties panel";
+      }
+      return state.selection.element.Empty() ? "" : "Shift+click to select more (coplanar, collinear, two edges)";
     case Tool::kPushPull:
       return state.selection.element.kind == ElementKind::kFace
                  ? "type the distance in the tools panel, then Extrude (Enter)"
@@ -655,7 +699,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
       CancelDrag(state);
       if (drag.kind == DragKind::kPlacePin) state->selection.pin_id = kNoId;
       drag.kind = DragKind::kNone;  // the rest of the press does nothing
-    } else if (drag.kind == DragKind::kNewSegment &&
+    } else if ((drag.kind == DragKind::kNewSegment || drag.kind == DragKind::kLinePin) &&
                ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
       drag.kind = DragKind::kNone;
     } else if (IsEditDrag(drag.kind) && drag.began) {
@@ -672,6 +716,11 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
       state->selection.connect_from = {};  // forget V_connect's first vertex
       if (state->tool == Tool::kPin) state->selection.element = {};  // and the vertex to pin
+      // The multi-selection goes back to its main element; the builder's pending first edge
+      // is forgotten.
+      state->selection.extra.clear();
+      state->constraint_first_kind.reset();
+      state->constraint_first_edge = {};
     }
   }
   DrawSegmentContextMenu(state, panel);
@@ -709,6 +758,9 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   if (drag.kind == DragKind::kNewSegment) {
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, IM_COL32(0, 0, 0, 200), 4.0f);
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, AxisColor(drag.axis), 2.0f);
+  }
+  if (drag.kind == DragKind::kLinePin && (mouse_uv - drag.press_uv).norm() * pointer_scale >= kMinSegmentLengthPx) {
+    DrawLinePinPreview(draw_list, overlay, transform, drag.press_uv, mouse_uv, rect_min, rect_max);
   }
   if (auto error = state->photo_errors.find(image.id); error != state->photo_errors.end()) {
     const std::string text = "Cannot show this photo: " + error->second;

@@ -1,11 +1,15 @@
 #include "app/model_edits.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <set>
 #include <sstream>
+
+#include <imgui.h>
 
 #include "core/mesh_extrude.h"
 #include "core/mesh_operators.h"
@@ -245,13 +249,60 @@ bool EdgeVertices(const Project& project, const ElementRef& edge, VertexRef* a, 
   return true;
 }
 
-// Adds `c` (a fresh id) unless an equal constraint (kind, vertices, value, axis) exists.
+bool VertexLess(const VertexRef& a, const VertexRef& b) {
+  return a.primitive_id != b.primitive_id ? a.primitive_id < b.primitive_id : a.vertex < b.vertex;
+}
+
+std::vector<VertexRef> Sorted(std::vector<VertexRef> v) {
+  std::sort(v.begin(), v.end(), VertexLess);
+  return v;
+}
+
+// An edge (two vertices) as an unordered pair.
+std::pair<VertexRef, VertexRef> UnorderedEdge(const VertexRef& a, const VertexRef& b) {
+  return VertexLess(a, b) ? std::make_pair(a, b) : std::make_pair(b, a);
+}
+
+bool PairLess(const std::pair<VertexRef, VertexRef>& a, const std::pair<VertexRef, VertexRef>& b) {
+  if (!(a.first == b.first)) return VertexLess(a.first, b.first);
+  return VertexLess(a.second, b.second);
+}
+
+// Whether two constraints say the same thing: vertex sets for coplanar and collinear, edge
+// pairs in either order and direction for the two-edge kinds, the same edge either way for
+// a distance; otherwise the same vertices in order. Values, axes and images must match.
+bool SameConstraint(const Constraint& a, const Constraint& b) {
+  if (a.kind != b.kind || a.vertices.size() != b.vertices.size()) return false;
+  switch (a.kind) {
+    case ConstraintKind::kCoplanar:
+    case ConstraintKind::kCollinear: return Sorted(a.vertices) == Sorted(b.vertices);
+    case ConstraintKind::kParallel:
+    case ConstraintKind::kPerpendicular:
+    case ConstraintKind::kEqualLength: {
+      auto edges = [](const Constraint& c) {
+        std::array<std::pair<VertexRef, VertexRef>, 2> e = {UnorderedEdge(c.vertices[0], c.vertices[1]),
+                                                            UnorderedEdge(c.vertices[2], c.vertices[3])};
+        if (PairLess(e[1], e[0])) std::swap(e[0], e[1]);
+        return e;
+      };
+      return edges(a) == edges(b);
+    }
+    case ConstraintKind::kDistance:
+      return a.value == b.value && UnorderedEdge(a.vertices[0], a.vertices[1]) == UnorderedEdge(b.vertices[0], b.vertices[1]);
+    case ConstraintKind::kAlongAxis:
+      return a.axis == b.axis && UnorderedEdge(a.vertices[0], a.vertices[1]) == UnorderedEdge(b.vertices[0], b.vertices[1]);
+    case ConstraintKind::kEdgeOnImageLine:
+      return a.image_id == b.image_id && a.vertices == b.vertices && a.line_a_px == b.line_a_px &&
+             a.line_b_px == b.line_b_px;
+    default: return a.vertices == b.vertices && a.value == b.value && a.axis == b.axis && a.point == b.point;
+  }
+}
+
+// Adds `c` (a fresh id) unless the same constraint (SameConstraint) exists.
 bool AddConstraint(AppState* state, Constraint c, const std::string& label) {
   Project edited = state->document.project();
   for (const Constraint& old : edited.constraints) {
-    if (old.kind == c.kind && old.vertices == c.vertices && old.value == c.value && old.axis == c.axis) {
-      return Refuse(state, label, "the same constraint exists already");
-    }
+    if (SameConstraint(old, c)) return Refuse(state, label, "the same constraint exists already");
   }
   c.id = edited.NewId();
   edited.constraints.push_back(c);
@@ -336,6 +387,220 @@ bool FixVertexEdit(AppState* state, const ElementRef& vertex) {
   return AddConstraint(state, c, label);
 }
 
+std::vector<VertexRef> VerticesOfElements(const Project& project, const std::vector<ElementRef>& elements) {
+  std::vector<VertexRef> out;
+  auto add = [&](Id primitive_id, VertexId v) {
+    const VertexRef ref{primitive_id, v};
+    if (!NamesVertex(out, ref)) out.push_back(ref);
+  };
+  for (const ElementRef& e : elements) {
+    if (!ElementExists(project, e)) continue;
+    const PolyMesh& mesh = project.FindPrimitive(e.primitive_id)->mesh;
+    switch (e.kind) {
+      case ElementKind::kVertex: add(e.primitive_id, e.element); break;
+      case ElementKind::kEdge:
+        add(e.primitive_id, mesh.Origin(2 * e.element));
+        add(e.primitive_id, mesh.Dest(2 * e.element));
+        break;
+      case ElementKind::kFace:
+        for (VertexId v : FaceVertices(mesh, e.element)) add(e.primitive_id, v);
+        break;
+      case ElementKind::kNone: break;
+    }
+  }
+  return out;
+}
+
+namespace {
+
+// Relative tolerance for "collinear" and "coincident" in the builder's refusals: the points
+// as they are now, before the solve (the core skips such constraints as degenerate).
+constexpr double kDegenerateRelTolerance = 1e-9;
+
+// Whether points a, b, c are collinear relative to their spread.
+bool Collinear3(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const double scale = std::max({(b - a).norm(), (c - a).norm(), (c - b).norm()});
+  return (b - a).cross(c - a).norm() <= kDegenerateRelTolerance * scale * scale;
+}
+
+}  // namespace
+
+bool ConstrainVertexSetEdit(AppState* state, ConstraintKind kind, const std::vector<ElementRef>& elements,
+                            const std::string& label_in) {
+  const bool coplanar = kind == ConstraintKind::kCoplanar;
+  const std::string label = !label_in.empty() ? label_in : coplanar ? "Coplanar" : "Collinear";
+  if (kind != ConstraintKind::kCoplanar && kind != ConstraintKind::kCollinear) {
+    return Refuse(state, label, "not a vertex-set constraint");
+  }
+  const Project& project = state->document.project();
+  for (const ElementRef& e : elements) {
+    if (!ElementExists(project, e)) return Refuse(state, label, DescribeElement(project, e) + " is gone");
+    if (!coplanar && e.kind == ElementKind::kFace) return Refuse(state, label, "select vertices or edges, not faces");
+  }
+  const std::vector<VertexRef> vertices = VerticesOfElements(project, elements);
+  const size_t need = coplanar ? 4 : 3;
+  if (vertices.size() < need) {
+    return Refuse(state, label,
+                  "needs " + std::to_string(need) + " or more different vertices (" + std::to_string(vertices.size()) +
+                      " selected" + (coplanar ? "; 3 points are always coplanar)" : "; 2 points are always collinear)"));
+  }
+  std::vector<Eigen::Vector3d> p;
+  for (const VertexRef& v : vertices) p.push_back(VertexInWorld(project, v));
+  // The farthest point from the first, then the one farthest off that line (as the solve
+  // picks its frame).
+  size_t i1 = 1;
+  for (size_t k = 1; k < p.size(); ++k) {
+    if ((p[k] - p[0]).norm() > (p[i1] - p[0]).norm()) i1 = k;
+  }
+  double spread = (p[i1] - p[0]).norm();
+  if (spread <= 0.0) return Refuse(state, label, "the vertices coincide");
+  if (coplanar) {
+    double best = 0.0;
+    for (size_t k = 1; k < p.size(); ++k) best = std::max(best, (p[i1] - p[0]).cross(p[k] - p[0]).norm());
+    if (best <= kDegenerateRelTolerance * spread * spread) {
+      return Refuse(state, label, "the vertices are collinear: they do not define a plane");
+    }
+    if (p.size() == 4) {
+      for (int skip = 0; skip < 4; ++skip) {
+        std::vector<int> rest;
+        for (int k = 0; k < 4; ++k) {
+          if (k != skip) rest.push_back(k);
+        }
+        if (Collinear3(p[rest[0]], p[rest[1]], p[rest[2]])) {
+          return Refuse(state, label,
+                        DescribeVertex(project, vertices[rest[0]]) + ", " + DescribeVertex(project, vertices[rest[1]]) +
+                            " and " + DescribeVertex(project, vertices[rest[2]]) +
+                            " are collinear: with a fourth point they are always coplanar");
+        }
+      }
+    }
+  }
+  Constraint c;
+  c.kind = kind;
+  c.vertices = vertices;
+  return AddConstraint(state, c, label + " (" + std::to_string(vertices.size()) + " vertices)");
+}
+
+bool ConstrainParallelFacesEdit(AppState* state, const ElementRef& first, const ElementRef& second) {
+  const std::string label = "Parallel faces";
+  const Project& project = state->document.project();
+  if (first.kind != ElementKind::kFace || second.kind != ElementKind::kFace || !ElementExists(project, first) ||
+      !ElementExists(project, second)) {
+    return Refuse(state, label, "select two faces");
+  }
+  if (first == second) return Refuse(state, label, "pick two different faces");
+  struct FaceEdge {
+    VertexRef a, b;
+    Eigen::Vector3d dir;
+  };
+  auto edges_of = [&](const ElementRef& face) {
+    std::vector<FaceEdge> out;
+    const PolyMesh& mesh = project.FindPrimitive(face.primitive_id)->mesh;
+    for (HalfedgeId h : FaceHalfedges(mesh, face.element)) {
+      FaceEdge e{{face.primitive_id, mesh.Origin(h)}, {face.primitive_id, mesh.Dest(h)}, Eigen::Vector3d::Zero()};
+      const Eigen::Vector3d d = mesh.vertex(mesh.Dest(h)).position - mesh.vertex(mesh.Origin(h)).position;
+      if (d.norm() <= 0.0) continue;
+      e.dir = d.normalized();
+      out.push_back(e);
+    }
+    return out;
+  };
+  const std::vector<FaceEdge> ea = edges_of(first), eb = edges_of(second);
+  auto sin_angle = [](const Eigen::Vector3d& u, const Eigen::Vector3d& v) { return u.cross(v).norm(); };
+  auto same_edge = [](const FaceEdge& x, const FaceEdge& y) {
+    return UnorderedEdge(x.a, x.b) == UnorderedEdge(y.a, y.b);
+  };
+  // The most nearly parallel pair, then the best pair whose first-face edge is not parallel
+  // to the first pair's (so the two pairs span the plane).
+  constexpr double kMinSpanSin = 0.34;  // about 20 degrees between the two directions
+  int best_i = -1, best_j = -1;
+  double best = 2.0;
+  for (size_t i = 0; i < ea.size(); ++i) {
+    for (size_t j = 0; j < eb.size(); ++j) {
+      if (same_edge(ea[i], eb[j])) continue;
+      const double sa = sin_angle(ea[i].dir, eb[j].dir);
+      if (sa < best) best = sa, best_i = static_cast<int>(i), best_j = static_cast<int>(j);
+    }
+  }
+  int second_i = -1, second_j = -1;
+  double second_best = 2.0;
+  if (best_i >= 0) {
+    for (size_t i = 0; i < ea.size(); ++i) {
+      if (sin_angle(ea[i].dir, ea[best_i].dir) < kMinSpanSin) continue;
+      for (size_t j = 0; j < eb.size(); ++j) {
+        if (same_edge(ea[i], eb[j]) || sin_angle(eb[j].dir, eb[best_j].dir) < kMinSpanSin) continue;
+        const double sa = sin_angle(ea[i].dir, eb[j].dir);
+        if (sa < second_best) second_best = sa, second_i = static_cast<int>(i), second_j = static_cast<int>(j);
+      }
+    }
+  }
+  const double max_sin = std::sin(kParallelFacesMaxAngleDeg * M_PI / 180.0);
+  if (best_i < 0 || second_i < 0 || best > max_sin || second_best > max_sin) {
+    char text[200];
+    std::snprintf(text, sizeof(text),
+                  "the faces have no two pairs of edges within %.0f deg of parallel; parallel faces are made of "
+                  "parallel edge pairs, which would also turn the faces within their planes",
+                  kParallelFacesMaxAngleDeg);
+    return Refuse(state, label, text);
+  }
+  Project edited = project;
+  int added = 0;
+  for (const auto& [i, j] : {std::make_pair(best_i, best_j), std::make_pair(second_i, second_j)}) {
+    Constraint c;
+    c.kind = ConstraintKind::kParallel;
+    c.vertices = {ea[i].a, ea[i].b, eb[j].a, eb[j].b};
+    const bool exists = std::any_of(edited.constraints.begin(), edited.constraints.end(),
+                                    [&](const Constraint& old) { return SameConstraint(old, c); });
+    if (exists) continue;
+    c.id = edited.NewId();
+    edited.constraints.push_back(c);
+    ++added;
+  }
+  if (added == 0) return Refuse(state, label, "the same constraints exist already");
+  CommitEdit(state, label, std::move(edited));
+  state->Log(LogLevel::kInfo, label + ": " + std::to_string(added) + " parallel-edge constraints added");
+  return true;
+}
+
+bool LinePinEdit(AppState* state, const ElementRef& edge, Id image_id, const Eigen::Vector2d& a_px,
+                 const Eigen::Vector2d& b_px) {
+  const std::string label = "Line pin";
+  const Project& project = state->document.project();
+  Constraint c;
+  c.kind = ConstraintKind::kEdgeOnImageLine;
+  c.vertices.resize(2);
+  if (!EdgeVertices(project, edge, &c.vertices[0], &c.vertices[1])) return Refuse(state, label, "select an edge first");
+  const Image* image = project.FindImage(image_id);
+  if (image == nullptr) return Refuse(state, label, "the image is gone");
+  if (!image->camera_calibrated) return Refuse(state, label, "the image is not calibrated yet (draw its lines first)");
+  if (!a_px.allFinite() || !b_px.allFinite() || (b_px - a_px).norm() < kMinLinePinLengthPx) {
+    return Refuse(state, label, "draw the line along the photo's edge (two points further apart)");
+  }
+  c.image_id = image_id;
+  c.line_a_px = a_px;
+  c.line_b_px = b_px;
+  Project edited = project;
+  const auto same_edge = [&](const Constraint& old) {
+    return old.kind == ConstraintKind::kEdgeOnImageLine && old.image_id == image_id &&
+           UnorderedEdge(old.vertices[0], old.vertices[1]) == UnorderedEdge(c.vertices[0], c.vertices[1]);
+  };
+  for (const Constraint& old : edited.constraints) {
+    if (same_edge(old) && old.line_a_px == a_px && old.line_b_px == b_px) {
+      return Refuse(state, label, "the same constraint exists already");
+    }
+  }
+  const size_t before = edited.constraints.size();
+  std::erase_if(edited.constraints, same_edge);
+  const bool replaced = edited.constraints.size() != before;
+  c.id = edited.NewId();
+  edited.constraints.push_back(c);
+  const std::string full = replaced ? label + " (replaced)" : label;
+  const std::string what = DescribeElement(project, edge);
+  CommitEdit(state, full, std::move(edited));
+  state->Log(LogLevel::kInfo, full + ": constraint " + std::to_string(c.id) + " on " + what);
+  return true;
+}
+
 bool RemoveConstraintEdit(AppState* state, Id constraint_id) {
   Project edited = state->document.project();
   const size_t before = edited.constraints.size();
@@ -390,7 +655,22 @@ bool RunConstrainCommand(AppState* state, const std::string& arg, std::string* e
     const ConstraintKind k = kind == "parallel"        ? ConstraintKind::kParallel
                              : kind == "perpendicular" ? ConstraintKind::kPerpendicular
                                                        : ConstraintKind::kEqualLength;
-    done = ConstraintPairStep(state, k);
+    const std::vector<ElementRef> selected = SelectedElements(state->selection);
+    if (selected.size() == 2) {
+      done = ConstrainEdgePairEdit(state, k, selected[0], selected[1]);
+    } else {
+      done = ConstraintPairStep(state, k);
+    }
+  } else if (kind == "coplanar" || kind == "collinear") {
+    done = ConstrainVertexSetEdit(state, kind == "coplanar" ? ConstraintKind::kCoplanar : ConstraintKind::kCollinear,
+                                  SelectedElements(state->selection));
+  } else if (kind == "parallel-faces") {
+    const std::vector<ElementRef> selected = SelectedElements(state->selection);
+    if (selected.size() != 2) {
+      *error = "constrain parallel-faces: select exactly two faces";
+      return false;
+    }
+    done = ConstrainParallelFacesEdit(state, selected[0], selected[1]);
   } else if (kind == "fix") {
     done = FixVertexEdit(state, e);
   } else if (kind == "remove") {
@@ -403,7 +683,8 @@ bool RunConstrainCommand(AppState* state, const std::string& arg, std::string* e
     done = RemoveConstraintEdit(state, static_cast<Id>(id));
   } else {
     *error = "constrain: unknown kind '" + kind +
-             "' (along-x, along-y, along-z, length VALUE, parallel, perpendicular, equal-length, fix, remove ID)";
+             "' (along-x, along-y, along-z, length VALUE, parallel, perpendicular, equal-length, fix, remove ID, "
+             "coplanar, collinear, parallel-faces)";
     return false;
   }
   if (!done) *error = state->log.empty() ? "constrain: refused" : state->log.back().text;
@@ -452,10 +733,26 @@ Id PinVertex(Project* project, Id image_id, const VertexRef& vertex, const Eigen
 }
 
 bool ApplyToolClick(AppState* state, const ElementRef& picked, double t) {
+  const bool shift = ImGui::GetCurrentContext() != nullptr && ImGui::GetIO().KeyShift;
+  return ApplyToolClick(state, picked, t, shift);
+}
+
+bool ApplyToolClick(AppState* state, const ElementRef& picked, double t, bool extend) {
   switch (state->tool) {
     case Tool::kSelect:
+      if (extend) {
+        ToggleSelected(&state->selection, picked);  // nothing picked: the selection stays
+        return true;
+      }
+      if (picked.Empty()) return false;
+      state->selection = Selection::Of(picked);
+      return true;
     case Tool::kPin:
       if (picked.Empty()) return false;
+      state->selection = Selection::Of(picked);
+      return true;
+    case Tool::kLinePin:
+      if (picked.kind != ElementKind::kEdge) return false;
       state->selection = Selection::Of(picked);
       return true;
     case Tool::kSplitEdge:
@@ -493,14 +790,51 @@ bool ApplyToolClick(AppState* state, const ElementRef& picked, double t) {
   }
 }
 
-bool RunSelectAddCommand(AppState* /*state*/, const std::string& arg, std::string* error) {
-  *error = "select-add: not available yet ('" + arg + "')";
-  return false;
+bool RunSelectAddCommand(AppState* state, const std::string& arg, std::string* error) {
+  std::istringstream in(arg);
+  std::string kind, extra;
+  unsigned long long primitive_id = 0, element = 0;
+  ElementRef ref;
+  if (in >> kind >> primitive_id >> element && !(in >> extra)) {
+    ref.kind = kind == "vertex" ? ElementKind::kVertex : kind == "edge" ? ElementKind::kEdge
+               : kind == "face" ? ElementKind::kFace : ElementKind::kNone;
+    ref.primitive_id = static_cast<Id>(primitive_id);
+    ref.element = static_cast<std::uint32_t>(element);
+  }
+  if (ref.kind == ElementKind::kNone) {
+    *error = "select-add: expected 'vertex|edge|face PRIMITIVE_ID ELEMENT_ID'";
+    return false;
+  }
+  const Project& project = state->document.project();
+  if (!ElementExists(project, ref)) {
+    *error = "select-add: no " + DescribeElement(project, ref);
+    return false;
+  }
+  if (!AddSelected(&state->selection, ref)) {
+    *error = "select-add: " + DescribeElement(project, ref) + " is selected already";
+    return false;
+  }
+  return true;
 }
 
-bool RunLinePinCommand(AppState* /*state*/, const std::string& arg, std::string* error) {
-  *error = "line-pin: not available yet ('" + arg + "')";
-  return false;
+bool RunLinePinCommand(AppState* state, const std::string& arg, std::string* error) {
+  std::istringstream in(arg);
+  long index = -1;
+  double x1, y1, x2, y2;
+  std::string extra;
+  if (!(in >> index >> x1 >> y1 >> x2 >> y2) || (in >> extra)) {
+    *error = "line-pin: expected 'IMAGE_INDEX X1 Y1 X2 Y2' (image pixels) with an edge selected";
+    return false;
+  }
+  const auto& images = state->document.project().images;
+  if (index < 0 || index >= static_cast<long>(images.size())) {
+    *error = "line-pin: image index " + std::to_string(index) + " is not in 0.." +
+             std::to_string(static_cast<long>(images.size()) - 1);
+    return false;
+  }
+  const bool done = LinePinEdit(state, state->selection.element, images[index].id, {x1, y1}, {x2, y2});
+  if (!done) *error = state->log.empty() ? "line-pin: refused" : state->log.back().text;
+  return done;
 }
 
 }  // namespace facet::app

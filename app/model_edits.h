@@ -6,6 +6,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -59,6 +60,29 @@ bool ConstrainEdgePairEdit(AppState* state, ConstraintKind kind, const ElementRe
 bool FixVertexEdit(AppState* state, const ElementRef& vertex);
 // Removes one constraint ("Remove constraint").
 bool RemoveConstraintEdit(AppState* state, Id constraint_id);
+// The world vertices of a set of elements (a vertex itself, an edge's two ends, a face's
+// corners), each once, in the order met.
+std::vector<VertexRef> VerticesOfElements(const Project& project, const std::vector<ElementRef>& elements);
+// kCoplanar (4+ distinct vertices) or kCollinear (3+) on the vertices of `elements` (any
+// primitives; faces only for coplanar). Refused: too few distinct vertices, points that are
+// collinear (coplanar: all of them, or 3 of 4, which makes the 4 always coplanar) or that
+// coincide (collinear), the same set constrained already. `label` names the edit; empty
+// gives "Coplanar" / "Collinear".
+bool ConstrainVertexSetEdit(AppState* state, ConstraintKind kind, const std::vector<ElementRef>& elements,
+                            const std::string& label = "");
+// "Parallel faces": a face's plane parallel to another's, as two kParallel constraints (one
+// edit) between the two most nearly parallel pairs of their edges whose directions in the
+// first face differ. Parallel planes are not an edge kind; two parallel edge pairs also hold
+// the faces' turn within their planes, so the edit is refused when the faces have no two
+// such pairs within kParallelFacesMaxAngleDeg (it would turn them).
+constexpr double kParallelFacesMaxAngleDeg = 15.0;
+bool ConstrainParallelFacesEdit(AppState* state, const ElementRef& first, const ElementRef& second);
+// kEdgeOnImageLine: the edge projects, in the image, onto the line through a_px and b_px
+// (image pixels). A line pin of the same edge in the same image is replaced. Refused: not an
+// edge, an image that is missing or not calibrated, points closer than kMinLinePinLengthPx.
+constexpr double kMinLinePinLengthPx = 2.0;
+bool LinePinEdit(AppState* state, const ElementRef& edge, Id image_id, const Eigen::Vector2d& a_px,
+                 const Eigen::Vector2d& b_px);
 // The builder's two-click step for a two-edge kind with the selected edge: the first call
 // stores it (state->constraint_first_edge), a call with a different edge selected adds the
 // constraint and clears the stored one. Returns whether it stored or edited.
@@ -67,14 +91,16 @@ bool ConstraintPairStep(AppState* state, ConstraintKind kind);
 std::string DescribeVertex(const Project& project, const VertexRef& ref);
 // The label of a builder button's edit ("Along x", "Known length", "Parallel", ...).
 std::string ConstraintEditLabel(ConstraintKind kind);
-// The script command `constrain KIND [VALUE]` on the current selection (app/script.h).
+// The script command `constrain KIND [VALUE]` on the current selection (app/script.h). On a
+// multi-selection: coplanar, collinear, parallel-faces, and parallel / perpendicular /
+// equal-length between exactly two selected edges at once.
 bool RunConstrainCommand(AppState* state, const std::string& arg, std::string* error);
 
 // The script command `select-add KIND PRIMITIVE_ID ELEMENT_ID`: adds an element to the
 // selection (multi-selection for coplanar/collinear on vertex sets).
 bool RunSelectAddCommand(AppState* state, const std::string& arg, std::string* error);
-// The script command `line-pin ARGS`: the selected edge on a line in an image
-// (ConstraintKind::kEdgeOnImageLine).
+// The script command `line-pin IMAGE_INDEX X1 Y1 X2 Y2`: the selected edge on the line
+// through (X1, Y1) and (X2, Y2), pixels of the project's image IMAGE_INDEX (LinePinEdit).
 bool RunLinePinCommand(AppState* state, const std::string& arg, std::string* error);
 
 // Push/pull: extrudes the face by `distance` project units along its outward normal (a
@@ -89,7 +115,12 @@ Id PinVertex(Project* project, Id image_id, const VertexRef& vertex, const Eigen
 
 // Runs the current tool's action on a picked element (the image and 3D panels call it on a
 // click): the operators, selection and V_connect's two-click state. `t` is the picked edge
-// parameter. Returns true when the click was consumed.
+// parameter. With `extend` (Shift held) the select tool adds the element to the selection or
+// removes it (ToggleSelected), and a click on nothing keeps the selection. The line-pin tool
+// selects the clicked edge. Returns true when the click was consumed.
+bool ApplyToolClick(AppState* state, const ElementRef& picked, double t, bool extend);
+// The same, with `extend` from the keyboard (ImGui's io.KeyShift, which scripts drive with
+// `hold shift`).
 bool ApplyToolClick(AppState* state, const ElementRef& picked, double t);
 
 }  // namespace facet::app

@@ -69,7 +69,8 @@ PickFilter PickFilterOf(Tool tool) {
     case Tool::kDeleteVertex:
     case Tool::kConnectVertices: return {true, false, false};
     case Tool::kSplitEdge:
-    case Tool::kDeleteEdge: return {false, true, false};
+    case Tool::kDeleteEdge:
+    case Tool::kLinePin: return {false, true, false};
     case Tool::kPushPull: return {false, false, true};
     default: return {false, false, false};
   }

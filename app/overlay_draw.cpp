@@ -22,6 +22,9 @@ constexpr ImU32 kSelectedElementColor = IM_COL32(255, 140, 30, 255);
 constexpr ImU32 kSelectedFaceColor = IM_COL32(255, 140, 30, 70);
 constexpr ImU32 kHoveredFaceColor = IM_COL32(255, 255, 255, 45);
 constexpr ImU32 kFreeVertexColor = IM_COL32(80, 230, 255, 255);
+constexpr ImU32 kLinePinColor = IM_COL32(0, 255, 200, 255);       // a line pin's photo line
+constexpr ImU32 kLinePinLineColor = IM_COL32(0, 255, 200, 110);   // ... extended across the view
+constexpr ImU32 kLinePinResidualColor = IM_COL32(255, 70, 200, 255);
 
 Eigen::Vector2d ToScreenD(const ViewTransform& view, const Eigen::Vector2d& uv_px) {
   return {view.origin.x + static_cast<double>(view.zoom) * uv_px.x(),
@@ -183,16 +186,18 @@ void FillFace(ImDrawList* draw_list, const Primitive& primitive, const Projected
 void DrawModel(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view, const ScreenRect& rect) {
   const Camera& camera = input.image->camera;
   const ElementRef& hover = input.hover.element;
-  const ElementRef& selected = input.selection.element;
+  const std::vector<ElementRef> selected = SelectedElements(input.selection);
   for (const Primitive& primitive : input.project->primitives) {
     const PolyMesh& mesh = primitive.mesh;
     const ProjectedPrimitive* pp = FindProjected(input, primitive.id);
     if (pp != nullptr) {
-      for (const ElementRef* ref : {&selected, &hover, &input.other_hover}) {
-        if (ref->kind != ElementKind::kFace || ref->primitive_id != primitive.id || !mesh.IsFace(ref->element)) continue;
-        FillFace(draw_list, primitive, *pp, ref->element, view,
-                 ref == &selected ? kSelectedFaceColor : kHoveredFaceColor);
-      }
+      auto fill = [&](const ElementRef& ref, ImU32 color) {
+        if (ref.kind != ElementKind::kFace || ref.primitive_id != primitive.id || !mesh.IsFace(ref.element)) return;
+        FillFace(draw_list, primitive, *pp, ref.element, view, color);
+      };
+      for (const ElementRef& ref : selected) fill(ref, kSelectedFaceColor);
+      fill(hover, kHoveredFaceColor);
+      fill(input.other_hover, kHoveredFaceColor);
     }
     const bool primitive_selected = input.selection.primitive_id == primitive.id;
     for (EdgeId e = 0; e < mesh.EdgeIdEnd(); ++e) {
@@ -202,7 +207,8 @@ void DrawModel(ImDrawList* draw_list, const OverlayInput& input, const ViewTrans
       const Eigen::Vector3d q = camera.CamFromWorld(mesh.vertex(mesh.Dest(2 * e)).position);
       if (!ProjectEdge(camera, view, p, q, &a, &b)) continue;
       const ElementRef ref{ElementKind::kEdge, primitive.id, e};
-      const bool is_selected = selected == ref, is_hovered = hover == ref || input.other_hover == ref;
+      const bool is_selected = IsSelected(input.selection, ref);
+      const bool is_hovered = hover == ref || input.other_hover == ref;
       if (is_selected) {
         DrawScreenLine(draw_list, a, b, rect, kSelectedElementColor, kModelEdgeThicknessPx + 4.0f);
       } else if (is_hovered) {
@@ -238,7 +244,7 @@ void DrawModelVertices(ImDrawList* draw_list, const OverlayInput& input, const V
       if (!rect.Contains(p, kClipMarginPx)) continue;
       const ElementRef ref{ElementKind::kVertex, pp.primitive_id, v};
       const bool hot = input.hover.element == ref || input.other_hover == ref;
-      const bool chosen = input.selection.element == ref || input.selection.connect_from == ref;
+      const bool chosen = IsSelected(input.selection, ref) || input.selection.connect_from == ref;
       const ImVec2 c = ToImVec(p);
       draw_list->AddCircleFilled(c, 4.0f, kShadowColor);
       if (primitive->mesh.vertex(v).local.free) {
@@ -252,7 +258,78 @@ void DrawModelVertices(ImDrawList* draw_list, const OverlayInput& input, const V
   }
 }
 
+// A line pin's image line: the two points the user dragged, solid, the line through them
+// dashed across the view.
+void DrawPinnedLine(ImDrawList* draw_list, const ViewTransform& view, const Eigen::Vector2d& a_px,
+                    const Eigen::Vector2d& b_px, const ScreenRect& rect) {
+  const Eigen::Vector3d line = Eigen::Vector3d(a_px.x(), a_px.y(), 1.0).cross(Eigen::Vector3d(b_px.x(), b_px.y(), 1.0));
+  DrawInfiniteImageLine(draw_list, line, view, rect, kLinePinLineColor, 1.0f, true);
+  const Eigen::Vector2d a = ToScreenD(view, a_px), b = ToScreenD(view, b_px);
+  DrawScreenLine(draw_list, a, b, rect, kShadowColor, 4.0f);
+  DrawScreenLine(draw_list, a, b, rect, kLinePinColor, 2.0f);
+}
+
+// Every line pin (kEdgeOnImageLine) of this image: its line, and from each projected end of
+// its edge the perpendicular to the line (the residual), with the larger distance in pixels.
+void DrawLinePins(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view, const ScreenRect& rect,
+                  bool show_labels) {
+  const Image& image = *input.image;
+  for (const Constraint& c : input.project->constraints) {
+    if (c.kind != ConstraintKind::kEdgeOnImageLine || c.image_id != image.id || c.vertices.size() != 2) continue;
+    const Eigen::Vector2d d = c.line_b_px - c.line_a_px;
+    if (d.norm() <= 0.0) continue;
+    DrawPinnedLine(draw_list, view, c.line_a_px, c.line_b_px, rect);
+    if (!image.camera_calibrated) continue;
+    const Eigen::Vector2d n = Eigen::Vector2d(-d.y(), d.x()).normalized();
+    double worst_px = 0.0;
+    Eigen::Vector2d label_at = ToScreenD(view, 0.5 * (c.line_a_px + c.line_b_px));
+    for (const VertexRef& v : c.vertices) {
+      if (input.project->FindVertex(v) == nullptr) continue;
+      const Eigen::Vector3d p = VertexInWorld(*input.project, v);
+      if (image.camera.CamFromWorld(p).z() <= kNearDepth) continue;
+      const Eigen::Vector2d uv = image.camera.Project(p);
+      const double dist = (uv - c.line_a_px).dot(n);
+      const Eigen::Vector2d foot = uv - dist * n;
+      DrawScreenLine(draw_list, ToScreenD(view, uv), ToScreenD(view, foot), rect, kLinePinResidualColor, 1.5f);
+      if (std::abs(dist) >= worst_px) {
+        worst_px = std::abs(dist);
+        label_at = ToScreenD(view, foot);
+      }
+    }
+    if (show_labels && rect.Contains(label_at)) {
+      char text[32];
+      std::snprintf(text, sizeof(text), "%.2f px", worst_px);
+      DrawShadowedText(draw_list, ImVec2(static_cast<float>(label_at.x()) + 6, static_cast<float>(label_at.y()) + 4),
+                       kLinePinColor, text);
+    }
+  }
+}
+
 }  // namespace
+
+void DrawLinePinPreview(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view,
+                        const Eigen::Vector2d& a_px, const Eigen::Vector2d& b_px, ImVec2 clip_min, ImVec2 clip_max) {
+  const ScreenRect rect{{clip_min.x, clip_min.y}, {clip_max.x, clip_max.y}};
+  draw_list->PushClipRect(clip_min, clip_max, true);
+  DrawPinnedLine(draw_list, view, a_px, b_px, rect);
+  // The selected edge's projected ends and how far they are from the line being drawn.
+  const ElementRef& edge = input.selection.element;
+  const Primitive* primitive = input.project ? input.project->FindPrimitive(edge.primitive_id) : nullptr;
+  const Eigen::Vector2d d = b_px - a_px;
+  if (edge.kind == ElementKind::kEdge && primitive != nullptr && primitive->mesh.IsEdge(edge.element) &&
+      input.image != nullptr && input.image->camera_calibrated && d.norm() > 0.0) {
+    const Eigen::Vector2d n = Eigen::Vector2d(-d.y(), d.x()).normalized();
+    const PolyMesh& mesh = primitive->mesh;
+    for (VertexId v : {mesh.Origin(2 * edge.element), mesh.Dest(2 * edge.element)}) {
+      const Eigen::Vector3d p = mesh.vertex(v).position;
+      if (input.image->camera.CamFromWorld(p).z() <= kNearDepth) continue;
+      const Eigen::Vector2d uv = input.image->camera.Project(p);
+      const Eigen::Vector2d foot = uv - (uv - a_px).dot(n) * n;
+      DrawDashedScreenLine(draw_list, ToScreenD(view, uv), ToScreenD(view, foot), rect, kLinePinResidualColor, 1.5f, 4.0);
+    }
+  }
+  draw_list->PopClipRect();
+}
 
 ImU32 AxisColor(Axis axis, int alpha) {
   switch (axis) {
@@ -383,6 +460,7 @@ void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const V
   }
 
   if (options.show_model && input.model != nullptr) DrawModelVertices(draw_list, input, view, rect);
+  if (options.show_model) DrawLinePins(draw_list, input, view, rect, options.show_labels);
 
   if (options.show_pins) {
     int number = 0;

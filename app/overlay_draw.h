@@ -1,6 +1,7 @@
 // What the image panel draws over a photo, as ImDrawList calls under an image-to-screen
 // transform: line segments by family, vanishing points and the horizon, the projected
-// primitives (every mesh edge, vertices, the selected and hovered element) and the pins with their residual lines. Also the projections
+// primitives (every mesh edge, vertices, every selected element and the hovered one), the pins
+// with their residual lines and the line pins (kEdgeOnImageLine) with their edges' distances. Also the projections
 // the panel's hit tests share with the drawing, so that what is picked is what is shown.
 #pragma once
 
@@ -68,6 +69,11 @@ void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const V
 // A line between two image points, clipped to the rectangle (for previews).
 void DrawImageLine(ImDrawList* draw_list, const ViewTransform& view, const Eigen::Vector2d& a_px,
                    const Eigen::Vector2d& b_px, ImVec2 clip_min, ImVec2 clip_max, ImU32 color, float thickness_px);
+
+// The line-pin tool's preview while dragging from a_px to b_px (image pixels): the line as it
+// will be stored, and dashed from the selected edge's projected ends to it.
+void DrawLinePinPreview(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view,
+                        const Eigen::Vector2d& a_px, const Eigen::Vector2d& b_px, ImVec2 clip_min, ImVec2 clip_max);
 
 // Text with a dark shadow so it reads on any photo.
 void DrawShadowedText(ImDrawList* draw_list, ImVec2 pos, ImU32 color, const char* text);

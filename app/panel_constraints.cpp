@@ -12,8 +12,9 @@ namespace facet::app {
 namespace {
 
 // The constraint builder for a selected edge: one-edge kinds at once, two-edge kinds in two
-// clicks (the first stores the edge, the second, with another edge selected, adds).
-void DrawEdgeConstraintBuilder(AppState* state, const ElementRef& element) {
+// clicks (the first stores the edge, the second, with another edge selected, adds). With a
+// multi-selection the two-edge kinds are in the selection's builder instead.
+void DrawEdgeConstraintBuilder(AppState* state, const ElementRef& element, bool pair_buttons) {
   ImGui::Spacing();
   ImGui::TextColored(kDimText, "Constrain edge");
   for (const Axis axis : {Axis::kX, Axis::kY, Axis::kZ}) {
@@ -35,6 +36,7 @@ void DrawEdgeConstraintBuilder(AppState* state, const ElementRef& element) {
                                                           {ConstraintKind::kEqualLength, "equal_length"}};
   bool first_button = true;
   for (const auto& [kind, key] : pairs) {
+    if (!pair_buttons) break;
     if (!first_button) ImGui::SameLine();
     first_button = false;
     const std::string label = ConstraintEditLabel(kind);
@@ -50,6 +52,80 @@ void DrawEdgeConstraintBuilder(AppState* state, const ElementRef& element) {
     if (ImGui::SmallButton("Cancel##constraint_pair")) {
       state->constraint_first_kind.reset();
       state->constraint_first_edge = ElementRef();
+    }
+  }
+}
+
+// The builder on a multi-selection (element + extra): coplanar / collinear on the selected
+// vertices (edges and faces give theirs), the two-edge kinds between two selected edges, and
+// coplanar / parallel faces for two faces. Each button is one undoable edit.
+void DrawSelectionBuilder(AppState* state) {
+  const std::vector<ElementRef> selected = SelectedElements(state->selection);
+  if (selected.size() < 2) return;
+  const Project& project = state->document.project();
+  int counts[4] = {0, 0, 0, 0};
+  for (const ElementRef& e : selected) ++counts[static_cast<int>(e.kind)];
+  const int vertices = counts[static_cast<int>(ElementKind::kVertex)];
+  const int edges = counts[static_cast<int>(ElementKind::kEdge)];
+  const int faces = counts[static_cast<int>(ElementKind::kFace)];
+  const size_t distinct = VerticesOfElements(project, selected).size();
+  ImGui::Spacing();
+  ImGui::TextColored(kDimText, "Selection: %d vertices, %d edges, %d faces (%zu distinct vertices)", vertices, edges,
+                     faces, distinct);
+  for (size_t i = 0; i < selected.size(); ++i) {
+    ImGui::PushID(static_cast<int>(i));
+    if (ImGui::SmallButton("x")) {
+      ToggleSelected(&state->selection, selected[i]);
+      ImGui::PopID();
+      return;  // the list changed
+    }
+    RecordItem("selection.remove." + std::to_string(i));
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Remove from the selection");
+    ImGui::SameLine();
+    ImGui::TextUnformatted(DescribeElement(project, selected[i]).c_str());
+    ImGui::PopID();
+  }
+  ImGui::TextColored(kDimText, "Shift+click adds or removes; Esc or a click on nothing clears");
+  const bool two_faces = faces == 2 && selected.size() == 2;
+  const bool two_edges = edges == 2 && selected.size() == 2;
+  bool same_line = false;
+  auto next = [&]() {
+    if (same_line) ImGui::SameLine();
+    same_line = true;
+  };
+  if (distinct >= 4) {
+    next();
+    const std::string label = two_faces ? "Coplanar faces" : "Coplanar (" + std::to_string(distinct) + ")";
+    if (ImGui::Button(label.c_str())) {
+      ConstrainVertexSetEdit(state, ConstraintKind::kCoplanar, selected, two_faces ? "Coplanar faces" : "");
+    }
+    RecordItem("constraint.coplanar");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Keep the selected vertices (and those of selected edges and faces) on one plane");
+  }
+  if (faces == 0 && distinct >= 3) {
+    next();
+    const std::string label = "Collinear (" + std::to_string(distinct) + ")";
+    if (ImGui::Button(label.c_str())) ConstrainVertexSetEdit(state, ConstraintKind::kCollinear, selected);
+    RecordItem("constraint.collinear");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Keep the selected vertices (and edge ends) on one line");
+  }
+  if (two_faces) {
+    next();
+    if (ImGui::Button("Parallel faces")) ConstrainParallelFacesEdit(state, selected[0], selected[1]);
+    RecordItem("constraint.parallel_faces");
+    if (ImGui::IsItemHovered()) {
+      ImGui::SetTooltip("Two parallel-edge constraints between the faces' most nearly parallel edges");
+    }
+  }
+  if (two_edges) {
+    const std::pair<ConstraintKind, const char*> pairs[] = {{ConstraintKind::kParallel, "parallel"},
+                                                            {ConstraintKind::kPerpendicular, "perpendicular"},
+                                                            {ConstraintKind::kEqualLength, "equal_length"}};
+    same_line = false;
+    for (const auto& [kind, key] : pairs) {
+      next();
+      if (ImGui::Button(ConstraintEditLabel(kind).c_str())) ConstrainEdgePairEdit(state, kind, selected[0], selected[1]);
+      RecordItem(std::string("constraint.") + key);
     }
   }
 }
@@ -75,6 +151,14 @@ void DrawConstraintsSection(AppState* state) {
       char v[48];
       std::snprintf(v, sizeof(v), " %.4g %s", c.value, project.units.c_str());
       text += v;
+    }
+    if (c.kind == ConstraintKind::kEdgeOnImageLine) {
+      int index = 0;
+      for (const Image& image : project.images) {
+        if (image.id == c.image_id) break;
+        ++index;
+      }
+      text += " in image " + std::to_string(index + 1);
     }
     text += ":";
     // Appended in two steps: GCC 12 reports a false -Wrestrict on " " + std::string.
@@ -131,7 +215,7 @@ void DrawElementSection(AppState* state, const Primitive& primitive, const Eleme
     const VertexId a = mesh.Origin(2 * element.element), b = mesh.Dest(2 * element.element);
     LabelValue("Vertices", "%u - %u", a, b);
     LabelValue("Length", "%.3f", (mesh.vertex(b).position - mesh.vertex(a).position).norm());
-    DrawEdgeConstraintBuilder(state, element);
+    DrawEdgeConstraintBuilder(state, element, state->selection.extra.empty());
   } else if (element.kind == ElementKind::kFace) {
     LabelValue("Vertices", "%d", FaceDegree(mesh, element.element));
     const Eigen::Vector3d n = FaceNormal(mesh, element.element);
@@ -141,6 +225,7 @@ void DrawElementSection(AppState* state, const Primitive& primitive, const Eleme
     if (ImGui::Button(label)) TogglePlanarFaceEdit(state, element.primitive_id, element.element);
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("A coplanarity constraint on the face's vertices (toggle)");
   }
+  DrawSelectionBuilder(state);
 }
 
 }  // namespace facet::app

@@ -1,0 +1,536 @@
+// Issue 5's F-operators on a multi-selection in the real application offscreen (`facet render`
+// with an input script): coplanar on four free vertices of different box faces, collinear on
+// three vertices, parallel between two selected edges, each solved on commit, undone and
+// redone; refusals that change nothing; an edge pinned to an image line by the script and by
+// a drag of the Line pin tool; Shift+click multi-selection in the image panel, highlighted.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <Eigen/SVD>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/mesh_operators.h"
+#include "core/mesh_primitives.h"
+#include "core/project_io.h"
+#include "tests/app/app_test_util.h"
+#include "tests/synthetic_scene.h"
+
+using namespace facet::testing;
+
+namespace {
+
+// The joint solve polishes hard constraints on commit: what a noise-free constraint must
+// reach, relative to the model's size (or in degrees / pixels where named).
+constexpr double kCoplanarRelTolerance = 1e-9;
+constexpr double kCollinearRelTolerance = 1e-9;
+constexpr double kParallelToleranceDeg = 1e-6;
+constexpr double kLinePinTolerancePx = 1e-6;
+constexpr double kStartOffRel = 1e-2;  // a start that is this far from the answer is not it
+
+std::string LogText(const nlohmann::json& report) {
+  std::string text;
+  for (const auto& e : report.at("log")) text += e.at("level").get<std::string>() + ": " + e.at("text").get<std::string>() + "\n";
+  return text;
+}
+
+// Runs the app on `project_path` with `script`; returns the report.
+nlohmann::json Render(const TempDir& dir, const std::string& project_path, const std::string& name,
+                      const std::string& script) {
+  WriteText(dir / (name + ".txt"), script);
+  const RunResult run = RunRender(dir, "'" + project_path + "' -o '" + (dir / (name + ".png")) + "' --script '" +
+                                           (dir / (name + ".txt")) + "' --report '" + (dir / (name + ".json")) + "'");
+  INFO("stderr: " << run.stderr_text);
+  REQUIRE(run.exit_code == 0);
+  return ReadJson(dir / (name + ".json"));
+}
+
+// Runs a script that must fail on a refused command; returns its stderr.
+std::string RenderRefused(const TempDir& dir, const std::string& project_path, const std::string& name,
+                          const std::string& script) {
+  WriteText(dir / (name + ".txt"), script);
+  const RunResult run = RunRender(dir, "'" + project_path + "' -o '" + (dir / (name + ".png")) + "' --script '" +
+                                           (dir / (name + ".txt")) + "'");
+  CHECK(run.exit_code != 0);
+  return run.stderr_text;
+}
+
+facet::Project Load(const std::string& path) {
+  const facet::ProjectLoadResult loaded = facet::LoadProject(path);
+  INFO("load " << path << ": " << loaded.error);
+  REQUIRE(loaded.ok());
+  return loaded.project;
+}
+
+Eigen::Vector3d P(const facet::Project& project, facet::Id primitive_id, facet::VertexId v) {
+  return facet::VertexInWorld(project, {primitive_id, v});
+}
+
+// Largest distance of the points from their best-fitting plane.
+double PlaneDistance(const std::vector<Eigen::Vector3d>& points) {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const auto& p : points) centre += p / static_cast<double>(points.size());
+  Eigen::MatrixXd m(points.size(), 3);
+  for (size_t i = 0; i < points.size(); ++i) m.row(i) = (points[i] - centre).transpose();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(m, Eigen::ComputeFullV);
+  const Eigen::Vector3d normal = svd.matrixV().col(2);
+  double worst = 0.0;
+  for (const auto& p : points) worst = std::max(worst, std::abs((p - centre).dot(normal)));
+  return worst;
+}
+
+// Distance of p from the line through a and b.
+double LineDistance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& p) {
+  return (p - a).cross((b - a).normalized()).norm();
+}
+
+double AngleDeg(const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
+  return std::atan2(u.cross(v).norm(), std::abs(u.dot(v))) * 180.0 / M_PI;
+}
+
+double ModelSize(const facet::Project& project) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  for (const facet::Primitive& p : project.primitives) {
+    for (facet::VertexId v = 0; v < p.mesh.VertexIdEnd(); ++v) {
+      if (!p.mesh.IsVertex(v)) continue;
+      lo = lo.cwiseMin(p.mesh.vertex(v).position);
+      hi = hi.cwiseMax(p.mesh.vertex(v).position);
+    }
+  }
+  return (hi - lo).norm();
+}
+
+facet::EdgeId EdgeBetween(const facet::PolyMesh& mesh, facet::VertexId a, facet::VertexId b) {
+  const facet::HalfedgeId h = facet::FindHalfedge(mesh, a, b);
+  REQUIRE(h != facet::kNoElement);
+  return facet::PolyMesh::EdgeOf(h);
+}
+
+// A unit box (all dimensions locked, so only free vertices move) whose edges 0 (x), 5 (y),
+// 10 (z) and 3 (x) are split, the new vertices freed and pushed off their edges by different
+// offsets: four free vertices on different faces, not coplanar.
+struct FreeVertexBox {
+  std::string path;
+  facet::Id box_id = facet::kNoId;
+  std::vector<facet::VertexId> split;     // the four new vertices
+  std::vector<facet::EdgeId> split_edge;  // which edge each split (now origin -> new vertex)
+  std::vector<facet::EdgeId> new_edge;    // new vertex -> the split edge's old destination
+  facet::VertexId plain_split = facet::kNoElement;  // edge 7 split, not freed: on its edge's line
+  facet::VertexId plain_ends[2] = {facet::kNoElement, facet::kNoElement};
+  facet::Project project;
+};
+
+FreeVertexBox WriteFreeVertexBox(const TempDir& dir) {
+  FreeVertexBox f;
+  facet::Project& p = f.project;
+  std::string message;
+  REQUIRE(facet::AddPrimitiveToProject(&p, facet::MakeBox(facet::kNoId, Eigen::Vector3d::Ones()), "box 1", &f.box_id,
+                                       &message));
+  facet::Primitive& box = *p.FindPrimitive(f.box_id);
+  box.param_locked = {true, true, true, true};
+  const facet::EdgeId edges[4] = {0, 5, 10, 3};
+  const double ts[4] = {0.3, 0.5, 0.6, 0.4};
+  const Eigen::Vector3d offsets[4] = {{0.0, -0.15, 0.1}, {0.2, 0.0, -0.1}, {-0.1, 0.12, 0.0}, {0.0, 0.1, 0.25}};
+  for (int i = 0; i < 4; ++i) {
+    const facet::ESplitResult r = facet::ESplit(&box.mesh, edges[i], ts[i]);
+    REQUIRE(r.ok);
+    box.mesh.vertex(r.vertex).local.free = true;
+    box.mesh.vertex(r.vertex).local.offset = offsets[i];
+    f.split.push_back(r.vertex);
+    f.split_edge.push_back(edges[i]);
+    f.new_edge.push_back(r.new_edge);
+  }
+  f.plain_ends[0] = box.mesh.Origin(2 * 7);
+  f.plain_ends[1] = box.mesh.Dest(2 * 7);
+  const facet::ESplitResult plain = facet::ESplit(&box.mesh, 7, 0.5);
+  REQUIRE(plain.ok);
+  f.plain_split = plain.vertex;
+  facet::UpdatePrimitivePositions(&box.mesh, box.shape);
+  f.path = dir / "box.facet";
+  REQUIRE(facet::SaveProject(p, f.path) == "");
+  return f;
+}
+
+std::string SelectScript(const std::string& first_kind, facet::Id primitive, const std::vector<std::string>& rest) {
+  std::ostringstream s;
+  s << "frames 2\ncommand tool select\n" << first_kind << "\n";
+  for (const std::string& r : rest) s << r << "\n";
+  s << "frames 2\n";
+  (void)primitive;
+  return s.str();
+}
+
+std::string Vertex(const char* command, facet::Id primitive, facet::VertexId v) {
+  return std::string("command ") + command + " vertex " + std::to_string(primitive) + " " + std::to_string(v);
+}
+std::string Edge(const char* command, facet::Id primitive, facet::EdgeId e) {
+  return std::string("command ") + command + " edge " + std::to_string(primitive) + " " + std::to_string(e);
+}
+
+// The edit, then save / undo + save / redo + save; returns the three saved projects.
+struct History {
+  facet::Project after, undone, redone;
+  nlohmann::json report;
+};
+History RunWithHistory(const TempDir& dir, const std::string& project_path, const std::string& name,
+                       const std::string& script) {
+  std::ostringstream s;
+  s << script << "frames 2\ncommand save " << (dir / (name + "_after.facet")) << "\nframes 1\n";
+  s << "command undo\nframes 2\ncommand save " << (dir / (name + "_undone.facet")) << "\nframes 1\n";
+  s << "command redo\nframes 2\ncommand save " << (dir / (name + "_redone.facet")) << "\nframes 1\n";
+  History h;
+  h.report = Render(dir, project_path, name, s.str());
+  h.after = Load(dir / (name + "_after.facet"));
+  h.undone = Load(dir / (name + "_undone.facet"));
+  h.redone = Load(dir / (name + "_redone.facet"));
+  return h;
+}
+
+}  // namespace
+
+TEST_CASE("multi-selection: coplanar on four free vertices of different faces, solved, undone, redone") {
+  TempDir dir("fops_coplanar");
+  const FreeVertexBox f = WriteFreeVertexBox(dir);
+  const double size = ModelSize(f.project);
+  std::vector<Eigen::Vector3d> start;
+  for (facet::VertexId v : f.split) start.push_back(P(f.project, f.box_id, v));
+  CAPTURE(PlaneDistance(start));
+  REQUIRE(PlaneDistance(start) > kStartOffRel * size);  // the start is not the answer
+
+  const std::string script =
+      SelectScript(Vertex("select", f.box_id, f.split[0]), f.box_id,
+                   {Vertex("select-add", f.box_id, f.split[1]), Vertex("select-add", f.box_id, f.split[2]),
+                    Vertex("select-add", f.box_id, f.split[3])}) +
+      "command constrain coplanar\n";
+  const History h = RunWithHistory(dir, f.path, "coplanar", script);
+  INFO("log: " << LogText(h.report));
+
+  REQUIRE(h.after.constraints.size() == 1);
+  const facet::Constraint& c = h.after.constraints[0];
+  CHECK(c.kind == facet::ConstraintKind::kCoplanar);
+  REQUIRE(c.vertices.size() == 4);
+  for (int i = 0; i < 4; ++i) CHECK(c.vertices[i] == facet::VertexRef{f.box_id, f.split[i]});
+  std::vector<Eigen::Vector3d> solved;
+  for (facet::VertexId v : f.split) solved.push_back(P(h.after, f.box_id, v));
+  const double distance = PlaneDistance(solved);
+  MESSAGE("coplanar: plane distance after the solve " << distance << " (model size " << size << ", start "
+                                                      << PlaneDistance(start) << ")");
+  CHECK(distance <= kCoplanarRelTolerance * size);
+  const nlohmann::json& undo = h.report.at("undo_stack");
+  CHECK(undo.back().dump().find("Coplanar (4 vertices)") != std::string::npos);
+
+  // Undo: no constraint, the vertices back where they were; redo: both again.
+  CHECK(h.undone.constraints.empty());
+  for (size_t i = 0; i < f.split.size(); ++i) CHECK((P(h.undone, f.box_id, f.split[i]) - start[i]).norm() < 1e-12);
+  REQUIRE(h.redone.constraints.size() == 1);
+  CHECK(h.redone.constraints[0] == c);
+  std::vector<Eigen::Vector3d> redone;
+  for (facet::VertexId v : f.split) redone.push_back(P(h.redone, f.box_id, v));
+  CHECK(PlaneDistance(redone) <= kCoplanarRelTolerance * size);
+}
+
+TEST_CASE("multi-selection: collinear on three vertices and parallel between two selected edges") {
+  TempDir dir("fops_collinear");
+  const FreeVertexBox f = WriteFreeVertexBox(dir);
+  const double size = ModelSize(f.project);
+  const facet::PolyMesh& mesh = f.project.FindPrimitive(f.box_id)->mesh;
+  // Edge 0's split vertex and the two corners of that edge (its ends before the split).
+  const facet::VertexId m = f.split[0];
+  const facet::VertexId a = mesh.Origin(2 * f.split_edge[0]) == m ? mesh.Dest(2 * f.split_edge[0])
+                                                                  : mesh.Origin(2 * f.split_edge[0]);
+  const facet::EdgeId new_edge = f.new_edge[0];
+  const facet::VertexId b = mesh.Dest(2 * new_edge) == m ? mesh.Origin(2 * new_edge) : mesh.Dest(2 * new_edge);
+  REQUIRE(b != m);
+  REQUIRE(a != b);
+  REQUIRE(a != m);
+  const double start_off = LineDistance(P(f.project, f.box_id, a), P(f.project, f.box_id, b), P(f.project, f.box_id, m));
+  CAPTURE(start_off);
+  REQUIRE(start_off > kStartOffRel * size);
+
+  SUBCASE("collinear") {
+    const std::string script = SelectScript(Vertex("select", f.box_id, a), f.box_id,
+                                            {Vertex("select-add", f.box_id, m), Vertex("select-add", f.box_id, b)}) +
+                               "command constrain collinear\n";
+    const History h = RunWithHistory(dir, f.path, "collinear", script);
+    INFO("log: " << LogText(h.report));
+    REQUIRE(h.after.constraints.size() == 1);
+    CHECK(h.after.constraints[0].kind == facet::ConstraintKind::kCollinear);
+    CHECK(h.after.constraints[0].vertices.size() == 3);
+    const double off = LineDistance(P(h.after, f.box_id, a), P(h.after, f.box_id, b), P(h.after, f.box_id, m));
+    MESSAGE("collinear: distance from the line after the solve " << off << " (start " << start_off << ")");
+    CHECK(off <= kCollinearRelTolerance * size);
+    CHECK(h.undone.constraints.empty());
+    CHECK((P(h.undone, f.box_id, m) - P(f.project, f.box_id, m)).norm() < 1e-12);
+    REQUIRE(h.redone.constraints.size() == 1);
+    CHECK(LineDistance(P(h.redone, f.box_id, a), P(h.redone, f.box_id, b), P(h.redone, f.box_id, m)) <=
+          kCollinearRelTolerance * size);
+    CHECK(h.report.at("undo_stack").back().dump().find("Collinear (3 vertices)") != std::string::npos);
+  }
+
+  SUBCASE("parallel between two selected edges") {
+    // The half of edge 0 from its first corner to the free vertex, and edge 1 (along x).
+    const facet::EdgeId half = EdgeBetween(mesh, a, m);
+    const facet::PolyMesh& pm = mesh;
+    const Eigen::Vector3d d1 = P(f.project, f.box_id, pm.Dest(2 * half)) - P(f.project, f.box_id, pm.Origin(2 * half));
+    const Eigen::Vector3d d2 = P(f.project, f.box_id, pm.Dest(2)) - P(f.project, f.box_id, pm.Origin(2));
+    const double start_deg = AngleDeg(d1, d2);
+    CAPTURE(start_deg);
+    REQUIRE(start_deg > 1.0);
+    const std::string script =
+        SelectScript(Edge("select", f.box_id, half), f.box_id, {Edge("select-add", f.box_id, 1)}) +
+        "command constrain parallel\n";
+    const History h = RunWithHistory(dir, f.path, "parallel", script);
+    INFO("log: " << LogText(h.report));
+    REQUIRE(h.after.constraints.size() == 1);
+    const facet::Constraint& c = h.after.constraints[0];
+    CHECK(c.kind == facet::ConstraintKind::kParallel);
+    REQUIRE(c.vertices.size() == 4);
+    auto angle = [&](const facet::Project& p) {
+      return AngleDeg(facet::VertexInWorld(p, c.vertices[1]) - facet::VertexInWorld(p, c.vertices[0]),
+                      facet::VertexInWorld(p, c.vertices[3]) - facet::VertexInWorld(p, c.vertices[2]));
+    };
+    MESSAGE("parallel: angle after the solve " << angle(h.after) << " deg (start " << start_deg << ")");
+    CHECK(angle(h.after) < kParallelToleranceDeg);
+    CHECK(h.undone.constraints.empty());
+    CHECK(std::abs(angle(h.undone) - start_deg) < 1e-9);
+    REQUIRE(h.redone.constraints.size() == 1);
+    CHECK(angle(h.redone) < kParallelToleranceDeg);
+  }
+
+  SUBCASE("refusals say why") {
+    // Two distinct vertices for a coplanar; three collinear of four (a plain split vertex and
+    // its edge's ends); the same set twice; an element selected twice. A refused command
+    // stops the script with the reason.
+    const std::string too_few =
+        SelectScript(Edge("select", f.box_id, 1), f.box_id, {Vertex("select-add", f.box_id, mesh.Origin(2))}) +
+        "command constrain coplanar\n";
+    const std::string err1 = RenderRefused(dir, f.path, "refuse_few", too_few);
+    CHECK(err1.find("needs 4 or more different vertices (2 selected") != std::string::npos);
+    const std::string three_collinear =
+        SelectScript(Vertex("select", f.box_id, f.plain_ends[0]), f.box_id,
+                     {Vertex("select-add", f.box_id, f.plain_split), Vertex("select-add", f.box_id, f.plain_ends[1]),
+                      Vertex("select-add", f.box_id, f.split[0])}) +
+        "command constrain coplanar\n";
+    const std::string err2 = RenderRefused(dir, f.path, "refuse_collinear", three_collinear);
+    CHECK(err2.find("are collinear: with a fourth point they are always coplanar") != std::string::npos);
+    // The bottom face's corners (box vertices 0..3, core/box.h), constrained twice.
+    const std::string twice =
+        SelectScript(Vertex("select", f.box_id, 0), f.box_id,
+                     {Vertex("select-add", f.box_id, 1), Vertex("select-add", f.box_id, 2),
+                      Vertex("select-add", f.box_id, 3)}) +
+        "command constrain coplanar\nframes 2\ncommand constrain coplanar\n";
+    const std::string err3 = RenderRefused(dir, f.path, "refuse_twice", twice);
+    CHECK(err3.find("the same constraint exists already") != std::string::npos);
+    const std::string same_edge =
+        SelectScript(Edge("select", f.box_id, 1), f.box_id, {Edge("select-add", f.box_id, 1)});
+    const std::string err4 = RenderRefused(dir, f.path, "refuse_dup", same_edge);
+    CHECK(err4.find("is selected already") != std::string::npos);
+  }
+}
+
+namespace {
+
+// The synthetic box scene (one calibrated image, its line families, the box) with its photo,
+// the pins of the top corners 4..7 removed so that those vertices are pickable and free to
+// follow a line pin (the bottom pins, the lines and the locked height keep the box fixed).
+struct LineScene {
+  std::string path;
+  SyntheticScene scene;
+  View view;
+};
+
+LineScene WriteLineScene(const TempDir& dir) {
+  LineScene f;
+  f.scene = MakeBoxScene();
+  facet::Project& p = f.scene.project;
+  std::erase_if(p.pins, [](const facet::Pin& pin) { return pin.vertex.vertex >= 4; });
+  const facet::Camera& cam = f.scene.true_camera;
+  // Lines ending at a top corner would be picked there before the vertex: leave them out
+  // (the bottom edges and the lines across the faces still calibrate the image).
+  std::vector<Eigen::Vector2d> top;
+  for (int c = 4; c < 8; ++c) top.push_back(cam.Project(f.scene.true_box.mesh.vertex(c).position));
+  std::erase_if(p.segments, [&](const facet::Segment& s) {
+    return std::any_of(top.begin(), top.end(), [&](const Eigen::Vector2d& t) {
+      return (s.a_px - t).norm() < 1.0 || (s.b_px - t).norm() < 1.0;
+    });
+  });
+  cv::Mat photo(cam.height_px, cam.width_px, CV_8UC3, cv::Scalar(150, 150, 150));
+  const auto corners = BoxCorners(f.scene.true_box);
+  for (const auto& e : facet::BoxEdges()) {
+    const Eigen::Vector2d a = cam.Project(corners[e[0]]), b = cam.Project(corners[e[1]]);
+    cv::line(photo, cv::Point(static_cast<int>(a.x()), static_cast<int>(a.y())),
+             cv::Point(static_cast<int>(b.x()), static_cast<int>(b.y())), cv::Scalar(40, 40, 40), 2, cv::LINE_AA);
+  }
+  REQUIRE(cv::imwrite(dir / "synthetic.png", photo));
+  f.path = dir / "scene.facet";
+  REQUIRE(facet::SaveProject(p, f.path) == "");
+  f.view = ViewFromReport(Render(dir, f.path, "probe", "frames 3\n"));
+  REQUIRE(f.view.zoom > 0.1);
+  return f;
+}
+
+std::string Fmt(const Eigen::Vector2d& p) {
+  std::ostringstream out;
+  out.precision(17);
+  out << p.x() << " " << p.y();
+  return out.str();
+}
+
+// Largest distance (px) of the constraint's edge ends, projected by its image's camera, from
+// its line.
+double LinePinDistancePx(const facet::Project& project, const facet::Constraint& c) {
+  const facet::Image* image = project.FindImage(c.image_id);
+  REQUIRE(image != nullptr);
+  const Eigen::Vector2d d = (c.line_b_px - c.line_a_px).normalized();
+  const Eigen::Vector2d n(-d.y(), d.x());
+  double worst = 0.0;
+  for (const facet::VertexRef& v : c.vertices) {
+    const Eigen::Vector2d uv = image->camera.Project(facet::VertexInWorld(project, v));
+    worst = std::max(worst, std::abs((uv - c.line_a_px).dot(n)));
+  }
+  return worst;
+}
+
+// A line in the photo near the top front x edge (corners 4 -> 5): its true projection moved
+// `shift_px` sideways, between 10 % and 90 % of its length.
+void ShiftedLine(const LineScene& f, double shift_px, Eigen::Vector2d* a, Eigen::Vector2d* b) {
+  const auto corners = BoxCorners(f.scene.true_box);
+  const Eigen::Vector2d p4 = f.scene.true_camera.Project(corners[4]), p5 = f.scene.true_camera.Project(corners[5]);
+  const Eigen::Vector2d d = (p5 - p4).normalized();
+  const Eigen::Vector2d n(-d.y(), d.x());
+  *a = p4 + 0.1 * (p5 - p4) + shift_px * n;
+  *b = p4 + 0.9 * (p5 - p4) + shift_px * n;
+}
+
+}  // namespace
+
+TEST_CASE("line pin: the selected edge on an image line, by the script and by a drag of the Line pin tool") {
+  TempDir dir("fops_linepin");
+  const LineScene f = WriteLineScene(dir);
+  const facet::Id box = f.scene.box_id;
+  const facet::PolyMesh& mesh = f.scene.project.FindPrimitive(box)->mesh;
+  const facet::EdgeId edge = EdgeBetween(mesh, 4, 5);
+  constexpr double kShiftPx = 3.0;
+  Eigen::Vector2d a, b;
+  ShiftedLine(f, kShiftPx, &a, &b);
+
+  SUBCASE("script") {
+    std::ostringstream s;
+    s << "frames 2\n" << Edge("select", box, edge) << "\nframes 1\ncommand line-pin 0 " << Fmt(a) << " " << Fmt(b)
+      << "\n";
+    const History h = RunWithHistory(dir, f.path, "linepin", s.str());
+    INFO("log: " << LogText(h.report));
+    REQUIRE(h.after.constraints.size() == 1);
+    const facet::Constraint& c = h.after.constraints[0];
+    CHECK(c.kind == facet::ConstraintKind::kEdgeOnImageLine);
+    CHECK(c.image_id == f.scene.image_id);
+    CHECK((c.line_a_px - a).norm() < 1e-9);
+    CHECK((c.line_b_px - b).norm() < 1e-9);
+    // The start (the solved scene without the pin) is about kShiftPx off the line.
+    const double start_px = LinePinDistancePx(h.undone, c);
+    const double after_px = LinePinDistancePx(h.after, c);
+    MESSAGE("line pin (script): edge ends from the line " << after_px << " px after the solve (start " << start_px
+                                                          << " px)");
+    CHECK(start_px > 0.5 * kShiftPx);
+    CHECK(after_px < kLinePinTolerancePx);
+    CHECK(h.undone.constraints.empty());
+    REQUIRE(h.redone.constraints.size() == 1);
+    CHECK(LinePinDistancePx(h.redone, h.redone.constraints[0]) < kLinePinTolerancePx);
+    CHECK(h.report.at("undo_stack").back().dump().find("Line pin") != std::string::npos);
+  }
+
+  SUBCASE("mouse: a click on the edge selects it, a drag along the photo's line pins it") {
+    const auto corners = BoxCorners(f.scene.true_box);
+    const Eigen::Vector2d mid = f.view.ToScreen(f.scene.true_camera.Project(0.5 * (corners[4] + corners[5])));
+    const Eigen::Vector2d sa = f.view.ToScreen(a), sb = f.view.ToScreen(b);
+    REQUIRE(f.view.Inside(sa, 5.0));
+    REQUIRE(f.view.Inside(sb, 5.0));
+    std::ostringstream s;
+    s << "frames 2\ncommand tool line-pin\nframes 1\nclick left " << Fmt(mid) << "\nframes 2\n";
+    s << "drag left " << Fmt(sa) << " " << Fmt(sb) << " 12\nframes 3\n";
+    const History h = RunWithHistory(dir, f.path, "linepin_mouse", s.str());
+    INFO("log: " << LogText(h.report));
+    REQUIRE(h.after.constraints.size() == 1);
+    const facet::Constraint& c = h.after.constraints[0];
+    CHECK(c.kind == facet::ConstraintKind::kEdgeOnImageLine);
+    REQUIRE(c.vertices.size() == 2);
+    // The clicked edge (either direction).
+    const bool same = (c.vertices[0].vertex == 4 && c.vertices[1].vertex == 5) ||
+                      (c.vertices[0].vertex == 5 && c.vertices[1].vertex == 4);
+    CHECK(same);
+    // The dragged points, to the whole screen pixel the mouse is rounded to.
+    const double pixel = 1.0 / f.view.zoom;
+    CAPTURE(c.line_a_px.transpose());
+    CAPTURE(c.line_b_px.transpose());
+    CHECK((c.line_a_px - a).norm() < 1.5 * pixel);
+    CHECK((c.line_b_px - b).norm() < 1.5 * pixel);
+    const double after_px = LinePinDistancePx(h.after, c);
+    MESSAGE("line pin (drag): edge ends from the line " << after_px << " px after the solve (start "
+                                                        << LinePinDistancePx(h.undone, c) << " px)");
+    CHECK(after_px < kLinePinTolerancePx);
+    CHECK(h.undone.constraints.empty());
+    CHECK(h.redone.constraints.size() == 1);
+  }
+}
+
+TEST_CASE("Shift+click in the image panel: a multi-selection, highlighted, toggled, made coplanar") {
+  TempDir dir("fops_shift");
+  const LineScene f = WriteLineScene(dir);
+  const facet::Id box = f.scene.box_id;
+  const auto corners = BoxCorners(f.scene.true_box);
+  auto screen = [&](const Eigen::Vector3d& x) { return f.view.ToScreen(f.scene.true_camera.Project(x)); };
+  std::ostringstream s;
+  s << "frames 2\ncommand tool select\nframes 1\nclick left " << Fmt(screen(corners[4])) << "\nframes 1\n";
+  s << "hold shift\nframes 1\n";
+  // Corner 5, then the pinned corners 0 and 1 (a Shift+click on a pin takes its vertex).
+  for (int c : {5, 0, 1}) s << "click left " << Fmt(screen(corners[c])) << "\nframes 1\n";
+  // An edge and corner 6 added and removed again.
+  const Eigen::Vector2d edge_mid = screen(0.5 * (corners[4] + corners[6]));
+  for (int i = 0; i < 2; ++i) s << "click left " << Fmt(edge_mid) << "\nframes 1\n";
+  for (int i = 0; i < 2; ++i) s << "click left " << Fmt(screen(corners[6])) << "\nframes 1\n";
+  s << "release shift\nmove 5 5\nframes 3\nscreenshot " << (dir / "multi.png") << "\nframes 1\n";
+  s << "command constrain coplanar\nframes 2\ncommand save " << (dir / "after.facet") << "\nframes 1\n";
+  const nlohmann::json report = Render(dir, f.path, "shift", s.str());
+  INFO("log: " << LogText(report));
+  const facet::Project after = Load(dir / "after.facet");
+  REQUIRE(after.constraints.size() == 1);
+  const facet::Constraint& c = after.constraints[0];
+  CHECK(c.kind == facet::ConstraintKind::kCoplanar);
+  std::vector<facet::VertexId> ids;
+  for (const facet::VertexRef& v : c.vertices) ids.push_back(v.vertex);
+  CHECK(ids == std::vector<facet::VertexId>{4, 5, 0, 1});
+
+  // The screenshot: each of the four selected corners carries the selection's orange.
+  const cv::Mat shot = cv::imread(dir / "multi.png");
+  REQUIRE(!shot.empty());
+  constexpr int kOrangeTolerance = 40;
+  auto orange_near = [&](const Eigen::Vector2d& p) {
+    const int cx = static_cast<int>(std::floor(p.x())), cy = static_cast<int>(std::floor(p.y()));
+    int count = 0;
+    for (int y = cy - 3; y <= cy + 3; ++y) {
+      for (int x = cx - 3; x <= cx + 3; ++x) {
+        if (x < 0 || y < 0 || x >= shot.cols || y >= shot.rows) continue;
+        const cv::Vec3b bgr = shot.at<cv::Vec3b>(y, x);
+        count += std::abs(bgr[2] - 255) <= kOrangeTolerance && std::abs(bgr[1] - 140) <= kOrangeTolerance &&
+                 std::abs(bgr[0] - 30) <= kOrangeTolerance;
+      }
+    }
+    return count;
+  };
+  for (int corner : {4, 5, 0, 1}) {
+    const int n = orange_near(screen(corners[corner]));
+    CAPTURE(corner);
+    CAPTURE(n);
+    CHECK(n >= 4);
+  }
+  // Corners 6 and 7 (not selected) have none.
+  CHECK(orange_near(screen(corners[6])) == 0);
+  CHECK(orange_near(screen(corners[7])) == 0);
+}
