@@ -24,6 +24,7 @@ struct MoveDrag {
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();        // world point under the mouse at the press
   Eigen::Vector3d plane_normal = Eigen::Vector3d::UnitZ();  // the drag plane through the anchor
   Eigen::Vector2d press_px = Eigen::Vector2d::Zero();
+  bool cancelled = false;  // Escape: the rest of the press does nothing (no orbit either)
   bool accepted = false;  // some frame's move was accepted into the preview
   std::string accepted_message;
   std::string hint;       // last result or refusal
@@ -122,10 +123,15 @@ void MoveToolFrame(AppState* state, const MoveToolInput& input) {
   }
   if (!drag.tracking) return;
 
+  if (drag.cancelled) {
+    if (input.released) Reset(&drag);
+    return;
+  }
   if (input.cancel) {
     if (drag.started) CancelDrag(state);
     drag.hint = "Move cancelled";
-    Reset(&drag);
+    drag.cancelled = true;
+    if (input.released) Reset(&drag);
     return;
   }
 

@@ -185,8 +185,14 @@ TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the
   const Eigen::Vector3d top_centre = box0.shape.translation + Eigen::Vector3d(2.0, 1.5, 2.0);
   const Eigen::Vector2d from = Rounded(view.ToScreen(top_centre));
   const Eigen::Vector2d to = from + Eigen::Vector2d(-30.0, 20.0);
+  // Escape during a vertex drag cancels it: nothing changes, no history entry.
+  const Eigen::Vector2d corner7 = Rounded(view.ToScreen(box0.mesh.vertex(7).position));
   std::ostringstream s;
-  s << prefix << DragScript(from, to, 5, "") << "command save " << (dir / "dragged.facet") << "\nframes 1\n";
+  s << prefix << "move " << Fmt(corner7) << "\nframes 1\ndown left\nframes 1\n";
+  for (int i = 1; i <= 3; ++i) s << "move " << Fmt(corner7 + Eigen::Vector2d(10.0 * i, 5.0 * i)) << "\nframes 1\n";
+  s << "key escape\nframes 1\nmove " << Fmt(corner7 + Eigen::Vector2d(50.0, 25.0)) << "\nframes 1\nup left\nframes 2\n";
+  s << "command save " << (dir / "escaped.facet") << "\nframes 1\n";
+  s << DragScript(from, to, 5, "") << "command save " << (dir / "dragged.facet") << "\nframes 1\n";
   // The command: the vertex to a position, then the primitive by a delta.
   const Eigen::Vector3d target(4.5, 3.25, 2.5);
   const Eigen::Vector3d delta(0.5, -0.25, 0.75);
@@ -219,11 +225,30 @@ TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the
     CAPTURE(error);
     CHECK(error < kExact);
   }
+  const facet::Project escaped = Load(dir / "escaped.facet");
+  CHECK(escaped == before);
+  CHECK(report.at("log").dump().find("Move cancelled") == std::string::npos);  // a hint, not a log line
+
   const auto& undo = report.at("undo_stack");
   REQUIRE(undo.size() == 3);
   CHECK(undo[0].get<std::string>() == "Move primitive");
   CHECK(undo[1].get<std::string>() == "Move vertex");
   CHECK(undo[2].get<std::string>() == "Move primitive");
+
+  // Shift: the vertex moves along the world z axis only. A run of its own: saving under a new
+  // name re-frames the 3D view, so the start view holds only until the model changes and is saved.
+  std::ostringstream z;
+  z << prefix << "hold shift\n" << DragScript(corner7, corner7 + Eigen::Vector2d(0.0, -30.0), 4, "")
+    << "release shift\ncommand save " << (dir / "shift.facet") << "\nframes 1\n";
+  const nlohmann::json shift_report = Render(dir, path, "shift", z.str());
+  INFO("shift log:\n" << LogText(shift_report));
+  const Eigen::Vector3d p7_before = box0.mesh.vertex(7).position;
+  const Eigen::Vector3d p7 = Load(dir / "shift.facet").FindPrimitive(box_id)->mesh.vertex(7).position;
+  CAPTURE(p7_before.transpose());
+  CAPTURE(p7.transpose());
+  CHECK(std::abs(p7.x() - p7_before.x()) < 1e-9);
+  CHECK(std::abs(p7.y() - p7_before.y()) < 1e-9);
+  CHECK(p7.z() - p7_before.z() > 0.05);  // up the screen is up
 }
 
 TEST_CASE("move tool: an undetermined depth keeps the dragged value through the app's re-solve") {
