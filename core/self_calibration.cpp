@@ -11,6 +11,7 @@
 
 #include <Eigen/Dense>
 
+#include "core/selfcal_projective_ba.h"
 #include "core/two_view.h"
 #include "core/solver_util_internal.h"
 
@@ -649,6 +650,18 @@ SelfCalibrationSummary SelfCalibrate(const std::vector<SelfCalibrationView>& vie
     for (int t = 0; t < num_tracks; ++t) TriangulateTrack(tracks, t, options.inlier_threshold_px, &p);
   }
   summary.registered = p.registered;
+  if (options.projective_bundle_adjust) {
+    std::vector<ProjectiveBundleObservation> observations;
+    for (int t = 0; t < num_tracks; ++t) {
+      if (!p.has_point[t]) continue;
+      for (size_t k = 0; k < tracks[t].size(); ++k)
+        if (p.ok[t][k] && p.registered[tracks[t][k].view]) observations.push_back({tracks[t][k].view, t, tracks[t][k].uv_px});
+    }
+    ProjectiveBundleOptions pba;
+    pba.max_iterations = options.max_projective_bundle_iterations;
+    const ProjectiveBundleSummary result = ProjectiveBundleAdjust(observations, p.n, pba, &p.P, &p.X);
+    if (!result.success) summary.warnings.push_back(result.message);
+  }
   const int num_registered = static_cast<int>(std::count(p.registered.begin(), p.registered.end(), true));
   for (int v = 0; v < n; ++v)
     if (!p.registered[v]) summary.warnings.push_back("view " + std::to_string(v) + " is not registered");

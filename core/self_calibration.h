@@ -89,6 +89,10 @@ struct SelfCalibrationOptions {
   double focal_weight = 1.0 / 9.0;
   double prior_focal_weight = 1.0;
   int quadric_reweighting_rounds = 3;
+  // A projective bundle adjustment of all registered views before the quadric
+  // (core/selfcal_projective_ba.h).
+  bool projective_bundle_adjust = true;
+  int max_projective_bundle_iterations = 50;
   // Observations farther than this from their reprojection are dropped (resection, after the
   // linear upgrade and between bundle adjustment rounds).
   double inlier_threshold_px = 3.0;

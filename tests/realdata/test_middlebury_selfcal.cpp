@@ -4,7 +4,9 @@
 // P = K [R | t]). Issue 3's target: the focal length within 2 %. The data set itself limits
 // what is reachable: a bundle adjustment started from the true cameras on the same kind of
 // tracks settles 1.0 % (these 6 views) to 1.7 % (15 views of the ring) above the calibrated
-// focal length, so this pinhole fit and the calibration differ by about that much.
+// focal length, so this pinhole fit and the calibration differ by about that much. Adding
+// the ring's neighbours does not help for that reason: 15,06..11 gives +2.4 % and
+// 16,15,06..11 +3.0 % (reported sigma 1.0 %), so the 6 views of the issue are kept.
 #include <doctest/doctest.h>
 
 #include <algorithm>
