@@ -134,7 +134,8 @@ void DrawCalibrationControls(AppState* state, const Image& image) {
   int focal_mode = static_cast<int>(image.focal_mode);
   ImGui::TextColored(kDimText, "Focal");
   ImGui::SameLine(ImGui::GetFontSize() * 7.5f);
-  ImGui::SetNextItemWidth(full);
+  const float exif_width = ImGui::CalcTextSize("EXIF").x + 2.0f * ImGui::GetStyle().FramePadding.x;
+  ImGui::SetNextItemWidth(-(exif_width + ImGui::GetStyle().ItemSpacing.x));
   if (ImGui::Combo("##focal_mode", &focal_mode, kFocalModes, 3)) {
     CommitImageEdit(state, id, "Focal mode", [&](Image* im) { SeedFocalMode(static_cast<FocalMode>(focal_mode), im); });
   }
@@ -142,6 +143,13 @@ void DrawCalibrationControls(AppState* state, const Image& image) {
   if (ImGui::IsItemHovered()) {
     ImGui::SetTooltip("Solve: from the vanishing points. Known focal: a calibrated lens.\n"
                       "Prior: solved, pulled towards a value +- std (e.g. from EXIF).");
+  }
+  ImGui::SameLine();
+  if (ImGui::Button("EXIF")) FromExif(state, image);
+  RecordItem("calibration.from_exif");
+  if (ImGui::IsItemHovered()) {
+    ImGui::SetTooltip("From EXIF: focal prior from the photo's 35 mm-equivalent focal length,\n"
+                      "+- ~3 %% (the spread between the makers' equivalence conventions)");
   }
   if (image.focal_mode == FocalMode::kFixed) {
     double f = image.fixed_focal_px;
@@ -159,12 +167,6 @@ void DrawCalibrationControls(AppState* state, const Image& image) {
       im->focal_prior_px = prior[0];
       im->focal_prior_std_px = prior[1];
     });
-  }
-  if (ImGui::Button("From EXIF")) FromExif(state, image);
-  RecordItem("calibration.from_exif");
-  if (ImGui::IsItemHovered()) {
-    ImGui::SetTooltip("Focal prior from the photo's EXIF (35 mm equivalent): +- ~3 %%,\n"
-                      "the spread between the makers' equivalence conventions");
   }
   const ExifFeedback& feedback = LastExifFeedback();
   if (feedback.image_id == id && !feedback.message.empty()) {
@@ -323,10 +325,11 @@ std::string ImageLabel(const Project& project, Id image_id) {
   return name.size() > 14 ? name.substr(0, 13) + "~" : name;
 }
 
-void DrawGeometrySolveFigures(const SceneSolveSummary& s) {
+void DrawGeometrySolveFigures(const SceneSolveSummary& s, const char* title) {
   const bool usable = s.IsUsable();
   const bool nothing = s.termination == SolveTermination::kNothingToSolve;
-  ImGui::TextColored(usable ? kGoodText : (nothing ? kDimText : kErrorText), "%s", SolveTerminationName(s.termination));
+  ImGui::TextColored(usable ? kGoodText : (nothing ? kDimText : kErrorText), "%s%s", title,
+                     SolveTerminationName(s.termination));
   if (usable) {
     LabelValue("Iterations", "%d", s.iterations);
     LabelValue("RMS", "%.3f px", s.reprojection_rms_px);
@@ -366,11 +369,13 @@ void DrawImageSection(AppState* state) {
   ImGui::Separator();
   DrawCalibrationControls(state, image);
 
-  ImGui::Spacing();
-  ImGui::TextColored(kDimText, "Vanishing-point result");
-  ImGui::Separator();
   // The controls above may have committed an edit: show the figures of the current camera.
   if (const Image* now = state->document.project().FindImage(image.id)) {
+    if (state->last_update.calibration.count(image.id)) {
+      ImGui::Spacing();
+      ImGui::TextColored(kDimText, "Vanishing-point result");
+      ImGui::Separator();
+    }
     DrawCalibrationResult(*state, *now);
   }
 }
@@ -396,8 +401,7 @@ void DrawSolveSection(AppState* state) {
     LabelValue("Time", "%.2f ms", j.time_ms);
   } else {
     // Only the geometry solve's result stands: its figures are the model's.
-    ImGui::TextColored(kDimText, "Geometry solve");
-    DrawGeometrySolveFigures(update.solve);
+    DrawGeometrySolveFigures(update.solve, "Geometry solve: ");
     if (j.termination != JointSolveSummary::Termination::kInvalidInput || !j.message.empty()) {
       ImGui::TextColored(kDimText, "Joint solve: %s", JointSolveTerminationName(j.termination));
     }
@@ -410,7 +414,7 @@ void DrawSolveSection(AppState* state) {
     const bool open = ImGui::TreeNodeEx("Geometry solve (start)", ImGuiTreeNodeFlags_SpanAvailWidth);
     RecordItem("solve.geometry_node");
     if (open) {
-      DrawGeometrySolveFigures(update.solve);
+      DrawGeometrySolveFigures(update.solve, "");
       ImGui::TreePop();
     }
   }
