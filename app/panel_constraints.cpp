@@ -70,8 +70,10 @@ void DrawSelectionBuilder(AppState* state) {
   const int faces = counts[static_cast<int>(ElementKind::kFace)];
   const size_t distinct = VerticesOfElements(project, selected).size();
   ImGui::Spacing();
-  ImGui::TextColored(kDimText, "Selection: %d vertices, %d edges, %d faces (%zu distinct vertices)", vertices, edges,
-                     faces, distinct);
+  ImGui::PushStyleColor(ImGuiCol_Text, kDimText);
+  ImGui::TextWrapped("Selection: %d vertices, %d edges, %d faces (%zu distinct vertices)", vertices, edges, faces,
+                     distinct);
+  ImGui::PopStyleColor();
   for (size_t i = 0; i < selected.size(); ++i) {
     ImGui::PushID(static_cast<int>(i));
     if (ImGui::SmallButton("x")) {
@@ -85,7 +87,9 @@ void DrawSelectionBuilder(AppState* state) {
     ImGui::TextUnformatted(DescribeElement(project, selected[i]).c_str());
     ImGui::PopID();
   }
-  ImGui::TextColored(kDimText, "Shift+click adds or removes; Esc or a click on nothing clears");
+  ImGui::PushStyleColor(ImGuiCol_Text, kDimText);
+  ImGui::TextWrapped("Shift+click adds or removes; Esc or a click on nothing clears");
+  ImGui::PopStyleColor();
   const bool two_faces = faces == 2 && selected.size() == 2;
   const bool two_edges = edges == 2 && selected.size() == 2;
   bool same_line = false;

@@ -496,8 +496,15 @@ TEST_CASE("Shift+click in the image panel: a multi-selection, highlighted, toggl
   for (int i = 0; i < 2; ++i) s << "click left " << Fmt(edge_mid) << "\nframes 1\n";
   for (int i = 0; i < 2; ++i) s << "click left " << Fmt(screen(corners[6])) << "\nframes 1\n";
   s << "release shift\nmove 5 5\nframes 3\nscreenshot " << (dir / "multi.png") << "\nframes 1\n";
+  const std::string selected = s.str();
   s << "command constrain coplanar\nframes 2\ncommand save " << (dir / "after.facet") << "\nframes 1\n";
   const nlohmann::json report = Render(dir, f.path, "shift", s.str());
+  // Escape over the image panel leaves the main element only: collinear then has 1 vertex.
+  const Eigen::Vector2d over_image(f.view.rect_x + 5.0, f.view.rect_y + 5.0);
+  const std::string err = RenderRefused(dir, f.path, "escape",
+                                        selected + "move " + Fmt(over_image) +
+                                            "\nframes 1\nkey escape\nframes 1\ncommand constrain collinear\n");
+  CHECK(err.find("needs 3 or more different vertices (1 selected") != std::string::npos);
   INFO("log: " << LogText(report));
   const facet::Project after = Load(dir / "after.facet");
   REQUIRE(after.constraints.size() == 1);
@@ -533,4 +540,44 @@ TEST_CASE("Shift+click in the image panel: a multi-selection, highlighted, toggl
   // Corners 6 and 7 (not selected) have none.
   CHECK(orange_near(screen(corners[6])) == 0);
   CHECK(orange_near(screen(corners[7])) == 0);
+}
+
+TEST_CASE("selection upkeep: an undo drops gone extras and the builder's first edge; so does a cleared selection") {
+  TempDir dir("fops_upkeep");
+  facet::Project empty;
+  const facet::Id box = empty.next_id;
+  const std::string path = dir / "empty.facet";
+  REQUIRE(facet::SaveProject(empty, path) == "");
+  const std::string add = "frames 2\ncommand add box\nframes 1\ncommand tool select\nframes 1\n";
+
+  // The first edge of a two-click parallel, then its box undone and redone: the next click
+  // stores a first edge again instead of pairing with the stale one.
+  std::ostringstream undo_first;
+  undo_first << add << Edge("select", box, 0) << "\ncommand constrain parallel\nframes 1\ncommand undo\nframes 2\n"
+             << "command redo\nframes 2\n" << Edge("select", box, 1) << "\ncommand constrain parallel\nframes 2\n";
+  nlohmann::json report = Render(dir, path, "undo_first", undo_first.str());
+  INFO("log: " << LogText(report));
+  CHECK(report.at("project").at("constraints").empty());
+  CHECK(LogText(report).find("Parallel: first edge box 1 edge 1") != std::string::npos);
+
+  // The same with the selection cleared in between.
+  std::ostringstream cleared;
+  cleared << add << Edge("select", box, 0) << "\ncommand constrain parallel\nframes 1\ncommand select none\nframes 2\n"
+          << Edge("select", box, 1) << "\ncommand constrain parallel\nframes 2\n";
+  report = Render(dir, path, "cleared", cleared.str());
+  CHECK(report.at("project").at("constraints").empty());
+  // Without either, the two clicks pair (the control).
+  std::ostringstream paired;
+  paired << add << Edge("select", box, 0) << "\ncommand constrain parallel\nframes 1\n"
+         << Edge("select", box, 1) << "\ncommand constrain parallel\nframes 2\n";
+  report = Render(dir, path, "paired", paired.str());
+  CHECK(report.at("project").at("constraints").size() == 1);
+
+  // A multi-selection whose box an undo removes is gone after the redo.
+  std::ostringstream extras;
+  extras << add << Vertex("select", box, 0) << "\n" << Vertex("select-add", box, 1) << "\n"
+         << Vertex("select-add", box, 2) << "\n" << Vertex("select-add", box, 3)
+         << "\nframes 1\ncommand undo\nframes 2\ncommand redo\nframes 2\ncommand constrain coplanar\n";
+  const std::string err = RenderRefused(dir, path, "extras", extras.str());
+  CHECK(err.find("(0 selected") != std::string::npos);
 }
