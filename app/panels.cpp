@@ -50,7 +50,8 @@ constexpr ToolButton kToolButtons[] = {
     {Tool::kPushPull, "Push/pull", "U", GLFW_KEY_U,
      "Push/pull: select a face, type a distance (negative pushes in) and press Enter or Extrude."},
     {Tool::kMove, "Move", "M", GLFW_KEY_M,
-     "V_op: drag a vertex or a primitive in the 3D panel; the solve starts from where you leave it."},
+     "V_op: in the 3D panel, drag a vertex (in the plane facing you) or an edge/face to move the whole "
+     "primitive over the ground; Shift: along z; Esc cancels. The solve starts from where you leave it."},
     {Tool::kLinePin, "Line pin", "L", GLFW_KEY_L,
      "Select an edge, then drag in the image along the line it lies on (edge on image line)."},
 };
