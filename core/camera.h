@@ -34,9 +34,10 @@ struct Camera {
   // Unit ray direction in world through pixel uv of the photo (distortion inverted by
   // UndistortNormalized, so Project(centre + t * ray) == uv inside the image).
   Eigen::Vector3d RayDirectionInWorld(const Eigen::Vector2d& uv_px) const;
-  // Normalised coordinates x = X / Z, y = Y / Z: undistorted -> distorted, x d(r^2).
+  // Normalised coordinates x = X / Z, y = Y / Z: undistorted -> distorted, (x, y) d.
   Eigen::Vector2d DistortNormalized(const Eigen::Vector2d& xy_undistorted) const;
-  // Distorted -> undistorted normalised coordinates (see UndistortNormalizedRadial).
+  // Distorted -> undistorted normalised coordinates: the free UndistortNormalized below says
+  // how it converges and what it returns beyond the model's fold.
   Eigen::Vector2d UndistortNormalized(const Eigen::Vector2d& xy_distorted) const;
   // Photo pixel -> the pixel a pinhole camera with the same K would see (K undistort K^-1),
   // and back. The identity when HasDistortion() is false. Line families drawn on the photo

@@ -8,7 +8,7 @@
 // Parameters (each block present only when free and used by a residual):
 // - per calibrated image: focal (unless Image::focal_locked), principal point (unless
 //   principal_point_locked), rotation (3, a small rotation applied on the left) and centre (3)
-//   unless pose_locked;
+//   unless pose_locked, radial distortion k1, k2 (unless distortion_locked; Camera's model);
 // - per primitive: each unlocked shape parameter, rotation (unless rotation_locked) and
 //   translation (unless translation_locked). A primitive attached on a box (attached_to)
 //   takes its footprint and pose from its base, so only its own parameters from index 2 on
@@ -17,10 +17,13 @@
 //   pin it to a roof ridge off its edge): its local offset (3). A vertex that is not free
 //   stays on its definition. The rule is explicit: the solve never frees a vertex itself.
 // Residuals, all in px so they share one scale:
-// - a pin: projection of its vertex minus the pin's pixel (2);
+// - a pin: projection of its vertex through the lens distortion minus the pin's pixel (2);
 // - a segment of a line family: signed distance of each endpoint to the line through the
 //   segment's midpoint and the family's vanishing point K R e_axis (2), which keeps the
-//   camera's rotation tied to the user's lines;
+//   camera's rotation tied to the user's lines. Segments are drawn on the distorted photo, so
+//   with k != 0 (or k free) their endpoints are undistorted with the current intrinsics first
+//   (Camera::UndistortPixel), derivatives with respect to f, c, k1, k2 included; an
+//   edge-on-image-line constraint's two line points likewise;
 // - a spatial constraint: g(v) made dimensionless (sines and cosines of angles, lengths over
 //   the model size S = RMS spread of the used vertices at the start, a distance over its
 //   value, image-line distances over the focal length; core/joint_solve_internal.h lists
@@ -62,7 +65,7 @@ struct JointSolveOptions {
   // most 300 parameters, the geometry solve (core/scene_solve.h, linear initialisation of
   // camera centres and dimensions) gives the start; initial_cost is then measured there.
   bool warm_start = true;
-  bool refine_intrinsics = true;  // false keeps every camera's intrinsics whatever the locks
+  bool refine_intrinsics = true;  // false keeps every camera's intrinsics (k too) whatever the locks
   bool use_segments = true;       // vanishing-line residuals on cameras with segments
   // Hard equality polish by NLopt SLSQP after LM, so that coplanar points end up coplanar to
   // ~1e-9 of the model size. Off on the per-frame path; on when a drag ends or on request.
