@@ -288,3 +288,57 @@ TEST_CASE("one line family, a known focal length and the horizon give the camera
   CHECK(solved.camera.focal_px == truth.focal_px);
   CHECK(report.at("undo_stack").size() == 3);
 }
+
+TEST_CASE("overlay: an outlier segment is crossed out, the given horizon dashed across the image") {
+  TempDir dir("calgui_overlay");
+  SyntheticSceneOptions options;
+  options.noise_px = 0.3;
+  SyntheticScene scene = MakeBoxScene(options);
+  facet::Project& project = scene.project;
+  // A wrong click: the first x segment's end 25 px off its edge.
+  facet::Segment& wrong = project.segments.at(0);
+  REQUIRE(wrong.axis == facet::Axis::kX);
+  const Eigen::Vector2d dir_ab = (wrong.b_px - wrong.a_px).normalized();
+  wrong.b_px += 25.0 * Eigen::Vector2d(-dir_ab.y(), dir_ab.x());
+  const Eigen::Vector2d wrong_mid = 0.5 * (wrong.a_px + wrong.b_px);
+  project.images[0].path = "photo.png";
+  REQUIRE(cv::imwrite(dir / "photo.png", cv::Mat(options.height_px, options.width_px, CV_8UC3, cv::Scalar(40, 40, 40))));
+  const std::string project_path = dir / "overlay.facet";
+  REQUIRE(facet::SaveProject(project, project_path) == "");
+  constexpr double kRow = 60.0;  // above the box: nothing else is drawn there
+  const RunResult run = Render(dir, project_path,
+                               "frames 2\ncommand calibration horizon level " + std::to_string(kRow) + "\nframes 3\n",
+                               "overlay");
+  INFO("stderr: " << run.stderr_text);
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json report = ReadJson(dir / "overlay.json");
+  const View view = ViewFromReport(report);
+  const cv::Mat shot = cv::imread(dir / "overlay.png");
+  REQUIRE(!shot.empty());
+  auto count_color = [&](int x0, int y0, int x1, int y1, const std::array<int, 3>& rgb) {
+    constexpr int kTolerance = 12;
+    int n = 0;
+    for (int y = std::max(0, y0); y <= std::min(shot.rows - 1, y1); ++y)
+      for (int x = std::max(0, x0); x <= std::min(shot.cols - 1, x1); ++x) {
+        const cv::Vec3b c = shot.at<cv::Vec3b>(y, x);
+        n += std::abs(c[2] - rgb[0]) <= kTolerance && std::abs(c[1] - rgb[1]) <= kTolerance &&
+             std::abs(c[0] - rgb[2]) <= kTolerance;
+      }
+    return n;
+  };
+  // The cross at the wrong segment's midpoint (app/overlay_calibration.cpp colours).
+  const Eigen::Vector2d m = view.ToScreen(wrong_mid);
+  REQUIRE(view.Inside(m, 10.0));
+  const int cross = count_color(int(m.x()) - 7, int(m.y()) - 7, int(m.x()) + 7, int(m.y()) + 7, {255, 70, 60});
+  CAPTURE(cross);
+  CHECK(cross >= 10);
+  // The horizon: dashes (10 of every 16 px) along the row across the image's width.
+  const Eigen::Vector2d left = view.ToScreen({0.0, kRow}), right = view.ToScreen({options.width_px - 1.0, kRow});
+  const int dashes = count_color(int(left.x()) + 40, int(left.y()) - 1, int(right.x()) - 10, int(left.y()) + 1,
+                                 {255, 160, 60});
+  const int span = int(right.x()) - 10 - (int(left.x()) + 40);
+  CAPTURE(dashes);
+  CAPTURE(span);
+  CHECK(dashes >= span / 2);  // 3 rows x 10/16 coverage, minus antialiased edges
+  CHECK(dashes < 3 * span);
+}
