@@ -1,8 +1,9 @@
 // Issue 5's F-operators on a multi-selection in the real application offscreen (`facet render`
 // with an input script): coplanar on four free vertices of different box faces, collinear on
 // three vertices, parallel between two selected edges, each solved on commit, undone and
-// redone; refusals that change nothing; an edge pinned to an image line by the script and by
-// a drag of the Line pin tool; Shift+click multi-selection in the image panel, highlighted.
+// redone; refusals that say why; an edge pinned to an image line by the script and by a drag
+// of the Line pin tool; Shift+click multi-selection in the image panel, highlighted, and
+// Escape; the selection's upkeep after undo; parallel faces as two parallel-edge constraints.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -580,4 +581,55 @@ TEST_CASE("selection upkeep: an undo drops gone extras and the builder's first e
          << "\nframes 1\ncommand undo\nframes 2\ncommand redo\nframes 2\ncommand constrain coplanar\n";
   const std::string err = RenderRefused(dir, path, "extras", extras.str());
   CHECK(err.find("(0 selected") != std::string::npos);
+}
+
+TEST_CASE("parallel faces: two parallel-edge constraints in one edit; perpendicular faces refused") {
+  TempDir dir("fops_faces");
+  facet::Project empty;
+  const facet::Id box = empty.next_id;
+  const std::string path = dir / "empty.facet";
+  REQUIRE(facet::SaveProject(empty, path) == "");
+  // The app's new box has the mesh of MakeBox: find its faces by their normals here.
+  facet::Project scratch;
+  facet::Id scratch_id = facet::kNoId;
+  std::string message;
+  REQUIRE(facet::AddPrimitiveToProject(&scratch, facet::MakeBox(facet::kNoId, Eigen::Vector3d::Ones()), "b",
+                                       &scratch_id, &message));
+  const facet::PolyMesh& mesh = scratch.FindPrimitive(scratch_id)->mesh;
+  auto face_along = [&](const Eigen::Vector3d& n) {
+    for (facet::FaceId f = 0; f < mesh.FaceIdEnd(); ++f) {
+      if (mesh.IsFace(f) && facet::FaceNormal(mesh, f).dot(n) > 0.99) return f;
+    }
+    return facet::kNoFace;
+  };
+  const facet::FaceId top = face_along(Eigen::Vector3d::UnitZ()), bottom = face_along(-Eigen::Vector3d::UnitZ());
+  const facet::FaceId front = face_along(-Eigen::Vector3d::UnitY());
+  REQUIRE(top != facet::kNoFace);
+  REQUIRE(bottom != facet::kNoFace);
+  REQUIRE(front != facet::kNoFace);
+  auto face = [&](const char* command, facet::FaceId f) {
+    return std::string("command ") + command + " face " + std::to_string(box) + " " + std::to_string(f) + "\n";
+  };
+  const std::string add = "frames 2\ncommand add box\nframes 1\ncommand tool select\nframes 1\n";
+  const nlohmann::json report = Render(dir, path, "faces",
+                                       add + face("select", top) + face("select-add", bottom) +
+                                           "frames 1\ncommand constrain parallel-faces\nframes 2\n");
+  INFO("log: " << LogText(report));
+  const facet::ProjectLoadResult after = facet::ProjectFromJson(report.at("project").dump());
+  REQUIRE(after.ok());
+  REQUIRE(after.project.constraints.size() == 2);
+  for (const facet::Constraint& c : after.project.constraints) {
+    CHECK(c.kind == facet::ConstraintKind::kParallel);
+    REQUIRE(c.vertices.size() == 4);
+    // Edge a on the top face (z = 1), edge b on the bottom one (z = 0).
+    const facet::Primitive& p = after.project.primitives.at(0);
+    CHECK(std::abs(p.mesh.vertex(c.vertices[0].vertex).position.z() - p.mesh.vertex(c.vertices[1].vertex).position.z()) < 1e-12);
+    CHECK(std::abs(p.mesh.vertex(c.vertices[2].vertex).position.z() - p.mesh.vertex(c.vertices[3].vertex).position.z()) < 1e-12);
+  }
+  CHECK(report.at("undo_stack").size() == 2);  // add box, parallel faces
+  CHECK(report.at("undo_stack").back().dump().find("Parallel faces") != std::string::npos);
+  const std::string err = RenderRefused(dir, path, "faces_refused",
+                                        add + face("select", top) + face("select-add", front) +
+                                            "frames 1\ncommand constrain parallel-faces\n");
+  CHECK(err.find("no two pairs of edges within 15 deg of parallel") != std::string::npos);
 }
