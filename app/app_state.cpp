@@ -22,8 +22,9 @@ ModelUpdateOptions FullUpdateOptions() {
   return options;
 }
 
-// One drag frame: both solves on the per-frame budget, no polish, and no diagnostics (their
-// SVD of the Jacobian is the expensive part and the panel shows them after release).
+// One drag frame: the joint solve alone on the per-frame budget (the geometry solve only when
+// its warm result does not hold), no polish, no diagnostics (their SVD of the Jacobian is the
+// expensive part and the panel shows them after release), no camera initialisation from pins.
 ModelUpdateOptions DragUpdateOptions() {
   ModelUpdateOptions options;
   options.solve.warm_start = true;
@@ -31,6 +32,8 @@ ModelUpdateOptions DragUpdateOptions() {
   options.joint.max_iterations = kDragIterationsPerFrame;
   options.joint.compute_diagnostics = false;
   options.joint.polish_constraints = false;
+  options.initialize_from_pins = false;
+  options.geometry_solve_when_warm = false;
   return options;
 }
 

@@ -116,6 +116,25 @@ VpCalibrationSummary CalibrateImage(const Image& image, const std::vector<Segmen
 // is cheap enough to try whenever the warm result looks wrong.
 constexpr double kWarmStartSuspectRmsPx = 3.0;
 
+// The geometry solve, warm when asked, retried cold when the warm result looks wrong; the
+// better of the two by cost.
+void GeometrySolve(const Project& project, const SceneSolveOptions& options, SceneSolveSummary* summary,
+                   Project* solved) {
+  *summary = SolveScene(project, options, solved);
+  const bool warm_suspect =
+      options.warm_start && (!summary->IsUsable() || summary->reprojection_rms_px > kWarmStartSuspectRmsPx);
+  if (!warm_suspect) return;
+  SceneSolveOptions cold = options;
+  cold.warm_start = false;
+  cold.max_iterations = std::max(cold.max_iterations, 50);
+  Project cold_solved;
+  SceneSolveSummary cold_summary = SolveScene(project, cold, &cold_solved);
+  if (cold_summary.IsUsable() && (!summary->IsUsable() || cold_summary.final_cost < summary->final_cost)) {
+    *summary = std::move(cold_summary);
+    *solved = std::move(cold_solved);
+  }
+}
+
 }  // namespace
 
 ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& options, Project* updated) {
@@ -158,26 +177,24 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
     }
   }
 
-  // Cameras of images without line families (from pins: core/multiview_init.h) are
-  // initialised here, after the vanishing-point calibration and before the geometry solve.
+  // The per-frame path: the joint solve alone, warm; the geometry solve below only when that
+  // does not hold up.
+  if (options.solve.warm_start && options.joint_solve && !options.geometry_solve_when_warm) {
+    JointSolveOptions joint_options = options.joint;
+    joint_options.warm_start = true;
+    Project joint_solved;
+    JointSolveSummary joint = SolveJoint(calibrated, joint_options, &joint_solved);
+    if (joint.IsUsable() && joint.reprojection_rms_px <= kWarmStartSuspectRmsPx) {
+      summary.joint = std::move(joint);
+      *updated = std::move(joint_solved);
+      summary.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      return summary;
+    }
+  }
 
   SceneSolveOptions solve_options = options.solve;
   Project solved;
-  summary.solve = SolveScene(calibrated, solve_options, &solved);
-  const bool warm_suspect = solve_options.warm_start &&
-                            (!summary.solve.IsUsable() || summary.solve.reprojection_rms_px > kWarmStartSuspectRmsPx);
-  if (warm_suspect) {
-    SceneSolveOptions cold = solve_options;
-    cold.warm_start = false;
-    cold.max_iterations = std::max(cold.max_iterations, 50);
-    Project cold_solved;
-    SceneSolveSummary cold_summary = SolveScene(calibrated, cold, &cold_solved);
-    if (cold_summary.IsUsable() &&
-        (!summary.solve.IsUsable() || cold_summary.final_cost < summary.solve.final_cost)) {
-      summary.solve = std::move(cold_summary);
-      solved = std::move(cold_solved);
-    }
-  }
+  GeometrySolve(calibrated, solve_options, &summary.solve, &solved);
 
   if (summary.solve.IsUsable()) {
     *updated = std::move(solved);
@@ -188,6 +205,34 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
     if (summary.solve.termination != SolveTermination::kNothingToSolve) {
       summary.ok = false;
       summary.messages.push_back("Solve: " + summary.solve.message);
+    }
+  }
+
+  // Cameras of images without line families, from their pins (core/multiview_init.h). After
+  // the geometry solve: resection reads the solved model's vertex positions; then the geometry
+  // solve runs again with the new cameras taking part.
+  if (options.initialize_from_pins && summary.ok) {
+    Project initialised;
+    summary.multiview = CalibrateImagesFromPins(*updated, options.multiview, &initialised);
+    for (const std::string& m : summary.multiview.messages) summary.messages.push_back(m);
+    // A guessed focal length (two views without a known lens) is only a start: the joint
+    // solve refines it, which a user can lock again once it settles.
+    for (const MultiViewImageReport& report : summary.multiview.images) {
+      if (!report.initialized || !report.focal_guessed) continue;
+      if (Image* image = initialised.FindImage(report.image_id)) image->focal_locked = false;
+    }
+    if (summary.multiview.num_initialized > 0) {
+      SceneSolveSummary again;
+      Project resolved;
+      GeometrySolve(initialised, solve_options, &again, &resolved);
+      if (again.IsUsable()) {
+        summary.solve = std::move(again);
+        *updated = std::move(resolved);
+      } else {
+        *updated = std::move(initialised);
+        if (again.termination != SolveTermination::kNothingToSolve)
+          summary.messages.push_back("Solve with the cameras from pins: " + again.message);
+      }
     }
   }
 

@@ -14,6 +14,7 @@
 
 #include "core/calibrate_vp.h"
 #include "core/joint_solve.h"
+#include "core/multiview_init.h"
 #include "core/plumb_line.h"
 #include "core/project.h"
 #include "core/scene_solve.h"
@@ -23,8 +24,19 @@ namespace facet {
 struct ModelUpdateOptions {
   SceneSolveOptions solve;
   bool calibrate = true;  // false keeps every camera's intrinsics and rotation
+  // Images with pins but no line families get cameras from their pins after the geometry
+  // solve (core/multiview_init.h: resection, two views, self-calibration), then the geometry
+  // solve runs again with them. Off on the per-frame drag path (a new image is initialised
+  // once, by the commit that gives it enough pins).
+  bool initialize_from_pins = true;
+  MultiViewInitOptions multiview;
   bool joint_solve = true;
   JointSolveOptions joint;
+  // Warm start (solve.warm_start) with the joint solve on: when false, the geometry solve runs
+  // only if the joint solve's warm result is not usable or above 3 px RMS, since the joint
+  // solve already covers every parameter of the geometry solve (the per-frame drag path:
+  // the dense geometry solve was most of a 10-box frame).
+  bool geometry_solve_when_warm = true;
 };
 
 struct ModelUpdateSummary {
@@ -33,7 +45,8 @@ struct ModelUpdateSummary {
   // plumb-line model (core/plumb_line.h); the camera's k1, k2 are its OpenCV conversion with
   // the calibrated focal length.
   std::map<Id, PlumbLineSummary> distortion;
-  SceneSolveSummary solve;
+  SceneSolveSummary solve;  // termination kInvalidInput with an empty message when it did not run
+  MultiViewInitSummary multiview;  // cameras initialised from pins (num_initialized 0: none)
   JointSolveSummary joint;  // termination kInvalidInput when it did not run
   std::vector<std::string> messages;  // user-facing: what failed and why
   double time_ms = 0.0;

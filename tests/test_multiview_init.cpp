@@ -774,9 +774,11 @@ TEST_CASE("integration: after resection the model update solves with the second 
   constexpr double kRmsTolPx = 1e-6;
   Scene s = MakeScene({});
   const Id id1 = s.project.images[1].id;
-  // Today: the second image's pins are skipped.
+  // Without the initialisation the second image's pins are skipped.
+  ModelUpdateOptions no_init;
+  no_init.initialize_from_pins = false;
   Project before;
-  const ModelUpdateSummary skipped = UpdateModel(s.project, ModelUpdateOptions(), &before);
+  const ModelUpdateSummary skipped = UpdateModel(s.project, no_init, &before);
   CHECK(skipped.solve.num_skipped_pins == PinsIn(s.project, id1));
   CHECK_FALSE(before.images[1].camera_calibrated);
 
@@ -873,6 +875,7 @@ TEST_CASE("the recommended wiring: VP calibration and geometry solve, then pins 
   // 1. VP calibration and the geometry solve (image 1's pins skipped).
   ModelUpdateOptions first;
   first.joint_solve = false;
+  first.initialize_from_pins = false;
   Project solved;
   const ModelUpdateSummary step1 = UpdateModel(s.project, first, &solved);
   REQUIRE(step1.ok);
@@ -898,6 +901,46 @@ TEST_CASE("the recommended wiring: VP calibration and geometry solve, then pins 
   CHECK(size_error < kExactTol);
   CHECK(e1.rotation_rad < kExactTol);
   CHECK(e1.translation_rel < kExactTol);
+}
+
+TEST_CASE("UpdateModel initialises an image without line families from its pins in the same update") {
+  // The same edit as above, in one call: the wiring in core/model_update.cpp.
+  constexpr double kRmsTolPx = 1e-6;
+  Scene s = MakeScene({});
+  Image& image0 = s.project.images[0];
+  image0.camera.focal_px *= 1.2;
+  image0.camera.SetPose(RotationFromAngleAxis(Eigen::Vector3d(0.05, -0.03, 0.08)) * image0.camera.cam_from_world_rotation,
+                        image0.camera.CenterInWorld() + Eigen::Vector3d(1.2, -0.8, 0.6));
+  Primitive& box = s.project.primitives[0];
+  box.shape.params.x() *= 1.3;
+  RefreshPrimitive(&s.project, &box);
+  const Eigen::Vector3d true_size = MakeScene({}).project.primitives[0].shape.params.head<3>();
+  REQUIRE_FALSE(s.project.images[1].camera_calibrated);
+
+  Project updated;
+  const ModelUpdateSummary summary = UpdateModel(s.project, ModelUpdateOptions(), &updated);
+  INFO("solve: " << summary.solve.message << "; joint: " << summary.joint.message);
+  REQUIRE(summary.ok);
+  REQUIRE(summary.multiview.images.size() == 2);
+  CHECK(summary.multiview.images[1].path == MultiViewInitPath::kResection);
+  CHECK(summary.multiview.num_initialized == 1);
+  CHECK(updated.images[1].camera_calibrated);
+  CHECK(summary.solve.num_skipped_pins == 0);
+  REQUIRE(summary.joint.IsUsable());
+  CHECK(summary.joint.reprojection_rms_px < kRmsTolPx);
+  const double size_error = (updated.primitives[0].shape.params.head<3>() - true_size).norm() / true_size.norm();
+  CHECK(size_error < kExactTol);
+  const CameraErrors e1 = Compare(updated.images[1].camera, s.truth[1]);
+  CHECK(e1.rotation_rad < kExactTol);
+  CHECK(e1.translation_rel < kExactTol);
+
+  // The per-frame path leaves a new image alone (it is initialised by the commit).
+  ModelUpdateOptions frame;
+  frame.initialize_from_pins = false;
+  Project frame_updated;
+  const ModelUpdateSummary frame_summary = UpdateModel(s.project, frame, &frame_updated);
+  CHECK(frame_summary.multiview.num_initialized == 0);
+  CHECK_FALSE(frame_updated.images[1].camera_calibrated);
 }
 
 }  // namespace
