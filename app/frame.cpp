@@ -13,6 +13,7 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>  // key codes only
 
+#include "app/add_photo.h"
 #include "app/image_panel.h"
 #include "app/model_edits.h"
 #include "app/move_tool.h"
@@ -299,6 +300,7 @@ const char* DialogTitle(Dialog dialog) {
     case Dialog::kOpen: return "Open project";
     case Dialog::kSaveAs: return "Save project as";
     case Dialog::kExport: return "Export model";
+    case Dialog::kAddPhoto: return "Add photo";
     case Dialog::kAbout: return "About Facet";
     case Dialog::kConfirmQuit: return "Unsaved changes##quit";
     case Dialog::kConfirmNew: return "Unsaved changes##new";
@@ -315,8 +317,12 @@ void CloseDialog(ShellState* shell) {
 
 void DrawPathDialog(AppState* state, ShellState* shell) {
   const Dialog d = shell->dialog;
-  const char* verb = d == Dialog::kOpen ? "Open" : d == Dialog::kSaveAs ? "Save" : "Export";
-  const std::string extension = d == Dialog::kExport ? "" : ".facet";
+  const char* verb = d == Dialog::kOpen      ? "Open"
+                     : d == Dialog::kSaveAs  ? "Save"
+                     : d == Dialog::kAddPhoto ? "Add"
+                                              : "Export";
+  const std::string extension = d == Dialog::kExport || d == Dialog::kAddPhoto ? "" : ".facet";
+  if (d == Dialog::kAddPhoto) ImGui::TextColored(kDimText, "A JPEG or PNG photo; its EXIF focal length becomes a prior");
   if (d == Dialog::kExport) ImGui::TextColored(kDimText, "The extension chooses the format: .glb (glTF) or .obj");
   if (ImGui::IsWindowAppearing()) ImGui::SetKeyboardFocusHere();
   ImGui::SetNextItemWidth(560);
@@ -341,7 +347,10 @@ void DrawPathDialog(AppState* state, ShellState* shell) {
     return;
   }
   std::string error;
-  const char* command = d == Dialog::kOpen ? "open" : d == Dialog::kSaveAs ? "save" : "export";
+  const char* command = d == Dialog::kOpen      ? "open"
+                        : d == Dialog::kSaveAs  ? "save"
+                        : d == Dialog::kAddPhoto ? "add-photo"
+                                                 : "export";
   if (RunAppCommand(state, shell, command, {path}, &error)) {
     CloseDialog(shell);
     if (d == Dialog::kSaveAs && shell->quit_after_save) shell->quit_now = true;
@@ -369,6 +378,7 @@ void DrawDialogs(AppState* state, ShellState* shell) {
   switch (shell->dialog) {
     case Dialog::kOpen:
     case Dialog::kSaveAs:
+    case Dialog::kAddPhoto:
     case Dialog::kExport: DrawPathDialog(state, shell); break;
     case Dialog::kAbout:
       ImGui::Text("Facet %s", "0.1");
@@ -583,6 +593,13 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     return true;
   }
   if (name == "select") return RunSelectCommand(state, arg, error);
+  if (name == "add-photo") {
+    if (!AddPhotoEdit(state, arg)) {
+      *error = LastLoggedError(*state);
+      return false;
+    }
+    return true;
+  }
   if (name == "constrain") return RunConstrainCommand(state, arg, error);
   if (name == "select-add") return RunSelectAddCommand(state, arg, error);
   if (name == "line-pin") return RunLinePinCommand(state, arg, error);

@@ -14,7 +14,7 @@
 
 namespace facet::app {
 
-enum class Dialog { kNone, kOpen, kSaveAs, kExport, kAbout, kConfirmQuit, kConfirmNew, kConfirmOpen };
+enum class Dialog { kNone, kOpen, kSaveAs, kExport, kAddPhoto, kAbout, kConfirmQuit, kConfirmNew, kConfirmOpen };
 
 struct ShellState {
   Layout layout = DefaultLayout();

@@ -291,6 +291,9 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
       }
     }
     if (ImGui::MenuItem("Open...", "Ctrl+O")) open_dialog(Dialog::kOpen, state->project_path);
+    if (ImGui::MenuItem("Add photo...")) open_dialog(Dialog::kAddPhoto, "");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("A new image: draw line families on it, or pin model vertices in it");
+    ImGui::Separator();
     if (ImGui::MenuItem("Save", "Ctrl+S")) {
       if (state->project_path.empty()) {
         open_dialog(Dialog::kSaveAs, "untitled.facet");

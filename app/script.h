@@ -23,12 +23,17 @@
 //                                                      selection: along-x|y|z, length VALUE
 //                                                      (edge); parallel, perpendicular,
 //                                                      equal-length (first call stores the
-//                                                      edge, second adds); fix (vertex);
-//                                                      remove ID. Dispatched by
+//                                                      edge, second adds; with two edges
+//                                                      selected, at once); coplanar (4+
+//                                                      vertices or two faces), collinear
+//                                                      (3+ vertices), parallel-faces;
+//                                                      fix (vertex); remove ID. Dispatched by
 //                                                      RunConstrainCommand (app/model_edits.h)
+//                                   add-photo PATH     a new image (app/add_photo.h)
 //                                   select-add vertex|edge|face PRIMITIVE_ID ELEMENT_ID
 //                                                      add to the selection (RunSelectAddCommand)
-//                                   line-pin ARGS      the selected edge on an image line
+//                                   line-pin IMAGE_INDEX X1 Y1 X2 Y2  the selected edge on the
+//                                                      image line through (X1, Y1), (X2, Y2)
 //                                                      (RunLinePinCommand, app/model_edits.h)
 //                                   calibration KEY VALUE  the active image's calibration
 //                                                      modes, each one undoable edit

@@ -1,0 +1,74 @@
+// File > Add photo in the real application offscreen (`command add-photo PATH`, app/add_photo.h):
+// the photo becomes a new image with its size, a path relative to the saved project, an
+// uncalibrated camera centred on the photo, and the focal prior of its EXIF when it has one;
+// undo removes it; an unreadable file is refused with the reason and changes nothing. Then a
+// second view takes part in the solve from its pins alone (resection, core/multiview_init.h).
+#include <doctest/doctest.h>
+
+#include <string>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/model_update.h"
+#include "core/project_io.h"
+#include "tests/app/app_test_util.h"
+#include "tests/synthetic_scene.h"
+
+using namespace facet::testing;
+
+namespace {
+
+constexpr char kWindowSize[] = "1280x800";
+constexpr double kExactRelative = 1e-9;
+
+RunResult Render(const TempDir& dir, const std::string& project, const std::string& script, const std::string& name) {
+  WriteText(dir / (name + ".txt"), script);
+  return RunRender(dir, "'" + project + "' -o '" + (dir / (name + ".png")) + "' --script '" + (dir / (name + ".txt")) +
+                            "' --report '" + (dir / (name + ".json")) + "' --size " + kWindowSize);
+}
+
+facet::Project Load(const std::string& path) {
+  const facet::ProjectLoadResult loaded = facet::LoadProject(path);
+  INFO("loading " << path << ": " << loaded.error);
+  REQUIRE(loaded.ok());
+  return loaded.project;
+}
+
+}  // namespace
+
+TEST_CASE("Add photo: a new uncalibrated image with its size and a relative path; undo; a corrupt file is refused") {
+  TempDir dir("add_photo");
+  SyntheticScene scene = MakeBoxScene(SyntheticSceneOptions());
+  const std::string project = dir / "scene.facet";
+  REQUIRE(facet::SaveProject(scene.project, project) == "");
+  REQUIRE(cv::imwrite(dir / "second.png", cv::Mat(600, 800, CV_8UC3, cv::Scalar(60, 80, 100))));
+  WriteText(dir / "broken.jpg", "not a photo");
+
+  const RunResult added = Render(dir, project,
+                                 "frames 2\ncommand add-photo " + (dir / "second.png") +
+                                     "\nframes 2\ncommand save\ncommand undo\nframes 2\ncommand save " +
+                                     (dir / "undone.facet") + "\n",
+                                 "add");
+  INFO(added.stderr_text);
+  REQUIRE(added.exit_code == 0);
+  const facet::Project saved = Load(project);
+  REQUIRE(saved.images.size() == 2);
+  const facet::Image& image = saved.images[1];
+  CHECK(image.path == "second.png");
+  CHECK(image.width_px == 800);
+  CHECK(image.height_px == 600);
+  CHECK_FALSE(image.camera_calibrated);
+  CHECK(image.focal_mode == facet::FocalMode::kSolve);  // a PNG carries no EXIF focal length
+  CHECK(image.camera.principal_point_px.isApprox(Eigen::Vector2d(399.5, 299.5), kExactRelative));
+  const nlohmann::json report = ReadJson(dir / "add.json");
+  REQUIRE(report["redo_stack"].size() == 1);
+  CHECK(report["redo_stack"][0].get<std::string>() == "Add photo second.png");
+
+  // Undo (in the same session) took the photo out again; the broken file stops the script
+  // with the reason.
+  CHECK(Load(dir / "undone.facet").images.size() == 1);
+  const RunResult broken = Render(dir, dir / "undone.facet",
+                                  "frames 2\ncommand add-photo " + (dir / "broken.jpg") + "\n", "broken");
+  CHECK(broken.exit_code != 0);
+  CHECK(broken.stderr_text.find("broken.jpg") != std::string::npos);
+}
