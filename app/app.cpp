@@ -151,6 +151,10 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
                           {{"kind", ElementKindName(state.selection.element.kind)},
                            {"primitive_id", state.selection.element.primitive_id},
                            {"id", state.selection.element.element}}}};
+  nlohmann::json extra = nlohmann::json::array();
+  for (const ElementRef& e : state.selection.extra)
+    extra.push_back({{"kind", ElementKindName(e.kind)}, {"primitive_id", e.primitive_id}, {"id", e.element}});
+  report["selection"]["extra"] = std::move(extra);
   report["hover"] = {{"kind", ElementKindName(state.hover.kind)},
                      {"primitive_id", state.hover.primitive_id},
                      {"id", state.hover.element}};

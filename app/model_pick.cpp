@@ -72,6 +72,7 @@ PickFilter PickFilterOf(Tool tool) {
     case Tool::kDeleteEdge:
     case Tool::kLinePin: return {false, true, false};
     case Tool::kPushPull: return {false, false, true};
+    case Tool::kMove: return {true, true, true};
     default: return {false, false, false};
   }
 }

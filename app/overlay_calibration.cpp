@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "app/overlay_draw.h"
+#include "core/multiview_init.h"
 
 namespace facet::app {
 
@@ -88,6 +89,37 @@ void DrawOutliers(ImDrawList* draw_list, const AppState& state, const Image& ima
   }
 }
 
+// Epipolar lines for teaching two-view geometry: for the selected vertices (or the selected
+// pin's vertex), the line in this image of each pin of that vertex in another calibrated
+// image (F from the two cameras, core/multiview_init.h). The vertex's own pin here should lie
+// on every such line; the distance is what the two-view solve minimises. On a distorted
+// photo the true epipolar curve bends: the line is drawn in pinhole pixels.
+void DrawEpipolarLines(ImDrawList* draw_list, const AppState& state, const Image& image, const ViewTransform& view) {
+  if (!image.camera_calibrated) return;
+  const Project& project = state.document.project();
+  std::vector<VertexRef> vertices;
+  for (const ElementRef& e : SelectedElements(state.selection))
+    if (e.kind == ElementKind::kVertex) vertices.push_back({e.primitive_id, e.element});
+  if (const Pin* pin = project.FindPin(state.selection.pin_id)) vertices.push_back(pin->vertex);
+  if (vertices.empty()) return;
+  constexpr ImU32 kEpipolarColor = IM_COL32(120, 230, 255, 230);
+  for (const Image& other : project.images) {
+    if (other.id == image.id || !other.camera_calibrated) continue;
+    const Eigen::Matrix3d f = FundamentalFromCameras(other.camera, image.camera);
+    for (const Pin& pin : project.pins) {
+      if (pin.image_id != other.id) continue;
+      if (std::find(vertices.begin(), vertices.end(), pin.vertex) == vertices.end()) continue;
+      const EpipolarLine line = EpipolarLineInImage(f, pin.uv_px, image.width_px, image.height_px);
+      if (!line.segment_px) continue;
+      const Eigen::Vector2d a = Screen(view, line.segment_px->first.x(), line.segment_px->first.y());
+      const Eigen::Vector2d b = Screen(view, line.segment_px->second.x(), line.segment_px->second.y());
+      DrawDashed(draw_list, a, b, kEpipolarColor, 1.5f);
+      const std::string label = "epipolar from " + other.path;
+      DrawShadowedText(draw_list, ImVec2(float(a.x()) + 6.0f, float(a.y()) + 4.0f), kEpipolarColor, label.c_str());
+    }
+  }
+}
+
 }  // namespace
 
 void DrawCalibrationOverlay(ImDrawList* draw_list, const AppState& state, const Image& image,
@@ -96,6 +128,7 @@ void DrawCalibrationOverlay(ImDrawList* draw_list, const AppState& state, const 
   draw_list->PushClipRect(clip_min, clip_max, true);
   if (image.use_horizon) DrawGivenHorizon(draw_list, image, view, clip_min, clip_max);
   DrawOutliers(draw_list, state, image, view);
+  DrawEpipolarLines(draw_list, state, image, view);
   draw_list->PopClipRect();
 }
 

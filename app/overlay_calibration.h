@@ -1,7 +1,8 @@
 // Calibration overlays of the image panel that teach what the solver sees: the user's horizon
 // (the 1-VP + horizon mode, dashed and labelled "horizon (given)", distinct from the fitted
 // horizon app/overlay_draw.h draws), the segments the calibration flagged as outliers
-// (crossed out), and epipolar lines between images (core/multiview_init.h, not drawn yet).
+// (crossed out), and the epipolar lines in this image of the selected vertices' pins in the
+// other calibrated images (core/multiview_init.h).
 #pragma once
 
 #include <imgui.h>

@@ -855,6 +855,7 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
   const ImU32 kSelectedColor = IM_COL32(255, 160, 40, 255);
   const ImU32 kHoverColor = IM_COL32(255, 235, 90, 255);
   draw_element(state.selection.element, kSelectedColor, true);
+  for (const ElementRef& extra : state.selection.extra) draw_element(extra, kSelectedColor, true);
   if (!(state.selection.connect_from == state.selection.element)) draw_element(state.selection.connect_from, kSelectedColor, true);
   if (!(state.hover == state.selection.element)) draw_element(state.hover, kHoverColor, false);
   // Free vertices: cyan rings, so that the user sees what the solve may move.
