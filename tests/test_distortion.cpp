@@ -456,5 +456,37 @@ TEST_CASE("distortion: a face baked from a distorted photo shows its checker und
   CHECK(without_k > 4.0 * kMaxMismatchFraction);  // the distortion path is what makes it match
 }
 
+TEST_CASE("distortion: on a pinhole photo with 0.5 px clicks the estimate is not significant and the camera stays a pinhole") {
+  // The same lines through a lens without distortion, each endpoint off by 0.5 px (seeded):
+  // the plumb-line k1 is within 3 of its standard deviations of 0, so it is not applied.
+  constexpr double kNoisePx = 0.5;
+  Camera truth;
+  Project edited = DistortedLineScene(&truth);
+  truth.k1 = truth.k2 = 0.0;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, kNoisePx);
+  // Re-project the segments' 3-D ends through the pinhole truth: undistort the distorted pixels.
+  for (Segment& s : edited.segments) {
+    Camera distorted = truth;
+    distorted.k1 = kTrueK1;
+    distorted.k2 = kTrueK2;
+    s.a_px = distorted.UndistortPixel(s.a_px) + Eigen::Vector2d(noise(rng), noise(rng));
+    s.b_px = distorted.UndistortPixel(s.b_px) + Eigen::Vector2d(noise(rng), noise(rng));
+  }
+  edited.images[0].estimate_distortion = true;
+  Project updated;
+  const ModelUpdateSummary summary = UpdateModel(edited, ModelUpdateOptions(), &updated);
+  REQUIRE(summary.distortion.count(edited.images[0].id) == 1);
+  const PlumbLineSummary& plumb = summary.distortion.at(edited.images[0].id);
+  REQUIRE(plumb.IsUsable());
+  MESSAGE("pinhole photo: plumb-line k1 " << plumb.distortion.k1 << " +- " << plumb.k1_std);
+  CHECK(std::abs(plumb.distortion.k1) <= 3.0 * plumb.k1_std);
+  CHECK(updated.images[0].camera.k1 == 0.0);
+  CHECK(updated.images[0].camera.k2 == 0.0);
+  bool said = false;
+  for (const std::string& m : summary.messages) said = said || m.find("not significant") != std::string::npos;
+  CHECK(said);
+}
+
 }  // namespace
 }  // namespace facet
