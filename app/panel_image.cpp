@@ -213,6 +213,22 @@ void DrawCalibrationControls(AppState* state, const Image& image) {
   }
   RecordItem("calibration.estimate_distortion");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Radial k1, k2 from the straightness of the drawn segments");
+  // What the joint solve may refine with the model (each kept as calibration gave it when locked).
+  bool focal_locked = image.focal_locked;
+  if (ImGui::Checkbox("Lock focal", &focal_locked)) {
+    CommitImageEdit(state, id, focal_locked ? "Lock focal" : "Unlock focal",
+                    [&](Image* im) { im->focal_locked = focal_locked; });
+  }
+  RecordItem("calibration.focal_locked");
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Unlocked: the joint solve refines the focal length with the model");
+  ImGui::SameLine();
+  bool pp_locked = image.principal_point_locked;
+  if (ImGui::Checkbox("Lock principal pt", &pp_locked)) {
+    CommitImageEdit(state, id, pp_locked ? "Lock principal point" : "Unlock principal point",
+                    [&](Image* im) { im->principal_point_locked = pp_locked; });
+  }
+  RecordItem("calibration.principal_point_locked");
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Unlocked: the joint solve refines the principal point with the model");
   bool locked = image.distortion_locked;
   if (ImGui::Checkbox("Lock distortion", &locked)) {
     CommitImageEdit(state, id, locked ? "Lock distortion" : "Unlock distortion",
@@ -542,8 +558,17 @@ bool RunCalibrationCommand(AppState* state, const std::string& arg, std::string*
                     [&](Image* im) { im->distortion_locked = on; });
     return true;
   }
+  if (key == "focal-lock" || key == "principal-point-lock") {
+    if (!ParseOnOff(w, &on)) return fail("on or off");
+    const bool focal = key == "focal-lock";
+    const std::string what = focal ? "focal" : "principal point";
+    CommitImageEdit(state, image.id, (on ? "Lock " : "Unlock ") + what, [&](Image* im) {
+      (focal ? im->focal_locked : im->principal_point_locked) = on;
+    });
+    return true;
+  }
   *error = "calibration: unknown key '" + key +
-           "' (principal-point, focal, horizon, distortion, distortion-lock)";
+           "' (principal-point, focal, horizon, distortion, distortion-lock, focal-lock, principal-point-lock)";
   return false;
 }
 

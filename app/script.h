@@ -44,7 +44,9 @@
 //                                                      prior F STD|exif (px); horizon
 //                                                      off|level V|X1 Y1 X2 Y2 (px);
 //                                                      distortion on|off (estimate from
-//                                                      lines); distortion-lock on|off
+//                                                      lines); distortion-lock,
+//                                                      focal-lock, principal-point-lock
+//                                                      on|off (what the joint solve keeps)
 //                                   move-selection ARGS  V_op on the selected vertex or
 //                                                      primitive (RunMoveCommand,
 //                                                      app/move_tool.h)

@@ -342,3 +342,28 @@ TEST_CASE("overlay: an outlier segment is crossed out, the given horizon dashed 
   CHECK(dashes >= span / 2);  // 3 rows x 10/16 coverage, minus antialiased edges
   CHECK(dashes < 3 * span);
 }
+
+TEST_CASE("intrinsics locks from the script: focal and principal point unlocked for the joint solve, undo relocks") {
+  TempDir dir("calgui_locks");
+  SyntheticScene scene = MakeBoxScene(SyntheticSceneOptions());
+  const std::string project = dir / "locks.facet";
+  REQUIRE(facet::SaveProject(scene.project, project) == "");
+  REQUIRE(scene.project.images[0].focal_locked);
+  REQUIRE(scene.project.images[0].principal_point_locked);
+  const RunResult run = Render(dir, project,
+                               "frames 2\ncommand calibration focal-lock off\nframes 1\n"
+                               "command calibration principal-point-lock off\nframes 1\ncommand save " +
+                                   (dir / "unlocked.facet") + "\ncommand undo\nframes 1\ncommand save " +
+                                   (dir / "relocked.facet") + "\n",
+                               "locks");
+  INFO(run.stderr_text);
+  REQUIRE(run.exit_code == 0);
+  const facet::Image unlocked = SavedImage(dir / "unlocked.facet");
+  CHECK_FALSE(unlocked.focal_locked);
+  CHECK_FALSE(unlocked.principal_point_locked);
+  const facet::Image relocked = SavedImage(dir / "relocked.facet");
+  CHECK_FALSE(relocked.focal_locked);  // undo takes back the last edit only
+  CHECK(relocked.principal_point_locked);
+  const bool error = run.stderr_text.find("unknown key") != std::string::npos;
+  CHECK_FALSE(error);
+}
