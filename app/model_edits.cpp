@@ -13,6 +13,7 @@
 
 #include "core/mesh_extrude.h"
 #include "core/mesh_operators.h"
+#include "core/vertex_move.h"
 
 namespace facet::app {
 namespace {
@@ -49,24 +50,9 @@ PrimitiveShape DefaultShape(PrimitiveKind kind) {
   return MakeBox(kNoId, Eigen::Vector3d::Ones());
 }
 
-int NumShapeParams(PrimitiveKind kind) {
-  switch (kind) {
-    case PrimitiveKind::kPrism:
-    case PrimitiveKind::kCylinder:
-    case PrimitiveKind::kPlane: return 2;
-    default: return 3;
-  }
-}
+int NumShapeParams(PrimitiveKind kind) { return ShapeParamCount(kind); }
 
-const char* ShapeParamName(PrimitiveKind kind, int index) {
-  switch (kind) {
-    case PrimitiveKind::kPrism:
-    case PrimitiveKind::kCylinder: return index == 0 ? "Radius" : "Height";
-    case PrimitiveKind::kPyramid:
-    case PrimitiveKind::kWedge: return index == 0 ? "Size x" : index == 1 ? "Size y" : "Height";
-    default: return index == 0 ? "Size x" : index == 1 ? "Size y" : "Size z";
-  }
-}
+const char* ShapeParamName(PrimitiveKind kind, int index) { return ShapeParamLabel(kind, index); }
 
 bool CanAttachOnTop(PrimitiveKind kind) {
   return kind == PrimitiveKind::kWedge || kind == PrimitiveKind::kPyramid || kind == PrimitiveKind::kPlane ||

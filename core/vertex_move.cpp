@@ -9,18 +9,6 @@
 namespace facet {
 namespace {
 
-// The name the properties panel shows for a shape parameter (app/model_edits.cpp uses the
-// same words), so that a message points at the field to unlock.
-const char* ParamLabel(PrimitiveKind kind, int index) {
-  switch (kind) {
-    case PrimitiveKind::kPrism:
-    case PrimitiveKind::kCylinder: return index == 0 ? "Radius" : "Height";
-    case PrimitiveKind::kPyramid:
-    case PrimitiveKind::kWedge: return index == 0 ? "Size x" : index == 1 ? "Size y" : "Height";
-    default: return index == 0 ? "Size x" : index == 1 ? "Size y" : "Size z";
-  }
-}
-
 std::string Describe(const Primitive& primitive) {
   return std::string(PrimitiveKindName(primitive.shape.kind)) + " '" + primitive.name + "'";
 }
@@ -74,6 +62,16 @@ bool VertexMoveOptions::Check(std::string* error) const {
     return false;
   }
   return true;
+}
+
+const char* ShapeParamLabel(PrimitiveKind kind, int index) {
+  switch (kind) {
+    case PrimitiveKind::kPrism:
+    case PrimitiveKind::kCylinder: return index == 0 ? "Radius" : "Height";
+    case PrimitiveKind::kPyramid:
+    case PrimitiveKind::kWedge: return index == 0 ? "Size x" : index == 1 ? "Size y" : "Height";
+    default: return index == 0 ? "Size x" : index == 1 ? "Size y" : "Size z";
+  }
 }
 
 int ShapeParamCount(PrimitiveKind kind) {
@@ -170,7 +168,7 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
       // A locked dimension limits the move only when it could have carried the vertex
       // towards the target.
       if (std::abs(column.dot(missing)) > 1e-12 * column.norm() * std::max(missing.norm(), 1e-300)) {
-        reasons.push_back(std::string(ParamLabel(shape.kind, k)) + " is locked (unlock it to change it)");
+        reasons.push_back(std::string(ShapeParamLabel(shape.kind, k)) + " is locked (unlock it to change it)");
       }
     }
     return reasons;
@@ -232,7 +230,7 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
   }
   for (int k = 0; k < param_count; ++k) {
     if (!(out.params[k] > 0.0)) {
-      return refuse(Describe(*source) + ": " + ParamLabel(shape.kind, k) + " would become " +
+      return refuse(Describe(*source) + ": " + ShapeParamLabel(shape.kind, k) + " would become " +
                     FormatNumber(out.params[k]) + " (the drag went through the opposite face)");
     }
   }
@@ -253,7 +251,7 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
   std::string text = Describe(*source) + ":";
   for (int k = 0; k < param_count; ++k) {
     if (out.params[k] != shape.params[k]) {
-      text += std::string(" ") + ParamLabel(shape.kind, k) + " " + FormatNumber(shape.params[k]) + " -> " +
+      text += std::string(" ") + ShapeParamLabel(shape.kind, k) + " " + FormatNumber(shape.params[k]) + " -> " +
               FormatNumber(out.params[k]) + ",";
     }
   }

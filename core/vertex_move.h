@@ -91,5 +91,8 @@ PrimitiveMoveSummary MovePrimitive(const Project& project, Id primitive_id, cons
 // Number of shape parameters a kind uses (core/mesh_primitives.h): 3 for box, wedge and
 // pyramid, 2 for prism, cylinder and plane.
 int ShapeParamCount(PrimitiveKind kind);
+// The name of a kind's shape parameter as the properties panel shows it ("Size x", "Radius",
+// "Height", ...), so that messages point at the field to edit or unlock.
+const char* ShapeParamLabel(PrimitiveKind kind, int index);
 
 }  // namespace facet

@@ -13,11 +13,12 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <doctest/doctest.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
-#include <Eigen/Core>
+#include <Eigen/Dense>
 
 #include "core/project.h"
 
@@ -120,5 +121,41 @@ inline std::array<Eigen::Vector3d, 8> BoxCorners(const facet::Primitive& box) {
   for (int c = 0; c < 8; ++c) corners[c] = box.mesh.vertex(static_cast<facet::VertexId>(c)).position;
   return corners;
 }
+
+// The 3D panel's projection from the report: screen px of a world point, and the eye.
+struct Viewport3d {
+  Eigen::Matrix4d clip_from_world;
+  double origin_x = 0, origin_y = 0, width_px = 1, height_px = 1;
+  Eigen::Vector2d ToScreen(const Eigen::Vector3d& x) const {
+    const Eigen::Vector4d clip = clip_from_world * x.homogeneous();
+    return {origin_x + (clip.x() / clip.w() + 1.0) * 0.5 * width_px,
+            origin_y + (1.0 - clip.y() / clip.w()) * 0.5 * height_px};
+  }
+  // The eye: the point with clip x = y = w = 0.
+  Eigen::Vector3d Eye() const {
+    Eigen::Matrix3d a;
+    Eigen::Vector3d b;
+    int r = 0;
+    for (int row : {0, 1, 3}) {
+      a.row(r) = clip_from_world.block<1, 3>(row, 0);
+      b(r++) = -clip_from_world(row, 3);
+    }
+    return a.colPivHouseholderQr().solve(b);
+  }
+};
+
+inline Viewport3d ViewportFromReport(const nlohmann::json& report) {
+  const auto& v = report.at("viewport");
+  Viewport3d out;
+  const std::vector<double> m = v.at("clip_from_world").get<std::vector<double>>();
+  REQUIRE(m.size() == 16);
+  out.clip_from_world = Eigen::Map<const Eigen::Matrix4d>(m.data());
+  out.origin_x = v.at("origin_x").get<double>();
+  out.origin_y = v.at("origin_y").get<double>();
+  out.width_px = v.at("width_px").get<double>();
+  out.height_px = v.at("height_px").get<double>();
+  return out;
+}
+
 
 }  // namespace facet::testing

@@ -352,44 +352,6 @@ TEST_CASE("pavilion: undo clears a selection it removes; a refused operator says
   CHECK(last.at("text").get<std::string>().rfind("Delete vertex: ", 0) == 0);
 }
 
-namespace {
-
-// The 3D panel's projection from the report: screen px of a world point, and the eye.
-struct Viewport3d {
-  Eigen::Matrix4d clip_from_world;
-  double origin_x = 0, origin_y = 0, width_px = 1, height_px = 1;
-  Eigen::Vector2d ToScreen(const Eigen::Vector3d& x) const {
-    const Eigen::Vector4d clip = clip_from_world * x.homogeneous();
-    return {origin_x + (clip.x() / clip.w() + 1.0) * 0.5 * width_px,
-            origin_y + (1.0 - clip.y() / clip.w()) * 0.5 * height_px};
-  }
-  // The eye: the point with clip x = y = w = 0.
-  Eigen::Vector3d Eye() const {
-    Eigen::Matrix3d a;
-    Eigen::Vector3d b;
-    int r = 0;
-    for (int row : {0, 1, 3}) {
-      a.row(r) = clip_from_world.block<1, 3>(row, 0);
-      b(r++) = -clip_from_world(row, 3);
-    }
-    return a.colPivHouseholderQr().solve(b);
-  }
-};
-
-Viewport3d ViewportFromReport(const nlohmann::json& report) {
-  const auto& v = report.at("viewport");
-  Viewport3d out;
-  const std::vector<double> m = v.at("clip_from_world").get<std::vector<double>>();
-  REQUIRE(m.size() == 16);
-  out.clip_from_world = Eigen::Map<const Eigen::Matrix4d>(m.data());
-  out.origin_x = v.at("origin_x").get<double>();
-  out.origin_y = v.at("origin_y").get<double>();
-  out.width_px = v.at("width_px").get<double>();
-  out.height_px = v.at("height_px").get<double>();
-  return out;
-}
-
-}  // namespace
 
 TEST_CASE("pavilion: the 3D panel picks a vertex, an edge and a face by ray, with hover") {
   TempDir dir("pavilion_3d");
