@@ -20,6 +20,7 @@ constexpr double kIndependentDirectionsRatio = 1e-9;
 // |pi . C1| / (|pi| |C1|) below which the plane at infinity passes through camera 1's centre.
 constexpr double kPlaneThroughCentre = 1e-12;
 
+using internal::FailedSummary;
 using internal::MsSince;
 std::string Fmt(double x) { return internal::FormatNumber(x, 4); }
 
@@ -149,12 +150,7 @@ ProjectiveReconstructionSummary ReconstructProjective(const Eigen::Matrix3d& F, 
                                                       const ProjectiveReconstructionOptions& options) {
   const auto start = Clock::now();
   ProjectiveReconstructionSummary summary;
-  auto fail = [&](std::string message) {
-    summary.success = false;
-    summary.message = std::move(message);
-    summary.time_ms = MsSince(start);
-    return summary;
-  };
+  auto fail = [&](std::string message) { return FailedSummary(summary, std::move(message), start); };
   std::string error;
   if (!options.Check(&error)) return fail("bad options: " + error);
   if (uv1.size() != uv2.size()) return fail("the two images have different numbers of points");
@@ -196,12 +192,7 @@ AffineUpgradeSummary UpgradeToAffine(const std::vector<Matrix34d>& cameras,
                                      const AffineUpgradeOptions& options) {
   const auto start = Clock::now();
   AffineUpgradeSummary summary;
-  auto fail = [&](std::string message) {
-    summary.success = false;
-    summary.message = std::move(message);
-    summary.time_ms = MsSince(start);
-    return summary;
-  };
+  auto fail = [&](std::string message) { return FailedSummary(summary, std::move(message), start); };
   std::string error;
   if (!options.Check(&error)) return fail("bad options: " + error);
   if (cameras.size() < 2) return fail("the affine upgrade needs at least 2 views");
@@ -293,12 +284,7 @@ MetricUpgradeSummary UpgradeToMetric(const std::vector<Matrix34d>& affine_camera
                                      const MetricUpgradeOptions& options) {
   const auto start = Clock::now();
   MetricUpgradeSummary summary;
-  auto fail = [&](std::string message) {
-    summary.success = false;
-    summary.message = std::move(message);
-    summary.time_ms = MsSince(start);
-    return summary;
-  };
+  auto fail = [&](std::string message) { return FailedSummary(summary, std::move(message), start); };
   std::string error;
   if (!options.Check(&error)) return fail("bad options: " + error);
   const int n = static_cast<int>(affine_cameras.size());

@@ -28,6 +28,7 @@ constexpr int kMinTracks = 8;
 constexpr int kMinResectionSamples = 50;
 constexpr int kMaxResectionSamples = 2000;
 
+using internal::FailedSummary;
 using internal::MsSince;
 std::string Fmt(double x) { return internal::FormatNumber(x, 4); }
 
@@ -535,12 +536,7 @@ SelfCalibrationSummary SelfCalibrate(const std::vector<SelfCalibrationView>& vie
                                      const SelfCalibrationOptions& options) {
   const auto start = Clock::now();
   SelfCalibrationSummary summary;
-  auto fail = [&](std::string message) {
-    summary.success = false;
-    summary.message = std::move(message);
-    summary.time_ms = MsSince(start);
-    return summary;
-  };
+  auto fail = [&](std::string message) { return FailedSummary(summary, std::move(message), start); };
   std::string error;
   if (!options.Check(&error)) return fail("bad options: " + error);
   const int n = static_cast<int>(views.size());

@@ -1,10 +1,11 @@
-// Small helpers the solvers share: the cross-product matrix, elapsed time for summaries, and
-// the compact number format their messages use. Internal to core/*.cpp.
+// Small helpers the solvers share: the cross-product matrix, elapsed time for summaries, the
+// early-failure return, and the compact number format their messages use. Internal to core/*.cpp.
 #pragma once
 
 #include <chrono>
 #include <cstdio>
 #include <string>
+#include <utility>
 
 #include <Eigen/Core>
 
@@ -19,6 +20,16 @@ inline Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
 
 inline double MsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The early return of a solver that could not run: success = false, the message, and the time
+// so far, on the summary as filled in up to then.
+template <typename Summary>
+Summary FailedSummary(Summary summary, std::string message, std::chrono::steady_clock::time_point start) {
+  summary.success = false;
+  summary.message = std::move(message);
+  summary.time_ms = MsSince(start);
+  return summary;
 }
 
 // "%.<significant>g": short, exact enough for a message.

@@ -41,6 +41,7 @@ constexpr int kMaxInlierRounds = 3;
 // EstimateFundamentalMatrix); wrong clicks lie farther and cost no refit.
 constexpr double kReadmitFactor = 2.0;
 
+using internal::FailedSummary;
 using internal::MsSince;
 std::string Fmt(double x) { return internal::FormatNumber(x, 4); }
 
@@ -543,12 +544,7 @@ Eigen::Matrix<double, 9, 5> PoseFundamental::Tangent() const {
 FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv2, const FundamentalOptions& options) {
   const auto start = Clock::now();
   FundamentalSummary summary;
-  auto fail = [&](std::string message) {
-    summary.success = false;
-    summary.message = std::move(message);
-    summary.time_ms = MsSince(start);
-    return summary;
-  };
+  auto fail = [&](std::string message) { return FailedSummary(summary, std::move(message), start); };
   std::string error;
   if (!options.Check(&error)) return fail("bad options: " + error);
   if (uv1.size() != uv2.size())
@@ -684,12 +680,7 @@ RelativePoseSummary EstimateRelativePose(const Eigen::Matrix3d& F, const Eigen::
                                          const std::vector<bool>& inliers, const RelativePoseOptions& options) {
   const auto start = Clock::now();
   RelativePoseSummary summary;
-  auto fail = [&](std::string message) {
-    summary.success = false;
-    summary.message = std::move(message);
-    summary.time_ms = MsSince(start);
-    return summary;
-  };
+  auto fail = [&](std::string message) { return FailedSummary(summary, std::move(message), start); };
   std::string error;
   if (!options.Check(&error)) return fail("bad options: " + error);
   if (uv1.size() != uv2.size()) return fail("the two images have different numbers of points");
