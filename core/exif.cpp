@@ -2,6 +2,7 @@
 #include "core/solver_util_internal.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
@@ -13,8 +14,8 @@
 namespace facet {
 namespace {
 
-// A full-frame 35 mm sensor is 36 mm wide.
-constexpr double kFullFrameWidthMm = 36.0;
+// The diagonal of a full-frame 35 mm sensor (36 x 24 mm), in mm.
+const double kFullFrameDiagonalMm = std::hypot(36.0, 24.0);
 
 std::string Fmt(double x) { return internal::FormatNumber(x, 6); }
 
@@ -68,7 +69,8 @@ ExifFocal ReadExifFocalFromBuffer(const unsigned char* bytes, std::size_t size, 
   const double image_side_px = std::max(width_px, height_px);
 
   if (result.focal_35mm_equivalent_mm > 0.0) {
-    result.focal_px = result.focal_35mm_equivalent_mm / kFullFrameWidthMm * image_side_px;
+    result.focal_px =
+        result.focal_35mm_equivalent_mm / kFullFrameDiagonalMm * std::hypot(double(width_px), double(height_px));
     result.found = true;
     result.message = "FocalLengthIn35mmFilm " + Fmt(result.focal_35mm_equivalent_mm) + " mm: f = " +
                      Fmt(result.focal_px) + " px for " + std::to_string(width_px) + " x " +

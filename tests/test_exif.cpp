@@ -96,7 +96,12 @@ void CheckRelative(double value, double expected) {
   CHECK(std::abs(value - expected) <= kRelative * std::abs(expected));
 }
 
-TEST_CASE("FocalLengthIn35mmFilm maps 36 mm to the image's larger side") {
+// The 35 mm convention: the full frame's diagonal, sqrt(36^2 + 24^2) mm, spans the image's.
+double EquivalentFocalPx(double focal_35mm, int width_px, int height_px) {
+  return focal_35mm / std::sqrt(36.0 * 36.0 + 24.0 * 24.0) * std::sqrt(double(width_px) * width_px + double(height_px) * height_px);
+}
+
+TEST_CASE("FocalLengthIn35mmFilm maps the full frame's diagonal to the image's") {
   const std::vector<uint8_t> jpeg = JpegWithExif(TiffWithExifTags({{0xa405, kShort, {28}}}));
   CHECK(jpeg.size() < 5000);
   const ExifFocal full = Read(jpeg, 4000, 3000);
@@ -105,9 +110,11 @@ TEST_CASE("FocalLengthIn35mmFilm maps 36 mm to the image's larger side") {
   CHECK(full.IsUsable());
   CHECK(full.focal_35mm_equivalent_mm == 28.0);
   CHECK(full.focal_length_mm == 0.0);
-  CheckRelative(full.focal_px, 28.0 / 36.0 * 4000.0);
+  // 4:3: 28 / 43.27 * 5000 px, 4 % longer than 36 mm on the larger side would give.
+  CheckRelative(full.focal_px, EquivalentFocalPx(28.0, 4000, 3000));
+  CHECK(full.focal_px > 1.035 * 28.0 / 36.0 * 4000.0);
   // Downscaled and portrait copies of the same photo.
-  CheckRelative(Read(jpeg, 800, 600).focal_px, 28.0 / 36.0 * 800.0);
+  CheckRelative(Read(jpeg, 800, 600).focal_px, EquivalentFocalPx(28.0, 800, 600));
   CheckRelative(Read(jpeg, 3000, 4000).focal_px, full.focal_px);
 }
 
@@ -136,7 +143,7 @@ TEST_CASE("FocalLength with the focal-plane resolution, scaled to the given imag
   // With the 35 mm figure present too, that one wins.
   std::vector<Tag> both = tags;
   both.insert(both.begin() + 3, {0xa405, kShort, {24}});
-  CheckRelative(Read(JpegWithExif(TiffWithExifTags(both)), 4000, 3000).focal_px, 24.0 / 36.0 * 4000.0);
+  CheckRelative(Read(JpegWithExif(TiffWithExifTags(both)), 4000, 3000).focal_px, EquivalentFocalPx(24.0, 4000, 3000));
 }
 
 TEST_CASE("absent, incomplete or corrupt EXIF gives found == false with a message") {
@@ -185,6 +192,7 @@ TEST_CASE("EXIF focal length from a file") {
   const ExifFocal focal = ReadExifFocalFromFile(path, 1200, 800);
   INFO(focal.message);
   CHECK(focal.found);
+  // 3:2, the full frame's own shape: the diagonal and the width conventions agree.
   CheckRelative(focal.focal_px, 50.0 / 36.0 * 1200.0);
   std::remove(path.c_str());
   const ExifFocal missing = ReadExifFocalFromFile(path, 1200, 800);

@@ -187,9 +187,11 @@ TEST_CASE("calibration modes from the script: known focal, undo, prior strength,
   CHECK(pp.camera.principal_point_px == fixed_pp);
   REQUIRE((original.camera.principal_point_px - fixed_pp).norm() > 1.0);
 
-  // The EXIF prior: 26 mm over a 36 mm frame on the 1024 px side, with its std.
+  // The EXIF prior: 26 mm over the full frame's 43.27 mm diagonal on the image's diagonal,
+  // with its std.
   const facet::Image exif = SavedImage(dir / "exif.facet");
-  const double exif_focal = kExifFocal35mm / 36.0 * options.width_px;
+  const double exif_focal =
+      kExifFocal35mm / std::hypot(36.0, 24.0) * std::hypot(double(options.width_px), double(options.height_px));
   CHECK(exif.focal_mode == facet::FocalMode::kPrior);
   CHECK(std::abs(exif.focal_prior_px - exif_focal) <= kExifRelTolerance * exif_focal);
   facet::ExifFocal tags;
