@@ -8,11 +8,14 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "app/calgui_exif_prior.h"
 #include "core/calibrate_vp.h"
+#include "core/exif.h"
 #include "core/plumb_line.h"
 
 namespace facet {
@@ -26,15 +29,25 @@ constexpr int kHeightPx = 480;
 // The figures this calibration reaches (defaults: endpoint-distance cost, outliers flagged
 // and refitted without, principal-point prior of 2.5 % of the larger side at the centre),
 // with a small margin: solved 1.55 % median / 6.55 % p90, centred 2.04 % / 4.43 %. The
-// issue's targets (1 % / 5 %) are NOT met: the labelled segments, fitted with the true K,
-// give vanishing directions 1.44 deg (median) from orthogonal (printed below), and the
-// photos show barrel distortion (k1 ~ 0.02 from the plumb lines); neither an orthogonal
-// pinhole fit can absorb.
+// issue's targets (1 % / 5 %) are NOT met from the lines alone. With the EXIF prior the
+// p90 is (below); the median is not, and the second test case shows why: the labelled
+// segments, fitted with the true K, give vanishing directions 1.44 deg (median) from
+// orthogonal (printed below), and the photos show barrel distortion (k1 ~ 0.015 in
+// core/plumb_line.h's model); neither an orthogonal pinhole fit of one photo can absorb.
 constexpr double kMaxMedianFocalErrorPercentSolved = 1.6;
 constexpr double kMaxP90FocalErrorPercentSolved = 6.8;
 constexpr double kMaxMedianFocalErrorPercentCentred = 2.1;
 constexpr double kMaxP90FocalErrorPercentCentred = 4.6;
 constexpr double kMaxMedianPrincipalPointErrorPx = 17.5;
+// With the focal prior the app takes from each photo's EXIF (35 mm: 647 px +- 3.3 %, 4.1 %
+// below the truth): 1.65 % / 4.14 % reached; the 5 % p90 target is met this way.
+constexpr double kMaxMedianFocalErrorPercentExif = 1.7;
+constexpr double kMaxP90FocalErrorPercentExif = 4.4;
+// The issue's 1 % median needs knowledge no single photo gives: with the true principal
+// point, the EXIF prior and the one radial coefficient that suits the whole set best against
+// the truth (a grid search), a per-image orthogonal fit reaches 0.99 %. No photo-only method
+// of this kind gets clearly below it.
+constexpr double kOracleMedianFloorPercent = 0.9;
 
 // Lines of numbers of a text file, skipping '#' comments.
 std::vector<std::vector<double>> ReadNumberRows(const fs::path& path) {
@@ -108,20 +121,35 @@ struct Figures {
   int images_with_warnings = 0;
 };
 
-TEST_CASE("York Urban train split: focal length and principal point from three vanishing points") {
+// The ground-truth intrinsics (K.txt, 1-based principal point made 0-based).
+struct TrueIntrinsics {
+  double focal_px = 0.0;
+  Eigen::Vector2d principal_point_px = Eigen::Vector2d::Zero();
+};
+
+TrueIntrinsics ReadTrueIntrinsics() {
   REQUIRE_MESSAGE(fs::is_directory(kDataDir), kDataDir << " is missing");
   const auto k_rows = ReadNumberRows(kDataDir / "K.txt");
   REQUIRE(k_rows.size() == 3);
-  const double true_focal_px = k_rows[0][0];
-  const Eigen::Vector2d true_pp_px(k_rows[0][2] - 1.0, k_rows[1][2] - 1.0);
+  return {k_rows[0][0], Eigen::Vector2d(k_rows[0][2] - 1.0, k_rows[1][2] - 1.0)};
+}
 
+std::vector<fs::path> PhotoFolders() {
   std::vector<fs::path> folders;
   for (const auto& entry : fs::directory_iterator(kDataDir))
     if (entry.is_directory()) folders.push_back(entry.path());
   std::sort(folders.begin(), folders.end());
   CHECK(folders.size() == 51);
+  return folders;
+}
 
-  Figures solve, center, undistorted;
+TEST_CASE("York Urban train split: focal length and principal point from three vanishing points") {
+  const TrueIntrinsics truth = ReadTrueIntrinsics();
+  const double true_focal_px = truth.focal_px;
+  const Eigen::Vector2d true_pp_px = truth.principal_point_px;
+  const std::vector<fs::path> folders = PhotoFolders();
+
+  Figures solve, center, undistorted, exif;
   std::vector<double> closed_form_errors_percent;  // the three-point closed form alone
   int closed_form_failures = 0;
   int two_family_images = 0;  // a photo whose labels use only two of the three vanishing points
@@ -143,10 +171,16 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
           s.b_px = plumb.distortion.Undistort(s.b_px);
         }
     }
-    for (auto* figures : {&solve, &center, &undistorted}) {
+    const ExifFocal exif_focal = ReadExifFocalFromFile((folder / (id + ".jpg")).string(), kWidthPx, kHeightPx);
+    REQUIRE_MESSAGE(exif_focal.found, id << ": " << exif_focal.message);
+    for (auto* figures : {&solve, &center, &undistorted, &exif}) {
       VpCalibrationOptions options;
       options.width_px = kWidthPx;
       options.height_px = kHeightPx;
+      if (figures == &exif) {
+        options.focal_prior_px = exif_focal.focal_px;
+        options.focal_prior_std_px = app::ExifFocalPriorStdPx(exif_focal);
+      }
       options.principal_point_mode =
           figures == &center ? PrincipalPointMode::kImageCenter : PrincipalPointMode::kSolve;
       const VpCalibrationSummary s =
@@ -168,10 +202,11 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
     }
   }
 
-  for (auto* figures : {&solve, &center, &undistorted}) {
-    const std::string name = figures == &solve     ? "3 VPs, principal point solved"
-                             : figures == &center ? "3 VPs, principal point at image centre"
-                                                  : "3 VPs, principal point solved, after plumb-line undistortion";
+  for (auto* figures : {&solve, &center, &undistorted, &exif}) {
+    const std::string name = figures == &solve        ? "3 VPs, principal point solved"
+                             : figures == &center     ? "3 VPs, principal point at image centre"
+                             : figures == &undistorted ? "3 VPs, principal point solved, after plumb-line undistortion"
+                                                       : "3 VPs, principal point solved, EXIF focal prior";
     std::ostringstream failures;
     for (const auto& f : figures->failures) failures << "\n  " << f;
     INFO(name << ": images without a usable result:" << failures.str());
@@ -197,6 +232,8 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
   CHECK(Percentile(center.focal_errors_percent, 0.5) <= kMaxMedianFocalErrorPercentCentred);
   CHECK(Percentile(center.focal_errors_percent, 0.9) <= kMaxP90FocalErrorPercentCentred);
   CHECK(Percentile(solve.pp_errors_px, 0.5) <= kMaxMedianPrincipalPointErrorPx);
+  CHECK(Percentile(exif.focal_errors_percent, 0.5) <= kMaxMedianFocalErrorPercentExif);
+  CHECK(Percentile(exif.focal_errors_percent, 0.9) <= kMaxP90FocalErrorPercentExif);
 
   // How far the labels themselves are from the Manhattan assumption: the ground-truth
   // vanishing directions (fitted to these segments with the true K, README) deviate from
@@ -224,6 +261,53 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
   MESSAGE("ground-truth vanishing directions from orthogonal (worst pair per image): median "
           << Percentile(orthogonality_deg, 0.5) << " deg, p90 " << Percentile(orthogonality_deg, 0.9) << " deg");
   CHECK(Percentile(orthogonality_deg, 0.5) > 0.5);
+}
+
+TEST_CASE("York Urban: only the true principal point and a distortion tuned to the truth bring the median to ~1 %") {
+  const TrueIntrinsics truth = ReadTrueIntrinsics();
+  const std::vector<fs::path> folders = PhotoFolders();
+  std::vector<std::vector<Segment>> segments_by_photo;
+  std::vector<ExifFocal> exif_by_photo;
+  for (const fs::path& folder : folders) {
+    const std::string id = folder.filename().string();
+    segments_by_photo.push_back(ReadSegments(folder / (id + "_lines.txt")));
+    exif_by_photo.push_back(ReadExifFocalFromFile((folder / (id + ".jpg")).string(), kWidthPx, kHeightPx));
+    REQUIRE(exif_by_photo.back().found);
+  }
+  // Barrel distortion of this camera is k1 ~ 0.02 in core/plumb_line.h's model (the plumb
+  // lines of the whole set); the grid brackets it.
+  double best_median = std::numeric_limits<double>::infinity(), best_k1 = 0.0, best_p90 = 0.0;
+  for (int step = 0; step <= 32; ++step) {
+    RadialDistortion distortion = MakeRadialDistortion(kWidthPx, kHeightPx, truth.principal_point_px);
+    distortion.k1 = 0.00125 * step;
+    std::vector<double> errors_percent;
+    for (size_t i = 0; i < segments_by_photo.size(); ++i) {
+      std::vector<Segment> segments = segments_by_photo[i];
+      for (Segment& s : segments) {
+        s.a_px = distortion.Undistort(s.a_px);
+        s.b_px = distortion.Undistort(s.b_px);
+      }
+      VpCalibrationOptions options;
+      options.width_px = kWidthPx;
+      options.height_px = kHeightPx;
+      options.principal_point_mode = PrincipalPointMode::kFixed;
+      options.fixed_principal_point_px = truth.principal_point_px;
+      options.focal_prior_px = exif_by_photo[i].focal_px;
+      options.focal_prior_std_px = app::ExifFocalPriorStdPx(exif_by_photo[i]);
+      const VpCalibrationSummary s = CalibrateFromVanishingLines(segments, options);
+      REQUIRE_MESSAGE(s.success, folders[i].filename().string() << ": " << s.message);
+      errors_percent.push_back(100.0 * std::abs(s.focal_px - truth.focal_px) / truth.focal_px);
+    }
+    const double median = Percentile(errors_percent, 0.5);
+    if (median < best_median) {
+      best_median = median;
+      best_k1 = distortion.k1;
+      best_p90 = Percentile(errors_percent, 0.9);
+    }
+  }
+  MESSAGE("oracle (true principal point, EXIF prior, best k1 = " << best_k1 << " for the set): focal error median "
+                                                                  << best_median << " %, p90 " << best_p90 << " %");
+  CHECK(best_median > kOracleMedianFloorPercent);
 }
 
 }  // namespace
