@@ -492,7 +492,7 @@ bool TextureBakeOptions::Check(std::string* error) const {
   return message.empty();
 }
 
-TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<ImageRgba8>& photos,
+TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<const ImageRgba8*>& photos,
                                     const TextureBakeOptions& options, TexturedMesh* mesh) {
   const auto start = std::chrono::steady_clock::now();
   TextureBakeSummary summary;
@@ -517,7 +517,8 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<Im
   std::vector<PhotoView> views;
   for (size_t i = 0; i < project.images.size(); ++i) {
     const Image& image = project.images[i];
-    const ImageRgba8& photo = photos[i];
+    if (photos[i] == nullptr) continue;
+    const ImageRgba8& photo = *photos[i];
     if (!image.camera_calibrated || photo.empty() ||
         photo.pixels.size() != static_cast<size_t>(photo.width) * photo.height * 4) {
       continue;
@@ -615,6 +616,14 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<Im
                     " faces into a " + std::to_string(atlas_width) + "x" + std::to_string(atlas_height) + " atlas" +
                     (shrink < 1.0 ? " (faces shrunk to fit)" : "");
   return summary;
+}
+
+TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<ImageRgba8>& photos,
+                                    const TextureBakeOptions& options, TexturedMesh* mesh) {
+  std::vector<const ImageRgba8*> pointers;
+  pointers.reserve(photos.size());
+  for (const ImageRgba8& photo : photos) pointers.push_back(&photo);
+  return BakeTexturedMesh(project, pointers, options, mesh);
 }
 
 }  // namespace facet

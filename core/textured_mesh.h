@@ -58,8 +58,10 @@ struct TextureBakeSummary {
   double time_ms = 0.0;
 };
 
-// Bakes a textured mesh. `photos[i]` holds the pixels of project.images[i] (an empty image
-// for a photo that is not loaded). A face is textured from the calibrated image that sees
+// Bakes a textured mesh. `photos[i]` points to the pixels of project.images[i] (nullptr or an
+// empty image for a photo that is not loaded); the bake only reads them, never copies them, and
+// the caller keeps them alive and unchanged until it returns (the app bakes on a worker thread
+// from photos it shares read-only). A face is textured from the calibrated image that sees
 // it best: in front of the camera, facing it, and largest projected area times cosine of
 // the view angle times the fraction of the face no other primitive hides (a 4 x 4 grid over
 // the face's rectangle, kept inside the polygon, each point's ray to the camera centre tested
@@ -70,7 +72,13 @@ struct TextureBakeSummary {
 // face that is not planar (a solved free vertex) is rectified through its best-fit plane
 // (Newell normal through the corners' centroid): approximate there. A degenerate face (zero
 // area) stays untextured. On failure (bad options, photos.size() != images.size(), atlas
-// overflow) *mesh is the untextured mesh and the summary says why.
+// overflow) *mesh is the untextured mesh and the summary says why. The result depends only
+// on the arguments (no shared state), so a bake on another thread is bit-identical.
+TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<const ImageRgba8*>& photos,
+                                    const TextureBakeOptions& options, TexturedMesh* mesh);
+
+// The same for callers that own their photos in one vector (tests, one-shot tools): bakes
+// from pointers into `photos`, copying no pixels.
 TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<ImageRgba8>& photos,
                                     const TextureBakeOptions& options, TexturedMesh* mesh);
 

@@ -758,6 +758,58 @@ TEST_CASE("bake: the nearer of two views textures the faces; an unloaded photo i
   }
 }
 
+TEST_CASE("bake from photo pointers: bit-identical to the owning overload; nullptr is an unloaded photo") {
+  facet::testing::SyntheticSceneOptions near_o;
+  facet::testing::SyntheticSceneOptions far_o;
+  far_o.camera_center = near_o.look_at + 1.8 * (near_o.camera_center - near_o.look_at);
+  auto scene = facet::testing::MakeBoxScene(near_o);
+  const std::vector<TestFace> faces = SceneFaces(scene.project);
+  const Camera far_cam = facet::testing::MakeLookAtCamera(far_o);
+  facet::Image far_image = scene.project.images[0];
+  far_image.id = scene.project.NewId();
+  far_image.camera = far_cam;
+  scene.project.images.insert(scene.project.images.begin(), far_image);
+  const std::vector<ImageRgba8> owned = {RenderPhoto(faces, far_cam, Paint::kInvertedChecker),
+                                         RenderPhoto(faces, scene.true_camera, Paint::kChecker)};
+  // The photos live elsewhere (as in the app's photo store); the bake reads them in place.
+  const std::vector<const ImageRgba8*> pointers = {&owned[0], &owned[1]};
+
+  auto same_mesh = [](const TexturedMesh& a, const TexturedMesh& b) {
+    return a.positions == b.positions && a.normals == b.normals && a.uvs == b.uvs && a.indices == b.indices &&
+           a.triangle_primitive == b.triangle_primitive && a.triangle_face == b.triangle_face &&
+           a.triangle_textured == b.triangle_textured && a.atlas.width == b.atlas.width &&
+           a.atlas.height == b.atlas.height && a.atlas.pixels == b.atlas.pixels;
+  };
+  TexturedMesh from_owned, from_pointers;
+  const auto owned_summary = facet::BakeTexturedMesh(scene.project, owned, {}, &from_owned);
+  const auto pointer_summary = facet::BakeTexturedMesh(scene.project, pointers, {}, &from_pointers);
+  REQUIRE_MESSAGE(owned_summary.success, owned_summary.message);
+  REQUIRE_MESSAGE(pointer_summary.success, pointer_summary.message);
+  REQUIRE(from_pointers.atlas.pixels.size() > 1000);
+  CHECK(same_mesh(from_owned, from_pointers));
+
+  // nullptr behaves as an empty (unloaded) photo: the far view textures every face then,
+  // which differs from the bake with both views.
+  TexturedMesh with_null, with_empty;
+  const auto null_summary = facet::BakeTexturedMesh(scene.project, {&owned[0], nullptr}, {}, &with_null);
+  const auto empty_summary = facet::BakeTexturedMesh(scene.project, {owned[0], ImageRgba8()}, {}, &with_empty);
+  REQUIRE_MESSAGE(null_summary.success, null_summary.message);
+  REQUIRE_MESSAGE(empty_summary.success, empty_summary.message);
+  CHECK(null_summary.faces_textured == 3);
+  CHECK(same_mesh(with_null, with_empty));
+  CHECK_FALSE(same_mesh(with_null, from_pointers));
+
+  // Every photo missing: untextured, not a failure; a wrong count is a failure.
+  TexturedMesh none;
+  const auto none_summary = facet::BakeTexturedMesh(scene.project, {nullptr, nullptr}, {}, &none);
+  CHECK(none_summary.success);
+  CHECK(none_summary.faces_textured == 0);
+  CHECK(none.atlas.empty());
+  const auto short_summary = facet::BakeTexturedMesh(scene.project, {&owned[0]}, {}, &none);
+  CHECK_FALSE(short_summary.success);
+  CHECK(short_summary.message.find("photos") != std::string::npos);
+}
+
 TEST_CASE("bake: a primitive in front of a face makes an unobstructed view win") {
   // Box A at the origin; box B hides most of A's -Y face from view 1, not from view 2.
   auto scene = facet::testing::MakeBoxScene();
@@ -905,7 +957,7 @@ TEST_CASE("bake: bad options and mismatched photos fail with a message; no photo
   }
   CHECK(facet::TextureBakeOptions().Check(&error));
 
-  summary = facet::BakeTexturedMesh(scene.project, {}, {}, &mesh);
+  summary = facet::BakeTexturedMesh(scene.project, std::vector<ImageRgba8>{}, {}, &mesh);
   CHECK_FALSE(summary.success);
   CHECK_FALSE(summary.message.empty());
 
@@ -925,7 +977,7 @@ TEST_CASE("bake: bad options and mismatched photos fail with a message; no photo
 
   // An empty project: success, nothing to texture.
   Project empty;
-  summary = facet::BakeTexturedMesh(empty, {}, {}, &mesh);
+  summary = facet::BakeTexturedMesh(empty, std::vector<const ImageRgba8*>{}, {}, &mesh);
   CHECK(summary.success);
   CHECK(mesh.indices.empty());
 }
