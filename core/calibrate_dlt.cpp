@@ -117,9 +117,19 @@ Eigen::Vector2d ProjectModel(const Model& m, const Eigen::Vector3d& p_in_world) 
   return {m.focal_px * x * d + m.principal_point_px.x(), m.focal_px * y * d + m.principal_point_px.y()};
 }
 
-Eigen::VectorXd Residuals(const Model& m, const std::vector<PointCorrespondence>& points) {
-  Eigen::VectorXd r(2 * points.size());
+// A Gaussian focal prior as one more residual, (f - focal_px) * weight, weight = pixel noise
+// over the prior's standard deviation; weight 0: no prior.
+struct FocalPrior {
+  double focal_px = 0.0;
+  double weight = 0.0;
+};
+
+Eigen::VectorXd Residuals(const Model& m, const std::vector<PointCorrespondence>& points,
+                          const FocalPrior& prior = {}) {
+  const bool with_prior = prior.weight > 0.0;
+  Eigen::VectorXd r(2 * points.size() + (with_prior ? 1 : 0));
   for (size_t i = 0; i < points.size(); ++i) r.segment<2>(2 * i) = ProjectModel(m, points[i].xyz) - points[i].uv_px;
+  if (with_prior) r(r.size() - 1) = (m.focal_px - prior.focal_px) * prior.weight;
   return r;
 }
 
@@ -127,8 +137,8 @@ Eigen::VectorXd Residuals(const Model& m, const std::vector<PointCorrespondence>
 // (~h^2) and the rounding error (~eps / h) are both near 1e-10 relative: far below any
 // pixel noise, and the fixed point of Gauss-Newton does not depend on the Jacobian.
 Eigen::MatrixXd Jacobian(const Model& m, const std::vector<PointCorrespondence>& points, const std::vector<int>& free,
-                         double length_scale) {
-  Eigen::MatrixXd j(2 * points.size(), free.size());
+                         double length_scale, const FocalPrior& prior) {
+  Eigen::MatrixXd j(2 * points.size() + (prior.weight > 0.0 ? 1 : 0), free.size());
   for (size_t c = 0; c < free.size(); ++c) {
     const int p = free[c];
     double h = 1e-6;
@@ -136,9 +146,9 @@ Eigen::MatrixXd Jacobian(const Model& m, const std::vector<PointCorrespondence>&
     if (p >= kTranslation && p < kTranslation + 3) h = 1e-6 * (m.translation.norm() + length_scale);
     Eigen::Matrix<double, kNumParams, 1> delta = Eigen::Matrix<double, kNumParams, 1>::Zero();
     delta(p) = h;
-    const Eigen::VectorXd plus = Residuals(Apply(m, delta), points);
+    const Eigen::VectorXd plus = Residuals(Apply(m, delta), points, prior);
     delta(p) = -h;
-    const Eigen::VectorXd minus = Residuals(Apply(m, delta), points);
+    const Eigen::VectorXd minus = Residuals(Apply(m, delta), points, prior);
     j.col(c) = (plus - minus) / (2.0 * h);
   }
   return j;
@@ -153,15 +163,15 @@ struct RefineResult {
 // Levenberg-Marquardt with Marquardt's diagonal scaling, which makes the step independent of
 // the units of f, t and the distortion coefficients.
 RefineResult Refine(const Model& start, const std::vector<PointCorrespondence>& points, const std::vector<int>& free,
-                    double length_scale, int max_iterations) {
+                    double length_scale, int max_iterations, const FocalPrior& prior) {
   RefineResult result;
   result.model = start;
-  Eigen::VectorXd r = Residuals(start, points);
+  Eigen::VectorXd r = Residuals(start, points, prior);
   double cost = r.squaredNorm();
   double lambda = 1e-4;
   const int n = static_cast<int>(free.size());
   for (int iteration = 0; iteration < max_iterations; ++iteration) {
-    const Eigen::MatrixXd j = Jacobian(result.model, points, free, length_scale);
+    const Eigen::MatrixXd j = Jacobian(result.model, points, free, length_scale, prior);
     const Eigen::MatrixXd a = j.transpose() * j;
     const Eigen::VectorXd g = j.transpose() * r;
     if (!g.allFinite() || g.lpNorm<Eigen::Infinity>() == 0.0) break;
@@ -174,7 +184,7 @@ RefineResult Refine(const Model& start, const std::vector<PointCorrespondence>& 
       Eigen::Matrix<double, kNumParams, 1> delta = Eigen::Matrix<double, kNumParams, 1>::Zero();
       for (int i = 0; i < n; ++i) delta(free[i]) = step(i);
       const Model candidate = Apply(result.model, delta);
-      const Eigen::VectorXd candidate_r = Residuals(candidate, points);
+      const Eigen::VectorXd candidate_r = Residuals(candidate, points, prior);
       const double candidate_cost = candidate_r.squaredNorm();
       if (std::isfinite(candidate_cost) && candidate_cost < cost) {
         accepted = true;
@@ -192,7 +202,7 @@ RefineResult Refine(const Model& start, const std::vector<PointCorrespondence>& 
     result.iterations = iteration + 1;
     if (!accepted || converged) break;
   }
-  result.jacobian = Jacobian(result.model, points, free, length_scale);
+  result.jacobian = Jacobian(result.model, points, free, length_scale, prior);
   return result;
 }
 
@@ -250,7 +260,8 @@ bool LinearNonPlanar(const std::vector<PointCorrespondence>& points, LinearResul
 
 bool LinearPlanar(const std::vector<PointCorrespondence>& points, const Eigen::Vector3d& centroid,
                   const Eigen::Matrix3d& plane_basis, const Eigen::Vector2d& principal_point_px, int width_px,
-                  int height_px, LinearResult* out, std::vector<std::string>* warnings, std::string* error) {
+                  int height_px, double known_focal_px, double fallback_focal_px, LinearResult* out,
+                  std::vector<std::string>* warnings, std::string* error) {
   std::vector<Eigen::Vector2d> ab, uv;
   for (const auto& p : points) {
     ab.push_back((plane_basis.transpose() * (p.xyz - centroid)).head<2>());
@@ -288,17 +299,28 @@ bool LinearPlanar(const std::vector<PointCorrespondence>& points, const Eigen::V
   const double a1 = h1.x() * h2.x() + h1.y() * h2.y(), b1 = h1.z() * h2.z();
   const double a2 = h1.head<2>().squaredNorm() - h2.head<2>().squaredNorm(), b2 = h1.z() * h1.z() - h2.z() * h2.z();
   const double inverse_f2 = -(a1 * b1 + a2 * b2) / (a1 * a1 + a2 * a2);
-  if (!(inverse_f2 > 0.0) || !std::isfinite(1.0 / std::sqrt(inverse_f2))) {
-    *error = "the focal length is undetermined from this plane: it is seen (nearly) fronto-parallel, or the "
-             "principal point is far from the one assumed";
-    return false;
+  double focal_px = known_focal_px;
+  if (!(focal_px > 0.0)) {
+    const bool determined = inverse_f2 > 0.0 && std::isfinite(1.0 / std::sqrt(inverse_f2));
+    if (!determined && !(fallback_focal_px > 0.0)) {
+      *error = "the focal length is undetermined from this plane: it is seen (nearly) fronto-parallel, or the "
+               "principal point is far from the one assumed";
+      return false;
+    }
+    if (determined) {
+      focal_px = 1.0 / std::sqrt(inverse_f2);
+      const double diagonal_px = std::hypot(width_px, height_px);
+      if (focal_px > 20.0 * diagonal_px)
+        warnings->push_back(Format("the focal length (%.0f px) is weakly determined: the plane is seen nearly "
+                                   "fronto-parallel; tilt it or use non-coplanar points",
+                                   focal_px));
+    } else {
+      focal_px = fallback_focal_px;
+      warnings->push_back(Format("the plane does not determine the focal length (seen fronto-parallel): it "
+                                 "starts from the prior, %.0f px",
+                                 focal_px));
+    }
   }
-  const double focal_px = 1.0 / std::sqrt(inverse_f2);
-  const double diagonal_px = std::hypot(width_px, height_px);
-  if (focal_px > 20.0 * diagonal_px)
-    warnings->push_back(Format("the focal length (%.0f px) is weakly determined: the plane is seen nearly "
-                               "fronto-parallel; tilt it or use non-coplanar points",
-                               focal_px));
 
   Eigen::Matrix3d k = Eigen::Matrix3d::Identity();
   k(0, 0) = k(1, 1) = focal_px;
@@ -321,6 +343,26 @@ bool LinearPlanar(const std::vector<PointCorrespondence>& points, const Eigen::V
   out->p.col(3) = k * out->translation;
   out->p /= out->p.norm();
   return true;
+}
+
+// t minimising the algebraic error [x_i]x (R X_i + t) = 0 of each point's ray x_i = K^-1 uv_i,
+// with K and R held: the pose start of a calibrated camera after the DLT's own K is dropped.
+bool TranslationGivenRotation(const std::vector<PointCorrespondence>& points, const Eigen::Matrix3d& k,
+                              const Eigen::Matrix3d& rotation, Eigen::Vector3d* translation) {
+  const Eigen::Matrix3d k_inverse = k.inverse();
+  Eigen::MatrixXd a(3 * points.size(), 3);
+  Eigen::VectorXd b(3 * points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d ray = (k_inverse * points[i].uv_px.homogeneous()).normalized();
+    Eigen::Matrix3d skew;
+    skew << 0, -ray.z(), ray.y(), ray.z(), 0, -ray.x(), -ray.y(), ray.x(), 0;
+    a.block<3, 3>(3 * i, 0) = skew;
+    b.segment<3>(3 * i) = -skew * rotation * points[i].xyz;
+  }
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  if (!(svd.singularValues()(2) > 1e-12 * svd.singularValues()(0))) return false;
+  *translation = svd.solve(b);
+  return translation->allFinite();
 }
 
 double Rms(const Eigen::VectorXd& r) {
@@ -352,6 +394,19 @@ bool DltCalibrationOptions::Check(std::string* error) const {
   }
   if (principal_point_mode == PrincipalPointMode::kFixed && !fixed_principal_point_px.allFinite()) {
     *error = "the fixed principal point must be finite";
+    return false;
+  }
+  if (!(fixed_focal_px >= 0.0) || !std::isfinite(fixed_focal_px)) {
+    *error = "fixed_focal_px must be finite and not negative (0: solve the focal length)";
+    return false;
+  }
+  if (!(focal_prior_px >= 0.0) || !std::isfinite(focal_prior_px) || !(focal_prior_std_px >= 0.0) ||
+      !std::isfinite(focal_prior_std_px)) {
+    *error = "focal_prior_px and focal_prior_std_px must be finite and not negative (0: no prior)";
+    return false;
+  }
+  if (!(pixel_noise_px > 0.0) || !std::isfinite(pixel_noise_px)) {
+    *error = "pixel_noise_px must be positive";
     return false;
   }
   return true;
@@ -402,11 +457,18 @@ DltCalibrationSummary CalibrateFromPoints(const std::vector<PointCorrespondence>
   const Eigen::Vector2d given_principal_point =
       options.principal_point_mode == PrincipalPointMode::kFixed ? options.fixed_principal_point_px : image_center;
 
+  const bool focal_fixed = options.fixed_focal_px > 0.0;
+  const bool use_prior = !focal_fixed && options.focal_prior_px > 0.0 && options.focal_prior_std_px > 0.0;
+  FocalPrior prior;
+  if (use_prior) prior = {options.focal_prior_px, options.pixel_noise_px / options.focal_prior_std_px};
+  summary.focal_fixed = focal_fixed;
+
   LinearResult linear;
   if (summary.planar) {
     Eigen::Matrix3d basis = shape.matrixV();
     basis.col(2) = basis.col(0).cross(basis.col(1));
-    if (!LinearPlanar(points, centroid, basis, given_principal_point, options.width_px, options.height_px, &linear,
+    if (!LinearPlanar(points, centroid, basis, given_principal_point, options.width_px, options.height_px,
+                      options.fixed_focal_px, use_prior ? options.focal_prior_px : 0.0, &linear,
                       &summary.warnings, &error)) {
       summary.message = error;
       return finish(summary);
@@ -448,8 +510,21 @@ DltCalibrationSummary CalibrateFromPoints(const std::vector<PointCorrespondence>
   // Without refinement the camera stays the linear one (a non-planar DLT estimates its own
   // principal point); the refinement starts from the held principal point.
   if (!solve_principal_point && options.refine) model.principal_point_px = given_principal_point;
+  if (focal_fixed && !summary.planar) {
+    // The DLT's K is dropped for the known one: its R stays, t follows for the known K.
+    model.focal_px = options.fixed_focal_px;
+    Eigen::Matrix3d k = Eigen::Matrix3d::Identity();
+    k(0, 0) = k(1, 1) = model.focal_px;
+    k.topRightCorner<2, 1>() = model.principal_point_px;
+    if (!TranslationGivenRotation(points, k, model.rotation, &model.translation)) {
+      summary.message = "the points do not determine the camera position for the known focal length";
+      return finish(summary);
+    }
+  }
+  if (use_prior && options.refine) summary.focal_prior_used = true;
   if (options.refine) {
-    std::vector<int> free = {kFocal};
+    std::vector<int> free;
+    if (!focal_fixed) free.push_back(kFocal);
     if (solve_principal_point) free.insert(free.end(), {kCx, kCy});
     free.insert(free.end(), {kRotation, kRotation + 1, kRotation + 2, kTranslation, kTranslation + 1, kTranslation + 2});
     if (options.radial_distortion_terms >= 1) free.push_back(kK1);
@@ -459,14 +534,14 @@ DltCalibrationSummary CalibrateFromPoints(const std::vector<PointCorrespondence>
                         " parameters need at least " + std::to_string((free.size() + 1) / 2) + " points";
       return finish(summary);
     }
-    const RefineResult refined = Refine(model, points, free, length_scale, options.max_iterations);
+    const RefineResult refined = Refine(model, points, free, length_scale, options.max_iterations, prior);
     model = refined.model;
     summary.iterations = refined.iterations;
-    const int dof = 2 * n - static_cast<int>(free.size());
+    const int dof = 2 * n + (use_prior ? 1 : 0) - static_cast<int>(free.size());
     const Eigen::MatrixXd information = refined.jacobian.transpose() * refined.jacobian;
     const Eigen::JacobiSVD<Eigen::MatrixXd> info_svd(information, Eigen::ComputeFullU | Eigen::ComputeFullV);
     if (dof > 0 && info_svd.singularValues()(free.size() - 1) > 1e-14 * info_svd.singularValues()(0)) {
-      const double variance = Residuals(model, points).squaredNorm() / dof;
+      const double variance = Residuals(model, points, prior).squaredNorm() / dof;
       const Eigen::MatrixXd covariance = variance * information.inverse();
       for (size_t c = 0; c < free.size(); ++c) {
         const double sd = std::sqrt(std::max(covariance(c, c), 0.0));
@@ -509,6 +584,9 @@ DltCalibrationSummary CalibrateFromPoints(const std::vector<PointCorrespondence>
   summary.message = Format(summary.planar ? "planar (homography), f = %.2f px, RMS %.3f px (linear %.3f px)"
                                           : "DLT, f = %.2f px, RMS %.3f px (linear %.3f px)",
                            camera.focal_px, summary.reprojection_rms_px, summary.initial_rms_px);
+  if (focal_fixed) summary.message += "; focal length known (pose only)";
+  if (summary.focal_prior_used)
+    summary.message += Format("; focal prior %.1f +- %.1f px", options.focal_prior_px, options.focal_prior_std_px);
   if (!solve_principal_point && (options.refine || summary.planar))
     summary.message += Format("; principal point held at (%.1f, %.1f)", camera.principal_point_px.x(),
                               camera.principal_point_px.y());

@@ -22,6 +22,15 @@
 //   orthogonality constraints on the homography's columns (Zhang 2000); R, t from K^-1 H,
 //   orthonormalised. The principal point stays fixed in the refinement: one view of a plane
 //   determines it only weakly. P, fx, fy, skew are then those of this first camera.
+// - Known focal length (fixed_focal_px > 0): a calibrated-camera pose (PnP). The linear step
+//   is the same (DLT, or the plane's homography without Zhang's focal constraints); its R is
+//   kept, t is re-solved linearly with K held (each point's ray through R X + t), and the
+//   refinement moves only R, t and what the principal point mode leaves free. Same point
+//   counts as above; noise-free data give the pose exactly.
+// - Focal prior (focal_prior_px, focal_prior_std_px > 0, fixed_focal_px = 0): the refinement
+//   adds the residual (f - prior) * pixel_noise_px / prior_std, so the cost is a weighted sum
+//   of squares with pixel noise pixel_noise_px; on the planar path a plane seen fronto-parallel
+//   (Zhang's constraints give no f) starts from the prior instead of failing.
 // Degenerate input (too few points, collinear points, non-finite values, a plane seen
 // fronto-parallel so that f is undetermined) gives success = false with a message. Nearly
 // coplanar points on the non-planar path and points behind the camera give warnings.
@@ -59,6 +68,16 @@ struct DltCalibrationOptions {
   PrincipalPointMode principal_point_mode = PrincipalPointMode::kSolve;
   Eigen::Vector2d fixed_principal_point_px = Eigen::Vector2d::Zero();  // for kFixed
   int max_iterations = 100;
+  // Focal length (px) known, e.g. Image::fixed_focal_px (FocalMode::kFixed): > 0 holds it
+  // (pose only), 0 solves it. Needs refine for a non-planar DLT to use it (without refine the
+  // linear camera is returned with the known f and the DLT's R, t re-solved with it).
+  double fixed_focal_px = 0.0;
+  // Gaussian prior on the focal length (FocalMode::kPrior), used when both are > 0 and the
+  // focal length is not fixed. pixel_noise_px is the clicks' assumed standard deviation: it
+  // weighs the prior against the reprojection residuals.
+  double focal_prior_px = 0.0;
+  double focal_prior_std_px = 0.0;
+  double pixel_noise_px = 1.0;
 
   bool Check(std::string* error) const;
 };
@@ -68,6 +87,8 @@ struct DltCalibrationSummary {
   std::string message;                // why it failed, or a one-line result
   std::vector<std::string> warnings;  // usable result, but the user should know
   bool planar = false;                // which path was taken
+  bool focal_fixed = false;           // fixed_focal_px was held (pose-only solve)
+  bool focal_prior_used = false;      // the focal prior took part in the refinement
   Camera camera;                      // final camera (refined when options.refine)
   double k1 = 0.0;                    // radial distortion, zero unless estimated
   double k2 = 0.0;
