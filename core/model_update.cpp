@@ -115,6 +115,23 @@ VpCalibrationSummary CalibrateImage(const Image& image, const std::vector<Segmen
       MapSegments(segments, [&](const Eigen::Vector2d& uv) { return camera->UndistortPixel(uv); }), options));
 }
 
+// The image as the calibration step reads it, without its camera (ImageCalibrationCacheEntry).
+Image CalibrationKey(const Image& image) {
+  Image key = image;
+  key.camera = Camera();
+  return key;
+}
+
+// The intrinsics CalibrateImage reads from a camera with distortion (size and pose cleared).
+Camera IntrinsicsOf(const Camera& camera) {
+  Camera intrinsics;
+  intrinsics.focal_px = camera.focal_px;
+  intrinsics.principal_point_px = camera.principal_point_px;
+  intrinsics.k1 = camera.k1;
+  intrinsics.k2 = camera.k2;
+  return intrinsics;
+}
+
 // A warm start can stall far from the answer (e.g. the first solve after calibration, when
 // the camera still sits at the origin); a cold start is linear plus a few iterations, so it
 // is cheap enough to try whenever the warm result looks wrong.
@@ -143,24 +160,42 @@ void GeometrySolve(const Project& project, const SceneSolveOptions& options, Sce
 
 }  // namespace
 
-ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& options, Project* updated) {
+ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& options, Project* updated,
+                               ModelUpdateCache* cache) {
   const auto start = std::chrono::steady_clock::now();
   ModelUpdateSummary summary;
   Project calibrated = edited;
 
   if (options.calibrate) {
+    const auto calibration_start = std::chrono::steady_clock::now();
+    std::map<Id, ImageCalibrationCacheEntry> next_cache;
     for (Image& image : calibrated.images) {
-      std::vector<Segment> segments;
+      ImageCalibrationCacheEntry entry;
       for (const Segment& s : calibrated.segments)
-        if (s.image_id == image.id) segments.push_back(s);
-      if (segments.empty()) continue;
+        if (s.image_id == image.id) entry.segments.push_back(s);
+      if (entry.segments.empty()) continue;
+      entry.image = CalibrationKey(image);
+      ImageCalibrationCacheEntry* cached = nullptr;
+      if (cache != nullptr) {
+        const auto it = cache->images.find(image.id);
+        if (it != cache->images.end() && it->second.image == entry.image && it->second.segments == entry.segments)
+          cached = &it->second;
+      }
+
+      entry.estimated_distortion = image.estimate_distortion;
       const PlumbLineSummary* plumb = nullptr;
       if (image.estimate_distortion) {
-        PlumbLineSummary& estimate = summary.distortion[image.id] = EstimateDistortion(image, segments);
-        if (!estimate.IsUsable()) {
-          summary.messages.push_back("Image '" + image.path + "': distortion not estimated: " + estimate.message);
+        if (cached != nullptr && cached->estimated_distortion) {
+          entry.distortion = cached->distortion;
+        } else {
+          entry.distortion = EstimateDistortion(image, entry.segments);
+          ++summary.distortion_estimates_run;
         }
-        plumb = &estimate;
+        summary.distortion[image.id] = entry.distortion;
+        if (!entry.distortion.IsUsable()) {
+          summary.messages.push_back("Image '" + image.path + "': distortion not estimated: " + entry.distortion.message);
+        }
+        plumb = &entry.distortion;
       }
       Camera camera = image.camera;
       // An estimate within kDistortionSignificanceSigmas of zero is noise (a lens without
@@ -174,7 +209,21 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
         plumb = nullptr;
         camera.k1 = camera.k2 = 0.0;
       }
-      VpCalibrationSummary vp = CalibrateImage(image, segments, CalibrationOptionsFor(image), plumb, &camera);
+      // CalibrateImage reads the camera's intrinsics only to undistort the segments by its own k.
+      entry.camera_read = !(plumb != nullptr && plumb->IsUsable()) && camera.HasDistortion();
+      if (entry.camera_read) entry.camera = IntrinsicsOf(camera);
+      if (cached != nullptr && cached->camera_read == entry.camera_read && cached->camera == entry.camera) {
+        entry.calibration = std::move(cached->calibration);
+        entry.k1 = cached->k1;
+        entry.k2 = cached->k2;
+        ++summary.images_reused;
+      } else {
+        entry.calibration = CalibrateImage(image, entry.segments, CalibrationOptionsFor(image), plumb, &camera);
+        entry.k1 = camera.k1;
+        entry.k2 = camera.k2;
+        ++summary.images_calibrated;
+      }
+      const VpCalibrationSummary& vp = entry.calibration;
       if (vp.IsUsable()) {
         // Calibration fixes intrinsics and rotation; the camera keeps its centre, which the
         // geometry solve then moves.
@@ -183,15 +232,19 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
         image.camera.height_px = image.height_px;
         image.camera.focal_px = vp.focal_px;
         image.camera.principal_point_px = vp.principal_point_px;
-        image.camera.k1 = camera.k1;
-        image.camera.k2 = camera.k2;
+        image.camera.k1 = entry.k1;
+        image.camera.k2 = entry.k2;
         image.camera.SetPose(vp.cam_from_world_rotation, center);
         image.camera_calibrated = true;
       } else {
         summary.messages.push_back("Image '" + image.path + "': " + vp.message);
       }
-      summary.calibration[image.id] = std::move(vp);
+      summary.calibration[image.id] = vp;
+      if (cache != nullptr) next_cache[image.id] = std::move(entry);
     }
+    if (cache != nullptr) cache->images = std::move(next_cache);
+    summary.calibration_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - calibration_start).count();
   }
 
   // The per-frame path: the joint solve alone, warm; the geometry solve below only when that

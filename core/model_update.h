@@ -39,6 +39,30 @@ struct ModelUpdateOptions {
   bool geometry_solve_when_warm = true;
 };
 
+// What the calibration step of one image read and what it gave, kept between UpdateModel
+// calls so that a drag frame (which moves a pin, not a line) does not calibrate again. Owned
+// by the caller (e.g. the app's state), passed to UpdateModel by pointer; empty at first.
+// A result is reused only when every input equals the stored one by content (the project's
+// operator==, so undo, redo and loading a project need no invalidation): the image with its
+// pose cleared (size, calibration modes, estimate_distortion, camera_calibrated, ...), its
+// segments in order, and the camera intrinsics (focal, principal point, k1, k2) whenever the
+// calibration reads them (segments undistorted by the camera's own non-zero k). NaN inputs
+// never compare equal, so they are calibrated each time.
+struct ImageCalibrationCacheEntry {
+  Image image;  // camera = Camera(): the intrinsics the calibration read are in `camera`
+  std::vector<Segment> segments;
+  bool camera_read = false;
+  Camera camera;  // intrinsics only (pose cleared); default when !camera_read
+  bool estimated_distortion = false;
+  PlumbLineSummary distortion;  // when estimated_distortion
+  VpCalibrationSummary calibration;
+  double k1 = 0.0;  // the camera's k1, k2 the calibration gave (OpenCV model)
+  double k2 = 0.0;
+};
+struct ModelUpdateCache {
+  std::map<Id, ImageCalibrationCacheEntry> images;  // by image id; images calibrated last call
+};
+
 struct ModelUpdateSummary {
   std::map<Id, VpCalibrationSummary> calibration;  // by image id, images with segments only
   // By image id, images with estimate_distortion and segments only. The estimate is in the
@@ -49,6 +73,13 @@ struct ModelUpdateSummary {
   MultiViewInitSummary multiview;  // cameras initialised from pins (num_initialized 0: none)
   JointSolveSummary joint;  // termination kInvalidInput when it did not run
   std::vector<std::string> messages;  // user-facing: what failed and why
+  // The calibration step per image with segments: run, or taken from the cache (the plumb-line
+  // estimate counts apart: it is reused whenever the image and its segments are unchanged,
+  // even when the vanishing-point calibration runs again for a camera whose k changed).
+  int images_calibrated = 0;
+  int images_reused = 0;
+  int distortion_estimates_run = 0;
+  double calibration_ms = 0.0;  // the calibration step (all images)
   double time_ms = 0.0;
   // False when a step failed; the project is then left as the edit made it (cameras and
   // primitives keep their previous values), never half-updated.
@@ -56,7 +87,12 @@ struct ModelUpdateSummary {
 };
 
 // `edited` is the project after the user's edit; *updated receives it with re-solved cameras
-// and primitives.
-ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& options, Project* updated);
+// and primitives. With a cache (may be null: everything is computed), an image whose
+// calibration inputs equal the cached ones takes the cached result: *updated is then the same,
+// bit for bit, as without the cache. The cache is updated to this call's images (entries of
+// images without segments or no longer in the project are dropped); options.calibrate = false
+// leaves it untouched.
+ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& options, Project* updated,
+                               ModelUpdateCache* cache = nullptr);
 
 }  // namespace facet

@@ -4,8 +4,11 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <Eigen/Geometry>
 
@@ -46,6 +49,224 @@ void Perturb(SyntheticScene* scene, double scale) {
   box.shape.params.x() *= 1.3;
   box.shape.params.y() *= 0.75;
   RefreshPrimitive(&scene->project, &box);
+}
+
+// The app's two kinds of update (app/app_state.cpp): a commit or a released drag, and one
+// drag frame.
+ModelUpdateOptions CommitOptions() {
+  ModelUpdateOptions options;
+  options.solve.warm_start = true;
+  options.joint.polish_constraints = true;
+  return options;
+}
+ModelUpdateOptions DragFrameOptions() {
+  ModelUpdateOptions options;
+  options.solve.warm_start = true;
+  options.solve.max_iterations = 5;
+  options.joint.max_iterations = 5;
+  options.joint.compute_diagnostics = false;
+  options.joint.polish_constraints = false;
+  options.initialize_from_pins = false;
+  options.geometry_solve_when_warm = false;
+  return options;
+}
+
+// Two images of the same box: the first scene's, and a second view from another side whose
+// segments and pins (at 0.1 px noise) went through a lens with k1 = `second_k1` (OpenCV
+// model), so that a plumb-line estimate there is significant.
+Project TwoImageProject(double second_k1) {
+  SyntheticSceneOptions options;
+  options.noise_px = 0.5;
+  SyntheticScene scene = MakeBoxScene(options);
+  Perturb(&scene, 1.0);
+  SyntheticSceneOptions other_options = options;
+  other_options.camera_center = Eigen::Vector3d(-6.0, -8.0, 4.0);
+  other_options.seed = 2;
+  other_options.noise_px = 0.1;  // so that the plumb-line k1 is many of its sigmas from zero
+  const SyntheticScene other = MakeBoxScene(other_options);
+  Project project = scene.project;
+  Camera lens = other.true_camera;
+  lens.k1 = second_k1;
+  Image image = other.project.images[0];
+  image.id = project.NewId();
+  image.path = "second.png";
+  project.images.push_back(image);
+  for (Segment s : other.project.segments) {
+    s.id = project.NewId();
+    s.image_id = image.id;
+    s.a_px = lens.DistortPixel(s.a_px);
+    s.b_px = lens.DistortPixel(s.b_px);
+    project.segments.push_back(s);
+  }
+  for (Pin pin : other.project.pins) {
+    pin.id = project.NewId();
+    pin.image_id = image.id;
+    pin.vertex.primitive_id = scene.box_id;
+    pin.uv_px = lens.DistortPixel(pin.uv_px);
+    project.pins.push_back(pin);
+  }
+  return project;
+}
+
+// Bit-for-bit equality of the doubles a camera holds (operator== would let -0.0 == 0.0 pass).
+bool SameBits(const Camera& a, const Camera& b) {
+  auto same = [](const auto& x, const auto& y) { return std::memcmp(x.data(), y.data(), sizeof(double) * x.size()) == 0; };
+  return a.focal_px == b.focal_px && std::signbit(a.focal_px) == std::signbit(b.focal_px) &&
+         same(a.principal_point_px, b.principal_point_px) && same(a.cam_from_world_rotation, b.cam_from_world_rotation) &&
+         same(a.cam_from_world_translation, b.cam_from_world_translation) &&
+         std::memcmp(&a.k1, &b.k1, sizeof(double)) == 0 && std::memcmp(&a.k2, &b.k2, sizeof(double)) == 0;
+}
+
+struct Step {
+  std::string name;
+  Project edited;
+  bool drag = false;
+  int expect_calibrated = 0;
+  int expect_reused = 0;
+  int expect_distortion_runs = 0;
+};
+
+// Runs `edited` with the cache and without it; checks both give the same project and
+// calibration summaries, bit for bit, and the counts the step expects.
+Project RunStep(const Step& step, ModelUpdateCache* cache) {
+  INFO("step: " << step.name);
+  const ModelUpdateOptions options = step.drag ? DragFrameOptions() : CommitOptions();
+  Project with_cache;
+  Project without_cache;
+  const ModelUpdateSummary cached = UpdateModel(step.edited, options, &with_cache, cache);
+  const ModelUpdateSummary fresh = UpdateModel(step.edited, options, &without_cache);
+  INFO(Messages(cached));
+  REQUIRE(cached.ok);
+  REQUIRE(fresh.ok);
+  CHECK(with_cache == without_cache);
+  REQUIRE(with_cache.images.size() == without_cache.images.size());
+  for (size_t i = 0; i < with_cache.images.size(); ++i) {
+    CAPTURE(i);
+    CHECK(SameBits(with_cache.images[i].camera, without_cache.images[i].camera));
+  }
+  CHECK(cached.messages == fresh.messages);
+  CHECK(cached.calibration.size() == fresh.calibration.size());
+  for (const auto& [id, vp] : fresh.calibration) {
+    CAPTURE(id);
+    REQUIRE(cached.calibration.count(id) == 1);
+    const VpCalibrationSummary& other = cached.calibration.at(id);
+    CHECK(other.success == vp.success);
+    CHECK(other.message == vp.message);
+    CHECK(std::memcmp(&other.focal_px, &vp.focal_px, sizeof(double)) == 0);
+    CHECK(other.cam_from_world_rotation == vp.cam_from_world_rotation);
+    CHECK(other.vanishing_point_rms_px == vp.vanishing_point_rms_px);
+  }
+  CHECK(cached.distortion.size() == fresh.distortion.size());
+  for (const auto& [id, plumb] : fresh.distortion) {
+    REQUIRE(cached.distortion.count(id) == 1);
+    CHECK(cached.distortion.at(id).distortion.k1 == plumb.distortion.k1);
+    CHECK(cached.distortion.at(id).k1_std == plumb.k1_std);
+  }
+  CHECK(std::memcmp(&cached.joint.final_cost, &fresh.joint.final_cost, sizeof(double)) == 0);
+  // Without a cache everything runs.
+  CHECK(fresh.images_reused == 0);
+  CHECK(fresh.images_calibrated == static_cast<int>(fresh.calibration.size()));
+  CHECK(cached.images_calibrated == step.expect_calibrated);
+  CHECK(cached.images_reused == step.expect_reused);
+  CHECK(cached.distortion_estimates_run == step.expect_distortion_runs);
+  return with_cache;
+}
+
+TEST_CASE("the calibration cache: same result bit for bit, calibration only where an image's inputs changed") {
+  constexpr double kSecondK1 = -0.15;  // about 30 px at the second photo's corners
+  ModelUpdateCache cache;
+  Project current = TwoImageProject(kSecondK1);
+  REQUIRE(current.images.size() == 2);
+  const Id first_id = current.images[0].id;
+  const Id second_id = current.images[1].id;
+  auto first_pin = [&](Project* p) -> Pin& {
+    for (Pin& pin : p->pins)
+      if (pin.image_id == first_id) return pin;
+    FAIL("no pin");
+    return p->pins.front();
+  };
+  auto first_segment_of = [&](Project* p, Id image_id) -> Segment& {
+    for (Segment& s : p->segments)
+      if (s.image_id == image_id) return s;
+    FAIL("no segment");
+    return p->segments.front();
+  };
+  auto run = [&](const std::string& name, Project edited, bool drag, int calibrated, int reused, int plumb_runs) {
+    current = RunStep({name, std::move(edited), drag, calibrated, reused, plumb_runs}, &cache);
+    return current;
+  };
+
+  run("first commit, empty cache", current, false, 2, 0, 0);
+  for (int frame = 0; frame < 3; ++frame) {
+    Project edited = current;
+    first_pin(&edited).uv_px += Eigen::Vector2d(2.0, -1.0);
+    run("pin drag frame " + std::to_string(frame), edited, true, 0, 2, 0);
+  }
+  run("drag released", current, false, 0, 2, 0);
+  const Project before_segment_edits = current;
+
+  Project edited = current;
+  first_segment_of(&edited, first_id).a_px += Eigen::Vector2d(1.5, 0.0);
+  run("segment endpoint dragged in the first image", edited, true, 1, 1, 0);
+
+  edited = current;
+  Segment added = first_segment_of(&edited, second_id);
+  added.id = edited.NewId();
+  std::swap(added.a_px, added.b_px);  // the same line drawn again the other way round
+  edited.segments.push_back(added);
+  run("segment added in the second image", edited, false, 1, 1, 0);
+
+  edited = current;
+  edited.FindImage(second_id)->estimate_distortion = true;
+  const Project distortion_on = run("estimate distortion in the second image", edited, false, 1, 1, 1);
+  INFO("k1 " << distortion_on.FindImage(second_id)->camera.k1);
+  REQUIRE(distortion_on.FindImage(second_id)->camera.k1 != 0.0);
+  for (int frame = 0; frame < 2; ++frame) {
+    edited = current;
+    first_pin(&edited).uv_px += Eigen::Vector2d(-1.0, 2.0);
+    run("pin drag frame with distortion estimated " + std::to_string(frame), edited, true, 0, 2, 0);
+  }
+
+  // Undo back to before the segment edits: both images' inputs differ from the cached ones.
+  run("undo", before_segment_edits, false, 2, 0, 0);
+  // Loading a project equal in content to the last one takes the cached results.
+  Project loaded = current;
+  run("load a project equal in content", loaded, false, 0, 2, 0);
+
+  // A camera with its own k: the calibration undistorts the segments with the camera's
+  // intrinsics, so they are inputs; a pinhole camera's intrinsics are not.
+  edited = current;
+  edited.FindImage(first_id)->camera.k1 = 0.02;
+  const Project with_k = edited;
+  run("the first camera gets k1 from a file", edited, false, 1, 1, 0);
+  run("same input again", with_k, false, 0, 2, 0);
+  edited = with_k;
+  edited.FindImage(second_id)->camera.focal_px *= 1.01;
+  REQUIRE_FALSE(edited.FindImage(second_id)->camera.HasDistortion());
+  run("focal of the pinhole camera changed", edited, false, 0, 2, 0);
+  edited = with_k;
+  edited.FindImage(first_id)->camera.focal_px *= 1.0 + 1e-12;
+  run("focal of the camera with k changed", edited, false, 1, 1, 0);
+}
+
+TEST_CASE("the calibration cache drops images without segments and is untouched when calibration is off") {
+  ModelUpdateCache cache;
+  SyntheticScene scene = MakeBoxScene();
+  Perturb(&scene, 1.0);
+  Project updated;
+  ModelUpdateSummary summary = UpdateModel(scene.project, CommitOptions(), &updated, &cache);
+  REQUIRE(summary.ok);
+  CHECK(cache.images.size() == 1);
+  ModelUpdateOptions no_calibration = CommitOptions();
+  no_calibration.calibrate = false;
+  Project edited = updated;
+  edited.segments.clear();
+  summary = UpdateModel(edited, no_calibration, &updated, &cache);
+  CHECK(summary.images_calibrated + summary.images_reused == 0);
+  CHECK(cache.images.size() == 1);
+  summary = UpdateModel(edited, CommitOptions(), &updated, &cache);
+  CHECK(summary.images_calibrated + summary.images_reused == 0);
+  CHECK(cache.images.empty());
 }
 
 TEST_CASE("noise-free: calibration, geometry solve and joint solve recover camera and box from a perturbed start") {
