@@ -11,6 +11,7 @@
 
 #include <Eigen/Dense>
 
+#include "core/lm_internal.h"
 #include "core/selfcal_projective_ba.h"
 #include "core/two_view.h"
 #include "core/solver_util_internal.h"
@@ -27,6 +28,10 @@ constexpr int kResectionRounds = 5;  // refits on the inliers until the set is s
 constexpr int kMinTracks = 8;
 constexpr int kMinResectionSamples = 50;
 constexpr int kMaxResectionSamples = 2000;
+// Pairs (of those sharing the most tracks) whose F is estimated to choose the initial pair.
+constexpr int kMaxInitialPairCandidates = 20;
+// Starts tried when one leaves views out (each from views no earlier attempt registered).
+constexpr int kMaxInitialPairAttempts = 4;
 
 using internal::FailedSummary;
 using internal::MsSince;
@@ -194,6 +199,82 @@ bool Resect(const std::vector<Track>& tracks, int v, double threshold_px, unsign
   return static_cast<int>(use.size()) >= kMinResectionTracks;
 }
 
+struct InitialPair {
+  int a = -1, b = -1;
+  FundamentalSummary f;
+  std::vector<std::pair<int, std::pair<int, int>>> obs;  // track, (observation in a, in b)
+};
+
+// Projective bundle adjustment of the registered views over the accepted observations.
+ProjectiveBundleSummary AdjustProjective(const std::vector<Track>& tracks, int max_iterations, Projective* p) {
+  std::vector<ProjectiveBundleObservation> observations;
+  for (size_t t = 0; t < tracks.size(); ++t) {
+    if (!p->has_point[t]) continue;
+    for (size_t k = 0; k < tracks[t].size(); ++k)
+      if (p->ok[t][k] && p->registered[tracks[t][k].view])
+        observations.push_back({tracks[t][k].view, static_cast<int>(t), tracks[t][k].uv_px});
+  }
+  ProjectiveBundleOptions pba;
+  pba.max_iterations = max_iterations;
+  return ProjectiveBundleAdjust(observations, p->n, pba, &p->P, &p->X);
+}
+
+// Step 1 from one initial pair: canonical cameras from its F, triangulation, then every
+// further view by resection, the one seeing the most reconstructed points first, with a
+// projective bundle adjustment each time options.projective_bundle_every_views more views
+// have joined (resection errors compound along a chain of views otherwise). False when F
+// gives no canonical cameras.
+bool RegisterIncrementally(const std::vector<Track>& tracks, const InitialPair& pair,
+                           const SelfCalibrationOptions& options, Projective* p, std::vector<std::string>* warnings) {
+  const int n = static_cast<int>(p->P.size());
+  const int num_tracks = static_cast<int>(tracks.size());
+  for (size_t i = 0; i < pair.obs.size(); ++i)
+    if (!pair.f.inliers[i]) {
+      p->ok[pair.obs[i].first][pair.obs[i].second.first] = false;
+      p->ok[pair.obs[i].first][pair.obs[i].second.second] = false;
+    }
+  const Eigen::Matrix3d f_normalised = p->n[pair.b].transpose() * pair.f.F * p->n[pair.a];
+  if (!CanonicalCamerasFromFundamental(f_normalised, &p->P[pair.a], &p->P[pair.b])) return false;
+  p->registered[pair.a] = p->registered[pair.b] = true;
+  for (int t = 0; t < num_tracks; ++t) TriangulateTrack(tracks, t, options.inlier_threshold_px, p);
+  int since_adjustment = 0;
+  while (true) {
+    int best = -1, best_count = 0;
+    for (int v = 0; v < n; ++v) {
+      if (p->registered[v]) continue;
+      int count = 0;
+      for (int t = 0; t < num_tracks; ++t) {
+        if (!p->has_point[t]) continue;
+        for (size_t k = 0; k < tracks[t].size(); ++k) count += tracks[t][k].view == v && p->ok[t][k];
+      }
+      if (count > best_count) {
+        best_count = count;
+        best = v;
+      }
+    }
+    if (best < 0 || best_count < kMinResectionTracks) break;
+    if (!Resect(tracks, best, options.inlier_threshold_px, options.seed, p)) {
+      warnings->push_back("view " + std::to_string(best) + " could not be resected (" + std::to_string(best_count) +
+                          " triangulated tracks, too few consistent ones)");
+      // Marked so that it is not tried again; it stays unregistered.
+      for (int t = 0; t < num_tracks; ++t)
+        for (size_t k = 0; k < tracks[t].size(); ++k)
+          if (tracks[t][k].view == best) p->ok[t][k] = false;
+      continue;
+    }
+    p->registered[best] = true;
+    for (int t = 0; t < num_tracks; ++t) TriangulateTrack(tracks, t, options.inlier_threshold_px, p);
+    if (options.projective_bundle_adjust && options.projective_bundle_every_views > 0 &&
+        ++since_adjustment >= options.projective_bundle_every_views) {
+      since_adjustment = 0;
+      const ProjectiveBundleSummary result = AdjustProjective(tracks, options.max_projective_bundle_iterations, p);
+      if (!result.success) warnings->push_back(result.message);
+      for (int t = 0; t < num_tracks; ++t) TriangulateTrack(tracks, t, options.inlier_threshold_px, p);
+    }
+  }
+  return true;
+}
+
 // Coefficients of w*_ab = (P Q P^T)_ab over the 10 upper-triangular entries of Q.
 Eigen::Matrix<double, 1, 10> QuadricRow(const Matrix34d& P, int a, int b) {
   Eigen::Matrix<double, 1, 10> row;
@@ -269,6 +350,10 @@ bool SelfCalibrationOptions::Check(std::string* error) const {
   }
   if (!(principal_point_prior_std >= 0)) {
     *error = "principal_point_prior_std must not be negative";
+    return false;
+  }
+  if (projective_bundle_every_views < 0 || max_projective_bundle_iterations < 0) {
+    *error = "projective_bundle_every_views and max_projective_bundle_iterations must not be negative";
     return false;
   }
   if (quadric_reweighting_rounds < 1 || max_bundle_iterations < 0 || bundle_rounds < 1) {
@@ -420,62 +505,56 @@ BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& obser
   double cost = cost_of(cams, pts);
   const double initial_cost = cost;
   summary.initial_rms_px = std::sqrt(reprojection_cost(cams, pts) / (2.0 * observations.size()));
-  double lambda = 1e-4;
   Eigen::MatrixXd s(nc, nc);
   Eigen::VectorXd rhs(nc);
-  for (int it = 0; it < options.max_iterations && cost > 0; ++it) {
-    build();
-    bool improved = false;
-    while (lambda < 1e16) {
-      s = u;
-      s.diagonal() += lambda * (u.diagonal().array() + 1e-12 * u.diagonal().maxCoeff()).matrix();
-      rhs = -g_c;
-      std::vector<Eigen::Matrix3d> v_inv(m);
-      for (int j = 0; j < m; ++j) {
-        if (!point_used[j]) continue;
-        Eigen::Matrix3d vj = v_blocks[j];
-        vj.diagonal() += lambda * (v_blocks[j].diagonal().array() + 1e-12 * v_blocks[j].diagonal().maxCoeff()).matrix();
-        v_inv[j] = vj.inverse();
-        const Eigen::MatrixXd y = w_blocks[j] * v_inv[j];
-        s.noalias() -= y * w_blocks[j].transpose();
-        rhs.noalias() += y * g_p[j];
-      }
-      const Eigen::VectorXd dc = s.ldlt().solve(rhs);
-      if (!dc.allFinite()) {
-        lambda *= 10;
-        continue;
-      }
-      std::vector<Camera> cams_new = cams;
-      std::vector<Eigen::Vector3d> pts_new = pts;
-      for (int v = 0; v < n; ++v) {
-        Camera& c = cams_new[v];
-        c.cam_from_world_rotation = RotationFromAngleAxis(dc.segment<3>(6 * v)) * c.cam_from_world_rotation;
-        c.cam_from_world_translation += dc.segment<3>(6 * v + 3);
-        c.focal_px += dc(focal_index(v));
-        if (options.refine_principal_point) c.principal_point_px += dc.segment<2>(pp_index(v));
-      }
-      double step_sq = dc.squaredNorm();
-      for (int j = 0; j < m; ++j) {
-        if (!point_used[j]) continue;
-        const Eigen::Vector3d dp = v_inv[j] * (-g_p[j] - w_blocks[j].transpose() * dc);
-        pts_new[j] += dp;
-        step_sq += dp.squaredNorm();
-      }
-      const double cost_new = cost_of(cams_new, pts_new);
-      if (std::isfinite(cost_new) && cost_new < cost) {
-        const double decrease = cost - cost_new;
-        cams = std::move(cams_new);
-        pts = std::move(pts_new);
-        cost = cost_new;
-        lambda = std::max(lambda / 5, 1e-12);
-        improved = decrease > 1e-14 * cost && step_sq > 1e-30;
-        break;
-      }
-      lambda *= 5;
+  std::vector<Camera> cams_new;
+  std::vector<Eigen::Vector3d> pts_new;
+  // The damped Schur-reduced system, then the points by back-substitution.
+  auto step = [&](double lambda, double* cost_new, double* step_sq) {
+    s = u;
+    s.diagonal() += lambda * (u.diagonal().array() + 1e-12 * u.diagonal().maxCoeff()).matrix();
+    rhs = -g_c;
+    std::vector<Eigen::Matrix3d> v_inv(m);
+    for (int j = 0; j < m; ++j) {
+      if (!point_used[j]) continue;
+      Eigen::Matrix3d vj = v_blocks[j];
+      vj.diagonal() += lambda * (v_blocks[j].diagonal().array() + 1e-12 * v_blocks[j].diagonal().maxCoeff()).matrix();
+      v_inv[j] = vj.inverse();
+      const Eigen::MatrixXd y = w_blocks[j] * v_inv[j];
+      s.noalias() -= y * w_blocks[j].transpose();
+      rhs.noalias() += y * g_p[j];
     }
-    ++summary.iterations;
-    if (!improved) break;
-  }
+    const Eigen::VectorXd dc = s.ldlt().solve(rhs);
+    if (!dc.allFinite()) return false;
+    cams_new = cams;
+    pts_new = pts;
+    for (int v = 0; v < n; ++v) {
+      Camera& c = cams_new[v];
+      c.cam_from_world_rotation = RotationFromAngleAxis(dc.segment<3>(6 * v)) * c.cam_from_world_rotation;
+      c.cam_from_world_translation += dc.segment<3>(6 * v + 3);
+      c.focal_px += dc(focal_index(v));
+      if (options.refine_principal_point) c.principal_point_px += dc.segment<2>(pp_index(v));
+    }
+    *step_sq = dc.squaredNorm();
+    for (int j = 0; j < m; ++j) {
+      if (!point_used[j]) continue;
+      const Eigen::Vector3d dp = v_inv[j] * (-g_p[j] - w_blocks[j].transpose() * dc);
+      pts_new[j] += dp;
+      *step_sq += dp.squaredNorm();
+    }
+    *cost_new = cost_of(cams_new, pts_new);
+    return true;
+  };
+  auto accept = [&]() {
+    cams = std::move(cams_new);
+    pts = std::move(pts_new);
+  };
+  internal::LmOptions lm;
+  lm.max_iterations = options.max_iterations;
+  lm.relative_decrease_tolerance = 1e-14;
+  const internal::LmResult lm_result = internal::MinimizeLevenbergMarquardt(cost, lm, build, step, accept);
+  cost = lm_result.final_cost;
+  summary.iterations = lm_result.iterations;
 
   // Focal uncertainty: sigma^2 (residual over degrees of freedom) times the focal entry of
   // the inverse of the undamped reduced camera system S. S is singular along the 7 directions
@@ -577,90 +656,116 @@ SelfCalibrationSummary SelfCalibrate(const std::vector<SelfCalibrationView>& vie
   if (duplicates > 0)
     summary.warnings.push_back(std::to_string(duplicates) + " observations repeat a view within their track (ignored)");
 
-  // Step 1: the initial pair and its F (in pixels; RANSAC flags wrong matches).
-  Eigen::Index a_index = 0, b_index = 0;
-  shared_count.maxCoeff(&a_index, &b_index);
-  const int va = static_cast<int>(a_index), vb = static_cast<int>(b_index);
-  if (shared_count(va, vb) < kMinTracks)
+  // Step 1: the initial pair and its F (in pixels; RANSAC flags wrong matches): the pair
+  // sharing the most tracks whose F a homography does not explain (a pair seen from nearly
+  // one centre, e.g. the two photos of the Middlebury ring taken from one place, matches best
+  // of all and fixes nothing).
+  std::vector<std::pair<int, std::pair<int, int>>> candidates;  // shared tracks, (a, b)
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b)
+      if (shared_count(a, b) >= kMinTracks) candidates.push_back({shared_count(a, b), {a, b}});
+  if (candidates.empty())
     return fail("no pair of views shares " + std::to_string(kMinTracks) + " tracks (best: " +
-                std::to_string(shared_count(va, vb)) + ")");
-  summary.initial_view_a = va;
-  summary.initial_view_b = vb;
-  std::vector<Eigen::Vector2d> uv_a, uv_b;
-  std::vector<std::pair<int, std::pair<int, int>>> pair_obs;  // track, (obs in a, obs in b)
-  for (int t = 0; t < num_tracks; ++t) {
-    int ka = -1, kb = -1;
-    for (size_t k = 0; k < tracks[t].size(); ++k) {
-      if (!p.ok[t][k]) continue;
-      if (tracks[t][k].view == va) ka = static_cast<int>(k);
-      if (tracks[t][k].view == vb) kb = static_cast<int>(k);
-    }
-    if (ka < 0 || kb < 0) continue;
-    uv_a.push_back(tracks[t][ka].uv_px);
-    uv_b.push_back(tracks[t][kb].uv_px);
-    pair_obs.push_back({t, {ka, kb}});
-  }
+                std::to_string(shared_count.maxCoeff()) + ")");
+  std::stable_sort(candidates.begin(), candidates.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+  if (static_cast<int>(candidates.size()) > kMaxInitialPairCandidates) candidates.resize(kMaxInitialPairCandidates);
   FundamentalOptions f_options;
   f_options.inlier_threshold_px = options.inlier_threshold_px;
   f_options.seed = options.seed;
-  const FundamentalSummary f = EstimateFundamentalMatrix(uv_a, uv_b, f_options);
-  if (!f.success)
-    return fail("the fundamental matrix of views " + std::to_string(va) + " and " + std::to_string(vb) +
-                " failed: " + f.message);
-  for (size_t i = 0; i < pair_obs.size(); ++i)
-    if (!f.inliers[i]) {
-      p.ok[pair_obs[i].first][pair_obs[i].second.first] = false;
-      p.ok[pair_obs[i].first][pair_obs[i].second.second] = false;
-    }
-  const Eigen::Matrix3d f_normalised = p.n[vb].transpose() * f.F * p.n[va];
-  if (!CanonicalCamerasFromFundamental(f_normalised, &p.P[va], &p.P[vb])) return fail("F gives no canonical cameras");
-  p.registered[va] = p.registered[vb] = true;
-  for (int t = 0; t < num_tracks; ++t) TriangulateTrack(tracks, t, options.inlier_threshold_px, &p);
-
-  // Further views by resection, the best-connected first.
-  while (true) {
-    int best = -1, best_count = 0;
-    for (int v = 0; v < n; ++v) {
-      if (p.registered[v]) continue;
-      int count = 0;
-      for (int t = 0; t < num_tracks; ++t) {
-        if (!p.has_point[t]) continue;
-        for (size_t k = 0; k < tracks[t].size(); ++k) count += tracks[t][k].view == v && p.ok[t][k];
+  std::vector<InitialPair> pairs;
+  int degenerate_pairs = 0;
+  for (const auto& candidate : candidates) {
+    InitialPair pair;
+    pair.a = candidate.second.first;
+    pair.b = candidate.second.second;
+    std::vector<Eigen::Vector2d> uv_a, uv_b;
+    for (int t = 0; t < num_tracks; ++t) {
+      int ka = -1, kb = -1;
+      for (size_t k = 0; k < tracks[t].size(); ++k) {
+        if (!p.ok[t][k]) continue;
+        if (tracks[t][k].view == pair.a) ka = static_cast<int>(k);
+        if (tracks[t][k].view == pair.b) kb = static_cast<int>(k);
       }
-      if (count > best_count) {
-        best_count = count;
-        best = v;
-      }
+      if (ka < 0 || kb < 0) continue;
+      uv_a.push_back(tracks[t][ka].uv_px);
+      uv_b.push_back(tracks[t][kb].uv_px);
+      pair.obs.push_back({t, {ka, kb}});
     }
-    if (best < 0 || best_count < kMinResectionTracks) break;
-    if (!Resect(tracks, best, options.inlier_threshold_px, options.seed, &p)) {
-      summary.warnings.push_back("view " + std::to_string(best) + " could not be resected (" +
-                                 std::to_string(best_count) + " triangulated tracks, too few consistent ones)");
-      // Mark it so it is not tried again; it stays unregistered.
-      for (int t = 0; t < num_tracks; ++t)
-        for (size_t k = 0; k < tracks[t].size(); ++k)
-          if (tracks[t][k].view == best) p.ok[t][k] = false;
+    pair.f = EstimateFundamentalMatrix(uv_a, uv_b, f_options);
+    if (!pair.f.success) continue;
+    if (pair.f.homography_rms_px > 0 &&
+        pair.f.homography_rms_px <= f_options.homography_warning_ratio * pair.f.symmetric_epipolar_rms_px +
+                                         f_options.homography_warning_slack_px) {
+      ++degenerate_pairs;
       continue;
     }
-    p.registered[best] = true;
-    for (int t = 0; t < num_tracks; ++t) TriangulateTrack(tracks, t, options.inlier_threshold_px, &p);
+    pairs.push_back(std::move(pair));
   }
+  if (pairs.empty())
+    return fail("no pair of views gives a fundamental matrix with parallax (" + std::to_string(degenerate_pairs) +
+                " pairs are explained by a homography: one centre or a plane)");
+  if (degenerate_pairs > 0)
+    summary.warnings.push_back(std::to_string(degenerate_pairs) +
+                               " pair(s) sharing many tracks are explained by a homography (nearly one centre or a "
+                               "plane) and were not used to start");
+
+  // Views that share tracks only two at a time with the rest (a ring photographed in two
+  // halves, a junction of few three-view tracks) cannot be resected into one projective frame:
+  // a start on one side registers that side only. So further starts are tried from pairs of
+  // views the attempts so far left out, and the attempt registering the most views is kept.
+  std::vector<bool> has_tracks(n, false);
+  for (const Track& track : tracks)
+    for (const auto& o : track) has_tracks[o.view] = true;
+  const int reachable = static_cast<int>(std::count(has_tracks.begin(), has_tracks.end(), true));
+  std::vector<bool> tried(n, false);
+  Projective best_p;
+  std::vector<std::string> best_warnings;
+  int best_registered = -1, va = -1, vb = -1, attempts = 0;
+  for (const InitialPair& pair : pairs) {
+    if (attempts >= kMaxInitialPairAttempts || best_registered == reachable) break;
+    if (tried[pair.a] || tried[pair.b]) continue;
+    ++attempts;
+    Projective attempt = p;
+    std::vector<std::string> warnings;
+    if (!RegisterIncrementally(tracks, pair, options, &attempt, &warnings)) continue;
+    const int registered = static_cast<int>(std::count(attempt.registered.begin(), attempt.registered.end(), true));
+    for (int v = 0; v < n; ++v) tried[v] = tried[v] || attempt.registered[v];
+    if (registered > best_registered) {
+      best_registered = registered;
+      best_p = std::move(attempt);
+      best_warnings = std::move(warnings);
+      va = pair.a;
+      vb = pair.b;
+    }
+  }
+  if (va < 0) return fail("no initial pair gives canonical cameras");
+  p = std::move(best_p);
+  summary.warnings.insert(summary.warnings.end(), best_warnings.begin(), best_warnings.end());
+  summary.initial_view_a = va;
+  summary.initial_view_b = vb;
   summary.registered = p.registered;
   if (options.projective_bundle_adjust) {
-    std::vector<ProjectiveBundleObservation> observations;
-    for (int t = 0; t < num_tracks; ++t) {
-      if (!p.has_point[t]) continue;
-      for (size_t k = 0; k < tracks[t].size(); ++k)
-        if (p.ok[t][k] && p.registered[tracks[t][k].view]) observations.push_back({tracks[t][k].view, t, tracks[t][k].uv_px});
-    }
-    ProjectiveBundleOptions pba;
-    pba.max_iterations = options.max_projective_bundle_iterations;
-    const ProjectiveBundleSummary result = ProjectiveBundleAdjust(observations, p.n, pba, &p.P, &p.X);
+    const ProjectiveBundleSummary result = AdjustProjective(tracks, options.max_projective_bundle_iterations, &p);
     if (!result.success) summary.warnings.push_back(result.message);
   }
   const int num_registered = static_cast<int>(std::count(p.registered.begin(), p.registered.end(), true));
   for (int v = 0; v < n; ++v)
-    if (!p.registered[v]) summary.warnings.push_back("view " + std::to_string(v) + " is not registered");
+    if (!p.registered[v]) {
+      int seen = 0, shared = 0;
+      for (int t = 0; t < num_tracks; ++t) {
+        bool in_v = false, in_registered = false;
+        for (const auto& o : tracks[t]) {
+          in_v = in_v || o.view == v;
+          in_registered = in_registered || p.registered[o.view];
+        }
+        seen += in_v && p.has_point[t];
+        shared += in_v && in_registered;
+      }
+      summary.warnings.push_back("view " + std::to_string(v) + " is not registered: it sees " + std::to_string(seen) +
+                                 " reconstructed points (resection needs " + std::to_string(kMinResectionTracks) +
+                                 " consistent ones) and shares " + std::to_string(shared) +
+                                 " tracks with registered views");
+    }
   if (num_registered < 3)
     return fail("only " + std::to_string(num_registered) + " views could be registered; self-calibration needs 3");
 

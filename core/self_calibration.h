@@ -93,6 +93,9 @@ struct SelfCalibrationOptions {
   // (core/selfcal_projective_ba.h).
   bool projective_bundle_adjust = true;
   int max_projective_bundle_iterations = 50;
+  // During the incremental registration, a projective bundle adjustment each time this many
+  // views have been resected (0: only the final one).
+  int projective_bundle_every_views = 0;
   // Observations farther than this from their reprojection are dropped (resection, after the
   // linear upgrade and between bundle adjustment rounds).
   double inlier_threshold_px = 3.0;

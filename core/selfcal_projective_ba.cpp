@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 
+#include "core/lm_internal.h"
 #include "core/solver_util_internal.h"
 
 namespace facet {
@@ -142,59 +143,52 @@ ProjectiveBundleSummary ProjectiveBundleAdjust(const std::vector<ProjectiveBundl
   double cost = cost_of(cams, pts);
   const double initial_cost = cost;
   summary.initial_rms_px = std::sqrt(cost / (2.0 * observations.size()));
-  double lambda = 1e-4;
   Eigen::MatrixXd s(nc, nc);
   Eigen::VectorXd rhs(nc);
   std::vector<Eigen::Matrix3d> v_inv(m);
-  for (int it = 0; it < options.max_iterations && cost > 0 && std::isfinite(cost); ++it) {
-    build();
-    bool improved = false;
-    while (lambda < 1e16) {
-      // Marquardt damping (scaled by the diagonal) also regularises the projective gauge.
-      s = u;
-      s.diagonal() += lambda * (u.diagonal().array() + 1e-12 * u.diagonal().maxCoeff()).matrix();
-      rhs = -g_c;
-      for (int j = 0; j < m; ++j) {
-        if (!point_used[j]) continue;
-        Eigen::Matrix3d vj = v_blocks[j];
-        vj.diagonal() += lambda * (v_blocks[j].diagonal().array() + 1e-12 * v_blocks[j].diagonal().maxCoeff()).matrix();
-        v_inv[j] = vj.inverse();
-        const Eigen::MatrixXd y = w_blocks[j] * v_inv[j];
-        s.noalias() -= y * w_blocks[j].transpose();
-        rhs.noalias() += y * g_p[j];
-      }
-      const Eigen::VectorXd dc = s.ldlt().solve(rhs);
-      if (!dc.allFinite()) {
-        lambda *= 10;
-        continue;
-      }
-      std::vector<Matrix34d> cams_new = cams;
-      std::vector<Eigen::Vector4d> pts_new = pts;
-      for (int v = 0; v < n; ++v)
-        if (camera_used[v])
-          cams_new[v] = FromRowMajor(RowMajor(cams[v]) + cam_basis[v] * dc.segment<kCameraDof>(kCameraDof * v)).normalized();
-      double step_sq = dc.squaredNorm();
-      for (int j = 0; j < m; ++j) {
-        if (!point_used[j]) continue;
-        const Eigen::Vector3d dx = v_inv[j] * (-g_p[j] - w_blocks[j].transpose() * dc);
-        pts_new[j] = (pts[j] + point_basis[j] * dx).normalized();
-        step_sq += dx.squaredNorm();
-      }
-      const double cost_new = cost_of(cams_new, pts_new);
-      if (std::isfinite(cost_new) && cost_new < cost) {
-        const double decrease = cost - cost_new;
-        cams = std::move(cams_new);
-        pts = std::move(pts_new);
-        cost = cost_new;
-        lambda = std::max(lambda / 5, 1e-12);
-        improved = decrease > 1e-12 * cost && step_sq > 1e-30;
-        break;
-      }
-      lambda *= 5;
+  std::vector<Matrix34d> cams_new;
+  std::vector<Eigen::Vector4d> pts_new;
+  // Marquardt damping (scaled by the diagonal) also regularises the projective gauge.
+  auto step = [&](double lambda, double* cost_new, double* step_sq) {
+    s = u;
+    s.diagonal() += lambda * (u.diagonal().array() + 1e-12 * u.diagonal().maxCoeff()).matrix();
+    rhs = -g_c;
+    for (int j = 0; j < m; ++j) {
+      if (!point_used[j]) continue;
+      Eigen::Matrix3d vj = v_blocks[j];
+      vj.diagonal() += lambda * (v_blocks[j].diagonal().array() + 1e-12 * v_blocks[j].diagonal().maxCoeff()).matrix();
+      v_inv[j] = vj.inverse();
+      const Eigen::MatrixXd y = w_blocks[j] * v_inv[j];
+      s.noalias() -= y * w_blocks[j].transpose();
+      rhs.noalias() += y * g_p[j];
     }
-    ++summary.iterations;
-    if (!improved) break;
-  }
+    const Eigen::VectorXd dc = s.ldlt().solve(rhs);
+    if (!dc.allFinite()) return false;
+    cams_new = cams;
+    pts_new = pts;
+    for (int v = 0; v < n; ++v)
+      if (camera_used[v])
+        cams_new[v] = FromRowMajor(RowMajor(cams[v]) + cam_basis[v] * dc.segment<kCameraDof>(kCameraDof * v)).normalized();
+    *step_sq = dc.squaredNorm();
+    for (int j = 0; j < m; ++j) {
+      if (!point_used[j]) continue;
+      const Eigen::Vector3d dx = v_inv[j] * (-g_p[j] - w_blocks[j].transpose() * dc);
+      pts_new[j] = (pts[j] + point_basis[j] * dx).normalized();
+      *step_sq += dx.squaredNorm();
+    }
+    *cost_new = cost_of(cams_new, pts_new);
+    return true;
+  };
+  auto accept = [&]() {
+    cams = std::move(cams_new);
+    pts = std::move(pts_new);
+  };
+  internal::LmOptions lm;
+  lm.max_iterations = options.max_iterations;
+  lm.relative_decrease_tolerance = 1e-12;
+  const internal::LmResult lm_result = internal::MinimizeLevenbergMarquardt(cost, lm, build, step, accept);
+  cost = lm_result.final_cost;
+  summary.iterations = lm_result.iterations;
   summary.final_rms_px = std::sqrt(cost / (2.0 * observations.size()));
   summary.success = std::isfinite(cost) && cost <= initial_cost;
   if (summary.success) {
