@@ -52,6 +52,11 @@ using Termination = JointSolveSummary::Termination;
 constexpr double kInitialConstraintWeight = 1e3;  // sqrt(mu): a relative error of 1e-3 weighs 1 px
 constexpr double kMaxConstraintWeight = 1e7;
 constexpr int kMaxOuterRounds = 12;
+// The augmented Lagrangian ends when the constraints hold and the cost they still owe (sum
+// |lambda c|) is below this fraction of the observation cost, or below the floor (px^2,
+// invisible) for a noise-free scene whose cost is ~0.
+constexpr double kCostGapTolerance = 1e-10;
+constexpr double kCostGapFloorPx2 = 1e-20;
 constexpr int kMaxDiagnosticParameters = 600;  // dense SVD above this costs too much for a full solve
 constexpr double kRankTolerance = 1e-9;        // singular values below this times the largest are zero
 constexpr int kMaxColdStartParameters = 300;   // the geometry solve's initialisation is dense
@@ -399,6 +404,9 @@ bool StateIsFinite(const JointState& state) {
 struct LmState {
   double lambda = 1e-4;
   double nu = 2.0;
+  // The damping after the last accepted step: the next outer round starts from it, not from
+  // the lambda that the rejections at the end of a converged run inflated.
+  double accepted_lambda = 1e-4;
   int iterations = 0;
 };
 
@@ -416,6 +424,13 @@ LmStop RunLevenbergMarquardt(const JointSolveOptions& options, int budget, Joint
   }
   double cost = TotalCost(*problem);
   bool assembled = false;
+  bool evaluated_at_state = true;  // the blocks hold *state's evaluation, not a rejected trial's
+  auto converged = [&]() {
+    if (!evaluated_at_state) EvaluateBlocks(problem, *state, true);
+    return LmStop::kConverged;
+  };
+  lm->lambda = std::min(lm->accepted_lambda, options.initial_lambda);
+  lm->nu = 2.0;
   const int n = problem->num_parameters;
   for (int it = 0; it < budget; ++it) {
     if (!assembled) {
@@ -443,8 +458,11 @@ LmStop RunLevenbergMarquardt(const JointSolveOptions& options, int budget, Joint
     for (int k = 0; k < n; ++k) scaled_step += d(k) * (*delta)(k) * (*delta)(k);
     const double predicted = 0.5 * (lm->lambda * scaled_step - normal->gradient().dot(*delta));
     if (std::sqrt(scaled_step) <= options.parameter_tolerance * (std::sqrt(2.0 * cost) + options.parameter_tolerance)) {
-      return LmStop::kConverged;
+      return converged();
     }
+    // The model promises less than the cost's working precision: every further step would be
+    // rounding noise, rejected one by one while lambda climbs to its cap.
+    if (predicted <= options.function_tolerance * cost) return converged();
     ApplyStep(*problem, *delta, *state, trial);
     const bool ok = EvaluateBlocks(problem, *trial, true);
     const double new_cost = ok ? TotalCost(*problem) : std::numeric_limits<double>::infinity();
@@ -456,22 +474,18 @@ LmStop RunLevenbergMarquardt(const JointSolveOptions& options, int budget, Joint
       assembled = false;
       lm->lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
       lm->lambda = std::max(lm->lambda, 1e-16);
+      lm->accepted_lambda = lm->lambda;
       lm->nu = 2.0;
-      if (decrease <= options.function_tolerance * (cost + decrease)) {
-        EvaluateBlocks(problem, *state, true);
-        return LmStop::kConverged;
-      }
+      evaluated_at_state = true;
+      if (decrease <= options.function_tolerance * (cost + decrease)) return converged();
     } else {
+      evaluated_at_state = false;
       lm->lambda *= lm->nu;
       lm->nu *= 2.0;
-      if (lm->lambda > 1e16) {
-        EvaluateBlocks(problem, *state, true);
-        return LmStop::kConverged;  // no step decreases the cost: a minimum to working precision
-      }
+      if (lm->lambda > 1e16) return converged();  // no step decreases the cost: a minimum to working precision
     }
   }
-  if (!assembled) return LmStop::kBudget;
-  EvaluateBlocks(problem, *state, true);
+  if (!evaluated_at_state) EvaluateBlocks(problem, *state, true);
   return LmStop::kBudget;
 }
 
@@ -764,14 +778,15 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   }
   NormalEquations& normal = *normal_ptr;
   LmState lm;
-  lm.lambda = options.initial_lambda;
+  lm.lambda = lm.accepted_lambda = options.initial_lambda;
   JointState trial = state;
   Eigen::VectorXd delta(problem.num_parameters);
   std::string why;
   bool budget_used = false;
   double previous_violation = std::numeric_limits<double>::infinity();
   const bool has_constraints = !problem.constraints.empty();
-  for (int round = 0; round < (has_constraints ? kMaxOuterRounds : 1); ++round) {
+  bool final_round = false;
+  for (int round = 0;; ++round) {
     const int budget = options.max_iterations - lm.iterations;
     if (budget <= 0) {
       budget_used = true;
@@ -784,13 +799,32 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
       return finish(Termination::kFailed, "the solve failed (" + why + "); the model is unchanged");
     }
     if (stop == LmStop::kBudget) budget_used = true;
-    if (!has_constraints || budget_used) break;
+    if (!has_constraints || budget_used || final_round) break;
     const double violation = MaxConstraintViolation(problem);
-    if (violation <= options.constraint_tolerance) break;
-    // Multiplier update, then a stiffer penalty when the violation did not drop enough.
     const double mu = problem.constraint_weight * problem.constraint_weight;
+    // The observation cost still to pay for the violation: sum |lambda_i c_i| with the
+    // updated multipliers (first order). A violation within constraint_tolerance can still
+    // leave the cost far from its constrained minimum when a constraint fights the pins: a
+    // line pin 3 px off has lambda ~ 3 px x focal, so c = 5e-10 rad left 2e-6 of the cost.
+    double cost_gap = 0.0;
+    for (const ResidualBlock& b : problem.blocks) {
+      if (b.kind != BlockKind::kConstraint) continue;
+      cost_gap += std::abs((problem.constraints[b.source].multiplier + mu * b.raw).dot(b.raw));
+    }
+    const bool held = violation <= options.constraint_tolerance;
+    if (held && cost_gap <= kCostGapTolerance * ObservationCost(problem) + kCostGapFloorPx2) break;
+    if (!held && round + 1 >= kMaxOuterRounds) break;
+    // Multiplier update, then a stiffer penalty when the violation did not drop enough.
     for (const ResidualBlock& b : problem.blocks) {
       if (b.kind == BlockKind::kConstraint) problem.constraints[b.source].multiplier += mu * b.raw;
+    }
+    if (held) {
+      // One last round at the stiffest penalty: the multipliers are nearly exact by now, so
+      // it takes a step or two, and it resolves c to ~sqrt(2 eps cost) / weight where the
+      // AL's rounds at a moderate weight stall (the merit's rounding hides smaller c).
+      final_round = true;
+      problem.constraint_weight = kMaxConstraintWeight;
+      continue;
     }
     if (violation > 0.25 * previous_violation) {
       problem.constraint_weight = std::min(problem.constraint_weight * std::sqrt(10.0), kMaxConstraintWeight);

@@ -31,8 +31,12 @@
 //   sqrt(mu) c + lambda / sqrt(mu), mu starting at 1e6 (a relative error of 1e-3 weighs like
 //   1 px); after each inner Levenberg-Marquardt run lambda += mu c, and mu grows tenfold
 //   (up to 1e14) when max |c| fell by less than a factor 4; at most 12 outer rounds, ending
-//   once max |c| <= constraint_tolerance. The SLSQP polish (NLopt) then makes them hold as
-//   hard equalities.
+//   once max |c| <= constraint_tolerance and the cost the constraints still owe, sum
+//   |lambda c|, is below 1e-10 of the observation cost; when only the latter fails, one last
+//   round at mu = 1e14 with the (by then nearly exact) multipliers settles it in a step or
+//   two. Each inner LM run stops once its model promises less than function_tolerance of
+//   the cost and restarts from the damping of its last accepted step. The SLSQP polish
+//   (NLopt) then makes them hold as hard equalities.
 // Linear algebra: the damped normal equations (J^T J + lambda diag(J^T J)) delta = -J^T r. By
 // default (kSchur) the primitive-side parameters are grouped (a primitive with the primitives
 // attached to it and its free vertices, merged when a constraint couples them); no residual
