@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 
 #include "core/calibrate_dlt.h"
+#include "core/homography_pose.h"
 #include "core/projective_upgrade.h"
 
 namespace facet {
@@ -170,6 +171,13 @@ ResectionResult Resect(const Project& project, const Image& image, const std::ve
   dlt_options.principal_point_mode = image.principal_point_mode;
   dlt_options.fixed_principal_point_px = image.fixed_principal_point_px;
   dlt_options.max_iterations = options.max_resection_iterations;
+  if (image.focal_mode == FocalMode::kFixed && image.fixed_focal_px > 0.0) {
+    dlt_options.fixed_focal_px = image.fixed_focal_px;
+  } else if (image.focal_mode == FocalMode::kPrior && image.focal_prior_px > 0.0 && image.focal_prior_std_px > 0.0) {
+    dlt_options.focal_prior_px = image.focal_prior_px;
+    dlt_options.focal_prior_std_px = image.focal_prior_std_px;
+    dlt_options.pixel_noise_px = options.resection_pixel_noise_px;
+  }
   while (true) {
     DltCalibrationSummary dlt = CalibrateFromPoints(points, dlt_options);
     if (!dlt.success) {
@@ -193,6 +201,7 @@ ResectionResult Resect(const Project& project, const Image& image, const std::ve
       result.focal_std_px = dlt.focal_std_px;
       result.message = std::string(dlt.planar ? "resection (planar)" : "resection") + " from " +
                        std::to_string(points.size()) + " pins, f = " + Format("%.1f px", dlt.camera.focal_px) +
+                       (dlt.focal_fixed ? " (known, held)" : dlt.focal_prior_used ? " (with the prior)" : "") +
                        ", RMS " + Format("%.3f px", dlt.reprojection_rms_px);
       for (const auto& w : dlt.warnings) result.warnings.push_back(w);
       return result;
@@ -216,6 +225,7 @@ struct TwoViewResult {
   std::vector<Id> flagged_a, flagged_b;
   MultiViewPairGeometry pair;
   bool guessed_a = false, guessed_b = false;
+  bool plane = false;  // by the plane's homography
 };
 
 // The pixel a pinhole camera would see: a calibrated image's distortion removed (its K is
@@ -231,6 +241,43 @@ Eigen::Vector3d TriangulateEuclidean(const Camera& a, const Camera& b, const Eig
   x = RefineTriangulatedPoint(cameras, {uv_a, uv_b}, x);
   *ok = std::abs(x(3)) > 1e-12 * x.head<3>().norm();
   return *ok ? Eigen::Vector3d(x.head<3>() / x(3)) : Eigen::Vector3d::Zero();
+}
+
+// The model's positions of the shared vertices lie on one plane: their thickness (smallest
+// singular value of the centred points) is below ratio times their extent (the largest).
+bool OnOnePlane(const std::vector<Eigen::Vector3d>& points, double ratio) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : points) mean += p;
+  mean /= static_cast<double>(points.size());
+  Eigen::MatrixXd centred(points.size(), 3);
+  for (size_t i = 0; i < points.size(); ++i) centred.row(i) = (points[i] - mean).transpose();
+  const Eigen::Vector3d s = Eigen::JacobiSVD<Eigen::MatrixXd>(centred).singularValues();
+  return s(0) > 0.0 && s(2) <= ratio * s(0);
+}
+
+// How far the inliers triangulated by two reconstruction cameras are from the model's
+// positions after the best similarity, as an RMS relative to the model's spread; infinity
+// when they cannot be aligned.
+double ModelMisfit(const Camera& recon_a, const Camera& recon_b, const std::vector<Eigen::Vector2d>& uv_a,
+                   const std::vector<Eigen::Vector2d>& uv_b, const std::vector<Eigen::Vector3d>& model,
+                   const std::vector<bool>& inliers) {
+  std::vector<Eigen::Vector3d> recon, target;
+  for (size_t i = 0; i < uv_a.size(); ++i) {
+    if (!inliers[i]) continue;
+    bool ok = false;
+    const Eigen::Vector3d x = TriangulateEuclidean(recon_a, recon_b, uv_a[i], uv_b[i], &ok);
+    if (!ok) continue;
+    recon.push_back(x);
+    target.push_back(model[i]);
+  }
+  Similarity3d sim;
+  const double spread = RmsSpread(target);
+  if (recon.size() < 3 || !(spread > 0.0) || !AlignSimilarity(recon, target, &sim))
+    return std::numeric_limits<double>::infinity();
+  double sum = 0.0;
+  for (size_t i = 0; i < recon.size(); ++i)
+    sum += (sim.scale * sim.rotation * recon[i] + sim.translation - target[i]).squaredNorm();
+  return std::sqrt(sum / recon.size()) / spread;
 }
 
 // a is the calibrated image when one of them is.
@@ -253,9 +300,12 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
     uv_b.push_back(PinholePixel(image_b, it->second->uv_px));
   }
   result.pair.num_correspondences = static_cast<int>(uv_a.size());
-  if (uv_a.size() < 7) {
+  std::vector<Eigen::Vector3d> model_all;
+  for (const Pin* pin : match_a) model_all.push_back(VertexInWorld(project, pin->vertex));
+  const bool on_one_plane = uv_a.size() >= 4 && OnOnePlane(model_all, options.coplanar_thickness_ratio);
+  if (uv_a.size() < 4 || (uv_a.size() < 7 && !on_one_plane)) {
     result.message = std::to_string(uv_a.size()) + " vertices pinned in both " + Quoted(image_a) + " and " +
-                     Quoted(image_b) + "; two views need 7 (8 to flag wrong clicks)";
+                     Quoted(image_b) + "; two views need 7 (8 to flag wrong clicks), or 4 on one face";
     return result;
   }
   for (const Image* image : {&image_a, &image_b})
@@ -263,47 +313,115 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
       result.message = Quoted(*image) + " has no size: its principal point is unknown";
       return result;
     }
-
-  FundamentalOptions f_options = options.fundamental;
-  f_options.inlier_threshold_px = options.wrong_click_threshold_px;
-  const FundamentalSummary f = EstimateFundamentalMatrix(uv_a, uv_b, f_options);
-  if (!f.success) {
-    result.message = "fundamental matrix of " + Quoted(image_a) + " and " + Quoted(image_b) + ": " + f.message;
-    return result;
-  }
-  for (const auto& w : f.warnings) result.warnings.push_back("F: " + w);
-  result.pair.F = f.F;
-  result.pair.num_inliers = f.num_inliers;
-  for (size_t i = 0; i < uv_a.size(); ++i)
-    if (!f.inliers[i]) {
-      result.flagged_a.push_back(match_a[i]->id);
-      result.flagged_b.push_back(match_b[i]->id);
-    }
-
   const Camera intrinsics_a = IntrinsicsFor(image_a, options, &result.guessed_a);
   const Camera intrinsics_b = IntrinsicsFor(image_b, options, &result.guessed_b);
-  const RelativePoseSummary pose = EstimateRelativePose(f.F, intrinsics_a.K(), intrinsics_b.K(), uv_a, uv_b, f.inliers,
-                                                        options.relative_pose);
-  if (!pose.success) {
-    result.message = "relative pose of " + Quoted(image_b) + " to " + Quoted(image_a) + ": " + pose.message;
-    return result;
+
+  // The relative pose (b from a, unit baseline) and its inliers, by F or by the plane.
+  Eigen::Matrix3d relative_rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d relative_translation = Eigen::Vector3d::Zero();
+  std::vector<bool> inliers;
+  std::string method;
+  Eigen::Matrix3d estimated_f = Eigen::Matrix3d::Zero();  // F's path: the estimated F, for display
+  if (!on_one_plane) {
+    FundamentalOptions f_options = options.fundamental;
+    f_options.inlier_threshold_px = options.wrong_click_threshold_px;
+    const FundamentalSummary f = EstimateFundamentalMatrix(uv_a, uv_b, f_options);
+    if (!f.success) {
+      result.message = "fundamental matrix of " + Quoted(image_a) + " and " + Quoted(image_b) + ": " + f.message;
+      return result;
+    }
+    for (const auto& w : f.warnings) result.warnings.push_back("F: " + w);
+    const RelativePoseSummary pose = EstimateRelativePose(f.F, intrinsics_a.K(), intrinsics_b.K(), uv_a, uv_b,
+                                                          f.inliers, options.relative_pose);
+    if (!pose.success) {
+      result.message = "relative pose of " + Quoted(image_b) + " to " + Quoted(image_a) + ": " + pose.message;
+      return result;
+    }
+    for (const auto& w : pose.warnings) result.warnings.push_back("pose: " + w);
+    relative_rotation = pose.cam2_from_cam1_rotation;
+    relative_translation = pose.cam2_from_cam1_translation;
+    inliers = f.inliers;
+    estimated_f = f.F;
+    method = std::to_string(f.num_inliers) + " of " + std::to_string(uv_a.size()) + " correspondences";
+  } else {
+    HomographyPoseOptions h_options;
+    h_options.homography = options.homography;
+    h_options.homography.inlier_threshold_px = options.wrong_click_threshold_px;
+    const HomographyPoseSummary pose =
+        EstimatePlanePose(uv_a, uv_b, intrinsics_a.K(), intrinsics_b.K(), h_options);
+    if (!pose.success) {
+      result.message = "two views of one plane (" + Quoted(image_a) + " and " + Quoted(image_b) +
+                       "): " + pose.message;
+      return result;
+    }
+    if (pose.pure_rotation) {
+      result.message = "two views of one plane (" + Quoted(image_a) + " and " + Quoted(image_b) +
+                       "): the cameras share their centre (a pure rotation): no baseline to place them";
+      return result;
+    }
+    for (const auto& w : pose.warnings)
+      if (!pose.ambiguous || w.find("ambiguous") == std::string::npos) result.warnings.push_back("plane: " + w);
+    inliers = pose.homography.inliers;
+    // Several decompositions reproduce H: the model, which knows the plane, picks the one whose
+    // triangulated vertices it fits best (a similarity, relative to the vertices' spread).
+    const PlanePose* chosen = &pose.candidates[0];
+    if (pose.ambiguous) {
+      std::vector<double> misfit;
+      for (const PlanePose& candidate : pose.candidates) {
+        Camera recon_a = intrinsics_a, recon_b = intrinsics_b;
+        recon_a.cam_from_world_rotation.setIdentity();
+        recon_a.cam_from_world_translation.setZero();
+        recon_b.cam_from_world_rotation = candidate.cam2_from_cam1_rotation;
+        recon_b.cam_from_world_translation = candidate.cam2_from_cam1_translation;
+        misfit.push_back(ModelMisfit(recon_a, recon_b, uv_a, uv_b, model_all, inliers));
+      }
+      const size_t best = std::min_element(misfit.begin(), misfit.end()) - misfit.begin();
+      chosen = &pose.candidates[best];
+      std::vector<double> others = misfit;
+      others.erase(others.begin() + best);
+      const double second = *std::min_element(others.begin(), others.end());
+      result.warnings.push_back("plane: " + std::to_string(pose.candidates.size()) +
+                                " poses explain the clicks; the model's vertices chose one (misfit " +
+                                Format("%.3g", misfit[best]) + " against " + Format("%.3g", second) +
+                                " of their spread)");
+      if (!(second > 2.0 * misfit[best] + 1e-3))
+        result.warnings.push_back("plane: the model hardly tells the poses apart: the camera may be the mirror "
+                                  "pose; pin a vertex off the face");
+    }
+    relative_rotation = chosen->cam2_from_cam1_rotation;
+    relative_translation = chosen->cam2_from_cam1_translation;
+    result.plane = true;
+    method = "one plane (homography), " + std::to_string(pose.homography.num_inliers) + " of " +
+             std::to_string(uv_a.size()) + " correspondences";
   }
-  for (const auto& w : pose.warnings) result.warnings.push_back("pose: " + w);
+  int num_inliers = 0;
+  for (size_t i = 0; i < uv_a.size(); ++i) {
+    if (inliers[i]) {
+      ++num_inliers;
+      continue;
+    }
+    result.flagged_a.push_back(match_a[i]->id);
+    result.flagged_b.push_back(match_b[i]->id);
+  }
+  result.pair.num_inliers = num_inliers;
 
   // The reconstruction frame: camera a at the origin, unit baseline.
   Camera recon_a = intrinsics_a, recon_b = intrinsics_b;
   recon_a.cam_from_world_rotation.setIdentity();
   recon_a.cam_from_world_translation.setZero();
-  recon_b.cam_from_world_rotation = pose.cam2_from_cam1_rotation;
-  recon_b.cam_from_world_translation = pose.cam2_from_cam1_translation;
+  recon_b.cam_from_world_rotation = relative_rotation;
+  recon_b.cam_from_world_translation = relative_translation;
+  const Eigen::Matrix3d pose_f = NormalizeFundamental(FundamentalFromCameras(recon_a, recon_b));
+  result.pair.F = result.plane ? pose_f : estimated_f;
+  const double epipolar_rms_px = SymmetricEpipolarRms(pose_f, uv_a, uv_b, inliers);
   std::vector<Eigen::Vector3d> recon_points, model_points;
   for (size_t i = 0; i < uv_a.size(); ++i) {
-    if (!f.inliers[i]) continue;
+    if (!inliers[i]) continue;
     bool ok = false;
     const Eigen::Vector3d x = TriangulateEuclidean(recon_a, recon_b, uv_a[i], uv_b[i], &ok);
     if (!ok) continue;
     recon_points.push_back(x);
-    model_points.push_back(VertexInWorld(project, match_a[i]->vertex));
+    model_points.push_back(model_all[i]);
   }
 
   std::string gauge;
@@ -320,11 +438,10 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
     result.message = "two views of " + Quoted(image_a) + " and " + Quoted(image_b) + " gave a non-finite camera";
     return result;
   }
-  result.rms_px = pose.symmetric_epipolar_rms_px;
+  result.rms_px = epipolar_rms_px;
   result.ok = true;
-  result.message = "two views with " + Quoted(image_a) + " and " + Quoted(image_b) + ": " +
-                   std::to_string(f.num_inliers) + " of " + std::to_string(uv_a.size()) +
-                   " correspondences, epipolar RMS " + Format("%.3f px", pose.symmetric_epipolar_rms_px) + "; " + gauge;
+  result.message = "two views with " + Quoted(image_a) + " and " + Quoted(image_b) + ": " + method +
+                   ", epipolar RMS " + Format("%.3f px", epipolar_rms_px) + "; " + gauge;
   return result;
 }
 
@@ -448,6 +565,13 @@ bool MultiViewInitOptions::Check(std::string* error) const {
   f.inlier_threshold_px = wrong_click_threshold_px;
   if (!f.Check(&sub)) return fail("fundamental: " + sub);
   if (!relative_pose.Check(&sub)) return fail("relative_pose: " + sub);
+  HomographyOptions h = homography;
+  h.inlier_threshold_px = wrong_click_threshold_px;
+  if (!h.Check(&sub)) return fail("homography: " + sub);
+  if (!(coplanar_thickness_ratio >= 0.0) || !(coplanar_thickness_ratio < 1.0))
+    return fail("coplanar_thickness_ratio must be in [0, 1)");
+  if (!(resection_pixel_noise_px > 0.0) || !std::isfinite(resection_pixel_noise_px))
+    return fail("resection_pixel_noise_px must be positive");
   SelfCalibrationOptions sc = self_calibration;
   sc.inlier_threshold_px = wrong_click_threshold_px;
   if (!sc.Check(&sub)) return fail("self_calibration: " + sub);
@@ -572,6 +696,7 @@ MultiViewInitSummary CalibrateImagesFromPins(const Project& project, const Multi
       report.focal_px = camera.focal_px;
       report.focal_guessed = is_a ? r.guessed_a : r.guessed_b;
       report.flagged_pins = is_a ? r.flagged_a : r.flagged_b;
+      report.two_view_plane = r.plane;
       report.warnings = r.warnings;
       report.message = r.message;
     }

@@ -13,12 +13,22 @@
 //     point (per Image::principal_point_mode; held at the centre on the planar path), R, t in
 //     the model's world frame. A pin whose reprojection error stays above
 //     wrong_click_threshold_px is dropped and the camera refitted (one at a time, worst first,
-//     while enough points remain); dropped pins are reported as wrong clicks.
+//     while enough points remain); dropped pins are reported as wrong clicks. An image with a
+//     known focal length (FocalMode::kFixed, fixed_focal_px > 0) keeps it exactly: resection
+//     then solves only its pose (and the principal point its mode leaves free), a calibrated
+//     PnP; with FocalMode::kPrior the focal length is refined under that Gaussian prior (weighed
+//     with resection_pixel_noise_px). focal_px_by_image (EXIF) is not used here: resection
+//     measures f, an EXIF value is only as good as the prior it would be.
 // (b) Two views: the images not resected, when exactly two are left; then each image still
 //     uncalibrated (after (b) or (c), or alone) with the calibrated image, at input or
 //     initialised here, it shares the most pinned vertices with. Correspondences are the
 //     vertices pinned in both; 7 or more give F (core/two_view.h, RANSAC flags wrong
-//     clicks). The intrinsics (a calibrated image's own; else focal_px_by_image, e.g. EXIF;
+//     clicks). When the model places the shared vertices on one plane (thickness at most
+//     coplanar_thickness_ratio of their extent: every pin on one face, where F is not unique),
+//     4 or more give the plane's homography instead (core/homography_pose.h; RANSAC flags wrong
+//     clicks from 6) and its decomposition; of the poses that pass cheirality (often two), the
+//     one whose triangulated vertices best fit the model's positions (a similarity) is taken,
+//     with a warning naming the misfits (two_view_plane is set in the report). The intrinsics (a calibrated image's own; else focal_px_by_image, e.g. EXIF;
 //     else the image's fixed_focal_px (FocalMode::kFixed) or focal_prior_px (kPrior); else
 //     default_focal_factor x the larger image side; principal point at the centre unless
 //     kFixed) give E and the relative pose with the cheirality check. The baseline is fixed
@@ -62,6 +72,7 @@
 #include <Eigen/Core>
 
 #include "core/camera.h"
+#include "core/homography_pose.h"
 #include "core/project.h"
 #include "core/self_calibration.h"
 #include "core/two_view.h"
@@ -73,6 +84,9 @@ enum class MultiViewGauge { kAlignToModel, kKeepFirstCamera };
 struct MultiViewInitOptions {
   // Resection (a).
   int max_resection_iterations = 100;
+  // The clicks' assumed standard deviation (px): weighs an image's focal prior (kPrior)
+  // against the reprojection residuals in resection.
+  double resection_pixel_noise_px = 1.0;
   // A resection pin farther than this from its reprojection is a wrong click (also the
   // F RANSAC inlier threshold of (b) and the self-calibration's).
   double wrong_click_threshold_px = 3.0;
@@ -86,6 +100,11 @@ struct MultiViewInitOptions {
   // and the relative pose.
   FundamentalOptions fundamental;
   RelativePoseOptions relative_pose;
+  // Two views of one plane (b): the shared vertices' model positions count as one plane when
+  // their thickness is at most this fraction of their extent; then the homography (its inlier
+  // threshold set from wrong_click_threshold_px) replaces F.
+  double coplanar_thickness_ratio = 0.02;
+  HomographyOptions homography;
   // Self-calibration (c) (its inlier threshold is set from wrong_click_threshold_px).
   SelfCalibrationOptions self_calibration;
 
@@ -118,6 +137,7 @@ struct MultiViewImageReport {
   // its bundle adjustment; 0 for two views (the focal length is given or guessed there).
   double focal_std_px = 0.0;
   bool focal_guessed = false;  // two views: default_focal_factor; self-calibration: no prior
+  bool two_view_plane = false;  // two views through the plane's homography (shared vertices on one face)
   std::vector<Id> flagged_pins;  // wrong clicks in this image, by pin id
   std::string message;           // one line: what was done, or why nothing could be
   std::vector<std::string> warnings;
