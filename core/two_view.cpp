@@ -103,6 +103,45 @@ double MatchSquaredError(const Eigen::Matrix3d& F, const Eigen::Vector2d& uv1, c
   return 0.5 * SymmetricEpipolarDistances(F, uv1, uv2).squaredNorm();
 }
 
+// Gauss-Newton blocks over F's nine entries (row-major), summed per match so that the
+// 2n x 9 Jacobian is never formed: the LM's time is in this loop.
+struct EpipolarNormalEquations {
+  Eigen::Matrix<double, 9, 9> jtj = Eigen::Matrix<double, 9, 9>::Zero();
+  Eigen::Matrix<double, 9, 1> jtr = Eigen::Matrix<double, 9, 1>::Zero();
+};
+
+// Sum of squared symmetric epipolar residuals (those of internal::SymmetricEpipolarResiduals)
+// and, when `normal` is given, their normal equations over F.
+double SymmetricEpipolarCost(const Eigen::Matrix3d& F, const Points& uv1, const Points& uv2,
+                             EpipolarNormalEquations* normal) {
+  double cost = 0.0;
+  Eigen::Matrix<double, 9, 1> g1, g2;
+  for (size_t i = 0; i < uv1.size(); ++i) {
+    const Eigen::Vector3d x1 = uv1[i].homogeneous(), x2 = uv2[i].homogeneous();
+    const Eigen::Vector3d l2 = F * x1, l1 = F.transpose() * x2;
+    const double e = x2.dot(l2);
+    const double n2_sq = l2.x() * l2.x() + l2.y() * l2.y(), n1_sq = l1.x() * l1.x() + l1.y() * l1.y();
+    if (!(n2_sq > 0) || !(n1_sq > 0)) continue;
+    const double inv_n2 = 1.0 / std::sqrt(n2_sq), inv_n1 = 1.0 / std::sqrt(n1_sq);
+    const double r2 = e * inv_n2, r1 = e * inv_n1;
+    cost += r2 * r2 + r1 * r1;
+    if (!normal) continue;
+    // d e / d F_rc = x2_r x1_c; d n2 / d F_rc = l2_r x1_c / n2 (r < 2); d n1 / d F_rc =
+    // l1_c x2_r / n1 (c < 2).
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        const double de = x2(r) * x1(c);
+        const double dn2 = r < 2 ? l2(r) * x1(c) * inv_n2 : 0.0;
+        const double dn1 = c < 2 ? l1(c) * x2(r) * inv_n1 : 0.0;
+        g2(3 * r + c) = (de - r2 * dn2) * inv_n2;
+        g1(3 * r + c) = (de - r1 * dn1) * inv_n1;
+      }
+    normal->jtj.noalias() += g2 * g2.transpose() + g1 * g1.transpose();
+    normal->jtr += r2 * g2 + r1 * g1;
+  }
+  return cost;
+}
+
 // Levenberg-Marquardt on the symmetric epipolar residuals over a parameterisation of F
 // (State: F(), Plus(delta), Tangent()). Only steps that lower the cost are taken, so the
 // result is never worse than the start.
@@ -111,17 +150,15 @@ State MinimizeSymmetricEpipolar(State state, const Points& uv1, const Points& uv
                                 int* iterations) {
   using VecD = Eigen::Matrix<double, D, 1>;
   using MatD = Eigen::Matrix<double, D, D>;
-  Eigen::VectorXd r;
-  Eigen::Matrix<double, Eigen::Dynamic, 9> j_f;
-  internal::SymmetricEpipolarResiduals(state.F(), uv1, uv2, &r, &j_f);
-  double cost = r.squaredNorm();
+  EpipolarNormalEquations normal;
+  double cost = SymmetricEpipolarCost(state.F(), uv1, uv2, &normal);
   double lambda = -1.0;
   *iterations = 0;
   for (int it = 0; it < max_iterations && cost > 0.0; ++it) {
     ++*iterations;
-    const Eigen::MatrixXd j = j_f * state.Tangent();
-    const MatD jtj = j.transpose() * j;
-    const VecD jtr = j.transpose() * r;
+    const Eigen::Matrix<double, 9, D> tangent = state.Tangent();
+    const MatD jtj = tangent.transpose() * normal.jtj * tangent;
+    const VecD jtr = tangent.transpose() * normal.jtr;
     if (lambda < 0) lambda = 1e-4 * std::max(jtj.diagonal().maxCoeff(), 1e-300);
     bool improved = false;
     while (lambda < 1e20) {
@@ -133,19 +170,16 @@ State MinimizeSymmetricEpipolar(State state, const Points& uv1, const Points& uv
         continue;
       }
       const State candidate = state.Plus(delta);
-      Eigen::VectorXd r_c;
-      Eigen::Matrix<double, Eigen::Dynamic, 9> j_c;
-      internal::SymmetricEpipolarResiduals(candidate.F(), uv1, uv2, &r_c, &j_c);
-      const double cost_c = r_c.squaredNorm();
+      EpipolarNormalEquations normal_c;
+      const double cost_c = SymmetricEpipolarCost(candidate.F(), uv1, uv2, &normal_c);
       if (std::isfinite(cost_c) && cost_c < cost) {
         const double decrease = cost - cost_c;
         state = candidate;
-        r = r_c;
-        j_f = j_c;
+        normal = normal_c;
         cost = cost_c;
         lambda = std::max(lambda / 10, 1e-15);
         improved = true;
-        if (decrease <= 1e-14 * cost || delta.norm() < 1e-14) return state;
+        if (decrease <= 1e-10 * cost || delta.norm() < 1e-12) return state;
         break;
       }
       lambda *= 10;
@@ -153,6 +187,20 @@ State MinimizeSymmetricEpipolar(State state, const Points& uv1, const Points& uv
     if (!improved) break;
   }
   return state;
+}
+
+// The SVD of an n x 9 design matrix through its 9 x 9 triangular factor: the same singular
+// values and right singular vectors as A's own SVD, at a fixed size (RANSAC calls this for
+// every 7-point sample; a dynamic-size SVD of A was a sixth of the estimate's time).
+Eigen::JacobiSVD<Eigen::Matrix<double, 9, 9>> DesignMatrixSvd(const Eigen::MatrixXd& a) {
+  Eigen::Matrix<double, 9, 9> r = Eigen::Matrix<double, 9, 9>::Zero();
+  if (a.rows() > 9) {
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(a);
+    r = qr.matrixQR().topRows<9>().triangularView<Eigen::Upper>();
+  } else {
+    r.topRows(a.rows()) = a;
+  }
+  return Eigen::JacobiSVD<Eigen::Matrix<double, 9, 9>>(r, Eigen::ComputeFullV);
 }
 
 // Normalised DLT homography uv2 ~ H uv1 (4 or more matches); false when degenerate.
@@ -165,7 +213,7 @@ bool HomographyDlt(const Points& uv1, const Points& uv2, Eigen::Matrix3d* h) {
     a.row(2 * i) << 0, 0, 0, -y.z() * x.transpose(), y.y() * x.transpose();
     a.row(2 * i + 1) << y.z() * x.transpose(), 0, 0, 0, -y.x() * x.transpose();
   }
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV);
+  const auto svd = DesignMatrixSvd(a);
   const Eigen::Matrix3d hn = FromVecRowMajor(svd.matrixV().col(8));
   *h = t2.inverse() * hn * t1;
   return h->allFinite() && std::abs(h->determinant()) > 0;
@@ -338,7 +386,9 @@ Eigen::Vector2d SymmetricEpipolarDistances(const Eigen::Matrix3d& F, const Eigen
   const Eigen::Vector3d x1 = uv1.homogeneous(), x2 = uv2.homogeneous();
   const Eigen::Vector3d l2 = F * x1, l1 = F.transpose() * x2;
   const double e = x2.dot(l2);
-  const double n2 = std::hypot(l2.x(), l2.y()), n1 = std::hypot(l1.x(), l1.y());
+  // sqrt, not hypot: line coefficients of pixel data cannot overflow, and hypot was a tenth
+  // of the fundamental matrix's time.
+  const double n2 = std::sqrt(l2.x() * l2.x() + l2.y() * l2.y()), n1 = std::sqrt(l1.x() * l1.x() + l1.y() * l1.y());
   return {n2 > 0 ? e / n2 : 0.0, n1 > 0 ? e / n1 : 0.0};
 }
 
@@ -358,8 +408,8 @@ bool FundamentalEightPoint(const Points& uv1, const Points& uv2, Eigen::Matrix3d
   if (uv1.size() < 8 || uv1.size() != uv2.size()) return false;
   const Eigen::Matrix3d t1 = NormalizingTransform(uv1), t2 = NormalizingTransform(uv2);
   const Eigen::MatrixXd a = DesignMatrix(uv1, uv2, t1, t2);
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV);
-  const Eigen::VectorXd& sv = svd.singularValues();
+  const auto svd = DesignMatrixSvd(a);
+  const Eigen::Matrix<double, 9, 1>& sv = svd.singularValues();
   if (!(sv(0) > 0) || sv(7) < kNullSpaceRatio * sv(0)) return false;
   const Eigen::Matrix3d fn = FromVecRowMajor(svd.matrixV().col(8));
   Eigen::JacobiSVD<Eigen::Matrix3d> svd_f(fn, Eigen::ComputeFullU | Eigen::ComputeFullV);
@@ -375,8 +425,8 @@ std::vector<Eigen::Matrix3d> FundamentalSevenPoint(const Points& uv1, const Poin
   if (uv1.size() != 7 || uv2.size() != 7) return out;
   const Eigen::Matrix3d t1 = NormalizingTransform(uv1), t2 = NormalizingTransform(uv2);
   const Eigen::MatrixXd a = DesignMatrix(uv1, uv2, t1, t2);
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV);
-  const Eigen::VectorXd& sv = svd.singularValues();
+  const auto svd = DesignMatrixSvd(a);
+  const Eigen::Matrix<double, 9, 1>& sv = svd.singularValues();
   if (!(sv(0) > 0) || sv(6) < kNullSpaceRatio * sv(0)) return out;
   const Eigen::Matrix3d f1 = FromVecRowMajor(svd.matrixV().col(7));
   const Eigen::Matrix3d f2 = FromVecRowMajor(svd.matrixV().col(8));

@@ -49,14 +49,20 @@ void BM_FundamentalEightPointAndRefine(benchmark::State& state) {
   const TwoViewScene s = MakeTwoViewScene(static_cast<int>(state.range(0)));
   facet::FundamentalOptions options;
   options.use_ransac = false;
-  for (auto _ : state) benchmark::DoNotOptimize(facet::EstimateFundamentalMatrix(s.uv1, s.uv2, options));
+  facet::FundamentalSummary summary;
+  for (auto _ : state) benchmark::DoNotOptimize(summary = facet::EstimateFundamentalMatrix(s.uv1, s.uv2, options));
+  state.counters["refine_iterations"] = summary.refine_iterations;
+  state.counters["ransac_iterations"] = summary.ransac_iterations;
 }
 BENCHMARK(BM_FundamentalEightPointAndRefine)->Arg(30)->Arg(200)->Unit(benchmark::kMicrosecond);
 
 void BM_FundamentalRansacAndRefine(benchmark::State& state) {
   const TwoViewScene s = MakeTwoViewScene(static_cast<int>(state.range(0)));
   facet::FundamentalOptions options;
-  for (auto _ : state) benchmark::DoNotOptimize(facet::EstimateFundamentalMatrix(s.uv1, s.uv2, options));
+  facet::FundamentalSummary summary;
+  for (auto _ : state) benchmark::DoNotOptimize(summary = facet::EstimateFundamentalMatrix(s.uv1, s.uv2, options));
+  state.counters["refine_iterations"] = summary.refine_iterations;
+  state.counters["ransac_iterations"] = summary.ransac_iterations;
 }
 BENCHMARK(BM_FundamentalRansacAndRefine)->Arg(30)->Arg(200)->Unit(benchmark::kMicrosecond);
 
