@@ -86,6 +86,16 @@ bool ParseInput(const json& doc, std::vector<PointCorrespondence>* points, DltCa
     options->radial_distortion_terms = static_cast<int>(terms);
   }
 
+  const auto focal_it = doc.find("focal_px");
+  if (focal_it != doc.end()) {
+    double focal_px = 0.0;
+    if (!ReadNumber(*focal_it, &focal_px) || !(focal_px > 0.0)) {
+      *error = "\"focal_px\" must be a positive number (a known focal length), got " + focal_it->dump();
+      return false;
+    }
+    options->fixed_focal_px = focal_px;
+  }
+
   if (!json_io::ReadPrincipalPoint(doc, &options->principal_point_mode, &options->fixed_principal_point_px, error))
     return false;
   return true;
@@ -124,6 +134,7 @@ CalibrateIoResult CalibratePointsJson(const std::string& points_json_text) {
     out["residuals_px"] = summary.residuals_px;
     out["planar"] = summary.planar;
     out["focal_std_px"] = summary.focal_std_px;
+    out["focal_fixed"] = summary.focal_fixed;
     out["warnings"] = summary.warnings;
     out["message"] = summary.message;
     out["time_ms"] = summary.time_ms;

@@ -546,6 +546,17 @@ TEST_CASE("JSON adapter: round trip and malformed input") {
   CHECK(out["reprojection_rms_px"].get<double>() <= 1e-6);
   CHECK(out["warnings"].is_array());
   CHECK(out["principal_point"].size() == 2);
+  CHECK(out["focal_fixed"].get<bool>() == false);
+
+  // A known focal length, off the truth by 5 %: held exactly (the pose then absorbs it).
+  nlohmann::json known = doc;
+  known["focal_px"] = 1.05 * truth.focal_px;
+  const CalibrateIoResult held = CalibratePointsJson(known.dump());
+  REQUIRE_MESSAGE(held.ok(), held.error);
+  const nlohmann::json held_out = nlohmann::json::parse(held.json);
+  CHECK(held_out["focal_px"].get<double>() == 1.05 * truth.focal_px);
+  CHECK(held_out["focal_fixed"].get<bool>());
+  CHECK(held_out["focal_std_px"].get<double>() == 0.0);
 
   auto expect_error = [](const std::string& text, const std::string& needle) {
     const CalibrateIoResult r = CalibratePointsJson(text);
@@ -555,6 +566,11 @@ TEST_CASE("JSON adapter: round trip and malformed input") {
     CHECK(r.error.find(needle) != std::string::npos);
   };
   expect_error("{not json", "malformed JSON");
+  {
+    nlohmann::json bad_focal = doc;
+    bad_focal["focal_px"] = -3.0;
+    expect_error(bad_focal.dump(), "\"focal_px\" must be a positive number");
+  }
   expect_error("[]", "JSON object");
   expect_error(R"({"points": []})", "image_size");
   expect_error(R"({"image_size": [640], "points": []})", "image_size");
