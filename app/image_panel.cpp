@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "app/image_tiles.h"
@@ -35,7 +36,17 @@ struct CachedPhoto {
   TiledTexture texture;
 };
 
-enum class DragKind { kNone, kPan, kNewSegment, kMoveEndpoint, kMoveSegment, kMovePin, kPlacePin, kLinePin };
+enum class DragKind {
+  kNone,
+  kPan,
+  kNewSegment,
+  kMoveEndpoint,
+  kMoveSegment,
+  kMovePin,
+  kPlacePin,
+  kLinePin,
+  kMoveLinePinEnd,  // an existing line pin's end handle (target_id, endpoint)
+};
 
 struct Interaction {
   DragKind kind = DragKind::kNone;
@@ -48,6 +59,7 @@ struct Interaction {
   VertexRef vertex;  // kPlacePin: the vertex being pinned
   ElementRef press_element;  // kLinePin: the element under the press (a click selects it)
   double press_edge_t = 0.5;
+  Id press_line_pin = kNoId;  // kLinePin: the line pin under the press (a click selects it too)
   // Shift+press on a pin (select tool): a click toggles the pinned vertex in the
   // multi-selection, a drag moves the pin (fine pointing) and leaves the selection alone.
   ElementRef toggle_on_click;
@@ -68,6 +80,10 @@ struct PanelState {
   Id shown_tab = kNoId;
   Id context_segment = kNoId;
   bool fit_requested = false;
+  // The selected line pin, with the edge it pins (which the selection holds). A stopgap until
+  // Selection has a constraint id: it holds while the selection is exactly that edge.
+  Id selected_line_pin = kNoId;
+  ElementRef selected_line_pin_edge;
   ImageViewReport report;
   // Fine pointing, Shift held during a press: ImGui reports whole screen pixels, so the
   // pointer then moves at 1 / magnification of the mouse's speed, continuing from where it
@@ -136,6 +152,32 @@ const VpCalibrationSummary* CalibrationFor(const AppState& state, Id image_id) {
   return it == state.last_update.calibration.end() ? nullptr : &it->second;
 }
 
+// The selected line pin, or kNoId when the selection moved on (another element, a multi-
+// selection, a segment or pin) or the constraint is gone (a delete, an undo).
+Id SelectedLinePin(const AppState& state, PanelState* panel) {
+  const Selection& selection = state.selection;
+  const Constraint* c = state.document.project().FindConstraint(panel->selected_line_pin);
+  const bool holds = c != nullptr && c->kind == ConstraintKind::kEdgeOnImageLine &&
+                     selection.element == panel->selected_line_pin_edge && selection.extra.empty() &&
+                     selection.segment_id == kNoId && selection.pin_id == kNoId;
+  if (!holds) {
+    panel->selected_line_pin = kNoId;
+    panel->selected_line_pin_edge = {};
+  }
+  return panel->selected_line_pin;
+}
+
+// Selects a line pin and its edge (when the edge still exists).
+void SelectLinePin(AppState* state, PanelState* panel, Id constraint_id) {
+  const Project& project = state->document.project();
+  const Constraint* c = project.FindConstraint(constraint_id);
+  if (c == nullptr) return;
+  const ElementRef edge = LinePinEdge(project, *c);
+  state->selection = edge.Empty() ? Selection() : Selection::Of(edge);
+  panel->selected_line_pin = constraint_id;
+  panel->selected_line_pin_edge = edge;
+}
+
 // The residual of a segment from the last calibration, when that calibration still matches
 // the image's segments (the summary lists them in project order).
 bool SegmentResidual(const AppState& state, const Segment& segment, double* residual_px) {
@@ -162,6 +204,7 @@ OverlayHover HitTest(const Project& project, const Image& image, const std::vect
   auto screen = [&](const Eigen::Vector2d& uv) { return ToEigen(view.ToScreen(uv.x(), uv.y())); };
   const bool pick_pins = tool == Tool::kSelect || tool == Tool::kPin;
   const bool pick_lines = tool == Tool::kSelect;
+  const bool pick_line_pins = tool == Tool::kSelect || tool == Tool::kLinePin;
   double best = kPickRadiusPx;
   for (const Pin& pin : project.pins) {
     if (pin.image_id != image.id || !pick_pins) continue;
@@ -173,6 +216,20 @@ OverlayHover HitTest(const Project& project, const Image& image, const std::vect
       hover.pin_id = pin.id;
     }
   }
+  // Line pins' end handles: the nearest one within the radius, like the pins.
+  for (const Constraint& c : project.constraints) {
+    if (!pick_line_pins || c.kind != ConstraintKind::kEdgeOnImageLine || c.image_id != image.id) continue;
+    for (int end = 0; end < 2; ++end) {
+      const double d = (screen(end == 0 ? c.line_a_px : c.line_b_px) - m).norm();
+      if (d < best) {
+        best = d;
+        hover = OverlayHover();
+        hover.line_pin_id = c.id;
+        hover.line_pin_endpoint = end;
+      }
+    }
+  }
+  if (hover.line_pin_id != kNoId) return hover;
   if (pick_lines) {
     for (const Segment& segment : project.segments) {
       if (segment.image_id != image.id) continue;
@@ -191,6 +248,24 @@ OverlayHover HitTest(const Project& project, const Image& image, const std::vect
   const PickFilter filter = PickFilterOf(tool);
   const ElementPick pick = PickInImage(project, model, image.camera, view.zoom, ToEigen(view.ToScreen(0.0, 0.0)), m,
                                        filter, kCornerPickRadiusPx);
+  // A line pin's drawn line (between its two points) beats the model's edges and faces: the
+  // solve puts its edge right under it. A vertex, or another edge nearer the cursor, wins.
+  if (pick_line_pins && pick.element.kind != ElementKind::kVertex) {
+    double best_line = kPickRadiusPx;
+    OverlayHover line_hover;
+    for (const Constraint& c : project.constraints) {
+      if (c.kind != ConstraintKind::kEdgeOnImageLine || c.image_id != image.id) continue;
+      const double d = DistanceToSegment(m, screen(c.line_a_px), screen(c.line_b_px));
+      if (d >= best_line) continue;
+      const ElementRef edge = LinePinEdge(project, c);
+      if (pick.element.kind == ElementKind::kEdge && pick.element != edge && pick.distance_px < d) continue;
+      best_line = d;
+      line_hover = OverlayHover();
+      line_hover.line_pin_id = c.id;
+      line_hover.element = edge;
+    }
+    if (line_hover.line_pin_id != kNoId) return line_hover;
+  }
   // Segments win over the model's faces (a line drawn on a face stays pickable).
   if (!pick.element.Empty() && pick.element.kind != ElementKind::kFace) {
     hover.element = pick.element;
@@ -236,6 +311,14 @@ std::string DescribeHover(const AppState& state, const OverlayHover& hover) {
                   vertex.c_str(), pin->uv_px.x(), pin->uv_px.y());
     return text;
   }
+  if (const Constraint* c = hover.line_pin_id != kNoId ? project.FindConstraint(hover.line_pin_id) : nullptr) {
+    const ElementRef edge = LinePinEdge(project, *c);
+    const std::string what = edge.Empty() ? std::string("a deleted edge") : DescribeElement(project, edge);
+    const char* part = hover.line_pin_endpoint == 0 ? ", end a (drag to move)"
+                       : hover.line_pin_endpoint == 1 ? ", end b (drag to move)" : "";
+    std::snprintf(text, sizeof(text), "line pin %llu of %s%s", static_cast<unsigned long long>(c->id), what.c_str(), part);
+    return text;
+  }
   if (!hover.element.Empty()) {
     std::string description = DescribeElement(project, hover.element);
     if (hover.element.kind == ElementKind::kVertex) {
@@ -250,7 +333,13 @@ std::string DescribeHover(const AppState& state, const OverlayHover& hover) {
   return "";
 }
 
-void DeleteSelection(AppState* state) {
+void DeleteSelection(AppState* state, PanelState* panel) {
+  if (const Id line_pin = SelectedLinePin(*state, panel); line_pin != kNoId) {
+    // The line pin, not its edge (which the selection holds with it).
+    state->selection = Selection();
+    RemoveConstraintEdit(state, line_pin);
+    return;
+  }
   Project edited = state->document.project();
   const Selection& selection = state->selection;
   if (selection.segment_id != kNoId && edited.FindSegment(selection.segment_id)) {
@@ -299,6 +388,10 @@ void UpdateEditDrag(AppState* state, Interaction* drag, const Eigen::Vector2d& m
     case DragKind::kPlacePin:
       state->selection.pin_id = PinVertex(&edited, drag->image_id, drag->vertex, target);
       break;
+    case DragKind::kMoveLinePinEnd:
+      // Too close to the other end: the line keeps its last valid position.
+      if (!MoveLinePinEnd(&edited, drag->target_id, drag->endpoint, target)) return;
+      break;
     default:
       return;
   }
@@ -311,13 +404,14 @@ const char* DragLabel(DragKind kind) {
     case DragKind::kMoveSegment: return "Move line";
     case DragKind::kMovePin: return "Move pin";
     case DragKind::kPlacePin: return "Pin vertex";
+    case DragKind::kMoveLinePinEnd: return "Move line pin end";
     default: return "Drag";
   }
 }
 
 bool IsEditDrag(DragKind kind) {
   return kind == DragKind::kMoveEndpoint || kind == DragKind::kMoveSegment || kind == DragKind::kMovePin ||
-         kind == DragKind::kPlacePin;
+         kind == DragKind::kPlacePin || kind == DragKind::kMoveLinePinEnd;
 }
 
 // A left press with the current tool: decides what the press will do.
@@ -336,11 +430,28 @@ void StartLeftPress(AppState* state, PanelState* panel, const Image& image, cons
     drag.axis = AxisOfTool(tool);
     return;
   }
+  if ((tool == Tool::kLinePin || tool == Tool::kSelect) && hover.line_pin_id != kNoId &&
+      hover.line_pin_endpoint >= 0) {
+    // An end handle: a drag moves that end (the model re-solves live), a click selects it.
+    const Constraint* c = project.FindConstraint(hover.line_pin_id);
+    SelectLinePin(state, panel, hover.line_pin_id);
+    drag.kind = DragKind::kMoveLinePinEnd;
+    drag.target_id = hover.line_pin_id;
+    drag.endpoint = hover.line_pin_endpoint;
+    drag.grab_offset = (drag.endpoint == 0 ? c->line_a_px : c->line_b_px) - mouse_uv;
+    return;
+  }
   if (tool == Tool::kLinePin) {
-    // A drag draws the photo's line for the selected edge; a click selects an edge.
+    // A drag draws the photo's line for the selected edge; a click selects an edge (and the
+    // line pin clicked on, if any).
     drag.kind = DragKind::kLinePin;
     drag.press_element = hover.element;
     drag.press_edge_t = hover.edge_t;
+    drag.press_line_pin = hover.line_pin_id;
+    return;
+  }
+  if (tool == Tool::kSelect && hover.line_pin_id != kNoId && !ImGui::GetIO().KeyShift) {
+    SelectLinePin(state, panel, hover.line_pin_id);
     return;
   }
   if (tool != Tool::kSelect && tool != Tool::kPin) {
@@ -443,11 +554,30 @@ void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& 
       LinePinEdit(state, state->selection.element, drag.image_id, drag.press_uv, mouse_uv);
     } else {
       ApplyToolClick(state, drag.press_element, drag.press_edge_t, false);
+      if (drag.press_line_pin != kNoId) SelectLinePin(state, panel, drag.press_line_pin);
     }
   } else if (IsEditDrag(drag.kind)) {
     if (!drag.began && !drag.toggle_on_click.Empty()) {
       if (ElementExists(state->document.project(), drag.toggle_on_click)) {
         ToggleSelected(&state->selection, drag.toggle_on_click);
+      }
+    } else if (drag.began && drag.kind == DragKind::kMoveLinePinEnd) {
+      // The release is the edit `line-pin-move` makes: the new end on the project as it was
+      // before the drag, with the full solve from there. The joint solve warm-started from the
+      // drag's previews can stop short of the hard constraint (it refuses a step that raises
+      // the cost and keeps the preview), so the mouse and the script give the same model.
+      const Constraint* c = state->document.project().FindConstraint(drag.target_id);
+      const Constraint* old = state->drag_start ? state->drag_start->FindConstraint(drag.target_id) : nullptr;
+      const std::optional<Eigen::Vector2d> end =
+          c ? std::optional<Eigen::Vector2d>(drag.endpoint == 0 ? c->line_a_px : c->line_b_px) : std::nullopt;
+      const bool moved = end && old && *end != (drag.endpoint == 0 ? old->line_a_px : old->line_b_px);
+      if (moved) {
+        // CancelDrag without its diagnostics refresh (a full solve): the edit solves anyway.
+        state->document.CancelPreview(*state->drag_start);
+        state->drag_start.reset();
+        MoveLinePinEndEdit(state, drag.target_id, drag.endpoint, *end);
+      } else {
+        CancelDrag(state);
       }
     } else if (drag.began) {
       EndDrag(state);
@@ -562,7 +692,7 @@ std::string ToolHint(const AppState& state) {
         return "drag along the photo's line of " + DescribeElement(state.document.project(), state.selection.element) +
                " to pin it there (Shift: fine); click another edge to choose it";
       }
-      return "click a model edge, then drag along its line in the photo";
+      return "click a model edge, then drag along its line in the photo; drag a line pin's end handle to move it";
     case Tool::kSelect:
       if (!state.selection.extra.empty()) {
         return std::to_string(SelectedElements(state.selection).size()) +
@@ -711,7 +841,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   } else if (keys_for_us) {
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete), false) ||
         ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Backspace), false)) {
-      DeleteSelection(state);
+      DeleteSelection(state, panel);
     }
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
       state->selection.connect_from = {};  // forget V_connect's first vertex
@@ -739,7 +869,13 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   overlay.tool = state->tool;
   if (state->hover_panel != kImagePanelHover) overlay.other_hover = state->hover;
   overlay.selection = state->selection;
+  overlay.selected_line_pin = SelectedLinePin(*state, panel);
   overlay.hover = hover;
+  if (drag.kind == DragKind::kMoveLinePinEnd) {  // the dragged handle stays lit
+    overlay.hover = OverlayHover();
+    overlay.hover.line_pin_id = drag.target_id;
+    overlay.hover.line_pin_endpoint = drag.endpoint;
+  }
 
   ImDrawList* draw_list = ImGui::GetWindowDrawList();
   draw_list->PushClipRect(rect_min, rect_max, true);

@@ -1,6 +1,7 @@
 // The image panel: one tab per photo; zoom about the cursor, pan, fit, loupe; draws the
-// line families, vanishing points, pins and the projected model over the photo, and turns
-// mouse input into edits (draw and drag segments, place and drag pins).
+// line families, vanishing points, pins, line pins and the projected model over the photo,
+// and turns mouse input into edits (draw and drag segments, place and drag pins, drag a line
+// pin's end handle with a live re-solve, select a line pin by its line and delete it).
 #pragma once
 
 #include "app/app_state.h"

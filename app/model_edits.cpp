@@ -587,6 +587,53 @@ bool LinePinEdit(AppState* state, const ElementRef& edge, Id image_id, const Eig
   return true;
 }
 
+std::vector<Id> LinePinsOfImage(const Project& project, Id image_id) {
+  std::vector<Id> ids;
+  for (const Constraint& c : project.constraints) {
+    if (c.kind == ConstraintKind::kEdgeOnImageLine && c.image_id == image_id) ids.push_back(c.id);
+  }
+  return ids;
+}
+
+ElementRef LinePinEdge(const Project& project, const Constraint& line_pin) {
+  if (line_pin.kind != ConstraintKind::kEdgeOnImageLine || line_pin.vertices.size() != 2) return {};
+  const VertexRef& a = line_pin.vertices[0];
+  const VertexRef& b = line_pin.vertices[1];
+  const Primitive* primitive = project.FindPrimitive(a.primitive_id);
+  if (primitive == nullptr || b.primitive_id != a.primitive_id || !primitive->mesh.IsVertex(a.vertex) ||
+      !primitive->mesh.IsVertex(b.vertex)) {
+    return {};
+  }
+  const HalfedgeId h = FindHalfedge(primitive->mesh, a.vertex, b.vertex);
+  if (h == kNoElement) return {};
+  return {ElementKind::kEdge, a.primitive_id, PolyMesh::EdgeOf(h)};
+}
+
+bool MoveLinePinEnd(Project* project, Id constraint_id, int end, const Eigen::Vector2d& uv_px) {
+  Constraint* c = project->FindConstraint(constraint_id);
+  if (c == nullptr || c->kind != ConstraintKind::kEdgeOnImageLine || (end != 0 && end != 1) || !uv_px.allFinite()) {
+    return false;
+  }
+  const Eigen::Vector2d& other = end == 0 ? c->line_b_px : c->line_a_px;
+  if ((uv_px - other).norm() < kMinLinePinLengthPx) return false;
+  (end == 0 ? c->line_a_px : c->line_b_px) = uv_px;
+  return true;
+}
+
+bool MoveLinePinEndEdit(AppState* state, Id constraint_id, int end, const Eigen::Vector2d& uv_px) {
+  const std::string label = "Move line pin end";
+  const Constraint* c = state->document.project().FindConstraint(constraint_id);
+  if (c == nullptr || c->kind != ConstraintKind::kEdgeOnImageLine) return Refuse(state, label, "no such line pin");
+  if (end != 0 && end != 1) return Refuse(state, label, "the end is 0 (a) or 1 (b)");
+  if ((end == 0 ? c->line_a_px : c->line_b_px) == uv_px) return Refuse(state, label, "the end is there already");
+  Project edited = state->document.project();
+  if (!MoveLinePinEnd(&edited, constraint_id, end, uv_px)) {
+    return Refuse(state, label, "the line's two points must stay further apart than 2 px");
+  }
+  CommitEdit(state, label, std::move(edited));
+  return true;
+}
+
 bool RemoveConstraintEdit(AppState* state, Id constraint_id) {
   Project edited = state->document.project();
   const size_t before = edited.constraints.size();
@@ -820,6 +867,38 @@ bool RunLinePinCommand(AppState* state, const std::string& arg, std::string* err
   }
   const bool done = LinePinEdit(state, state->selection.element, images[index].id, {x1, y1}, {x2, y2});
   if (!done) *error = state->log.empty() ? "line-pin: refused" : state->log.back().text;
+  return done;
+}
+
+bool RunLinePinMoveCommand(AppState* state, const std::string& arg, std::string* error) {
+  std::istringstream in(arg);
+  long image_index = -1, pin_index = -1;
+  std::string end_name, extra;
+  double x, y;
+  const char* usage = "line-pin-move: expected 'IMAGE_INDEX PIN_INDEX END X Y' (END 0|a or 1|b, image pixels)";
+  if (!(in >> image_index >> pin_index >> end_name >> x >> y) || (in >> extra)) {
+    *error = usage;
+    return false;
+  }
+  const int end = end_name == "0" || end_name == "a" ? 0 : end_name == "1" || end_name == "b" ? 1 : -1;
+  if (end < 0) {
+    *error = usage;
+    return false;
+  }
+  const Project& project = state->document.project();
+  if (image_index < 0 || image_index >= static_cast<long>(project.images.size())) {
+    *error = "line-pin-move: image index " + std::to_string(image_index) + " is not in 0.." +
+             std::to_string(static_cast<long>(project.images.size()) - 1);
+    return false;
+  }
+  const std::vector<Id> pins = LinePinsOfImage(project, project.images[image_index].id);
+  if (pin_index < 0 || pin_index >= static_cast<long>(pins.size())) {
+    *error = "line-pin-move: the image has " + std::to_string(pins.size()) + " line pins, no index " +
+             std::to_string(pin_index);
+    return false;
+  }
+  const bool done = MoveLinePinEndEdit(state, pins[pin_index], end, {x, y});
+  if (!done) *error = state->log.empty() ? "line-pin-move: refused" : state->log.back().text;
   return done;
 }
 

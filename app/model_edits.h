@@ -83,6 +83,18 @@ bool ConstrainParallelFacesEdit(AppState* state, const ElementRef& first, const 
 constexpr double kMinLinePinLengthPx = 2.0;
 bool LinePinEdit(AppState* state, const ElementRef& edge, Id image_id, const Eigen::Vector2d& a_px,
                  const Eigen::Vector2d& b_px);
+// The line pins of an image (kEdgeOnImageLine constraints naming it), in project order: the
+// PIN_INDEX of `line-pin-move`.
+std::vector<Id> LinePinsOfImage(const Project& project, Id image_id);
+// The edge a line pin names (its two vertices' edge), or an empty ref when the edge is gone.
+ElementRef LinePinEdge(const Project& project, const Constraint& line_pin);
+// Sets end `end` (0: line_a_px, 1: line_b_px) of a line pin's image line to `uv_px` in
+// `project` (the drag preview and the edit share it). False, project unchanged, when the
+// constraint is not a line pin, `end` is not 0 or 1, the point is not finite or the line
+// would get shorter than kMinLinePinLengthPx.
+bool MoveLinePinEnd(Project* project, Id constraint_id, int end, const Eigen::Vector2d& uv_px);
+// MoveLinePinEnd as one undoable edit with the re-solve; also refused when nothing moves.
+bool MoveLinePinEndEdit(AppState* state, Id constraint_id, int end, const Eigen::Vector2d& uv_px);
 // The builder's two-click step for a two-edge kind with the selected edge: the first call
 // stores it (state->constraint_first_edge), a call with a different edge selected adds the
 // constraint and clears the stored one. Returns whether it stored or edited.
@@ -102,6 +114,10 @@ bool RunSelectAddCommand(AppState* state, const std::string& arg, std::string* e
 // The script command `line-pin IMAGE_INDEX X1 Y1 X2 Y2`: the selected edge on the line
 // through (X1, Y1) and (X2, Y2), pixels of the project's image IMAGE_INDEX (LinePinEdit).
 bool RunLinePinCommand(AppState* state, const std::string& arg, std::string* error);
+// The script command `line-pin-move IMAGE_INDEX PIN_INDEX END X Y`: end END (0 or a, 1 or b)
+// of the image's PIN_INDEX-th line pin (LinePinsOfImage, from 0) to (X, Y), image pixels
+// (MoveLinePinEndEdit).
+bool RunLinePinMoveCommand(AppState* state, const std::string& arg, std::string* error);
 
 // Push/pull: extrudes the face by `distance` project units along its outward normal (a
 // negative distance pushes it in), core/mesh_extrude.h; the face stays selected.

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/mesh_triangulate.h"
 
@@ -258,15 +260,45 @@ void DrawModelVertices(ImDrawList* draw_list, const OverlayInput& input, const V
   }
 }
 
+// How a line pin's line is drawn: highlighted when selected or hovered, with end handles
+// (hot_end: the end under the cursor or being dragged, -1 none).
+struct PinnedLineLook {
+  bool handles = false;
+  bool selected = false;
+  bool hovered = false;
+  int hot_end = -1;
+};
+
+// A diamond handle centred on p.
+void DrawLinePinHandle(ImDrawList* draw_list, const Eigen::Vector2d& p, bool hot) {
+  const float r = hot ? kLinePinHandleHotRadiusPx : kLinePinHandleRadiusPx;
+  const ImVec2 c = ToImVec(p);
+  const ImVec2 q[4] = {{c.x, c.y - r}, {c.x + r, c.y}, {c.x, c.y + r}, {c.x - r, c.y}};
+  const ImVec2 o[4] = {{c.x, c.y - r - 1.5f}, {c.x + r + 1.5f, c.y}, {c.x, c.y + r + 1.5f}, {c.x - r - 1.5f, c.y}};
+  draw_list->AddConvexPolyFilled(o, 4, kShadowColor);
+  draw_list->AddConvexPolyFilled(q, 4, hot ? kHighlightColor : kLinePinColor);
+}
+
 // A line pin's image line: the two points the user dragged, solid, the line through them
 // dashed across the view.
 void DrawPinnedLine(ImDrawList* draw_list, const ViewTransform& view, const Eigen::Vector2d& a_px,
-                    const Eigen::Vector2d& b_px, const ScreenRect& rect) {
+                    const Eigen::Vector2d& b_px, const ScreenRect& rect, const PinnedLineLook& look = {}) {
   const Eigen::Vector3d line = Eigen::Vector3d(a_px.x(), a_px.y(), 1.0).cross(Eigen::Vector3d(b_px.x(), b_px.y(), 1.0));
   DrawInfiniteImageLine(draw_list, line, view, rect, kLinePinLineColor, 1.0f, true);
   const Eigen::Vector2d a = ToScreenD(view, a_px), b = ToScreenD(view, b_px);
-  DrawScreenLine(draw_list, a, b, rect, kShadowColor, 4.0f);
+  if (look.selected) {
+    DrawScreenLine(draw_list, a, b, rect, kSelectedElementColor, 6.0f);
+  } else if (look.hovered) {
+    DrawScreenLine(draw_list, a, b, rect, IM_COL32(255, 255, 255, 160), 5.0f);
+  } else {
+    DrawScreenLine(draw_list, a, b, rect, kShadowColor, 4.0f);
+  }
   DrawScreenLine(draw_list, a, b, rect, kLinePinColor, 2.0f);
+  if (!look.handles) return;
+  for (int end = 0; end < 2; ++end) {
+    const Eigen::Vector2d& p = end == 0 ? a : b;
+    if (rect.Contains(p, kClipMarginPx)) DrawLinePinHandle(draw_list, p, look.hot_end == end);
+  }
 }
 
 // Every line pin (kEdgeOnImageLine) of this image: its line, and from each projected end of
@@ -278,8 +310,17 @@ void DrawLinePins(ImDrawList* draw_list, const OverlayInput& input, const ViewTr
     if (c.kind != ConstraintKind::kEdgeOnImageLine || c.image_id != image.id || c.vertices.size() != 2) continue;
     const Eigen::Vector2d d = c.line_b_px - c.line_a_px;
     if (d.norm() <= 0.0) continue;
-    DrawPinnedLine(draw_list, view, c.line_a_px, c.line_b_px, rect);
-    if (!image.camera_calibrated) continue;
+    PinnedLineLook look;
+    look.handles = true;
+    look.selected = input.selected_line_pin == c.id;
+    look.hovered = input.hover.line_pin_id == c.id;
+    look.hot_end = look.hovered ? input.hover.line_pin_endpoint : -1;
+    // The residuals (edge ends to their feet on the line) go under the line and its handles.
+    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> residuals;
+    if (!image.camera_calibrated) {
+      DrawPinnedLine(draw_list, view, c.line_a_px, c.line_b_px, rect, look);
+      continue;
+    }
     const Eigen::Vector2d n = Eigen::Vector2d(-d.y(), d.x()).normalized();
     double worst_px = 0.0;
     Eigen::Vector2d label_at = ToScreenD(view, 0.5 * (c.line_a_px + c.line_b_px));
@@ -290,12 +331,14 @@ void DrawLinePins(ImDrawList* draw_list, const OverlayInput& input, const ViewTr
       const Eigen::Vector2d uv = image.camera.Project(p);
       const double dist = (uv - c.line_a_px).dot(n);
       const Eigen::Vector2d foot = uv - dist * n;
-      DrawScreenLine(draw_list, ToScreenD(view, uv), ToScreenD(view, foot), rect, kLinePinResidualColor, 1.5f);
+      residuals.emplace_back(ToScreenD(view, uv), ToScreenD(view, foot));
       if (std::abs(dist) >= worst_px) {
         worst_px = std::abs(dist);
         label_at = ToScreenD(view, foot);
       }
     }
+    for (const auto& [from, to] : residuals) DrawScreenLine(draw_list, from, to, rect, kLinePinResidualColor, 1.5f);
+    DrawPinnedLine(draw_list, view, c.line_a_px, c.line_b_px, rect, look);
     if (show_labels && rect.Contains(label_at)) {
       char text[32];
       std::snprintf(text, sizeof(text), "%.2f px", worst_px);

@@ -1,7 +1,8 @@
 // What the image panel draws over a photo, as ImDrawList calls under an image-to-screen
 // transform: line segments by family, vanishing points and the horizon, the projected
 // primitives (every mesh edge, vertices, every selected element and the hovered one), the pins
-// with their residual lines and the line pins (kEdgeOnImageLine) with their edges' distances. Also the projections
+// with their residual lines and the line pins (kEdgeOnImageLine) with their edges' distances
+// and a draggable handle at each end. Also the projections
 // the panel's hit tests share with the drawing, so that what is picked is what is shown.
 #pragma once
 
@@ -20,6 +21,11 @@ namespace facet::app {
 // Colour of the projected model in every image: the shell's screenshot tests look for it.
 constexpr ImU32 kModelEdgeColor = IM_COL32(255, 220, 0, 255);
 constexpr float kModelEdgeThicknessPx = 2.0f;
+
+// A line pin's end handle (a diamond at each of the two points its line was drawn through):
+// its half-size in screen px, larger when hovered or dragged.
+constexpr float kLinePinHandleRadiusPx = 4.0f;
+constexpr float kLinePinHandleHotRadiusPx = 6.0f;
 
 // Colour of a line family (x red, y green, z blue) with the given alpha.
 ImU32 AxisColor(Axis axis, int alpha = 255);
@@ -47,6 +53,8 @@ struct OverlayHover {
   Id segment_id = kNoId;
   int segment_endpoint = -1;  // 0 = a, 1 = b, -1 = the segment itself
   Id pin_id = kNoId;
+  Id line_pin_id = kNoId;     // a kEdgeOnImageLine constraint of this image
+  int line_pin_endpoint = -1;  // 0 = line_a_px, 1 = line_b_px, -1 = the line itself
   ElementRef element;  // a vertex, edge or face of the model
   double edge_t = 0.5;  // for an edge: where E_split would split
 };
@@ -59,6 +67,7 @@ struct OverlayInput {
   ElementRef other_hover;  // hovered in the 3D panel: highlighted here too
   Tool tool = Tool::kSelect;
   Selection selection;
+  Id selected_line_pin = kNoId;  // drawn highlighted (with its edge, which the selection holds)
   OverlayHover hover;
 };
 

@@ -1,11 +1,13 @@
 // Helpers shared by the suites that drive the real application offscreen (`facet render`):
-// temporary folders, running the binary, reading its report, and locating image pixels and
-// the projected model on the screenshot.
+// temporary folders, running the binary with an input script, reading its report and saved
+// projects, locating image pixels and the projected model on the screenshot, and the
+// line-pin scene (the synthetic box with its photo) that the line-pin suites share.
 #pragma once
 
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdlib>
@@ -18,9 +20,14 @@
 #include <doctest/doctest.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <Eigen/Dense>
 
+#include "core/box.h"
 #include "core/project.h"
+#include "core/project_io.h"
+#include "tests/synthetic_scene.h"
 
 namespace facet::testing {
 
@@ -76,6 +83,59 @@ inline nlohmann::json ReadJson(const std::string& path) {
 inline void WriteText(const std::string& path, const std::string& text) {
   std::ofstream out(path);
   out << text;
+}
+
+// The report's log, one "level: text" line per entry (for failure messages).
+inline std::string ReportLog(const nlohmann::json& report) {
+  std::string text;
+  for (const auto& e : report.at("log")) text += e.at("level").get<std::string>() + ": " + e.at("text").get<std::string>() + "\n";
+  return text;
+}
+
+// Runs the app on `project_path` with `script` (written to dir/NAME.txt; the screenshot is
+// dir/NAME.png); requires success and returns the report (dir/NAME.json).
+inline nlohmann::json RenderScript(const TempDir& dir, const std::string& project_path, const std::string& name,
+                                   const std::string& script) {
+  WriteText(dir / (name + ".txt"), script);
+  const RunResult run = RunRender(dir, "'" + project_path + "' -o '" + (dir / (name + ".png")) + "' --script '" +
+                                           (dir / (name + ".txt")) + "' --report '" + (dir / (name + ".json")) + "'");
+  INFO("stderr: " << run.stderr_text);
+  REQUIRE(run.exit_code == 0);
+  return ReadJson(dir / (name + ".json"));
+}
+
+// Runs a script that must fail on a refused command; returns its stderr.
+inline std::string RenderScriptRefused(const TempDir& dir, const std::string& project_path, const std::string& name,
+                                       const std::string& script) {
+  WriteText(dir / (name + ".txt"), script);
+  const RunResult run = RunRender(dir, "'" + project_path + "' -o '" + (dir / (name + ".png")) + "' --script '" +
+                                           (dir / (name + ".txt")) + "'");
+  CHECK(run.exit_code != 0);
+  return run.stderr_text;
+}
+
+// A project the script saved; requires that it loads.
+inline facet::Project LoadProjectFile(const std::string& path) {
+  const facet::ProjectLoadResult loaded = facet::LoadProject(path);
+  INFO("load " << path << ": " << loaded.error);
+  REQUIRE(loaded.ok());
+  return loaded.project;
+}
+
+// "x y" with full precision, for script coordinates.
+inline std::string FormatXY(const Eigen::Vector2d& p) {
+  std::ostringstream out;
+  out.precision(17);
+  out << p.x() << " " << p.y();
+  return out.str();
+}
+
+// "x y" of the centre of a named item rectangle of the report's "items".
+inline std::string ItemCenter(const nlohmann::json& items, const std::string& name) {
+  const nlohmann::json& r = items.at(name);
+  std::ostringstream s;
+  s << r.at("x").get<double>() + 0.5 * r.at("w").get<double>() << " " << r.at("y").get<double>() + 0.5 * r.at("h").get<double>();
+  return s.str();
 }
 
 struct View {
@@ -157,5 +217,69 @@ inline Viewport3d ViewportFromReport(const nlohmann::json& report) {
   return out;
 }
 
+// The synthetic box scene (one calibrated image, its line families, the box) with its photo,
+// the pins of the top corners 4..7 removed so that those vertices are pickable and free to
+// follow a line pin (the bottom pins, the lines and the locked height keep the box fixed).
+struct LineScene {
+  std::string path;
+  SyntheticScene scene;
+  View view;
+};
+
+inline LineScene WriteLineScene(const TempDir& dir) {
+  LineScene f;
+  f.scene = MakeBoxScene();
+  facet::Project& p = f.scene.project;
+  std::erase_if(p.pins, [](const facet::Pin& pin) { return pin.vertex.vertex >= 4; });
+  const facet::Camera& cam = f.scene.true_camera;
+  // Lines ending at a top corner would be picked there before the vertex: leave them out
+  // (the bottom edges and the lines across the faces still calibrate the image).
+  std::vector<Eigen::Vector2d> top;
+  for (int c = 4; c < 8; ++c) top.push_back(cam.Project(f.scene.true_box.mesh.vertex(c).position));
+  std::erase_if(p.segments, [&](const facet::Segment& s) {
+    return std::any_of(top.begin(), top.end(), [&](const Eigen::Vector2d& t) {
+      return (s.a_px - t).norm() < 1.0 || (s.b_px - t).norm() < 1.0;
+    });
+  });
+  cv::Mat photo(cam.height_px, cam.width_px, CV_8UC3, cv::Scalar(150, 150, 150));
+  const auto corners = BoxCorners(f.scene.true_box);
+  for (const auto& e : facet::BoxEdges()) {
+    const Eigen::Vector2d a = cam.Project(corners[e[0]]), b = cam.Project(corners[e[1]]);
+    cv::line(photo, cv::Point(static_cast<int>(a.x()), static_cast<int>(a.y())),
+             cv::Point(static_cast<int>(b.x()), static_cast<int>(b.y())), cv::Scalar(40, 40, 40), 2, cv::LINE_AA);
+  }
+  REQUIRE(cv::imwrite(dir / "synthetic.png", photo));
+  f.path = dir / "scene.facet";
+  REQUIRE(facet::SaveProject(p, f.path) == "");
+  f.view = ViewFromReport(RenderScript(dir, f.path, "probe", "frames 3\n"));
+  REQUIRE(f.view.zoom > 0.1);
+  return f;
+}
+
+// Largest distance (px) of the constraint's edge ends, projected by its image's camera, from
+// its line.
+inline double LinePinDistancePx(const facet::Project& project, const facet::Constraint& c) {
+  const facet::Image* image = project.FindImage(c.image_id);
+  REQUIRE(image != nullptr);
+  const Eigen::Vector2d d = (c.line_b_px - c.line_a_px).normalized();
+  const Eigen::Vector2d n(-d.y(), d.x());
+  double worst = 0.0;
+  for (const facet::VertexRef& v : c.vertices) {
+    const Eigen::Vector2d uv = image->camera.Project(facet::VertexInWorld(project, v));
+    worst = std::max(worst, std::abs((uv - c.line_a_px).dot(n)));
+  }
+  return worst;
+}
+
+// A line in the photo near the top front x edge (corners 4 -> 5): its true projection moved
+// `shift_px` sideways, between 10 % and 90 % of its length.
+inline void ShiftedLine(const LineScene& f, double shift_px, Eigen::Vector2d* a, Eigen::Vector2d* b) {
+  const auto corners = BoxCorners(f.scene.true_box);
+  const Eigen::Vector2d p4 = f.scene.true_camera.Project(corners[4]), p5 = f.scene.true_camera.Project(corners[5]);
+  const Eigen::Vector2d d = (p5 - p4).normalized();
+  const Eigen::Vector2d n(-d.y(), d.x());
+  *a = p4 + 0.1 * (p5 - p4) + shift_px * n;
+  *b = p4 + 0.9 * (p5 - p4) + shift_px * n;
+}
 
 }  // namespace facet::testing

@@ -33,13 +33,6 @@ facet::EdgeId XEdge(const facet::PolyMesh& mesh) {
   return facet::kNoElement;
 }
 
-std::string Center(const nlohmann::json& items, const std::string& name) {
-  const nlohmann::json& r = items.at(name);
-  std::ostringstream s;
-  s << r.at("x").get<double>() + 0.5 * r.at("w").get<double>() << " " << r.at("y").get<double>() + 0.5 * r.at("h").get<double>();
-  return s.str();
-}
-
 double EdgeLength(const facet::Primitive& p, facet::EdgeId e) {
   return (p.mesh.vertex(p.mesh.Dest(2 * e)).position - p.mesh.vertex(p.mesh.Origin(2 * e)).position).norm();
 }
@@ -70,12 +63,7 @@ TEST_CASE("constraint builder: known length and along-axis on a box edge, saved,
   setup << "command select edge " << box_id << " " << edge << "\nframes 3\n";
   // The builder sits below the primitive's fields: scroll the properties panel to its end.
   setup << "wheel -30 1450 400\nframes 3\n";
-  WriteText(dir / "probe.txt", setup.str());
-  const RunResult probe = RunRender(dir, "'" + project_path + "' -o '" + (dir / "probe.png") + "' --script '" +
-                                             (dir / "probe.txt") + "' --report '" + (dir / "probe.json") + "'");
-  INFO("probe stderr: " << probe.stderr_text);
-  REQUIRE(probe.exit_code == 0);
-  const nlohmann::json items = ReadJson(dir / "probe.json").at("items");
+  const nlohmann::json items = RenderScript(dir, project_path, "probe", setup.str()).at("items");
   INFO("items: " << items.dump());
   REQUIRE(items.contains("constraint.length_value"));
   REQUIRE(items.contains("constraint.length"));
@@ -85,24 +73,15 @@ TEST_CASE("constraint builder: known length and along-axis on a box edge, saved,
   // figures above the builder grow after the first constraint.
   std::ostringstream s;
   s << setup.str();
-  s << "click left " << Center(items, "constraint.length_value") << "\nframes 1\nkey ctrl+a\nframes 1\ntype "
+  s << "click left " << ItemCenter(items, "constraint.length_value") << "\nframes 1\nkey ctrl+a\nframes 1\ntype "
     << kLength << "\nframes 1\n";
-  s << "click left " << Center(items, "constraint.length") << "\nframes 3\n";
+  s << "click left " << ItemCenter(items, "constraint.length") << "\nframes 3\n";
   s << "wheel -30 1450 400\nframes 3\n";
-  WriteText(dir / "probe2.txt", s.str());
-  const RunResult probe2 = RunRender(dir, "'" + project_path + "' -o '" + (dir / "probe2.png") + "' --script '" +
-                                              (dir / "probe2.txt") + "' --report '" + (dir / "probe2.json") + "'");
-  REQUIRE(probe2.exit_code == 0);
-  const nlohmann::json items2 = ReadJson(dir / "probe2.json").at("items");
+  const nlohmann::json items2 = RenderScript(dir, project_path, "probe2", s.str()).at("items");
   REQUIRE(items2.contains("constraint.along_x"));
-  s << "click left " << Center(items2, "constraint.along_x") << "\nframes 2\n";
+  s << "click left " << ItemCenter(items2, "constraint.along_x") << "\nframes 2\n";
   s << "command save " << (dir / "after.facet") << "\nframes 2\n";
-  WriteText(dir / "script.txt", s.str());
-  const RunResult run = RunRender(dir, "'" + project_path + "' -o '" + (dir / "out.png") + "' --script '" +
-                                           (dir / "script.txt") + "' --report '" + (dir / "report.json") + "'");
-  INFO("stderr: " << run.stderr_text);
-  REQUIRE(run.exit_code == 0);
-  const nlohmann::json report = ReadJson(dir / "report.json");
+  const nlohmann::json report = RenderScript(dir, project_path, "script", s.str());
   INFO("log: " << report.at("log").dump());
 
   const facet::ProjectLoadResult after = facet::LoadProject(dir / "after.facet");
@@ -138,22 +117,12 @@ TEST_CASE("constraint builder: known length and along-axis on a box edge, saved,
   CHECK(undo[2].dump().find("Along x") != std::string::npos);
   std::ostringstream s2;
   s2 << s.str() << "command undo\nframes 2\ncommand save " << (dir / "undone.facet") << "\nframes 2\n";
-  WriteText(dir / "script2.txt", s2.str());
-  const RunResult run2 = RunRender(dir, "'" + project_path + "' -o '" + (dir / "out2.png") + "' --script '" +
-                                            (dir / "script2.txt") + "' --report '" + (dir / "report2.json") + "'");
-  INFO("stderr 2: " << run2.stderr_text);
-  REQUIRE(run2.exit_code == 0);
-  const nlohmann::json undone_items = ReadJson(dir / "report2.json").at("items");
+  const nlohmann::json undone_items = RenderScript(dir, project_path, "script2", s2.str()).at("items");
   REQUIRE(undone_items.contains("constraint.remove.0"));
 
   std::ostringstream s3;
-  s3 << s2.str() << "click left " << Center(undone_items, "constraint.remove.0") << "\nframes 2\n";
-  WriteText(dir / "script3.txt", s3.str());
-  const RunResult run3 = RunRender(dir, "'" + project_path + "' -o '" + (dir / "out3.png") + "' --script '" +
-                                            (dir / "script3.txt") + "' --report '" + (dir / "report3.json") + "'");
-  INFO("stderr 3: " << run3.stderr_text);
-  REQUIRE(run3.exit_code == 0);
-  const nlohmann::json report2 = ReadJson(dir / "report3.json");
+  s3 << s2.str() << "click left " << ItemCenter(undone_items, "constraint.remove.0") << "\nframes 2\n";
+  const nlohmann::json report2 = RenderScript(dir, project_path, "script3", s3.str());
   INFO("log 3: " << report2.at("log").dump());
   const facet::ProjectLoadResult undone = facet::LoadProject(dir / "undone.facet");
   REQUIRE(undone.ok());
@@ -178,11 +147,7 @@ TEST_CASE("constrain script command: two-edge parallel and a fixed point, saved 
   s << "command select edge " << box_id << " 1\nframes 1\ncommand constrain parallel\nframes 2\n";
   s << "command select vertex " << box_id << " 0\nframes 1\ncommand constrain fix\nframes 2\n";
   s << "command save " << (dir / "after.facet") << "\nframes 1\n";
-  WriteText(dir / "script.txt", s.str());
-  const RunResult run = RunRender(dir, "'" + project_path + "' -o '" + (dir / "out.png") + "' --script '" +
-                                           (dir / "script.txt") + "' --report '" + (dir / "report.json") + "'");
-  INFO("stderr: " << run.stderr_text);
-  REQUIRE(run.exit_code == 0);
+  RenderScript(dir, project_path, "script", s.str());
   const facet::ProjectLoadResult after = facet::LoadProject(dir / "after.facet");
   REQUIRE(after.ok());
   REQUIRE(after.project.constraints.size() == 2);

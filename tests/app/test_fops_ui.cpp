@@ -36,40 +36,6 @@ constexpr double kParallelToleranceDeg = 1e-6;
 constexpr double kLinePinTolerancePx = 1e-6;
 constexpr double kStartOffRel = 1e-2;  // a start that is this far from the answer is not it
 
-std::string LogText(const nlohmann::json& report) {
-  std::string text;
-  for (const auto& e : report.at("log")) text += e.at("level").get<std::string>() + ": " + e.at("text").get<std::string>() + "\n";
-  return text;
-}
-
-// Runs the app on `project_path` with `script`; returns the report.
-nlohmann::json Render(const TempDir& dir, const std::string& project_path, const std::string& name,
-                      const std::string& script) {
-  WriteText(dir / (name + ".txt"), script);
-  const RunResult run = RunRender(dir, "'" + project_path + "' -o '" + (dir / (name + ".png")) + "' --script '" +
-                                           (dir / (name + ".txt")) + "' --report '" + (dir / (name + ".json")) + "'");
-  INFO("stderr: " << run.stderr_text);
-  REQUIRE(run.exit_code == 0);
-  return ReadJson(dir / (name + ".json"));
-}
-
-// Runs a script that must fail on a refused command; returns its stderr.
-std::string RenderRefused(const TempDir& dir, const std::string& project_path, const std::string& name,
-                          const std::string& script) {
-  WriteText(dir / (name + ".txt"), script);
-  const RunResult run = RunRender(dir, "'" + project_path + "' -o '" + (dir / (name + ".png")) + "' --script '" +
-                                           (dir / (name + ".txt")) + "'");
-  CHECK(run.exit_code != 0);
-  return run.stderr_text;
-}
-
-facet::Project Load(const std::string& path) {
-  const facet::ProjectLoadResult loaded = facet::LoadProject(path);
-  INFO("load " << path << ": " << loaded.error);
-  REQUIRE(loaded.ok());
-  return loaded.project;
-}
-
 Eigen::Vector3d P(const facet::Project& project, facet::Id primitive_id, facet::VertexId v) {
   return facet::VertexInWorld(project, {primitive_id, v});
 }
@@ -187,10 +153,10 @@ History RunWithHistory(const TempDir& dir, const std::string& project_path, cons
   s << "command undo\nframes 2\ncommand save " << (dir / (name + "_undone.facet")) << "\nframes 1\n";
   s << "command redo\nframes 2\ncommand save " << (dir / (name + "_redone.facet")) << "\nframes 1\n";
   History h;
-  h.report = Render(dir, project_path, name, s.str());
-  h.after = Load(dir / (name + "_after.facet"));
-  h.undone = Load(dir / (name + "_undone.facet"));
-  h.redone = Load(dir / (name + "_redone.facet"));
+  h.report = RenderScript(dir, project_path, name, s.str());
+  h.after = LoadProjectFile(dir / (name + "_after.facet"));
+  h.undone = LoadProjectFile(dir / (name + "_undone.facet"));
+  h.redone = LoadProjectFile(dir / (name + "_redone.facet"));
   return h;
 }
 
@@ -211,7 +177,7 @@ TEST_CASE("multi-selection: coplanar on four free vertices of different faces, s
                     Vertex("select-add", f.box_id, f.split[3])}) +
       "command constrain coplanar\n";
   const History h = RunWithHistory(dir, f.path, "coplanar", script);
-  INFO("log: " << LogText(h.report));
+  INFO("log: " << ReportLog(h.report));
 
   REQUIRE(h.after.constraints.size() == 1);
   const facet::Constraint& c = h.after.constraints[0];
@@ -260,7 +226,7 @@ TEST_CASE("multi-selection: collinear on three vertices and parallel between two
                                             {Vertex("select-add", f.box_id, m), Vertex("select-add", f.box_id, b)}) +
                                "command constrain collinear\n";
     const History h = RunWithHistory(dir, f.path, "collinear", script);
-    INFO("log: " << LogText(h.report));
+    INFO("log: " << ReportLog(h.report));
     REQUIRE(h.after.constraints.size() == 1);
     CHECK(h.after.constraints[0].kind == facet::ConstraintKind::kCollinear);
     CHECK(h.after.constraints[0].vertices.size() == 3);
@@ -288,7 +254,7 @@ TEST_CASE("multi-selection: collinear on three vertices and parallel between two
         SelectScript(Edge("select", f.box_id, half), f.box_id, {Edge("select-add", f.box_id, 1)}) +
         "command constrain parallel\n";
     const History h = RunWithHistory(dir, f.path, "parallel", script);
-    INFO("log: " << LogText(h.report));
+    INFO("log: " << ReportLog(h.report));
     REQUIRE(h.after.constraints.size() == 1);
     const facet::Constraint& c = h.after.constraints[0];
     CHECK(c.kind == facet::ConstraintKind::kParallel);
@@ -312,14 +278,14 @@ TEST_CASE("multi-selection: collinear on three vertices and parallel between two
     const std::string too_few =
         SelectScript(Edge("select", f.box_id, 1), f.box_id, {Vertex("select-add", f.box_id, mesh.Origin(2))}) +
         "command constrain coplanar\n";
-    const std::string err1 = RenderRefused(dir, f.path, "refuse_few", too_few);
+    const std::string err1 = RenderScriptRefused(dir, f.path, "refuse_few", too_few);
     CHECK(err1.find("needs 4 or more different vertices (2 selected") != std::string::npos);
     const std::string three_collinear =
         SelectScript(Vertex("select", f.box_id, f.plain_ends[0]), f.box_id,
                      {Vertex("select-add", f.box_id, f.plain_split), Vertex("select-add", f.box_id, f.plain_ends[1]),
                       Vertex("select-add", f.box_id, f.split[0])}) +
         "command constrain coplanar\n";
-    const std::string err2 = RenderRefused(dir, f.path, "refuse_collinear", three_collinear);
+    const std::string err2 = RenderScriptRefused(dir, f.path, "refuse_collinear", three_collinear);
     CHECK(err2.find("are collinear: with a fourth point they are always coplanar") != std::string::npos);
     // The bottom face's corners (box vertices 0..3, core/box.h), constrained twice.
     const std::string twice =
@@ -327,90 +293,14 @@ TEST_CASE("multi-selection: collinear on three vertices and parallel between two
                      {Vertex("select-add", f.box_id, 1), Vertex("select-add", f.box_id, 2),
                       Vertex("select-add", f.box_id, 3)}) +
         "command constrain coplanar\nframes 2\ncommand constrain coplanar\n";
-    const std::string err3 = RenderRefused(dir, f.path, "refuse_twice", twice);
+    const std::string err3 = RenderScriptRefused(dir, f.path, "refuse_twice", twice);
     CHECK(err3.find("the same constraint exists already") != std::string::npos);
     const std::string same_edge =
         SelectScript(Edge("select", f.box_id, 1), f.box_id, {Edge("select-add", f.box_id, 1)});
-    const std::string err4 = RenderRefused(dir, f.path, "refuse_dup", same_edge);
+    const std::string err4 = RenderScriptRefused(dir, f.path, "refuse_dup", same_edge);
     CHECK(err4.find("is selected already") != std::string::npos);
   }
 }
-
-namespace {
-
-// The synthetic box scene (one calibrated image, its line families, the box) with its photo,
-// the pins of the top corners 4..7 removed so that those vertices are pickable and free to
-// follow a line pin (the bottom pins, the lines and the locked height keep the box fixed).
-struct LineScene {
-  std::string path;
-  SyntheticScene scene;
-  View view;
-};
-
-LineScene WriteLineScene(const TempDir& dir) {
-  LineScene f;
-  f.scene = MakeBoxScene();
-  facet::Project& p = f.scene.project;
-  std::erase_if(p.pins, [](const facet::Pin& pin) { return pin.vertex.vertex >= 4; });
-  const facet::Camera& cam = f.scene.true_camera;
-  // Lines ending at a top corner would be picked there before the vertex: leave them out
-  // (the bottom edges and the lines across the faces still calibrate the image).
-  std::vector<Eigen::Vector2d> top;
-  for (int c = 4; c < 8; ++c) top.push_back(cam.Project(f.scene.true_box.mesh.vertex(c).position));
-  std::erase_if(p.segments, [&](const facet::Segment& s) {
-    return std::any_of(top.begin(), top.end(), [&](const Eigen::Vector2d& t) {
-      return (s.a_px - t).norm() < 1.0 || (s.b_px - t).norm() < 1.0;
-    });
-  });
-  cv::Mat photo(cam.height_px, cam.width_px, CV_8UC3, cv::Scalar(150, 150, 150));
-  const auto corners = BoxCorners(f.scene.true_box);
-  for (const auto& e : facet::BoxEdges()) {
-    const Eigen::Vector2d a = cam.Project(corners[e[0]]), b = cam.Project(corners[e[1]]);
-    cv::line(photo, cv::Point(static_cast<int>(a.x()), static_cast<int>(a.y())),
-             cv::Point(static_cast<int>(b.x()), static_cast<int>(b.y())), cv::Scalar(40, 40, 40), 2, cv::LINE_AA);
-  }
-  REQUIRE(cv::imwrite(dir / "synthetic.png", photo));
-  f.path = dir / "scene.facet";
-  REQUIRE(facet::SaveProject(p, f.path) == "");
-  f.view = ViewFromReport(Render(dir, f.path, "probe", "frames 3\n"));
-  REQUIRE(f.view.zoom > 0.1);
-  return f;
-}
-
-std::string Fmt(const Eigen::Vector2d& p) {
-  std::ostringstream out;
-  out.precision(17);
-  out << p.x() << " " << p.y();
-  return out.str();
-}
-
-// Largest distance (px) of the constraint's edge ends, projected by its image's camera, from
-// its line.
-double LinePinDistancePx(const facet::Project& project, const facet::Constraint& c) {
-  const facet::Image* image = project.FindImage(c.image_id);
-  REQUIRE(image != nullptr);
-  const Eigen::Vector2d d = (c.line_b_px - c.line_a_px).normalized();
-  const Eigen::Vector2d n(-d.y(), d.x());
-  double worst = 0.0;
-  for (const facet::VertexRef& v : c.vertices) {
-    const Eigen::Vector2d uv = image->camera.Project(facet::VertexInWorld(project, v));
-    worst = std::max(worst, std::abs((uv - c.line_a_px).dot(n)));
-  }
-  return worst;
-}
-
-// A line in the photo near the top front x edge (corners 4 -> 5): its true projection moved
-// `shift_px` sideways, between 10 % and 90 % of its length.
-void ShiftedLine(const LineScene& f, double shift_px, Eigen::Vector2d* a, Eigen::Vector2d* b) {
-  const auto corners = BoxCorners(f.scene.true_box);
-  const Eigen::Vector2d p4 = f.scene.true_camera.Project(corners[4]), p5 = f.scene.true_camera.Project(corners[5]);
-  const Eigen::Vector2d d = (p5 - p4).normalized();
-  const Eigen::Vector2d n(-d.y(), d.x());
-  *a = p4 + 0.1 * (p5 - p4) + shift_px * n;
-  *b = p4 + 0.9 * (p5 - p4) + shift_px * n;
-}
-
-}  // namespace
 
 TEST_CASE("line pin: the selected edge on an image line, by the script and by a drag of the Line pin tool") {
   TempDir dir("fops_linepin");
@@ -424,10 +314,10 @@ TEST_CASE("line pin: the selected edge on an image line, by the script and by a 
 
   SUBCASE("script") {
     std::ostringstream s;
-    s << "frames 2\n" << Edge("select", box, edge) << "\nframes 1\ncommand line-pin 0 " << Fmt(a) << " " << Fmt(b)
+    s << "frames 2\n" << Edge("select", box, edge) << "\nframes 1\ncommand line-pin 0 " << FormatXY(a) << " " << FormatXY(b)
       << "\n";
     const History h = RunWithHistory(dir, f.path, "linepin", s.str());
-    INFO("log: " << LogText(h.report));
+    INFO("log: " << ReportLog(h.report));
     REQUIRE(h.after.constraints.size() == 1);
     const facet::Constraint& c = h.after.constraints[0];
     CHECK(c.kind == facet::ConstraintKind::kEdgeOnImageLine);
@@ -454,10 +344,10 @@ TEST_CASE("line pin: the selected edge on an image line, by the script and by a 
     REQUIRE(f.view.Inside(sa, 5.0));
     REQUIRE(f.view.Inside(sb, 5.0));
     std::ostringstream s;
-    s << "frames 2\ncommand tool line-pin\nframes 1\nclick left " << Fmt(mid) << "\nframes 2\n";
-    s << "drag left " << Fmt(sa) << " " << Fmt(sb) << " 12\nframes 3\n";
+    s << "frames 2\ncommand tool line-pin\nframes 1\nclick left " << FormatXY(mid) << "\nframes 2\n";
+    s << "drag left " << FormatXY(sa) << " " << FormatXY(sb) << " 12\nframes 3\n";
     const History h = RunWithHistory(dir, f.path, "linepin_mouse", s.str());
-    INFO("log: " << LogText(h.report));
+    INFO("log: " << ReportLog(h.report));
     REQUIRE(h.after.constraints.size() == 1);
     const facet::Constraint& c = h.after.constraints[0];
     CHECK(c.kind == facet::ConstraintKind::kEdgeOnImageLine);
@@ -488,26 +378,26 @@ TEST_CASE("Shift+click in the image panel: a multi-selection, highlighted, toggl
   const auto corners = BoxCorners(f.scene.true_box);
   auto screen = [&](const Eigen::Vector3d& x) { return f.view.ToScreen(f.scene.true_camera.Project(x)); };
   std::ostringstream s;
-  s << "frames 2\ncommand tool select\nframes 1\nclick left " << Fmt(screen(corners[4])) << "\nframes 1\n";
+  s << "frames 2\ncommand tool select\nframes 1\nclick left " << FormatXY(screen(corners[4])) << "\nframes 1\n";
   s << "hold shift\nframes 1\n";
   // Corner 5, then the pinned corners 0 and 1 (a Shift+click on a pin takes its vertex).
-  for (int c : {5, 0, 1}) s << "click left " << Fmt(screen(corners[c])) << "\nframes 1\n";
+  for (int c : {5, 0, 1}) s << "click left " << FormatXY(screen(corners[c])) << "\nframes 1\n";
   // An edge and corner 6 added and removed again.
   const Eigen::Vector2d edge_mid = screen(0.5 * (corners[4] + corners[6]));
-  for (int i = 0; i < 2; ++i) s << "click left " << Fmt(edge_mid) << "\nframes 1\n";
-  for (int i = 0; i < 2; ++i) s << "click left " << Fmt(screen(corners[6])) << "\nframes 1\n";
+  for (int i = 0; i < 2; ++i) s << "click left " << FormatXY(edge_mid) << "\nframes 1\n";
+  for (int i = 0; i < 2; ++i) s << "click left " << FormatXY(screen(corners[6])) << "\nframes 1\n";
   s << "release shift\nmove 5 5\nframes 3\nscreenshot " << (dir / "multi.png") << "\nframes 1\n";
   const std::string selected = s.str();
   s << "command constrain coplanar\nframes 2\ncommand save " << (dir / "after.facet") << "\nframes 1\n";
-  const nlohmann::json report = Render(dir, f.path, "shift", s.str());
+  const nlohmann::json report = RenderScript(dir, f.path, "shift", s.str());
   // Escape over the image panel leaves the main element only: collinear then has 1 vertex.
   const Eigen::Vector2d over_image(f.view.rect_x + 5.0, f.view.rect_y + 5.0);
-  const std::string err = RenderRefused(dir, f.path, "escape",
-                                        selected + "move " + Fmt(over_image) +
+  const std::string err = RenderScriptRefused(dir, f.path, "escape",
+                                        selected + "move " + FormatXY(over_image) +
                                             "\nframes 1\nkey escape\nframes 1\ncommand constrain collinear\n");
   CHECK(err.find("needs 3 or more different vertices (1 selected") != std::string::npos);
-  INFO("log: " << LogText(report));
-  const facet::Project after = Load(dir / "after.facet");
+  INFO("log: " << ReportLog(report));
+  const facet::Project after = LoadProjectFile(dir / "after.facet");
   REQUIRE(after.constraints.size() == 1);
   const facet::Constraint& c = after.constraints[0];
   CHECK(c.kind == facet::ConstraintKind::kCoplanar);
@@ -556,22 +446,22 @@ TEST_CASE("selection upkeep: an undo drops gone extras and the builder's first e
   std::ostringstream undo_first;
   undo_first << add << Edge("select", box, 0) << "\ncommand constrain parallel\nframes 1\ncommand undo\nframes 2\n"
              << "command redo\nframes 2\n" << Edge("select", box, 1) << "\ncommand constrain parallel\nframes 2\n";
-  nlohmann::json report = Render(dir, path, "undo_first", undo_first.str());
-  INFO("log: " << LogText(report));
+  nlohmann::json report = RenderScript(dir, path, "undo_first", undo_first.str());
+  INFO("log: " << ReportLog(report));
   CHECK(report.at("project").at("constraints").empty());
-  CHECK(LogText(report).find("Parallel: first edge box 1 edge 1") != std::string::npos);
+  CHECK(ReportLog(report).find("Parallel: first edge box 1 edge 1") != std::string::npos);
 
   // The same with the selection cleared in between.
   std::ostringstream cleared;
   cleared << add << Edge("select", box, 0) << "\ncommand constrain parallel\nframes 1\ncommand select none\nframes 2\n"
           << Edge("select", box, 1) << "\ncommand constrain parallel\nframes 2\n";
-  report = Render(dir, path, "cleared", cleared.str());
+  report = RenderScript(dir, path, "cleared", cleared.str());
   CHECK(report.at("project").at("constraints").empty());
   // Without either, the two clicks pair (the control).
   std::ostringstream paired;
   paired << add << Edge("select", box, 0) << "\ncommand constrain parallel\nframes 1\n"
          << Edge("select", box, 1) << "\ncommand constrain parallel\nframes 2\n";
-  report = Render(dir, path, "paired", paired.str());
+  report = RenderScript(dir, path, "paired", paired.str());
   CHECK(report.at("project").at("constraints").size() == 1);
 
   // A multi-selection whose box an undo removes is gone after the redo.
@@ -579,7 +469,7 @@ TEST_CASE("selection upkeep: an undo drops gone extras and the builder's first e
   extras << add << Vertex("select", box, 0) << "\n" << Vertex("select-add", box, 1) << "\n"
          << Vertex("select-add", box, 2) << "\n" << Vertex("select-add", box, 3)
          << "\nframes 1\ncommand undo\nframes 2\ncommand redo\nframes 2\ncommand constrain coplanar\n";
-  const std::string err = RenderRefused(dir, path, "extras", extras.str());
+  const std::string err = RenderScriptRefused(dir, path, "extras", extras.str());
   CHECK(err.find("(0 selected") != std::string::npos);
 }
 
@@ -611,10 +501,10 @@ TEST_CASE("parallel faces: two parallel-edge constraints in one edit; perpendicu
     return std::string("command ") + command + " face " + std::to_string(box) + " " + std::to_string(f) + "\n";
   };
   const std::string add = "frames 2\ncommand add box\nframes 1\ncommand tool select\nframes 1\n";
-  const nlohmann::json report = Render(dir, path, "faces",
+  const nlohmann::json report = RenderScript(dir, path, "faces",
                                        add + face("select", top) + face("select-add", bottom) +
                                            "frames 1\ncommand constrain parallel-faces\nframes 2\n");
-  INFO("log: " << LogText(report));
+  INFO("log: " << ReportLog(report));
   const facet::ProjectLoadResult after = facet::ProjectFromJson(report.at("project").dump());
   REQUIRE(after.ok());
   REQUIRE(after.project.constraints.size() == 2);
@@ -628,7 +518,7 @@ TEST_CASE("parallel faces: two parallel-edge constraints in one edit; perpendicu
   }
   CHECK(report.at("undo_stack").size() == 2);  // add box, parallel faces
   CHECK(report.at("undo_stack").back().dump().find("Parallel faces") != std::string::npos);
-  const std::string err = RenderRefused(dir, path, "faces_refused",
+  const std::string err = RenderScriptRefused(dir, path, "faces_refused",
                                         add + face("select", top) + face("select-add", front) +
                                             "frames 1\ncommand constrain parallel-faces\n");
   CHECK(err.find("no two pairs of edges within 15 deg of parallel") != std::string::npos);
