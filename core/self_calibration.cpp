@@ -445,6 +445,14 @@ BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& obser
   std::vector<Eigen::MatrixXd> w_blocks(m);
   std::vector<bool> point_used(m, false);
   for (const auto& o : observations) point_used[o.point] = true;
+  std::vector<std::vector<int>> point_rows(m);  // per point, the rows of its cameras, then the intrinsics
+  for (const auto& o : observations) {
+    std::vector<int>& rows = point_rows[o.point];
+    if (std::find(rows.begin(), rows.end(), 6 * o.view) != rows.end()) continue;
+    for (int k = 0; k < 6; ++k) rows.push_back(6 * o.view + k);
+  }
+  for (auto& rows : point_rows)
+    for (int k = 6 * n; k < nc; ++k) rows.push_back(k);
 
   auto build = [&]() {
     u.setZero();
@@ -520,9 +528,11 @@ BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& obser
       Eigen::Matrix3d vj = v_blocks[j];
       vj.diagonal() += lambda * (v_blocks[j].diagonal().array() + 1e-12 * v_blocks[j].diagonal().maxCoeff()).matrix();
       v_inv[j] = vj.inverse();
-      const Eigen::MatrixXd y = w_blocks[j] * v_inv[j];
-      s.noalias() -= y * w_blocks[j].transpose();
-      rhs.noalias() += y * g_p[j];
+      // Only the rows of the cameras that see the point and the intrinsics are non-zero in W_j.
+      const Eigen::MatrixXd w = w_blocks[j](point_rows[j], Eigen::all);
+      const Eigen::MatrixXd y = w * v_inv[j];
+      s(point_rows[j], point_rows[j]) -= y * w.transpose();
+      rhs(point_rows[j]) += y * g_p[j];
     }
     const Eigen::VectorXd dc = s.ldlt().solve(rhs);
     if (!dc.allFinite()) return false;

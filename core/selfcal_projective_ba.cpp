@@ -97,6 +97,12 @@ ProjectiveBundleSummary ProjectiveBundleAdjust(const std::vector<ProjectiveBundl
   };
 
   const int nc = kCameraDof * n;
+  std::vector<std::vector<int>> point_rows(m);  // per point, the parameter rows of its cameras
+  for (const auto& o : observations) {
+    std::vector<int>& rows = point_rows[o.point];
+    if (std::find(rows.begin(), rows.end(), kCameraDof * o.view) != rows.end()) continue;
+    for (int k = 0; k < kCameraDof; ++k) rows.push_back(kCameraDof * o.view + k);
+  }
   Eigen::MatrixXd u(nc, nc);
   Eigen::VectorXd g_c(nc);
   std::vector<Eigen::Matrix3d> v_blocks(m);
@@ -158,9 +164,11 @@ ProjectiveBundleSummary ProjectiveBundleAdjust(const std::vector<ProjectiveBundl
       Eigen::Matrix3d vj = v_blocks[j];
       vj.diagonal() += lambda * (v_blocks[j].diagonal().array() + 1e-12 * v_blocks[j].diagonal().maxCoeff()).matrix();
       v_inv[j] = vj.inverse();
-      const Eigen::MatrixXd y = w_blocks[j] * v_inv[j];
-      s.noalias() -= y * w_blocks[j].transpose();
-      rhs.noalias() += y * g_p[j];
+      // Only the rows of the cameras that see the point are non-zero in W_j.
+      const Eigen::MatrixXd w = w_blocks[j](point_rows[j], Eigen::all);
+      const Eigen::MatrixXd y = w * v_inv[j];
+      s(point_rows[j], point_rows[j]) -= y * w.transpose();
+      rhs(point_rows[j]) += y * g_p[j];
     }
     const Eigen::VectorXd dc = s.ldlt().solve(rhs);
     if (!dc.allFinite()) return false;

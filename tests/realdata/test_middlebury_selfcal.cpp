@@ -236,8 +236,8 @@ TEST_CASE("Middlebury temple: self-calibrated focal length from SIFT tracks in 6
 TEST_CASE("Middlebury temple: the full ring of 16 views registers incrementally and self-calibrates") {
   // Measured (SIFT 4000, all 120 pairs matched, 22 kept): 13 of 16 views register, focal
   // +1.68 % (centre) and +1.62 % (solved) against the calibration, reported sigma 0.54 %;
-  // rotation errors to the reference view up to 2.8 degrees; about 20 s per solve (the
-  // matching takes 15 s more). templeSR0003, 0004 and 0014 stay out: the junctions of their
+  // rotation errors to the reference view up to 2.8 degrees; about 4 s per solve (the
+  // matching takes 10 to 25 s more). templeSR0003, 0004 and 0014 stay out: the junctions of their
   // part of the ring with the rest (0002-0014 do not match at all, 0005-0013 share 80 matches
   // but only 3 of them reach a third view) carry too few three-view tracks for a projective
   // resection; they are named in the warnings. The start from the pair sharing the most
