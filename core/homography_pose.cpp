@@ -441,7 +441,9 @@ HomographyPoseSummary EstimatePlanePose(const std::vector<Eigen::Vector2d>& uv1,
                            start);
     }
     std::stable_sort(summary.candidates.begin(), summary.candidates.end(),
-                     [](const PlanePose& a, const PlanePose& b) { return a.reprojection_rms_px < b.reprojection_rms_px; });
+                     [](const PlanePose& a, const PlanePose& b) {
+                       return a.reprojection_rms_px < b.reprojection_rms_px;
+                     });
     summary.ambiguous = summary.candidates.size() > 1;
   }
   const PlanePose& best = summary.candidates[0];
@@ -451,7 +453,8 @@ HomographyPoseSummary EstimatePlanePose(const std::vector<Eigen::Vector2d>& uv1,
   summary.plane_normal_in_cam1 = best.plane_normal_in_cam1;
   if (!summary.pure_rotation && best.translation_over_distance.norm() < kShortBaseline)
     summary.warnings.push_back("the baseline is very short against the plane's distance (|t| / d = " +
-                               FormatNumber(best.translation_over_distance.norm()) + "): the pose is weakly determined");
+                               FormatNumber(best.translation_over_distance.norm()) +
+                               "): the pose is weakly determined");
   if (summary.ambiguous)
     summary.warnings.push_back(std::to_string(summary.candidates.size()) +
                                " plane poses explain the matches equally well (a view pair of one plane is "

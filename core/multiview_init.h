@@ -28,11 +28,12 @@
 //     4 or more give the plane's homography instead (core/homography_pose.h; RANSAC flags wrong
 //     clicks from 6) and its decomposition; of the poses that pass cheirality (often two), the
 //     one whose triangulated vertices best fit the model's positions (a similarity) is taken,
-//     with a warning naming the misfits (two_view_plane is set in the report). The intrinsics (a calibrated image's own; else focal_px_by_image, e.g. EXIF;
-//     else the image's fixed_focal_px (FocalMode::kFixed) or focal_prior_px (kPrior); else
+//     with a warning naming the misfits (two_view_plane is set in the report). The intrinsics
+//     (a calibrated image's own; else focal_px_by_image, e.g. EXIF; else the image's
+//     fixed_focal_px (FocalMode::kFixed) or focal_prior_px (kPrior); else
 //     default_focal_factor x the larger image side; principal point at the centre unless
-//     kFixed) give E and the relative pose with the cheirality check. The baseline is fixed
-//     as in "Gauge" below.
+//     kFixed) give E (or decompose H) and the relative pose with the cheirality check. The
+//     baseline is fixed as in "Gauge" below. Residual: the symmetric epipolar RMS of the pose.
 // (c) Self-calibration: three or more images left are self-calibrated together
 //     (core/self_calibration.h) from the tracks of their pinned vertices, with the known
 //     focal lengths of (b) (not the guess) as single-image priors. When it initialises none

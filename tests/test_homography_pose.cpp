@@ -224,7 +224,8 @@ TEST_CASE("plane with 0.5 px noise: pose and normal within the noise over 10 see
       const double bound_rad = 300.0 * noise_px / (s.camera1.focal_px * std::sqrt(kPoints));
       if (level == 0)
         MESSAGE("plane 0.5 px, seed " << seed << ": rotation " << e.rotation_rad << " rad, direction "
-                                      << e.direction_rad << " rad, normal " << e.normal_rad << " rad (bound " << bound_rad
+                                      << e.direction_rad << " rad, normal " << e.normal_rad << " rad (bound "
+                                      << bound_rad
                                       << "), t/d " << e.t_over_d_rel << ", transfer RMS "
                                       << summary.homography.symmetric_transfer_rms_px << " px (DLT "
                                       << summary.homography.initial_symmetric_transfer_rms_px << ")");

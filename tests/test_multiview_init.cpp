@@ -527,8 +527,8 @@ TEST_CASE("resection keeps a known focal length exactly (FocalMode::kFixed), noi
       sq_free += std::pow(Compare(out_free.images[1].camera, s.truth[1]).translation_rel, 2);
       sq_fixed += std::pow(Compare(out_fixed.images[1].camera, s.truth[1]).translation_rel, 2);
     }
-    MESSAGE("resection 0.5 px, 8 pins, 10 seeds: t error RMS with f free " << std::sqrt(sq_free / 10)
-                                                                         << ", with f known " << std::sqrt(sq_fixed / 10));
+    MESSAGE("resection 0.5 px, 8 pins, 10 seeds: t error RMS with f free "
+            << std::sqrt(sq_free / 10) << ", with f known " << std::sqrt(sq_fixed / 10));
     CHECK(sq_fixed < sq_free);
   }
 }
