@@ -1,7 +1,10 @@
 #include "app/app_state.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <exception>
+#include <system_error>
 
 #include "core/project_io.h"
 
@@ -171,6 +174,9 @@ void ResetDocument(AppState* state, Project project, const std::string& path) {
   state->selection = {};
   state->active_image_id = kNoId;
   state->drag_start.reset();
+  if (state->bake_job) {
+    state->retired_photos.merge(state->photos);  // the worker may still read them
+  }
   state->photos.clear();
   state->photo_errors.clear();
   state->last_update = {};
@@ -179,7 +185,8 @@ void ResetDocument(AppState* state, Project project, const std::string& path) {
   state->hover_panel = 0;
   state->mesh_images.clear();
   state->mesh_photo_count = 0;
-  state->mesh_texture_stale = false;
+  state->mesh_inputs_known = false;
+  ++state->bake_input_revision;  // a bake of the previous document is dropped on arrival
   state->mesh = {};
   ++state->mesh_revision;
   ++state->atlas_revision;
@@ -307,12 +314,123 @@ void ValidateSelection(AppState* state) {
   if (!state->constraint_first_kind) state->constraint_first_edge = {};
 }
 
+namespace {
+
+double MsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The mesh follows an edit at once. When the faces are the same ones (a move, a solve) they
+// keep their place in the atlas, so the previous UVs stay valid, stretched by the move until
+// the new bake arrives; otherwise the new mesh is untextured until then.
+void ShowGeometry(AppState* state, const Project& project) {
+  TexturedMesh geometry = BuildUntexturedMesh(project);
+  ++state->mesh_revision;
+  if (!state->mesh.atlas.empty() && geometry.positions.size() == state->mesh.positions.size() &&
+      geometry.triangle_primitive == state->mesh.triangle_primitive &&
+      geometry.triangle_face == state->mesh.triangle_face) {
+    state->mesh.positions = std::move(geometry.positions);
+    state->mesh.normals = std::move(geometry.normals);
+    return;
+  }
+  state->mesh = std::move(geometry);
+  ++state->atlas_revision;
+}
+
+BakeResult Bake(const Project& project, const std::vector<const ImageRgba8*>& photos) {
+  BakeResult result;
+  result.summary = BakeTexturedMesh(project, photos, TextureBakeOptions{}, &result.mesh);
+  return result;
+}
+
+// Starts the bake of the current project on a worker thread. The worker gets its own copy of
+// the project (small next to the photos) and pointers to the loaded photos, which RefreshDerived
+// and ResetDocument keep alive (retired_photos) until the job is collected.
+void StartBake(AppState* state) {
+  const Project& project = state->document.project();
+  std::vector<const ImageRgba8*> photos;
+  photos.reserve(project.images.size());
+  for (const Image& image : project.images) {
+    const auto it = state->photos.find(image.id);
+    photos.push_back(it == state->photos.end() || it->second.empty() ? nullptr : &it->second);
+  }
+  BakeJob job;
+  job.input_revision = state->bake_input_revision;
+  try {
+    job.result = std::async(std::launch::async, [snapshot = project, photos = std::move(photos)]() {
+      return Bake(snapshot, photos);
+    });
+  } catch (const std::system_error& e) {
+    // No thread to be had: bake here rather than leave the model untextured.
+    state->Log(LogLevel::kWarning, std::string("Texture: baking on the main thread (") + e.what() + ")");
+    std::promise<BakeResult> done;
+    done.set_value(Bake(project, photos));
+    job.result = done.get_future();
+  }
+  state->bake_job = std::move(job);
+  ++state->bake_stats.started;
+}
+
+// Swaps a finished bake in, or drops it when the inputs changed since it started. With
+// `wait`, blocks until the bake in flight finishes; otherwise returns at once when it has not.
+void CollectBake(AppState* state, bool wait) {
+  if (!state->bake_job) return;
+  std::future<BakeResult>& future = state->bake_job->result;
+  if (wait) {
+    const auto start = std::chrono::steady_clock::now();
+    future.wait();
+    state->bake_stats.last_wait_ms = MsSince(start);
+  } else if (future.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+    return;
+  } else {
+    state->bake_stats.last_wait_ms = 0.0;
+  }
+  const std::uint64_t input_revision = state->bake_job->input_revision;
+  BakeResult result;
+  try {
+    result = future.get();
+  } catch (const std::exception& e) {
+    result.summary.success = false;
+    result.summary.message = std::string("the bake failed: ") + e.what();
+    result.mesh = BuildUntexturedMesh(state->document.project());
+  }
+  state->bake_job.reset();
+  state->retired_photos.clear();  // the worker is done with them
+  if (input_revision != state->bake_input_revision) {
+    ++state->bake_stats.dropped;
+    return;
+  }
+  ++state->bake_stats.collected;
+  state->last_bake = std::move(result.summary);
+  if (!state->last_bake.success) state->Log(LogLevel::kWarning, "Texture: " + state->last_bake.message);
+  state->mesh = std::move(result.mesh);  // the untextured mesh when the bake failed
+  state->baked_input_revision = input_revision;
+  ++state->mesh_revision;
+  ++state->atlas_revision;
+}
+
+}  // namespace
+
+bool BakeInFlight(const AppState& state) { return state.bake_job.has_value(); }
+
+bool TexturePending(const AppState& state) { return state.baked_input_revision != state.bake_input_revision; }
+
 void RefreshDerived(AppState* state) {
+  const auto start = std::chrono::steady_clock::now();
   const Project& project = state->document.project();
 
-  // Photos: load the new ones once, forget the ones that left the project.
+  // Photos: load the new ones once, forget the ones that left the project (after the bake in
+  // flight, which may read them).
   for (auto it = state->photos.begin(); it != state->photos.end();) {
-    it = project.FindImage(it->first) ? std::next(it) : state->photos.erase(it);
+    if (project.FindImage(it->first)) {
+      ++it;
+    } else if (state->bake_job) {
+      const auto next = std::next(it);
+      state->retired_photos.insert(state->photos.extract(it));
+      it = next;
+    } else {
+      it = state->photos.erase(it);
+    }
   }
   for (const Image& image : project.images) {
     if (state->photos.count(image.id) || state->photo_errors.count(image.id)) continue;
@@ -321,7 +439,7 @@ void RefreshDerived(AppState* state) {
                                  : ResolveImagePath(state->project_path, image.path);
     ImageReadResult read = ReadImage(path);
     if (read.ok()) {
-      state->photos[image.id] = std::move(read.image);
+      state->photos.emplace(image.id, std::move(read.image));
     } else {
       state->photo_errors[image.id] = read.error;
       state->Log(LogLevel::kError, read.error);
@@ -331,44 +449,36 @@ void RefreshDerived(AppState* state) {
   ValidateSelection(state);
 
   // The mesh depends on the primitives, the cameras and the loaded photos only.
-  const bool inputs_unchanged = state->mesh_primitives == project.primitives && state->mesh_images == project.images &&
-                                state->mesh_photo_count == state->photos.size() && state->mesh_revision != 0;
-  if (inputs_unchanged && (!state->mesh_texture_stale || state->drag_start)) return;
-  state->mesh_primitives = project.primitives;
-  state->mesh_images = project.images;
-  state->mesh_photo_count = state->photos.size();
-  ++state->mesh_revision;
-
-  // While a pin is dragged only the geometry follows: re-baking the texture every frame would
-  // stall on large photos. Faces keep their place in the atlas, so the old UVs stay valid;
-  // the texture is baked again when the drag ends.
-  if (state->drag_start && !state->mesh.atlas.empty()) {
-    TexturedMesh geometry = BuildUntexturedMesh(project);
-    if (geometry.positions.size() == state->mesh.positions.size() &&
-        geometry.triangle_primitive == state->mesh.triangle_primitive &&
-        geometry.triangle_face == state->mesh.triangle_face) {
-      state->mesh.positions = std::move(geometry.positions);
-      state->mesh.normals = std::move(geometry.normals);
-      state->mesh_texture_stale = true;
-      return;
-    }
+  const bool inputs_unchanged = state->mesh_inputs_known && state->mesh_primitives == project.primitives &&
+                                state->mesh_images == project.images &&
+                                state->mesh_photo_count == state->photos.size();
+  if (!inputs_unchanged) {
+    state->mesh_inputs_known = true;
+    state->mesh_primitives = project.primitives;
+    state->mesh_images = project.images;
+    state->mesh_photo_count = state->photos.size();
+    ++state->bake_input_revision;
+    ShowGeometry(state, project);
   }
 
-  std::vector<ImageRgba8> photos;
-  photos.reserve(project.images.size());
-  for (const Image& image : project.images) {
-    auto it = state->photos.find(image.id);
-    photos.push_back(it == state->photos.end() ? ImageRgba8{} : it->second);
+  // Before starting a bake, so that a result whose inputs were just edited is dropped.
+  const bool had_job = state->bake_job.has_value();
+  CollectBake(state, state->bake_mode == BakeMode::kFinishNextFrame);
+  const double waited_ms = had_job && !state->bake_job ? state->bake_stats.last_wait_ms : 0.0;
+
+  // While a pin is dragged only the geometry follows: the bake starts on release.
+  if (!state->drag_start && !state->bake_job && TexturePending(*state)) {
+    StartBake(state);
+    state->bake_stats.start_refresh_ms = MsSince(start) - waited_ms;
   }
-  TexturedMesh mesh;
-  state->last_bake = BakeTexturedMesh(project, photos, TextureBakeOptions{}, &mesh);
-  if (!state->last_bake.success) {
-    mesh = BuildUntexturedMesh(project);
-    state->Log(LogLevel::kWarning, "Texture: " + state->last_bake.message);
+}
+
+void FinishBake(AppState* state) {
+  RefreshDerived(state);
+  while (state->bake_job) {
+    CollectBake(state, /*wait=*/true);
+    if (!state->drag_start && TexturePending(*state)) StartBake(state);
   }
-  state->mesh = std::move(mesh);
-  state->mesh_texture_stale = false;
-  ++state->atlas_revision;
 }
 
 }  // namespace facet::app

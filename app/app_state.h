@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <future>
 #include <map>
 #include <optional>
 #include <string>
@@ -88,6 +89,37 @@ struct LogEntry {
   double time_s = 0.0;  // since start
 };
 
+// How RefreshDerived runs the texture bake. Both bake on a worker thread, so the frame that
+// starts a bake returns at once with the new geometry and the previous (or no) texture.
+enum class BakeMode {
+  kBackground,       // GUI: the first frame after the result arrives swaps it in
+  kFinishNextFrame,  // offscreen: the next frame waits for it, so a script gives the same
+                     // pictures however fast the machine is
+};
+
+// A texture bake on a worker thread, for one revision of the bake's inputs (AppState::
+// bake_input_revision). The worker reads its own copy of the project and the photos in
+// AppState::photos / retired_photos, which stay alive and unchanged until it is collected.
+struct BakeResult {
+  TexturedMesh mesh;
+  TextureBakeSummary summary;
+};
+struct BakeJob {
+  std::uint64_t input_revision = 0;
+  std::future<BakeResult> result;
+};
+
+// Counters and main-thread timings of the background bake, for the `bake-status` command.
+struct BakeStats {
+  int started = 0;
+  int collected = 0;  // results swapped in
+  int dropped = 0;    // results that arrived after a newer edit and were thrown away
+  // Main-thread time of the RefreshDerived call that started the latest bake (new geometry,
+  // project snapshot, thread start), without any wait for an earlier bake in the same call.
+  double start_refresh_ms = 0.0;
+  double last_wait_ms = 0.0;  // main thread blocked on the latest collected or dropped bake
+};
+
 struct AppState {
   Document document;
   std::string project_path;  // empty for an unsaved project
@@ -110,8 +142,12 @@ struct AppState {
   ElementRef hover;
   int hover_panel = 0;
 
-  // Photos by image id, loaded once (core type; each panel makes its own GL textures).
+  // Photos by image id, loaded once (core type; each panel makes its own GL textures). An
+  // entry is never changed in place once loaded, so the bake's worker thread reads the pixels
+  // without a copy; an entry removed while a bake is in flight moves to retired_photos (the
+  // same node, so the same address) until that bake is collected.
   std::map<Id, ImageRgba8> photos;
+  std::multimap<Id, ImageRgba8> retired_photos;
   std::map<Id, std::string> photo_errors;
 
   // Derived from the project after each change (RefreshDerived).
@@ -124,7 +160,13 @@ struct AppState {
   std::vector<Primitive> mesh_primitives;
   std::vector<Image> mesh_images;
   size_t mesh_photo_count = 0;
-  bool mesh_texture_stale = false;  // geometry moved during a drag; texture not re-baked yet
+  bool mesh_inputs_known = false;  // false until the first build of a document
+  // Increments whenever the bake's inputs (primitives, images, loaded photos) change; the
+  // texture shown comes from baked_input_revision, behind it while a bake is pending.
+  std::uint64_t bake_input_revision = 0;
+  std::uint64_t baked_input_revision = 0;
+  BakeMode bake_mode = BakeMode::kBackground;
+  BakeStats bake_stats;
 
   std::vector<LogEntry> log;
   double time_s = 0.0;
@@ -132,6 +174,10 @@ struct AppState {
   // An in-progress interactive drag: the project as it was when the drag began.
   std::optional<Project> drag_start;
   std::string drag_label;
+
+  // The bake in flight, if any. Declared last so that it is destroyed first: the future of
+  // std::async waits for the worker before the photos it reads are freed.
+  std::optional<BakeJob> bake_job;
 
   void Log(LogLevel level, std::string text);
   const Image* ActiveImage() const;
@@ -166,8 +212,23 @@ void Redo(AppState* state);
 // its element is gone or nothing is selected any more.
 void ValidateSelection(AppState* state);
 
-// Loads missing photos and rebuilds the textured mesh when the project changed since the
-// last call. Called once per frame before drawing.
+// Loads missing photos and follows project changes: called once per frame before drawing.
+// When the primitives, images or loaded photos changed since the last call, the mesh shows
+// the new geometry at once (keeping the previous texture when the faces are the same ones,
+// else untextured) and the texture is re-baked on a worker thread: one bake in flight; a
+// result whose inputs were edited since is dropped and the newest inputs baked next. A
+// finished bake is swapped in here, on the main thread (the 3D panel then uploads its atlas).
+// During a drag only the geometry follows; the bake waits for the release.
 void RefreshDerived(AppState* state);
+
+// Whether a bake runs on the worker thread; whether the texture shown is behind the geometry
+// (a bake in flight or still to start, e.g. during a drag).
+bool BakeInFlight(const AppState& state);
+bool TexturePending(const AppState& state);
+
+// Blocks until the texture matches the current project (refreshes first, so an edit since
+// the last frame is baked too), unless a drag defers the bake: for screenshots, exports and
+// scripts that need the finished model.
+void FinishBake(AppState* state);
 
 }  // namespace facet::app

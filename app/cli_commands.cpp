@@ -114,14 +114,20 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
 int RunExportCommand(const std::string& project_path, const std::string& output_path) {
   Project project;
   if (!LoadForCli(project_path, &project)) return 1;
-  std::vector<ImageRgba8> photos;
-  for (const Image& image : project.images) {
-    ImageReadResult read = ReadImage(ResolveImagePath(project_path, image.path));
-    if (!read.ok()) std::cerr << "facet export: warning: " << read.error << " (its faces stay untextured)\n";
-    photos.push_back(std::move(read.image));
+  // Each photo is read once and baked in place (the bake takes pointers, copies no pixels).
+  std::vector<ImageRgba8> photos(project.images.size());
+  std::vector<const ImageRgba8*> photo_pointers(project.images.size(), nullptr);
+  for (size_t i = 0; i < project.images.size(); ++i) {
+    ImageReadResult read = ReadImage(ResolveImagePath(project_path, project.images[i].path));
+    if (!read.ok()) {
+      std::cerr << "facet export: warning: " << read.error << " (its faces stay untextured)\n";
+      continue;
+    }
+    photos[i] = std::move(read.image);
+    photo_pointers[i] = &photos[i];
   }
   TexturedMesh mesh;
-  const TextureBakeSummary bake = BakeTexturedMesh(project, photos, TextureBakeOptions{}, &mesh);
+  const TextureBakeSummary bake = BakeTexturedMesh(project, photo_pointers, TextureBakeOptions{}, &mesh);
   if (!bake.success) {
     std::cerr << "facet export: texture: " << bake.message << "\n";
     mesh = BuildUntexturedMesh(project);

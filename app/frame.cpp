@@ -2,13 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <optional>
 #include <sstream>
 
 #include <imgui.h>
 #include <imgui_internal.h>  // the window's title-bar rectangle, for the Dock/Undock button
 #include <imgui_stdlib.h>
+#include <nlohmann/json.hpp>
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>  // key codes only
@@ -35,6 +38,53 @@ void OpenDialog(ShellState* shell, Dialog dialog, std::string path = {}) {
   shell->dialog_just_opened = true;
   shell->dialog_path = std::move(path);
   shell->dialog_error.clear();
+}
+
+// FNV-1a (64 bit) of raw bytes: the `bake-status` fingerprints that let a test compare the
+// app's bake with its own, bit for bit, without shipping the atlas.
+std::uint64_t Fnv1a(const void* data, size_t bytes, std::uint64_t hash = 14695981039346656037ull) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
+  return hash;
+}
+
+template <typename T>
+std::string FingerprintHex(const std::vector<T>& values) {
+  char text[24];
+  std::snprintf(text, sizeof(text), "%016llx",
+                static_cast<unsigned long long>(Fnv1a(values.data(), values.size() * sizeof(T))));
+  return text;
+}
+
+// `bake-status PATH`: the background bake's state and the mesh shown, as JSON.
+bool WriteBakeStatus(const AppState& state, const std::string& path, std::string* error) {
+  const TexturedMesh& mesh = state.mesh;
+  nlohmann::json status = {
+      {"in_flight", BakeInFlight(state)},
+      {"texture_pending", TexturePending(state)},
+      {"input_revision", state.bake_input_revision},
+      {"baked_input_revision", state.baked_input_revision},
+      {"started", state.bake_stats.started},
+      {"collected", state.bake_stats.collected},
+      {"dropped", state.bake_stats.dropped},
+      {"start_refresh_ms", state.bake_stats.start_refresh_ms},
+      {"last_wait_ms", state.bake_stats.last_wait_ms},
+      {"bake_ms", state.last_bake.time_ms},
+      {"faces_textured", state.last_bake.faces_textured},
+      {"triangles", mesh.indices.size() / 3},
+      {"atlas_width", mesh.atlas.width},
+      {"atlas_height", mesh.atlas.height},
+      {"atlas_fnv", FingerprintHex(mesh.atlas.pixels)},
+      {"uvs_fnv", FingerprintHex(mesh.uvs)},
+      {"positions_fnv", FingerprintHex(mesh.positions)},
+  };
+  std::ofstream out(path);
+  out << status.dump(2) << "\n";
+  if (!out) {
+    *error = "bake-status: cannot write " + path;
+    return false;
+  }
+  return true;
 }
 
 std::string LastLoggedError(const AppState& state) {
@@ -632,7 +682,13 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     RequestImageFit();
     return true;
   }
+  if (name == "wait-bake") {
+    FinishBake(state);
+    return true;
+  }
+  if (name == "bake-status") return WriteBakeStatus(*state, arg, error);
   if (name == "export") {
+    FinishBake(state);  // the model as it is now, textured
     const std::string ext = std::filesystem::path(arg).extension().string();
     if (state->mesh.indices.empty()) {
       *error = "export: there is no model yet (add a primitive and pin it)";
@@ -661,6 +717,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
 
 void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   state->time_s = time_s;
+  state->bake_mode = shell->offscreen ? BakeMode::kFinishNextFrame : BakeMode::kBackground;
   RefreshDerived(state);
   if (state->request_quit) {
     state->request_quit = false;
@@ -691,6 +748,15 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
     }
   }
   if (!ImGui::GetIO().MouseDown[0]) shell->tearing_panel = -1;
+
+  // The texture catches up with an edit in the background: say so over the 3D panel.
+  const int viewport = static_cast<int>(PanelId::kViewport);
+  if (BakeInFlight(*state) && shell->panel_drawn[viewport] && shell->dialog == Dialog::kNone) {
+    const Rect& r = shell->panel_rects[viewport];
+    const float line = ImGui::GetTextLineHeightWithSpacing();
+    ImGui::GetForegroundDrawList()->AddText(ImVec2(r.x + 8.0f, r.y + r.h - line - 6.0f),
+                                            ImGui::GetColorU32(kDimText), "baking texture...");
+  }
 
   DrawDialogs(state, shell);
   if (shell->dialog == Dialog::kNone) HandleToolShortcuts(state);

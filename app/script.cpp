@@ -70,6 +70,7 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"add", {1, 1}},  {"select", {1, 1}},       {"free-vertex", {0, 0}}, {"planar-face", {0, 0}},
       {"constrain", {1, 1}},  {"select-add", {1, 1}},   {"line-pin", {1, 1}},
       {"calibration", {1, 1}}, {"move-selection", {1, 1}}, {"add-photo", {1, 1}},
+      {"wait-bake", {0, 0}},  {"bake-status", {1, 1}},
   };
   return arity;
 }
@@ -237,7 +238,8 @@ bool ParseScript(const std::string& text, Script* script, std::string* error) {
       if (it == arity.end()) {
         return fail("unknown app command '" + t[1] +
                     "' (undo, redo, save, open, tool, select-image, fit, export, add, select, free-vertex, "
-                    "planar-face, constrain, select-add, line-pin, calibration, move-selection, add-photo)");
+                    "planar-face, constrain, select-add, line-pin, calibration, move-selection, add-photo, wait-bake, "
+                    "bake-status)");
       }
       const std::string rest = Rest(line, 2);
       if (!rest.empty()) step.command_args.push_back(rest);
@@ -250,6 +252,7 @@ bool ParseScript(const std::string& text, Script* script, std::string* error) {
     } else if (cmd == "screenshot") {
       step.screenshot_path = Rest(line, 1);
       if (step.screenshot_path.empty()) return fail("'screenshot PATH' needs a path");
+      step.command = "wait-bake";  // the picture shows the finished texture of every edit so far
       push(step);
     } else {
       return fail("unknown command '" + t[0] + "'");

@@ -50,10 +50,17 @@
 //                                   move-selection ARGS  V_op on the selected vertex or
 //                                                      primitive (RunMoveCommand,
 //                                                      app/move_tool.h)
+//                                   wait-bake          block until the texture bake of the
+//                                                      current project is swapped in
+//                                   bake-status PATH   the background bake's state as JSON
+//                                                      (in flight, revisions, counters,
+//                                                      main-thread ms, mesh fingerprints)
 //                                 Tool names: select, line-x, line-y, line-z, pin,
 //                                 add-primitive (adds at once), split-edge, delete-vertex,
 //                                 connect-vertices, delete-edge, push-pull, move, line-pin
-//   screenshot PATH               write a PNG of the frame just rendered
+//   screenshot PATH               write a PNG of the frame just rendered; that frame first
+//                                 waits for the texture bake (wait-bake), so the picture never
+//                                 depends on how fast the worker thread was
 #pragma once
 
 #include <array>
