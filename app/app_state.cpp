@@ -45,7 +45,7 @@ ModelUpdateOptions DragUpdateOptions() {
 // without touching the project.
 void RefreshDiagnostics(AppState* state) {
   Project unused;
-  state->last_update = UpdateModel(state->document.project(), FullUpdateOptions(), &unused);
+  state->last_update = UpdateModel(state->document.project(), FullUpdateOptions(), &unused, &state->update_cache);
 }
 
 void LogUpdate(AppState* state, const ModelUpdateSummary& summary) {
@@ -232,7 +232,7 @@ bool SaveProjectAs(AppState* state, const std::string& path) {
 
 void CommitEdit(AppState* state, const std::string& label, Project after) {
   Project updated;
-  state->last_update = UpdateModel(after, FullUpdateOptions(), &updated);
+  state->last_update = UpdateModel(after, FullUpdateOptions(), &updated, &state->update_cache);
   LogUpdate(state, state->last_update);
   if (state->document.Commit(label, updated)) state->Log(LogLevel::kInfo, label);
 }
@@ -246,14 +246,14 @@ void BeginDrag(AppState* state, const std::string& label) {
 void UpdateDrag(AppState* state, Project edited) {
   if (!state->drag_start) return;
   Project updated;
-  state->last_update = UpdateModel(edited, DragUpdateOptions(), &updated);
+  state->last_update = UpdateModel(edited, DragUpdateOptions(), &updated, &state->update_cache);
   *state->document.MutableProjectForPreview() = std::move(updated);
 }
 
 void EndDrag(AppState* state) {
   if (!state->drag_start) return;
   Project updated;
-  state->last_update = UpdateModel(state->document.project(), FullUpdateOptions(), &updated);
+  state->last_update = UpdateModel(state->document.project(), FullUpdateOptions(), &updated, &state->update_cache);
   LogUpdate(state, state->last_update);
   *state->document.MutableProjectForPreview() = std::move(updated);
   if (state->document.CommitFrom(state->drag_label, *state->drag_start))

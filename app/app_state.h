@@ -155,6 +155,9 @@ struct AppState {
   std::uint64_t mesh_revision = 0;   // increments whenever mesh changes
   std::uint64_t atlas_revision = 0;  // increments when mesh.atlas changes (a subset of the above)
   ModelUpdateSummary last_update;   // calibration and solve figures of the last change
+  // Calibration results reused while an image's inputs are unchanged (core/model_update.h):
+  // drag frames then skip the vanishing-point and plumb-line fits of untouched images.
+  ModelUpdateCache update_cache;
   TextureBakeSummary last_bake;
   // What the current mesh was built from, to rebuild it only when that changes.
   std::vector<Primitive> mesh_primitives;

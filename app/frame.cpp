@@ -653,6 +653,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   if (name == "constrain") return RunConstrainCommand(state, arg, error);
   if (name == "select-add") return RunSelectAddCommand(state, arg, error);
   if (name == "line-pin") return RunLinePinCommand(state, arg, error);
+  if (name == "line-pin-move") return RunLinePinMoveCommand(state, arg, error);
   if (name == "calibration") return RunCalibrationCommand(state, arg, error);
   if (name == "move-selection") return RunMoveCommand(state, arg, error);
   if (name == "free-vertex" || name == "planar-face") {

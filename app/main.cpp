@@ -62,7 +62,8 @@ int main(int argc, char** argv) {
       calibrate
           ->add_option("--points", points_path,
                        "POINTS.json: {\"image_size\": [w, h], \"points\": [{\"xyz\": [X, Y, Z], \"uv\": [u, v]}, "
-                       "...], \"distortion\": 0 | 1 | 2} (6+ points, or 4+ on one plane)")
+                       "...], \"distortion\": 0 | 1 | 2, \"focal_px\": F (optional: a known focal length, pose only)} "
+                       "(6+ points, or 4+ on one plane)")
           ->check(CLI::ExistingFile);
   lines_option->excludes(points_option);
   calibrate->require_option(1);

@@ -68,7 +68,7 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"undo", {0, 0}}, {"redo", {0, 0}},         {"save", {0, 1}},   {"open", {1, 1}},
       {"tool", {1, 1}}, {"select-image", {1, 1}}, {"fit", {0, 0}},    {"export", {1, 1}},
       {"add", {1, 1}},  {"select", {1, 1}},       {"free-vertex", {0, 0}}, {"planar-face", {0, 0}},
-      {"constrain", {1, 1}},  {"select-add", {1, 1}},   {"line-pin", {1, 1}},
+      {"constrain", {1, 1}},  {"select-add", {1, 1}},   {"line-pin", {1, 1}}, {"line-pin-move", {1, 1}},
       {"calibration", {1, 1}}, {"move-selection", {1, 1}}, {"add-photo", {1, 1}},
       {"wait-bake", {0, 0}},  {"bake-status", {1, 1}},
   };
@@ -238,7 +238,7 @@ bool ParseScript(const std::string& text, Script* script, std::string* error) {
       if (it == arity.end()) {
         return fail("unknown app command '" + t[1] +
                     "' (undo, redo, save, open, tool, select-image, fit, export, add, select, free-vertex, "
-                    "planar-face, constrain, select-add, line-pin, calibration, move-selection, add-photo, wait-bake, "
+                    "planar-face, constrain, select-add, line-pin, line-pin-move, calibration, move-selection, add-photo, wait-bake, "
                     "bake-status)");
       }
       const std::string rest = Rest(line, 2);

@@ -35,6 +35,9 @@
 //                                   line-pin IMAGE_INDEX X1 Y1 X2 Y2  the selected edge on the
 //                                                      image line through (X1, Y1), (X2, Y2)
 //                                                      (RunLinePinCommand, app/model_edits.h)
+//                                   line-pin-move IMAGE_INDEX PIN_INDEX END X Y  one end (0|a,
+//                                                      1|b) of the image's PIN_INDEX-th line
+//                                                      pin to (X, Y) (RunLinePinMoveCommand)
 //                                   calibration KEY VALUE  the active image's calibration
 //                                                      modes, each one undoable edit
 //                                                      (RunCalibrationCommand,

@@ -241,3 +241,28 @@ TEST_CASE("line pin: a click on its line selects it, Delete removes it (not its 
   CAPTURE(orange);
   CHECK(orange >= 4);
 }
+
+TEST_CASE("line pin: the script command line-pin-move sets one end, as one undoable edit") {
+  TempDir dir("linepin_move_command");
+  const PinnedScene p = MakePinnedScene(dir, "select", Eigen::Vector2d(0.0, kMoveScreenPx));
+  std::ostringstream s;
+  s << p.setup << "command line-pin-move 0 0 b " << FormatXY(p.b) << "\nframes 3\ncommand save " << (dir / "after.facet")
+    << "\nframes 1\ncommand undo\nframes 2\ncommand save " << (dir / "undone.facet") << "\nframes 1\n";
+  const nlohmann::json report = RenderScript(dir, p.f.path, "command", s.str());
+  INFO("log: " << ReportLog(report));
+  const facet::Project before = LoadProjectFile(dir / "before.facet");
+  const facet::Project after = LoadProjectFile(dir / "after.facet");
+  const facet::Project undone = LoadProjectFile(dir / "undone.facet");
+  REQUIRE(before.constraints.size() == 1);
+  REQUIRE(after.constraints.size() == 1);
+  const facet::Constraint& moved = after.constraints[0];
+  CHECK(moved.id == before.constraints[0].id);
+  CHECK(moved.line_a_px == before.constraints[0].line_a_px);
+  // FormatXY prints enough digits for the end to arrive within the drag test's tolerance.
+  CHECK((moved.line_b_px - p.b).norm() < kEndTolerancePx);
+  CHECK(LinePinDistancePx(before, moved) > kStartOffPx);
+  CHECK(LinePinDistancePx(after, moved) < kLinePinTolerancePx);
+  REQUIRE(undone.constraints.size() == 1);
+  CHECK(undone.constraints[0] == before.constraints[0]);
+  CHECK(undone.primitives == before.primitives);
+}
