@@ -31,20 +31,6 @@ constexpr double kPureRotationGap = 1e-9;
 // |t / d| below which the baseline is too short for a useful pose (a warning).
 constexpr double kShortBaseline = 1e-2;
 
-Eigen::Matrix3d Normalisation(const std::vector<Eigen::Vector2d>& x) {
-  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
-  for (const auto& p : x) centroid += p;
-  centroid /= static_cast<double>(x.size());
-  double mean_distance = 0.0;
-  for (const auto& p : x) mean_distance += (p - centroid).norm();
-  mean_distance /= static_cast<double>(x.size());
-  const double scale = mean_distance > 0.0 ? std::sqrt(2.0) / mean_distance : 1.0;
-  Eigen::Matrix3d t = Eigen::Matrix3d::Identity();
-  t.topLeftCorner<2, 2>() *= scale;
-  t.topRightCorner<2, 1>() = -scale * centroid;
-  return t;
-}
-
 bool Collinear(const std::vector<Eigen::Vector2d>& x) {
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
   for (const auto& p : x) centroid += p;
@@ -71,7 +57,7 @@ Eigen::Matrix3d NormalizeH(Eigen::Matrix3d h) {
 // Normalised DLT on all given matches; false when the null space is not one-dimensional.
 bool HomographyDlt(const std::vector<Eigen::Vector2d>& uv1, const std::vector<Eigen::Vector2d>& uv2,
                    Eigen::Matrix3d* h) {
-  const Eigen::Matrix3d t1 = Normalisation(uv1), t2 = Normalisation(uv2);
+  const Eigen::Matrix3d t1 = internal::HartleyNormalization(uv1), t2 = internal::HartleyNormalization(uv2);
   const int n = static_cast<int>(uv1.size());
   // Nine columns even for four matches: pad with zero rows so the SVD has a full V.
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(std::max(2 * n, 9), 9);
@@ -98,7 +84,7 @@ bool HomographyDlt(const std::vector<Eigen::Vector2d>& uv1, const std::vector<Ei
 // Three of four normalised points on a line, in either image.
 bool DegenerateSample(const std::vector<Eigen::Vector2d>& uv1, const std::vector<Eigen::Vector2d>& uv2) {
   for (const auto* uv : {&uv1, &uv2}) {
-    const Eigen::Matrix3d t = Normalisation(*uv);
+    const Eigen::Matrix3d t = internal::HartleyNormalization(*uv);
     std::vector<Eigen::Vector2d> x;
     for (const auto& p : *uv) x.push_back((t * p.homogeneous()).head<2>());
     for (int i = 0; i < 4; ++i)
@@ -135,7 +121,7 @@ double TransferRms(const Eigen::Matrix3d& h, const std::vector<Eigen::Vector2d>&
 // (Hn = T2 H T1^-1, entries of order one), its largest entry held so the scale is fixed.
 Eigen::Matrix3d RefineHomography(const Eigen::Matrix3d& h_start, const std::vector<Eigen::Vector2d>& uv1,
                                  const std::vector<Eigen::Vector2d>& uv2, int max_iterations, int* iterations) {
-  const Eigen::Matrix3d t1 = Normalisation(uv1), t2 = Normalisation(uv2);
+  const Eigen::Matrix3d t1 = internal::HartleyNormalization(uv1), t2 = internal::HartleyNormalization(uv2);
   const Eigen::Matrix3d t1_inverse = t1.inverse(), t2_inverse = t2.inverse();
   Eigen::Matrix3d hn = t2 * h_start * t1_inverse;
   hn /= hn.norm();

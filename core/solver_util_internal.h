@@ -1,11 +1,14 @@
-// Small helpers the solvers share: the cross-product matrix, elapsed time for summaries, the
-// early-failure return, and the compact number format their messages use. Internal to core/*.cpp.
+// Small helpers the solvers share: the cross-product matrix, Hartley's normalisation, elapsed
+// time for summaries, the early-failure return, and the compact number format their messages
+// use. Internal to core/*.cpp.
 #pragma once
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -16,6 +19,24 @@ inline Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d s;
   s << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
   return s;
+}
+
+// Hartley's normalisation of 2-D points (the DLTs of F and H): the similarity that moves their
+// centroid to the origin and their mean distance from it to sqrt(2); identity scale when all
+// points coincide.
+inline Eigen::Matrix3d HartleyNormalization(const std::vector<Eigen::Vector2d>& points) {
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  for (const auto& p : points) centroid += p;
+  centroid /= static_cast<double>(points.size());
+  double mean_distance = 0.0;
+  for (const auto& p : points) mean_distance += (p - centroid).norm();
+  mean_distance /= static_cast<double>(points.size());
+  const double scale = mean_distance > 0 ? std::sqrt(2.0) / mean_distance : 1.0;
+  Eigen::Matrix3d t = Eigen::Matrix3d::Identity();
+  t(0, 0) = t(1, 1) = scale;
+  t(0, 2) = -scale * centroid.x();
+  t(1, 2) = -scale * centroid.y();
+  return t;
 }
 
 inline double MsSince(std::chrono::steady_clock::time_point start) {

@@ -60,22 +60,6 @@ Eigen::Matrix3d FromVecRowMajor(const Eigen::Matrix<double, 9, 1>& v) {
   return m;
 }
 
-// Hartley's normalisation: centroid to the origin, mean distance sqrt(2).
-Eigen::Matrix3d NormalizingTransform(const Points& uv) {
-  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
-  for (const auto& p : uv) centroid += p;
-  centroid /= static_cast<double>(uv.size());
-  double mean_distance = 0.0;
-  for (const auto& p : uv) mean_distance += (p - centroid).norm();
-  mean_distance /= static_cast<double>(uv.size());
-  const double scale = mean_distance > 0 ? std::sqrt(2.0) / mean_distance : 1.0;
-  Eigen::Matrix3d t = Eigen::Matrix3d::Identity();
-  t(0, 0) = t(1, 1) = scale;
-  t(0, 2) = -scale * centroid.x();
-  t(1, 2) = -scale * centroid.y();
-  return t;
-}
-
 Eigen::Vector3d Apply(const Eigen::Matrix3d& t, const Eigen::Vector2d& p) { return t * p.homogeneous(); }
 
 // Rows kron(x2, x1) of the linear system A vec(Fn) = 0 in normalised coordinates.
@@ -205,7 +189,7 @@ Eigen::JacobiSVD<Eigen::Matrix<double, 9, 9>> DesignMatrixSvd(const Eigen::Matri
 
 // Normalised DLT homography uv2 ~ H uv1 (4 or more matches); false when degenerate.
 bool HomographyDlt(const Points& uv1, const Points& uv2, Eigen::Matrix3d* h) {
-  const Eigen::Matrix3d t1 = NormalizingTransform(uv1), t2 = NormalizingTransform(uv2);
+  const Eigen::Matrix3d t1 = internal::HartleyNormalization(uv1), t2 = internal::HartleyNormalization(uv2);
   Eigen::MatrixXd a(2 * uv1.size(), 9);
   for (size_t i = 0; i < uv1.size(); ++i) {
     const Eigen::Vector3d x = Apply(t1, uv1[i]);
@@ -406,7 +390,7 @@ double SymmetricEpipolarRms(const Eigen::Matrix3d& F, const Points& uv1, const P
 
 bool FundamentalEightPoint(const Points& uv1, const Points& uv2, Eigen::Matrix3d* F) {
   if (uv1.size() < 8 || uv1.size() != uv2.size()) return false;
-  const Eigen::Matrix3d t1 = NormalizingTransform(uv1), t2 = NormalizingTransform(uv2);
+  const Eigen::Matrix3d t1 = internal::HartleyNormalization(uv1), t2 = internal::HartleyNormalization(uv2);
   const Eigen::MatrixXd a = DesignMatrix(uv1, uv2, t1, t2);
   const auto svd = DesignMatrixSvd(a);
   const Eigen::Matrix<double, 9, 1>& sv = svd.singularValues();
@@ -423,7 +407,7 @@ bool FundamentalEightPoint(const Points& uv1, const Points& uv2, Eigen::Matrix3d
 std::vector<Eigen::Matrix3d> FundamentalSevenPoint(const Points& uv1, const Points& uv2) {
   std::vector<Eigen::Matrix3d> out;
   if (uv1.size() != 7 || uv2.size() != 7) return out;
-  const Eigen::Matrix3d t1 = NormalizingTransform(uv1), t2 = NormalizingTransform(uv2);
+  const Eigen::Matrix3d t1 = internal::HartleyNormalization(uv1), t2 = internal::HartleyNormalization(uv2);
   const Eigen::MatrixXd a = DesignMatrix(uv1, uv2, t1, t2);
   const auto svd = DesignMatrixSvd(a);
   const Eigen::Matrix<double, 9, 1>& sv = svd.singularValues();
@@ -630,7 +614,8 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
     *iterations = 0;
     if (options.refine) {
       const internal::OrthonormalFundamental start_state =
-          internal::OrthonormalFundamental::FromF(*linear, NormalizingTransform(in1), NormalizingTransform(in2));
+          internal::OrthonormalFundamental::FromF(*linear, internal::HartleyNormalization(in1),
+                                                  internal::HartleyNormalization(in2));
       *refined = MinimizeSymmetricEpipolar<7>(start_state, in1, in2, options.max_refine_iterations, iterations).F();
     }
     return true;
