@@ -136,14 +136,16 @@ State MinimizeSymmetricEpipolar(State state, const Points& uv1, const Points& uv
   using MatD = Eigen::Matrix<double, D, D>;
   EpipolarNormalEquations normal;
   double cost = SymmetricEpipolarCost(state.F(), uv1, uv2, &normal);
-  double lambda = -1.0;
+  // The damping scales J^T J's own diagonal (Marquardt), so lambda is relative: starting it
+  // at 1e-4 times the largest diagonal entry (Levenberg's absolute convention) damped the
+  // first steps ~100-fold and cost 5 to 10 iterations.
+  double lambda = 1e-4;
   *iterations = 0;
   for (int it = 0; it < max_iterations && cost > 0.0; ++it) {
     ++*iterations;
     const Eigen::Matrix<double, 9, D> tangent = state.Tangent();
     const MatD jtj = tangent.transpose() * normal.jtj * tangent;
     const VecD jtr = tangent.transpose() * normal.jtr;
-    if (lambda < 0) lambda = 1e-4 * std::max(jtj.diagonal().maxCoeff(), 1e-300);
     bool improved = false;
     while (lambda < 1e20) {
       MatD h = jtj;
