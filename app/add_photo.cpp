@@ -4,7 +4,7 @@
 #include <system_error>
 
 #include "app/calgui_exif_prior.h"
-#include "core/image_io.h"
+#include "core/image/image_io.h"
 
 namespace facet::app {
 namespace {

@@ -1,6 +1,6 @@
 // File > Add photo: a photo joins the project as a new image (the start of every model, and
 // the second and further views of the two-view and self-calibration paths, which then take
-// their cameras from pins: core/multiview_init.h). One undoable edit.
+// their cameras from pins: core/solve/multiview_init.h). One undoable edit.
 #pragma once
 
 #include <string>

@@ -22,7 +22,7 @@
 #include "app/platform_glfw.h"
 #include "app/script.h"
 #include "app/viewport_panel.h"
-#include "core/project_io.h"
+#include "core/io/project_io.h"
 
 namespace facet::app {
 namespace {

@@ -6,7 +6,7 @@
 #include <exception>
 #include <system_error>
 
-#include "core/project_io.h"
+#include "core/io/project_io.h"
 
 namespace facet::app {
 namespace {

@@ -12,12 +12,12 @@
 #include <string>
 #include <vector>
 
-#include "core/calibrate_vp.h"
-#include "core/document.h"
-#include "core/mesh_primitives.h"
-#include "core/image_io.h"
-#include "core/model_update.h"
-#include "core/textured_mesh.h"
+#include "core/estimators/calibrate_vp.h"
+#include "core/scene/document.h"
+#include "core/mesh/primitives.h"
+#include "core/image/image_io.h"
+#include "core/solve/model_update.h"
+#include "core/texture/textured_mesh.h"
 
 namespace facet::app {
 
@@ -38,7 +38,7 @@ enum class Tool {
 };
 const char* ToolName(Tool tool);
 
-// A vertex, edge or face of a primitive's mesh, by stable ids (core/mesh.h).
+// A vertex, edge or face of a primitive's mesh, by stable ids (core/mesh/mesh.h).
 enum class ElementKind { kNone, kVertex, kEdge, kFace };
 const char* ElementKindName(ElementKind kind);  // "vertex", "edge", "face"
 struct ElementRef {
@@ -155,7 +155,7 @@ struct AppState {
   std::uint64_t mesh_revision = 0;   // increments whenever mesh changes
   std::uint64_t atlas_revision = 0;  // increments when mesh.atlas changes (a subset of the above)
   ModelUpdateSummary last_update;   // calibration and solve figures of the last change
-  // Calibration results reused while an image's inputs are unchanged (core/model_update.h):
+  // Calibration results reused while an image's inputs are unchanged (core/solve/model_update.h):
   // drag frames then skip the vanishing-point and plumb-line fits of untouched images.
   ModelUpdateCache update_cache;
   TextureBakeSummary last_bake;

@@ -1,4 +1,4 @@
-// The focal-length prior a photo's EXIF gives (core/exif.h): its value, a standard deviation
+// The focal-length prior a photo's EXIF gives (core/image/exif.h): its value, a standard deviation
 // that states how far EXIF focal lengths are off in practice, and the log line. No ImGui, so
 // the unit tests include it directly; the app sets it on import, from the image panel's
 // "From EXIF" button and from the script command `calibration focal exif`.
@@ -9,15 +9,15 @@
 #include <cstdio>
 #include <string>
 
-#include "core/exif.h"
-#include "core/project.h"
+#include "core/image/exif.h"
+#include "core/scene/project.h"
 
 namespace facet::app {
 
 // Relative std of the 35 mm-equivalent convention: cameras map the 36 x 24 mm frame to the
 // sensor by its diagonal, its width or its larger side; for a 4:3 sensor, diagonal versus
 // larger side differs by 4 % (36 / (0.8 * 43.27) = 1.04), and focus breathing adds ~1 %. A
-// 3 % std keeps either convention within about 1.3 sigma. core/exif.h takes the diagonal;
+// 3 % std keeps either convention within about 1.3 sigma. core/image/exif.h takes the diagonal;
 // on the two real cameras we have it gives 3.4 % (iPhone 6) and 4.1 % (York Urban's) below
 // the calibrated focal length, 1.1 and 1.3 sigma.
 constexpr double kExifEquivalentConventionRelStd = 0.03;

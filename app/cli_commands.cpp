@@ -7,13 +7,13 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/calibrate_io.h"
-#include "core/calibrate_points_io.h"
-#include "core/export.h"
-#include "core/model_update.h"
-#include "core/project_io.h"
-#include "core/relate_io.h"
-#include "core/textured_mesh.h"
+#include "core/io/calibrate_io.h"
+#include "core/io/calibrate_points_io.h"
+#include "core/io/export.h"
+#include "core/solve/model_update.h"
+#include "core/io/project_io.h"
+#include "core/io/relate_io.h"
+#include "core/texture/textured_mesh.h"
 
 namespace facet::app {
 namespace {

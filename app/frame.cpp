@@ -23,7 +23,7 @@
 #include "app/panel_image.h"
 #include "app/panels.h"
 #include "app/viewport_panel.h"
-#include "core/export.h"
+#include "core/io/export.h"
 
 namespace facet::app {
 namespace {

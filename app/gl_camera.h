@@ -1,5 +1,5 @@
 // The one conversion of a Facet camera (OpenCV frame: X right, Y down, Z forward; pixel
-// centres at integer coordinates, core/conventions.h) to OpenGL's view and projection
+// centres at integer coordinates, core/geometry/conventions.h) to OpenGL's view and projection
 // matrices (eye frame: X right, Y up, looking down -Z; clip space with w = depth).
 //
 // Header-only and free of GL so that tests can check it without a context: a world point
@@ -11,7 +11,7 @@
 
 #include <Eigen/Core>
 
-#include "core/camera.h"
+#include "core/geometry/camera.h"
 
 namespace facet::app {
 

@@ -8,7 +8,7 @@
 
 #include <string>
 
-#include "core/image_io.h"
+#include "core/image/image_io.h"
 
 namespace facet::app {
 

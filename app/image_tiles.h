@@ -9,7 +9,7 @@
 
 #include <imgui.h>
 
-#include "core/image_io.h"
+#include "core/image/image_io.h"
 
 namespace facet::app {
 
@@ -38,7 +38,7 @@ TiledTexture CreateTiledTexture(const ImageRgba8& image);
 void DestroyTiledTexture(TiledTexture* texture);
 
 // Image-to-screen transform: screen = origin + zoom * uv_px, where origin is the screen
-// position of pixel (0, 0)'s centre (core/conventions.h: that pixel covers [-0.5, 0.5]^2).
+// position of pixel (0, 0)'s centre (core/geometry/conventions.h: that pixel covers [-0.5, 0.5]^2).
 struct ViewTransform {
   ImVec2 origin{0, 0};
   float zoom = 1.0f;  // screen px per image px

@@ -1,6 +1,6 @@
 // The image view's transform (zoom and pan per image, app-side UI state) and the loupe: a
 // magnified square of the photo and its overlays around a point, with a crosshair on it.
-// Pixel convention (core/conventions.h): screen = origin + zoom * uv_px, where origin is the
+// Pixel convention (core/geometry/conventions.h): screen = origin + zoom * uv_px, where origin is the
 // screen position of pixel (0, 0)'s centre; the image covers [-0.5, size - 0.5] in uv.
 #pragma once
 

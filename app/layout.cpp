@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/project_io.h"
+#include "core/io/project_io.h"
 
 namespace facet::app {
 namespace {

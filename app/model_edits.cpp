@@ -11,9 +11,9 @@
 
 #include <imgui.h>
 
-#include "core/mesh_extrude.h"
-#include "core/mesh_operators.h"
-#include "core/vertex_move.h"
+#include "core/mesh/extrude.h"
+#include "core/mesh/operators.h"
+#include "core/solve/vertex_move.h"
 
 namespace facet::app {
 namespace {

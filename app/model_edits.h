@@ -46,7 +46,7 @@ bool ToggleFreeVertexEdit(AppState* state, Id primitive_id, VertexId vertex);
 // when the same constraint exists.
 bool TogglePlanarFaceEdit(AppState* state, Id primitive_id, FaceId face);
 
-// Spatial constraints (issue 5, core/project.h Constraint). Each adds one constraint as one
+// Spatial constraints (issue 5, core/scene/project.h Constraint). Each adds one constraint as one
 // edit; the joint solve then enforces it. Edges are ElementRefs of kind kEdge (vertices a -> b
 // of half-edge 2 * edge); a refusal (a missing element, the same edge twice, a length <= 0,
 // a constraint already there) is logged and changes nothing.
@@ -120,7 +120,7 @@ bool RunLinePinCommand(AppState* state, const std::string& arg, std::string* err
 bool RunLinePinMoveCommand(AppState* state, const std::string& arg, std::string* error);
 
 // Push/pull: extrudes the face by `distance` project units along its outward normal (a
-// negative distance pushes it in), core/mesh_extrude.h; the face stays selected.
+// negative distance pushes it in), core/mesh/extrude.h; the face stays selected.
 bool PushPullFaceEdit(AppState* state, Id primitive_id, FaceId face, double distance);
 // The push/pull distance a face starts with: 10 % of the primitive's size (the largest side
 // of its bounding box), or 0.1 for an empty mesh.

@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "app/overlay_draw.h"  // DistanceToSegment
-#include "core/mesh_triangulate.h"
+#include "core/mesh/triangulate.h"
 
 namespace facet::app {
 namespace {

@@ -46,7 +46,7 @@ struct PickFilter {
 // vertices, the edge operators edges.
 PickFilter PickFilterOf(Tool tool);
 
-// A pick result; `t` is the edge parameter from the origin of half-edge 2 * edge (core/mesh.h)
+// A pick result; `t` is the edge parameter from the origin of half-edge 2 * edge (core/mesh/mesh.h)
 // of the point nearest the pick, in 3D (perspective-correct), for edges only.
 struct ElementPick {
   ElementRef element;

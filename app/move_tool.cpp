@@ -3,7 +3,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "core/vertex_move.h"
+#include "core/solve/vertex_move.h"
 
 namespace facet::app {
 namespace {

@@ -1,6 +1,6 @@
 // V_op: the Move tool drags a model vertex or a whole primitive in the 3D panel; the drag
 // moves it directly and the solve that follows starts from there (the paper's "V-ops help the
-// solver"). The geometry is core/vertex_move.h; this file is the interaction.
+// solver"). The geometry is core/solve/vertex_move.h; this file is the interaction.
 //
 // Press on a vertex and drag: the vertex follows the mouse in the plane through it facing the
 // camera (with Shift: along the world z axis through it). Press on an edge or a face: the

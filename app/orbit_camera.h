@@ -1,13 +1,13 @@
 // The 3D panel's viewpoint (UI state, not part of the document): a turntable orbit about a
-// target point with world Z kept up (core/conventions.h), or, after "View from photo",
+// target point with world Z kept up (core/geometry/conventions.h), or, after "View from photo",
 // exactly a photo's camera until the user moves. Either way the view is a facet::Camera,
 // so the one OpenCV-to-OpenGL conversion (app/gl_camera.h) serves both.
 #pragma once
 
 #include <Eigen/Core>
 
-#include "core/camera.h"
-#include "core/project.h"
+#include "core/geometry/camera.h"
+#include "core/scene/project.h"
 
 namespace facet::app {
 

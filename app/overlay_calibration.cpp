@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "app/overlay_draw.h"
-#include "core/multiview_init.h"
+#include "core/solve/multiview_init.h"
 
 namespace facet::app {
 
@@ -91,7 +91,7 @@ void DrawOutliers(ImDrawList* draw_list, const AppState& state, const Image& ima
 
 // Epipolar lines for teaching two-view geometry: for the selected vertices (or the selected
 // pin's vertex), the line in this image of each pin of that vertex in another calibrated
-// image (F from the two cameras, core/multiview_init.h). The vertex's own pin here should lie
+// image (F from the two cameras, core/solve/multiview_init.h). The vertex's own pin here should lie
 // on every such line; the distance is what the two-view solve minimises. On a distorted
 // photo the true epipolar curve bends: the line is drawn in pinhole pixels.
 void DrawEpipolarLines(ImDrawList* draw_list, const AppState& state, const Image& image, const ViewTransform& view) {

@@ -2,7 +2,7 @@
 // (the 1-VP + horizon mode, dashed and labelled "horizon (given)", distinct from the fitted
 // horizon app/overlay_draw.h draws), the segments the calibration flagged as outliers
 // (crossed out), and the epipolar lines in this image of the selected vertices' pins in the
-// other calibrated images (core/multiview_init.h).
+// other calibrated images (core/solve/multiview_init.h).
 #pragma once
 
 #include <imgui.h>

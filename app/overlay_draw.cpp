@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/mesh_triangulate.h"
+#include "core/mesh/triangulate.h"
 
 namespace facet::app {
 namespace {

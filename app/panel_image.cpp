@@ -12,8 +12,8 @@
 
 #include "app/calgui_exif_prior.h"
 #include "app/panel_util.h"
-#include "core/project_io.h"
-#include "core/scene_solve.h"
+#include "core/io/project_io.h"
+#include "core/solve/scene_solve.h"
 
 namespace facet::app {
 

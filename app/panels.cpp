@@ -15,7 +15,7 @@
 #include "app/panel_constraints.h"
 #include "app/panel_image.h"
 #include "app/panel_util.h"
-#include "core/scene_solve.h"
+#include "core/solve/scene_solve.h"
 
 namespace facet::app {
 namespace {

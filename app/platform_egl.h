@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "core/image_io.h"
+#include "core/image/image_io.h"
 
 namespace facet::app {
 

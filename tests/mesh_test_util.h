@@ -7,8 +7,8 @@
 
 #include <doctest/doctest.h>
 
-#include "core/mesh.h"
-#include "core/mesh_primitives.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/primitives.h"
 
 namespace facet::testing {
 

@@ -10,9 +10,9 @@
 
 #include <Eigen/Geometry>
 
-#include "core/box.h"
-#include "core/camera.h"
-#include "core/project.h"
+#include "core/mesh/box.h"
+#include "core/geometry/camera.h"
+#include "core/scene/project.h"
 
 namespace facet::testing {
 

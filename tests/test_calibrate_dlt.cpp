@@ -1,5 +1,5 @@
-// Calibration from known 3D points (core/calibrate_dlt.h) and its JSON adapter
-// (core/calibrate_points_io.h) on synthetic cameras with known K, R, t.
+// Calibration from known 3D points (core/estimators/calibrate_dlt.h) and its JSON adapter
+// (core/io/calibrate_points_io.h) on synthetic cameras with known K, R, t.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -8,8 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/calibrate_dlt.h"
-#include "core/calibrate_points_io.h"
+#include "core/estimators/calibrate_dlt.h"
+#include "core/io/calibrate_points_io.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

@@ -1,4 +1,4 @@
-// The JSON adapter of single-image calibration (core/calibrate_io.h): a synthetic scene's
+// The JSON adapter of single-image calibration (core/io/calibrate_io.h): a synthetic scene's
 // line families written as LINES.json come back as its camera; bad input gives messages.
 #include <doctest/doctest.h>
 
@@ -11,8 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/calibrate_io.h"
-#include "core/calibrate_vp.h"
+#include "core/io/calibrate_io.h"
+#include "core/estimators/calibrate_vp.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

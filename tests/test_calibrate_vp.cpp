@@ -1,4 +1,4 @@
-// Single-image calibration from vanishing points (core/calibrate_vp.h) on synthetic box
+// Single-image calibration from vanishing points (core/estimators/calibrate_vp.h) on synthetic box
 // scenes: exact recovery without noise, accuracy within the noise, degenerate input.
 #include <doctest/doctest.h>
 
@@ -8,8 +8,8 @@
 
 #include <Eigen/Geometry>
 
-#include "core/calibrate_vp.h"
-#include "core/vanishing_point.h"
+#include "core/estimators/calibrate_vp.h"
+#include "core/estimators/vanishing_point.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

@@ -13,11 +13,11 @@
 
 #include <Eigen/Geometry>
 
-#include "core/box.h"
-#include "core/camera.h"
-#include "core/joint_solve_internal.h"
-#include "core/model_update.h"
-#include "core/textured_mesh.h"
+#include "core/mesh/box.h"
+#include "core/geometry/camera.h"
+#include "core/solve/joint_solve_internal.h"
+#include "core/solve/model_update.h"
+#include "core/texture/textured_mesh.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

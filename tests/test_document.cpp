@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "core/document.h"
-#include "core/mesh_extrude.h"
-#include "core/mesh_operators.h"
-#include "core/project.h"
+#include "core/scene/document.h"
+#include "core/mesh/extrude.h"
+#include "core/mesh/operators.h"
+#include "core/scene/project.h"
 #include "tests/synthetic_scene.h"
 
 using facet::Axis;

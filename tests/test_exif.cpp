@@ -1,4 +1,4 @@
-// The EXIF focal-length reader (core/exif.h) on JPEGs built here: a tiny image from OpenCV
+// The EXIF focal-length reader (core/image/exif.h) on JPEGs built here: a tiny image from OpenCV
 // with an EXIF block written byte by byte (TIFF header, IFD0 pointing at the Exif IFD), so
 // the test does not trust libexif's writer to check libexif's reader.
 #include <doctest/doctest.h>
@@ -12,7 +12,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/exif.h"
+#include "core/image/exif.h"
 
 namespace facet {
 namespace {

@@ -11,10 +11,10 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/export.h"
-#include "core/mesh_operators.h"
-#include "core/mesh_primitives.h"
-#include "core/textured_mesh.h"
+#include "core/io/export.h"
+#include "core/mesh/operators.h"
+#include "core/mesh/primitives.h"
+#include "core/texture/textured_mesh.h"
 #include "synthetic_scene.h"
 
 namespace fs = std::filesystem;

@@ -1,4 +1,4 @@
-// Two views of one plane (core/homography_pose.h): a tilted plane of random points seen by two
+// Two views of one plane (core/estimators/homography_pose.h): a tilted plane of random points seen by two
 // look-at cameras with known K; the homography, its decomposition into the relative pose and
 // the plane normal, the two-fold ambiguity, noise, wrong clicks and degenerate input.
 #include <doctest/doctest.h>
@@ -11,7 +11,7 @@
 
 #include <Eigen/Geometry>
 
-#include "core/homography_pose.h"
+#include "core/estimators/homography_pose.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

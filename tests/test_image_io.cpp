@@ -8,7 +8,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/image_io.h"
+#include "core/image/image_io.h"
 
 namespace fs = std::filesystem;
 

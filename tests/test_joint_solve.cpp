@@ -1,4 +1,4 @@
-// The joint solve (core/joint_solve.h): analytic Jacobians against central differences,
+// The joint solve (core/solve/joint_solve.h): analytic Jacobians against central differences,
 // recovery of synthetic scenes (one and several images, several primitives, noise, scale),
 // the paper's pavilion with free ridge vertices, diagnostics and failure safety.
 #include <doctest/doctest.h>
@@ -8,10 +8,10 @@
 
 #include <Eigen/Geometry>
 
-#include "core/box.h"
-#include "core/joint_solve.h"
-#include "core/joint_solve_internal.h"
-#include "core/mesh_operators.h"
+#include "core/mesh/box.h"
+#include "core/solve/joint_solve.h"
+#include "core/solve/joint_solve_internal.h"
+#include "core/mesh/operators.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

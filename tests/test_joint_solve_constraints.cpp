@@ -1,4 +1,4 @@
-// Spatial constraints in the joint solve (core/joint_solve.h): every kind's residual and
+// Spatial constraints in the joint solve (core/solve/joint_solve.h): every kind's residual and
 // Jacobian against central differences, a scene where each kind is what fixes a free
 // parameter, the SLSQP polish to 1e-9 of the model size, gauge by distance and fixed point,
 // conflicting constraints named, and a line pin 3 px off settled by convergence.
@@ -15,10 +15,10 @@
 
 #include <Eigen/Geometry>
 
-#include "core/box.h"
-#include "core/joint_solve.h"
-#include "core/joint_solve_internal.h"
-#include "core/mesh_operators.h"
+#include "core/mesh/box.h"
+#include "core/solve/joint_solve.h"
+#include "core/solve/joint_solve_internal.h"
+#include "core/mesh/operators.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

@@ -1,5 +1,5 @@
-// The polygon mesh (core/mesh.h), K_create primitives (core/mesh_primitives.h) and their
-// triangulation (core/mesh_triangulate.h): invariants on every primitive kind, and
+// The polygon mesh (core/mesh/mesh.h), K_create primitives (core/mesh/primitives.h) and their
+// triangulation (core/mesh/triangulate.h): invariants on every primitive kind, and
 // Validate() naming exactly what a corrupted mesh breaks.
 #include <doctest/doctest.h>
 
@@ -9,10 +9,10 @@
 
 #include <Eigen/Geometry>
 
-#include "core/camera.h"
-#include "core/mesh.h"
-#include "core/mesh_primitives.h"
-#include "core/mesh_triangulate.h"
+#include "core/geometry/camera.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/primitives.h"
+#include "core/mesh/triangulate.h"
 
 namespace facet {
 namespace {

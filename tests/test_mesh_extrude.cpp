@@ -1,4 +1,4 @@
-// Face extrusion (core/mesh_extrude.h): on every face of every primitive kind the mesh stays
+// Face extrusion (core/mesh/extrude.h): on every face of every primitive kind the mesh stays
 // valid with exact element-count deltas, the face moves along its normal, resizing the
 // primitive keeps the extrusion attached, refusals change nothing, push/pull again changes
 // only the offsets, and the inverse restores the mesh identically, also after random
@@ -15,12 +15,12 @@
 
 #include <Eigen/Geometry>
 
-#include "core/camera.h"
-#include "core/mesh.h"
-#include "core/mesh_extrude.h"
-#include "core/mesh_operators.h"
-#include "core/mesh_primitives.h"
-#include "core/mesh_triangulate.h"
+#include "core/geometry/camera.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/extrude.h"
+#include "core/mesh/operators.h"
+#include "core/mesh/primitives.h"
+#include "core/mesh/triangulate.h"
 #include "tests/mesh_test_util.h"
 
 namespace facet {

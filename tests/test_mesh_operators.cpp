@@ -1,4 +1,4 @@
-// The paper's K-operators (core/mesh_operators.h): on every primitive kind, invariants hold
+// The paper's K-operators (core/mesh/operators.h): on every primitive kind, invariants hold
 // after each operator, element counts change exactly, refusals change nothing, and every
 // operator is undone exactly by its inverse (same ids, links, positions, attributes).
 #include <doctest/doctest.h>
@@ -12,10 +12,10 @@
 
 #include <Eigen/Geometry>
 
-#include "core/mesh.h"
-#include "core/mesh_operators.h"
-#include "core/mesh_primitives.h"
-#include "core/mesh_triangulate.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/operators.h"
+#include "core/mesh/primitives.h"
+#include "core/mesh/triangulate.h"
 #include "tests/mesh_test_util.h"
 
 namespace facet {

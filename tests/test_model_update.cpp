@@ -1,4 +1,4 @@
-// What runs after every edit (core/model_update.h): on synthetic scenes, calibration from the
+// What runs after every edit (core/solve/model_update.h): on synthetic scenes, calibration from the
 // line families, the geometry solve and the joint solve together recover the true camera and
 // box from a perturbed start; a failed solve leaves the project as the edit made it.
 #include <doctest/doctest.h>
@@ -12,9 +12,9 @@
 
 #include <Eigen/Geometry>
 
-#include "core/camera.h"
-#include "core/model_update.h"
-#include "core/project.h"
+#include "core/geometry/camera.h"
+#include "core/solve/model_update.h"
+#include "core/scene/project.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

@@ -1,4 +1,4 @@
-// Cameras for images with pins but no line families (core/multiview_init.h) on synthetic
+// Cameras for images with pins but no line families (core/solve/multiview_init.h) on synthetic
 // scenes: MakeBoxScene's box (plus up to three more boxes for more vertices) seen by several
 // look-at cameras, every visible vertex pinned in every image. Resection against a calibrated
 // image, two views with a known focal length, self-calibration of three, the refusals, the
@@ -13,10 +13,10 @@
 
 #include <Eigen/Geometry>
 
-#include "core/model_update.h"
-#include "core/multiview_init.h"
-#include "core/project.h"
-#include "core/two_view.h"
+#include "core/solve/model_update.h"
+#include "core/solve/multiview_init.h"
+#include "core/scene/project.h"
+#include "core/estimators/two_view.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {
@@ -597,7 +597,7 @@ TEST_CASE("a chain: image 1 resected from image 0, image 2 (no known vertex) pai
 
 // First-order standard deviations (rad) of the relative pose that two views with these true
 // matches determine under pixel noise sigma: the Jacobian J of the symmetric epipolar residuals
-// (core/two_view.h) with respect to the pose's 5 parameters (rotation 3, baseline direction 2;
+// (core/estimators/two_view.h) with respect to the pose's 5 parameters (rotation 3, baseline direction 2;
 // internal::PoseFundamental), each residual a point-to-line distance carrying the noise of
 // both points (variance 2 sigma^2), so covariance = 2 sigma^2 (J^T J)^-1. Returns the RMS
 // rotation angle and the RMS direction angle (square roots of the blocks' traces).
@@ -999,7 +999,7 @@ TEST_CASE("the recommended wiring: VP calibration and geometry solve, then pins 
 }
 
 TEST_CASE("UpdateModel initialises an image without line families from its pins in the same update") {
-  // The same edit as above, in one call: the wiring in core/model_update.cpp.
+  // The same edit as above, in one call: the wiring in core/solve/model_update.cpp.
   constexpr double kRmsTolPx = 1e-6;
   Scene s = MakeScene({});
   Image& image0 = s.project.images[0];

@@ -7,8 +7,8 @@
 #include <random>
 #include <vector>
 
-#include "core/camera.h"
-#include "core/plumb_line.h"
+#include "core/geometry/camera.h"
+#include "core/estimators/plumb_line.h"
 
 namespace {
 

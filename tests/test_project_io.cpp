@@ -24,11 +24,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/camera.h"
-#include "core/mesh_extrude.h"
-#include "core/mesh_operators.h"
-#include "core/project.h"
-#include "core/project_io.h"
+#include "core/geometry/camera.h"
+#include "core/mesh/extrude.h"
+#include "core/mesh/operators.h"
+#include "core/scene/project.h"
+#include "core/io/project_io.h"
 #include "tests/synthetic_scene.h"
 
 namespace fs = std::filesystem;
@@ -1159,7 +1159,7 @@ TEST_CASE("the version-1 fixture keeps loading: boxes become box primitives, cor
   REQUIRE(p.pins.size() == 3);
   CHECK(p.pins[2].vertex == facet::VertexRef{7, 7});
   CHECK(p.pins[2].uv_px == Eigen::Vector2d(1234.5, 876.25));
-  // Corner pins became vertex pins at the right world positions (core/box.h bit code:
+  // Corner pins became vertex pins at the right world positions (core/mesh/box.h bit code:
   // corner c is (c & 1, c >> 1 & 1, c >> 2 & 1) * size, then the box's pose).
   constexpr double kPositionTolerance = 1e-12;  // a few roundings of ~10 m coordinates
   const double s = std::sqrt(0.5);

@@ -1,4 +1,4 @@
-// Stratified two-view reconstruction (core/projective_upgrade.h) on synthetic scenes: random
+// Stratified two-view reconstruction (core/estimators/projective_upgrade.h) on synthetic scenes: random
 // points in front of two known look-at cameras and the vanishing points of the three world
 // axes. The metric result is compared with the truth after a similarity alignment.
 #include <doctest/doctest.h>
@@ -10,8 +10,8 @@
 
 #include <Eigen/Geometry>
 
-#include "core/projective_upgrade.h"
-#include "core/two_view.h"
+#include "core/estimators/projective_upgrade.h"
+#include "core/estimators/two_view.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

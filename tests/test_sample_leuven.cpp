@@ -17,9 +17,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "core/box.h"
-#include "core/model_update.h"
-#include "core/project_io.h"
+#include "core/mesh/box.h"
+#include "core/solve/model_update.h"
+#include "core/io/project_io.h"
 
 namespace {
 

@@ -1,4 +1,4 @@
-// The geometry solve's linear initialisation (core/scene_solve_internal.h): its Schur path
+// The geometry solve's linear initialisation (core/solve/scene_solve_internal.h): its Schur path
 // (used above 300 unknowns) must give the dense SVD's solution, and both must recover a
 // noise-free scene exactly from a cold start (every camera at the origin, every free box a unit
 // cube at the origin), whatever the start. Scenes from tests/bench/joint_scene.h.
@@ -8,8 +8,8 @@
 #include <cmath>
 #include <string>
 
-#include "core/scene_solve.h"
-#include "core/scene_solve_internal.h"
+#include "core/solve/scene_solve.h"
+#include "core/solve/scene_solve_internal.h"
 #include "tests/bench/joint_scene.h"
 
 namespace {

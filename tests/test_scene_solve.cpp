@@ -1,4 +1,4 @@
-// The geometry solve (core/scene_solve.h): analytic Jacobian against finite differences,
+// The geometry solve (core/solve/scene_solve.h): analytic Jacobian against finite differences,
 // recovery of a synthetic box and camera from its pinned corners (noise-free and noisy, at
 // several scales), degenerate inputs and the speed of the interactive (warm-started) path.
 #include <doctest/doctest.h>
@@ -12,12 +12,12 @@
 
 #include <Eigen/Dense>
 
-#include "core/camera.h"
-#include "core/mesh_extrude.h"
-#include "core/mesh_operators.h"
-#include "core/project.h"
-#include "core/scene_solve.h"
-#include "core/scene_solve_internal.h"
+#include "core/geometry/camera.h"
+#include "core/mesh/extrude.h"
+#include "core/mesh/operators.h"
+#include "core/scene/project.h"
+#include "core/solve/scene_solve.h"
+#include "core/solve/scene_solve_internal.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

@@ -1,7 +1,7 @@
-// Self-calibration of 3 or more views (core/self_calibration.h) on synthetic scenes: random
+// Self-calibration of 3 or more views (core/estimators/self_calibration.h) on synthetic scenes: random
 // points in a box seen by look-at cameras placed around it, tracks of their pixels with
 // optional noise and wrong observations. Recovered cameras and points are compared with the
-// truth after a similarity alignment (AlignSimilarity, core/projective_upgrade.h).
+// truth after a similarity alignment (AlignSimilarity, core/estimators/projective_upgrade.h).
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -12,8 +12,8 @@
 
 #include <Eigen/Geometry>
 
-#include "core/self_calibration.h"
-#include "core/selfcal_projective_ba.h"
+#include "core/estimators/self_calibration.h"
+#include "core/estimators/projective_bundle_adjustment.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

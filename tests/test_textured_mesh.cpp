@@ -11,9 +11,9 @@
 
 #include <doctest/doctest.h>
 
-#include "core/mesh_operators.h"
-#include "core/mesh_primitives.h"
-#include "core/textured_mesh.h"
+#include "core/mesh/operators.h"
+#include "core/mesh/primitives.h"
+#include "core/texture/textured_mesh.h"
 #include "synthetic_scene.h"
 
 using facet::Camera;

@@ -1,4 +1,4 @@
-// Two-view geometry (core/two_view.h) and its JSON adapter (core/relate_io.h) on synthetic
+// Two-view geometry (core/estimators/two_view.h) and its JSON adapter (core/io/relate_io.h) on synthetic
 // two-camera scenes: random points in front of two known look-at cameras, projected, with
 // optional pixel noise and wrong matches.
 #include <doctest/doctest.h>
@@ -11,8 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/relate_io.h"
-#include "core/two_view.h"
+#include "core/io/relate_io.h"
+#include "core/estimators/two_view.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

@@ -1,4 +1,4 @@
-// V_op (core/vertex_move.h): a dragged vertex reaches its target by the smallest change of its
+// V_op (core/solve/vertex_move.h): a dragged vertex reaches its target by the smallest change of its
 // primitive. Checked on a box, wedge, pyramid, cylinder, a split vertex and a free vertex:
 // the target reached to 1e-12, the step optimal (KKT: the objective's gradient lies in the
 // span of the dragged vertex's constraint rows, with the Jacobians measured independently by
@@ -14,9 +14,9 @@
 
 #include <Eigen/Dense>
 
-#include "core/mesh_operators.h"
-#include "core/model_update.h"
-#include "core/vertex_move.h"
+#include "core/mesh/operators.h"
+#include "core/solve/model_update.h"
+#include "core/solve/vertex_move.h"
 #include "tests/synthetic_scene.h"
 
 using namespace facet;

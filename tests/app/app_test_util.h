@@ -24,9 +24,9 @@
 #include <opencv2/imgproc.hpp>
 #include <Eigen/Dense>
 
-#include "core/box.h"
-#include "core/project.h"
-#include "core/project_io.h"
+#include "core/mesh/box.h"
+#include "core/scene/project.h"
+#include "core/io/project_io.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet::testing {

@@ -2,15 +2,15 @@
 // the photo becomes a new image with its size, a path relative to the saved project, an
 // uncalibrated camera centred on the photo, and the focal prior of its EXIF when it has one;
 // undo removes it; an unreadable file is refused with the reason and changes nothing. Then a
-// second view takes part in the solve from its pins alone (resection, core/multiview_init.h).
+// second view takes part in the solve from its pins alone (resection, core/solve/multiview_init.h).
 #include <doctest/doctest.h>
 
 #include <string>
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/model_update.h"
-#include "core/project_io.h"
+#include "core/solve/model_update.h"
+#include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 

@@ -15,9 +15,9 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/image_io.h"
-#include "core/project_io.h"
-#include "core/textured_mesh.h"
+#include "core/image/image_io.h"
+#include "core/io/project_io.h"
+#include "core/texture/textured_mesh.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 

@@ -17,7 +17,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "app/calgui_exif_prior.h"
-#include "core/project_io.h"
+#include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 

@@ -11,8 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/mesh_primitives.h"
-#include "core/project_io.h"
+#include "core/mesh/primitives.h"
+#include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 
 using namespace facet::testing;
@@ -140,7 +140,7 @@ TEST_CASE("constrain script command: two-edge parallel and a fixed point, saved 
   const facet::Id box_id = empty.next_id;
   const std::string project_path = dir / "empty.facet";
   REQUIRE(facet::SaveProject(empty, project_path) == "");
-  // A box's edges 0 and 1 (core/box.h order: both along x) and its vertex 0.
+  // A box's edges 0 and 1 (core/mesh/box.h order: both along x) and its vertex 0.
   std::ostringstream s;
   s << "frames 2\ncommand add box\nframes 1\ncommand tool select\nframes 1\n";
   s << "command select edge " << box_id << " 0\nframes 1\ncommand constrain parallel\nframes 1\n";

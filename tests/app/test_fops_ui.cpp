@@ -18,9 +18,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "core/mesh_operators.h"
-#include "core/mesh_primitives.h"
-#include "core/project_io.h"
+#include "core/mesh/operators.h"
+#include "core/mesh/primitives.h"
+#include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 
@@ -287,7 +287,7 @@ TEST_CASE("multi-selection: collinear on three vertices and parallel between two
         "command constrain coplanar\n";
     const std::string err2 = RenderScriptRefused(dir, f.path, "refuse_collinear", three_collinear);
     CHECK(err2.find("are collinear: with a fourth point they are always coplanar") != std::string::npos);
-    // The bottom face's corners (box vertices 0..3, core/box.h), constrained twice.
+    // The bottom face's corners (box vertices 0..3, core/mesh/box.h), constrained twice.
     const std::string twice =
         SelectScript(Vertex("select", f.box_id, 0), f.box_id,
                      {Vertex("select-add", f.box_id, 1), Vertex("select-add", f.box_id, 2),

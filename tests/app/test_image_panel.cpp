@@ -22,8 +22,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/box.h"
-#include "core/project_io.h"
+#include "core/mesh/box.h"
+#include "core/io/project_io.h"
 #include "tests/synthetic_scene.h"
 
 namespace fs = std::filesystem;

@@ -14,8 +14,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/mesh_primitives.h"
-#include "core/project_io.h"
+#include "core/mesh/primitives.h"
+#include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 

@@ -11,8 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/mesh_primitives.h"
-#include "core/project_io.h"
+#include "core/mesh/primitives.h"
+#include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 
 using namespace facet::testing;

@@ -8,8 +8,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/box.h"
-#include "core/project_io.h"
+#include "core/mesh/box.h"
+#include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 
 using namespace facet::testing;  // app_test_util.h

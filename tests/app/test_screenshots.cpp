@@ -22,9 +22,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "core/box.h"
-#include "core/mesh.h"
-#include "core/project_io.h"
+#include "core/mesh/box.h"
+#include "core/mesh/mesh.h"
+#include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 
@@ -62,7 +62,7 @@ cv::Mat MakePhoto(const SyntheticScene& scene, bool with_box) {
       const auto& face = facet::BoxFaces()[f];
       Eigen::Vector3d centre = Eigen::Vector3d::Zero();
       for (int c : face) centre += corners[c] / 4.0;
-      // The box mesh's face f is BoxFaces()[f] (core/mesh_primitives.h builds them in order).
+      // The box mesh's face f is BoxFaces()[f] (core/mesh/primitives.h builds them in order).
       if (facet::FaceNormal(scene.true_box.mesh, static_cast<facet::FaceId>(f)).dot(eye - centre) <= 0) continue;
       std::vector<cv::Point> poly;
       for (int c : face) {

@@ -9,7 +9,7 @@
 #include <random>
 #include <vector>
 
-#include "core/textured_mesh.h"
+#include "core/texture/textured_mesh.h"
 #include "tests/synthetic_scene.h"
 
 namespace {

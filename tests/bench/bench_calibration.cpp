@@ -9,9 +9,9 @@
 
 #include <opencv2/calib3d.hpp>
 
-#include "core/calibrate_dlt.h"
-#include "core/calibrate_vp.h"
-#include "core/two_view.h"
+#include "core/estimators/calibrate_dlt.h"
+#include "core/estimators/calibrate_vp.h"
+#include "core/estimators/two_view.h"
 #include "tests/synthetic_scene.h"
 
 namespace {

@@ -7,11 +7,11 @@
 
 #include <string>
 
-#include "core/document.h"
-#include "core/mesh_operators.h"
-#include "core/mesh_primitives.h"
-#include "core/project.h"
-#include "core/textured_mesh.h"
+#include "core/scene/document.h"
+#include "core/mesh/operators.h"
+#include "core/mesh/primitives.h"
+#include "core/scene/project.h"
+#include "core/texture/textured_mesh.h"
 
 namespace {
 

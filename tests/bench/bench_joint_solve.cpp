@@ -1,4 +1,4 @@
-// Timings of the joint solve (core/joint_solve.h, issue 5 "Speed") on the scenes of
+// Timings of the joint solve (core/solve/joint_solve.h, issue 5 "Speed") on the scenes of
 // tests/bench/joint_scene.h: the per-frame update while a pin is dragged (warm start, the
 // app's iteration budget, no diagnostics), the full solve from a cold start, and the growth
 // with the number of primitives. tests/bench/ceres_joint_solve.cpp times the same problems in
@@ -10,7 +10,7 @@
 #include <map>
 #include <tuple>
 
-#include "core/joint_solve.h"
+#include "core/solve/joint_solve.h"
 #include "tests/bench/joint_scene.h"
 
 namespace {

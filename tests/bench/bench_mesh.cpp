@@ -1,4 +1,4 @@
-// K-operator and triangulation timings against scene size (core/mesh_operators.h): a scene
+// K-operator and triangulation timings against scene size (core/mesh/operators.h): a scene
 // of N cylinders of 98 segments (100 faces each), N = 1, 10, 100 up to 10,000 faces. The
 // operators must not grow with N; re-triangulating the changed faces must not either, while
 // a full triangulation does. Linked into facet_bench, whose main is in bench_model.cpp.
@@ -6,10 +6,10 @@
 
 #include <vector>
 
-#include "core/mesh.h"
-#include "core/mesh_operators.h"
-#include "core/mesh_primitives.h"
-#include "core/mesh_triangulate.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/operators.h"
+#include "core/mesh/primitives.h"
+#include "core/mesh/triangulate.h"
 
 namespace {
 

@@ -4,12 +4,12 @@
 
 #include <opencv2/calib3d.hpp>
 
-#include "core/calibrate_vp.h"
-#include "core/mesh_extrude.h"
-#include "core/mesh_primitives.h"
-#include "core/model_update.h"
-#include "core/scene_solve.h"
-#include "core/textured_mesh.h"
+#include "core/estimators/calibrate_vp.h"
+#include "core/mesh/extrude.h"
+#include "core/mesh/primitives.h"
+#include "core/solve/model_update.h"
+#include "core/solve/scene_solve.h"
+#include "core/texture/textured_mesh.h"
 #include "tests/synthetic_scene.h"
 
 namespace {

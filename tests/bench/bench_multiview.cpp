@@ -6,9 +6,9 @@
 #include <cmath>
 #include <random>
 
-#include "core/projective_upgrade.h"
-#include "core/self_calibration.h"
-#include "core/two_view.h"
+#include "core/estimators/projective_upgrade.h"
+#include "core/estimators/self_calibration.h"
+#include "core/estimators/two_view.h"
 #include "tests/synthetic_scene.h"
 
 namespace {

@@ -2,7 +2,7 @@
 // the larger scene under 200 ms"): cameras know only their rotations and intrinsics (what
 // vanishing-point calibration gives), every camera centre sits at the world origin and every
 // box is a unit cube at the origin except the gauge box (primitive 0 keeps its translation and
-// height). core/model_update.h then runs the geometry solve's linear initialisation + LM and
+// height). core/solve/model_update.h then runs the geometry solve's linear initialisation + LM and
 // the joint solve, as after the first edit that makes a scene solvable. Counters: the final
 // RMS (px) and the largest box-dimension error against the truth (m). The small scene has
 // 12 pins per box (the joint-solve bench's 6 leave some boxes seen in one image only, which
@@ -13,9 +13,9 @@
 #include <cmath>
 #include <random>
 
-#include "core/box.h"
-#include "core/calibrate_vp.h"
-#include "core/model_update.h"
+#include "core/mesh/box.h"
+#include "core/estimators/calibrate_vp.h"
+#include "core/solve/model_update.h"
 #include "tests/bench/joint_scene.h"
 
 namespace {

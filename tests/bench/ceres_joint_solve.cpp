@@ -2,7 +2,7 @@
 // (tests/bench/bench_joint_solve.cpp) on the same scenes, budgets and tolerances (issue 5:
 // no slower than Ceres on the interactive problem, the same final cost).
 //
-// Same parameters as core/joint_solve.h for these scenes: per camera a small rotation applied
+// Same parameters as core/solve/joint_solve.h for these scenes: per camera a small rotation applied
 // on the left of the start rotation (angle-axis, 3) and the centre (3), intrinsics fixed; per
 // box its three dimensions and translation (6, rotation fixed), the locked entries held by a
 // SubsetManifold. Same residual: projection of the pinned vertex minus the pin, in px, so
@@ -23,7 +23,7 @@
 #include <tuple>
 #include <vector>
 
-#include "core/joint_solve.h"
+#include "core/solve/joint_solve.h"
 #include "tests/bench/joint_scene.h"
 
 namespace {

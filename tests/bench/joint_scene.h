@@ -11,7 +11,7 @@
 // Pins: P / N per primitive (the remainder to the first ones), spread round-robin over the
 // images in which the primitive has visible vertices (in front of the camera, inside the
 // image), at distinct vertices per image, so a primitive is pinned in two images or more
-// whenever two cameras see it. Box corner i (core/box.h bit code) is vertex i.
+// whenever two cameras see it. Box corner i (core/mesh/box.h bit code) is vertex i.
 #pragma once
 
 #include <algorithm>
@@ -22,9 +22,9 @@
 
 #include <Eigen/Geometry>
 
-#include "core/camera.h"
-#include "core/mesh_primitives.h"
-#include "core/project.h"
+#include "core/geometry/camera.h"
+#include "core/mesh/primitives.h"
+#include "core/scene/project.h"
 
 namespace facet::testing {
 

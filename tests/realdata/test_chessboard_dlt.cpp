@@ -1,4 +1,4 @@
-// Calibration from known 3D points (core/calibrate_dlt.h, planar path) on OpenCV's sample
+// Calibration from known 3D points (core/estimators/calibrate_dlt.h, planar path) on OpenCV's sample
 // chessboard views, one view at a time, against the multi-view cv::calibrateCamera reference
 // in the data folder and against cv::calibrateCamera on the same single view in the same run.
 // Data: FACET_SHARED_DATA/opencv-chessboard (PROVENANCE.md there): 13 left and 13 right
@@ -21,7 +21,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "core/calibrate_dlt.h"
+#include "core/estimators/calibrate_dlt.h"
 
 namespace facet {
 namespace {

@@ -1,4 +1,4 @@
-// The focal length the bundled Leuven sample gives (core/calibrate_vp.h, the sample's own
+// The focal length the bundled Leuven sample gives (core/estimators/calibrate_vp.h, the sample's own
 // options: principal point at the image centre, and the focal-length prior from the photo's
 // EXIF that File > Add photo sets) against the photo's reference K, which OpenCV ships with
 // it (FACET_SHARED_DATA/opencv-leuven/essential_mat_data.txt; how OpenCV obtained it is
@@ -25,8 +25,8 @@
 #include <string>
 #include <vector>
 
-#include "core/calibrate_vp.h"
-#include "core/project_io.h"
+#include "core/estimators/calibrate_vp.h"
+#include "core/io/project_io.h"
 
 namespace facet {
 namespace {

@@ -27,8 +27,8 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/self_calibration.h"
-#include "core/two_view.h"
+#include "core/estimators/self_calibration.h"
+#include "core/estimators/two_view.h"
 
 namespace facet {
 namespace {

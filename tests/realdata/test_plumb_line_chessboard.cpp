@@ -1,4 +1,4 @@
-// Plumb-line radial distortion (core/plumb_line.h) on OpenCV's sample chessboard views, against
+// Plumb-line radial distortion (core/estimators/plumb_line.h) on OpenCV's sample chessboard views, against
 // the distortion that cv::calibrateCamera found for the same lens (left_intrinsics.yml).
 // Data: FACET_SHARED_DATA/opencv-chessboard (PROVENANCE.md there): 13 left 640x480 views of a
 // 9x6-inner-corner board through a lens with strong barrel distortion (OpenCV k1 = -0.266,
@@ -22,7 +22,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "core/plumb_line.h"
+#include "core/estimators/plumb_line.h"
 
 namespace facet {
 namespace {

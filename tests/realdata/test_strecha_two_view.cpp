@@ -1,4 +1,4 @@
-// Two-view geometry (core/two_view.h) on Strecha's fountain-P11 (pairs among 0004-0007):
+// Two-view geometry (core/estimators/two_view.h) on Strecha's fountain-P11 (pairs among 0004-0007):
 // 30 SIFT matches per pair, spread over the image, stand in for the user's clicks; with the
 // ground-truth K the relative pose is compared with the ground-truth cameras, and the
 // symmetric epipolar RMS with cv::findFundamentalMat's on the same matches.
@@ -23,7 +23,7 @@
 
 #include <Eigen/Geometry>
 
-#include "core/two_view.h"
+#include "core/estimators/two_view.h"
 
 namespace facet {
 namespace {

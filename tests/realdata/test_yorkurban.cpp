@@ -1,4 +1,4 @@
-// Single-image calibration (core/calibrate_vp.h) on the York Urban DB train split: the
+// Single-image calibration (core/estimators/calibrate_vp.h) on the York Urban DB train split: the
 // hand-labelled segments of each photo, three vanishing points, against the ground-truth K.
 // Data: FACET_SHARED_DATA/yorkurbandb-train (README.md and PROVENANCE.md there). The files
 // use MATLAB's 1-based pixel coordinates; Facet's pixel centres are 0-based.
@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "app/calgui_exif_prior.h"
-#include "core/calibrate_vp.h"
-#include "core/exif.h"
-#include "core/plumb_line.h"
+#include "core/estimators/calibrate_vp.h"
+#include "core/image/exif.h"
+#include "core/estimators/plumb_line.h"
 
 namespace facet {
 namespace {
@@ -33,7 +33,7 @@ constexpr int kHeightPx = 480;
 // p90 is (below); the median is not, and the second test case shows why: the labelled
 // segments, fitted with the true K, give vanishing directions 1.44 deg (median) from
 // orthogonal (printed below), and the photos show barrel distortion (k1 ~ 0.015 in
-// core/plumb_line.h's model); neither an orthogonal pinhole fit of one photo can absorb.
+// core/estimators/plumb_line.h's model); neither an orthogonal pinhole fit of one photo can absorb.
 constexpr double kMaxMedianFocalErrorPercentSolved = 1.6;
 constexpr double kMaxP90FocalErrorPercentSolved = 6.8;
 constexpr double kMaxMedianFocalErrorPercentCentred = 2.1;
@@ -156,7 +156,7 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
   for (const fs::path& folder : folders) {
     const std::string id = folder.filename().string();
     const std::vector<Segment> segments = ReadSegments(folder / (id + "_lines.txt"));
-    // Radial distortion from the same segments (core/plumb_line.h), for the third variant.
+    // Radial distortion from the same segments (core/estimators/plumb_line.h), for the third variant.
     std::vector<Segment> undistorted_segments = segments;
     {
       PlumbLineOptions plumb_options;
@@ -274,7 +274,7 @@ TEST_CASE("York Urban: only the true principal point and a distortion tuned to t
     exif_by_photo.push_back(ReadExifFocalFromFile((folder / (id + ".jpg")).string(), kWidthPx, kHeightPx));
     REQUIRE(exif_by_photo.back().found);
   }
-  // Barrel distortion of this camera is k1 ~ 0.02 in core/plumb_line.h's model (the plumb
+  // Barrel distortion of this camera is k1 ~ 0.02 in core/estimators/plumb_line.h's model (the plumb
   // lines of the whole set); the grid brackets it.
   double best_median = std::numeric_limits<double>::infinity(), best_k1 = 0.0, best_p90 = 0.0;
   for (int step = 0; step <= 32; ++step) {

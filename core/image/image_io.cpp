@@ -1,0 +1,204 @@
+// Decoding goes through OpenCV's imgcodecs (libjpeg-turbo, libpng): faster than stb_image on
+// 12 MP JPEGs and it reads every format the header promises. Sizes come from stb_image's
+// header parser, which reads a few bytes instead of decoding. Neither decoder reports a
+// truncated JPEG (both pad the missing scan data), so a JPEG is checked for its end-of-image
+// marker before decoding.
+#include "core/image/image_io.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stb_image.h>
+
+namespace facet {
+namespace {
+
+bool ReadFileBytes(const std::string& path, std::vector<std::uint8_t>* bytes, std::string* error) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) {
+    *error = path + ": cannot open (" + std::strerror(errno) + ")";
+    return false;
+  }
+  bytes->clear();
+  std::uint8_t buffer[1 << 16];
+  size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof(buffer), file)) > 0) bytes->insert(bytes->end(), buffer, buffer + n);
+  const bool failed = std::ferror(file) != 0;
+  std::fclose(file);
+  if (failed) {
+    *error = path + ": read error";
+    return false;
+  }
+  return true;
+}
+
+bool IsJpeg(const std::vector<std::uint8_t>& b) { return b.size() >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF; }
+
+// Walks the marker segments of the primary image and its entropy-coded scans and returns
+// true when the end-of-image marker is reached. Segment payloads are skipped by their
+// length field, so an EOI inside an embedded EXIF thumbnail does not count.
+bool JpegIsComplete(const std::vector<std::uint8_t>& b) {
+  size_t i = 2;
+  const size_t n = b.size();
+  while (i + 1 < n) {
+    if (b[i] != 0xFF) return false;
+    const std::uint8_t marker = b[i + 1];
+    if (marker == 0xFF) {  // fill byte
+      ++i;
+      continue;
+    }
+    if (marker == 0xD9) return true;
+    if ((marker >= 0xD0 && marker <= 0xD7) || marker == 0x01) {  // no payload
+      i += 2;
+      continue;
+    }
+    if (i + 3 >= n) return false;
+    const size_t length = (static_cast<size_t>(b[i + 2]) << 8) | b[i + 3];
+    if (length < 2) return false;
+    i += 2 + length;
+    if (i > n) return false;
+    if (marker == 0xDA) {
+      // Entropy-coded data: 0xFF is followed by 0x00 (stuffing), a restart marker or a
+      // fill byte; anything else is the next marker.
+      while (i + 1 < n) {
+        if (b[i] == 0xFF && b[i + 1] != 0x00 && !(b[i + 1] >= 0xD0 && b[i + 1] <= 0xD7) && b[i + 1] != 0xFF) break;
+        ++i;
+      }
+      if (i + 1 >= n) return false;
+    }
+  }
+  return false;
+}
+
+bool MatToRgba(const cv::Mat& decoded, ImageRgba8* out, std::string* what) {
+  cv::Mat eight_bit;
+  if (decoded.depth() == CV_8U) {
+    eight_bit = decoded;
+  } else if (decoded.depth() == CV_16U) {
+    decoded.convertTo(eight_bit, CV_8U, 1.0 / 257.0);
+  } else if (decoded.depth() == CV_32F || decoded.depth() == CV_64F) {
+    decoded.convertTo(eight_bit, CV_8U, 255.0);  // saturating: HDR values above 1 clip
+  } else {
+    *what = "unsupported pixel depth";
+    return false;
+  }
+  cv::Mat rgba;
+  switch (eight_bit.channels()) {
+    case 1: cv::cvtColor(eight_bit, rgba, cv::COLOR_GRAY2RGBA); break;
+    case 3: cv::cvtColor(eight_bit, rgba, cv::COLOR_BGR2RGBA); break;
+    case 4: cv::cvtColor(eight_bit, rgba, cv::COLOR_BGRA2RGBA); break;
+    default: *what = "unsupported channel count " + std::to_string(eight_bit.channels()); return false;
+  }
+  out->width = rgba.cols;
+  out->height = rgba.rows;
+  out->pixels.resize(static_cast<size_t>(rgba.cols) * rgba.rows * 4);
+  for (int y = 0; y < rgba.rows; ++y) {
+    std::memcpy(&out->pixels[static_cast<size_t>(y) * rgba.cols * 4], rgba.ptr<std::uint8_t>(y),
+                static_cast<size_t>(rgba.cols) * 4);
+  }
+  return true;
+}
+
+bool ValidImage(const ImageRgba8& image) {
+  return !image.empty() && image.pixels.size() == static_cast<size_t>(image.width) * image.height * 4;
+}
+
+}  // namespace
+
+ImageReadResult ReadImage(const std::string& path) {
+  ImageReadResult result;
+  std::vector<std::uint8_t> bytes;
+  if (!ReadFileBytes(path, &bytes, &result.error)) return result;
+  if (bytes.empty()) {
+    result.error = path + ": file is empty";
+    return result;
+  }
+  if (IsJpeg(bytes) && !JpegIsComplete(bytes)) {
+    result.error = path + ": JPEG is truncated or corrupt (no end-of-image marker)";
+    return result;
+  }
+  cv::Mat decoded;
+  try {
+    // UNCHANGED keeps alpha and ignores the EXIF orientation, so pixel coordinates match
+    // the stored raster, ReadImageSize and the ground truth of research datasets.
+    decoded = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, bytes.data()), cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    result.error = path + ": cannot decode (" + e.what() + ")";
+    return result;
+  }
+  if (decoded.empty()) {
+    result.error = path + ": not a readable image or corrupt";
+    return result;
+  }
+  std::string what;
+  if (!MatToRgba(decoded, &result.image, &what)) {
+    result.image = ImageRgba8();
+    result.error = path + ": " + what;
+    return result;
+  }
+  if (result.image.empty()) result.error = path + ": image has zero size";
+  return result;
+}
+
+bool ReadImageSize(const std::string& path, int* width, int* height, std::string* error) {
+  std::string local_error;
+  std::string* err = error != nullptr ? error : &local_error;
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr) {
+    *err = path + ": cannot open (" + std::strerror(errno) + ")";
+    return false;
+  }
+  int w = 0, h = 0, channels = 0;
+  const int ok = stbi_info_from_file(file, &w, &h, &channels);
+  std::fclose(file);
+  if (ok == 0) {
+    // A format stb does not parse (TIFF, WebP, ...): decode it fully.
+    ImageReadResult full = ReadImage(path);
+    if (!full.ok()) {
+      *err = full.error;
+      return false;
+    }
+    w = full.image.width;
+    h = full.image.height;
+  }
+  if (w <= 0 || h <= 0) {
+    *err = path + ": image has zero size";
+    return false;
+  }
+  *width = w;
+  *height = h;
+  return true;
+}
+
+std::vector<std::uint8_t> EncodePng(const ImageRgba8& image) {
+  if (!ValidImage(image)) return {};
+  try {
+    const cv::Mat rgba(image.height, image.width, CV_8UC4, const_cast<std::uint8_t*>(image.pixels.data()));
+    cv::Mat bgra;
+    cv::cvtColor(rgba, bgra, cv::COLOR_RGBA2BGRA);
+    std::vector<std::uint8_t> png;
+    if (!cv::imencode(".png", bgra, png, {cv::IMWRITE_PNG_COMPRESSION, 3})) return {};
+    return png;
+  } catch (const cv::Exception&) {
+    return {};
+  }
+}
+
+std::string WritePng(const std::string& path, const ImageRgba8& image) {
+  if (!ValidImage(image)) return path + ": cannot write an empty or malformed image";
+  const std::vector<std::uint8_t> png = EncodePng(image);
+  if (png.empty()) return path + ": PNG encoding failed";
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) return path + ": cannot open for writing (" + std::strerror(errno) + ")";
+  out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+  out.close();
+  if (!out) return path + ": write failed";
+  return "";
+}
+
+}  // namespace facet

@@ -1,0 +1,60 @@
+// The JSON adapter of single-image calibration (core/estimators/calibrate_vp.h), the core of
+// `facet calibrate --lines LINES.json`: parses the line families, calibrates, formats.
+//
+// Input (pixels, 0-based, core/geometry/conventions.h):
+//   {"image_size": [w, h],
+//    "families": [{"axis": "x" | "y" | "z", "segments": [[x1, y1, x2, y2], ...]}, ...],
+//    optional:
+//    "principal_point": "solve" | "center" | [cx, cy]   ("solve" by default with three
+//        families, "center" otherwise; "solve" with fewer falls back to the centre with a
+//        warning; [cx, cy] may lie outside the image),
+//    "focal_px": f                 a known focal length, not solved,
+//    "focal_prior_px": f0, "focal_prior_std_px": s    a Gaussian prior on f (e.g. EXIF's,
+//        core/image/exif.h); both or neither, and not with "focal_px",
+//    "horizon": [x1, y1, x2, y2] | v    two points on the horizon, or the row of a level one;
+//        with one horizontal family and a known focal length it fixes the rotation,
+//    "distortion": true            radial distortion first, from the same segments
+//        (core/estimators/plumb_line.h, each family a common vanishing point); the calibration then
+//        runs on the undistorted segments,
+//    "refit_without_outliers": bool (default true)}
+// Output (pretty JSON, doubles with enough digits to round-trip; NaN and infinity as null):
+//   {"focal_px": f, "focal_std_px": s (0 when fixed, null when there are too few segments),
+//    "principal_point": [cx, cy], "principal_point_std_px": [sx, sy] (0 unless solved),
+//    "residual_sigma_px": noise sigma estimated from the fit (dof-corrected),
+//    "K": 3x3 rows, "R": 3x3 rows (cam_from_world),
+//    "vanishing_point_axes": ["x", ...] (the given families in x, y, z order),
+//    "vanishing_points": [[x, y] or null for a point at infinity, ...] (same order),
+//    "vanishing_points_homogeneous": [[x, y, w], ...] (unit norm, same order),
+//    "vanishing_direction_std_deg", "family_angle_spread_deg",
+//    "vanishing_point_to_principal_point_px" (null at infinity): per family, same order,
+//    "min_family_angle_spread_deg", "min_vanishing_point_to_principal_point_px",
+//    "vanishing_point_triangle_max_angle_deg" (0 unless three finite points),
+//    "segment_residuals_px": [...] (per input segment, families in input order; in
+//        undistorted px when "distortion" was asked),
+//    "outlier_segments": [i, ...] (indices into segment_residuals_px),
+//    "outlier_threshold_px": t, "refitted_without_outliers": bool,
+//    "horizon_residual_px": r (only with "horizon"),
+//    "distortion": {"k1", "k2", "k1_std", "center", "scale_px", "model"} (only when asked;
+//        k1 = k2 = 0 with a warning when it could not be estimated),
+//    "segments_per_axis": [nx, ny, nz], "warnings": [...], "message": "...", "time_ms": t}
+//   core/estimators/calibrate_vp.h documents each figure.
+// Malformed JSON, missing fields, wrong types, an unknown or repeated axis, and input the
+// calibration rejects give ok() == false with a message; nothing throws.
+#pragma once
+
+#include <string>
+
+namespace facet {
+
+struct CalibrateIoResult {
+  std::string json;   // the output document when ok()
+  std::string error;  // what was wrong, when !ok()
+
+  bool ok() const { return error.empty(); }
+};
+
+CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text);
+// Reads the file at path and calls CalibrateLinesJson; an unreadable file is an error.
+CalibrateIoResult CalibrateLinesFile(const std::string& path);
+
+}  // namespace facet

@@ -1,0 +1,26 @@
+// Writing the textured model: binary glTF 2.0 (.glb, with the cameras as glTF camera nodes)
+// and Wavefront OBJ + MTL + PNG. glTF is Y up: world (x, y, z) is written as (x, z, -y).
+#pragma once
+
+#include <string>
+
+#include "core/scene/project.h"
+#include "core/texture/textured_mesh.h"
+
+namespace facet {
+
+struct ExportSummary {
+  bool success = false;
+  std::string message;  // the error, or what was written
+  std::vector<std::string> files_written;
+};
+
+// One .glb holding mesh, UVs, the atlas as an embedded PNG and one camera node per
+// calibrated image (perspective, yfov from the focal length, at the camera's pose).
+// Writes atomically (temporary file, then rename).
+ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const std::string& path);
+// FILE.obj, FILE.mtl and FILE.png (the atlas) side by side; OBJ's v runs upwards, so v is flipped.
+// Positions and normals use the same Y-up axes as the GLB. `path` may end in .obj or not.
+ExportSummary ExportObj(const TexturedMesh& mesh, const std::string& path);
+
+}  // namespace facet

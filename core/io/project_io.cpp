@@ -1,0 +1,1133 @@
+#include "core/io/project_io.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <set>
+#include <unordered_map>
+
+#include <Eigen/LU>
+#include <nlohmann/json.hpp>
+
+namespace facet {
+namespace {
+
+using Json = nlohmann::json;
+// Written objects keep the field order of the format description, so files diff well.
+using OrderedJson = nlohmann::ordered_json;
+
+constexpr const char* kFormatName = "facet-project";
+
+std::string ErrnoText(int err) { return std::strerror(err); }
+
+std::string Join(const std::string& base, const std::string& key) {
+  return base.empty() ? key : base + "." + key;
+}
+std::string Index(const std::string& base, size_t i) { return base + "[" + std::to_string(i) + "]"; }
+
+const char* PrincipalPointModeName(PrincipalPointMode mode) {
+  switch (mode) {
+    case PrincipalPointMode::kSolve: return "solve";
+    case PrincipalPointMode::kImageCenter: return "center";
+    case PrincipalPointMode::kFixed: return "fixed";
+  }
+  return "?";
+}
+
+std::optional<PrincipalPointMode> PrincipalPointModeFromName(const std::string& name) {
+  if (name == "solve") return PrincipalPointMode::kSolve;
+  if (name == "center") return PrincipalPointMode::kImageCenter;
+  if (name == "fixed") return PrincipalPointMode::kFixed;
+  return std::nullopt;
+}
+
+bool IsValidUtf8(const std::string& s) {
+  size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    int extra = 0;
+    unsigned min_code = 0;
+    unsigned code = 0;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if ((c & 0xE0) == 0xC0) {
+      extra = 1, min_code = 0x80, code = c & 0x1F;
+    } else if ((c & 0xF0) == 0xE0) {
+      extra = 2, min_code = 0x800, code = c & 0x0F;
+    } else if ((c & 0xF8) == 0xF0) {
+      extra = 3, min_code = 0x10000, code = c & 0x07;
+    } else {
+      return false;
+    }
+    if (i + extra >= s.size()) return false;
+    for (int k = 1; k <= extra; ++k) {
+      const auto cc = static_cast<unsigned char>(s[i + k]);
+      if ((cc & 0xC0) != 0x80) return false;
+      code = (code << 6) | (cc & 0x3F);
+    }
+    if (code < min_code || code > 0x10FFFF || (code >= 0xD800 && code <= 0xDFFF)) return false;
+    i += extra + 1;
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------
+// Writing. The writer records the first value JSON cannot represent (NaN, infinity,
+// invalid UTF-8) with its path, so SaveProject can refuse with a precise message.
+
+class Writer {
+ public:
+  const std::string& error() const { return error_; }
+
+  OrderedJson Number(const std::string& path, double v) {
+    if (!std::isfinite(v) && error_.empty()) {
+      error_ = path + ": " + (std::isnan(v) ? "NaN" : "infinity") +
+               " cannot be saved (JSON has no NaN or infinity)";
+    }
+    return v;
+  }
+  template <typename Derived>
+  OrderedJson Numbers(const std::string& path, const Eigen::DenseBase<Derived>& v) {
+    OrderedJson out = OrderedJson::array();
+    for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(Number(Index(path, i), v(i)));
+    return out;
+  }
+  // Row-major, so the file reads like the matrix.
+  OrderedJson Matrix(const std::string& path, const Eigen::Matrix3d& m) {
+    OrderedJson out = OrderedJson::array();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) out.push_back(Number(Index(path, r * 3 + c), m(r, c)));
+    return out;
+  }
+  OrderedJson String(const std::string& path, const std::string& s) {
+    if (!IsValidUtf8(s) && error_.empty()) error_ = path + ": text is not valid UTF-8";
+    return s;
+  }
+
+ private:
+  std::string error_;
+};
+
+// A mesh is stored record by record with its ids (dead slots stay holes), so a round trip
+// restores the very ids that pins and constraints refer to. No-element links are -1.
+OrderedJson Link(std::uint32_t id) { return id == kNoElement ? OrderedJson(-1) : OrderedJson(id); }
+
+OrderedJson WriteMesh(const PolyMesh& mesh, const std::string& at, Writer* w) {
+  OrderedJson j;
+  j["vertex_id_end"] = mesh.VertexIdEnd();
+  j["edge_id_end"] = mesh.EdgeIdEnd();
+  j["face_id_end"] = mesh.FaceIdEnd();
+  OrderedJson vertices = OrderedJson::array();
+  for (VertexId v = 0; v < mesh.VertexIdEnd(); ++v) {
+    if (!mesh.IsVertex(v)) continue;
+    const MeshVertex& mv = mesh.vertex(v);
+    const std::string vat = Index(Join(at, "vertices"), vertices.size());
+    OrderedJson jv;
+    jv["id"] = v;
+    jv["halfedge"] = Link(mv.halfedge);
+    // Row-major 3x4 coefficients; b only when it differs from a (E_split vertices).
+    jv["a"] = w->Numbers(Join(vat, "a"), mv.local.a.transpose().reshaped());
+    if (mv.local.b != mv.local.a) jv["b"] = w->Numbers(Join(vat, "b"), mv.local.b.transpose().reshaped());
+    jv["t"] = w->Number(Join(vat, "t"), mv.local.t);
+    jv["on_edge"] = mv.local.on_edge;
+    jv["free"] = mv.local.free;
+    jv["offset"] = w->Numbers(Join(vat, "offset"), mv.local.offset);
+    jv["position"] = w->Numbers(Join(vat, "position"), mv.position);
+    vertices.push_back(std::move(jv));
+  }
+  j["vertices"] = std::move(vertices);
+  OrderedJson edges = OrderedJson::array();
+  for (EdgeId e = 0; e < mesh.EdgeIdEnd(); ++e) {
+    if (!mesh.IsEdge(e)) continue;
+    const std::string eat = Index(Join(at, "edges"), edges.size());
+    OrderedJson je;
+    je["id"] = e;
+    OrderedJson sides = OrderedJson::array();
+    for (int side = 0; side < 2; ++side) {
+      const MeshHalfedge& h = mesh.halfedge(PolyMesh::EdgeHalfedge(e, side));
+      OrderedJson jh;
+      jh["origin"] = Link(h.origin);
+      jh["next"] = Link(h.next);
+      jh["prev"] = Link(h.prev);
+      jh["face"] = Link(h.face);
+      jh["uv"] = w->Numbers(Index(Join(eat, "halfedges"), side) + ".uv", h.uv);
+      sides.push_back(std::move(jh));
+    }
+    je["halfedges"] = std::move(sides);
+    edges.push_back(std::move(je));
+  }
+  j["edges"] = std::move(edges);
+  OrderedJson faces = OrderedJson::array();
+  for (FaceId f = 0; f < mesh.FaceIdEnd(); ++f) {
+    if (!mesh.IsFace(f)) continue;
+    const MeshFace& mf = mesh.face(f);
+    faces.push_back(OrderedJson{{"id", f}, {"halfedge", Link(mf.halfedge)}, {"material", mf.material}});
+  }
+  j["faces"] = std::move(faces);
+  return j;
+}
+
+OrderedJson WriteProject(const Project& p, Writer* w) {
+  OrderedJson root;
+  root["format"] = kFormatName;
+  root["version"] = Project::kFormatVersion;
+  root["units"] = w->String("units", p.units);
+  root["next_id"] = p.next_id;
+
+  OrderedJson images = OrderedJson::array();
+  for (size_t i = 0; i < p.images.size(); ++i) {
+    const Image& im = p.images[i];
+    const std::string at = Index("images", i);
+    OrderedJson j;
+    j["id"] = im.id;
+    j["path"] = w->String(Join(at, "path"), std::filesystem::path(im.path).generic_string());
+    j["width_px"] = im.width_px;
+    j["height_px"] = im.height_px;
+    const std::string cam_at = Join(at, "camera");
+    OrderedJson cam;
+    cam["width_px"] = im.camera.width_px;
+    cam["height_px"] = im.camera.height_px;
+    cam["focal_px"] = w->Number(Join(cam_at, "focal_px"), im.camera.focal_px);
+    cam["principal_point_px"] =
+        w->Numbers(Join(cam_at, "principal_point_px"), im.camera.principal_point_px);
+    cam["rotation"] = w->Matrix(Join(cam_at, "rotation"), im.camera.cam_from_world_rotation);
+    cam["translation"] =
+        w->Numbers(Join(cam_at, "translation"), im.camera.cam_from_world_translation);
+    cam["k1"] = w->Number(Join(cam_at, "k1"), im.camera.k1);
+    cam["k2"] = w->Number(Join(cam_at, "k2"), im.camera.k2);
+    j["camera"] = std::move(cam);
+    j["camera_calibrated"] = im.camera_calibrated;
+    j["principal_point_mode"] = PrincipalPointModeName(im.principal_point_mode);
+    j["fixed_principal_point_px"] =
+        w->Numbers(Join(at, "fixed_principal_point_px"), im.fixed_principal_point_px);
+    j["pose_locked"] = im.pose_locked;
+    j["focal_locked"] = im.focal_locked;
+    j["principal_point_locked"] = im.principal_point_locked;
+    j["focal_mode"] = FocalModeName(im.focal_mode);
+    j["fixed_focal_px"] = w->Number(Join(at, "fixed_focal_px"), im.fixed_focal_px);
+    j["focal_prior_px"] = w->Number(Join(at, "focal_prior_px"), im.focal_prior_px);
+    j["focal_prior_std_px"] = w->Number(Join(at, "focal_prior_std_px"), im.focal_prior_std_px);
+    j["use_horizon"] = im.use_horizon;
+    j["horizon_px"] = w->Numbers(Join(at, "horizon_px"), im.horizon_px);
+    j["estimate_distortion"] = im.estimate_distortion;
+    j["distortion_locked"] = im.distortion_locked;
+    images.push_back(std::move(j));
+  }
+  root["images"] = std::move(images);
+
+  OrderedJson segments = OrderedJson::array();
+  for (size_t i = 0; i < p.segments.size(); ++i) {
+    const Segment& s = p.segments[i];
+    const std::string at = Index("segments", i);
+    OrderedJson j;
+    j["id"] = s.id;
+    j["image_id"] = s.image_id;
+    j["axis"] = AxisName(s.axis);
+    j["a_px"] = w->Numbers(Join(at, "a_px"), s.a_px);
+    j["b_px"] = w->Numbers(Join(at, "b_px"), s.b_px);
+    segments.push_back(std::move(j));
+  }
+  root["segments"] = std::move(segments);
+
+  OrderedJson primitives = OrderedJson::array();
+  for (size_t i = 0; i < p.primitives.size(); ++i) {
+    const Primitive& prim = p.primitives[i];
+    const std::string at = Index("primitives", i);
+    OrderedJson j;
+    j["id"] = prim.id;
+    j["name"] = w->String(Join(at, "name"), prim.name);
+    j["kind"] = PrimitiveKindName(prim.shape.kind);
+    j["params"] = w->Numbers(Join(at, "params"), prim.shape.params);
+    j["segments"] = prim.shape.segments;
+    j["rotation"] = w->Numbers(Join(at, "rotation"), prim.shape.rotation);
+    j["translation"] = w->Numbers(Join(at, "translation"), prim.shape.translation);
+    j["param_locked"] = prim.param_locked;
+    j["rotation_locked"] = prim.rotation_locked;
+    j["translation_locked"] = prim.translation_locked;
+    j["attached_to"] = prim.attached_to;
+    j["mesh"] = WriteMesh(prim.mesh, Join(at, "mesh"), w);
+    primitives.push_back(std::move(j));
+  }
+  root["primitives"] = std::move(primitives);
+
+  OrderedJson pins = OrderedJson::array();
+  for (size_t i = 0; i < p.pins.size(); ++i) {
+    const Pin& pin = p.pins[i];
+    OrderedJson j;
+    j["id"] = pin.id;
+    j["image_id"] = pin.image_id;
+    j["primitive_id"] = pin.vertex.primitive_id;
+    j["vertex"] = pin.vertex.vertex;
+    j["uv_px"] = w->Numbers(Join(Index("pins", i), "uv_px"), pin.uv_px);
+    pins.push_back(std::move(j));
+  }
+  root["pins"] = std::move(pins);
+
+  OrderedJson constraints = OrderedJson::array();
+  for (size_t i = 0; i < p.constraints.size(); ++i) {
+    const Constraint& c = p.constraints[i];
+    const std::string at = Index("constraints", i);
+    OrderedJson j;
+    j["id"] = c.id;
+    j["kind"] = ConstraintKindName(c.kind);
+    OrderedJson refs = OrderedJson::array();
+    for (const VertexRef& ref : c.vertices) refs.push_back({ref.primitive_id, ref.vertex});
+    j["vertices"] = std::move(refs);
+    j["value"] = w->Number(Join(at, "value"), c.value);
+    j["point"] = w->Numbers(Join(at, "point"), c.point);
+    j["axis"] = AxisName(c.axis);
+    j["image_id"] = c.image_id;
+    j["line_a_px"] = w->Numbers(Join(at, "line_a_px"), c.line_a_px);
+    j["line_b_px"] = w->Numbers(Join(at, "line_b_px"), c.line_b_px);
+    constraints.push_back(std::move(j));
+  }
+  root["constraints"] = std::move(constraints);
+  return root;
+}
+
+// ---------------------------------------------------------------------------------------
+// Reading. Every accessor names the JSON path of what it reads; the first error wins.
+
+class Reader {
+ public:
+  explicit Reader(std::vector<std::string>* warnings) : warnings_(warnings) {}
+  const std::string& error() const { return error_; }
+
+  bool Fail(const std::string& path, const std::string& what) {
+    if (error_.empty()) error_ = (path.empty() ? std::string("(top level)") : path) + ": " + what;
+    return false;
+  }
+
+  // The value of a required field, or null after recording "missing field".
+  const Json* Field(const Json& obj, const std::string& obj_path, const char* key) {
+    auto it = obj.find(key);
+    if (it == obj.end()) {
+      Fail(Join(obj_path, key), "missing field");
+      return nullptr;
+    }
+    return &*it;
+  }
+
+  bool Object(const Json& j, const std::string& path, std::initializer_list<const char*> known) {
+    if (!j.is_object()) return Fail(path, "expected an object, found " + TypeName(j));
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      bool is_known = false;
+      for (const char* k : known) is_known = is_known || it.key() == k;
+      if (!is_known) warnings_->push_back(Join(path, it.key()) + ": unknown field ignored");
+    }
+    return true;
+  }
+
+  bool Array(const Json& obj, const std::string& obj_path, const char* key, const Json** out) {
+    const Json* j = Field(obj, obj_path, key);
+    if (!j) return false;
+    if (!j->is_array()) return Fail(Join(obj_path, key), "expected an array, found " + TypeName(*j));
+    *out = j;
+    return true;
+  }
+
+  bool Double(const Json& j, const std::string& path, double* out) {
+    if (!j.is_number()) return Fail(path, "expected a number, found " + TypeName(j));
+    *out = j.get<double>();
+    if (!std::isfinite(*out)) return Fail(path, "number out of range");
+    return true;
+  }
+  bool Double(const Json& obj, const std::string& obj_path, const char* key, double* out) {
+    const Json* j = Field(obj, obj_path, key);
+    return j && Double(*j, Join(obj_path, key), out);
+  }
+
+  template <int N>
+  bool Vector(const Json& obj, const std::string& obj_path, const char* key,
+              Eigen::Matrix<double, N, 1>* out) {
+    const Json* j = Field(obj, obj_path, key);
+    if (!j) return false;
+    const std::string path = Join(obj_path, key);
+    if (!j->is_array() || j->size() != N)
+      return Fail(path, "expected an array of " + std::to_string(N) + " numbers");
+    for (int i = 0; i < N; ++i)
+      if (!Double((*j)[i], Index(path, i), &(*out)(i))) return false;
+    return true;
+  }
+
+  bool Matrix(const Json& obj, const std::string& obj_path, const char* key, Eigen::Matrix3d* out) {
+    Eigen::Matrix<double, 9, 1> v;
+    if (!Vector<9>(obj, obj_path, key, &v)) return false;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) (*out)(r, c) = v(r * 3 + c);
+    return true;
+  }
+
+  bool Bool(const Json& j, const std::string& path, bool* out) {
+    if (!j.is_boolean()) return Fail(path, "expected true or false, found " + TypeName(j));
+    *out = j.get<bool>();
+    return true;
+  }
+  bool Bool(const Json& obj, const std::string& obj_path, const char* key, bool* out) {
+    const Json* j = Field(obj, obj_path, key);
+    return j && Bool(*j, Join(obj_path, key), out);
+  }
+
+  bool Int(const Json& obj, const std::string& obj_path, const char* key, int min, int max, int* out) {
+    const Json* j = Field(obj, obj_path, key);
+    if (!j) return false;
+    const std::string path = Join(obj_path, key);
+    const std::string range = "expected an integer from " + std::to_string(min) + " to " + std::to_string(max);
+    if (!j->is_number_integer()) return Fail(path, range + ", found " + TypeName(*j));
+    if (j->is_number_unsigned()) {
+      const auto v = j->get<std::uint64_t>();
+      if (v > static_cast<std::uint64_t>(max)) return Fail(path, range + ", found " + j->dump());
+      *out = static_cast<int>(v);
+    } else {
+      const auto v = j->get<std::int64_t>();
+      if (v < min || v > max) return Fail(path, range + ", found " + j->dump());
+      *out = static_cast<int>(v);
+    }
+    return true;
+  }
+
+  // Ids are positive: 0 is kNoId.
+  bool IdField(const Json& obj, const std::string& obj_path, const char* key, Id* out) {
+    const Json* j = Field(obj, obj_path, key);
+    if (!j) return false;
+    const std::string path = Join(obj_path, key);
+    if (!j->is_number_unsigned() || j->get<std::uint64_t>() == 0)
+      return Fail(path, "expected a positive integer id, found " + Describe(*j));
+    *out = j->get<std::uint64_t>();
+    return true;
+  }
+
+  bool String(const Json& obj, const std::string& obj_path, const char* key, std::string* out) {
+    const Json* j = Field(obj, obj_path, key);
+    if (!j) return false;
+    if (!j->is_string()) return Fail(Join(obj_path, key), "expected a string, found " + TypeName(*j));
+    *out = j->get<std::string>();
+    return true;
+  }
+
+  static std::string TypeName(const Json& j) {
+    if (j.is_null()) return "null";
+    if (j.is_boolean()) return "a boolean";
+    if (j.is_number()) return "a number";
+    if (j.is_string()) return "a string";
+    if (j.is_array()) return "an array";
+    if (j.is_object()) return "an object";
+    return "an unknown value";
+  }
+  static std::string Describe(const Json& j) {
+    return j.is_number() ? j.dump() : TypeName(j);
+  }
+
+ private:
+  std::string error_;
+  std::vector<std::string>* warnings_;
+};
+
+bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
+  if (!r->Object(j, at, {"id", "path", "width_px", "height_px", "camera", "camera_calibrated",
+                         "principal_point_mode", "fixed_principal_point_px", "pose_locked", "focal_locked",
+                         "principal_point_locked", "focal_mode", "fixed_focal_px", "focal_prior_px",
+                         "focal_prior_std_px", "use_horizon", "horizon_px", "estimate_distortion",
+                         "distortion_locked"}))
+    return false;
+  constexpr int kMaxSize = std::numeric_limits<int>::max();
+  if (!r->IdField(j, at, "id", &im->id) || !r->String(j, at, "path", &im->path) ||
+      !r->Int(j, at, "width_px", 0, kMaxSize, &im->width_px) ||
+      !r->Int(j, at, "height_px", 0, kMaxSize, &im->height_px))
+    return false;
+  const Json* cam = r->Field(j, at, "camera");
+  const std::string cam_at = Join(at, "camera");
+  if (!cam || !r->Object(*cam, cam_at, {"width_px", "height_px", "focal_px", "principal_point_px",
+                                        "rotation", "translation", "k1", "k2"}))
+    return false;
+  Camera& c = im->camera;
+  if (!r->Int(*cam, cam_at, "width_px", 0, kMaxSize, &c.width_px) ||
+      !r->Int(*cam, cam_at, "height_px", 0, kMaxSize, &c.height_px) ||
+      !r->Double(*cam, cam_at, "focal_px", &c.focal_px) ||
+      !r->Vector<2>(*cam, cam_at, "principal_point_px", &c.principal_point_px) ||
+      !r->Matrix(*cam, cam_at, "rotation", &c.cam_from_world_rotation) ||
+      !r->Vector<3>(*cam, cam_at, "translation", &c.cam_from_world_translation))
+    return false;
+  // Distortion and the calibration modes came after the first version-2 files: absent means
+  // the defaults (a pinhole camera, focal solved, no horizon).
+  if ((cam->contains("k1") && !r->Double(*cam, cam_at, "k1", &c.k1)) ||
+      (cam->contains("k2") && !r->Double(*cam, cam_at, "k2", &c.k2)))
+    return false;
+  if (!(c.focal_px > 0)) return r->Fail(Join(cam_at, "focal_px"), "must be positive");
+  // A loose tolerance: solvers leave rounding-level drift, a corrupted file is far off.
+  const Eigen::Matrix3d& rot = c.cam_from_world_rotation;
+  const double orthonormality_error = (rot.transpose() * rot - Eigen::Matrix3d::Identity()).norm();
+  if (orthonormality_error > 1e-6 || rot.determinant() < 0)
+    return r->Fail(Join(cam_at, "rotation"), "not a rotation matrix (|R^T R - I| = " +
+                                                 std::to_string(orthonormality_error) +
+                                                 ", det = " + std::to_string(rot.determinant()) + ")");
+  std::string mode;
+  if (!r->Bool(j, at, "camera_calibrated", &im->camera_calibrated) ||
+      !r->String(j, at, "principal_point_mode", &mode))
+    return false;
+  const auto parsed_mode = PrincipalPointModeFromName(mode);
+  if (!parsed_mode)
+    return r->Fail(Join(at, "principal_point_mode"),
+                   "expected \"solve\", \"center\" or \"fixed\", found \"" + mode + "\"");
+  im->principal_point_mode = *parsed_mode;
+  if (!r->Vector<2>(j, at, "fixed_principal_point_px", &im->fixed_principal_point_px) ||
+      !r->Bool(j, at, "pose_locked", &im->pose_locked) || !r->Bool(j, at, "focal_locked", &im->focal_locked) ||
+      !r->Bool(j, at, "principal_point_locked", &im->principal_point_locked))
+    return false;
+  if (j.contains("focal_mode")) {
+    std::string focal_mode;
+    if (!r->String(j, at, "focal_mode", &focal_mode)) return false;
+    const auto parsed_focal_mode = FocalModeFromName(focal_mode);
+    if (!parsed_focal_mode)
+      return r->Fail(Join(at, "focal_mode"),
+                     "expected \"solve\", \"fixed\" or \"prior\", found \"" + focal_mode + "\"");
+    im->focal_mode = *parsed_focal_mode;
+  }
+  const auto optional_double = [&](const char* key, double* out) {
+    return !j.contains(key) || r->Double(j, at, key, out);
+  };
+  const auto optional_bool = [&](const char* key, bool* out) { return !j.contains(key) || r->Bool(j, at, key, out); };
+  if (!optional_double("fixed_focal_px", &im->fixed_focal_px) ||
+      !optional_double("focal_prior_px", &im->focal_prior_px) ||
+      !optional_double("focal_prior_std_px", &im->focal_prior_std_px) ||
+      !optional_bool("use_horizon", &im->use_horizon) ||
+      (j.contains("horizon_px") && !r->Vector<4>(j, at, "horizon_px", &im->horizon_px)) ||
+      !optional_bool("estimate_distortion", &im->estimate_distortion) ||
+      !optional_bool("distortion_locked", &im->distortion_locked))
+    return false;
+  if (im->focal_mode == FocalMode::kFixed && !(im->fixed_focal_px > 0))
+    return r->Fail(Join(at, "fixed_focal_px"), "must be positive when focal_mode is \"fixed\"");
+  if (im->focal_mode == FocalMode::kPrior && !(im->focal_prior_px > 0 && im->focal_prior_std_px > 0))
+    return r->Fail(Join(at, "focal_prior_px"), "a prior needs focal_prior_px > 0 and focal_prior_std_px > 0");
+  return true;
+}
+
+bool ReadSegment(const Json& j, const std::string& at, Reader* r, Segment* s) {
+  std::string axis;
+  if (!r->Object(j, at, {"id", "image_id", "axis", "a_px", "b_px"}) ||
+      !r->IdField(j, at, "id", &s->id) || !r->IdField(j, at, "image_id", &s->image_id) ||
+      !r->String(j, at, "axis", &axis))
+    return false;
+  const auto parsed_axis = AxisFromName(axis);
+  if (!parsed_axis) return r->Fail(Join(at, "axis"), "expected \"x\", \"y\" or \"z\", found \"" + axis + "\"");
+  s->axis = *parsed_axis;
+  return r->Vector<2>(j, at, "a_px", &s->a_px) && r->Vector<2>(j, at, "b_px", &s->b_px);
+}
+
+// A mesh link: -1 (none) or an id below `end`.
+bool ReadLink(const Json& obj, const std::string& obj_path, const char* key, std::uint32_t end, Reader* r,
+              std::uint32_t* out) {
+  const Json* j = r->Field(obj, obj_path, key);
+  if (!j) return false;
+  if (j->is_number_integer() && !j->is_number_unsigned() && j->get<std::int64_t>() == -1) {
+    *out = kNoElement;
+    return true;
+  }
+  if (!j->is_number_unsigned() || j->get<std::uint64_t>() >= end)
+    return r->Fail(Join(obj_path, key), "expected -1 or an id below " + std::to_string(end) + ", found " +
+                                            Reader::Describe(*j));
+  *out = static_cast<std::uint32_t>(j->get<std::uint64_t>());
+  return true;
+}
+
+bool ReadCoefficients(const Json& obj, const std::string& at, const char* key, Reader* r, ParamCoefficients* c) {
+  Eigen::Matrix<double, 12, 1> v;
+  if (!r->Vector<12>(obj, at, key, &v)) return false;
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 4; ++col) (*c)(row, col) = v(row * 4 + col);
+  return true;
+}
+
+bool ReadMesh(const Json& j, const std::string& at, PrimitiveId primitive, Reader* r, PolyMesh* mesh) {
+  constexpr int kMaxIds = 1 << 30;
+  int vertex_end = 0, edge_end = 0, face_end = 0;
+  if (!r->Object(j, at, {"vertex_id_end", "edge_id_end", "face_id_end", "vertices", "edges", "faces"}) ||
+      !r->Int(j, at, "vertex_id_end", 0, kMaxIds, &vertex_end) || !r->Int(j, at, "edge_id_end", 0, kMaxIds, &edge_end) ||
+      !r->Int(j, at, "face_id_end", 0, kMaxIds, &face_end))
+    return false;
+  *mesh = PolyMesh();
+  mesh->GrowIdSpace(vertex_end, edge_end, face_end);
+  const std::uint32_t halfedge_end = 2u * static_cast<std::uint32_t>(edge_end);
+  const Json* list = nullptr;
+  if (!r->Array(j, at, "vertices", &list)) return false;
+  for (size_t i = 0; i < list->size(); ++i) {
+    const Json& jv = (*list)[i];
+    const std::string vat = Index(Join(at, "vertices"), i);
+    std::uint32_t id = 0;
+    if (!r->Object(jv, vat, {"id", "halfedge", "a", "b", "t", "on_edge", "free", "offset", "position"}) ||
+        !ReadLink(jv, vat, "id", vertex_end, r, &id))
+      return false;
+    if (id == kNoElement || mesh->IsVertex(id)) return r->Fail(Join(vat, "id"), "missing or duplicate vertex id");
+    mesh->ReviveVertex(id);
+    MeshVertex& v = mesh->vertex(id);
+    v.primitive = primitive;
+    if (!ReadLink(jv, vat, "halfedge", halfedge_end, r, &v.halfedge) || !ReadCoefficients(jv, vat, "a", r, &v.local.a))
+      return false;
+    v.local.b = v.local.a;
+    if (jv.contains("b") && !ReadCoefficients(jv, vat, "b", r, &v.local.b)) return false;
+    if (!r->Double(jv, vat, "t", &v.local.t) || !r->Bool(jv, vat, "on_edge", &v.local.on_edge) ||
+        !r->Bool(jv, vat, "free", &v.local.free) || !r->Vector<3>(jv, vat, "offset", &v.local.offset) ||
+        !r->Vector<3>(jv, vat, "position", &v.position))
+      return false;
+  }
+  if (!r->Array(j, at, "edges", &list)) return false;
+  for (size_t i = 0; i < list->size(); ++i) {
+    const Json& je = (*list)[i];
+    const std::string eat = Index(Join(at, "edges"), i);
+    std::uint32_t id = 0;
+    const Json* sides = nullptr;
+    if (!r->Object(je, eat, {"id", "halfedges"}) || !ReadLink(je, eat, "id", edge_end, r, &id) ||
+        !r->Array(je, eat, "halfedges", &sides))
+      return false;
+    if (id == kNoElement || mesh->IsEdge(id)) return r->Fail(Join(eat, "id"), "missing or duplicate edge id");
+    if (sides->size() != 2) return r->Fail(Join(eat, "halfedges"), "expected 2 half-edges");
+    mesh->ReviveEdge(id);
+    for (int side = 0; side < 2; ++side) {
+      const Json& jh = (*sides)[side];
+      const std::string hat = Index(Join(eat, "halfedges"), side);
+      MeshHalfedge& h = mesh->halfedge(PolyMesh::EdgeHalfedge(id, side));
+      if (!r->Object(jh, hat, {"origin", "next", "prev", "face", "uv"}) ||
+          !ReadLink(jh, hat, "origin", vertex_end, r, &h.origin) || !ReadLink(jh, hat, "next", halfedge_end, r, &h.next) ||
+          !ReadLink(jh, hat, "prev", halfedge_end, r, &h.prev) || !ReadLink(jh, hat, "face", face_end, r, &h.face) ||
+          !r->Vector<2>(jh, hat, "uv", &h.uv))
+        return false;
+    }
+  }
+  if (!r->Array(j, at, "faces", &list)) return false;
+  for (size_t i = 0; i < list->size(); ++i) {
+    const Json& jf = (*list)[i];
+    const std::string fat = Index(Join(at, "faces"), i);
+    std::uint32_t id = 0;
+    if (!r->Object(jf, fat, {"id", "halfedge", "material"}) || !ReadLink(jf, fat, "id", face_end, r, &id)) return false;
+    if (id == kNoElement || mesh->IsFace(id)) return r->Fail(Join(fat, "id"), "missing or duplicate face id");
+    mesh->ReviveFace(id);
+    MeshFace& f = mesh->face(id);
+    f.primitive = primitive;
+    if (!ReadLink(jf, fat, "halfedge", halfedge_end, r, &f.halfedge) ||
+        !r->Int(jf, fat, "material", 0, std::numeric_limits<int>::max(), &f.material))
+      return false;
+  }
+  const std::vector<std::string> problems = Validate(*mesh);
+  if (!problems.empty()) return r->Fail(at, "broken mesh: " + problems.front());
+  return true;
+}
+
+bool ReadPrimitive(const Json& j, const std::string& at, Reader* r, Primitive* prim) {
+  std::string kind;
+  if (!r->Object(j, at, {"id", "name", "kind", "params", "segments", "rotation", "translation", "param_locked",
+                         "rotation_locked", "translation_locked", "attached_to", "mesh"}) ||
+      !r->IdField(j, at, "id", &prim->id) || !r->String(j, at, "name", &prim->name) ||
+      !r->String(j, at, "kind", &kind))
+    return false;
+  PrimitiveShape& shape = prim->shape;
+  shape.id = prim->id;
+  bool known_kind = false;
+  for (PrimitiveKind k : {PrimitiveKind::kBox, PrimitiveKind::kWedge, PrimitiveKind::kPrism, PrimitiveKind::kPyramid,
+                          PrimitiveKind::kCylinder, PrimitiveKind::kPlane}) {
+    if (kind == PrimitiveKindName(k)) shape.kind = k, known_kind = true;
+  }
+  if (!known_kind) return r->Fail(Join(at, "kind"), "unknown primitive kind \"" + kind + "\"");
+  if (!r->Vector<kMaxPrimitiveParams>(j, at, "params", &shape.params) ||
+      !r->Int(j, at, "segments", 0, 100000, &shape.segments) || !r->Vector<3>(j, at, "rotation", &shape.rotation) ||
+      !r->Vector<3>(j, at, "translation", &shape.translation))
+    return false;
+  for (int k = 0; k < kMaxPrimitiveParams; ++k)
+    if (shape.params(k) < 0) return r->Fail(Index(Join(at, "params"), k), "a dimension cannot be negative");
+  const Json* locked = r->Field(j, at, "param_locked");
+  if (!locked) return false;
+  const std::string locked_at = Join(at, "param_locked");
+  if (!locked->is_array() || locked->size() != kMaxPrimitiveParams)
+    return r->Fail(locked_at, "expected an array of " + std::to_string(kMaxPrimitiveParams) + " booleans");
+  for (int k = 0; k < kMaxPrimitiveParams; ++k)
+    if (!r->Bool((*locked)[k], Index(locked_at, k), &prim->param_locked[k])) return false;
+  if (!r->Bool(j, at, "rotation_locked", &prim->rotation_locked) ||
+      !r->Bool(j, at, "translation_locked", &prim->translation_locked))
+    return false;
+  const Json* attached = r->Field(j, at, "attached_to");
+  if (!attached) return false;
+  if (!attached->is_number_unsigned()) return r->Fail(Join(at, "attached_to"), "expected an id or 0");
+  prim->attached_to = attached->get<std::uint64_t>();
+  const Json* mesh = r->Field(j, at, "mesh");
+  if (!mesh) return false;
+  // "from_shape" builds the primitive's unedited mesh: what files from version 1 (and
+  // hand-written ones) get.
+  if (mesh->is_string() && mesh->get<std::string>() == "from_shape") {
+    prim->mesh = PolyMesh();
+    const AddPrimitiveResult added = AddPrimitive(&prim->mesh, shape);
+    if (!added.ok) return r->Fail(Join(at, "params"), added.message);
+    return true;
+  }
+  return ReadMesh(*mesh, Join(at, "mesh"), prim->id, r, &prim->mesh);
+}
+
+bool ReadPin(const Json& j, const std::string& at, Reader* r, Pin* p) {
+  int vertex = 0;
+  if (!(r->Object(j, at, {"id", "image_id", "primitive_id", "vertex", "uv_px"}) &&
+        r->IdField(j, at, "id", &p->id) && r->IdField(j, at, "image_id", &p->image_id) &&
+        r->IdField(j, at, "primitive_id", &p->vertex.primitive_id) &&
+        r->Int(j, at, "vertex", 0, std::numeric_limits<int>::max(), &vertex) &&
+        r->Vector<2>(j, at, "uv_px", &p->uv_px)))
+    return false;
+  p->vertex.vertex = static_cast<VertexId>(vertex);
+  return true;
+}
+
+bool ReadConstraint(const Json& j, const std::string& at, Reader* r, Constraint* c) {
+  std::string kind, axis;
+  const Json* refs = nullptr;
+  if (!r->Object(j, at, {"id", "kind", "vertices", "value", "point", "axis", "image_id", "line_a_px", "line_b_px"}) ||
+      !r->IdField(j, at, "id", &c->id) || !r->String(j, at, "kind", &kind) || !r->Array(j, at, "vertices", &refs))
+    return false;
+  const auto parsed_kind = ConstraintKindFromName(kind);
+  if (!parsed_kind) return r->Fail(Join(at, "kind"), "unknown constraint kind \"" + kind + "\"");
+  c->kind = *parsed_kind;
+  c->vertices.clear();
+  for (size_t i = 0; i < refs->size(); ++i) {
+    const Json& ref = (*refs)[i];
+    const std::string rat = Index(Join(at, "vertices"), i);
+    if (!ref.is_array() || ref.size() != 2 || !ref[0].is_number_unsigned() || !ref[1].is_number_unsigned() ||
+        ref[1].get<std::uint64_t>() >= kNoElement)
+      return r->Fail(rat, "expected [primitive_id, vertex]");
+    c->vertices.push_back({ref[0].get<std::uint64_t>(), static_cast<VertexId>(ref[1].get<std::uint64_t>())});
+  }
+  const Json* image = r->Field(j, at, "image_id");
+  if (!image) return false;
+  if (!image->is_number_unsigned()) return r->Fail(Join(at, "image_id"), "expected an id or 0");
+  c->image_id = image->get<std::uint64_t>();
+  if (!r->Double(j, at, "value", &c->value) || !r->Vector<3>(j, at, "point", &c->point) ||
+      !r->String(j, at, "axis", &axis) || !r->Vector<2>(j, at, "line_a_px", &c->line_a_px) ||
+      !r->Vector<2>(j, at, "line_b_px", &c->line_b_px))
+    return false;
+  const auto parsed_axis = AxisFromName(axis);
+  if (!parsed_axis) return r->Fail(Join(at, "axis"), "expected \"x\", \"y\" or \"z\", found \"" + axis + "\"");
+  c->axis = *parsed_axis;
+  return true;
+}
+
+// How many vertices a constraint kind takes: exactly `min` when `max` == `min`.
+void ConstraintArity(ConstraintKind kind, size_t* min, size_t* max) {
+  constexpr size_t kAny = std::numeric_limits<size_t>::max();
+  switch (kind) {
+    case ConstraintKind::kCoplanar: *min = 4, *max = kAny; return;
+    case ConstraintKind::kCollinear: *min = 3, *max = kAny; return;
+    case ConstraintKind::kParallel:
+    case ConstraintKind::kPerpendicular:
+    case ConstraintKind::kEqualLength: *min = *max = 4; return;
+    case ConstraintKind::kFixedPoint: *min = *max = 1; return;
+    case ConstraintKind::kDistance:
+    case ConstraintKind::kAlongAxis:
+    case ConstraintKind::kEdgeOnImageLine: *min = *max = 2; return;
+  }
+}
+
+template <typename T, typename ReadFn>
+bool ReadList(const Json& root, const char* key, Reader* r, ReadFn read, std::vector<T>* out) {
+  const Json* list = nullptr;
+  if (!r->Array(root, "", key, &list)) return false;
+  out->resize(list->size());
+  for (size_t i = 0; i < list->size(); ++i)
+    if (!read((*list)[i], Index(key, i), r, &(*out)[i])) return false;
+  return true;
+}
+
+// Cross-object checks: ids unique in the whole project (one counter makes them), references
+// resolve, and next_id lies beyond every id so new objects never collide.
+bool CheckReferences(const Project& p, Reader* r) {
+  std::unordered_map<Id, std::string> owner;
+  Id max_id = 0;
+  auto claim = [&](Id id, const std::string& at) {
+    auto [it, inserted] = owner.emplace(id, at);
+    if (!inserted) return r->Fail(Join(at, "id"), "duplicate id " + std::to_string(id) + " (also used by " + it->second + ")");
+    max_id = std::max(max_id, id);
+    return true;
+  };
+  std::set<Id> image_ids;
+  for (size_t i = 0; i < p.images.size(); ++i) {
+    if (!claim(p.images[i].id, Index("images", i))) return false;
+    image_ids.insert(p.images[i].id);
+  }
+  for (size_t i = 0; i < p.primitives.size(); ++i) {
+    if (!claim(p.primitives[i].id, Index("primitives", i))) return false;
+  }
+  for (size_t i = 0; i < p.primitives.size(); ++i) {
+    const Id base = p.primitives[i].attached_to;
+    if (base != kNoId && (base == p.primitives[i].id || p.FindPrimitive(base) == nullptr))
+      return r->Fail(Join(Index("primitives", i), "attached_to"), "refers to a missing primitive " + std::to_string(base));
+  }
+  // "vertex 3 of primitive 7", checked against the mesh.
+  auto check_vertex = [&](const VertexRef& ref, const std::string& at) {
+    if (p.FindPrimitive(ref.primitive_id) == nullptr)
+      return r->Fail(at, "refers to a missing primitive " + std::to_string(ref.primitive_id));
+    if (p.FindVertex(ref) == nullptr)
+      return r->Fail(at, "refers to vertex " + std::to_string(ref.vertex) + ", which primitive " +
+                             std::to_string(ref.primitive_id) + " does not have");
+    return true;
+  };
+  for (size_t i = 0; i < p.segments.size(); ++i) {
+    const std::string at = Index("segments", i);
+    if (!claim(p.segments[i].id, at)) return false;
+    if (!image_ids.count(p.segments[i].image_id))
+      return r->Fail(Join(at, "image_id"), "refers to a missing image " + std::to_string(p.segments[i].image_id));
+  }
+  for (size_t i = 0; i < p.pins.size(); ++i) {
+    const std::string at = Index("pins", i);
+    if (!claim(p.pins[i].id, at)) return false;
+    if (!image_ids.count(p.pins[i].image_id))
+      return r->Fail(Join(at, "image_id"), "refers to a missing image " + std::to_string(p.pins[i].image_id));
+    if (!check_vertex(p.pins[i].vertex, Join(at, "vertex"))) return false;
+  }
+  for (size_t i = 0; i < p.constraints.size(); ++i) {
+    const Constraint& c = p.constraints[i];
+    const std::string at = Index("constraints", i);
+    if (!claim(c.id, at)) return false;
+    size_t min = 0, max = 0;
+    ConstraintArity(c.kind, &min, &max);
+    if (c.vertices.size() < min || c.vertices.size() > max)
+      return r->Fail(Join(at, "vertices"), std::string("a ") + ConstraintKindName(c.kind) + " constraint takes " +
+                                               (min == max ? std::to_string(min) : std::to_string(min) + " or more") +
+                                               " vertices, found " + std::to_string(c.vertices.size()));
+    for (size_t k = 0; k < c.vertices.size(); ++k)
+      if (!check_vertex(c.vertices[k], Index(Join(at, "vertices"), k))) return false;
+    if (c.kind == ConstraintKind::kEdgeOnImageLine && !image_ids.count(c.image_id))
+      return r->Fail(Join(at, "image_id"), "refers to a missing image " + std::to_string(c.image_id));
+  }
+  if (p.next_id <= max_id)
+    return r->Fail("next_id", "must be greater than every id (" + std::to_string(p.next_id) +
+                                  " <= " + std::to_string(max_id) + ")");
+  return true;
+}
+
+// Migration: each step upgrades a document by one version, in place, so that reading only
+// ever deals with the current layout. kMigrationSteps[k] turns version k + 1 into k + 2.
+using MigrationStep = bool (*)(Json* doc, std::string* error);
+
+// Version 1 -> 2: boxes become box primitives with unedited meshes ("from_shape"), whose
+// vertex i is corner i, so a pin's corner becomes its vertex; images gain intrinsics locks
+// (locked: version 1 never refined intrinsics in the solve); constraints start empty.
+// Malformed content is left for the reader, which reports it with its path.
+bool MigrateVersion1To2(Json* doc, std::string* error) {
+  Json& root = *doc;
+  if (root.contains("images") && root["images"].is_array()) {
+    for (Json& image : root["images"]) {
+      if (!image.is_object()) continue;
+      image["focal_locked"] = true;
+      image["principal_point_locked"] = true;
+    }
+  }
+  if (root.contains("boxes")) {
+    if (!root["boxes"].is_array()) {
+      *error = "boxes: expected an array";
+      return false;
+    }
+    Json primitives = Json::array();
+    for (const Json& box : root["boxes"]) {
+      if (!box.is_object()) {
+        primitives.push_back(box);
+        continue;
+      }
+      Json prim;
+      for (const char* key : {"id", "name", "rotation", "translation", "rotation_locked", "translation_locked"})
+        if (box.contains(key)) prim[key] = box[key];
+      prim["kind"] = "box";
+      prim["segments"] = 0;
+      if (box.contains("size") && box["size"].is_array()) {
+        Json params = box["size"];
+        params.push_back(0.0);
+        prim["params"] = params;
+      }
+      if (box.contains("size_locked") && box["size_locked"].is_array()) {
+        Json locked = box["size_locked"];
+        locked.push_back(false);
+        prim["param_locked"] = locked;
+      }
+      prim["attached_to"] = 0u;  // unsigned: the reader takes ids as unsigned integers
+      prim["mesh"] = "from_shape";
+      primitives.push_back(std::move(prim));
+    }
+    root.erase("boxes");
+    root["primitives"] = std::move(primitives);
+  }
+  if (root.contains("pins") && root["pins"].is_array()) {
+    for (Json& pin : root["pins"]) {
+      if (!pin.is_object()) continue;
+      if (pin.contains("box_id")) {
+        pin["primitive_id"] = pin["box_id"];
+        pin.erase("box_id");
+      }
+      if (pin.contains("corner")) {
+        const Json& corner = pin["corner"];
+        if (!corner.is_number_integer() || corner.get<std::int64_t>() < 0 || corner.get<std::int64_t>() > 7) {
+          *error = "a pin's corner must be an integer from 0 to 7, found " + corner.dump();
+          return false;
+        }
+        pin["vertex"] = corner;
+        pin.erase("corner");
+      }
+    }
+  }
+  root["constraints"] = Json::array();
+  return true;
+}
+
+// kMigrationSteps[k] turns version k + 1 into k + 2.
+constexpr std::array<MigrationStep, Project::kFormatVersion - 1> kMigrationSteps = {MigrateVersion1To2};
+
+bool MigrateToCurrent(Json* doc, int version, std::string* error) {
+  for (int v = version; v < Project::kFormatVersion; ++v) {
+    if (!kMigrationSteps[static_cast<size_t>(v - 1)](doc, error)) {
+      *error = "upgrading from version " + std::to_string(v) + ": " + *error;
+      return false;
+    }
+    (*doc)["version"] = v + 1;
+  }
+  return true;
+}
+
+bool ReadProject(Json& root, Reader* r, Project* p) {
+  if (!root.is_object()) return r->Fail("", "expected a JSON object, found " + Reader::TypeName(root));
+  std::string format;
+  const Json* fmt = root.contains("format") ? &root["format"] : nullptr;
+  if (!fmt) return r->Fail("format", "missing field: this is not a Facet project file");
+  if (!fmt->is_string() || fmt->get<std::string>() != kFormatName)
+    return r->Fail("format", "expected \"" + std::string(kFormatName) + "\": this is not a Facet project file");
+  const Json* version = r->Field(root, "", "version");
+  if (!version) return false;
+  if (version->is_number_unsigned() && version->get<std::uint64_t>() > Project::kFormatVersion)
+    return r->Fail("version", "written by a newer Facet: version " + version->dump() +
+                                  ", this build reads up to " + std::to_string(Project::kFormatVersion));
+  if (!version->is_number_unsigned() || version->get<std::uint64_t>() < 1)
+    return r->Fail("version", "expected a positive integer, found " + Reader::Describe(*version));
+  std::string migrate_error;
+  if (!MigrateToCurrent(&root, version->get<int>(), &migrate_error)) return r->Fail("", migrate_error);
+
+  if (!r->Object(root, "", {"format", "version", "units", "next_id", "images", "segments", "primitives", "pins",
+                            "constraints"}) ||
+      !r->String(root, "", "units", &p->units) || !r->IdField(root, "", "next_id", &p->next_id) ||
+      !ReadList(root, "images", r, ReadImage, &p->images) ||
+      !ReadList(root, "segments", r, ReadSegment, &p->segments) ||
+      !ReadList(root, "primitives", r, ReadPrimitive, &p->primitives) ||
+      !ReadList(root, "pins", r, ReadPin, &p->pins) ||
+      !ReadList(root, "constraints", r, ReadConstraint, &p->constraints))
+    return false;
+  return CheckReferences(*p, r);
+}
+
+// nlohmann reports a byte offset; people look for lines and columns.
+std::string LineColumn(const std::string& text, size_t byte) {
+  // `byte` counts the characters read, so the offending one is at byte - 1.
+  const size_t pos = std::min(byte == 0 ? 0 : byte - 1, text.size());
+  size_t line = 1, line_start = 0;
+  for (size_t i = 0; i < pos; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      line_start = i + 1;
+    }
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(pos - line_start + 1);
+}
+
+std::string ParseErrorText(const nlohmann::json::parse_error& e) {
+  // Drop nlohmann's "[json.exception...] parse error at ...: " prefix; we give our own position.
+  std::string what = e.what();
+  const size_t syntax = what.find("syntax error");
+  if (syntax != std::string::npos) return what.substr(syntax);
+  const size_t colon = what.rfind(": ");
+  return colon == std::string::npos ? what : what.substr(colon + 2);
+}
+
+bool ReadWholeFile(const std::string& path, std::string* bytes, std::string* error) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    *error = "cannot open " + path + ": it is a folder";
+    return false;
+  }
+  FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) {
+    *error = "cannot open " + path + ": " + ErrnoText(errno);
+    return false;
+  }
+  bytes->clear();
+  char buffer[1 << 16];
+  size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) bytes->append(buffer, n);
+  const bool failed = std::ferror(f);
+  const int err = errno;
+  std::fclose(f);
+  if (failed) {
+    *error = "cannot read " + path + ": " + ErrnoText(err);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::string ProjectToJson(const Project& project) {
+  Writer writer;
+  // Replacing invalid UTF-8 keeps this total; SaveProject refuses such text before it gets here.
+  return WriteProject(project, &writer).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+}
+
+std::string CheckProjectSavable(const Project& project) {
+  Writer writer;
+  WriteProject(project, &writer);
+  return writer.error();
+}
+
+ProjectLoadResult ProjectFromJson(const std::string& text) {
+  ProjectLoadResult result;
+  try {
+    if (text.find_first_not_of(" \t\r\n") == std::string::npos) {
+      result.error = "line 1, column 1: the file is empty";
+      return result;
+    }
+    Json root;
+    try {
+      root = Json::parse(text);
+    } catch (const nlohmann::json::out_of_range& e) {
+      // A number beyond the range of a double: nlohmann names the token but not where it is.
+      const std::string what = e.what();
+      const size_t open = what.find('\'');
+      const size_t close = what.rfind('\'');
+      const size_t at = open < close ? text.find(what.substr(open + 1, close - open - 1)) : std::string::npos;
+      result.error = (at == std::string::npos ? "" : LineColumn(text, at + 1) + ": ") +
+                     "number out of range" + (open < close ? " " + what.substr(open) : "");
+      return result;
+    }
+    Reader reader(&result.warnings);
+    if (!ReadProject(root, &reader, &result.project)) {
+      result.error = reader.error();
+      result.project = Project();
+    }
+  } catch (const nlohmann::json::parse_error& e) {
+    result.error = LineColumn(text, e.byte) + ": " + ParseErrorText(e);
+  } catch (const std::exception& e) {
+    result.error = std::string("cannot read the project: ") + e.what();
+  }
+  if (!result.ok()) result.project = Project();
+  return result;
+}
+
+std::string SaveProject(const Project& project, const std::string& path) {
+  std::string error = CheckProjectSavable(project);
+  if (!error.empty()) return "cannot save " + path + ": " + error;
+  const std::string text = ProjectToJson(project);
+  // A file that would not load again is worse than no save: the old file stays instead.
+  const ProjectLoadResult check = ProjectFromJson(text);
+  if (!check.ok()) return "cannot save " + path + ": the project is inconsistent: " + check.error;
+  if (!(check.project == project)) return "cannot save " + path + ": the saved text does not read back equal";
+  return WriteFileAtomically(path, text);
+}
+
+ProjectLoadResult LoadProject(const std::string& path) {
+  ProjectLoadResult result;
+  std::string bytes;
+  if (!ReadWholeFile(path, &bytes, &result.error)) return result;
+  result = ProjectFromJson(bytes);
+  if (!result.ok()) {
+    result.error = path + ": " + result.error;
+    return result;
+  }
+  for (size_t i = 0; i < result.project.images.size(); ++i) {
+    const Image& image = result.project.images[i];
+    const std::string resolved = ResolveImagePath(path, image.path);
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(resolved, ec))
+      result.warnings.push_back("images[" + std::to_string(i) + "]: image file not found: " + resolved);
+  }
+  return result;
+}
+
+std::string ResolveImagePath(const std::string& project_path, const std::string& image_path) {
+  namespace fs = std::filesystem;
+  if (image_path.empty()) return image_path;
+  const fs::path image(image_path);
+  if (image.is_absolute()) return image.lexically_normal().string();
+  return (fs::path(project_path).parent_path() / image).lexically_normal().string();
+}
+
+std::string RelativeImagePath(const std::string& project_path, const std::string& image_file_path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path folder = fs::absolute(fs::path(project_path), ec).parent_path();
+  if (ec) return fs::path(image_file_path).generic_string();
+  const fs::path image = fs::absolute(fs::path(image_file_path), ec);
+  if (ec) return fs::path(image_file_path).generic_string();
+  const fs::path relative = image.lexically_normal().lexically_relative(folder.lexically_normal());
+  return relative.empty() ? image.lexically_normal().generic_string() : relative.generic_string();
+}
+
+void RebaseImagePaths(const std::string& old_project_path, const std::string& new_project_path,
+                      Project* project) {
+  for (Image& image : project->images) {
+    if (image.path.empty()) continue;
+    std::error_code ec;
+    const std::string absolute =
+        std::filesystem::absolute(ResolveImagePath(old_project_path, image.path), ec).string();
+    if (!ec) image.path = RelativeImagePath(new_project_path, absolute);
+  }
+}
+
+std::string WriteFileAtomically(const std::string& requested_path, const std::string& bytes) {
+  namespace fs = std::filesystem;
+  // Renaming over a symlink would replace the link by a file; write where it points instead.
+  std::error_code link_ec;
+  std::string path = requested_path;
+  if (fs::is_symlink(requested_path, link_ec)) {
+    const fs::path target = fs::weakly_canonical(requested_path, link_ec);
+    if (!link_ec) path = target.string();
+  }
+  std::string temp = path + ".tmp-XXXXXX";
+  const int fd = ::mkstemp(temp.data());
+  if (fd < 0) return "cannot create a temporary file beside " + path + ": " + ErrnoText(errno);
+  auto fail = [&](const std::string& what, int err) {
+    ::close(fd);
+    ::unlink(temp.c_str());
+    return "cannot save " + path + ": " + what + ": " + ErrnoText(err);
+  };
+  // mkstemp makes the file private (0600); keep the replaced file's mode, else the usual 0644.
+  struct stat existing {};
+  const mode_t mode = ::stat(path.c_str(), &existing) == 0 && S_ISREG(existing.st_mode)
+                          ? (existing.st_mode & 07777)
+                          : 0644;
+  if (::fchmod(fd, mode) != 0) return fail("setting permissions", errno);
+  size_t written = 0;
+  while (written < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return fail("writing", errno);
+    }
+    written += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0) return fail("flushing to disk", errno);
+  if (::close(fd) != 0) {
+    const int err = errno;
+    ::unlink(temp.c_str());
+    return "cannot save " + path + ": closing: " + ErrnoText(err);
+  }
+  if (::rename(temp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(temp.c_str());
+    return "cannot save " + path + ": replacing the file: " + ErrnoText(err);
+  }
+  // Make the rename itself durable; failure here does not undo a completed save.
+  const fs::path folder = fs::path(path).parent_path();
+  const int dir_fd = ::open(folder.empty() ? "." : folder.c_str(), O_RDONLY | O_DIRECTORY);
+  if (dir_fd >= 0) {
+    ::fsync(dir_fd);
+    ::close(dir_fd);
+  }
+  return "";
+}
+
+}  // namespace facet

@@ -1,0 +1,179 @@
+// The modeling state of a Facet project: images with their cameras, the user's line
+// segments, the primitives (topology K and parameters) and the constraints F (pins and
+// spatial constraints).
+// Plain structs; every object has a stable id and is referred to by it, never by index.
+// Edits go through core/scene/document.h so that each one is undoable.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/geometry/camera.h"
+#include "core/geometry/ids.h"
+#include "core/geometry/axis.h"
+#include "core/geometry/intrinsics_modes.h"
+#include "core/geometry/segment.h"
+#include "core/mesh/mesh.h"
+#include "core/mesh/primitives.h"
+
+namespace facet {
+
+struct Image {
+  Id id = kNoId;
+  std::string path;  // as stored in the project file: relative to the project file's folder
+  int width_px = 0;
+  int height_px = 0;
+  Camera camera;
+  bool camera_calibrated = false;  // true once calibration produced intrinsics and rotation
+  PrincipalPointMode principal_point_mode = PrincipalPointMode::kSolve;
+  Eigen::Vector2d fixed_principal_point_px = Eigen::Vector2d::Zero();  // for kFixed
+  FocalMode focal_mode = FocalMode::kSolve;
+  double fixed_focal_px = 0.0;      // for FocalMode::kFixed
+  double focal_prior_px = 0.0;      // for FocalMode::kPrior
+  double focal_prior_std_px = 0.0;  // for FocalMode::kPrior
+  // The horizon, two points (x1, y1, x2, y2) in px on the image of the horizontal plane at
+  // infinity: with a known focal length it lets one horizontal line family fix the rotation
+  // (VpCalibrationOptions::horizon_px).
+  bool use_horizon = false;
+  Eigen::Vector4d horizon_px = Eigen::Vector4d::Zero();
+  // Estimate radial distortion (camera.k1, k2) from the image's straight lines (plumb-line,
+  // core/estimators/plumb_line.h) before the vanishing-point calibration.
+  bool estimate_distortion = false;
+  bool pose_locked = false;  // the geometry solve keeps this camera's position
+  // Whether the geometry solve keeps the intrinsics calibration gave (issue 5 frees them).
+  bool focal_locked = true;
+  bool principal_point_locked = true;
+  bool distortion_locked = true;  // the joint solve keeps camera.k1, k2
+};
+
+// K_create: a primitive with its own mesh. The shape (kind, parameters, pose) is the
+// Facade-style parameterisation; the mesh is its topology as the K-ops left it, every vertex
+// defined in primitive-local coordinates as a linear function of the parameters
+// (core/mesh/mesh.h, LocalDefinition), so world = R(shape.rotation) * C * params + translation.
+// The mesh holds this primitive only (one component), and its vertex ids are what pins and
+// constraints refer to: a box's corner i (core/mesh/box.h bit code) is vertex i.
+struct Primitive {
+  Id id = kNoId;
+  std::string name;
+  PrimitiveShape shape;  // shape.id == id
+  PolyMesh mesh;         // world positions cached: UpdatePrimitivePositions after a change
+  // Parameters the geometry solve must keep (by index into shape.params). A locked
+  // dimension is a known length: it fixes the scale of the scene.
+  std::array<bool, kMaxPrimitiveParams> param_locked = {false, false, false, false};
+  bool rotation_locked = true;  // aligned with the world axes found by calibration
+  bool translation_locked = true;
+  // The box this primitive sits on (AttachOnTop in core/mesh/primitives.h), or kNoId. Its
+  // footprint and pose follow the base's after every change.
+  Id attached_to = kNoId;
+};
+
+// A vertex of a primitive's mesh.
+struct VertexRef {
+  Id primitive_id = kNoId;
+  VertexId vertex = kNoElement;
+  friend bool operator==(const VertexRef&, const VertexRef&) = default;
+};
+
+// V_proj: a model vertex pinned to a pixel of an image.
+struct Pin {
+  Id id = kNoId;
+  Id image_id = kNoId;
+  VertexRef vertex;
+  Eigen::Vector2d uv_px = Eigen::Vector2d::Zero();
+};
+
+// V_space and edge-to-image-line F-ops: g(v) = 0 over model vertices (issue 5). Which
+// fields a kind reads:
+//   kCoplanar        vertices: 4 or more (a face's vertices, or any set)
+//   kCollinear       vertices: 3 or more
+//   kParallel        vertices: (a0, a1, b0, b1), edge a parallel to edge b
+//   kPerpendicular   vertices: (a0, a1, b0, b1)
+//   kEqualLength     vertices: (a0, a1, b0, b1)
+//   kDistance        vertices: (a, b); value = |b - a| in the project's units (sets the scale)
+//   kFixedPoint      vertices: (a); point = its world position (e.g. the origin)
+//   kAlongAxis       vertices: (a, b); axis = the world axis edge a -> b is parallel to
+//   kEdgeOnImageLine vertices: (a, b); image_id, line_a_px, line_b_px: the edge projects onto
+//                    the image line through those two pixels
+enum class ConstraintKind {
+  kCoplanar = 0,
+  kCollinear,
+  kParallel,
+  kPerpendicular,
+  kEqualLength,
+  kDistance,
+  kFixedPoint,
+  kAlongAxis,
+  kEdgeOnImageLine,
+};
+const char* ConstraintKindName(ConstraintKind kind);  // "coplanar", "collinear", ...
+std::optional<ConstraintKind> ConstraintKindFromName(const std::string& name);
+
+struct Constraint {
+  Id id = kNoId;
+  ConstraintKind kind = ConstraintKind::kCoplanar;
+  std::vector<VertexRef> vertices;
+  double value = 0.0;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  Axis axis = Axis::kZ;
+  Id image_id = kNoId;
+  Eigen::Vector2d line_a_px = Eigen::Vector2d::Zero();
+  Eigen::Vector2d line_b_px = Eigen::Vector2d::Zero();
+};
+
+struct Project {
+  // 1: boxes with corner pins (read and migrated); 2: primitives with meshes, vertex pins
+  // and constraints.
+  static constexpr int kFormatVersion = 2;
+  std::vector<Image> images;
+  std::vector<Segment> segments;
+  std::vector<Primitive> primitives;
+  std::vector<Pin> pins;
+  std::vector<Constraint> constraints;
+  std::string units = "m";
+  Id next_id = 1;  // ids are never reused within a project
+
+  Id NewId() { return next_id++; }
+
+  const Image* FindImage(Id id) const;
+  Image* FindImage(Id id);
+  const Segment* FindSegment(Id id) const;
+  Segment* FindSegment(Id id);
+  const Primitive* FindPrimitive(Id id) const;
+  Primitive* FindPrimitive(Id id);
+  const Pin* FindPin(Id id) const;
+  Pin* FindPin(Id id);
+  const Constraint* FindConstraint(Id id) const;
+  Constraint* FindConstraint(Id id);
+  // The vertex record a reference names, or null when the primitive or vertex is gone.
+  const MeshVertex* FindVertex(const VertexRef& ref) const;
+};
+
+// World position of a referenced vertex (cached in the mesh); the caller checks FindVertex.
+Eigen::Vector3d VertexInWorld(const Project& project, const VertexRef& ref);
+
+// K_create for the project: a primitive of `shape` with a fresh id (shape.id is replaced),
+// its mesh built and placed. Returns false with a message when the shape is invalid
+// (non-positive dimensions, too few segments); the project is then unchanged.
+bool AddPrimitiveToProject(Project* project, PrimitiveShape shape, const std::string& name, Id* new_id,
+                           std::string* message);
+
+// Recomputes the cached world positions of the primitive's vertices from its shape, after
+// re-applying AttachOnTop when it sits on another primitive. Call after changing a shape.
+void RefreshPrimitive(Project* project, Primitive* primitive);
+// RefreshPrimitive for every primitive, bases before the primitives attached to them.
+void RefreshAllPrimitives(Project* project);
+
+bool operator==(const Camera& a, const Camera& b);
+bool operator==(const Image& a, const Image& b);
+bool operator==(const Primitive& a, const Primitive& b);
+bool operator==(const PrimitiveShape& a, const PrimitiveShape& b);
+bool operator==(const Constraint& a, const Constraint& b);
+bool operator==(const Pin& a, const Pin& b);
+bool operator==(const Project& a, const Project& b);
+
+}  // namespace facet

@@ -1,0 +1,879 @@
+#include "core/solve/joint_solve.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include <Eigen/SVD>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include "core/solve/constraint_polish.h"
+#include "core/solve/joint_solve_internal.h"
+#include "core/solve/scene_solve.h"
+
+namespace facet {
+
+bool JointSolveOptions::Check(std::string* error) const {
+  auto fail = [&](const std::string& why) {
+    if (error != nullptr) *error = why;
+    return false;
+  };
+  if (max_iterations < 1) return fail("max_iterations must be at least 1");
+  if (!(function_tolerance >= 0.0)) return fail("function_tolerance must be non-negative");
+  if (!(gradient_tolerance >= 0.0)) return fail("gradient_tolerance must be non-negative");
+  if (!(parameter_tolerance >= 0.0)) return fail("parameter_tolerance must be non-negative");
+  if (!(initial_lambda > 0.0) || !std::isfinite(initial_lambda)) return fail("initial_lambda must be positive and finite");
+  if (!(constraint_tolerance > 0.0)) return fail("constraint_tolerance must be positive");
+  if (!(conflict_tolerance > 0.0)) return fail("conflict_tolerance must be positive");
+  return true;
+}
+
+const char* JointSolveTerminationName(JointSolveSummary::Termination termination) {
+  using T = JointSolveSummary::Termination;
+  switch (termination) {
+    case T::kConverged: return "converged";
+    case T::kMaxIterations: return "max iterations";
+    case T::kNothingToSolve: return "nothing to solve";
+    case T::kFailed: return "failed";
+    case T::kInvalidInput: return "invalid input";
+  }
+  return "?";
+}
+
+namespace {
+
+using namespace joint_solve_internal;
+using Termination = JointSolveSummary::Termination;
+
+constexpr double kInitialConstraintWeight = 1e3;  // sqrt(mu): a relative error of 1e-3 weighs 1 px
+constexpr double kMaxConstraintWeight = 1e7;
+constexpr int kMaxOuterRounds = 12;
+// The augmented Lagrangian ends when the constraints hold and the cost they still owe (sum
+// |lambda c|) is below this fraction of the observation cost, or below the floor (px^2,
+// invisible) for a noise-free scene whose cost is ~0.
+constexpr double kCostGapTolerance = 1e-10;
+constexpr double kCostGapFloorPx2 = 1e-20;
+constexpr int kMaxDiagnosticParameters = 600;  // dense SVD above this costs too much for a full solve
+constexpr double kRankTolerance = 1e-9;        // singular values below this times the largest are zero
+constexpr int kMaxColdStartParameters = 300;   // the geometry solve's initialisation is dense
+
+// The damped normal equations (J^T J + lambda D) delta = -J^T r, D = diag(J^T J) floored.
+class NormalEquations {
+ public:
+  virtual ~NormalEquations() = default;
+  virtual bool Init(const JointProblem& problem) = 0;
+  virtual void Assemble(const JointProblem& problem) = 0;
+  virtual bool Solve(double lambda, Eigen::VectorXd* delta) = 0;
+  const Eigen::VectorXd& gradient() const { return g_; }
+  const Eigen::VectorXd& damping() const { return d_; }
+  double HessianDiagonal(int k) const { return h_diag_(k); }
+
+ protected:
+  // Marquardt's scaling makes the step independent of the units of each parameter; a floor
+  // keeps parameters no residual sees (zero columns) from making the system singular.
+  void SetDamping() {
+    const double max_diag = h_diag_.size() > 0 ? h_diag_.maxCoeff() : 0.0;
+    const double floor = std::max(max_diag * 1e-14, std::numeric_limits<double>::min());
+    d_ = h_diag_.cwiseMax(floor);
+  }
+  Eigen::VectorXd g_;
+  Eigen::VectorXd d_;
+  Eigen::VectorXd h_diag_;
+};
+
+// General sparsity: a fixed sparse pattern assembled through precomputed value indices and
+// factorised by a simplicial LDL^T whose AMD ordering and symbolic analysis are done once.
+class SparseEquations : public NormalEquations {
+ public:
+  bool Init(const JointProblem& problem) override {
+    const int n = problem.num_parameters;
+    std::vector<Eigen::Triplet<double>> triplets;
+    for (int k = 0; k < n; ++k) triplets.emplace_back(k, k, 0.0);
+    for (const ResidualBlock& b : problem.blocks) {
+      for (size_t i = 0; i < b.cols.size(); ++i) {
+        for (size_t j = 0; j <= i; ++j) {
+          triplets.emplace_back(std::max(b.cols[i], b.cols[j]), std::min(b.cols[i], b.cols[j]), 0.0);
+        }
+      }
+    }
+    h_.resize(n, n);
+    h_.setFromTriplets(triplets.begin(), triplets.end());
+    h_.makeCompressed();
+    auto index = [&](int row, int col) {
+      const int* begin = h_.innerIndexPtr() + h_.outerIndexPtr()[col];
+      const int* end = h_.innerIndexPtr() + h_.outerIndexPtr()[col + 1];
+      return static_cast<int>(std::lower_bound(begin, end, row) - h_.innerIndexPtr());
+    };
+    diagonal_.resize(n);
+    for (int k = 0; k < n; ++k) diagonal_[k] = index(k, k);
+    block_index_.clear();
+    for (const ResidualBlock& b : problem.blocks) {
+      std::vector<int> idx;
+      idx.reserve(b.cols.size() * (b.cols.size() + 1) / 2);
+      for (size_t i = 0; i < b.cols.size(); ++i) {
+        for (size_t j = 0; j <= i; ++j) idx.push_back(index(std::max(b.cols[i], b.cols[j]), std::min(b.cols[i], b.cols[j])));
+      }
+      block_index_.push_back(std::move(idx));
+    }
+    damped_ = h_;
+    g_.setZero(n);
+    d_.setZero(n);
+    h_diag_.setZero(n);
+    ldlt_.analyzePattern(damped_);
+    return ldlt_.info() == Eigen::Success;
+  }
+
+  void Assemble(const JointProblem& problem) override {
+    double* h = h_.valuePtr();
+    std::fill(h, h + h_.nonZeros(), 0.0);
+    g_.setZero();
+    for (size_t bi = 0; bi < problem.blocks.size(); ++bi) {
+      const ResidualBlock& b = problem.blocks[bi];
+      const int* idx = block_index_[bi].data();
+      const int m = static_cast<int>(b.cols.size());
+      for (int i = 0; i < m; ++i) {
+        const auto ci = b.jacobian.col(i);
+        g_(b.cols[i]) += ci.dot(b.residual);
+        for (int j = 0; j <= i; ++j) h[*idx++] += ci.dot(b.jacobian.col(j));
+      }
+    }
+    for (size_t k = 0; k < diagonal_.size(); ++k) h_diag_(k) = h[diagonal_[k]];
+    SetDamping();
+  }
+
+  bool Solve(double lambda, Eigen::VectorXd* delta) override {
+    std::copy(h_.valuePtr(), h_.valuePtr() + h_.nonZeros(), damped_.valuePtr());
+    double* v = damped_.valuePtr();
+    for (size_t k = 0; k < diagonal_.size(); ++k) v[diagonal_[k]] += lambda * d_(k);
+    ldlt_.factorize(damped_);
+    if (ldlt_.info() != Eigen::Success) return false;
+    *delta = ldlt_.solve(-g_);
+    return delta->allFinite();
+  }
+
+ private:
+  Eigen::SparseMatrix<double> h_;
+  Eigen::SparseMatrix<double> damped_;
+  std::vector<int> diagonal_;
+  std::vector<std::vector<int>> block_index_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt_;
+};
+
+// The bundle-adjustment structure: camera parameters (numbered first) against groups of
+// primitive-side parameters (a primitive with its attached primitives and free vertices,
+// merged when a constraint couples them). Each group's block of J^T J is dense and small and
+// no block couples two groups, so they are eliminated one by one (Schur complement) into a
+// dense reduced camera system. Cost per iteration ~ sum over groups of (group size)^3 plus
+// (cameras seeing it x 9)^2 x group size, plus (9 x cameras)^3: linear in the primitives.
+class SchurEquations : public NormalEquations {
+ public:
+  // The largest group this class accepts; beyond it SparseEquations is used.
+  static constexpr int kMaxGroupSize = 96;
+
+  bool Init(const JointProblem& problem) override {
+    const int n = problem.num_parameters;
+    nc_ = 0;
+    // BuildJointProblem numbers the camera parameters first.
+    for (const CameraBlock& c : problem.cameras) {
+      if (c.focal_offset >= 0) nc_ = std::max(nc_, c.focal_offset + 1);
+      if (c.principal_point_offset >= 0) nc_ = std::max(nc_, c.principal_point_offset + 2);
+      if (c.center_offset >= 0) nc_ = std::max(nc_, c.center_offset + 3);
+      if (c.distortion_offset >= 0) nc_ = std::max(nc_, c.distortion_offset + 2);
+    }
+    // Union-find over the primitive-side parameters [nc, n).
+    std::vector<int> parent(n);
+    for (int k = 0; k < n; ++k) parent[k] = k;
+    auto find = [&](int k) {
+      while (parent[k] != k) k = parent[k] = parent[parent[k]];
+      return k;
+    };
+    for (const ResidualBlock& b : problem.blocks) {
+      int first = -1;
+      for (int c : b.cols) {
+        if (c < nc_) continue;
+        if (first < 0) first = c;
+        else parent[find(c)] = find(first);
+      }
+    }
+    group_of_.assign(n, -1);
+    local_.assign(n, -1);
+    std::vector<int> root_group(n, -1);
+    groups_.clear();
+    for (int k = nc_; k < n; ++k) {
+      const int r = find(k);
+      if (root_group[r] < 0) {
+        root_group[r] = static_cast<int>(groups_.size());
+        groups_.emplace_back();
+      }
+      Group& g = groups_[root_group[r]];
+      group_of_[k] = root_group[r];
+      local_[k] = static_cast<int>(g.params.size());
+      g.params.push_back(k);
+      if (static_cast<int>(g.params.size()) > kMaxGroupSize) return false;
+    }
+    // Camera rows of each group's W block.
+    for (const ResidualBlock& b : problem.blocks) {
+      for (int c : b.cols) {
+        if (c >= nc_) continue;
+        for (int p : b.cols) {
+          if (p < nc_) continue;
+          Group& g = groups_[group_of_[p]];
+          if (std::find(g.camera_rows.begin(), g.camera_rows.end(), c) == g.camera_rows.end()) g.camera_rows.push_back(c);
+        }
+      }
+    }
+    for (Group& g : groups_) {
+      std::sort(g.camera_rows.begin(), g.camera_rows.end());
+      const int ng = static_cast<int>(g.params.size());
+      const int kg = static_cast<int>(g.camera_rows.size());
+      g.v.setZero(ng, ng);
+      g.w.setZero(kg, ng);
+      g.y.setZero(ng, kg);
+      g.wy.setZero(kg, kg);
+      g.wg.setZero(kg);
+      g.damped.setZero(ng, ng);
+      g.rhs.setZero(ng);
+      g.llt = Eigen::LLT<Eigen::MatrixXd>(ng);
+    }
+    u_.setZero(nc_, nc_);
+    s_.setZero(nc_, nc_);
+    s_llt_ = Eigen::LLT<Eigen::MatrixXd>(nc_);
+    rhs_c_.setZero(nc_);
+    dc_.setZero(nc_);
+    auto camera_row = [&](const Group& g, int c) {
+      return static_cast<int>(std::lower_bound(g.camera_rows.begin(), g.camera_rows.end(), c) - g.camera_rows.begin());
+    };
+    auto entry = [&](int a, int b) -> double* {
+      if (a < nc_ && b < nc_) return &u_(std::max(a, b), std::min(a, b));
+      if (a >= nc_ && b >= nc_) {
+        Group& g = groups_[group_of_[a]];
+        return &g.v(std::max(local_[a], local_[b]), std::min(local_[a], local_[b]));
+      }
+      const int c = std::min(a, b), p = std::max(a, b);
+      Group& g = groups_[group_of_[p]];
+      return &g.w(camera_row(g, c), local_[p]);
+    };
+    targets_.clear();
+    for (const ResidualBlock& b : problem.blocks) {
+      std::vector<double*> t;
+      t.reserve(b.cols.size() * (b.cols.size() + 1) / 2);
+      for (size_t i = 0; i < b.cols.size(); ++i) {
+        for (size_t j = 0; j <= i; ++j) t.push_back(entry(b.cols[i], b.cols[j]));
+      }
+      targets_.push_back(std::move(t));
+    }
+    diagonal_.resize(n);
+    for (int k = 0; k < n; ++k) diagonal_[k] = entry(k, k);
+    g_.setZero(n);
+    d_.setZero(n);
+    h_diag_.setZero(n);
+    return true;
+  }
+
+  void Assemble(const JointProblem& problem) override {
+    u_.setZero();
+    for (Group& g : groups_) {
+      g.v.setZero();
+      g.w.setZero();
+    }
+    g_.setZero();
+    for (size_t bi = 0; bi < problem.blocks.size(); ++bi) {
+      const ResidualBlock& b = problem.blocks[bi];
+      double* const* t = targets_[bi].data();
+      const int m = static_cast<int>(b.cols.size());
+      for (int i = 0; i < m; ++i) {
+        const auto ci = b.jacobian.col(i);
+        g_(b.cols[i]) += ci.dot(b.residual);
+        for (int j = 0; j <= i; ++j) **t++ += ci.dot(b.jacobian.col(j));
+      }
+    }
+    for (size_t k = 0; k < diagonal_.size(); ++k) h_diag_(k) = *diagonal_[k];
+    SetDamping();
+  }
+
+  bool Solve(double lambda, Eigen::VectorXd* delta) override {
+    delta->resize(static_cast<Eigen::Index>(diagonal_.size()));
+    s_ = u_;
+    for (int k = 0; k < nc_; ++k) s_(k, k) += lambda * d_(k);
+    rhs_c_ = -g_.head(nc_);
+    for (Group& g : groups_) {
+      const int ng = static_cast<int>(g.params.size());
+      g.damped = g.v;
+      for (int i = 0; i < ng; ++i) {
+        g.damped(i, i) += lambda * d_(g.params[i]);
+        g.rhs(i) = g_(g.params[i]);
+      }
+      g.llt.compute(g.damped);
+      if (g.llt.info() != Eigen::Success) return false;
+      g.llt.solveInPlace(g.rhs);  // V^-1 g_p
+      if (g.camera_rows.empty()) continue;
+      g.y = g.w.transpose();
+      g.llt.solveInPlace(g.y);  // V^-1 W^T
+      const int kg = static_cast<int>(g.camera_rows.size());
+      g.wy.noalias() = g.w * g.y;
+      g.wg.noalias() = g.w * g.rhs;
+      for (int b = 0; b < kg; ++b) {
+        const int rb = g.camera_rows[b];
+        rhs_c_(rb) += g.wg(b);
+        for (int a = b; a < kg; ++a) s_(g.camera_rows[a], rb) -= g.wy(a, b);
+      }
+    }
+    if (nc_ > 0) {
+      s_llt_.compute(s_);
+      if (s_llt_.info() != Eigen::Success) return false;
+      dc_ = rhs_c_;
+      s_llt_.solveInPlace(dc_);
+      delta->head(nc_) = dc_;
+    }
+    for (Group& g : groups_) {
+      for (size_t a = 0; a < g.camera_rows.size(); ++a) g.wg(a) = dc_(g.camera_rows[a]);
+      g.rhs.noalias() += g.y * g.wg;
+      for (size_t i = 0; i < g.params.size(); ++i) (*delta)(g.params[i]) = -g.rhs(i);
+    }
+    return delta->allFinite();
+  }
+
+ private:
+  struct Group {
+    std::vector<int> params;       // parameter indices, in local order
+    std::vector<int> camera_rows;  // camera parameters coupled to the group, sorted
+    Eigen::MatrixXd v;             // J_p^T J_p (lower triangle)
+    Eigen::MatrixXd w;             // J_c^T J_p over camera_rows
+    Eigen::MatrixXd y;             // V^-1 W^T
+    Eigen::MatrixXd wy;            // W V^-1 W^T
+    Eigen::VectorXd wg;            // W V^-1 g_p
+    Eigen::MatrixXd damped;
+    Eigen::VectorXd rhs;
+    Eigen::LLT<Eigen::MatrixXd> llt;
+  };
+  int nc_ = 0;
+  std::vector<Group> groups_;
+  std::vector<int> group_of_;
+  std::vector<int> local_;
+  std::vector<std::vector<double*>> targets_;
+  std::vector<double*> diagonal_;
+  Eigen::MatrixXd u_;  // J_c^T J_c (lower triangle)
+  Eigen::MatrixXd s_;  // reduced camera system (lower triangle)
+  Eigen::LLT<Eigen::MatrixXd> s_llt_;
+  Eigen::VectorXd rhs_c_;
+  Eigen::VectorXd dc_;
+};
+
+double TotalCost(const JointProblem& problem) {
+  double cost = 0.0;
+  for (const ResidualBlock& b : problem.blocks) cost += b.residual.squaredNorm();
+  return 0.5 * cost;
+}
+
+double ObservationCost(const JointProblem& problem) {
+  double cost = 0.0;
+  for (const ResidualBlock& b : problem.blocks) {
+    if (b.kind != BlockKind::kConstraint) cost += b.residual.squaredNorm();
+  }
+  return 0.5 * cost;
+}
+
+double MaxConstraintViolation(const JointProblem& problem) {
+  double v = 0.0;
+  for (const ResidualBlock& b : problem.blocks) {
+    if (b.kind == BlockKind::kConstraint && b.raw.size() > 0) v = std::max(v, b.raw.cwiseAbs().maxCoeff());
+  }
+  return v;
+}
+
+bool StateIsFinite(const JointState& state) {
+  for (const CameraState& c : state.cameras) {
+    if (!std::isfinite(c.focal_px) || !c.principal_point_px.allFinite() || !c.cam_from_world_rotation.allFinite() ||
+        !c.center_in_world.allFinite() || !std::isfinite(c.k1) || !std::isfinite(c.k2)) {
+      return false;
+    }
+  }
+  for (const PrimitiveState& p : state.primitives) {
+    if (!p.params.allFinite() || !p.world_from_primitive.allFinite() || !p.translation.allFinite()) return false;
+  }
+  for (const Eigen::Vector3d& o : state.free_offsets) {
+    if (!o.allFinite()) return false;
+  }
+  return true;
+}
+
+struct LmState {
+  double lambda = 1e-4;
+  double nu = 2.0;
+  // The damping after the last accepted step: the next outer round starts from it, not from
+  // the lambda that the rejections at the end of a converged run inflated.
+  double accepted_lambda = 1e-4;
+  int iterations = 0;
+};
+
+enum class LmStop { kConverged, kBudget, kFailed };
+
+// Levenberg-Marquardt on the current problem (its constraint weights and multipliers fixed)
+// from *state, using at most `budget` iterations. The problem's blocks hold the evaluation at
+// *state on return.
+LmStop RunLevenbergMarquardt(const JointSolveOptions& options, int budget, JointProblem* problem, JointState* state,
+                             NormalEquations* normal, LmState* lm, JointState* trial, Eigen::VectorXd* delta,
+                             std::string* why) {
+  if (!EvaluateBlocks(problem, *state, true)) {
+    *why = "a pinned vertex lies behind its camera";
+    return LmStop::kFailed;
+  }
+  double cost = TotalCost(*problem);
+  bool assembled = false;
+  bool evaluated_at_state = true;  // the blocks hold *state's evaluation, not a rejected trial's
+  auto converged = [&]() {
+    if (!evaluated_at_state) EvaluateBlocks(problem, *state, true);
+    return LmStop::kConverged;
+  };
+  lm->lambda = std::min(lm->accepted_lambda, options.initial_lambda);
+  lm->nu = 2.0;
+  const int n = problem->num_parameters;
+  for (int it = 0; it < budget; ++it) {
+    if (!assembled) {
+      normal->Assemble(*problem);
+      assembled = true;
+      // Gradient with unit-norm columns: in px, whatever the parameters' units.
+      double max_gradient = 0.0;
+      for (int k = 0; k < n; ++k) {
+        const double h = normal->HessianDiagonal(k);
+        if (h > 0.0) max_gradient = std::max(max_gradient, std::abs(normal->gradient()(k)) / std::sqrt(h));
+      }
+      if (max_gradient <= options.gradient_tolerance || cost == 0.0) return LmStop::kConverged;
+    }
+    ++lm->iterations;
+    if (!normal->Solve(lm->lambda, delta)) {
+      lm->lambda *= 10.0;
+      if (lm->lambda > 1e32) {
+        *why = "the normal equations cannot be solved";
+        return LmStop::kFailed;
+      }
+      continue;
+    }
+    const Eigen::VectorXd& d = normal->damping();
+    double scaled_step = 0.0;
+    for (int k = 0; k < n; ++k) scaled_step += d(k) * (*delta)(k) * (*delta)(k);
+    const double predicted = 0.5 * (lm->lambda * scaled_step - normal->gradient().dot(*delta));
+    if (std::sqrt(scaled_step) <= options.parameter_tolerance * (std::sqrt(2.0 * cost) + options.parameter_tolerance)) {
+      return converged();
+    }
+    // The model promises less than the cost's working precision: every further step would be
+    // rounding noise, rejected one by one while lambda climbs to its cap.
+    if (predicted <= options.function_tolerance * cost) return converged();
+    ApplyStep(*problem, *delta, *state, trial);
+    const bool ok = EvaluateBlocks(problem, *trial, true);
+    const double new_cost = ok ? TotalCost(*problem) : std::numeric_limits<double>::infinity();
+    const double rho = predicted > 0.0 ? (cost - new_cost) / predicted : -1.0;
+    if (ok && std::isfinite(new_cost) && new_cost < cost && rho > 1e-4) {
+      std::swap(*state, *trial);
+      const double decrease = cost - new_cost;
+      cost = new_cost;
+      assembled = false;
+      lm->lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
+      lm->lambda = std::max(lm->lambda, 1e-16);
+      lm->accepted_lambda = lm->lambda;
+      lm->nu = 2.0;
+      evaluated_at_state = true;
+      if (decrease <= options.function_tolerance * (cost + decrease)) return converged();
+    } else {
+      evaluated_at_state = false;
+      lm->lambda *= lm->nu;
+      lm->nu *= 2.0;
+      if (lm->lambda > 1e16) return converged();  // no step decreases the cost: a minimum to working precision
+    }
+  }
+  if (!evaluated_at_state) EvaluateBlocks(problem, *state, true);
+  return LmStop::kBudget;
+}
+
+std::string Advice(const std::string& name) {
+  if (name.find("free vertex") != std::string::npos) return "pin that vertex in a second image";
+  if (name.rfind("the camera", 0) == 0) return "pin more vertices in that image, add segments, or lock it";
+  if (name.find("rotation") != std::string::npos || name.find("position") != std::string::npos) {
+    return "pin more of its vertices, add a constraint, or lock its pose";
+  }
+  return "pin a vertex that moves with it (e.g. on its back face) or add a second image, or lock it";
+}
+
+// Names the parameters the residuals do not determine, from the null space of the
+// column-scaled dense Jacobian at the problem's last evaluation.
+std::vector<std::string> UndeterminedParameters(const JointProblem& problem) {
+  std::vector<std::string> out;
+  const int n = problem.num_parameters;
+  Eigen::MatrixXd j;
+  Eigen::VectorXd r;
+  DenseJacobian(problem, &j, &r);
+  Eigen::VectorXd norms = j.colwise().norm().transpose();
+  const double max_norm = norms.size() > 0 ? norms.maxCoeff() : 0.0;
+  for (int k = 0; k < n; ++k) {
+    if (norms(k) <= kRankTolerance * max_norm) {
+      j.col(k).setZero();
+    } else {
+      j.col(k) /= norms(k);
+    }
+  }
+  Eigen::MatrixXd padded = j;
+  if (padded.rows() < n) {
+    padded.conservativeResize(n, n);
+    padded.bottomRows(n - j.rows()).setZero();
+  }
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(padded, Eigen::ComputeThinV);
+  const Eigen::VectorXd& sigma = svd.singularValues();
+  const double largest = sigma.size() > 0 ? sigma(0) : 0.0;
+  std::vector<int> null_columns;
+  for (int s = 0; s < sigma.size(); ++s) {
+    if (sigma(s) <= kRankTolerance * largest) null_columns.push_back(s);
+  }
+  const int null_dim = static_cast<int>(null_columns.size());
+  if (null_dim == 0) return out;
+  Eigen::MatrixXd null_space(n, null_dim);
+  for (int i = 0; i < null_dim; ++i) null_space.col(i) = svd.matrixV().col(null_columns[i]);
+
+  // Per object (a camera, a primitive, a free vertex: the part of the name before ": "), the
+  // directions inside its own parameters that lie in the null space: moving that object
+  // alone that way changes no residual.
+  std::vector<std::pair<std::string, std::vector<int>>> owners;
+  for (int k = 0; k < n; ++k) {
+    const std::string& name = problem.parameter_names[k];
+    const std::string owner = name.substr(0, name.find(": "));
+    if (owners.empty() || owners.back().first != owner) owners.push_back({owner, {}});
+    owners.back().second.push_back(k);
+  }
+  std::vector<double> freedom(n, 0.0);
+  for (int k = 0; k < n; ++k) freedom[k] = null_space.row(k).squaredNorm();
+  int alone = 0;
+  std::vector<char> named(n, 0);
+  for (const auto& [owner, params] : owners) {
+    Eigen::MatrixXd restricted(params.size(), null_dim);
+    for (size_t i = 0; i < params.size(); ++i) restricted.row(i) = null_space.row(params[i]);
+    Eigen::JacobiSVD<Eigen::MatrixXd> own(restricted, Eigen::ComputeThinU);
+    for (int d = 0; d < own.singularValues().size(); ++d) {
+      if (own.singularValues()(d) < 0.95) continue;  // not a motion of this object alone
+      ++alone;
+      const Eigen::VectorXd u = own.matrixU().col(d);
+      int dominant = 0;
+      u.cwiseAbs().maxCoeff(&dominant);
+      const std::string& first = problem.parameter_names[params[dominant]];
+      if (std::abs(u(dominant)) > 0.9) {
+        out.push_back(first + " is free: " + Advice(first));
+        named[params[dominant]] = 1;
+        continue;
+      }
+      std::string what;
+      for (size_t i = 0; i < params.size(); ++i) {
+        if (std::abs(u(i)) < 0.3) continue;
+        const std::string& name = problem.parameter_names[params[i]];
+        what += (what.empty() ? "" : ", ") + name.substr(name.find(": ") + 2);
+        named[params[i]] = 1;
+      }
+      out.push_back(owner + ": a combination of " + what + " is free: " + Advice(first));
+    }
+  }
+  if (null_dim > alone) {
+    std::vector<int> order(n);
+    for (int k = 0; k < n; ++k) order[k] = k;
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return freedom[a] > freedom[b]; });
+    std::ostringstream text;
+    text << null_dim - alone << " combined motion(s) of several objects leave every residual unchanged (e.g. the "
+         << "scene's scale or position): add a distance or fixed-point constraint or lock a dimension; most involved: ";
+    int listed = 0;
+    for (int k : order) {
+      if (named[k] || freedom[k] < 1e-6 || listed == 4) continue;
+      text << (listed++ > 0 ? "; " : "") << problem.parameter_names[k];
+    }
+    out.push_back(text.str());
+  }
+  return out;
+}
+
+// Equality polish over the whole parameter vector, in column-scaled steps from `start`.
+ConstraintPolishSummary Polish(const JointSolveOptions& options, JointProblem* problem, JointState* state,
+                               const NormalEquations& normal) {
+  const int n = problem->num_parameters;
+  Eigen::VectorXd scale(n);
+  for (int k = 0; k < n; ++k) {
+    const double h = normal.HessianDiagonal(k);
+    scale(k) = h > 0.0 ? std::sqrt(h) : 1.0;
+  }
+  int num_constraints = 0;
+  for (const ConstraintTerm& t : problem->constraints) num_constraints += t.num_rows;
+  const JointState start = *state;
+  JointState trial = start;
+  Eigen::VectorXd delta(n);
+  const double weight = problem->constraint_weight;
+  auto evaluate = [&](const Eigen::VectorXd& y) {
+    delta = y.cwiseQuotient(scale);
+    ApplyStep(*problem, delta, start, &trial);
+    return EvaluateBlocks(problem, trial, true);
+  };
+  ConstraintPolishProblem pp;
+  pp.num_variables = n;
+  pp.num_constraints = num_constraints;
+  pp.objective = [&](const Eigen::VectorXd& y, Eigen::VectorXd* gradient) {
+    const bool ok = evaluate(y);
+    if (gradient != nullptr) gradient->setZero(n);
+    if (!ok) return std::numeric_limits<double>::infinity();
+    double f = 0.0;
+    for (const ResidualBlock& b : problem->blocks) {
+      if (b.kind == BlockKind::kConstraint) continue;
+      f += 0.5 * b.residual.squaredNorm();
+      if (gradient != nullptr) {
+        for (size_t c = 0; c < b.cols.size(); ++c) (*gradient)(b.cols[c]) += b.jacobian.col(c).dot(b.residual);
+      }
+    }
+    if (gradient != nullptr) *gradient = gradient->cwiseQuotient(scale);
+    return f;
+  };
+  pp.constraints = [&](const Eigen::VectorXd& y, Eigen::VectorXd* values, Eigen::MatrixXd* jacobian) {
+    evaluate(y);
+    values->setZero(num_constraints);
+    if (jacobian != nullptr) jacobian->setZero(num_constraints, n);
+    int row = 0;
+    for (const ResidualBlock& b : problem->blocks) {
+      if (b.kind != BlockKind::kConstraint) continue;
+      values->segment(row, b.num_rows) = b.raw;
+      if (jacobian != nullptr) {
+        for (size_t c = 0; c < b.cols.size(); ++c) {
+          jacobian->block(row, b.cols[c], b.num_rows, 1) += b.jacobian.col(c) / (weight * scale(b.cols[c]));
+        }
+      }
+      row += b.num_rows;
+    }
+  };
+  ConstraintPolishOptions po;
+  po.constraint_tolerance = options.constraint_tolerance;
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(n);
+  ConstraintPolishSummary s = PolishConstraints(pp, po, &y);
+  if (s.success) {
+    ApplyStep(*problem, y.cwiseQuotient(scale), start, state);
+  }
+  EvaluateBlocks(problem, *state, true);
+  return s;
+}
+
+// Conflicts are named only after a solve that ran to convergence: a per-frame solve that
+// used its budget may simply not have enforced the constraints yet.
+void FillDiagnostics(const Project& project, const JointSolveOptions& options, const JointProblem& problem,
+                     bool name_conflicts, JointSolveSummary* summary) {
+  summary->pins.clear();
+  for (const Pin& pin : project.pins) summary->pins.push_back({pin.id, std::numeric_limits<double>::quiet_NaN()});
+  std::map<int, ImageDiagnostic> per_camera;
+  double sum_sq = 0.0, max_px = 0.0;
+  int count = 0;
+  for (const ResidualBlock& b : problem.blocks) {
+    if (b.kind != BlockKind::kPin) continue;
+    const double e = b.residual.norm();
+    summary->pins[b.source].error_px = e;
+    ImageDiagnostic& d = per_camera[b.camera];
+    d.image_id = project.images[problem.cameras[b.camera].image_index].id;
+    ++d.num_pins;
+    d.rms_px += e * e;
+    d.max_px = std::max(d.max_px, e);
+    sum_sq += e * e;
+    max_px = std::max(max_px, e);
+    ++count;
+  }
+  summary->images.clear();
+  for (auto& [camera, d] : per_camera) {
+    d.rms_px = std::sqrt(d.rms_px / d.num_pins);
+    summary->images.push_back(d);
+  }
+  summary->reprojection_rms_px = count > 0 ? std::sqrt(sum_sq / count) : 0.0;
+  summary->reprojection_max_px = max_px;
+
+  summary->constraints.clear();
+  for (const Constraint& c : project.constraints) {
+    ConstraintDiagnostic d;
+    d.constraint_id = c.id;
+    d.residual = std::numeric_limits<double>::quiet_NaN();
+    summary->constraints.push_back(d);
+  }
+  summary->conflicts.clear();
+  for (const ResidualBlock& b : problem.blocks) {
+    if (b.kind != BlockKind::kConstraint) continue;
+    const ConstraintTerm& term = problem.constraints[b.source];
+    ConstraintDiagnostic& d = summary->constraints[term.constraint_index];
+    d.residual = NaturalConstraintResidual(problem, term, b.raw, &d.unit);
+    d.satisfied = b.raw.cwiseAbs().maxCoeff() <= options.conflict_tolerance;
+    if (!d.satisfied && name_conflicts) {
+      const Constraint& c = project.constraints[term.constraint_index];
+      std::ostringstream text;
+      text << "constraint " << c.id << " (" << ConstraintKindName(c.kind) << ") is not met: residual " << d.residual
+           << " " << d.unit << "; it conflicts with other constraints or the pins";
+      summary->conflicts.push_back(text.str());
+    }
+  }
+}
+
+}  // namespace
+
+JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& options, Project* solved) {
+  const auto t0 = std::chrono::steady_clock::now();
+  JointSolveSummary summary;
+  auto finish = [&](Termination termination, const std::string& message) {
+    summary.termination = termination;
+    summary.message = message;
+    summary.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return summary;
+  };
+  if (solved == nullptr) return finish(Termination::kInvalidInput, "no output project given");
+  *solved = project;
+  std::string error;
+  if (!options.Check(&error)) return finish(Termination::kInvalidInput, "invalid options: " + error);
+
+  BuildOptions build;
+  build.refine_intrinsics = options.refine_intrinsics;
+  build.use_segments = options.use_segments;
+  JointState state;
+  JointProblem problem = BuildJointProblem(project, build, &state);
+  // Cold start: the geometry solve's linear initialisation (camera centres and dimensions
+  // with intrinsics and rotations held) gives the start, when the scene is small enough for
+  // its dense algebra; otherwise, or when it fails, the project's values are the start.
+  Project initialised;
+  const Project* start = &project;
+  if (!options.warm_start && problem.num_parameters > 0 && problem.num_parameters <= kMaxColdStartParameters) {
+    SceneSolveOptions scene_options;
+    scene_options.warm_start = false;
+    const SceneSolveSummary init = SolveScene(project, scene_options, &initialised);
+    if (init.IsUsable()) {
+      start = &initialised;
+      state = JointState();
+      problem = BuildJointProblem(initialised, build, &state);
+    } else if (init.termination != SolveTermination::kNothingToSolve) {
+      problem.warnings.push_back("cold start: the geometry solve gave no start (" + init.message +
+                                 "); started from the project's values");
+    }
+  }
+  summary.warnings = problem.warnings;
+  summary.num_parameters = problem.num_parameters;
+  summary.num_residuals = problem.num_residuals;
+  if (!StateIsFinite(state)) {
+    return finish(Termination::kInvalidInput, "a camera or primitive of the project has a non-finite value");
+  }
+  if (problem.blocks.empty()) return finish(Termination::kNothingToSolve, "no pins, segments or constraints to solve");
+  if (problem.num_parameters == 0) {
+    EvaluateBlocks(&problem, state, false);
+    FillDiagnostics(project, options, problem, true, &summary);
+    summary.initial_cost = summary.final_cost = ObservationCost(problem);
+    return finish(Termination::kNothingToSolve, "every parameter is locked");
+  }
+  problem.constraint_weight = kInitialConstraintWeight;
+
+  if (!EvaluateBlocks(&problem, state, true)) {
+    return finish(Termination::kFailed, "at the start a pinned vertex lies on or behind its camera; the model is unchanged");
+  }
+  summary.initial_cost = ObservationCost(problem);
+  const double initial_merit = TotalCost(problem);
+
+  // The Schur complement on primitive groups, unless a constraint makes a group too large.
+  SchurEquations schur;
+  SparseEquations sparse;
+  NormalEquations* normal_ptr = &schur;
+  if (options.linear_solver != JointSolveOptions::LinearSolver::kSchur || !schur.Init(problem)) {
+    normal_ptr = &sparse;
+    if (!sparse.Init(problem)) return finish(Termination::kFailed, "the sparse normal equations could not be analysed");
+  }
+  NormalEquations& normal = *normal_ptr;
+  LmState lm;
+  lm.lambda = lm.accepted_lambda = options.initial_lambda;
+  JointState trial = state;
+  Eigen::VectorXd delta(problem.num_parameters);
+  std::string why;
+  bool budget_used = false;
+  double previous_violation = std::numeric_limits<double>::infinity();
+  const bool has_constraints = !problem.constraints.empty();
+  bool final_round = false;
+  for (int round = 0;; ++round) {
+    const int budget = options.max_iterations - lm.iterations;
+    if (budget <= 0) {
+      budget_used = true;
+      break;
+    }
+    const LmStop stop = RunLevenbergMarquardt(options, budget, &problem, &state, &normal, &lm, &trial, &delta, &why);
+    if (stop == LmStop::kFailed) {
+      *solved = project;
+      summary.iterations = lm.iterations;
+      return finish(Termination::kFailed, "the solve failed (" + why + "); the model is unchanged");
+    }
+    if (stop == LmStop::kBudget) budget_used = true;
+    if (!has_constraints || budget_used || final_round) break;
+    const double violation = MaxConstraintViolation(problem);
+    const double mu = problem.constraint_weight * problem.constraint_weight;
+    // The observation cost still to pay for the violation: sum |lambda_i c_i| with the
+    // updated multipliers (first order). A violation within constraint_tolerance can still
+    // leave the cost far from its constrained minimum when a constraint fights the pins: a
+    // line pin 3 px off has lambda ~ 3 px x focal, so c = 5e-10 rad left 2e-6 of the cost.
+    double cost_gap = 0.0;
+    for (const ResidualBlock& b : problem.blocks) {
+      if (b.kind != BlockKind::kConstraint) continue;
+      cost_gap += std::abs((problem.constraints[b.source].multiplier + mu * b.raw).dot(b.raw));
+    }
+    const bool held = violation <= options.constraint_tolerance;
+    if (held && cost_gap <= kCostGapTolerance * ObservationCost(problem) + kCostGapFloorPx2) break;
+    if (!held && round + 1 >= kMaxOuterRounds) break;
+    // Multiplier update, then a stiffer penalty when the violation did not drop enough.
+    for (const ResidualBlock& b : problem.blocks) {
+      if (b.kind == BlockKind::kConstraint) problem.constraints[b.source].multiplier += mu * b.raw;
+    }
+    if (held) {
+      // One last round at the stiffest penalty: the multipliers are nearly exact by now, so
+      // it takes a step or two, and it resolves c to ~sqrt(2 eps cost) / weight where the
+      // AL's rounds at a moderate weight stall (the merit's rounding hides smaller c).
+      final_round = true;
+      problem.constraint_weight = kMaxConstraintWeight;
+      continue;
+    }
+    if (violation > 0.25 * previous_violation) {
+      problem.constraint_weight = std::min(problem.constraint_weight * std::sqrt(10.0), kMaxConstraintWeight);
+    }
+    previous_violation = violation;
+  }
+  summary.iterations = lm.iterations;
+  EvaluateBlocks(&problem, state, true);
+  normal.Assemble(problem);
+
+  if (options.polish_constraints && has_constraints) {
+    const ConstraintPolishSummary polish = Polish(options, &problem, &state, normal);
+    summary.polished = polish.success;
+    if (!polish.success) summary.warnings.push_back("constraint polish: " + polish.message);
+  }
+
+  const bool evaluated = EvaluateBlocks(&problem, state, true);
+  summary.final_cost = ObservationCost(problem);
+  if (!StateIsFinite(state) || !std::isfinite(summary.final_cost)) {
+    *solved = project;
+    return finish(Termination::kFailed, "the solve diverged (non-finite values); the model is unchanged");
+  }
+  if (!evaluated) {
+    *solved = project;
+    return finish(Termination::kFailed, "after the solve a pinned vertex lies behind its camera; the model is unchanged");
+  }
+  if (summary.final_cost > initial_merit * (1.0 + 1e-9) + 1e-18) {
+    *solved = project;
+    std::ostringstream text;
+    text << "the solve increased the cost from " << initial_merit << " to " << summary.final_cost
+         << " px^2; the model is unchanged";
+    return finish(Termination::kFailed, text.str());
+  }
+
+  FillDiagnostics(project, options, problem, !budget_used, &summary);
+  if (options.compute_diagnostics) {
+    if (problem.num_parameters <= kMaxDiagnosticParameters) {
+      summary.undetermined = UndeterminedParameters(problem);
+    } else {
+      summary.warnings.push_back("undetermined parameters not analysed: " + std::to_string(problem.num_parameters) +
+                                 " parameters exceed the dense limit of " + std::to_string(kMaxDiagnosticParameters));
+    }
+  }
+  if (start != &project) *solved = *start;
+  WriteState(problem, state, solved);
+  std::ostringstream text;
+  text << "RMS " << summary.reprojection_rms_px << " px over " << summary.pins.size() << " pins after "
+       << summary.iterations << " iterations";
+  return finish(budget_used ? Termination::kMaxIterations : Termination::kConverged, text.str());
+}
+
+}  // namespace facet
