@@ -192,10 +192,10 @@ ProjectiveBundleSummary ProjectiveBundleAdjust(const std::vector<ProjectiveBundl
     cams = std::move(cams_new);
     pts = std::move(pts_new);
   };
-  internal::LmOptions lm;
+  LmOptions lm;
   lm.max_iterations = options.max_iterations;
   lm.relative_decrease_tolerance = 1e-12;
-  const internal::LmResult lm_result = internal::MinimizeLevenbergMarquardt(cost, lm, build, step, accept);
+  const LmResult lm_result = MinimizeLevenbergMarquardt(cost, lm, build, step, accept);
   cost = lm_result.final_cost;
   summary.iterations = lm_result.iterations;
   summary.final_rms_px = std::sqrt(cost / (2.0 * observations.size()));

@@ -562,10 +562,10 @@ BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& obser
     cams = std::move(cams_new);
     pts = std::move(pts_new);
   };
-  internal::LmOptions lm;
+  LmOptions lm;
   lm.max_iterations = options.max_iterations;
   lm.relative_decrease_tolerance = 1e-14;
-  const internal::LmResult lm_result = internal::MinimizeLevenbergMarquardt(cost, lm, build, step, accept);
+  const LmResult lm_result = MinimizeLevenbergMarquardt(cost, lm, build, step, accept);
   cost = lm_result.final_cost;
   summary.iterations = lm_result.iterations;
 

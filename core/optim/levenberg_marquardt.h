@@ -1,96 +1,228 @@
-// The Levenberg-Marquardt iteration shared by the bundle adjustments of self-calibration
-// (core/estimators/self_calibration.cpp, metric; core/estimators/projective_bundle_adjustment.cpp, projective): the damping
-// schedule, the acceptance of a step and the termination, with the problem's linear algebra
-// left to callbacks. Internal to core/.
+// The one Levenberg-Marquardt driver of core: the damping schedule, the acceptance of a step,
+// the stop tests and the iteration callback. The problem's linear algebra is the caller's.
 //
-// Why callbacks rather than residuals and a Jacobian: both adjustments reduce the normal
-// equations to the camera block by the Schur complement over thousands of 3x3 point blocks
-// and parameterise on manifolds (rotations, unit-norm projective cameras and points); a
-// generic dense J^T J over all points would be orders of magnitude slower, and the updates
-// are not additive. The problem supplies:
-//   linearize()                          builds the normal equations at the current state;
-//   step(lambda, &cost, &step_sq) -> bool solves them with Marquardt damping lambda (scaled by
-//                                        the diagonal), forms the candidate state, returns its
-//                                        cost and the squared norm of the step; false when the
-//                                        damped system has no finite solution;
-//   accept()                             makes the candidate the current state.
-// A step is accepted when its cost is finite and lower; then lambda /= 5 (not below 1e-12),
-// else lambda *= 5 (10 after a non-finite solve) until it reaches 1e16. The iteration stops
-// when an accepted step lowers the cost by at most relative_decrease_tolerance times the new
-// cost or moves by at most min_step_squared_norm, when no damping gives a lower cost, when
-// the cost is 0 or not finite, or after max_iterations linearisations.
+// Why the problem is callbacks rather than residuals and a Jacobian: Facet's problems reduce
+// the normal equations by a Schur complement over thousands of point blocks, keep sparse
+// blocks, parameterise rotations and unit vectors on manifolds (updates are not additive) and
+// veto steps that put a vertex behind its camera. A generic dense J^T J would be orders of
+// magnitude slower on the large ones. The problem supplies
+//   bool Linearize();                          builds the normal equations at the current state;
+//                                              returns true when the caller's gradient test
+//                                              already says the state is a minimum;
+//   LmStepStatus Step(double lambda, LmTrial*); solves the damped equations, forms the
+//                                              candidate state and fills the trial;
+//   void Accept();                             makes the candidate the current state.
+//
+// Two damping schedules, both in use (LmOptions::schedule):
+//   kFixedFactors: lambda *= lambda_decrease after an accepted step, *= lambda_increase after
+//     a rejected one (Marquardt 1963). Cheap and robust for the small calibration problems.
+//   kGainRatio: Nielsen's rule (Madsen, Nielsen, Tingleff 2004, eq. 3.16): after a step with
+//     gain ratio rho = actual / predicted decrease, lambda *= max(1/3, 1 - (2 rho - 1)^3);
+//     after a rejection lambda *= nu, nu *= 2. Needs LmTrial::predicted_decrease; fewer
+//     rejected trials on the scene solves, where a trial costs a full evaluation.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <limits>
+#include <string>
 
-namespace facet::internal {
+namespace facet {
+
+enum class LmSchedule { kFixedFactors, kGainRatio };
+
+// What the driver reports after every trial step (accepted or not).
+struct LmIteration {
+  int iteration = 0;               // as counted by LmResult::iterations
+  double cost = 0.0;               // the current (accepted) cost
+  double trial_cost = 0.0;         // the trial's cost (+inf when it could not be evaluated)
+  double lambda = 0.0;             // the damping the trial used
+  double step_squared_norm = 0.0;  // in the problem's own (possibly scaled) coordinates
+  bool accepted = false;
+};
 
 struct LmOptions {
   int max_iterations = 100;
+  // Count every trial step as an iteration (the scene solves, as Ceres does), or every
+  // linearisation with however many trials it took (the calibration problems).
+  bool count_every_trial = false;
+  LmSchedule schedule = LmSchedule::kFixedFactors;
   double initial_lambda = 1e-4;
+  double lambda_decrease = 0.2;  // kFixedFactors: factor after an accepted step
+  double lambda_increase = 5.0;  // kFixedFactors: factor after a rejected step
+  // After a damped system without a finite solution: lambda *= this (kGainRatio: 0 means the
+  // rejection rule, lambda *= nu), or stop at once.
+  double lambda_increase_on_failed_solve = 10.0;
+  bool stop_on_failed_solve = false;
+  double min_lambda = 1e-12;  // lambda never drops below it after an accepted step
+  double max_lambda = 1e16;   // rejections up to it: no damping lowers the cost
+  double max_lambda_on_failed_solve = 1e16;
+  // kGainRatio: a step is accepted when it lowers the cost and rho exceeds this.
+  double min_gain_ratio = 0.0;
+  // An accepted step ends the run when it lowers the cost by at most this fraction of the
+  // cost before it, or moves the state by at most sqrt(min_step_squared_norm).
   double relative_decrease_tolerance = 1e-14;
   double min_step_squared_norm = 1e-30;
+  // Called after every trial; returning false stops the run (progress, stepping, budgets).
+  std::function<bool(const LmIteration&)> callback;
+
+  bool Check(std::string* error) const;
+};
+
+enum class LmStepStatus {
+  kSolved,           // the trial holds a candidate
+  kSolveFailed,      // the damped system has no finite solution at this lambda
+  kStepNegligible,   // the caller's own step test says the state has converged
+};
+
+struct LmTrial {
+  double cost = std::numeric_limits<double>::infinity();  // +inf vetoes the step
+  double step_squared_norm = 0.0;
+  double predicted_decrease = 0.0;  // kGainRatio: decrease of the linear model
 };
 
 enum class LmTermination {
-  kConverged,      // the last accepted step changed the cost or the state negligibly
-  kNoDecrease,     // no damping lowered the cost: a (local) minimum to working precision
-  kMaxIterations,  // max_iterations reached (0 included)
-  kZeroCost,       // the start or an accepted step fits exactly
-  kNonFiniteCost,  // the start's cost is not finite: nothing was tried
+  kConverged,           // a negligible decrease or step, or the caller's step test
+  kGradientConverged,   // the caller's gradient test at a linearisation
+  kNoDecrease,          // no damping up to max_lambda lowered the cost: a minimum to working precision
+  kMaxIterations,       // max_iterations reached (0 included)
+  kZeroCost,            // the start or an accepted step fits exactly
+  kNonFiniteCost,       // the start's cost is not finite: nothing was tried
+  kLinearSolveFailed,   // no damping up to max_lambda_on_failed_solve gave a finite step
+  kStoppedByCallback,
 };
+const char* LmTerminationName(LmTermination termination);
 
 struct LmResult {
-  int iterations = 0;  // linearisations, the last (non-improving) one included
+  int iterations = 0;
+  int accepted_steps = 0;
   double initial_cost = 0.0;
   double final_cost = 0.0;
+  double final_lambda = 0.0;  // the damping after the last accepted step (to resume from)
   LmTermination termination = LmTermination::kMaxIterations;
 };
 
+namespace internal {
+
+struct LmSchedulerState {
+  double lambda;
+  double nu = 2.0;
+};
+
+inline void LmOnAccepted(const LmOptions& o, double rho, LmSchedulerState* s) {
+  if (o.schedule == LmSchedule::kFixedFactors) {
+    s->lambda *= o.lambda_decrease;
+  } else {
+    const double t = 2.0 * rho - 1.0;
+    s->lambda *= std::max(1.0 / 3.0, 1.0 - t * t * t);
+    s->nu = 2.0;
+  }
+  s->lambda = std::max(s->lambda, o.min_lambda);
+}
+
+inline void LmOnRejected(const LmOptions& o, bool failed_solve, LmSchedulerState* s) {
+  if (o.schedule == LmSchedule::kFixedFactors) {
+    s->lambda *= failed_solve ? o.lambda_increase_on_failed_solve : o.lambda_increase;
+  } else if (failed_solve && o.lambda_increase_on_failed_solve > 0.0) {
+    s->lambda *= o.lambda_increase_on_failed_solve;
+  } else {
+    s->lambda *= s->nu;
+    s->nu *= 2.0;
+  }
+}
+
+}  // namespace internal
+
+// Minimises from the problem's current state, whose cost is `cost`. On return the problem's
+// state is the best one found (the last accepted candidate).
+template <typename Problem>
+LmResult MinimizeLevenbergMarquardt(double cost, const LmOptions& options, Problem& problem) {
+  LmResult result;
+  result.initial_cost = cost;
+  internal::LmSchedulerState schedule{options.initial_lambda};
+  result.final_lambda = schedule.lambda;
+  auto finish = [&](LmTermination termination) {
+    result.termination = termination;
+    result.final_cost = cost;
+    return result;
+  };
+  bool need_linearization = true;
+  while (true) {
+    if (need_linearization) {
+      if (!std::isfinite(cost)) return finish(LmTermination::kNonFiniteCost);
+      if (!(cost > 0.0)) return finish(LmTermination::kZeroCost);
+      if (!options.count_every_trial && result.iterations >= options.max_iterations) {
+        return finish(LmTermination::kMaxIterations);
+      }
+      if (problem.Linearize()) return finish(LmTermination::kGradientConverged);
+      need_linearization = false;
+      if (!options.count_every_trial) ++result.iterations;
+    }
+    if (options.count_every_trial) {
+      if (result.iterations >= options.max_iterations) return finish(LmTermination::kMaxIterations);
+      ++result.iterations;
+    }
+    LmTrial trial;
+    const double lambda = schedule.lambda;
+    const LmStepStatus status = problem.Step(lambda, &trial);
+    if (status == LmStepStatus::kStepNegligible) return finish(LmTermination::kConverged);
+    bool accepted = false;
+    bool converged = false;
+    if (status == LmStepStatus::kSolveFailed) {
+      if (options.stop_on_failed_solve) return finish(LmTermination::kLinearSolveFailed);
+      internal::LmOnRejected(options, true, &schedule);
+      if (!(schedule.lambda < options.max_lambda_on_failed_solve)) return finish(LmTermination::kLinearSolveFailed);
+    } else {
+      const double decrease = cost - trial.cost;
+      const double rho = trial.predicted_decrease > 0.0 ? decrease / trial.predicted_decrease : -1.0;
+      accepted = std::isfinite(trial.cost) && trial.cost < cost &&
+                 (options.schedule == LmSchedule::kFixedFactors || rho > options.min_gain_ratio);
+      if (accepted) {
+        problem.Accept();
+        converged = decrease <= options.relative_decrease_tolerance * cost ||
+                    trial.step_squared_norm <= options.min_step_squared_norm;
+        cost = trial.cost;
+        ++result.accepted_steps;
+        internal::LmOnAccepted(options, rho, &schedule);
+        result.final_lambda = schedule.lambda;
+        need_linearization = true;
+      } else {
+        internal::LmOnRejected(options, false, &schedule);
+      }
+    }
+    if (options.callback) {
+      LmIteration report{result.iterations, cost, trial.cost, lambda, trial.step_squared_norm, accepted};
+      if (!options.callback(report)) return finish(LmTermination::kStoppedByCallback);
+    }
+    if (converged) return finish(!(cost > 0.0) ? LmTermination::kZeroCost : LmTermination::kConverged);
+    if (!accepted && status == LmStepStatus::kSolved && !(schedule.lambda < options.max_lambda)) {
+      return finish(LmTermination::kNoDecrease);
+    }
+  }
+}
+
+// The same driver for problems written as three lambdas (the bundle adjustments):
+//   linearize(); step(lambda, &cost, &step_squared_norm) -> bool (false: no finite solution);
+//   accept().
 template <typename Linearize, typename Step, typename Accept>
 LmResult MinimizeLevenbergMarquardt(double cost, const LmOptions& options, Linearize&& linearize, Step&& step,
                                     Accept&& accept) {
-  LmResult result;
-  result.initial_cost = cost;
-  double lambda = options.initial_lambda;
-  result.termination = LmTermination::kMaxIterations;
-  for (int it = 0; it < options.max_iterations; ++it) {
-    if (!std::isfinite(cost)) {
-      result.termination = LmTermination::kNonFiniteCost;
-      break;
+  struct Adapter {
+    Linearize& linearize;
+    Step& step;
+    Accept& accept;
+    bool Linearize() {
+      linearize();
+      return false;
     }
-    if (!(cost > 0)) {
-      result.termination = LmTermination::kZeroCost;
-      break;
+    LmStepStatus Step(double lambda, LmTrial* trial) {
+      return step(lambda, &trial->cost, &trial->step_squared_norm) ? LmStepStatus::kSolved
+                                                                    : LmStepStatus::kSolveFailed;
     }
-    linearize();
-    bool improved = false;
-    result.termination = LmTermination::kNoDecrease;
-    while (lambda < 1e16) {
-      double cost_new = 0.0, step_sq = 0.0;
-      if (!step(lambda, &cost_new, &step_sq)) {
-        lambda *= 10;
-        continue;
-      }
-      if (std::isfinite(cost_new) && cost_new < cost) {
-        const double decrease = cost - cost_new;
-        accept();
-        cost = cost_new;
-        lambda = std::max(lambda / 5, 1e-12);
-        improved = decrease > options.relative_decrease_tolerance * cost && step_sq > options.min_step_squared_norm;
-        result.termination = improved ? LmTermination::kMaxIterations : LmTermination::kConverged;
-        break;
-      }
-      lambda *= 5;
-    }
-    ++result.iterations;
-    if (!improved) break;
-  }
-  if (result.termination == LmTermination::kMaxIterations && !(cost > 0) && std::isfinite(cost))
-    result.termination = LmTermination::kZeroCost;
-  result.final_cost = cost;
-  return result;
+    void Accept() { accept(); }
+  } adapter{linearize, step, accept};
+  return MinimizeLevenbergMarquardt(cost, options, adapter);
 }
 
-}  // namespace facet::internal
+}  // namespace facet
