@@ -41,7 +41,11 @@ namespace internal {
 template <typename Summary>
 Summary FailedSummary(Summary summary, std::string message, std::chrono::steady_clock::time_point start,
                       SolverTermination termination = SolverTermination::kFailed) {
-  summary.termination = termination;
+  if constexpr (requires { summary.success; }) {
+    summary.success = false;  // a summary not yet on SolverSummary
+  } else {
+    summary.termination = termination;
+  }
   summary.message = std::move(message);
   summary.time_ms = MsSince(start);
   return summary;
