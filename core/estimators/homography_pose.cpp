@@ -11,6 +11,7 @@
 
 #include "core/util/format.h"
 #include "core/util/timer.h"
+#include "core/geometry/cross_product_matrix.h"
 #include "core/geometry/hartley_normalization.h"
 #include "core/optim/solver_summary.h"
 

@@ -205,13 +205,13 @@ LmResult MinimizeLevenbergMarquardt(double cost, const LmOptions& options, Probl
 // The same driver for problems written as three lambdas (the bundle adjustments):
 //   linearize(); step(lambda, &cost, &step_squared_norm) -> bool (false: no finite solution);
 //   accept().
-template <typename Linearize, typename Step, typename Accept>
-LmResult MinimizeLevenbergMarquardt(double cost, const LmOptions& options, Linearize&& linearize, Step&& step,
-                                    Accept&& accept) {
+template <typename LinearizeFn, typename StepFn, typename AcceptFn>
+LmResult MinimizeLevenbergMarquardt(double cost, const LmOptions& options, LinearizeFn&& linearize, StepFn&& step,
+                                    AcceptFn&& accept) {
   struct Adapter {
-    Linearize& linearize;
-    Step& step;
-    Accept& accept;
+    LinearizeFn& linearize;
+    StepFn& step;
+    AcceptFn& accept;
     bool Linearize() {
       linearize();
       return false;
