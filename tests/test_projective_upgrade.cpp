@@ -96,13 +96,13 @@ struct MetricResult {
 // The whole chain: projective from F, affine from the vanishing points, metric from K1, K2.
 MetricResult Stratify(const Scene& s, const Eigen::Matrix3d& F) {
   const ProjectiveReconstructionSummary proj = ReconstructProjective(F, s.uv1, s.uv2, {});
-  REQUIRE_MESSAGE(proj.success, proj.message);
+  REQUIRE_MESSAGE(proj.IsUsable(), proj.message);
   const AffineUpgradeSummary affine = UpgradeToAffine({proj.P1, proj.P2}, s.vanishing, {});
-  REQUIRE_MESSAGE(affine.success, affine.message);
+  REQUIRE_MESSAGE(affine.IsUsable(), affine.message);
   const std::vector<Eigen::Vector4d> affine_points = TransformPoints(affine.affine_from_projective, proj.points);
   const MetricUpgradeSummary metric =
       UpgradeToMetric(affine.cameras, {s.cam1.K(), s.cam2.K()}, affine_points, MetricUpgradeOptions());
-  REQUIRE_MESSAGE(metric.success, metric.message);
+  REQUIRE_MESSAGE(metric.IsUsable(), metric.message);
   MetricResult out;
   out.cameras = metric.cameras;
   for (const auto& x : TransformPoints(metric.metric_from_affine, affine_points)) out.points.push_back(Dehomogenize(x));
@@ -137,7 +137,7 @@ TEST_CASE("canonical cameras from F reproduce F and triangulate the matches exac
   CAPTURE((f_back - s.F).cwiseAbs().maxCoeff());
   CHECK((f_back - s.F).cwiseAbs().maxCoeff() < kExactTol);
   const ProjectiveReconstructionSummary proj = ReconstructProjective(s.F, s.uv1, s.uv2, {});
-  REQUIRE_MESSAGE(proj.success, proj.message);
+  REQUIRE_MESSAGE(proj.IsUsable(), proj.message);
   CAPTURE(proj.reprojection_rms_px);
   CHECK(proj.reprojection_rms_px < 1e-7);  // px, on ~1000 px coordinates
 }
@@ -150,8 +150,8 @@ TEST_CASE("refinement lowers the linear triangulation's reprojection error under
   linear_only.refine_points = false;
   const auto linear = ReconstructProjective(s.F, s.uv1, s.uv2, linear_only);
   const auto refined = ReconstructProjective(s.F, s.uv1, s.uv2, {});
-  REQUIRE(linear.success);
-  REQUIRE(refined.success);
+  REQUIRE(linear.IsUsable());
+  REQUIRE(refined.IsUsable());
   CAPTURE(linear.reprojection_rms_px);
   CAPTURE(refined.reprojection_rms_px);
   CHECK(refined.reprojection_rms_px < linear.reprojection_rms_px);
@@ -183,7 +183,7 @@ TEST_CASE("with pixel noise and 1 mrad vanishing directions the upgrade error fo
     o.num_points = 100;
     const Scene s = MakeScene(o);
     const FundamentalSummary f = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
-    REQUIRE_MESSAGE(f.success, f.message);
+    REQUIRE_MESSAGE(f.IsUsable(), f.message);
     const MetricResult m = Stratify(s, f.F);
     const double error = AlignedRelativeError(s, m);
     const Eigen::Matrix3d r_true = s.cam2.cam_from_world_rotation * s.cam1.cam_from_world_rotation.transpose();
@@ -207,7 +207,7 @@ TEST_CASE("the affine upgrade rejects too few or dependent vanishing points") {
   std::vector<std::vector<Eigen::Vector3d>> two(s.vanishing.begin(), s.vanishing.begin() + 2);
   const AffineUpgradeSummary too_few = UpgradeToAffine({p1, p2}, two, {});
   CAPTURE(too_few.message);
-  CHECK_FALSE(too_few.success);
+  CHECK_FALSE(too_few.IsUsable());
   // The third direction in the plane of the first two: its vanishing points lie on the line
   // through theirs in both images.
   std::vector<std::vector<Eigen::Vector3d>> dependent = two;
@@ -218,21 +218,21 @@ TEST_CASE("the affine upgrade rejects too few or dependent vanishing points") {
     dependent[2][v] = cams[v]->K() * cams[v]->cam_from_world_rotation * Eigen::Vector3d(1.0, 2.0, 0.0);
   const AffineUpgradeSummary coplanar = UpgradeToAffine({p1, p2}, dependent, {});
   CAPTURE(coplanar.message);
-  CHECK_FALSE(coplanar.success);
+  CHECK_FALSE(coplanar.IsUsable());
 }
 
 TEST_CASE("wrong intrinsics in the metric upgrade are reported") {
   const Scene s = MakeScene({});
   const ProjectiveReconstructionSummary proj = ReconstructProjective(s.F, s.uv1, s.uv2, {});
   const AffineUpgradeSummary affine = UpgradeToAffine({proj.P1, proj.P2}, s.vanishing, {});
-  REQUIRE(affine.success);
+  REQUIRE(affine.IsUsable());
   Eigen::Matrix3d k2_wrong = s.cam2.K();
   k2_wrong(0, 0) *= 2.0;
   k2_wrong(1, 1) *= 2.0;
   const MetricUpgradeSummary metric = UpgradeToMetric(affine.cameras, {s.cam1.K(), k2_wrong}, {}, MetricUpgradeOptions());
   CAPTURE(metric.message);
   CAPTURE(metric.max_rotation_residual);
-  const bool reported = !metric.success || !metric.warnings.empty();
+  const bool reported = !metric.IsUsable() || !metric.warnings.empty();
   CHECK(reported);
 }
 

@@ -122,7 +122,7 @@ TEST_CASE("noise-free, principal point at the centre: the linear quadric is exac
   options.focal_weight = 0.0;  // only the exact constraints
   options.bundle_adjust = false;
   const SelfCalibrationSummary linear = SelfCalibrate(s.views, s.tracks, options);
-  REQUIRE_MESSAGE(linear.success, linear.message);
+  REQUIRE_MESSAGE(linear.IsUsable(), linear.message);
   const Errors linear_errors = Compare(s, linear);
   CAPTURE(linear.message);
   CAPTURE(linear_errors.max_focal_rel);
@@ -134,7 +134,7 @@ TEST_CASE("noise-free, principal point at the centre: the linear quadric is exac
 
   options.bundle_adjust = true;
   const SelfCalibrationSummary full = SelfCalibrate(s.views, s.tracks, options);
-  REQUIRE_MESSAGE(full.success, full.message);
+  REQUIRE_MESSAGE(full.IsUsable(), full.message);
   const Errors e = Compare(s, full);
   CAPTURE(full.message);
   CAPTURE(e.max_focal_rel);
@@ -153,7 +153,7 @@ TEST_CASE("noise-free, principal point off-centre: the adjustment recovers focal
   options.principal_point_mode = PrincipalPointMode::kSolve;
   options.principal_point_prior_std = 0.0;  // the unbiased solve (a prior pulls towards the centre)
   const SelfCalibrationSummary r = SelfCalibrate(s.views, s.tracks, options);
-  REQUIRE_MESSAGE(r.success, r.message);
+  REQUIRE_MESSAGE(r.IsUsable(), r.message);
   const Errors e = Compare(s, r);
   const double linear_rel = std::abs(r.linear_focal_px[0] / s.cameras[0].focal_px - 1.0);
   const double pp_error = (r.cameras[0].principal_point_px - s.cameras[0].principal_point_px).norm();
@@ -177,7 +177,7 @@ TEST_CASE("noise-free, one focal length per view (zoom): each is recovered") {
   SelfCalibrationOptions options;
   options.shared_focal_length = false;
   const SelfCalibrationSummary r = SelfCalibrate(s.views, s.tracks, options);
-  REQUIRE_MESSAGE(r.success, r.message);
+  REQUIRE_MESSAGE(r.IsUsable(), r.message);
   const Errors e = Compare(s, r);
   CAPTURE(r.message);
   CAPTURE(e.max_focal_rel);
@@ -197,7 +197,7 @@ TEST_CASE("with 0.5 px noise and 5 % wrong observations the focal length is with
     SelfCalibrationOptions options;
     options.principal_point_mode = mode;
     const SelfCalibrationSummary r = SelfCalibrate(s.views, s.tracks, options);
-    REQUIRE_MESSAGE(r.success, r.message);
+    REQUIRE_MESSAGE(r.IsUsable(), r.message);
     const Errors e = Compare(s, r);
     const double focal_error_px = std::abs(r.cameras[0].focal_px - s.cameras[0].focal_px);
     CAPTURE(static_cast<int>(mode));
@@ -249,7 +249,7 @@ TEST_CASE("the reported focal standard deviation matches the spread of the estim
       for (Track& t : tracks)
         for (auto& obs : t) obs.uv_px += Eigen::Vector2d(noise(rng), noise(rng));
       const SelfCalibrationSummary r = SelfCalibrate(s.views, tracks, options);
-      REQUIRE_MESSAGE(r.success, r.message);
+      REQUIRE_MESSAGE(r.IsUsable(), r.message);
       focal.push_back(r.cameras[0].focal_px);
       reported.push_back(r.focal_std_px[0]);
     }
@@ -283,7 +283,7 @@ TEST_CASE("a single-image focal prior lets a long lens far from the default norm
   std::vector<SelfCalibrationView> views = s.views;
   for (auto& v : views) v.focal_prior_px = 2300.0;  // the single-image estimate, 12 % low
   const SelfCalibrationSummary r = SelfCalibrate(views, s.tracks, SelfCalibrationOptions());
-  REQUIRE_MESSAGE(r.success, r.message);
+  REQUIRE_MESSAGE(r.IsUsable(), r.message);
   const double rel = std::abs(r.cameras[0].focal_px / s.cameras[0].focal_px - 1.0);
   CAPTURE(r.message);
   CAPTURE(rel);
@@ -313,13 +313,18 @@ TEST_CASE("projective bundle adjustment converges from perturbed cameras and poi
   for (auto& x : points) x += 1e-4 * x.norm() * Eigen::Vector4d::NullaryExpr([&] { return noise(rng); });
   const ProjectiveBundleSummary r = ProjectiveBundleAdjust(observations, pixel_from_normalised, {}, &cameras, &points);
   CAPTURE(r.message);
-  REQUIRE(r.success);
+  REQUIRE(r.IsUsable());
   CHECK(r.initial_rms_px > 1.0);  // the start is not the answer (about 180 px off)
   CHECK(r.final_rms_px < kExactTol * s.cameras[0].focal_px);
+  // The summary's costs are the squared pixel errors behind the RMS figures.
+  CHECK(r.initial_cost == doctest::Approx(2.0 * observations.size() * r.initial_rms_px * r.initial_rms_px));
+  CHECK(r.final_cost <= r.initial_cost);
+  CHECK(r.iterations > 0);
 
   std::vector<ProjectiveBundleObservation> bad = observations;
   bad[0].point = -1;
-  CHECK_FALSE(ProjectiveBundleAdjust(bad, pixel_from_normalised, {}, &cameras, &points).success);
+  CHECK(ProjectiveBundleAdjust(bad, pixel_from_normalised, {}, &cameras, &points).termination ==
+        SolverTermination::kInvalidInput);
 }
 
 // A closed ring of views around the box where each track reaches only three consecutive
@@ -378,7 +383,7 @@ TEST_CASE("a ring of 12 views whose tracks reach only neighbours registers view 
     const SelfCalibrationSummary r = SelfCalibrate(s.views, s.tracks, SelfCalibrationOptions());
     CAPTURE(noise_px);
     CAPTURE(r.message);
-    REQUIRE_MESSAGE(r.success, r.message);
+    REQUIRE_MESSAGE(r.IsUsable(), r.message);
     for (const auto& w : r.warnings) MESSAGE("warning: " << w);
     const Errors e = Compare(s, r);  // requires every view registered
     const double focal_error_px = std::abs(r.cameras[0].focal_px - s.cameras[0].focal_px);
@@ -416,16 +421,16 @@ TEST_CASE("bad input comes back as a message") {
   }
   const SelfCalibrationSummary r2 = SelfCalibrate(two, tracks_two, {});
   CAPTURE(r2.message);
-  CHECK_FALSE(r2.success);
+  CHECK_FALSE(r2.IsUsable());
   std::vector<Track> few(s.tracks.begin(), s.tracks.begin() + 5);
   const SelfCalibrationSummary r_few = SelfCalibrate(s.views, few, {});
   CAPTURE(r_few.message);
-  CHECK_FALSE(r_few.success);
+  CHECK_FALSE(r_few.IsUsable());
   std::vector<Track> bad = s.tracks;
   bad[0][0].view = 99;
   const SelfCalibrationSummary r_bad = SelfCalibrate(s.views, bad, {});
   CAPTURE(r_bad.message);
-  CHECK_FALSE(r_bad.success);
+  CHECK_FALSE(r_bad.IsUsable());
 }
 
 }  // namespace

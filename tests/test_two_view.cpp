@@ -113,7 +113,7 @@ TEST_CASE("noise-free matches give the true F from the 8-point algorithm and aft
     Eigen::Matrix3d f8;
     REQUIRE(FundamentalEightPoint(s.uv1, s.uv2, &f8));
     const FundamentalSummary summary = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
-    REQUIRE_MESSAGE(summary.success, summary.message);
+    REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
     CAPTURE(scale);
     CAPTURE(MaxAbsDiff(f8, s.F));
     CAPTURE(MaxAbsDiff(summary.F, s.F));
@@ -145,14 +145,14 @@ TEST_CASE("seven matches: one of the 7-point roots is the true F") {
   CHECK(best < kExactTol);
 
   const FundamentalSummary summary = EstimateFundamentalMatrix(uv1, uv2, FundamentalOptions());
-  REQUIRE_MESSAGE(summary.success, summary.message);
+  REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
   CHECK(summary.symmetric_epipolar_rms_px < 1e-6);
   CHECK(HasWarning(summary.warnings, "7 matches"));
 
   // Eight matches: the 8-point solution, exact, but with no check for wrong clicks.
   const Points uv1_8(s.uv1.begin(), s.uv1.begin() + 8), uv2_8(s.uv2.begin(), s.uv2.begin() + 8);
   const FundamentalSummary eight = EstimateFundamentalMatrix(uv1_8, uv2_8, FundamentalOptions());
-  REQUIRE_MESSAGE(eight.success, eight.message);
+  REQUIRE_MESSAGE(eight.IsUsable(), eight.message);
   CAPTURE(MaxAbsDiff(eight.F, s.F));
   CHECK(MaxAbsDiff(eight.F, s.F) < kExactTol);
   CHECK(HasWarning(eight.warnings, "no redundancy"));
@@ -167,13 +167,13 @@ TEST_CASE("with 0.5 px noise the refined RMS is near the noise and never above t
     o.seed = seed;
     const TwoViewScene s = MakeScene(o);
     const FundamentalSummary summary = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
-    REQUIRE_MESSAGE(summary.success, summary.message);
+    REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
     const double true_f_rms = SymmetricEpipolarRms(s.F, s.uv1, s.uv2, summary.inliers);
     CAPTURE(seed);
     CAPTURE(summary.initial_symmetric_epipolar_rms_px);
     CAPTURE(summary.symmetric_epipolar_rms_px);
     CAPTURE(true_f_rms);
-    CAPTURE(summary.refine_iterations);
+    CAPTURE(summary.iterations);
     CHECK(summary.num_inliers == o.num_points);
     // Each distance mixes the noise of both images (~ sqrt(2) sigma) less the 7 fitted dof.
     CHECK(summary.symmetric_epipolar_rms_px > 0.4 * kNoisePx);
@@ -210,7 +210,7 @@ TEST_CASE("10 % wrong matches are flagged") {
       is_outlier[i] = true;
     }
     const FundamentalSummary summary = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
-    REQUIRE_MESSAGE(summary.success, summary.message);
+    REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
     for (int i = 0; i < kNumPoints; ++i) {
       outliers_total += is_outlier[i];
       flagged += !summary.inliers[i];
@@ -245,7 +245,7 @@ TEST_CASE("the adaptive RANSAC stop draws far fewer samples than 100 on clean ma
     o.seed = seed;
     TwoViewScene s = MakeScene(o);
     const FundamentalSummary clean = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
-    REQUIRE_MESSAGE(clean.success, clean.message);
+    REQUIRE_MESSAGE(clean.IsUsable(), clean.message);
     CAPTURE(seed);
     CAPTURE(clean.ransac_iterations);
     CHECK(clean.ransac_iterations >= 1);
@@ -265,7 +265,7 @@ TEST_CASE("the adaptive RANSAC stop draws far fewer samples than 100 on clean ma
       is_outlier[i] = true;
     }
     const FundamentalSummary dirty = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
-    REQUIRE_MESSAGE(dirty.success, dirty.message);
+    REQUIRE_MESSAGE(dirty.IsUsable(), dirty.message);
     CAPTURE(dirty.ransac_iterations);
     CAPTURE(dirty.num_inliers);
     CAPTURE(dirty.symmetric_epipolar_rms_px);
@@ -303,10 +303,10 @@ int InFront(const TwoViewScene& s, const Eigen::Matrix3d& R, const Eigen::Vector
 TEST_CASE("relative pose from E: noise-free exact, cheirality picks the true decomposition") {
   const TwoViewScene s = MakeScene({});
   const FundamentalSummary f = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
-  REQUIRE(f.success);
+  REQUIRE(f.IsUsable());
   const RelativePoseSummary pose =
       EstimateRelativePose(f.F, s.cam1.K(), s.cam2.K(), s.uv1, s.uv2, f.inliers, RelativePoseOptions());
-  REQUIRE_MESSAGE(pose.success, pose.message);
+  REQUIRE_MESSAGE(pose.IsUsable(), pose.message);
   const double rot_err = RotationErrorRad(pose.cam2_from_cam1_rotation, s.R);
   const double t_err = AngleRad(pose.cam2_from_cam1_translation, s.t);
   CAPTURE(rot_err);
@@ -351,11 +351,11 @@ TEST_CASE("relative pose with 0.5 px noise is within the noise, and its refineme
     o.num_points = 100;
     const TwoViewScene s = MakeScene(o);
     const FundamentalSummary f = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
-    REQUIRE(f.success);
+    REQUIRE(f.IsUsable());
     const double true_pose_rms = SymmetricEpipolarRms(s.F, s.uv1, s.uv2, f.inliers);
     const RelativePoseSummary pose =
         EstimateRelativePose(f.F, s.cam1.K(), s.cam2.K(), s.uv1, s.uv2, f.inliers, RelativePoseOptions());
-    REQUIRE_MESSAGE(pose.success, pose.message);
+    REQUIRE_MESSAGE(pose.IsUsable(), pose.message);
     const double rot_err = RotationErrorRad(pose.cam2_from_cam1_rotation, s.R);
     const double t_err = AngleRad(pose.cam2_from_cam1_translation, s.t);
     CAPTURE(seed);
@@ -382,7 +382,7 @@ TEST_CASE("degenerate input gives an error that says why") {
   const TwoViewScene s = MakeScene({});
   auto message = [](const Points& a, const Points& b) {
     const FundamentalSummary summary = EstimateFundamentalMatrix(a, b, FundamentalOptions());
-    CHECK(!summary.success);
+    CHECK(!summary.IsUsable());
     return summary.message;
   };
   {
@@ -421,19 +421,21 @@ TEST_CASE("degenerate input gives an error that says why") {
     o.noise_px = 0.5;
     const TwoViewScene q = MakeScene(o);
     const FundamentalSummary noisy = EstimateFundamentalMatrix(q.uv1, q.uv2, FundamentalOptions());
-    REQUIRE_MESSAGE(noisy.success, noisy.message);
+    REQUIRE_MESSAGE(noisy.IsUsable(), noisy.message);
     CAPTURE(noisy.homography_rms_px);
     CHECK(HasWarning(noisy.warnings, "homography"));
   }
   {
     FundamentalOptions bad;
     bad.inlier_threshold_px = -1;
-    CHECK(EstimateFundamentalMatrix(s.uv1, s.uv2, bad).message.find("bad options") != std::string::npos);
+    const FundamentalSummary rejected = EstimateFundamentalMatrix(s.uv1, s.uv2, bad);
+    CHECK(rejected.message.find("bad options") != std::string::npos);
+    CHECK(rejected.termination == SolverTermination::kInvalidInput);
   }
   {
     const RelativePoseSummary pose = EstimateRelativePose(s.F, Eigen::Matrix3d::Zero(), s.cam2.K(), s.uv1, s.uv2, {},
                                                           RelativePoseOptions());
-    CHECK(!pose.success);
+    CHECK(!pose.IsUsable());
     CHECK(pose.message.find("singular") != std::string::npos);
   }
 }

@@ -12,7 +12,7 @@
 // gauge is left to the damping: the result is one of the equivalent minima.
 //
 // Degenerate input (no observations, an index out of range, non-finite pixels) returns
-// success = false with a message and leaves cameras and points unchanged.
+// an unusable summary with a message and leaves cameras and points unchanged.
 #pragma once
 
 #include <string>
@@ -21,6 +21,7 @@
 #include <Eigen/Core>
 
 #include "core/estimators/projective_upgrade.h"
+#include "core/optim/solver_summary.h"
 
 namespace facet {
 
@@ -36,15 +37,10 @@ struct ProjectiveBundleOptions {
   bool Check(std::string* error) const;
 };
 
-struct ProjectiveBundleSummary {
-  bool success = false;
-  std::string message;
+// initial_cost / final_cost: the sum of squared reprojection errors (px^2).
+struct ProjectiveBundleSummary : SolverSummary {
   double initial_rms_px = 0.0;
   double final_rms_px = 0.0;
-  int iterations = 0;
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 ProjectiveBundleSummary ProjectiveBundleAdjust(const std::vector<ProjectiveBundleObservation>& observations,

@@ -22,6 +22,8 @@
 
 #include <Eigen/Core>
 
+#include "core/optim/solver_summary.h"
+
 namespace facet {
 
 using Matrix34d = Eigen::Matrix<double, 3, 4>;
@@ -52,22 +54,18 @@ struct ProjectiveReconstructionOptions {
   bool Check(std::string* error) const;
 };
 
-struct ProjectiveReconstructionSummary {
-  bool success = false;
-  std::string message;
-  std::vector<std::string> warnings;
+// No iterations; initial_cost / final_cost: the sum of squared reprojection errors (px^2) of
+// the matches, both images, after the linear triangulation and after the refinement.
+struct ProjectiveReconstructionSummary : SolverSummary {
   Matrix34d P1 = Matrix34d::Zero(), P2 = Matrix34d::Zero();  // canonical pair
   std::vector<Eigen::Vector4d> points;                        // per match, unit norm
   // Per match: the RMS of its two reprojection errors (px).
   std::vector<double> reprojection_errors_px;
   double reprojection_rms_px = 0.0;  // over all matches, both images
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 // Canonical cameras from F and the triangulated matches (uv1.size() == uv2.size(), any
-// number including zero). Bad F or non-finite input gives success = false.
+// number including zero). Bad F or non-finite input gives an unusable summary.
 ProjectiveReconstructionSummary ReconstructProjective(const Eigen::Matrix3d& F, const std::vector<Eigen::Vector2d>& uv1,
                                                       const std::vector<Eigen::Vector2d>& uv2,
                                                       const ProjectiveReconstructionOptions& options);
@@ -81,25 +79,21 @@ struct AffineUpgradeOptions {
   bool Check(std::string* error) const;
 };
 
-struct AffineUpgradeSummary {
-  bool success = false;
-  std::string message;
-  std::vector<std::string> warnings;
+// A linear solve: no iterations, and initial_cost / final_cost stay 0 (plane_residual is the
+// fit's measure).
+struct AffineUpgradeSummary : SolverSummary {
   Eigen::Vector4d plane_at_infinity = Eigen::Vector4d::Zero();  // in the projective frame, unit norm
   Eigen::Matrix4d affine_from_projective = Eigen::Matrix4d::Identity();  // X_a = H X_p
   std::vector<Matrix34d> cameras;                                      // P_a = P_p H^-1
   std::vector<Eigen::Vector4d> vanishing_points_3d;  // triangulated, projective frame, unit norm
   double plane_residual = 0.0;                       // see the option
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 // Plane at infinity from 3 or more vanishing points matched across the views (vanishing[k][v]
 // is the k-th direction's vanishing point in view v; every direction must be seen in every
 // view, and views.size() == cameras.size() >= 2). Fewer than 3 directions, directions that
 // triangulate onto a line (fewer than 3 independent ones), or a plane through the first
-// camera's centre give success = false.
+// camera's centre give an unusable summary.
 AffineUpgradeSummary UpgradeToAffine(const std::vector<Matrix34d>& cameras,
                                      const std::vector<std::vector<Eigen::Vector3d>>& vanishing,
                                      const AffineUpgradeOptions& options);
@@ -118,18 +112,14 @@ struct MetricUpgradeOptions {
   bool Check(std::string* error) const;
 };
 
-struct MetricUpgradeSummary {
-  bool success = false;
-  std::string message;
-  std::vector<std::string> warnings;
+// A linear solve: no iterations, and initial_cost / final_cost stay 0 (max_rotation_residual
+// is the fit's measure).
+struct MetricUpgradeSummary : SolverSummary {
   Eigen::Matrix4d metric_from_affine = Eigen::Matrix4d::Identity();  // X_m = H X_a
   std::vector<MetricCamera> cameras;  // K as given, R orthonormalised, t in the metric frame
   // The largest relative deviation of K_i^-1 M_i A (the metric camera's left 3x3 over its
   // scale) from a rotation: 0 for intrinsics consistent with the affine reconstruction.
   double max_rotation_residual = 0.0;
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 // Metric upgrade of an affine reconstruction (cameras.size() == K.size() >= 1, each camera's
@@ -140,7 +130,7 @@ struct MetricUpgradeSummary {
 // a reflection free: affine_points (homogeneous, any number) choose the one that puts most of
 // them in front of the cameras; with none, the result may be the mirror image. A C that is
 // not positive definite (intrinsics inconsistent with the reconstruction, or not an affine
-// one) gives success = false.
+// one) gives an unusable summary.
 MetricUpgradeSummary UpgradeToMetric(const std::vector<Matrix34d>& affine_cameras,
                                      const std::vector<Eigen::Matrix3d>& K,
                                      const std::vector<Eigen::Vector4d>& affine_points,

@@ -33,12 +33,13 @@
 //    rotations and translations, the points, one shared focal length or one per view, and
 //    optionally a principal point (under a weak prior at the image centre by default). The
 //    normal equations are reduced to the camera block by the Schur complement over the 3x3
-//    point blocks; the camera block is solved densely (fine for the few tens of views a user
-//    clicks in, any number of points). Between rounds the inliers are decided again on the
-//    adjusted cameras: observations flagged in the rough early stages come back when they fit.
+//    point blocks (core/optim/schur_step.h); the camera block is solved densely (fine for the
+//    few tens of views a user clicks in, any number of points). Between rounds the inliers
+//    are decided again on the adjusted cameras: observations flagged in the rough early
+//    stages come back when they fit.
 //
 // Degenerate input (fewer than 3 views with tracks, too few tracks, no pair with a usable F,
-// fewer than 3 views registered) gives success = false with a message; views that cannot be
+// fewer than 3 views registered) gives an unusable summary with a message; views that cannot be
 // resected are left out when at least 3 remain, flagged in `registered` and named in a
 // warning with the number of reconstructed points they see.
 // Critical motions (pure translation, rotation about the optical axes, all optical axes
@@ -54,6 +55,7 @@
 #include "core/geometry/camera.h"
 #include "core/geometry/intrinsics_modes.h"
 #include "core/estimators/projective_upgrade.h"
+#include "core/optim/solver_summary.h"
 
 namespace facet {
 
@@ -114,10 +116,10 @@ struct SelfCalibrationOptions {
   bool Check(std::string* error) const;
 };
 
-struct SelfCalibrationSummary {
-  bool success = false;
-  std::string message;
-  std::vector<std::string> warnings;
+// iterations: of the metric bundle adjustment, over its rounds; initial_cost / final_cost: the
+// sum of squared reprojection errors (px^2) of the metric cameras right after the linear
+// upgrade and at the end.
+struct SelfCalibrationSummary : SolverSummary {
   std::vector<Camera> cameras;    // per view; meaningful where registered
   std::vector<bool> registered;   // per view
   std::vector<Eigen::Vector3d> points;  // per track, world
@@ -132,10 +134,6 @@ struct SelfCalibrationSummary {
   double linear_rms_px = 0.0;      // of the metric cameras right after the upgrade
   double reprojection_rms_px = 0.0;  // final
   int num_observations = 0;          // used in the final adjustment
-  int bundle_iterations = 0;
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 SelfCalibrationSummary SelfCalibrate(const std::vector<SelfCalibrationView>& views, const std::vector<Track>& tracks,
@@ -163,16 +161,12 @@ struct BundleObservation {
   Eigen::Vector2d uv_px = Eigen::Vector2d::Zero();
 };
 
-struct BundleAdjustmentSummary {
-  bool success = false;
-  std::string message;
-  double initial_rms_px = 0.0;
+// initial_cost / final_cost: the minimised sum of squared reprojection errors (px^2) plus the
+// principal-point prior's term.
+struct BundleAdjustmentSummary : SolverSummary {
+  double initial_rms_px = 0.0;  // reprojection RMS, without the prior
   double final_rms_px = 0.0;
-  int iterations = 0;
   std::vector<double> focal_std_px;  // per camera
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 // Adjusts cameras and points in place to minimise the squared reprojection error of the

@@ -16,6 +16,7 @@
 #include "core/util/timer.h"
 #include "core/geometry/cross_product_matrix.h"
 #include "core/geometry/hartley_normalization.h"
+#include "core/optim/levenberg_marquardt.h"
 #include "core/optim/solver_summary.h"
 
 namespace facet {
@@ -130,53 +131,78 @@ double SymmetricEpipolarCost(const Eigen::Matrix3d& F, const Points& uv1, const 
   return cost;
 }
 
-// Levenberg-Marquardt on the symmetric epipolar residuals over a parameterisation of F
-// (State: F(), Plus(delta), Tangent()). Only steps that lower the cost are taken, so the
-// result is never worse than the start.
+// The symmetric epipolar residuals over a parameterisation of F (State: F(), Plus(delta),
+// Tangent()) as a problem of the Levenberg-Marquardt driver.
 template <int D, class State>
-State MinimizeSymmetricEpipolar(State state, const Points& uv1, const Points& uv2, int max_iterations,
-                                int* iterations) {
+struct SymmetricEpipolarProblem {
   using VecD = Eigen::Matrix<double, D, 1>;
   using MatD = Eigen::Matrix<double, D, D>;
-  EpipolarNormalEquations normal;
-  double cost = SymmetricEpipolarCost(state.F(), uv1, uv2, &normal);
-  // The damping scales J^T J's own diagonal (Marquardt), so lambda is relative: starting it
-  // at 1e-4 times the largest diagonal entry (Levenberg's absolute convention) damped the
-  // first steps ~100-fold and cost 5 to 10 iterations.
-  double lambda = 1e-4;
-  *iterations = 0;
-  for (int it = 0; it < max_iterations && cost > 0.0; ++it) {
-    ++*iterations;
+  const Points& uv1;
+  const Points& uv2;
+  State state;
+  EpipolarNormalEquations normal;  // at state, over F's nine entries
+  State candidate;
+  EpipolarNormalEquations candidate_normal;
+  MatD jtj;
+  VecD jtr;
+
+  bool Linearize() {
     const Eigen::Matrix<double, 9, D> tangent = state.Tangent();
-    const MatD jtj = tangent.transpose() * normal.jtj * tangent;
-    const VecD jtr = tangent.transpose() * normal.jtr;
-    bool improved = false;
-    while (lambda < 1e20) {
-      MatD h = jtj;
-      h.diagonal() += lambda * (jtj.diagonal().array() + 1e-12 * jtj.diagonal().maxCoeff()).matrix();
-      const VecD delta = -h.ldlt().solve(jtr);
-      if (!delta.allFinite()) {
-        lambda *= 10;
-        continue;
-      }
-      const State candidate = state.Plus(delta);
-      EpipolarNormalEquations normal_c;
-      const double cost_c = SymmetricEpipolarCost(candidate.F(), uv1, uv2, &normal_c);
-      if (std::isfinite(cost_c) && cost_c < cost) {
-        const double decrease = cost - cost_c;
-        state = candidate;
-        normal = normal_c;
-        cost = cost_c;
-        lambda = std::max(lambda / 10, 1e-15);
-        improved = true;
-        if (decrease <= 1e-10 * cost || delta.norm() < 1e-12) return state;
-        break;
-      }
-      lambda *= 10;
-    }
-    if (!improved) break;
+    jtj = tangent.transpose() * normal.jtj * tangent;
+    jtr = tangent.transpose() * normal.jtr;
+    return false;
   }
-  return state;
+  LmStepStatus Step(double lambda, LmTrial* trial) {
+    MatD h = jtj;
+    h.diagonal() += lambda * (jtj.diagonal().array() + 1e-12 * jtj.diagonal().maxCoeff()).matrix();
+    const VecD delta = -h.ldlt().solve(jtr);
+    if (!delta.allFinite()) return LmStepStatus::kSolveFailed;
+    candidate = state.Plus(delta);
+    candidate_normal = EpipolarNormalEquations();
+    trial->cost = SymmetricEpipolarCost(candidate.F(), uv1, uv2, &candidate_normal);
+    trial->step_squared_norm = delta.squaredNorm();
+    return LmStepStatus::kSolved;
+  }
+  void Accept() {
+    state = candidate;
+    normal = candidate_normal;
+  }
+};
+
+// Levenberg-Marquardt on the symmetric epipolar residuals. Only steps that lower the cost are
+// taken, so the result is never worse than the start.
+template <int D, class State>
+State MinimizeSymmetricEpipolar(State state, const Points& uv1, const Points& uv2, int max_iterations,
+                                LmResult* result) {
+  SymmetricEpipolarProblem<D, State> problem{uv1, uv2, state, {}, state, {}, {}, {}};
+  const double cost = SymmetricEpipolarCost(state.F(), uv1, uv2, &problem.normal);
+  // A different rule from the driver's defaults, kept from the refinement's tuning: the
+  // damping lambda (diag + 1e-12 max diag) scales J^T J's own diagonal (Marquardt), so lambda
+  // is relative and starts at 1e-4 (Levenberg's absolute 1e-4 max diag damped the first steps
+  // ~100-fold and cost 5 to 10 iterations); lambda / 10 and x 10 within [1e-15, 1e20); stop
+  // when a step gains at most 1e-10 of the cost after it (= 1e-10 / (1 + 1e-10) of the cost
+  // before, the driver's measure) or moves the parameters by less than 1e-12.
+  LmOptions lm;
+  lm.max_iterations = max_iterations;
+  lm.initial_lambda = 1e-4;
+  lm.lambda_decrease = 0.1;
+  lm.lambda_increase = 10.0;
+  lm.lambda_increase_on_failed_solve = 10.0;
+  lm.min_lambda = 1e-15;
+  lm.max_lambda = lm.max_lambda_on_failed_solve = 1e20;
+  lm.relative_decrease_tolerance = 1e-10 / (1.0 + 1e-10);
+  lm.min_step_squared_norm = 1e-24;
+  *result = MinimizeLevenbergMarquardt(cost, lm, problem);
+  return problem.state;
+}
+
+// The sum of the squared distances (px^2) behind a symmetric epipolar RMS over `count` matches.
+double SquaredRmsToSum(double rms_px, int count) { return rms_px * rms_px * 2.0 * count; }
+
+// A refinement that ran out of iterations leaves a usable F, better than the linear one.
+SolverTermination RefineTermination(const LmResult& result) {
+  return result.termination == LmTermination::kMaxIterations ? SolverTermination::kMaxIterations
+                                                             : SolverTermination::kConverged;
 }
 
 // The SVD of an n x 9 design matrix through its 9 x 9 triangular factor: the same singular
@@ -586,7 +612,8 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
   FundamentalSummary summary;
   auto fail = [&](std::string message) { return FailedSummary(summary, std::move(message), start); };
   std::string error;
-  if (!options.Check(&error)) return fail("bad options: " + error);
+  if (!options.Check(&error))
+    return FailedSummary(summary, "bad options: " + error, start, SolverTermination::kInvalidInput);
   if (uv1.size() != uv2.size())
     return fail("the two images have different numbers of points (" + std::to_string(uv1.size()) + " and " +
                 std::to_string(uv2.size()) + ")");
@@ -612,23 +639,24 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
   // F, which noise in its 7 matches tilts; the refined F decides the final set, and a
   // changed set is fitted again.
   Eigen::Matrix3d f_linear, f_final;
-  int refine_iterations = 0;
-  auto fit = [&](const std::vector<bool>& flags, Eigen::Matrix3d* linear, Eigen::Matrix3d* refined, int* iterations) {
+  LmResult refine_result;
+  auto fit = [&](const std::vector<bool>& flags, Eigen::Matrix3d* linear, Eigen::Matrix3d* refined, LmResult* result) {
     const Points in1 = Select(uv1, flags), in2 = Select(uv2, flags);
     if (!LinearFundamental(in1, in2, linear, &error)) return false;
     *refined = *linear;
-    *iterations = 0;
+    *result = LmResult();
+    result->termination = LmTermination::kConverged;
     if (options.refine) {
       const internal::OrthonormalFundamental start_state =
           internal::OrthonormalFundamental::FromF(*linear, internal::HartleyNormalization(in1),
                                                   internal::HartleyNormalization(in2));
-      *refined = MinimizeSymmetricEpipolar<7>(start_state, in1, in2, options.max_refine_iterations, iterations).F();
+      *refined = MinimizeSymmetricEpipolar<7>(start_state, in1, in2, options.max_refine_iterations, result).F();
     }
     return true;
   };
   const bool robust = options.use_ransac && n > 8;
   for (int round = 0; round < kMaxInlierRounds; ++round) {
-    if (!fit(inliers, &f_linear, &f_final, &refine_iterations)) return fail(error);
+    if (!fit(inliers, &f_linear, &f_final, &refine_result)) return fail(error);
     if (!robust) break;
     const std::vector<bool> updated = Classify(f_final, uv1, uv2, options.inlier_threshold_px);
     if (updated == inliers || Count(updated) < 7 || round + 1 == kMaxInlierRounds) break;
@@ -645,22 +673,24 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
       std::vector<bool> trial = inliers;
       trial[i] = true;
       Eigen::Matrix3d trial_linear, trial_final;
-      int trial_iterations = 0;
-      if (!fit(trial, &trial_linear, &trial_final, &trial_iterations)) continue;
+      LmResult trial_result;
+      if (!fit(trial, &trial_linear, &trial_final, &trial_result)) continue;
       if (Classify(trial_final, uv1, uv2, options.inlier_threshold_px) != trial) continue;
       inliers = trial;
       f_linear = trial_linear;
       f_final = trial_final;
-      refine_iterations = trial_iterations;
+      refine_result = trial_result;
     }
   }
-  summary.refine_iterations = refine_iterations;
+  summary.iterations = refine_result.iterations;
 
   summary.F = NormalizeFundamental(f_final);
   summary.inliers = inliers;
   summary.num_inliers = Count(inliers);
   summary.initial_symmetric_epipolar_rms_px = SymmetricEpipolarRms(f_linear, uv1, uv2, inliers);
   summary.symmetric_epipolar_rms_px = SymmetricEpipolarRms(summary.F, uv1, uv2, inliers);
+  summary.initial_cost = SquaredRmsToSum(summary.initial_symmetric_epipolar_rms_px, summary.num_inliers);
+  summary.final_cost = SquaredRmsToSum(summary.symmetric_epipolar_rms_px, summary.num_inliers);
 
   if (n == 7)
     summary.warnings.push_back(
@@ -684,7 +714,7 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
                                    " px): a planar scene or a camera that only rotated; F is poorly determined");
     }
   }
-  summary.success = true;
+  summary.termination = RefineTermination(refine_result);
   summary.message = "F from " + std::to_string(summary.num_inliers) + " of " + std::to_string(n) +
                     " matches, symmetric epipolar RMS " + Fmt(summary.symmetric_epipolar_rms_px) + " px";
   summary.time_ms = MsSince(start);
@@ -723,7 +753,8 @@ RelativePoseSummary EstimateRelativePose(const Eigen::Matrix3d& F, const Eigen::
   RelativePoseSummary summary;
   auto fail = [&](std::string message) { return FailedSummary(summary, std::move(message), start); };
   std::string error;
-  if (!options.Check(&error)) return fail("bad options: " + error);
+  if (!options.Check(&error))
+    return FailedSummary(summary, "bad options: " + error, start, SolverTermination::kInvalidInput);
   if (uv1.size() != uv2.size()) return fail("the two images have different numbers of points");
   if (!inliers.empty() && inliers.size() != uv1.size()) return fail("inliers must have one flag per match");
   if (!F.allFinite() || !(F.norm() > 0)) return fail("F is zero or not finite");
@@ -762,9 +793,14 @@ RelativePoseSummary EstimateRelativePose(const Eigen::Matrix3d& F, const Eigen::
   state.R = poses[best].first;
   state.t = poses[best].second;
   summary.initial_symmetric_epipolar_rms_px = SymmetricEpipolarRms(state.F(), in1, in2);
+  LmResult refine_result;
+  refine_result.termination = LmTermination::kConverged;
   if (options.refine)
-    state = MinimizeSymmetricEpipolar<5>(state, in1, in2, options.max_refine_iterations, &summary.refine_iterations);
+    state = MinimizeSymmetricEpipolar<5>(state, in1, in2, options.max_refine_iterations, &refine_result);
+  summary.iterations = refine_result.iterations;
   summary.symmetric_epipolar_rms_px = SymmetricEpipolarRms(state.F(), in1, in2);
+  summary.initial_cost = SquaredRmsToSum(summary.initial_symmetric_epipolar_rms_px, summary.num_points);
+  summary.final_cost = SquaredRmsToSum(summary.symmetric_epipolar_rms_px, summary.num_points);
   summary.cam2_from_cam1_rotation = state.R;
   summary.cam2_from_cam1_translation = state.t.normalized();
   summary.E = Skew(summary.cam2_from_cam1_translation) * state.R;
@@ -775,7 +811,7 @@ RelativePoseSummary EstimateRelativePose(const Eigen::Matrix3d& F, const Eigen::
                                " points triangulate behind a camera (wrong clicks or points near the baseline)");
   if (second_count >= best_count - 1 && summary.num_points > 2)
     summary.warnings.push_back("two decompositions of E put nearly as many points in front: the pose is ambiguous");
-  summary.success = true;
+  summary.termination = RefineTermination(refine_result);
   summary.message = "relative pose with " + std::to_string(summary.points_in_front) + " of " +
                     std::to_string(summary.num_points) + " points in front, symmetric epipolar RMS " +
                     Fmt(summary.symmetric_epipolar_rms_px) + " px";

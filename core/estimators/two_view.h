@@ -25,6 +25,8 @@
 
 #include <Eigen/Core>
 
+#include "core/optim/solver_summary.h"
+
 namespace facet {
 
 struct FundamentalOptions {
@@ -48,10 +50,11 @@ struct FundamentalOptions {
   bool Check(std::string* error) const;
 };
 
-struct FundamentalSummary {
-  bool success = false;
-  std::string message;                // why it failed, or a one-line result
-  std::vector<std::string> warnings;  // usable result, but the user should know
+// iterations: of the final refinement; initial_cost / final_cost: the sum of the squared
+// symmetric epipolar distances (px^2) over the inliers, of the linear and the final estimate.
+// warnings: a usable result the user should know about (7 or 8 matches, outliers, a
+// homography that fits as well).
+struct FundamentalSummary : SolverSummary {
   // x2^T F x1 = 0; unit Frobenius norm, sign such that the entry of largest magnitude is
   // positive; rank 2.
   Eigen::Matrix3d F = Eigen::Matrix3d::Zero();
@@ -64,16 +67,12 @@ struct FundamentalSummary {
   // Symmetric transfer RMS of the best homography (DLT) on the inliers; 0 if not computed.
   double homography_rms_px = 0.0;
   int ransac_iterations = 0;
-  int refine_iterations = 0;
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 // Estimates F from 7 or more matches (uv1.size() == uv2.size()). Fewer than 7 matches (or
 // fewer than 7 distinct ones), non-finite coordinates, all points of an image on one line,
-// and configurations where F is not unique (e.g. a noise-free planar scene) give
-// success = false with a message. With exactly 7 matches the 7-point algorithm gives up to
+// and configurations where F is not unique (e.g. a noise-free planar scene) give a summary
+// that is not usable, with a message. With exactly 7 matches the 7-point algorithm gives up to
 // three F; the one with the smallest RMS is returned with a warning.
 FundamentalSummary EstimateFundamentalMatrix(const std::vector<Eigen::Vector2d>& uv1,
                                              const std::vector<Eigen::Vector2d>& uv2,
@@ -88,10 +87,9 @@ struct RelativePoseOptions {
   bool Check(std::string* error) const;
 };
 
-struct RelativePoseSummary {
-  bool success = false;
-  std::string message;
-  std::vector<std::string> warnings;
+// iterations: of the refinement; initial_cost / final_cost: the sum of the squared symmetric
+// epipolar distances (px^2) over the points used, before and after it.
+struct RelativePoseSummary : SolverSummary {
   // E = [t]x R (singular values 1, 1, 0).
   Eigen::Matrix3d E = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d cam2_from_cam1_rotation = Eigen::Matrix3d::Identity();
@@ -103,17 +101,13 @@ struct RelativePoseSummary {
   // Symmetric epipolar RMS (px) of the projected E before and after the refinement.
   double initial_symmetric_epipolar_rms_px = 0.0;
   double symmetric_epipolar_rms_px = 0.0;
-  int refine_iterations = 0;
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 // Relative pose from F (any scale, rank 2) and the intrinsics: E = K2^T F K1 projected to
 // the essential manifold, the decomposition whose triangulated inliers lie in front of both
 // cameras most often, then the optional refinement. inliers may be empty (all matches are
 // used) or have one flag per match. Fewer than 5 points, a non-invertible K, non-finite
-// input, or no decomposition with a majority in front give success = false.
+// input, or no decomposition with a majority in front give an unusable summary.
 RelativePoseSummary EstimateRelativePose(const Eigen::Matrix3d& F, const Eigen::Matrix3d& K1,
                                          const Eigen::Matrix3d& K2, const std::vector<Eigen::Vector2d>& uv1,
                                          const std::vector<Eigen::Vector2d>& uv2, const std::vector<bool>& inliers,

@@ -97,7 +97,7 @@ RelateIoResult RelateMatchesJson(const std::string& matches_json_text) {
     if (!ParseInput(doc, &in, &error)) return Error(error);
 
     const FundamentalSummary f = EstimateFundamentalMatrix(in.uv1, in.uv2, FundamentalOptions());
-    if (!f.success) return Error("fundamental matrix failed: " + f.message);
+    if (!f.IsUsable()) return Error("fundamental matrix failed: " + f.message);
 
     json out = json::object();
     out["F"] = Rows(f.F);
@@ -113,7 +113,7 @@ RelateIoResult RelateMatchesJson(const std::string& matches_json_text) {
     if (in.has_k) {
       const RelativePoseSummary pose =
           EstimateRelativePose(f.F, in.k1, in.k2, in.uv1, in.uv2, f.inliers, RelativePoseOptions());
-      if (!pose.success) return Error("relative pose failed: " + pose.message);
+      if (!pose.IsUsable()) return Error("relative pose failed: " + pose.message);
       const Eigen::Vector3d& t = pose.cam2_from_cam1_translation;
       out["E"] = Rows(pose.E);
       out["R"] = Rows(pose.cam2_from_cam1_rotation);

@@ -326,14 +326,14 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
     FundamentalOptions f_options = options.fundamental;
     f_options.inlier_threshold_px = options.wrong_click_threshold_px;
     const FundamentalSummary f = EstimateFundamentalMatrix(uv_a, uv_b, f_options);
-    if (!f.success) {
+    if (!f.IsUsable()) {
       result.message = "fundamental matrix of " + Quoted(image_a) + " and " + Quoted(image_b) + ": " + f.message;
       return result;
     }
     for (const auto& w : f.warnings) result.warnings.push_back("F: " + w);
     const RelativePoseSummary pose = EstimateRelativePose(f.F, intrinsics_a.K(), intrinsics_b.K(), uv_a, uv_b,
                                                           f.inliers, options.relative_pose);
-    if (!pose.success) {
+    if (!pose.IsUsable()) {
       result.message = "relative pose of " + Quoted(image_b) + " to " + Quoted(image_a) + ": " + pose.message;
       return result;
     }
@@ -492,7 +492,7 @@ SelfCalibrationResult SelfCalibrateImages(const Project& project, const std::vec
   SelfCalibrationOptions sc_options = options.self_calibration;
   sc_options.inlier_threshold_px = options.wrong_click_threshold_px;
   const SelfCalibrationSummary sc = SelfCalibrate(views, tracks, sc_options);
-  if (!sc.success) {
+  if (!sc.IsUsable()) {
     result.message = "self-calibration of " + std::to_string(n) + " images from " + std::to_string(tracks.size()) +
                      " shared vertices: " + sc.message;
     return result;

@@ -51,7 +51,7 @@ void BM_FundamentalEightPointAndRefine(benchmark::State& state) {
   options.use_ransac = false;
   facet::FundamentalSummary summary;
   for (auto _ : state) benchmark::DoNotOptimize(summary = facet::EstimateFundamentalMatrix(s.uv1, s.uv2, options));
-  state.counters["refine_iterations"] = summary.refine_iterations;
+  state.counters["refine_iterations"] = summary.iterations;
   state.counters["ransac_iterations"] = summary.ransac_iterations;
 }
 BENCHMARK(BM_FundamentalEightPointAndRefine)->Arg(30)->Arg(200)->Unit(benchmark::kMicrosecond);
@@ -61,7 +61,7 @@ void BM_FundamentalRansacAndRefine(benchmark::State& state) {
   facet::FundamentalOptions options;
   facet::FundamentalSummary summary;
   for (auto _ : state) benchmark::DoNotOptimize(summary = facet::EstimateFundamentalMatrix(s.uv1, s.uv2, options));
-  state.counters["refine_iterations"] = summary.refine_iterations;
+  state.counters["refine_iterations"] = summary.iterations;
   state.counters["ransac_iterations"] = summary.ransac_iterations;
 }
 BENCHMARK(BM_FundamentalRansacAndRefine)->Arg(30)->Arg(200)->Unit(benchmark::kMicrosecond);

@@ -165,9 +165,9 @@ TEST_CASE("Strecha fountain: relative pose and F from 30 SIFT matches per pair")
     REQUIRE(static_cast<int>(uv1.size()) == kMatchesPerPair);
 
     const FundamentalSummary f = EstimateFundamentalMatrix(uv1, uv2, FundamentalOptions());
-    REQUIRE_MESSAGE(f.success, f.message);
+    REQUIRE_MESSAGE(f.IsUsable(), f.message);
     const RelativePoseSummary pose = EstimateRelativePose(f.F, c1.K, c2.K, uv1, uv2, f.inliers, RelativePoseOptions());
-    REQUIRE_MESSAGE(pose.success, pose.message);
+    REQUIRE_MESSAGE(pose.IsUsable(), pose.message);
 
     const Eigen::Matrix3d true_r = c2.cam_from_world_rotation * c1.cam_from_world_rotation.transpose();
     const Eigen::Vector3d true_t = c2.cam_from_world_translation - true_r * c1.cam_from_world_translation;
