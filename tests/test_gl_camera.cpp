@@ -1,4 +1,4 @@
-// The OpenCV-to-OpenGL camera conversion (app/gl_camera.h): a world point taken through
+// The OpenCV-to-OpenGL camera conversion (app/platform/gl_camera.h): a world point taken through
 // the GL matrices, the perspective divide and the viewport transform lands on the pixel
 // Camera::Project gives, for an off-centre principal point, in a viewport of the image's
 // size and in one of another aspect (image fitted and centred).
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <random>
 
-#include "app/gl_camera.h"
+#include "app/platform/gl_camera.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet::app {
