@@ -22,18 +22,6 @@ namespace {
 const char* const kPrincipalPointModes[] = {"Solve (3 VPs)", "Image centre", "Fixed"};
 const char* const kFocalModes[] = {"Solve from lines", "Known focal", "Prior"};
 
-// The last "From EXIF" outcome, shown under the button until another image is active. UI
-// feedback, not document state.
-struct ExifFeedback {
-  Id image_id = kNoId;
-  bool found = false;
-  std::string message;
-};
-ExifFeedback& LastExifFeedback() {
-  static ExifFeedback feedback;
-  return feedback;
-}
-
 std::string PhotoPath(const AppState& state, const Image& image) {
   return state.project_path.empty() ? image.path : ResolveImagePath(state.project_path, image.path);
 }
@@ -96,9 +84,9 @@ void TrackImageEdit(AppState* state, Id image_id, const std::string& label, bool
   });
 }
 
-void FromExif(AppState* state, const Image& image) {
+void FromExif(AppState* state, const Image& image, ExifFeedback* feedback) {
   const ExifFocalPrior prior = ReadExifFocalPrior(PhotoPath(*state, image), image);
-  LastExifFeedback() = {image.id, prior.found, prior.message};
+  *feedback = {image.id, prior.found, prior.message};
   if (!prior.found) {
     state->Log(LogLevel::kWarning, prior.message);
     return;
@@ -107,7 +95,7 @@ void FromExif(AppState* state, const Image& image) {
   CommitImageEdit(state, image.id, "Focal prior from EXIF", [&](Image* im) { ApplyExifFocalPrior(prior, im); });
 }
 
-void DrawCalibrationControls(AppState* state, const Image& image) {
+void DrawCalibrationControls(AppState* state, const Image& image, ExifFeedback* exif_feedback) {
   const Id id = image.id;
   const float full = -FLT_MIN;
 
@@ -119,13 +107,13 @@ void DrawCalibrationControls(AppState* state, const Image& image) {
     CommitImageEdit(state, id, "Principal point mode",
                     [&](Image* im) { SeedPrincipalPointMode(static_cast<PrincipalPointMode>(pp_mode), im); });
   }
-  RecordItem("calibration.pp_mode");
+  RecordItem(state, "calibration.pp_mode");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("How calibration treats the principal point");
   if (image.principal_point_mode == PrincipalPointMode::kFixed) {
     double pp[2] = {image.fixed_principal_point_px.x(), image.fixed_principal_point_px.y()};
     ImGui::SetNextItemWidth(full);
     const bool changed = DragDoubles("##pp_fixed", pp, 2, 0.5f, "%.1f px");
-    RecordItem("calibration.pp_fixed");
+    RecordItem(state, "calibration.pp_fixed");
     TrackImageEdit(state, id, "Fixed principal point", changed,
                    [&](Image* im) { im->fixed_principal_point_px = Eigen::Vector2d(pp[0], pp[1]); });
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Principal point u, v in px (may lie outside a cropped photo)");
@@ -139,14 +127,14 @@ void DrawCalibrationControls(AppState* state, const Image& image) {
   if (ImGui::Combo("##focal_mode", &focal_mode, kFocalModes, 3)) {
     CommitImageEdit(state, id, "Focal mode", [&](Image* im) { SeedFocalMode(static_cast<FocalMode>(focal_mode), im); });
   }
-  RecordItem("calibration.focal_mode");
+  RecordItem(state, "calibration.focal_mode");
   if (ImGui::IsItemHovered()) {
     ImGui::SetTooltip("Solve: from the vanishing points. Known focal: a calibrated lens.\n"
                       "Prior: solved, pulled towards a value +- std (e.g. from EXIF).");
   }
   ImGui::SameLine();
-  if (ImGui::Button("EXIF")) FromExif(state, image);
-  RecordItem("calibration.from_exif");
+  if (ImGui::Button("EXIF")) FromExif(state, image, exif_feedback);
+  RecordItem(state, "calibration.from_exif");
   if (ImGui::IsItemHovered()) {
     ImGui::SetTooltip("From EXIF: focal prior from the photo's 35 mm-equivalent focal length,\n"
                       "+- ~3 %% (the spread between the makers' equivalence conventions)");
@@ -155,20 +143,20 @@ void DrawCalibrationControls(AppState* state, const Image& image) {
     double f = image.fixed_focal_px;
     ImGui::SetNextItemWidth(full);
     const bool changed = ImGui::DragScalar("##focal_fixed", ImGuiDataType_Double, &f, 1.0f, nullptr, nullptr, "%.1f px");
-    RecordItem("calibration.focal_fixed");
+    RecordItem(state, "calibration.focal_fixed");
     TrackImageEdit(state, id, "Known focal", changed && f > 0.0, [&](Image* im) { im->fixed_focal_px = f; });
   } else if (image.focal_mode == FocalMode::kPrior) {
     double prior[2] = {image.focal_prior_px, image.focal_prior_std_px};
     ImGui::SetNextItemWidth(full);
     const bool changed = DragDoubles("##focal_prior", prior, 2, 1.0f, "%.1f px");
-    RecordItem("calibration.focal_prior");
+    RecordItem(state, "calibration.focal_prior");
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Prior focal length and its standard deviation, px");
     TrackImageEdit(state, id, "Focal prior", changed && prior[0] > 0.0 && prior[1] > 0.0, [&](Image* im) {
       im->focal_prior_px = prior[0];
       im->focal_prior_std_px = prior[1];
     });
   }
-  const ExifFeedback& feedback = LastExifFeedback();
+  const ExifFeedback& feedback = *exif_feedback;
   if (feedback.image_id == id && !feedback.message.empty()) {
     WrappedColored(feedback.found ? kDimText : kWarningText, feedback.message);
   }
@@ -181,7 +169,7 @@ void DrawCalibrationControls(AppState* state, const Image& image) {
       if (use_horizon && im->horizon_px.isZero()) im->horizon_px = start;
     });
   }
-  RecordItem("calibration.use_horizon");
+  RecordItem(state, "calibration.use_horizon");
   if (ImGui::IsItemHovered()) {
     ImGui::SetTooltip("The image of the horizontal plane at infinity: with a known focal\n"
                       "length, one horizontal line family is then enough");
@@ -201,7 +189,7 @@ void DrawCalibrationControls(AppState* state, const Image& image) {
     ImGui::SameLine(ImGui::GetFontSize() * 7.5f);
     ImGui::SetNextItemWidth(full);
     const bool level = ImGui::DragScalar("##horizon_level", ImGuiDataType_Double, &row, 0.5f, nullptr, nullptr, "%.1f px");
-    RecordItem("calibration.horizon_level");
+    RecordItem(state, "calibration.horizon_level");
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Sets a level horizon across the image at this row");
     TrackImageEdit(state, id, "Level horizon", level, [&](Image* im) { im->horizon_px = LevelHorizon(*im, row); });
   }
@@ -211,7 +199,7 @@ void DrawCalibrationControls(AppState* state, const Image& image) {
     CommitImageEdit(state, id, estimate ? "Estimate distortion" : "No distortion estimate",
                     [&](Image* im) { im->estimate_distortion = estimate; });
   }
-  RecordItem("calibration.estimate_distortion");
+  RecordItem(state, "calibration.estimate_distortion");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Radial k1, k2 from the straightness of the drawn segments");
   // What the joint solve may refine with the model (each kept as calibration gave it when locked).
   bool focal_locked = image.focal_locked;
@@ -219,7 +207,7 @@ void DrawCalibrationControls(AppState* state, const Image& image) {
     CommitImageEdit(state, id, focal_locked ? "Lock focal" : "Unlock focal",
                     [&](Image* im) { im->focal_locked = focal_locked; });
   }
-  RecordItem("calibration.focal_locked");
+  RecordItem(state, "calibration.focal_locked");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Unlocked: the joint solve refines the focal length with the model");
   ImGui::SameLine();
   bool pp_locked = image.principal_point_locked;
@@ -227,14 +215,14 @@ void DrawCalibrationControls(AppState* state, const Image& image) {
     CommitImageEdit(state, id, pp_locked ? "Lock principal point" : "Unlock principal point",
                     [&](Image* im) { im->principal_point_locked = pp_locked; });
   }
-  RecordItem("calibration.principal_point_locked");
+  RecordItem(state, "calibration.principal_point_locked");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Unlocked: the joint solve refines the principal point with the model");
   bool locked = image.distortion_locked;
   if (ImGui::Checkbox("Lock distortion", &locked)) {
     CommitImageEdit(state, id, locked ? "Lock distortion" : "Unlock distortion",
                     [&](Image* im) { im->distortion_locked = locked; });
   }
-  RecordItem("calibration.distortion_locked");
+  RecordItem(state, "calibration.distortion_locked");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Unlocked: the joint solve refines k1, k2 with the model");
   bool pose_locked = image.pose_locked;
   if (ImGui::Checkbox("Lock camera position", &pose_locked)) {
@@ -251,9 +239,9 @@ std::string Std(double v, const char* fmt = "%.1f") {
   return text;
 }
 
-void DrawCalibrationResult(const AppState& state, const Image& image) {
-  const auto cal = state.last_update.calibration.find(image.id);
-  if (cal == state.last_update.calibration.end()) {
+void DrawCalibrationResult(AppState* state, const Image& image) {
+  const auto cal = state->last_update.calibration.find(image.id);
+  if (cal == state->last_update.calibration.end()) {
     ImGui::TextColored(kDimText, "No line families drawn in this image.");
     return;
   }
@@ -270,7 +258,7 @@ void DrawCalibrationResult(const AppState& state, const Image& image) {
     } else {
       LabelValue("Focal", "%.1f +- %s px", c.focal_px, Std(c.focal_std_px).c_str());
     }
-    RecordItem("calibration.result_focal");
+    RecordItem(state, "calibration.result_focal");
     const Eigen::Vector2d& pp = c.principal_point_px;
     if (image.principal_point_mode == PrincipalPointMode::kSolve && c.principal_point_std_px.squaredNorm() > 0.0) {
       LabelValue("Principal pt", "%.1f, %.1f px", pp.x(), pp.y());
@@ -296,7 +284,7 @@ void DrawCalibrationResult(const AppState& state, const Image& image) {
 
   if (!c.success) return;
   const bool details = ImGui::TreeNodeEx("Details##calibration", ImGuiTreeNodeFlags_SpanAvailWidth);
-  RecordItem("calibration.details");
+  RecordItem(state, "calibration.details");
   if (details) {
     for (int a = 0; a < 3; ++a) {
       if (c.segments_per_axis[a] == 0) continue;
@@ -359,7 +347,7 @@ void DrawGeometrySolveFigures(const SceneSolveSummary& s, const char* title) {
 
 }  // namespace
 
-void DrawImageSection(AppState* state) {
+void DrawImageSection(AppState* state, ExifFeedback* exif_feedback) {
   if (!state->ActiveImage()) {
     ImGui::TextColored(kDimText, "No image in the project.");
     return;
@@ -383,7 +371,7 @@ void DrawImageSection(AppState* state) {
   ImGui::Spacing();
   ImGui::TextColored(kDimText, "Calibration");
   ImGui::Separator();
-  DrawCalibrationControls(state, image);
+  DrawCalibrationControls(state, image, exif_feedback);
 
   // The controls above may have committed an edit: show the figures of the current camera.
   if (const Image* now = state->document.project().FindImage(image.id)) {
@@ -392,7 +380,7 @@ void DrawImageSection(AppState* state) {
       ImGui::TextColored(kDimText, "Vanishing-point result");
       ImGui::Separator();
     }
-    DrawCalibrationResult(*state, *now);
+    DrawCalibrationResult(state, *now);
   }
 }
 
@@ -405,7 +393,7 @@ void DrawSolveSection(AppState* state) {
     // model's (tens of px where the joint solve reaches half a pixel), so it stays folded.
     ImGui::TextColored(kGoodText, "Joint solve: %s", JointSolveTerminationName(j.termination));
     LabelValue("RMS", "%.3f px", j.reprojection_rms_px);
-    RecordItem("solve.joint_rms");
+    RecordItem(state, "solve.joint_rms");
     LabelValue("Max", "%.3f px", j.reprojection_max_px);
     LabelValue("Iterations", "%d", j.iterations);
     LabelValue("Residuals", "%d (%d parameters)", j.num_residuals, j.num_parameters);
@@ -428,7 +416,7 @@ void DrawSolveSection(AppState* state) {
   for (const std::string& w : j.warnings) WrappedColored(kWarningText, w);
   if (j.IsUsable()) {
     const bool open = ImGui::TreeNodeEx("Geometry solve (start)", ImGuiTreeNodeFlags_SpanAvailWidth);
-    RecordItem("solve.geometry_node");
+    RecordItem(state, "solve.geometry_node");
     if (open) {
       DrawGeometrySolveFigures(update.solve, "");
       ImGui::TreePop();
@@ -459,7 +447,8 @@ bool ParseOnOff(const std::vector<std::string>& words, bool* on) {
 
 }  // namespace
 
-bool RunCalibrationCommand(AppState* state, const std::string& arg, std::string* error) {
+bool RunCalibrationCommand(AppState* state, ExifFeedback* exif_feedback, const std::string& arg,
+                           std::string* error) {
   std::vector<std::string> w;
   std::istringstream in(arg);
   for (std::string word; in >> word;) w.push_back(word);
@@ -512,7 +501,7 @@ bool RunCalibrationCommand(AppState* state, const std::string& arg, std::string*
       });
     } else if (sub == "exif" && w.size() == 2) {
       const ExifFocalPrior prior = ReadExifFocalPrior(PhotoPath(*state, image), image);
-      LastExifFeedback() = {image.id, prior.found, prior.message};
+      *exif_feedback = {image.id, prior.found, prior.message};
       if (!prior.found) {
         *error = "calibration focal exif: " + prior.message;
         return false;

@@ -21,15 +21,15 @@ void DrawEdgeConstraintBuilder(AppState* state, const ElementRef& element, bool 
     const std::string label = std::string("Along ") + AxisName(axis);
     if (axis != Axis::kX) ImGui::SameLine();
     if (ImGui::Button(label.c_str())) ConstrainAlongAxisEdit(state, element, axis);
-    RecordItem(std::string("constraint.along_") + AxisName(axis));
+    RecordItem(state, std::string("constraint.along_") + AxisName(axis));
   }
   ImGui::SetNextItemWidth(ImGui::GetFontSize() * 6.0f);
   ImGui::InputDouble("##constraint_length", &state->constraint_length, 0.0, 0.0, "%.4g");
-  RecordItem("constraint.length_value");
+  RecordItem(state, "constraint.length_value");
   ImGui::SameLine();
   const std::string length_label = "Known length (" + state->document.project().units + ")";
   if (ImGui::Button(length_label.c_str())) ConstrainLengthEdit(state, element, state->constraint_length);
-  RecordItem("constraint.length");
+  RecordItem(state, "constraint.length");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("The edge's length in project units: sets the scale");
   const std::pair<ConstraintKind, const char*> pairs[] = {{ConstraintKind::kParallel, "parallel"},
                                                           {ConstraintKind::kPerpendicular, "perpendicular"},
@@ -41,7 +41,7 @@ void DrawEdgeConstraintBuilder(AppState* state, const ElementRef& element, bool 
     first_button = false;
     const std::string label = ConstraintEditLabel(kind);
     if (ImGui::Button(label.c_str())) ConstraintPairStep(state, kind);
-    RecordItem(std::string("constraint.") + key);
+    RecordItem(state, std::string("constraint.") + key);
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Click with the first edge selected, then with the second");
   }
   const Project& project = state->document.project();
@@ -81,7 +81,7 @@ void DrawSelectionBuilder(AppState* state) {
       ImGui::PopID();
       return;  // the list changed
     }
-    RecordItem("selection.remove." + std::to_string(i));
+    RecordItem(state, "selection.remove." + std::to_string(i));
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Remove from the selection");
     ImGui::SameLine();
     ImGui::TextUnformatted(DescribeElement(project, selected[i]).c_str());
@@ -103,20 +103,20 @@ void DrawSelectionBuilder(AppState* state) {
     if (ImGui::Button(label.c_str())) {
       ConstrainVertexSetEdit(state, ConstraintKind::kCoplanar, selected, two_faces ? "Coplanar faces" : "");
     }
-    RecordItem("constraint.coplanar");
+    RecordItem(state, "constraint.coplanar");
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Keep the selected vertices (and those of selected edges and faces) on one plane");
   }
   if (faces == 0 && distinct >= 3) {
     next();
     const std::string label = "Collinear (" + std::to_string(distinct) + ")";
     if (ImGui::Button(label.c_str())) ConstrainVertexSetEdit(state, ConstraintKind::kCollinear, selected);
-    RecordItem("constraint.collinear");
+    RecordItem(state, "constraint.collinear");
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Keep the selected vertices (and edge ends) on one line");
   }
   if (two_faces) {
     next();
     if (ImGui::Button("Parallel faces")) ConstrainParallelFacesEdit(state, selected[0], selected[1]);
-    RecordItem("constraint.parallel_faces");
+    RecordItem(state, "constraint.parallel_faces");
     if (ImGui::IsItemHovered()) {
       ImGui::SetTooltip("Two parallel-edge constraints between the faces' most nearly parallel edges");
     }
@@ -129,7 +129,7 @@ void DrawSelectionBuilder(AppState* state) {
     for (const auto& [kind, key] : pairs) {
       next();
       if (ImGui::Button(ConstraintEditLabel(kind).c_str())) ConstrainEdgePairEdit(state, kind, selected[0], selected[1]);
-      RecordItem(std::string("constraint.") + key);
+      RecordItem(state, std::string("constraint.") + key);
     }
   }
 }
@@ -175,7 +175,7 @@ void DrawConstraintsSection(AppState* state) {
       if (diag.constraint_id == c.id) d = &diag;
     }
     if (ImGui::SmallButton("x")) RemoveConstraintEdit(state, c.id);
-    RecordItem("constraint.remove." + std::to_string(i));
+    RecordItem(state, "constraint.remove." + std::to_string(i));
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Remove constraint");
     ImGui::SameLine();
     ImGui::TextWrapped("%s", text.c_str());
@@ -204,13 +204,13 @@ void DrawElementSection(AppState* state, const Primitive& primitive, const Eleme
     char label[64];
     std::snprintf(label, sizeof(label), "Free vertex (%s)", kFreeVertexShortcut);
     if (ImGui::Checkbox(label, &free)) ToggleFreeVertexEdit(state, element.primitive_id, element.element);
-    RecordItem("element.free");
+    RecordItem(state, "element.free");
     if (ImGui::IsItemHovered()) {
       ImGui::SetTooltip("Let the solve move this vertex off its definition (e.g. a ridge above a face) (%s)",
                         kFreeVertexShortcut);
     }
     if (ImGui::Button("Fix at origin")) FixVertexEdit(state, element);
-    RecordItem("constraint.fix");
+    RecordItem(state, "constraint.fix");
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("A fixed-point constraint at the vertex's current position");
     int pins = 0;
     for (const Pin& pin : state->document.project().pins) pins += pin.vertex == VertexRef{primitive.id, element.element};

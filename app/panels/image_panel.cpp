@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -71,7 +72,9 @@ struct Interaction {
   Eigen::Vector2d last_uv = Eigen::Vector2d::Constant(1e300);
 };
 
-struct PanelState {
+}  // namespace
+
+struct ImagePanelState::Impl {
   std::map<Id, ImageViewState> views;
   std::map<Id, CachedPhoto> textures;
   Interaction interaction;
@@ -80,10 +83,6 @@ struct PanelState {
   Id shown_tab = kNoId;
   Id context_segment = kNoId;
   bool fit_requested = false;
-  // The selected line pin, with the edge it pins (which the selection holds). A stopgap until
-  // Selection has a constraint id: it holds while the selection is exactly that edge.
-  Id selected_line_pin = kNoId;
-  ElementRef selected_line_pin_edge;
   ImageViewReport report;
   // Fine pointing, Shift held during a press: ImGui reports whole screen pixels, so the
   // pointer then moves at 1 / magnification of the mouse's speed, continuing from where it
@@ -95,9 +94,16 @@ struct PanelState {
   Eigen::Vector2d last_pointer_uv = Eigen::Vector2d::Zero();
 };
 
-PanelState& Panel() {
-  static PanelState panel;
-  return panel;
+ImagePanelState::ImagePanelState() = default;
+ImagePanelState::~ImagePanelState() = default;
+
+namespace {
+
+using PanelState = ImagePanelState::Impl;
+
+PanelState& Panel(ImagePanelState* owner) {
+  if (!owner->impl) owner->impl = std::make_unique<PanelState>();
+  return *owner->impl;
 }
 
 Eigen::Vector2d ToEigen(ImVec2 p) { return {p.x, p.y}; }
@@ -154,28 +160,28 @@ const VpCalibrationSummary* CalibrationFor(const AppState& state, Id image_id) {
 
 // The selected line pin, or kNoId when the selection moved on (another element, a multi-
 // selection, a segment or pin) or the constraint is gone (a delete, an undo).
-Id SelectedLinePin(const AppState& state, PanelState* panel) {
-  const Selection& selection = state.selection;
-  const Constraint* c = state.document.project().FindConstraint(panel->selected_line_pin);
+Id SelectedLinePin(AppState* state) {
+  Selection& selection = state->selection;
+  const Constraint* c = state->document.project().FindConstraint(selection.line_pin_id);
   const bool holds = c != nullptr && c->kind == ConstraintKind::kEdgeOnImageLine &&
-                     selection.element == panel->selected_line_pin_edge && selection.extra.empty() &&
+                     selection.element == selection.line_pin_edge && selection.extra.empty() &&
                      selection.segment_id == kNoId && selection.pin_id == kNoId;
   if (!holds) {
-    panel->selected_line_pin = kNoId;
-    panel->selected_line_pin_edge = {};
+    selection.line_pin_id = kNoId;
+    selection.line_pin_edge = {};
   }
-  return panel->selected_line_pin;
+  return selection.line_pin_id;
 }
 
 // Selects a line pin and its edge (when the edge still exists).
-void SelectLinePin(AppState* state, PanelState* panel, Id constraint_id) {
+void SelectLinePin(AppState* state, Id constraint_id) {
   const Project& project = state->document.project();
   const Constraint* c = project.FindConstraint(constraint_id);
   if (c == nullptr) return;
   const ElementRef edge = LinePinEdge(project, *c);
   state->selection = edge.Empty() ? Selection() : Selection::Of(edge);
-  panel->selected_line_pin = constraint_id;
-  panel->selected_line_pin_edge = edge;
+  state->selection.line_pin_id = constraint_id;
+  state->selection.line_pin_edge = edge;
 }
 
 // The residual of a segment from the last calibration, when that calibration still matches
@@ -334,7 +340,7 @@ std::string DescribeHover(const AppState& state, const OverlayHover& hover) {
 }
 
 void DeleteSelection(AppState* state, PanelState* panel) {
-  if (const Id line_pin = SelectedLinePin(*state, panel); line_pin != kNoId) {
+  if (const Id line_pin = SelectedLinePin(state); line_pin != kNoId) {
     // The line pin, not its edge (which the selection holds with it).
     state->selection = Selection();
     RemoveConstraintEdit(state, line_pin);
@@ -434,7 +440,7 @@ void StartLeftPress(AppState* state, PanelState* panel, const Image& image, cons
       hover.line_pin_endpoint >= 0) {
     // An end handle: a drag moves that end (the model re-solves live), a click selects it.
     const Constraint* c = project.FindConstraint(hover.line_pin_id);
-    SelectLinePin(state, panel, hover.line_pin_id);
+    SelectLinePin(state, hover.line_pin_id);
     drag.kind = DragKind::kMoveLinePinEnd;
     drag.target_id = hover.line_pin_id;
     drag.endpoint = hover.line_pin_endpoint;
@@ -451,7 +457,7 @@ void StartLeftPress(AppState* state, PanelState* panel, const Image& image, cons
     return;
   }
   if (tool == Tool::kSelect && hover.line_pin_id != kNoId && !ImGui::GetIO().KeyShift) {
-    SelectLinePin(state, panel, hover.line_pin_id);
+    SelectLinePin(state, hover.line_pin_id);
     return;
   }
   if (tool != Tool::kSelect && tool != Tool::kPin) {
@@ -554,7 +560,7 @@ void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& 
       LinePinEdit(state, state->selection.element, drag.image_id, drag.press_uv, mouse_uv);
     } else {
       ApplyToolClick(state, drag.press_element, drag.press_edge_t, false);
-      if (drag.press_line_pin != kNoId) SelectLinePin(state, panel, drag.press_line_pin);
+      if (drag.press_line_pin != kNoId) SelectLinePin(state, drag.press_line_pin);
     }
   } else if (IsEditDrag(drag.kind)) {
     if (!drag.began && !drag.toggle_on_click.Empty()) {
@@ -869,7 +875,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   overlay.tool = state->tool;
   if (state->hover_panel != kImagePanelHover) overlay.other_hover = state->hover;
   overlay.selection = state->selection;
-  overlay.selected_line_pin = SelectedLinePin(*state, panel);
+  overlay.selected_line_pin = SelectedLinePin(state);
   overlay.hover = hover;
   if (drag.kind == DragKind::kMoveLinePinEnd) {  // the dragged handle stays lit
     overlay.hover = OverlayHover();
@@ -945,8 +951,8 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
 
 }  // namespace
 
-void DrawImagePanel(AppState* state) {
-  PanelState& panel = Panel();
+void DrawImagePanel(AppState* state, ImagePanelState* owner) {
+  PanelState& panel = Panel(owner);
   CollectGarbage(&panel, *state);
   const Project& project = state->document.project();
   if (project.images.empty()) {
@@ -964,16 +970,16 @@ void DrawImagePanel(AppState* state) {
   ImGui::PopID();
 }
 
-ImageViewReport LastImageViewReport() { return Panel().report; }
+ImageViewReport LastImageViewReport(const ImagePanelState& panel) {
+  return panel.impl ? panel.impl->report : ImageViewReport();
+}
 
-void RequestImageFit() { Panel().fit_requested = true; }
+void RequestImageFit(ImagePanelState* panel) { Panel(panel).fit_requested = true; }
 
-void ShutdownImagePanel() {
-  PanelState& panel = Panel();
-  for (auto& [id, cached] : panel.textures) DestroyTiledTexture(&cached.texture);
-  panel.textures.clear();
-  panel.views.clear();
-  ShutdownImageTiles();
+void ShutdownImagePanel(ImagePanelState* panel) {
+  if (!panel->impl) return;
+  for (auto& [id, cached] : panel->impl->textures) DestroyTiledTexture(&cached.texture);
+  panel->impl.reset();
 }
 
 }  // namespace facet::app

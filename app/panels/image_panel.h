@@ -4,6 +4,8 @@
 // pin's end handle with a live re-solve, select a line pin by its line and delete it).
 #pragma once
 
+#include <memory>
+
 #include "app/state/app_state.h"
 
 namespace facet::app {
@@ -16,13 +18,25 @@ struct ImageViewReport {
   float rect_x = 0, rect_y = 0, rect_w = 0, rect_h = 0;  // the view's screen rectangle
 };
 
+// Everything one image panel keeps between frames: each image's zoom and pan, the photos' GL
+// textures, the drag in progress, the overlay and loupe options and the last frame's report.
+// Owned by the shell (ShellState); two panels, or a test, each hold their own. The contents
+// are private to image_panel.cpp and made on the first draw; ShutdownImagePanel frees its GL
+// textures, and must run while the GL context is current.
+struct ImagePanelState {
+  struct Impl;
+  std::unique_ptr<Impl> impl;
+  ImagePanelState();
+  ~ImagePanelState();
+};
+
 // Draws the panel's contents into the current ImGui window (the caller owns the window).
-void DrawImagePanel(AppState* state);
+void DrawImagePanel(AppState* state, ImagePanelState* panel);
 // The transform used in the last frame.
-ImageViewReport LastImageViewReport();
+ImageViewReport LastImageViewReport(const ImagePanelState& panel);
 // Fits the active image to the panel on the next frame (the F key does the same).
-void RequestImageFit();
+void RequestImageFit(ImagePanelState* panel);
 // Frees GL resources (before the context goes away).
-void ShutdownImagePanel();
+void ShutdownImagePanel(ImagePanelState* panel);
 
 }  // namespace facet::app

@@ -65,7 +65,7 @@ void DrawPrimitiveSection(AppState* state, const Primitive primitive) {
   std::string name = primitive.name;
   ImGui::SetNextItemWidth(-FLT_MIN);
   const bool renamed = ImGui::InputTextWithHint("##name", "name", &name);
-  RecordItem("primitive.name");
+  RecordItem(state, "primitive.name");
   TrackEdit(state, "Rename " + kind, renamed, [&](Project* p) { p->FindPrimitive(id)->name = name; });
   LabelValue("Kind", "%s", kind.c_str());
   if (primitive.shape.segments > 0) {
@@ -94,7 +94,7 @@ void DrawPrimitiveSection(AppState* state, const Primitive primitive) {
     ImGui::BeginDisabled(i < first_free);
     const bool resized = DragDoubles(ShapeParamName(primitive.shape.kind, i), &value, 1, 0.01f, "%.3f");
     ImGui::EndDisabled();
-    RecordItem("primitive.param." + std::to_string(i));
+    RecordItem(state, "primitive.param." + std::to_string(i));
     TrackEdit(state, "Resize " + kind, resized, [&](Project* p) {
       p->FindPrimitive(id)->shape.params[i] = std::max(1e-3, value);
       RefreshAllPrimitives(p);
@@ -104,7 +104,7 @@ void DrawPrimitiveSection(AppState* state, const Primitive primitive) {
   ImGui::BeginDisabled(primitive.attached_to != kNoId);
   double t[3] = {primitive.shape.translation.x(), primitive.shape.translation.y(), primitive.shape.translation.z()};
   const bool moved = DragDoubles("Position", t, 3, 0.01f, "%.3f");
-  RecordItem("primitive.position");
+  RecordItem(state, "primitive.position");
   TrackEdit(state, "Move " + kind, moved, [&](Project* p) {
     p->FindPrimitive(id)->shape.translation = Eigen::Vector3d(t[0], t[1], t[2]);
     RefreshAllPrimitives(p);
@@ -143,7 +143,7 @@ void DrawPinSection(AppState* state, const Pin pin) {
   ImGui::PushID("pin");
   double uv[2] = {pin.uv_px.x(), pin.uv_px.y()};
   const bool moved = DragDoubles("Pixel", uv, 2, 0.25f, "%.2f");
-  RecordItem("pin.uv");
+  RecordItem(state, "pin.uv");
   TrackEdit(state, "Move pin", moved, [&](Project* p) { p->FindPin(pin_id)->uv_px = Eigen::Vector2d(uv[0], uv[1]); });
   ImGui::PopID();
   // The joint solve's figure when it ran (it also fits free vertices), else the geometry solve's.
@@ -207,13 +207,13 @@ void DrawAddPrimitiveOptions(AppState* state, float width) {
     }
     ImGui::EndCombo();
   }
-  RecordItem("tool.add_kind");
+  RecordItem(state, "tool.add_kind");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Kind of primitive that Add primitive (B) adds");
   const Primitive* base = state->add_kind != PrimitiveKind::kBox ? AttachBaseFor(*state, state->add_kind) : nullptr;
   if (base != nullptr) {
     const std::string label = "on top of '" + base->name + "'";
     ImGui::Checkbox(label.c_str(), &state->add_on_top);
-    RecordItem("tool.add_on_top");
+    RecordItem(state, "tool.add_on_top");
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("AttachOnTop: its footprint and pose follow the box");
   }
   ImGui::Unindent(8.0f);
@@ -244,10 +244,10 @@ void DrawPushPullOptions(AppState* state, float width) {
   ImGui::SetNextItemWidth(width - 8.0f);
   const bool entered = ImGui::InputDouble("##push_pull_distance", &state->push_pull_distance, 0.0, 0.0, "%.4g",
                                           ImGuiInputTextFlags_EnterReturnsTrue);
-  RecordItem("tool.push_pull_distance");
+  RecordItem(state, "tool.push_pull_distance");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Distance along the face's normal, project units (negative: in)");
   const bool clicked = ImGui::Button("Extrude##push_pull", ImVec2(width - 8.0f, 0.0f));
-  RecordItem("tool.push_pull_extrude");
+  RecordItem(state, "tool.push_pull_extrude");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Extrude %s (Enter in the field)", DescribeElement(project, face).c_str());
   if (entered || clicked) {
     const Id primitive_id = face.primitive_id;
@@ -258,8 +258,6 @@ void DrawPushPullOptions(AppState* state, float width) {
 
 }  // namespace
 
-const std::map<std::string, Rect>& LastItemRects() { return ItemRects(); }
-void ClearItemRects() { ItemRects().clear(); }
 
 void HandleToolShortcuts(AppState* state) {
   const ImGuiIO& io = ImGui::GetIO();
@@ -312,7 +310,7 @@ void DrawToolsPanel(AppState* state) {
       }
     }
     if (active) ImGui::PopStyleColor();
-    RecordItem(std::string("tool.") + b.label);
+    RecordItem(state, std::string("tool.") + b.label);
     // The shortcut letter at the right end of the button.
     const ImVec2 max = ImGui::GetItemRectMax();
     const ImVec2 min = ImGui::GetItemRectMin();
@@ -334,7 +332,7 @@ void DrawToolsPanel(AppState* state) {
   std::snprintf(free_label, sizeof(free_label), "Free vertex##action");
   if (ImGui::Button(free_label, button_size)) ToggleFreeVertexEdit(state, element.primitive_id, element.element);
   ImGui::EndDisabled();
-  RecordItem("action.free_vertex");
+  RecordItem(state, "action.free_vertex");
   if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) {
     ImGui::SetTooltip("Toggle: the solve may move the selected vertex off its definition (%s)", kFreeVertexShortcut);
   }
@@ -343,7 +341,7 @@ void DrawToolsPanel(AppState* state) {
     TogglePlanarFaceEdit(state, element.primitive_id, element.element);
   }
   ImGui::EndDisabled();
-  RecordItem("action.planar_face");
+  RecordItem(state, "action.planar_face");
   if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) {
     ImGui::SetTooltip("Toggle a coplanarity constraint on the selected face's vertices (%s)", kPlanarFaceShortcut);
   }
@@ -351,7 +349,7 @@ void DrawToolsPanel(AppState* state) {
   ImGui::Separator();
   ImGui::Spacing();
   if (ImGui::Button("Solve", button_size)) SolveNow(state);
-  RecordItem("tool.Solve");
+  RecordItem(state, "tool.Solve");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Re-run calibration and the geometry solve");
   ImGui::Spacing();
   for (const ToolButton& b : kToolButtons) {
@@ -363,8 +361,8 @@ void DrawToolsPanel(AppState* state) {
   }
 }
 
-void DrawPropertiesPanel(AppState* state) {
-  DrawImageSection(state);
+void DrawPropertiesPanel(AppState* state, PropertiesPanelState* panel) {
+  DrawImageSection(state, &panel->exif_feedback);
   DrawSolveSection(state);
   const Project& project = state->document.project();
   if (const Primitive* primitive = project.FindPrimitive(state->selection.primitive_id)) {
@@ -400,7 +398,7 @@ void DrawHistoryPanel(AppState* state) {
     char text[256];
     std::snprintf(text, sizeof(text), "%3d  %s##h%d", position, label.c_str(), position);
     if (ImGui::Selectable(text, current) && !current) target = position;
-    RecordItem("history." + std::to_string(position));
+    RecordItem(state, "history." + std::to_string(position));
     if (current && ImGui::IsWindowAppearing()) ImGui::SetScrollHereY();
     if (future) ImGui::PopStyleColor();
   };

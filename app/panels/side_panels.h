@@ -6,6 +6,7 @@
 #include <map>
 #include <string>
 
+#include "app/panels/camera_sections.h"
 #include "app/state/app_state.h"
 #include "app/state/rect.h"
 
@@ -18,19 +19,19 @@ constexpr PrimitiveKind kPrimitiveKinds[] = {PrimitiveKind::kBox,     PrimitiveK
 
 // Tool buttons with their shortcuts, the kind to add, the selection actions and Solve.
 void DrawToolsPanel(AppState* state);
+// What the properties panel keeps between frames; owned by the shell.
+struct PropertiesPanelState {
+  ExifFeedback exif_feedback;
+};
+
 // Active image, calibration and solve figures, and the selected primitive (and its vertex,
 // edge or face), pin or segment.
-void DrawPropertiesPanel(AppState* state);
+void DrawPropertiesPanel(AppState* state, PropertiesPanelState* panel);
 // The undo stack; clicking an entry undoes or redoes to it.
 void DrawHistoryPanel(AppState* state);
 // The log, coloured by level.
 void DrawLogPanel(AppState* state);
 
-// Screen rectangles of the shell panels' main widgets in the last frame, by name (e.g.
-// "tool.Pin", "primitive.param.0", "primitive.name", "history.2"), for the render report and tests.
-const std::map<std::string, Rect>& LastItemRects();
-// Starts a new frame's record (DrawFrame calls it).
-void ClearItemRects();
 
 // Tool shortcuts (V, X, Y, Z, P, B, E, D, C, R) and the selection actions (T: free vertex,
 // K: keep face planar) when no text field is active and no modifier is down.

@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -146,9 +147,11 @@ struct SceneMeasure {
   Eigen::Vector3d grid_center = Eigen::Vector3d::Zero();
 };
 
-// Everything the panel keeps between frames. It lives here, not in AppState, because it is
-// this panel's own view state (the document and the selection stay in AppState).
-struct PanelState {
+}  // namespace
+
+// Everything the panel keeps between frames: this panel's own view state (the document and
+// the selection stay in AppState).
+struct ViewportPanelState::Impl {
   GlResources gl;
   OrbitCamera orbit;
   bool framed_once = false;
@@ -161,15 +164,20 @@ struct PanelState {
   bool frame_requested = false;
   Id view_from_photo_requested = kNoId;
   ViewportReport report;
+  MoveDrag move_drag;  // the Move tool's drag in this panel
 };
 
-// Created on first use and deleted by ShutdownViewportPanel while the context is current; a
-// plain pointer so that nothing touches GL during static destruction.
-PanelState* g_panel = nullptr;
+ViewportPanelState::ViewportPanelState() = default;
+ViewportPanelState::~ViewportPanelState() = default;
 
-PanelState& Panel() {
-  if (!g_panel) g_panel = new PanelState();
-  return *g_panel;
+namespace {
+
+using PanelState = ViewportPanelState::Impl;
+
+// Made on the first draw and freed by ShutdownViewportPanel while the context is current.
+PanelState& Panel(ViewportPanelState* owner) {
+  if (!owner->impl) owner->impl = std::make_unique<PanelState>();
+  return *owner->impl;
 }
 
 ImTextureID ToImTexture(GLuint texture) {
@@ -883,7 +891,7 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
   draw->AddText(ImVec2(box_min.x + 4.0f, box_min.y + 2.0f + line_h + 2.0f), IM_COL32(200, 200, 200, 200), kHelpText);
 
   if (state.tool == Tool::kMove) {  // the Move tool's help, or what the drag did
-    const std::string hint = MoveToolHint();
+    const std::string hint = MoveToolHint(panel.move_drag);
     const ImVec2 hint_min(box_min.x, box_min.y - line_h - 8.0f);
     const ImVec2 hint_size = ImGui::CalcTextSize(hint.c_str());
     draw->AddRectFilled(hint_min, ImVec2(hint_min.x + hint_size.x + 8.0f, box_min.y - 2.0f), IM_COL32(0, 0, 0, 140), 3.0f);
@@ -900,8 +908,8 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
 
 }  // namespace
 
-void DrawViewportPanel(AppState* state) {
-  PanelState& panel = Panel();
+void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
+  PanelState& panel = Panel(owner);
   GlResources& gl = panel.gl;
   const Project& project = state->document.project();
   const ImGuiIO& io = ImGui::GetIO();
@@ -961,7 +969,7 @@ void DrawViewportPanel(AppState* state) {
     panel.left_pressed_here = true;
     panel.left_press_pos = io.MousePos;
   }
-  if (active && !MoveToolOwnsMouse() && ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) &&
+  if (active && !MoveToolOwnsMouse(panel.move_drag) && ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) &&
       (delta_px.x != 0 || delta_px.y != 0)) {
     OrbitRotate(&panel.orbit, delta_px.x, delta_px.y, width_px, height_px);
   }
@@ -992,7 +1000,7 @@ void DrawViewportPanel(AppState* state) {
   // everything); a click (not a drag) applies the tool to it, or clears the selection.
   const PickFilter filter = state->tool == Tool::kMove ? MoveToolPickFilter() : PickFilterOf(state->tool);
   // V_op: a press on an element drags it (app/state/move_tool.h); elsewhere the left drag orbits.
-  if (state->tool == Tool::kMove || MoveToolOwnsMouse()) {
+  if (state->tool == Tool::kMove || MoveToolOwnsMouse(panel.move_drag)) {
     MoveToolInput move;
     move.ray = RayOf(view, mouse_px);
     move.pressed = left_pressed && hovered;
@@ -1000,7 +1008,7 @@ void DrawViewportPanel(AppState* state) {
     move.released = ImGui::IsMouseReleased(ImGuiMouseButton_Left);
     move.shift = io.KeyShift;
     move.cancel = ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false);
-    MoveToolFrame(state, move);
+    MoveToolFrame(state, &panel.move_drag, move);
   }
   const bool picking = hovered && !ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) &&
                        (filter.vertices || filter.edges || filter.faces);
@@ -1050,17 +1058,20 @@ void DrawViewportPanel(AppState* state) {
   DrawOverlay(*state, panel, view, origin, size, ImVec2(scale_x, scale_y));
 }
 
-void RequestViewportFrame() { Panel().frame_requested = true; }
+void RequestViewportFrame(ViewportPanelState* panel) { Panel(panel).frame_requested = true; }
 
-ViewportReport LastViewportReport() { return Panel().report; }
+ViewportReport LastViewportReport(const ViewportPanelState& panel) {
+  return panel.impl ? panel.impl->report : ViewportReport();
+}
 
-void RequestViewportViewFromPhoto(Id image_id) { Panel().view_from_photo_requested = image_id; }
+void RequestViewportViewFromPhoto(ViewportPanelState* panel, Id image_id) {
+  Panel(panel).view_from_photo_requested = image_id;
+}
 
-void ShutdownViewportPanel() {
-  if (!g_panel) return;
-  ReleaseGl(&g_panel->gl);
-  delete g_panel;
-  g_panel = nullptr;
+void ShutdownViewportPanel(ViewportPanelState* panel) {
+  if (!panel->impl) return;
+  ReleaseGl(&panel->impl->gl);
+  panel->impl.reset();
 }
 
 }  // namespace facet::app

@@ -4,15 +4,9 @@
 
 namespace facet::app {
 
-// Per-frame UI introspection, not document data: rebuilt every frame.
-std::map<std::string, Rect>& ItemRects() {
-  static std::map<std::string, Rect> rects;
-  return rects;
-}
-
-void RecordItem(const std::string& name) {
+void RecordItem(AppState* state, const std::string& name) {
   const ImVec2 min = ImGui::GetItemRectMin(), size = ImGui::GetItemRectSize();
-  ItemRects()[name] = {min.x, min.y, size.x, size.y};
+  state->item_rects[name] = {min.x, min.y, size.x, size.y};
 }
 
 ImVec4 AxisColor(Axis axis) {

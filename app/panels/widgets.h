@@ -1,6 +1,6 @@
 // Widgets and colours the properties panels share: label/value rows, wrapped coloured text,
 // the undo pattern for continuous widgets and the per-frame record of widget rectangles
-// (LastItemRects in app/panels/side_panels.h, read by the render report and tests).
+// (AppState::item_rects, read by the render report and tests).
 #pragma once
 
 #include <functional>
@@ -24,10 +24,8 @@ inline const ImVec4 kGoodText(0.45f, 0.85f, 0.50f, 1.0f);
 constexpr const char* kFreeVertexShortcut = "T";
 constexpr const char* kPlanarFaceShortcut = "K";
 
-// Widget rectangles of this frame by name.
-std::map<std::string, Rect>& ItemRects();
-// Records the last ImGui item's rectangle under `name`.
-void RecordItem(const std::string& name);
+// Records the last ImGui item's rectangle under `name` in state->item_rects.
+void RecordItem(AppState* state, const std::string& name);
 ImVec4 AxisColor(Axis axis);
 // A dim label and a value in a second column.
 void LabelValue(const char* label, const char* fmt, ...) IM_FMTARGS(2);

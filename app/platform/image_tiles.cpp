@@ -14,23 +14,19 @@ constexpr int kMinTilePx = 16;  // below this the one-pixel padding dominates
 
 // Sampler objects override the textures' own filter per draw call, so the main view and
 // the loupe can show the same texture with different filters in one frame.
-GLuint g_linear_sampler = 0;
-GLuint g_nearest_sampler = 0;
-
-void EnsureSamplers() {
-  if (g_linear_sampler != 0) return;
+void CreateSamplers(TiledTexture* texture) {
   GLuint samplers[2] = {0, 0};
   glGenSamplers(2, samplers);
-  g_linear_sampler = samplers[0];
-  g_nearest_sampler = samplers[1];
+  texture->linear_sampler = samplers[0];
+  texture->nearest_sampler = samplers[1];
   for (GLuint s : samplers) {
     glSamplerParameteri(s, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glSamplerParameteri(s, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   }
-  glSamplerParameteri(g_linear_sampler, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-  glSamplerParameteri(g_linear_sampler, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glSamplerParameteri(g_nearest_sampler, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
-  glSamplerParameteri(g_nearest_sampler, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glSamplerParameteri(samplers[0], GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glSamplerParameteri(samplers[0], GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glSamplerParameteri(samplers[1], GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
+  glSamplerParameteri(samplers[1], GL_TEXTURE_MAG_FILTER, GL_NEAREST);
 }
 
 // Runs inside the renderer backend, which keeps texture unit 0 active while drawing.
@@ -45,11 +41,9 @@ void* SamplerAsUserData(GLuint sampler) {
 }  // namespace
 
 int ImageTileSizePx() {
-  static int tile_px = 0;
-  if (tile_px > 0) return tile_px;
   GLint max_texture_px = 0;
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture_px);
-  tile_px = std::min<int>(max_texture_px > 0 ? max_texture_px : 2048, kMaxTilePx);
+  int tile_px = std::min<int>(max_texture_px > 0 ? max_texture_px : 2048, kMaxTilePx);
   if (const char* forced = std::getenv("FACET_IMAGE_TILE_PX")) {
     const int value = std::atoi(forced);
     if (value >= kMinTilePx) tile_px = std::min(value, tile_px);
@@ -106,6 +100,7 @@ TiledTexture CreateTiledTexture(const ImageRgba8& image) {
   glPixelStorei(GL_UNPACK_SKIP_ROWS, last_skip_rows);
   glPixelStorei(GL_UNPACK_ALIGNMENT, last_alignment);
   glBindTexture(GL_TEXTURE_2D, static_cast<GLuint>(last_texture));
+  CreateSamplers(&result);
   return result;
 }
 
@@ -113,15 +108,18 @@ void DestroyTiledTexture(TiledTexture* texture) {
   for (ImageTile& tile : texture->tiles) {
     if (tile.texture != 0) glDeleteTextures(1, &tile.texture);
   }
+  if (texture->linear_sampler != 0) {
+    const GLuint samplers[2] = {texture->linear_sampler, texture->nearest_sampler};
+    glDeleteSamplers(2, samplers);
+  }
   *texture = TiledTexture();
 }
 
 void DrawTiledTexture(ImDrawList* draw_list, const TiledTexture& texture, const ViewTransform& view,
                       ImVec2 clip_min, ImVec2 clip_max, ImU32 tint) {
   if (texture.Empty() || view.zoom <= 0.0f) return;
-  EnsureSamplers();
-  draw_list->AddCallback(BindSamplerCallback, SamplerAsUserData(view.zoom > 1.0f ? g_nearest_sampler
-                                                                                 : g_linear_sampler));
+  draw_list->AddCallback(BindSamplerCallback, SamplerAsUserData(view.zoom > 1.0f ? texture.nearest_sampler
+                                                                                 : texture.linear_sampler));
   for (const ImageTile& tile : texture.tiles) {
     // The tile's drawn pixels cover [x0 - 0.5, x0 + w - 0.5] in image coordinates.
     const ImVec2 tile_min = view.ToScreen(tile.x0 - 0.5, tile.y0 - 0.5);
@@ -141,13 +139,6 @@ void DrawTiledTexture(ImDrawList* draw_list, const TiledTexture& texture, const 
   }
   // Back to the texture's own state (the backend's default) for everything drawn later.
   draw_list->AddCallback(BindSamplerCallback, SamplerAsUserData(0));
-}
-
-void ShutdownImageTiles() {
-  if (g_linear_sampler == 0) return;
-  GLuint samplers[2] = {g_linear_sampler, g_nearest_sampler};
-  glDeleteSamplers(2, samplers);
-  g_linear_sampler = g_nearest_sampler = 0;
 }
 
 }  // namespace facet::app

@@ -26,14 +26,20 @@ struct TiledTexture {
   int width = 0;
   int height = 0;
   std::vector<ImageTile> tiles;
+  // Sampler objects (GLuint) that override the tiles' filter per draw: linear (mipmapped) when
+  // zoomed out, nearest past 1:1. Made with the texture, deleted with it.
+  unsigned int linear_sampler = 0;
+  unsigned int nearest_sampler = 0;
   bool Empty() const { return tiles.empty(); }
 };
 
-// The tile size used for new textures: min(GL_MAX_TEXTURE_SIZE, 4096), or the value of the
-// environment variable FACET_IMAGE_TILE_PX when set (to test tiling with small tiles).
+// The tile size used for new textures (asked of GL at each call): min(GL_MAX_TEXTURE_SIZE,
+// 4096), or the value of the environment variable FACET_IMAGE_TILE_PX when set (to test
+// tiling with small tiles).
 int ImageTileSizePx();
 
-// Uploads `image` (RGBA8) as tiles with mipmaps. An empty image gives an empty result.
+// Uploads `image` (RGBA8) as tiles with mipmaps, and makes the texture's two samplers. An
+// empty image gives an empty result.
 TiledTexture CreateTiledTexture(const ImageRgba8& image);
 void DestroyTiledTexture(TiledTexture* texture);
 
@@ -57,8 +63,5 @@ struct ViewTransform {
 // each tile becomes vertices, so extreme zooms keep float coordinates small.
 void DrawTiledTexture(ImDrawList* draw_list, const TiledTexture& texture, const ViewTransform& view,
                       ImVec2 clip_min, ImVec2 clip_max, ImU32 tint = IM_COL32_WHITE);
-
-// Frees the shared sampler objects (before the GL context goes away).
-void ShutdownImageTiles();
 
 }  // namespace facet::app

@@ -119,15 +119,15 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
   }
   report["panels"] = panels;
   nlohmann::json items = nlohmann::json::object();
-  for (const auto& [name, rect] : LastItemRects()) items[name] = RectJson(rect);
+  for (const auto& [name, rect] : state.item_rects) items[name] = RectJson(rect);
   report["items"] = items;
-  const ImageViewReport view = LastImageViewReport();
+  const ImageViewReport view = LastImageViewReport(shell.image_panel);
   report["image_view"] = {{"image_id", view.image_id},
                           {"origin_x", view.origin_x},
                           {"origin_y", view.origin_y},
                           {"zoom", view.zoom},
                           {"rect", RectJson({view.rect_x, view.rect_y, view.rect_w, view.rect_h})}};
-  const ViewportReport viewport = LastViewportReport();
+  const ViewportReport viewport = LastViewportReport(shell.viewport_panel);
   if (viewport.drawn) {
     report["viewport"] = {{"origin_x", viewport.origin_x},
                           {"origin_y", viewport.origin_y},
@@ -300,8 +300,8 @@ int RunOffscreen(const RenderOptions& options) {
     return Fail("the ImGui OpenGL3 renderer failed to start on " + egl.Renderer());
   }
   const int code = RenderWithContext(options, &state, &shell, script, egl.Renderer());
-  ShutdownImagePanel();
-  ShutdownViewportPanel();
+  ShutdownImagePanel(&shell.image_panel);
+  ShutdownViewportPanel(&shell.viewport_panel);
   ImGui_ImplOpenGL3_Shutdown();
   ImGui::DestroyContext();
   return code;

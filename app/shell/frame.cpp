@@ -195,12 +195,12 @@ bool TitleBarButton(const char* label, const char* window_title, const char* too
   return pressed;
 }
 
-void DrawPanelContents(AppState* state, PanelId panel) {
+void DrawPanelContents(AppState* state, ShellState* shell, PanelId panel) {
   switch (panel) {
     case PanelId::kTools: DrawToolsPanel(state); break;
-    case PanelId::kImage: DrawImagePanel(state); break;
-    case PanelId::kViewport: DrawViewportPanel(state); break;
-    case PanelId::kProperties: DrawPropertiesPanel(state); break;
+    case PanelId::kImage: DrawImagePanel(state, &shell->image_panel); break;
+    case PanelId::kViewport: DrawViewportPanel(state, &shell->viewport_panel); break;
+    case PanelId::kProperties: DrawPropertiesPanel(state, &shell->properties_panel); break;
     case PanelId::kHistory: DrawHistoryPanel(state); break;
     case PanelId::kLog: DrawLogPanel(state); break;
   }
@@ -287,7 +287,7 @@ void DrawPanel(AppState* state, ShellState* shell, int index, const TiledLayout&
     }
   }
 
-  if (expanded) DrawPanelContents(state, panel);
+  if (expanded) DrawPanelContents(state, shell, panel);
   ImGui::End();
 
   if (toggle_dock) {
@@ -655,7 +655,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   if (name == "select-add") return RunSelectAddCommand(state, arg, error);
   if (name == "line-pin") return RunLinePinCommand(state, arg, error);
   if (name == "line-pin-move") return RunLinePinMoveCommand(state, arg, error);
-  if (name == "calibration") return RunCalibrationCommand(state, arg, error);
+  if (name == "calibration") return RunCalibrationCommand(state, &shell->properties_panel.exif_feedback, arg, error);
   if (name == "move-selection") return RunMoveCommand(state, arg, error);
   if (name == "free-vertex" || name == "planar-face") {
     const ElementRef& e = state->selection.element;
@@ -681,7 +681,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     return true;
   }
   if (name == "fit") {
-    RequestImageFit();
+    RequestImageFit(&shell->image_panel);
     return true;
   }
   if (name == "wait-bake") {
@@ -741,7 +741,7 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   }
 
   shell->panel_drawn.fill(false);
-  ClearItemRects();
+  state->item_rects.clear();
   DrawSplitters(shell, tiled, work);
   // Docked panels first: floating ones are created later and so stay in front.
   for (int pass = 0; pass < 2; ++pass) {

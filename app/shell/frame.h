@@ -2,13 +2,16 @@
 // modes both call between ImGui::NewFrame() and ImGui::Render(). It refreshes the derived
 // state, then draws the menu bar, the tiled and floating panels, the splitters and the
 // modal dialogs, and handles the global shortcuts. Everything the shell keeps between frames
-// that is neither document nor app state lives in ShellState.
+// that is neither document nor app state lives in ShellState, the panels' own state included.
 #pragma once
 
 #include <array>
 #include <string>
 #include <vector>
 
+#include "app/panels/image_panel.h"
+#include "app/panels/side_panels.h"
+#include "app/panels/viewport_panel.h"
 #include "app/shell/layout.h"
 #include "app/state/app_state.h"
 
@@ -18,6 +21,11 @@ enum class Dialog { kNone, kOpen, kSaveAs, kExport, kAddPhoto, kAbout, kConfirmQ
 
 struct ShellState {
   Layout layout = DefaultLayout();
+  // The panels' own state between frames (views, GL resources, interactions). The GL side
+  // must be shut down (ShutdownImagePanel, ShutdownViewportPanel) while the context lives.
+  ImagePanelState image_panel;
+  ViewportPanelState viewport_panel;
+  PropertiesPanelState properties_panel;
   bool offscreen = false;  // no quitting dialogs, no layout persistence
 
   // Modal dialogs.

@@ -105,8 +105,8 @@ int RunGlfwWindow(AppState* state, ShellState* shell, const std::string& imgui_i
     }
   }
 
-  ShutdownImagePanel();
-  ShutdownViewportPanel();
+  ShutdownImagePanel(&shell->image_panel);
+  ShutdownViewportPanel(&shell->viewport_panel);
   ImGui_ImplOpenGL3_Shutdown();
   ImGui_ImplGlfw_Shutdown();
   ImGui::DestroyContext();

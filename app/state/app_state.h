@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "app/state/rect.h"
 #include "core/estimators/calibrate_vp.h"
 #include "core/image/image_io.h"
 #include "core/mesh/primitives.h"
@@ -66,6 +67,10 @@ struct Selection {
   // constraint builder reads element + extra (SelectedElements).
   std::vector<ElementRef> extra;
   ElementRef connect_from;    // V_connect: the first vertex clicked
+  // The selected line pin (a kEdgeOnImageLine constraint) and the edge it pins, which is
+  // `element`: it holds while the selection is exactly that edge (the image panel checks).
+  Id line_pin_id = kNoId;
+  ElementRef line_pin_edge;
   bool Empty() const { return segment_id == kNoId && pin_id == kNoId && primitive_id == kNoId; }
   // Selects an element and its primitive, clearing segment, pin and the multi-selection.
   static Selection Of(const ElementRef& element);
@@ -141,6 +146,10 @@ struct AppState {
   // panel set it (0 none, 1 image, 2 3D): a panel clears only its own hover.
   ElementRef hover;
   int hover_panel = 0;
+  // Screen rectangles of the panels' main widgets in this frame by name (e.g. "tool.Pin",
+  // "primitive.name"): per-frame UI introspection for the render report and tests, cleared
+  // by DrawFrame, filled by RecordItem (app/panels/widgets.h).
+  std::map<std::string, Rect> item_rects;
 
   // Photos by image id, loaded once (core type; each panel makes its own GL textures). An
   // entry is never changed in place once loaded, so the bake's worker thread reads the pixels

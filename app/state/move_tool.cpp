@@ -14,27 +14,6 @@ constexpr const char* kToolHelp =
     "Move: drag a vertex (in the plane facing you) or an edge/face (the primitive, horizontally); "
     "hold Shift to move along z; Esc cancels";
 
-// The tool's state between frames; panel-local like the 3D panel's own view state.
-struct MoveDrag {
-  bool tracking = false;  // the left button was pressed on an element and is still down
-  bool started = false;   // BeginDrag ran (the mouse moved)
-  bool vertex = false;    // a vertex, or the whole primitive
-  VertexRef ref;
-  Id primitive_id = kNoId;
-  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();        // world point under the mouse at the press
-  Eigen::Vector3d plane_normal = Eigen::Vector3d::UnitZ();  // the drag plane through the anchor
-  Eigen::Vector2d press_px = Eigen::Vector2d::Zero();
-  bool cancelled = false;  // Escape: the rest of the press does nothing (no orbit either)
-  bool accepted = false;  // some frame's move was accepted into the preview
-  std::string accepted_message;
-  std::string hint;       // last result or refusal
-};
-
-MoveDrag& Drag() {
-  static MoveDrag drag;
-  return drag;
-}
-
 bool RayPlane(const PickRay& ray, const Eigen::Vector3d& point, const Eigen::Vector3d& normal, Eigen::Vector3d* hit) {
   const double denominator = ray.direction.dot(normal);
   if (std::abs(denominator) < kParallelCosine * normal.norm()) return false;
@@ -95,12 +74,12 @@ void Reset(MoveDrag* drag) {
 
 PickFilter MoveToolPickFilter() { return {true, true, true}; }
 
-bool MoveToolOwnsMouse() { return Drag().tracking; }
+bool MoveToolOwnsMouse(const MoveDrag& drag) { return drag.tracking; }
 
-std::string MoveToolHint() { return Drag().hint.empty() ? std::string(kToolHelp) : Drag().hint; }
+std::string MoveToolHint(const MoveDrag& drag) { return drag.hint.empty() ? std::string(kToolHelp) : drag.hint; }
 
-void MoveToolFrame(AppState* state, const MoveToolInput& input) {
-  MoveDrag& drag = Drag();
+void MoveToolFrame(AppState* state, MoveDrag* drag_state, const MoveToolInput& input) {
+  MoveDrag& drag = *drag_state;
   // An undo during the drag cancels it (app_state.cpp): let go as well.
   if (drag.started && !state->drag_start) Reset(&drag);
 

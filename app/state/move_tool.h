@@ -14,6 +14,8 @@
 
 #include <string>
 
+#include <Eigen/Core>
+
 #include "app/state/app_state.h"
 #include "app/state/model_pick.h"
 
@@ -21,6 +23,22 @@ namespace facet::app {
 
 // What the Move tool picks: vertices, edges and faces.
 PickFilter MoveToolPickFilter();
+
+// The tool's state between frames, held by the 3D panel that drives it (ViewportPanelState).
+struct MoveDrag {
+  bool tracking = false;  // the left button was pressed on an element and is still down
+  bool started = false;   // BeginDrag ran (the mouse moved)
+  bool vertex = false;    // a vertex, or the whole primitive
+  VertexRef ref;
+  Id primitive_id = kNoId;
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();        // world point under the mouse at the press
+  Eigen::Vector3d plane_normal = Eigen::Vector3d::UnitZ();  // the drag plane through the anchor
+  Eigen::Vector2d press_px = Eigen::Vector2d::Zero();
+  bool cancelled = false;  // Escape: the rest of the press does nothing (no orbit either)
+  bool accepted = false;  // some frame's move was accepted into the preview
+  std::string accepted_message;
+  std::string hint;       // last result or refusal
+};
 
 // One frame of the 3D panel's input for the Move tool.
 struct MoveToolInput {
@@ -33,11 +51,11 @@ struct MoveToolInput {
 };
 
 // Advances the tool; call every frame while the Move tool is active or a move drag runs.
-void MoveToolFrame(AppState* state, const MoveToolInput& input);
+void MoveToolFrame(AppState* state, MoveDrag* drag, const MoveToolInput& input);
 // Whether a press on an element is being dragged: the panel then neither orbits nor clicks.
-bool MoveToolOwnsMouse();
+bool MoveToolOwnsMouse(const MoveDrag& drag);
 // One line for the 3D panel: the tool's help, or the current drag's result or refusal.
-std::string MoveToolHint();
+std::string MoveToolHint(const MoveDrag& drag);
 
 // The script command `move-selection ARGS` on the selection, one undoable edit each:
 //   vertex X Y Z         the selected vertex to world position (X, Y, Z)
