@@ -6,6 +6,8 @@
 
 #include "app/platform/gl_util.h"  // epoxy first
 
+#include <glm/glm.hpp>
+#include <glm/gtc/type_ptr.hpp>
 #include <imgui.h>
 
 #include <algorithm>
@@ -184,10 +186,11 @@ ImTextureID ToImTexture(GLuint texture) {
   return reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(texture));
 }
 
-Eigen::Matrix4f ToFloat(const Eigen::Matrix4d& m) { return m.cast<float>(); }
 
-void SetMatrix(GLint location, const Eigen::Matrix4f& m) {
-  glUniformMatrix4fv(location, 1, GL_FALSE, m.data());  // Eigen is column-major, as GL expects
+// Uploads a double matrix as GL's float mat4 (column-major, as GLM stores it).
+void SetMatrix(GLint location, const glm::dmat4& m) {
+  const glm::mat4 m_float(m);
+  glUniformMatrix4fv(location, 1, GL_FALSE, glm::value_ptr(m_float));
 }
 
 // ---------------------------------------------------------------------------------------
@@ -572,7 +575,7 @@ void BuildSceneGeometry(const AppState& state, const SceneMeasure& measure, Id p
 struct ViewSetup {
   Camera camera;  // the facet camera of the view (panel-sized for the orbit)
   GlCameraMatrices gl;
-  Eigen::Matrix4d clip_from_world = Eigen::Matrix4d::Identity();
+  glm::dmat4 clip_from_world = glm::dmat4(1.0);
   Eigen::Vector3d eye = Eigen::Vector3d::Zero();
   int width_px = 1, height_px = 1;
 };
@@ -600,10 +603,10 @@ ViewSetup MakeView(const OrbitCamera& orbit, const SceneMeasure& measure, int wi
 // Panel pixel (from its top-left, continuous: pixel edges at integers) of a world point, or
 // false when it is behind the eye.
 bool PanelPixelOf(const ViewSetup& view, const Eigen::Vector3d& p_in_world, ImVec2* out) {
-  const Eigen::Vector4d clip = view.clip_from_world * p_in_world.homogeneous();
-  if (clip.w() <= 1e-9) return false;
-  const double x = (clip.x() / clip.w() + 1.0) * 0.5 * view.width_px;
-  const double y = (1.0 - clip.y() / clip.w()) * 0.5 * view.height_px;
+  const glm::dvec4 clip = view.clip_from_world * HomogeneousGlm(p_in_world);
+  if (clip.w <= 1e-9) return false;
+  const double x = (clip.x / clip.w + 1.0) * 0.5 * view.width_px;
+  const double y = (1.0 - clip.y / clip.w) * 0.5 * view.height_px;
   *out = ImVec2(static_cast<float>(x), static_cast<float>(y));
   return true;
 }
@@ -614,7 +617,7 @@ void SetLineWidth(const GlResources& gl, float width) {
 
 void RenderScene(const AppState& state, const PanelState& panel, const ViewSetup& view, const SceneMeasure& measure) {
   const GlResources& gl = panel.gl;
-  const Eigen::Matrix4f clip_from_world = ToFloat(view.clip_from_world);
+  const glm::dmat4& clip_from_world = view.clip_from_world;
   const Eigen::Vector3f eye = view.eye.cast<float>();
 
   glDisable(GL_SCISSOR_TEST);
@@ -632,18 +635,18 @@ void RenderScene(const AppState& state, const PanelState& panel, const ViewSetup
     const auto photo = gl.photo_textures.find(panel.orbit.photo_image_id);
     if (photo != gl.photo_textures.end()) {
       const double s = view.gl.image_scale;
-      const double x0 = view.gl.image_offset_px.x(), y0 = view.gl.image_offset_px.y();
+      const double x0 = view.gl.image_offset_px.x, y0 = view.gl.image_offset_px.y;
       const double x1 = x0 + s * view.camera.width_px, y1 = y0 + s * view.camera.height_px;
       // Unit square (x right, y down) onto the rect in NDC (y up).
-      Eigen::Matrix4d ndc_from_unit = Eigen::Matrix4d::Identity();
-      ndc_from_unit(0, 0) = 2.0 * (x1 - x0) / view.width_px;
-      ndc_from_unit(0, 3) = 2.0 * x0 / view.width_px - 1.0;
-      ndc_from_unit(1, 1) = -2.0 * (y1 - y0) / view.height_px;
-      ndc_from_unit(1, 3) = 1.0 - 2.0 * y0 / view.height_px;
+      glm::dmat4 ndc_from_unit(1.0);  // [column][row]
+      ndc_from_unit[0][0] = 2.0 * (x1 - x0) / view.width_px;
+      ndc_from_unit[3][0] = 2.0 * x0 / view.width_px - 1.0;
+      ndc_from_unit[1][1] = -2.0 * (y1 - y0) / view.height_px;
+      ndc_from_unit[3][1] = 1.0 - 2.0 * y0 / view.height_px;
       glDisable(GL_DEPTH_TEST);
       glDisable(GL_BLEND);
       glUseProgram(gl.photo_program.id);
-      SetMatrix(gl.photo_program.clip_from_world, ToFloat(ndc_from_unit));
+      SetMatrix(gl.photo_program.clip_from_world, ndc_from_unit);
       glUniform1i(gl.photo_sampler, 0);
       glUniform1f(gl.photo_alpha, 1.0f);
       glBindTexture(GL_TEXTURE_2D, photo->second.texture);
@@ -735,13 +738,14 @@ void RenderScene(const AppState& state, const PanelState& panel, const ViewSetup
 // The pick ray of a panel pixel, unprojected with the same matrices the frame used.
 PickRay RayOf(const ViewSetup& view, ImVec2 pixel_in_panel) {
   PickRay ray;
-  const Eigen::Matrix4d world_from_clip = view.clip_from_world.inverse();
+  const glm::dmat4 world_from_clip = glm::inverse(view.clip_from_world);
   const double ndc_x = 2.0 * pixel_in_panel.x / view.width_px - 1.0;
   const double ndc_y = 1.0 - 2.0 * pixel_in_panel.y / view.height_px;
-  const Eigen::Vector4d near_h = world_from_clip * Eigen::Vector4d(ndc_x, ndc_y, -1.0, 1.0);
-  const Eigen::Vector4d far_h = world_from_clip * Eigen::Vector4d(ndc_x, ndc_y, 1.0, 1.0);
-  ray.origin = near_h.head<3>() / near_h.w();
-  ray.direction = (far_h.head<3>() / far_h.w() - ray.origin).normalized();
+  const glm::dvec4 near_h = world_from_clip * glm::dvec4(ndc_x, ndc_y, -1.0, 1.0);
+  const glm::dvec4 far_h = world_from_clip * glm::dvec4(ndc_x, ndc_y, 1.0, 1.0);
+  const glm::dvec3 origin = glm::dvec3(near_h) / near_h.w;
+  ray.origin = ToEigen(origin);
+  ray.direction = ToEigen(glm::normalize(glm::dvec3(far_h) / far_h.w - origin));
   ray.clip_from_world = view.clip_from_world;
   ray.width_px = view.width_px;
   ray.height_px = view.height_px;
@@ -995,7 +999,7 @@ void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
   panel.report.origin_y = origin.y;
   panel.report.width_px = width_px;
   panel.report.height_px = height_px;
-  for (int i = 0; i < 16; ++i) panel.report.clip_from_world[i] = view.clip_from_world.data()[i];
+  for (int i = 0; i < 16; ++i) panel.report.clip_from_world[i] = glm::value_ptr(view.clip_from_world)[i];
   // Hover and clicks: the element under the cursor for the current tool (select picks
   // everything); a click (not a drag) applies the tool to it, or clears the selection.
   const PickFilter filter = state->tool == Tool::kMove ? MoveToolPickFilter() : PickFilterOf(state->tool);

@@ -1,6 +1,12 @@
-// The one conversion of a Facet camera (OpenCV frame: X right, Y down, Z forward; pixel
-// centres at integer coordinates, core/geometry/conventions.h) to OpenGL's view and projection
-// matrices (eye frame: X right, Y up, looking down -Z; clip space with w = depth).
+// The one conversion between core's cameras and vectors (Eigen, double, OpenCV frame: X right,
+// Y down, Z forward; pixel centres at integer coordinates, core/geometry/conventions.h) and
+// the GL side's GLM types (OpenGL's eye frame: X right, Y up, looking down -Z; clip space with
+// w = depth; matrices column-major, m[column][row], as glUniformMatrix4fv expects). Nothing
+// else in app/ converts between Eigen and GLM: rendering code includes this header.
+//
+// Precision: the matrices are glm::dmat4 (double): float's relative precision (6e-8) is already
+// ~7e-5 px across a 1200 px viewport, far above the 1e-6 px round trip that
+// tests/test_gl_camera.cpp checks. They become float (glm::mat4) only for the uniform upload.
 //
 // Header-only and free of GL so that tests can check it without a context: a world point
 // taken through projection * view, the perspective divide and the GL viewport transform
@@ -10,18 +16,27 @@
 #include <algorithm>
 
 #include <Eigen/Core>
+#include <glm/glm.hpp>
 
 #include "core/geometry/camera.h"
 
 namespace facet::app {
 
+// Eigen <-> GLM, element by element (no arithmetic, so exact).
+inline glm::dvec3 ToGlm(const Eigen::Vector3d& v) { return glm::dvec3(v.x(), v.y(), v.z()); }
+inline Eigen::Vector3d ToEigen(const glm::dvec3& v) { return Eigen::Vector3d(v.x, v.y, v.z); }
+inline glm::dvec2 ToGlm(const Eigen::Vector2d& v) { return glm::dvec2(v.x(), v.y()); }
+inline Eigen::Vector2d ToEigen(const glm::dvec2& v) { return Eigen::Vector2d(v.x, v.y); }
+// A world point (Eigen, as core stores it) as GL's homogeneous column (w = 1).
+inline glm::dvec4 HomogeneousGlm(const Eigen::Vector3d& p) { return glm::dvec4(p.x(), p.y(), p.z(), 1.0); }
+
 struct GlCameraMatrices {
-  Eigen::Matrix4d view = Eigen::Matrix4d::Identity();        // gl_eye_from_world
-  Eigen::Matrix4d projection = Eigen::Matrix4d::Identity();  // clip_from_gl_eye
+  glm::dmat4 view = glm::dmat4(1.0);        // gl_eye_from_world
+  glm::dmat4 projection = glm::dmat4(1.0);  // clip_from_gl_eye
   // Where the camera's image lies in the viewport, in viewport pixels from the top-left:
   // viewport_px = image_scale * (uv_px + 0.5) + image_offset_px - 0.5 (pixel centres).
   double image_scale = 1.0;
-  Eigen::Vector2d image_offset_px = Eigen::Vector2d::Zero();
+  glm::dvec2 image_offset_px = glm::dvec2(0.0);
 };
 
 // View and projection matrices that show `camera` in a GL viewport of
@@ -46,14 +61,15 @@ inline GlCameraMatrices GlMatricesFromCamera(const Camera& camera, int viewport_
   // of the first pixel) the image maps by x_edge = s * u_edge + offset.
   const double s = std::min(viewport_w / image_w, viewport_h / image_h);
   out.image_scale = s;
-  out.image_offset_px = Eigen::Vector2d((viewport_w - s * image_w) / 2.0, (viewport_h - s * image_h) / 2.0);
+  out.image_offset_px = glm::dvec2((viewport_w - s * image_w) / 2.0, (viewport_h - s * image_h) / 2.0);
 
-  // The GL eye frame is the OpenCV camera frame turned half a turn about X.
-  Eigen::Matrix4d cam_from_world = Eigen::Matrix4d::Identity();
-  cam_from_world.topLeftCorner<3, 3>() = camera.cam_from_world_rotation;
-  cam_from_world.topRightCorner<3, 1>() = camera.cam_from_world_translation;
-  const Eigen::Matrix4d gl_eye_from_cam = Eigen::Vector4d(1.0, -1.0, -1.0, 1.0).asDiagonal();
-  out.view = gl_eye_from_cam * cam_from_world;
+  // The GL eye frame is the OpenCV camera frame turned half a turn about X: row r of
+  // cam_from_world [R | t] is multiplied by (1, -1, -1)[r].
+  const double gl_eye_from_cam[3] = {1.0, -1.0, -1.0};
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out.view[c][r] = gl_eye_from_cam[r] * camera.cam_from_world_rotation(r, c);
+    out.view[3][r] = gl_eye_from_cam[r] * camera.cam_from_world_translation(r);
+  }
 
   // In pixel edges of the viewport the camera has focal s*f and principal point
   // s*(c + 0.5) + offset (OpenCV puts pixel centres, not edges, at integers). From there:
@@ -61,19 +77,19 @@ inline GlCameraMatrices GlMatricesFromCamera(const Camera& camera, int viewport_
   // last), with (x_edge, y_edge) = (fx * X / Z + px, fy * Y / Z + py) and, in the GL eye
   // frame, X = x_gl, Y = -y_gl, Z = -z_gl = clip w.
   const double f = s * camera.focal_px;
-  const double px = s * (camera.principal_point_px.x() + 0.5) + out.image_offset_px.x();
-  const double py = s * (camera.principal_point_px.y() + 0.5) + out.image_offset_px.y();
+  const double px = s * (camera.principal_point_px.x() + 0.5) + out.image_offset_px.x;
+  const double py = s * (camera.principal_point_px.y() + 0.5) + out.image_offset_px.y;
   const double n = near_depth;
   const double fa = far_depth;
-  Eigen::Matrix4d& p = out.projection;
-  p.setZero();
-  p(0, 0) = 2.0 * f / viewport_w;
-  p(0, 2) = 1.0 - 2.0 * px / viewport_w;
-  p(1, 1) = 2.0 * f / viewport_h;
-  p(1, 2) = 2.0 * py / viewport_h - 1.0;
-  p(2, 2) = -(fa + n) / (fa - n);
-  p(2, 3) = -2.0 * fa * n / (fa - n);
-  p(3, 2) = -1.0;
+  glm::dmat4& p = out.projection;  // p[column][row]
+  p = glm::dmat4(0.0);
+  p[0][0] = 2.0 * f / viewport_w;
+  p[2][0] = 1.0 - 2.0 * px / viewport_w;
+  p[1][1] = 2.0 * f / viewport_h;
+  p[2][1] = 2.0 * py / viewport_h - 1.0;
+  p[2][2] = -(fa + n) / (fa - n);
+  p[3][2] = -2.0 * fa * n / (fa - n);
+  p[2][3] = -1.0;
   return out;
 }
 

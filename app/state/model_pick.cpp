@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "app/platform/gl_camera.h"
 #include "core/mesh/triangulate.h"
 
 namespace facet::app {
@@ -185,10 +186,10 @@ ElementPick PickInImage(const Project& project, const std::vector<ProjectedPrimi
 }
 
 bool ProjectToPanel(const PickRay& ray, const Eigen::Vector3d& p_in_world, Eigen::Vector2d* px) {
-  const Eigen::Vector4d clip = ray.clip_from_world * p_in_world.homogeneous();
-  if (clip.w() <= 1e-9) return false;
-  *px = Eigen::Vector2d((clip.x() / clip.w() + 1.0) * 0.5 * ray.width_px,
-                        (1.0 - clip.y() / clip.w()) * 0.5 * ray.height_px);
+  const glm::dvec4 clip = ray.clip_from_world * HomogeneousGlm(p_in_world);
+  if (clip.w <= 1e-9) return false;
+  *px = Eigen::Vector2d((clip.x / clip.w + 1.0) * 0.5 * ray.width_px,
+                        (1.0 - clip.y / clip.w) * 0.5 * ray.height_px);
   return true;
 }
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <glm/glm.hpp>
 
 #include "app/state/app_state.h"
 
@@ -64,11 +65,13 @@ ElementPick PickInImage(const Project& project, const std::vector<ProjectedPrimi
                         const Camera& camera, double zoom, const Eigen::Vector2d& origin_screen,
                         const Eigen::Vector2d& mouse_screen, const PickFilter& filter, double radius_px);
 
-// A view ray for picking in the 3D panel, with a projection to panel px.
+// A view ray for picking in the 3D panel, with a projection to panel px. Origin and direction
+// are world points in core's Eigen (they meet the meshes); clip_from_world is the frame's GL
+// matrix in GLM (app/platform/gl_camera.h converts between the two).
 struct PickRay {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();  // unit
-  Eigen::Matrix4d clip_from_world = Eigen::Matrix4d::Identity();
+  glm::dmat4 clip_from_world = glm::dmat4(1.0);  // GL's, as the frame drew (app/platform/gl_camera.h)
   int width_px = 1, height_px = 1;  // the panel in px (device)
   Eigen::Vector2d mouse_px = Eigen::Vector2d::Zero();
 };
