@@ -714,239 +714,323 @@ std::string ToolHint(const AppState& state) {
   }
 }
 
-void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
+// What one frame of the image view works with, filled step by step by DrawImageView.
+struct ViewFrame {
+  const TiledTexture* texture = nullptr;  // null while the photo is not loaded
+  int width_px = 1, height_px = 1;        // the image's size
+  ImVec2 rect_min{0, 0}, rect_max{0, 0}, rect_size{0, 0};  // the view's screen rectangle
+  bool hovered = false;
+  bool keys_for_us = false;  // keyboard shortcuts act on this view
+  bool fine = false;         // fine pointing (Shift during a press)
+  double pointer_scale = 1.0;  // screen px per image px of the pointer's motion
+  Eigen::Vector2d mouse_uv = Eigen::Vector2d::Zero();  // the pointer, image px
+  ImVec2 pointer_screen{0, 0};
+  OverlayHover hover;
+};
+
+// Step 1: the toolbar, the view's rectangle (an invisible button taking the mouse and the
+// wheel) and whether keys are ours. Sets *fit_now / *one_to_one from the toolbar.
+ViewFrame LayOutView(PanelState* panel, ImageViewState* view, bool* fit_now, bool* one_to_one) {
   ImGuiIO& io = ImGui::GetIO();
-  ImageViewState& view = panel->views[image.id];
-  const TiledTexture* texture = TextureFor(panel, *state, image.id);
-  const int width_px = texture ? texture->width : std::max(1, image.width_px);
-  const int height_px = texture ? texture->height : std::max(1, image.height_px);
-
-  bool fit_now = false, one_to_one = false;
-  DrawToolbar(panel, &view, &fit_now, &one_to_one);
-
+  ViewFrame frame;
+  DrawToolbar(panel, view, fit_now, one_to_one);
   const float status_h = ImGui::GetTextLineHeightWithSpacing();
   const ImVec2 avail = ImGui::GetContentRegionAvail();
-  const ImVec2 rect_size(std::max(avail.x, 32.0f), std::max(avail.y - status_h, 32.0f));
-  const ImVec2 rect_min = ImGui::GetCursorScreenPos();
-  const ImVec2 rect_max(rect_min.x + rect_size.x, rect_min.y + rect_size.y);
+  frame.rect_size = ImVec2(std::max(avail.x, 32.0f), std::max(avail.y - status_h, 32.0f));
+  frame.rect_min = ImGui::GetCursorScreenPos();
+  frame.rect_max = ImVec2(frame.rect_min.x + frame.rect_size.x, frame.rect_min.y + frame.rect_size.y);
 
-  ImGui::InvisibleButton("##image_view", rect_size,
+  ImGui::InvisibleButton("##image_view", frame.rect_size,
                          ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight |
                              ImGuiButtonFlags_MouseButtonMiddle);
   ImGui::SetItemUsingMouseWheel();
-  const bool hovered = ImGui::IsItemHovered();
+  frame.hovered = ImGui::IsItemHovered();
   const bool focused = ImGui::IsWindowFocused(ImGuiFocusedFlags_RootAndChildWindows);
   // Keys go to the panel under the mouse, or to this one when it has focus and the mouse
   // is over no other window (the 3D panel also answers F).
   const bool other_window_hovered = ImGui::IsWindowHovered(ImGuiHoveredFlags_AnyWindow) &&
                                     !ImGui::IsWindowHovered(ImGuiHoveredFlags_RootAndChildWindows);
-  const bool keys_for_us = (hovered || (focused && !other_window_hovered)) && !io.WantTextInput;
+  frame.keys_for_us = (frame.hovered || (focused && !other_window_hovered)) && !io.WantTextInput;
+  return frame;
+}
 
+// Step 2: fit (requested, F, or a resize of a fitted view), 1:1, and the wheel: zoom about
+// the cursor, or with Shift the loupe's magnification.
+void FitAndZoomView(PanelState* panel, ImageViewState* view, const ViewFrame& frame, bool fit_now, bool one_to_one) {
+  ImGuiIO& io = ImGui::GetIO();
   if (panel->fit_requested) fit_now = true;
-  if (keys_for_us && ImGui::IsKeyPressed(GLFW_KEY_F, false) && !io.KeyCtrl && !io.KeyAlt) fit_now = true;
-  const bool resized = view.last_size.x != rect_size.x || view.last_size.y != rect_size.y;
-  if (!view.initialized || fit_now || (view.fitted && resized)) {
-    FitImageView(&view, width_px, height_px, rect_min, rect_size);
+  if (frame.keys_for_us && ImGui::IsKeyPressed(GLFW_KEY_F, false) && !io.KeyCtrl && !io.KeyAlt) fit_now = true;
+  const bool resized = view->last_size.x != frame.rect_size.x || view->last_size.y != frame.rect_size.y;
+  if (!view->initialized || fit_now || (view->fitted && resized)) {
+    FitImageView(view, frame.width_px, frame.height_px, frame.rect_min, frame.rect_size);
     panel->fit_requested = false;
   }
-  view.last_size = rect_size;
-  if (one_to_one) ZoomImageViewAbout(&view, 1.0f, ImVec2(rect_min.x + 0.5f * rect_size.x, rect_min.y + 0.5f * rect_size.y));
-
-  // Wheel: zoom about the cursor; with Shift, the loupe's magnification.
-  if (hovered) {
-    const float wheel = io.KeyShift && io.MouseWheel == 0.0f ? io.MouseWheelH : io.MouseWheel;
-    if (wheel != 0.0f) {
-      if (io.KeyShift) {
-        const float factor = wheel > 0 ? 2.0f : 0.5f;
-        panel->loupe_magnification =
-            std::clamp(panel->loupe_magnification * factor, kMinLoupeMagnification, kMaxLoupeMagnification);
-        panel->fine_active = false;  // re-anchored below at the current pointer
-      } else {
-        ZoomImageViewAbout(&view, view.zoom * std::pow(kWheelZoomStep, wheel), io.MousePos);
-      }
-    }
+  view->last_size = frame.rect_size;
+  if (one_to_one) {
+    ZoomImageViewAbout(view, 1.0f,
+                       ImVec2(frame.rect_min.x + 0.5f * frame.rect_size.x, frame.rect_min.y + 0.5f * frame.rect_size.y));
   }
+  if (!frame.hovered) return;
+  const float wheel = io.KeyShift && io.MouseWheel == 0.0f ? io.MouseWheelH : io.MouseWheel;
+  if (wheel == 0.0f) return;
+  if (io.KeyShift) {
+    const float factor = wheel > 0 ? 2.0f : 0.5f;
+    panel->loupe_magnification =
+        std::clamp(panel->loupe_magnification * factor, kMinLoupeMagnification, kMaxLoupeMagnification);
+    panel->fine_active = false;  // re-anchored below at the current pointer
+  } else {
+    ZoomImageViewAbout(view, view->zoom * std::pow(kWheelZoomStep, wheel), io.MousePos);
+  }
+}
 
-  const Project& project = state->document.project();
-  const std::vector<ProjectedPrimitive> model = ProjectModel(project, image);
-  ViewTransform transform = TransformOf(view);
-  Interaction& drag = panel->interaction;
+// Step 3: the pointer: the mouse, or in fine mode (Shift during a press) the slowed-down
+// point that the loupe shows.
+void UpdatePointer(PanelState* panel, const ImageViewState& view, const ViewTransform& transform, ViewFrame* frame) {
+  ImGuiIO& io = ImGui::GetIO();
+  const Interaction& drag = panel->interaction;
   const bool busy = drag.kind != DragKind::kNone;
-  // The pointer: the mouse, or in fine mode (Shift during a press) the slowed-down point
-  // that the loupe shows.
-  const bool fine = io.KeyShift && busy && drag.kind != DragKind::kPan;
-  if (fine && !panel->fine_active) {
+  frame->fine = io.KeyShift && busy && drag.kind != DragKind::kPan;
+  if (frame->fine && !panel->fine_active) {
     panel->fine_anchor_screen = panel->last_mouse_screen;
     panel->fine_anchor_uv = panel->last_pointer_uv;
   }
-  panel->fine_active = fine;
-  const double pointer_scale = view.zoom * (fine ? panel->loupe_magnification : 1.0f);
-  const Eigen::Vector2d mouse_uv =
-      fine ? Eigen::Vector2d(panel->fine_anchor_uv + (ToEigen(io.MousePos) - ToEigen(panel->fine_anchor_screen)) / pointer_scale)
-           : MouseUv(view);
-  const ImVec2 pointer_screen = transform.ToScreen(mouse_uv.x(), mouse_uv.y());
-  panel->last_pointer_uv = mouse_uv;
+  panel->fine_active = frame->fine;
+  frame->pointer_scale = view.zoom * (frame->fine ? panel->loupe_magnification : 1.0f);
+  frame->mouse_uv = frame->fine ? Eigen::Vector2d(panel->fine_anchor_uv + (ToEigen(io.MousePos) -
+                                                                          ToEigen(panel->fine_anchor_screen)) /
+                                                                             frame->pointer_scale)
+                                : MouseUv(view);
+  frame->pointer_screen = transform.ToScreen(frame->mouse_uv.x(), frame->mouse_uv.y());
+  panel->last_pointer_uv = frame->mouse_uv;
   panel->last_mouse_screen = io.MousePos;
-  OverlayHover hover;
-  if (hovered && !busy) hover = HitTest(project, image, model, transform, pointer_screen, state->tool);
-  if (hovered && !busy) {
-    state->hover = hover.element;
+}
+
+// Step 4: what is under the pointer, shared with the 3D panel through AppState::hover.
+void UpdateHover(AppState* state, const PanelState& panel, const Image& image,
+                 const std::vector<ProjectedPrimitive>& model, const ViewTransform& transform, ViewFrame* frame) {
+  const bool busy = panel.interaction.kind != DragKind::kNone;
+  if (frame->hovered && !busy) {
+    frame->hover = HitTest(state->document.project(), image, model, transform, frame->pointer_screen, state->tool);
+  }
+  if (frame->hovered && !busy) {
+    state->hover = frame->hover.element;
     state->hover_panel = kImagePanelHover;
   } else if (state->hover_panel == kImagePanelHover) {
     state->hover = {};
     state->hover_panel = 0;
   }
+}
 
-  // Presses start an interaction; a drag started elsewhere (another panel) blocks edits.
+// Step 5: presses start an interaction; a drag started elsewhere (another panel) blocks edits.
+void StartInteraction(AppState* state, PanelState* panel, const Image& image,
+                      const std::vector<ProjectedPrimitive>& model, const ViewTransform& transform,
+                      const ViewFrame& frame) {
+  Interaction& drag = panel->interaction;
+  if (!frame.hovered || drag.kind != DragKind::kNone) return;
   const bool space_down = ImGui::IsKeyDown(ImGui::GetKeyIndex(ImGuiKey_Space));
-  if (hovered && !busy) {
-    if (ImGui::IsMouseClicked(ImGuiMouseButton_Middle) ||
-        (ImGui::IsMouseClicked(ImGuiMouseButton_Left) && space_down)) {
-      drag = Interaction();
-      drag.kind = DragKind::kPan;
-      drag.button = ImGui::IsMouseClicked(ImGuiMouseButton_Middle) ? ImGuiMouseButton_Middle : ImGuiMouseButton_Left;
-    } else if (ImGui::IsMouseClicked(ImGuiMouseButton_Left) && !state->drag_start) {
-      StartLeftPress(state, panel, image, hover, mouse_uv);
-    } else if (ImGui::IsMouseClicked(ImGuiMouseButton_Right)) {
-      // The context menu works with every tool, so pick segments as the select tool does.
-      const OverlayHover under = HitTest(project, image, model, transform, pointer_screen, Tool::kSelect);
-      if (under.segment_id != kNoId) {
-        panel->context_segment = under.segment_id;
-        ImGui::OpenPopup("##segment_menu");
-      }
+  if (ImGui::IsMouseClicked(ImGuiMouseButton_Middle) || (ImGui::IsMouseClicked(ImGuiMouseButton_Left) && space_down)) {
+    drag = Interaction();
+    drag.kind = DragKind::kPan;
+    drag.button = ImGui::IsMouseClicked(ImGuiMouseButton_Middle) ? ImGuiMouseButton_Middle : ImGuiMouseButton_Left;
+  } else if (ImGui::IsMouseClicked(ImGuiMouseButton_Left) && !state->drag_start) {
+    StartLeftPress(state, panel, image, frame.hover, frame.mouse_uv);
+  } else if (ImGui::IsMouseClicked(ImGuiMouseButton_Right)) {
+    // The context menu works with every tool, so pick segments as the select tool does.
+    const OverlayHover under =
+        HitTest(state->document.project(), image, model, transform, frame.pointer_screen, Tool::kSelect);
+    if (under.segment_id != kNoId) {
+      panel->context_segment = under.segment_id;
+      ImGui::OpenPopup("##segment_menu");
     }
   }
+}
 
-  // Ongoing interaction.
+// Step 6a: an edit drag in progress: begin it past the threshold, cancel on Escape, update,
+// finish on release.
+void ContinueEditDrag(AppState* state, PanelState* panel, const ViewFrame& frame) {
+  ImGuiIO& io = ImGui::GetIO();
+  Interaction& drag = panel->interaction;
+  if (IsEditDrag(drag.kind) && drag.began && !state->drag_start) {
+    drag.kind = DragKind::kNone;  // cancelled elsewhere (undo during the drag)
+  }
+  const double moved_px = (ToEigen(io.MousePos) - ToEigen(drag.press_screen)).norm();
+  if (IsEditDrag(drag.kind) && !drag.began && moved_px >= kDragStartPx && !state->drag_start) {
+    drag.began = true;
+    BeginDrag(state, DragLabel(drag.kind));
+  }
+  if (IsEditDrag(drag.kind) && drag.began && ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
+    CancelDrag(state);
+    if (drag.kind == DragKind::kPlacePin) state->selection.pin_id = kNoId;
+    drag.kind = DragKind::kNone;  // the rest of the press does nothing
+  } else if ((drag.kind == DragKind::kNewSegment || drag.kind == DragKind::kLinePin) &&
+             ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
+    drag.kind = DragKind::kNone;
+  } else if (IsEditDrag(drag.kind) && drag.began) {
+    UpdateEditDrag(state, &drag, frame.mouse_uv);
+  }
+  if (ImGui::IsMouseReleased(drag.button) || !ImGui::IsMouseDown(drag.button)) {
+    FinishLeftPress(state, panel, frame.mouse_uv, frame.pointer_scale);
+  }
+}
+
+// Step 6b: the keys of an idle view: Delete removes the selection, Escape steps back.
+void HandleIdleKeys(AppState* state, PanelState* panel) {
+  if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete), false) ||
+      ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Backspace), false)) {
+    DeleteSelection(state, panel);
+  }
+  if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
+    state->selection.connect_from = {};  // forget V_connect's first vertex
+    if (state->tool == Tool::kPin) state->selection.element = {};  // and the vertex to pin
+    // The multi-selection goes back to its main element; the builder's pending first edge
+    // is forgotten.
+    state->selection.extra.clear();
+    state->constraint_first_kind.reset();
+    state->constraint_first_edge = {};
+  }
+}
+
+// Step 6: the ongoing interaction (pan, edit drag) or, when idle, the keys.
+void ContinueInteraction(AppState* state, PanelState* panel, ImageViewState* view, const ViewFrame& frame) {
+  ImGuiIO& io = ImGui::GetIO();
+  Interaction& drag = panel->interaction;
   if (drag.kind == DragKind::kPan) {
-    view.origin = ImVec2(view.origin.x + io.MouseDelta.x, view.origin.y + io.MouseDelta.y);
-    if (io.MouseDelta.x != 0.0f || io.MouseDelta.y != 0.0f) view.fitted = false;
+    view->origin = ImVec2(view->origin.x + io.MouseDelta.x, view->origin.y + io.MouseDelta.y);
+    if (io.MouseDelta.x != 0.0f || io.MouseDelta.y != 0.0f) view->fitted = false;
     if (!ImGui::IsMouseDown(drag.button)) drag = Interaction();
   } else if (drag.kind != DragKind::kNone) {
-    if (IsEditDrag(drag.kind) && drag.began && !state->drag_start) {
-      drag.kind = DragKind::kNone;  // cancelled elsewhere (undo during the drag)
-    }
-    const double moved_px = (ToEigen(io.MousePos) - ToEigen(drag.press_screen)).norm();
-    if (IsEditDrag(drag.kind) && !drag.began && moved_px >= kDragStartPx && !state->drag_start) {
-      drag.began = true;
-      BeginDrag(state, DragLabel(drag.kind));
-    }
-    if (IsEditDrag(drag.kind) && drag.began && ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
-      CancelDrag(state);
-      if (drag.kind == DragKind::kPlacePin) state->selection.pin_id = kNoId;
-      drag.kind = DragKind::kNone;  // the rest of the press does nothing
-    } else if ((drag.kind == DragKind::kNewSegment || drag.kind == DragKind::kLinePin) &&
-               ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
-      drag.kind = DragKind::kNone;
-    } else if (IsEditDrag(drag.kind) && drag.began) {
-      UpdateEditDrag(state, &drag, mouse_uv);
-    }
-    if (ImGui::IsMouseReleased(drag.button) || !ImGui::IsMouseDown(drag.button)) {
-      FinishLeftPress(state, panel, mouse_uv, pointer_scale);
-    }
-  } else if (keys_for_us) {
-    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete), false) ||
-        ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Backspace), false)) {
-      DeleteSelection(state, panel);
-    }
-    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
-      state->selection.connect_from = {};  // forget V_connect's first vertex
-      if (state->tool == Tool::kPin) state->selection.element = {};  // and the vertex to pin
-      // The multi-selection goes back to its main element; the builder's pending first edge
-      // is forgotten.
-      state->selection.extra.clear();
-      state->constraint_first_kind.reset();
-      state->constraint_first_edge = {};
-    }
+    ContinueEditDrag(state, panel, frame);
+  } else if (frame.keys_for_us) {
+    HandleIdleKeys(state, panel);
   }
-  DrawSegmentContextMenu(state, panel);
+}
 
-  // Drawing (the project may have changed above: read it again).
-  transform = TransformOf(view);
-  const Project& current = state->document.project();
-  const Image* current_image = current.FindImage(image.id);
-  if (current_image == nullptr) return;
-  const std::vector<ProjectedPrimitive> current_model = ProjectModel(current, *current_image);
+// Step 7: what the overlays show, from the project as it is now (step 6 may have edited it).
+// `model` is current_image projected and must outlive the result.
+OverlayInput MakeOverlayInput(AppState* state, const PanelState& panel, const Image& current_image,
+                              const std::vector<ProjectedPrimitive>& model, const OverlayHover& hover) {
   OverlayInput overlay;
-  overlay.project = &current;
-  overlay.image = current_image;
-  overlay.calibration = CalibrationFor(*state, image.id);
-  overlay.model = &current_model;
+  overlay.project = &state->document.project();
+  overlay.image = &current_image;
+  overlay.calibration = CalibrationFor(*state, current_image.id);
+  overlay.model = &model;
   overlay.tool = state->tool;
   if (state->hover_panel != kImagePanelHover) overlay.other_hover = state->hover;
   overlay.selection = state->selection;
   overlay.selected_line_pin = SelectedLinePin(state);
   overlay.hover = hover;
+  const Interaction& drag = panel.interaction;
   if (drag.kind == DragKind::kMoveLinePinEnd) {  // the dragged handle stays lit
     overlay.hover = OverlayHover();
     overlay.hover.line_pin_id = drag.target_id;
     overlay.hover.line_pin_endpoint = drag.endpoint;
   }
+  return overlay;
+}
 
+// Step 8: the photo (or its placeholder), the overlays, the drag previews, a load error, the
+// loupe and the fine pointer, clipped to the view.
+void DrawViewContents(const AppState& state, const PanelState& panel, const ImageViewState& view, const Image& image,
+                      const OverlayInput& overlay, const ViewFrame& frame) {
+  ImGuiIO& io = ImGui::GetIO();
+  const ViewTransform transform = TransformOf(view);
+  const Interaction& drag = panel.interaction;
+  const ImVec2 rect_min = frame.rect_min, rect_max = frame.rect_max;
+  const Eigen::Vector2d& mouse_uv = frame.mouse_uv;
   ImDrawList* draw_list = ImGui::GetWindowDrawList();
   draw_list->PushClipRect(rect_min, rect_max, true);
   draw_list->AddRectFilled(rect_min, rect_max, kImageViewBackground);
   const ImVec2 image_min = transform.ToScreen(-0.5, -0.5);
-  const ImVec2 image_max = transform.ToScreen(width_px - 0.5, height_px - 0.5);
-  if (texture != nullptr) {
-    DrawTiledTexture(draw_list, *texture, transform, rect_min, rect_max);
+  const ImVec2 image_max = transform.ToScreen(frame.width_px - 0.5, frame.height_px - 0.5);
+  if (frame.texture != nullptr) {
+    DrawTiledTexture(draw_list, *frame.texture, transform, rect_min, rect_max);
   } else {
     draw_list->AddRectFilled(image_min, image_max, IM_COL32(70, 70, 76, 255));
   }
   draw_list->AddRect(ImVec2(image_min.x - 1, image_min.y - 1), ImVec2(image_max.x + 1, image_max.y + 1),
                      IM_COL32(0, 0, 0, 255));
-  DrawImageOverlays(draw_list, overlay, transform, rect_min, rect_max, panel->overlay);
-  DrawCalibrationOverlay(draw_list, *state, image, transform, rect_min, rect_max, hovered ? &mouse_uv : nullptr);
+  DrawImageOverlays(draw_list, overlay, transform, rect_min, rect_max, panel.overlay);
+  DrawCalibrationOverlay(draw_list, state, image, transform, rect_min, rect_max, frame.hovered ? &mouse_uv : nullptr);
   if (drag.kind == DragKind::kNewSegment) {
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, IM_COL32(0, 0, 0, 200), 4.0f);
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, AxisColor(drag.axis), 2.0f);
   }
-  if (drag.kind == DragKind::kLinePin && (mouse_uv - drag.press_uv).norm() * pointer_scale >= kMinSegmentLengthPx) {
+  if (drag.kind == DragKind::kLinePin &&
+      (mouse_uv - drag.press_uv).norm() * frame.pointer_scale >= kMinSegmentLengthPx) {
     DrawLinePinPreview(draw_list, overlay, transform, drag.press_uv, mouse_uv, rect_min, rect_max);
   }
-  if (auto error = state->photo_errors.find(image.id); error != state->photo_errors.end()) {
+  if (auto error = state.photo_errors.find(image.id); error != state.photo_errors.end()) {
     const std::string text = "Cannot show this photo: " + error->second;
     draw_list->AddText(ImGui::GetFont(), ImGui::GetFontSize(), ImVec2(rect_min.x + 10, rect_min.y + 10),
-                       IM_COL32(255, 110, 110, 255), text.c_str(), nullptr, rect_size.x - 20.0f);
-  } else if (texture == nullptr) {
+                       IM_COL32(255, 110, 110, 255), text.c_str(), nullptr, frame.rect_size.x - 20.0f);
+  } else if (frame.texture == nullptr) {
     draw_list->AddText(ImVec2(rect_min.x + 10, rect_min.y + 10), IM_COL32(200, 200, 200, 255), "Loading photo...");
   }
-  if ((hovered || fine) && io.KeyShift && drag.kind != DragKind::kPan) {
+  if ((frame.hovered || frame.fine) && io.KeyShift && drag.kind != DragKind::kPan) {
     std::optional<LoupePreview> preview;
     if (drag.kind == DragKind::kNewSegment) preview = LoupePreview{drag.press_uv, drag.axis};
-    DrawLoupe(draw_list, texture, overlay, panel->overlay, view, panel->loupe_magnification, mouse_uv, preview, rect_min,
-              rect_max, width_px, height_px);
-    if (fine) {  // where the slowed-down pointer is in the main view
+    DrawLoupe(draw_list, frame.texture, overlay, panel.overlay, view, panel.loupe_magnification, mouse_uv, preview,
+              rect_min, rect_max, frame.width_px, frame.height_px);
+    if (frame.fine) {  // where the slowed-down pointer is in the main view
       const ImVec2 p = transform.ToScreen(mouse_uv.x(), mouse_uv.y());
       draw_list->AddCircle(p, 5.0f, IM_COL32(0, 0, 0, 200), 0, 3.0f);
       draw_list->AddCircle(p, 5.0f, IM_COL32(255, 255, 255, 230), 0, 1.5f);
     }
   }
   draw_list->PopClipRect();
+}
 
-  if (hovered && drag.kind == DragKind::kNone && !io.KeyShift) {
-    const std::string hover_text = DescribeHover(*state, hover);
+// Step 9: the hover tooltip and the status line (pointer, zoom, hover, tool hint).
+void DrawViewStatus(const AppState& state, const PanelState& panel, const ImageViewState& view, const ViewFrame& frame) {
+  ImGuiIO& io = ImGui::GetIO();
+  if (frame.hovered && panel.interaction.kind == DragKind::kNone && !io.KeyShift) {
+    const std::string hover_text = DescribeHover(state, frame.hover);
     if (!hover_text.empty()) ImGui::SetTooltip("%s", hover_text.c_str());
   }
-
-  // Status line.
-  const std::string hover_text = DescribeHover(*state, hover);
-  const std::string hint = ToolHint(*state);
-  if (hovered) {
-    ImGui::Text("(%.1f, %.1f) px   %.1f%%   %s%s%s", mouse_uv.x(), mouse_uv.y(), view.zoom * 100.0f,
+  const std::string hover_text = DescribeHover(state, frame.hover);
+  const std::string hint = ToolHint(state);
+  if (frame.hovered) {
+    ImGui::Text("(%.1f, %.1f) px   %.1f%%   %s%s%s", frame.mouse_uv.x(), frame.mouse_uv.y(), view.zoom * 100.0f,
                 hover_text.c_str(), hover_text.empty() || hint.empty() ? "" : "   ", hint.c_str());
   } else {
-    ImGui::Text("%d x %d px   %.1f%%   %s", width_px, height_px, view.zoom * 100.0f, hint.c_str());
+    ImGui::Text("%d x %d px   %.1f%%   %s", frame.width_px, frame.height_px, view.zoom * 100.0f, hint.c_str());
   }
+}
+
+// One image's view for one frame, in the steps above.
+void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
+  ImageViewState& view = panel->views[image.id];
+  bool fit_now = false, one_to_one = false;
+  ViewFrame frame = LayOutView(panel, &view, &fit_now, &one_to_one);
+  frame.texture = TextureFor(panel, *state, image.id);
+  frame.width_px = frame.texture ? frame.texture->width : std::max(1, image.width_px);
+  frame.height_px = frame.texture ? frame.texture->height : std::max(1, image.height_px);
+  FitAndZoomView(panel, &view, frame, fit_now, one_to_one);
+
+  const std::vector<ProjectedPrimitive> model = ProjectModel(state->document.project(), image);
+  const ViewTransform transform = TransformOf(view);
+  UpdatePointer(panel, view, transform, &frame);
+  UpdateHover(state, *panel, image, model, transform, &frame);
+  StartInteraction(state, panel, image, model, transform, frame);
+  ContinueInteraction(state, panel, &view, frame);
+  DrawSegmentContextMenu(state, panel);
+
+  // Drawing (the project may have changed above: read it again).
+  const Image* current_image = state->document.project().FindImage(image.id);
+  if (current_image == nullptr) return;
+  const std::vector<ProjectedPrimitive> current_model = ProjectModel(state->document.project(), *current_image);
+  const OverlayInput overlay = MakeOverlayInput(state, *panel, *current_image, current_model, frame.hover);
+  DrawViewContents(*state, *panel, view, image, overlay, frame);
+  DrawViewStatus(*state, *panel, view, frame);
 
   panel->report.image_id = image.id;
   panel->report.origin_x = view.origin.x;
   panel->report.origin_y = view.origin.y;
   panel->report.zoom = view.zoom;
-  panel->report.rect_x = rect_min.x;
-  panel->report.rect_y = rect_min.y;
-  panel->report.rect_w = rect_size.x;
-  panel->report.rect_h = rect_size.y;
+  panel->report.rect_x = frame.rect_min.x;
+  panel->report.rect_y = frame.rect_min.y;
+  panel->report.rect_w = frame.rect_size.x;
+  panel->report.rect_h = frame.rect_size.y;
 }
 
 }  // namespace

@@ -910,12 +910,170 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
   draw->PopClipRect();
 }
 
+// Where the panel's canvas is this frame and what the mouse does on it.
+struct CanvasFrame {
+  ImVec2 origin{0, 0};  // screen position of the canvas's top-left
+  ImVec2 size{16, 16};  // screen px
+  float scale_x = 1.0f, scale_y = 1.0f;  // framebuffer px per screen px
+  int width_px = 1, height_px = 1;       // framebuffer px
+  bool hovered = false, active = false;
+  bool left_pressed = false;  // the left button went down on the canvas this frame
+  ImVec2 mouse_px{0, 0};      // the mouse in framebuffer px from the canvas's top-left
+  ImVec2 delta_px{0, 0};      // the mouse's motion this frame, framebuffer px
+};
+
+// Frames the model when a project shows up (first frame, another file, first content); a
+// photo view of an image that lost its calibration (or was deleted) falls back to the orbit.
+void FollowProject(const AppState& state, PanelState* panel, const SceneMeasure& measure, int width_px,
+                   int height_px) {
+  const Project& project = state.document.project();
+  const bool has_content = !project.primitives.empty() || std::any_of(project.images.begin(), project.images.end(), Drawable);
+  if (!panel->framed_once || panel->framed_project_path != state.project_path || (has_content && !panel->had_content)) {
+    if (panel->orbit.photo_image_id == kNoId) OrbitFrame(&panel->orbit, measure.frame_bounds, width_px, height_px);
+    panel->framed_once = true;
+    panel->framed_project_path = state.project_path;
+  }
+  panel->had_content = has_content;
+  if (panel->orbit.photo_image_id != kNoId) {
+    const Image* image = project.FindImage(panel->orbit.photo_image_id);
+    if (!image || !Drawable(*image)) {
+      OrbitLeavePhotoView(&panel->orbit, width_px, height_px);
+    } else {
+      panel->orbit.photo_camera = CameraOf(*image);  // follow re-calibration
+    }
+  }
+}
+
+// The canvas is an invisible button so that drags on it do not move the window.
+// The canvas's place and framebuffer size, before its button is submitted.
+CanvasFrame PlaceCanvas(ImVec2 size, float scale_x, float scale_y) {
+  CanvasFrame frame;
+  frame.size = size;
+  frame.scale_x = scale_x;
+  frame.scale_y = scale_y;
+  frame.width_px = std::max(1, static_cast<int>(std::lround(size.x * scale_x)));
+  frame.height_px = std::max(1, static_cast<int>(std::lround(size.y * scale_y)));
+  frame.origin = ImGui::GetCursorScreenPos();
+  return frame;
+}
+
+// Submits the canvas's button and reads the mouse over it.
+void ReadCanvasInput(PanelState* panel, CanvasFrame* frame) {
+  const ImGuiIO& io = ImGui::GetIO();
+  ImGui::InvisibleButton("##viewport_canvas", frame->size,
+                         ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight | ImGuiButtonFlags_MouseButtonMiddle);
+  frame->hovered = ImGui::IsItemHovered();
+  frame->active = ImGui::IsItemActive();
+  const ImVec2 mouse(io.MousePos.x - frame->origin.x, io.MousePos.y - frame->origin.y);
+  frame->mouse_px = ImVec2(mouse.x * frame->scale_x, mouse.y * frame->scale_y);
+  frame->delta_px = ImVec2(io.MouseDelta.x * frame->scale_x, io.MouseDelta.y * frame->scale_y);
+  frame->left_pressed = ImGui::IsItemActivated() && ImGui::IsMouseClicked(ImGuiMouseButton_Left);
+  if (frame->left_pressed) {
+    panel->left_pressed_here = true;
+    panel->left_press_pos = io.MousePos;
+  }
+}
+
+// Orbit (left drag, unless the Move tool holds the mouse), pan (right or middle drag), zoom
+// (wheel), frame (double click, F, or a request) and view-from-photo requests.
+void HandleViewGestures(const Project& project, PanelState* panel, const SceneMeasure& measure,
+                        const CanvasFrame& frame) {
+  const ImGuiIO& io = ImGui::GetIO();
+  const int width_px = frame.width_px, height_px = frame.height_px;
+  const ImVec2 delta_px = frame.delta_px;
+  if (frame.active && !MoveToolOwnsMouse(panel->move_drag) && ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) &&
+      (delta_px.x != 0 || delta_px.y != 0)) {
+    OrbitRotate(&panel->orbit, delta_px.x, delta_px.y, width_px, height_px);
+  }
+  if (frame.active && (ImGui::IsMouseDragging(ImGuiMouseButton_Right, 1.0f) || ImGui::IsMouseDragging(ImGuiMouseButton_Middle, 1.0f)) &&
+      (delta_px.x != 0 || delta_px.y != 0)) {
+    OrbitPan(&panel->orbit, delta_px.x, delta_px.y, width_px, height_px);
+  }
+  if (frame.hovered && io.MouseWheel != 0.0f) OrbitZoom(&panel->orbit, io.MouseWheel, width_px, height_px);
+  if ((frame.hovered && ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) ||
+      ((frame.hovered || frame.active) && FramePressed(io)) || panel->frame_requested) {
+    OrbitFrame(&panel->orbit, measure.frame_bounds, width_px, height_px);
+  }
+  panel->frame_requested = false;
+  if (panel->view_from_photo_requested != kNoId) {
+    const Image* image = project.FindImage(panel->view_from_photo_requested);
+    if (image && Drawable(*image)) OrbitViewFromPhoto(&panel->orbit, image->id, CameraOf(*image), measure.bounds);
+    panel->view_from_photo_requested = kNoId;
+  }
+}
+
+// Hover and clicks: the element under the cursor for the current tool (select picks
+// everything); a click (not a drag) applies the tool to it, or clears the selection. With the
+// Move tool a press on an element drags it (app/state/move_tool.h).
+void HandlePicking(AppState* state, PanelState* panel, const ViewSetup& view, const CanvasFrame& frame) {
+  const ImGuiIO& io = ImGui::GetIO();
+  const Project& project = state->document.project();
+  const PickFilter filter = state->tool == Tool::kMove ? MoveToolPickFilter() : PickFilterOf(state->tool);
+  const double radius_px = kPickRadiusPx * frame.scale_x;
+  if (state->tool == Tool::kMove || MoveToolOwnsMouse(panel->move_drag)) {
+    MoveToolInput move;
+    move.ray = RayOf(view, frame.mouse_px);
+    move.pressed = frame.left_pressed && frame.hovered;
+    if (move.pressed) move.pressed_on = PickByRay(project, move.ray, filter, radius_px);
+    move.released = ImGui::IsMouseReleased(ImGuiMouseButton_Left);
+    move.shift = io.KeyShift;
+    move.cancel = ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false);
+    MoveToolFrame(state, &panel->move_drag, move);
+  }
+  const bool picking = frame.hovered && !ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) &&
+                       (filter.vertices || filter.edges || filter.faces);
+  panel->hovered = picking ? PickByRay(project, RayOf(view, frame.mouse_px), filter, radius_px) : ElementPick();
+  if (frame.hovered) {
+    state->hover = panel->hovered.element;
+    state->hover_panel = kViewportHover;
+  } else if (state->hover_panel == kViewportHover) {
+    state->hover = {};
+    state->hover_panel = 0;
+  }
+  if (panel->left_pressed_here && ImGui::IsMouseReleased(ImGuiMouseButton_Left)) {
+    panel->left_pressed_here = false;
+    const float dx = io.MousePos.x - panel->left_press_pos.x, dy = io.MousePos.y - panel->left_press_pos.y;
+    if (dx * dx + dy * dy <= kClickSlopPx * kClickSlopPx && frame.hovered && !state->drag_start) {
+      const ElementPick picked = PickByRay(project, RayOf(view, frame.mouse_px), filter, radius_px);
+      if (!ApplyToolClick(state, picked.element, picked.t) && state->tool == Tool::kSelect) state->selection = {};
+    }
+  }
+}
+
+// GL work: uploads when their sources changed, then the frame into the panel's target.
+// Returns false (after drawing the message) when the target cannot be made.
+bool RenderToTarget(const AppState& state, PanelState* panel, const ViewSetup& view, const SceneMeasure& measure,
+                    const CanvasFrame& frame) {
+  GlResources& gl = panel->gl;
+  const SavedGlState saved = SavedGlState::Capture();
+  if (!gl.mesh_uploaded || gl.mesh_revision != state.mesh_revision) UploadMesh(state.mesh, state.mesh_revision, state.atlas_revision, &gl);
+  UpdatePhotoTextures(state, &gl);
+  // The project may have changed (a tool click): read it again.
+  const Project& current = state.document.project();
+  SceneKey key{current.primitives, current.images, state.active_image_id, state.selection.primitive_id,
+               panel->orbit.photo_image_id};
+  if (!gl.scene_built || !(key == gl.scene_key)) {
+    BuildSceneGeometry(state, measure, panel->orbit.photo_image_id, &gl);
+    gl.scene_key = std::move(key);
+  }
+  std::string target_error;
+  if (!gl.target.Ensure(frame.width_px, frame.height_px, gl.msaa_samples, &target_error)) {
+    saved.Restore();
+    ImGui::GetWindowDrawList()->AddText(frame.origin, IM_COL32(255, 100, 100, 255), target_error.c_str());
+    return false;
+  }
+  gl.target.BindForDrawing();
+  RenderScene(state, *panel, view, measure);
+  gl.target.Resolve();
+  saved.Restore();
+  return true;
+}
+
 }  // namespace
 
 void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
   PanelState& panel = Panel(owner);
   GlResources& gl = panel.gl;
-  const Project& project = state->document.project();
   const ImGuiIO& io = ImGui::GetIO();
 
   if (!gl.initialised) {
@@ -928,7 +1086,7 @@ void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
     return;
   }
 
-  const SceneMeasure measure = MeasureScene(project);
+  const SceneMeasure measure = MeasureScene(state->document.project());
   const ImVec2 avail_before_toolbar = ImGui::GetContentRegionAvail();
   const float scale_x = io.DisplayFramebufferScale.x > 0 ? io.DisplayFramebufferScale.x : 1.0f;
   const float scale_y = io.DisplayFramebufferScale.y > 0 ? io.DisplayFramebufferScale.y : 1.0f;
@@ -938,128 +1096,25 @@ void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
               std::max(1, static_cast<int>(avail_before_toolbar.y * scale_y)));
 
   const ImVec2 size(std::max(ImGui::GetContentRegionAvail().x, 16.0f), std::max(ImGui::GetContentRegionAvail().y, 16.0f));
-  const int width_px = std::max(1, static_cast<int>(std::lround(size.x * scale_x)));
-  const int height_px = std::max(1, static_cast<int>(std::lround(size.y * scale_y)));
-  const ImVec2 origin = ImGui::GetCursorScreenPos();
+  CanvasFrame frame = PlaceCanvas(size, scale_x, scale_y);
+  FollowProject(*state, &panel, measure, frame.width_px, frame.height_px);
+  ReadCanvasInput(&panel, &frame);
+  HandleViewGestures(state->document.project(), &panel, measure, frame);
 
-  // Frame the model when a project shows up (first frame, another file, first content).
-  const bool has_content = !project.primitives.empty() || std::any_of(project.images.begin(), project.images.end(), Drawable);
-  if (!panel.framed_once || panel.framed_project_path != state->project_path || (has_content && !panel.had_content)) {
-    if (panel.orbit.photo_image_id == kNoId) OrbitFrame(&panel.orbit, measure.frame_bounds, width_px, height_px);
-    panel.framed_once = true;
-    panel.framed_project_path = state->project_path;
-  }
-  panel.had_content = has_content;
-  // A photo view of an image that lost its calibration (or was deleted) falls back to the orbit.
-  if (panel.orbit.photo_image_id != kNoId) {
-    const Image* image = project.FindImage(panel.orbit.photo_image_id);
-    if (!image || !Drawable(*image)) {
-      OrbitLeavePhotoView(&panel.orbit, width_px, height_px);
-    } else {
-      panel.orbit.photo_camera = CameraOf(*image);  // follow re-calibration
-    }
-  }
-
-  // Input: the canvas is an invisible button so that drags on it do not move the window.
-  ImGui::InvisibleButton("##viewport_canvas", size,
-                         ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight | ImGuiButtonFlags_MouseButtonMiddle);
-  const bool hovered = ImGui::IsItemHovered();
-  const bool active = ImGui::IsItemActive();
-  const ImVec2 mouse(io.MousePos.x - origin.x, io.MousePos.y - origin.y);
-  const ImVec2 mouse_px(mouse.x * scale_x, mouse.y * scale_y);
-  const ImVec2 delta_px(io.MouseDelta.x * scale_x, io.MouseDelta.y * scale_y);
-  const bool left_pressed = ImGui::IsItemActivated() && ImGui::IsMouseClicked(ImGuiMouseButton_Left);
-  if (left_pressed) {
-    panel.left_pressed_here = true;
-    panel.left_press_pos = io.MousePos;
-  }
-  if (active && !MoveToolOwnsMouse(panel.move_drag) && ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) &&
-      (delta_px.x != 0 || delta_px.y != 0)) {
-    OrbitRotate(&panel.orbit, delta_px.x, delta_px.y, width_px, height_px);
-  }
-  if (active && (ImGui::IsMouseDragging(ImGuiMouseButton_Right, 1.0f) || ImGui::IsMouseDragging(ImGuiMouseButton_Middle, 1.0f)) &&
-      (delta_px.x != 0 || delta_px.y != 0)) {
-    OrbitPan(&panel.orbit, delta_px.x, delta_px.y, width_px, height_px);
-  }
-  if (hovered && io.MouseWheel != 0.0f) OrbitZoom(&panel.orbit, io.MouseWheel, width_px, height_px);
-  if ((hovered && ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) || ((hovered || active) && FramePressed(io)) ||
-      panel.frame_requested) {
-    OrbitFrame(&panel.orbit, measure.frame_bounds, width_px, height_px);
-  }
-  panel.frame_requested = false;
-  if (panel.view_from_photo_requested != kNoId) {
-    const Image* image = project.FindImage(panel.view_from_photo_requested);
-    if (image && Drawable(*image)) OrbitViewFromPhoto(&panel.orbit, image->id, CameraOf(*image), measure.bounds);
-    panel.view_from_photo_requested = kNoId;
-  }
-
-  const ViewSetup view = MakeView(panel.orbit, measure, width_px, height_px);
+  const ViewSetup view = MakeView(panel.orbit, measure, frame.width_px, frame.height_px);
   panel.report.drawn = true;
-  panel.report.origin_x = origin.x;
-  panel.report.origin_y = origin.y;
-  panel.report.width_px = width_px;
-  panel.report.height_px = height_px;
+  panel.report.origin_x = frame.origin.x;
+  panel.report.origin_y = frame.origin.y;
+  panel.report.width_px = frame.width_px;
+  panel.report.height_px = frame.height_px;
   for (int i = 0; i < 16; ++i) panel.report.clip_from_world[i] = glm::value_ptr(view.clip_from_world)[i];
-  // Hover and clicks: the element under the cursor for the current tool (select picks
-  // everything); a click (not a drag) applies the tool to it, or clears the selection.
-  const PickFilter filter = state->tool == Tool::kMove ? MoveToolPickFilter() : PickFilterOf(state->tool);
-  // V_op: a press on an element drags it (app/state/move_tool.h); elsewhere the left drag orbits.
-  if (state->tool == Tool::kMove || MoveToolOwnsMouse(panel.move_drag)) {
-    MoveToolInput move;
-    move.ray = RayOf(view, mouse_px);
-    move.pressed = left_pressed && hovered;
-    if (move.pressed) move.pressed_on = PickByRay(project, move.ray, filter, kPickRadiusPx * scale_x);
-    move.released = ImGui::IsMouseReleased(ImGuiMouseButton_Left);
-    move.shift = io.KeyShift;
-    move.cancel = ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false);
-    MoveToolFrame(state, &panel.move_drag, move);
-  }
-  const bool picking = hovered && !ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) &&
-                       (filter.vertices || filter.edges || filter.faces);
-  panel.hovered = picking ? PickByRay(project, RayOf(view, mouse_px), filter, kPickRadiusPx * scale_x) : ElementPick();
-  if (hovered) {
-    state->hover = panel.hovered.element;
-    state->hover_panel = kViewportHover;
-  } else if (state->hover_panel == kViewportHover) {
-    state->hover = {};
-    state->hover_panel = 0;
-  }
-  if (panel.left_pressed_here && ImGui::IsMouseReleased(ImGuiMouseButton_Left)) {
-    panel.left_pressed_here = false;
-    const float dx = io.MousePos.x - panel.left_press_pos.x, dy = io.MousePos.y - panel.left_press_pos.y;
-    if (dx * dx + dy * dy <= kClickSlopPx * kClickSlopPx && hovered && !state->drag_start) {
-      const ElementPick picked = PickByRay(project, RayOf(view, mouse_px), filter, kPickRadiusPx * scale_x);
-      if (!ApplyToolClick(state, picked.element, picked.t) && state->tool == Tool::kSelect) state->selection = {};
-    }
-  }
+  HandlePicking(state, &panel, view, frame);
 
-  // GL work: uploads when their sources changed, then the frame.
-  const SavedGlState saved = SavedGlState::Capture();
-  if (!gl.mesh_uploaded || gl.mesh_revision != state->mesh_revision) UploadMesh(state->mesh, state->mesh_revision, state->atlas_revision, &gl);
-  UpdatePhotoTextures(*state, &gl);
-  // The project may have changed above (a tool click): read it again.
-  const Project& current = state->document.project();
-  SceneKey key{current.primitives, current.images, state->active_image_id, state->selection.primitive_id,
-               panel.orbit.photo_image_id};
-  if (!gl.scene_built || !(key == gl.scene_key)) {
-    BuildSceneGeometry(*state, measure, panel.orbit.photo_image_id, &gl);
-    gl.scene_key = std::move(key);
-  }
-  std::string target_error;
-  if (!gl.target.Ensure(width_px, height_px, gl.msaa_samples, &target_error)) {
-    saved.Restore();
-    ImGui::GetWindowDrawList()->AddText(origin, IM_COL32(255, 100, 100, 255), target_error.c_str());
-    return;
-  }
-  gl.target.BindForDrawing();
-  RenderScene(*state, panel, view, measure);
-  gl.target.Resolve();
-  saved.Restore();
-
+  if (!RenderToTarget(*state, &panel, view, measure, frame)) return;
   // A GL texture's first row is the bottom of the picture: flip V.
-  ImGui::GetWindowDrawList()->AddImage(ToImTexture(gl.target.color_texture()), origin,
-                                       ImVec2(origin.x + size.x, origin.y + size.y), ImVec2(0, 1), ImVec2(1, 0));
-  DrawOverlay(*state, panel, view, origin, size, ImVec2(scale_x, scale_y));
+  ImGui::GetWindowDrawList()->AddImage(ToImTexture(gl.target.color_texture()), frame.origin,
+                                       ImVec2(frame.origin.x + size.x, frame.origin.y + size.y), ImVec2(0, 1), ImVec2(1, 0));
+  DrawOverlay(*state, panel, view, frame.origin, size, ImVec2(scale_x, scale_y));
 }
 
 void RequestViewportFrame(ViewportPanelState* panel) { Panel(panel).frame_requested = true; }
