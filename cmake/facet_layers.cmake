@@ -2,7 +2,7 @@
 # listed before it, never one after it: cmake/check_layers.cmake enforces it on every build.
 #   util        formatting and timing helpers, no dependencies
 #   geometry    conventions, the camera model, small value types (ids, axes, segments)
-#   optim       the Levenberg-Marquardt driver and the shape of solver summaries
+#   optim       the Levenberg-Marquardt driver, the damped Schur step, the shape of solver summaries
 #   mesh        the half-edge mesh, K-operators, primitives, extrusion, triangulation
 #   image       photo decoding and EXIF
 #   estimators  calibration: vanishing points, DLT, plumb line, two-view, homography,

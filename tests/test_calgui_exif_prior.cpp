@@ -1,11 +1,11 @@
-// The focal prior from EXIF (app/calgui_exif_prior.h): its std combines the 35 mm
+// The focal prior from EXIF (app/state/calgui_exif_prior.h): its std combines the 35 mm
 // convention's spread with the rounding of the 35 mm figure to whole mm; a true focal length
 // with the sensor's pixel pitch gets the narrower lens tolerance; no EXIF gives no prior.
 #include <doctest/doctest.h>
 
 #include <cmath>
 
-#include "app/calgui_exif_prior.h"
+#include "app/state/calgui_exif_prior.h"
 
 namespace facet::app {
 namespace {

@@ -1,5 +1,5 @@
-// The OpenCV-to-OpenGL camera conversion (app/gl_camera.h): a world point taken through
-// the GL matrices, the perspective divide and the viewport transform lands on the pixel
+// The OpenCV-to-OpenGL camera conversion (app/platform/gl_camera.h): a world point taken through
+// the GL matrices (glm::dmat4), the perspective divide and the viewport transform lands on the pixel
 // Camera::Project gives, for an off-centre principal point, in a viewport of the image's
 // size and in one of another aspect (image fitted and centred).
 #include <doctest/doctest.h>
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <random>
 
-#include "app/gl_camera.h"
+#include "app/platform/gl_camera.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet::app {
@@ -25,15 +25,16 @@ struct ViewportHit {
 // What GL does: clip = P * V * p, divide by w, viewport transform to window coordinates
 // (origin at the bottom-left corner, pixel centres at +0.5), then read back as an image whose
 // top row is the framebuffer's last row.
+// In double (glm::dmat4), as the matrices are: float would not hold 1e-6 px.
 ViewportHit ProjectLikeGl(const GlCameraMatrices& gl, const Eigen::Vector3d& p_in_world, int w, int h) {
-  const Eigen::Vector4d clip = gl.projection * gl.view * p_in_world.homogeneous();
-  const Eigen::Vector3d ndc = clip.head<3>() / clip.w();
-  const double x_window = (ndc.x() + 1.0) * 0.5 * w;
-  const double y_window = (ndc.y() + 1.0) * 0.5 * h;
+  const glm::dvec4 clip = gl.projection * gl.view * HomogeneousGlm(p_in_world);
+  const glm::dvec3 ndc = glm::dvec3(clip) / clip.w;
+  const double x_window = (ndc.x + 1.0) * 0.5 * w;
+  const double y_window = (ndc.y + 1.0) * 0.5 * h;
   ViewportHit hit;
   hit.uv_px = Eigen::Vector2d(x_window - 0.5, (h - y_window) - 0.5);
-  hit.ndc_depth = ndc.z();
-  hit.clip_w = clip.w();
+  hit.ndc_depth = ndc.z;
+  hit.clip_w = clip.w;
   return hit;
 }
 
@@ -92,10 +93,12 @@ TEST_CASE("The principal point lands on its pixel and the image corners on the v
 
   // The top-left corner of the first pixel is the NDC corner (-1, +1).
   const Eigen::Vector3d corner = camera.CenterInWorld() + 10.0 * camera.RayDirectionInWorld({-0.5, -0.5});
-  const Eigen::Vector4d clip = gl.projection * gl.view * corner.homogeneous();
-  CAPTURE(clip.transpose());
-  CHECK(std::abs(clip.x() / clip.w() + 1.0) < 1e-9);
-  CHECK(std::abs(clip.y() / clip.w() - 1.0) < 1e-9);
+  const glm::dvec4 clip = gl.projection * gl.view * HomogeneousGlm(corner);
+  CAPTURE(clip.x);
+  CAPTURE(clip.y);
+  CAPTURE(clip.w);
+  CHECK(std::abs(clip.x / clip.w + 1.0) < 1e-9);
+  CHECK(std::abs(clip.y / clip.w - 1.0) < 1e-9);
 }
 
 TEST_CASE("Near and far depths map to GL depth -1 and +1") {
@@ -121,7 +124,7 @@ TEST_CASE("In a viewport of another aspect the image is fitted, centred and unst
     const double s = std::min(double(w) / camera.width_px, double(h) / camera.height_px);
     const Eigen::Vector2d offset((w - s * camera.width_px) / 2.0, (h - s * camera.height_px) / 2.0);
     CHECK(std::abs(gl.image_scale - s) < 1e-12);
-    CHECK((gl.image_offset_px - offset).norm() < 1e-12);
+    CHECK((ToEigen(gl.image_offset_px) - offset).norm() < 1e-12);
     double max_error_px = 0.0;
     for (const Eigen::Vector3d& p : PointsInFront(camera, 100)) {
       const ViewportHit hit = ProjectLikeGl(gl, p, w, h);

@@ -51,7 +51,7 @@ void Perturb(SyntheticScene* scene, double scale) {
   RefreshPrimitive(&scene->project, &box);
 }
 
-// The app's two kinds of update (app/app_state.cpp): a commit or a released drag, and one
+// The app's two kinds of update (app/state/app_state.cpp): a commit or a released drag, and one
 // drag frame.
 ModelUpdateOptions CommitOptions() {
   ModelUpdateOptions options;

@@ -33,7 +33,7 @@ namespace facet::testing {
 
 namespace fs = std::filesystem;
 
-// The projected model's colour (app/overlay_draw.h, kModelEdgeColor), RGB.
+// The projected model's colour (app/panels/image_overlay.h, kModelEdgeColor), RGB.
 constexpr std::array<int, 3> kModelEdgeRgb = {255, 220, 0};
 
 struct TempDir {

@@ -1,4 +1,4 @@
-// File > Add photo in the real application offscreen (`command add-photo PATH`, app/add_photo.h):
+// File > Add photo in the real application offscreen (`command add-photo PATH`, app/state/add_photo.h):
 // the photo becomes a new image with its size, a path relative to the saved project, an
 // uncalibrated camera centred on the photo, and the focal prior of its EXIF when it has one;
 // undo removes it; an unreadable file is refused with the reason and changes nothing. Then a

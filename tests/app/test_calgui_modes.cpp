@@ -1,5 +1,5 @@
 // The calibration modes of the image panel in the real application offscreen (`facet render`
-// with `command calibration ...` script lines, app/panel_image.h): a known focal length and
+// with `command calibration ...` script lines, app/panels/camera_sections.h): a known focal length and
 // a fixed principal point are kept exactly, a focal prior pulls the result towards itself as
 // its std shrinks, one line family with a known focal length and the horizon gives the
 // camera's vertical, undo restores the previous mode, the focal prior comes from the photo's
@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "app/calgui_exif_prior.h"
+#include "app/state/calgui_exif_prior.h"
 #include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
@@ -328,7 +328,7 @@ TEST_CASE("overlay: an outlier segment is crossed out, the given horizon dashed 
       }
     return n;
   };
-  // The cross at the wrong segment's midpoint (app/overlay_calibration.cpp colours).
+  // The cross at the wrong segment's midpoint (app/panels/calibration_overlay.cpp colours).
   const Eigen::Vector2d m = view.ToScreen(wrong_mid);
   REQUIRE(view.Inside(m, 10.0));
   const int cross = count_color(int(m.x()) - 7, int(m.y()) - 7, int(m.x()) + 7, int(m.y()) + 7, {255, 70, 60});

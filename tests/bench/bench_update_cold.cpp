@@ -67,7 +67,7 @@ BENCHMARK(BM_UpdateModelCold)
     ->Args({100, 10, 1000})
     ->Unit(benchmark::kMillisecond);
 
-// One drag frame of the app as a whole (app/app_state.cpp DragUpdateOptions: calibration and
+// One drag frame of the app as a whole (app/state/app_state.cpp DragUpdateOptions: calibration and
 // the joint solve, warm on the 5-iteration budget, no diagnostics; the geometry solve only
 // when the joint result does not hold),
 // after the scene converged, with one pin moved by 2 px: what the user waits for per frame,

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "app/calgui_exif_prior.h"
+#include "app/state/calgui_exif_prior.h"
 #include "core/estimators/calibrate_vp.h"
 #include "core/image/exif.h"
 #include "core/estimators/plumb_line.h"

@@ -1,0 +1,58 @@
+#include "app/panels/widgets.h"
+
+#include <cstdarg>
+
+namespace facet::app {
+
+void RecordItem(AppState* state, const std::string& name) {
+  const ImVec2 min = ImGui::GetItemRectMin(), size = ImGui::GetItemRectSize();
+  state->item_rects[name] = {min.x, min.y, size.x, size.y};
+}
+
+ImVec4 AxisColor(Axis axis) {
+  switch (axis) {
+    case Axis::kX: return ImVec4(0.95f, 0.35f, 0.32f, 1.0f);
+    case Axis::kY: return ImVec4(0.40f, 0.85f, 0.40f, 1.0f);
+    case Axis::kZ: return ImVec4(0.40f, 0.60f, 1.00f, 1.0f);
+  }
+  return ImVec4(1, 1, 1, 1);
+}
+
+void LabelValue(const char* label, const char* fmt, ...) {
+  ImGui::TextColored(kDimText, "%s", label);
+  ImGui::SameLine(ImGui::GetFontSize() * 7.5f);
+  va_list args;
+  va_start(args, fmt);
+  ImGui::TextV(fmt, args);
+  va_end(args);
+}
+
+void WrappedColored(const ImVec4& color, const std::string& text) {
+  ImGui::PushStyleColor(ImGuiCol_Text, color);
+  ImGui::TextWrapped("%s", text.c_str());
+  ImGui::PopStyleColor();
+}
+
+void TrackEdit(AppState* state, const std::string& label, bool changed, const std::function<void(Project*)>& apply) {
+  if (ImGui::IsItemActivated()) BeginDrag(state, label);
+  if (changed) {
+    Project edited = state->document.project();
+    apply(&edited);
+    if (state->drag_start) {
+      UpdateDrag(state, std::move(edited));
+    } else {
+      CommitEdit(state, label, std::move(edited));
+    }
+  }
+  if (ImGui::IsItemDeactivatedAfterEdit()) {
+    EndDrag(state);
+  } else if (ImGui::IsItemDeactivated()) {
+    CancelDrag(state);
+  }
+}
+
+bool DragDoubles(const char* label, double* values, int count, float speed, const char* format) {
+  return ImGui::DragScalarN(label, ImGuiDataType_Double, values, count, speed, nullptr, nullptr, format);
+}
+
+}  // namespace facet::app

@@ -1,0 +1,310 @@
+#include "app/shell/app.h"
+
+#include <epoxy/gl.h>
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>  // key codes only: the offscreen key map matches the GLFW backend's
+
+#include <cfloat>
+#include <cstdio>
+#include <filesystem>
+
+#include <imgui.h>
+#include <imgui_impl_opengl3.h>
+#include <nlohmann/json.hpp>
+
+#include "app/panels/image_panel.h"
+#include "app/panels/side_panels.h"
+#include "app/panels/viewport_panel.h"
+#include "app/platform/egl_context.h"
+#include "app/shell/frame.h"
+#include "app/shell/glfw_window.h"
+#include "app/shell/layout.h"
+#include "app/state/app_state.h"
+#include "app/state/input_script.h"
+#include "core/io/project_io.h"
+
+namespace facet::app {
+namespace {
+
+constexpr int kWarmUpFrames = 4;  // layout, fonts and panel textures settle before any input
+constexpr int kSettleFrames = 3;  // after the script, before the final read-back
+constexpr double kFrameTimeS = 1.0 / 60.0;
+
+// The same mapping as ImGui's GLFW backend, so panels test keys identically in both modes.
+void SetGlfwKeyMap(ImGuiIO& io) {
+  io.KeyMap[ImGuiKey_Tab] = GLFW_KEY_TAB;
+  io.KeyMap[ImGuiKey_LeftArrow] = GLFW_KEY_LEFT;
+  io.KeyMap[ImGuiKey_RightArrow] = GLFW_KEY_RIGHT;
+  io.KeyMap[ImGuiKey_UpArrow] = GLFW_KEY_UP;
+  io.KeyMap[ImGuiKey_DownArrow] = GLFW_KEY_DOWN;
+  io.KeyMap[ImGuiKey_PageUp] = GLFW_KEY_PAGE_UP;
+  io.KeyMap[ImGuiKey_PageDown] = GLFW_KEY_PAGE_DOWN;
+  io.KeyMap[ImGuiKey_Home] = GLFW_KEY_HOME;
+  io.KeyMap[ImGuiKey_End] = GLFW_KEY_END;
+  io.KeyMap[ImGuiKey_Insert] = GLFW_KEY_INSERT;
+  io.KeyMap[ImGuiKey_Delete] = GLFW_KEY_DELETE;
+  io.KeyMap[ImGuiKey_Backspace] = GLFW_KEY_BACKSPACE;
+  io.KeyMap[ImGuiKey_Space] = GLFW_KEY_SPACE;
+  io.KeyMap[ImGuiKey_Enter] = GLFW_KEY_ENTER;
+  io.KeyMap[ImGuiKey_Escape] = GLFW_KEY_ESCAPE;
+  io.KeyMap[ImGuiKey_KeyPadEnter] = GLFW_KEY_KP_ENTER;
+  io.KeyMap[ImGuiKey_A] = GLFW_KEY_A;
+  io.KeyMap[ImGuiKey_C] = GLFW_KEY_C;
+  io.KeyMap[ImGuiKey_V] = GLFW_KEY_V;
+  io.KeyMap[ImGuiKey_X] = GLFW_KEY_X;
+  io.KeyMap[ImGuiKey_Y] = GLFW_KEY_Y;
+  io.KeyMap[ImGuiKey_Z] = GLFW_KEY_Z;
+}
+
+// The synthetic input device of the offscreen mode.
+struct ScriptedInput {
+  float mouse_x = -FLT_MAX, mouse_y = -FLT_MAX;  // no mouse until the script moves it
+  bool mouse_down[3] = {false, false, false};
+  bool hold_shift = false, hold_ctrl = false, hold_alt = false;
+  int key_down = -1;
+
+  void Apply(const ScriptStep* step, ImGuiIO& io) {
+    if (key_down >= 0) io.KeysDown[key_down] = false;
+    key_down = -1;
+    io.MouseWheel = 0.0f;
+    ScriptKey key;
+    if (step) {
+      if (step->mouse_pos) {
+        mouse_x = (*step->mouse_pos)[0];
+        mouse_y = (*step->mouse_pos)[1];
+      }
+      for (int b = 0; b < 3; ++b) {
+        if (step->mouse_down[b]) mouse_down[b] = *step->mouse_down[b];
+      }
+      if (step->hold_shift) hold_shift = *step->hold_shift;
+      if (step->hold_ctrl) hold_ctrl = *step->hold_ctrl;
+      if (step->hold_alt) hold_alt = *step->hold_alt;
+      io.MouseWheel = step->wheel;
+      if (step->key_press) {
+        key = *step->key_press;
+        key_down = key.key_code;
+        io.KeysDown[key_down] = true;
+        if (key.character) io.AddInputCharacter(key.character);
+      }
+      if (!step->text.empty()) io.AddInputCharactersUTF8(step->text.c_str());
+    }
+    io.MousePos = ImVec2(mouse_x, mouse_y);
+    for (int b = 0; b < 3; ++b) io.MouseDown[b] = mouse_down[b];
+    io.KeyShift = hold_shift || key.shift;
+    io.KeyCtrl = hold_ctrl || key.ctrl;
+    io.KeyAlt = hold_alt || key.alt;
+    io.KeySuper = false;
+    io.KeysDown[GLFW_KEY_LEFT_SHIFT] = io.KeyShift;
+    io.KeysDown[GLFW_KEY_LEFT_CONTROL] = io.KeyCtrl;
+    io.KeysDown[GLFW_KEY_LEFT_ALT] = io.KeyAlt;
+  }
+};
+
+nlohmann::json RectJson(const Rect& r) { return {{"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}}; }
+
+std::string BuildReport(const AppState& state, const ShellState& shell, const RenderOptions& options,
+                        const std::string& renderer, int frames) {
+  nlohmann::json report;
+  report["size"] = {options.width, options.height};
+  report["renderer"] = renderer;
+  report["frames"] = frames;
+  report["menu_bar"] = RectJson(shell.menu_bar_rect);
+  nlohmann::json panels = nlohmann::json::object();
+  for (int i = 0; i < kNumPanels; ++i) {
+    if (!shell.panel_drawn[i]) continue;
+    nlohmann::json p = RectJson(shell.panel_rects[i]);
+    p["floating"] = shell.layout.panels[i].floating;
+    panels[PanelTitle(static_cast<PanelId>(i))] = p;
+  }
+  report["panels"] = panels;
+  nlohmann::json items = nlohmann::json::object();
+  for (const auto& [name, rect] : state.item_rects) items[name] = RectJson(rect);
+  report["items"] = items;
+  const ImageViewReport view = LastImageViewReport(shell.image_panel);
+  report["image_view"] = {{"image_id", view.image_id},
+                          {"origin_x", view.origin_x},
+                          {"origin_y", view.origin_y},
+                          {"zoom", view.zoom},
+                          {"rect", RectJson({view.rect_x, view.rect_y, view.rect_w, view.rect_h})}};
+  const ViewportReport viewport = LastViewportReport(shell.viewport_panel);
+  if (viewport.drawn) {
+    report["viewport"] = {{"origin_x", viewport.origin_x},
+                          {"origin_y", viewport.origin_y},
+                          {"width_px", viewport.width_px},
+                          {"height_px", viewport.height_px},
+                          {"clip_from_world", viewport.clip_from_world}};
+  }
+  nlohmann::json undo = nlohmann::json::array(), redo = nlohmann::json::array();
+  for (const Edit& e : state.document.undo_stack()) undo.push_back(e.label);
+  for (const Edit& e : state.document.redo_stack()) redo.push_back(e.label);
+  report["undo_stack"] = undo;
+  report["redo_stack"] = redo;
+  report["dirty"] = state.document.dirty();
+  report["tool"] = ToolName(state.tool);
+  report["active_image_id"] = state.active_image_id;
+  report["selection"] = {{"segment_id", state.selection.segment_id},
+                         {"segment_endpoint", state.selection.segment_endpoint},
+                         {"pin_id", state.selection.pin_id},
+                         {"primitive_id", state.selection.primitive_id},
+                         {"element",
+                          {{"kind", ElementKindName(state.selection.element.kind)},
+                           {"primitive_id", state.selection.element.primitive_id},
+                           {"id", state.selection.element.element}}}};
+  nlohmann::json extra = nlohmann::json::array();
+  for (const ElementRef& e : state.selection.extra)
+    extra.push_back({{"kind", ElementKindName(e.kind)}, {"primitive_id", e.primitive_id}, {"id", e.element}});
+  report["selection"]["extra"] = std::move(extra);
+  report["hover"] = {{"kind", ElementKindName(state.hover.kind)},
+                     {"primitive_id", state.hover.primitive_id},
+                     {"id", state.hover.element}};
+  report["solve"] = {{"termination", SolveTerminationName(state.last_update.solve.termination)},
+                     {"rms_px", state.last_update.solve.reprojection_rms_px},
+                     {"max_px", state.last_update.solve.reprojection_max_px}};
+  const JointSolveSummary& joint = state.last_update.joint;
+  report["joint_solve"] = {{"termination", JointSolveTerminationName(joint.termination)},
+                           {"message", joint.message},
+                           {"rms_px", joint.reprojection_rms_px},
+                           {"undetermined", joint.undetermined},
+                           {"conflicts", joint.conflicts}};
+  nlohmann::json log = nlohmann::json::array();
+  for (const LogEntry& e : state.log) {
+    const char* level = e.level == LogLevel::kInfo ? "info" : e.level == LogLevel::kWarning ? "warning" : "error";
+    log.push_back({{"level", level}, {"text", e.text}});
+  }
+  report["log"] = log;
+  report["project"] = nlohmann::json::parse(ProjectToJson(state.document.project()), nullptr, false);
+  return report.dump(2);
+}
+
+int Fail(const std::string& message) {
+  std::fprintf(stderr, "facet render: %s\n", message.c_str());
+  return 1;
+}
+
+int RenderWithContext(const RenderOptions& options, AppState* state, ShellState* shell, const Script& script,
+                      const std::string& renderer) {
+  std::string error;
+  OffscreenTarget target;
+  if (!target.Create(options.width, options.height, &error)) return Fail(error);
+
+  ImGuiIO& io = ImGui::GetIO();
+  io.DisplaySize = ImVec2(static_cast<float>(options.width), static_cast<float>(options.height));
+  io.DisplayFramebufferScale = ImVec2(1, 1);
+  io.DeltaTime = static_cast<float>(kFrameTimeS);
+  SetGlfwKeyMap(io);
+
+  ScriptedInput input;
+  int frame = 0;
+  // One frame: input, app command, UI, render into the target, optional screenshot.
+  auto run_frame = [&](const ScriptStep* step) -> bool {
+    input.Apply(step, io);
+    if (step && !step->command.empty()) {
+      std::string command_error;
+      if (!RunAppCommand(state, shell, step->command, step->command_args, &command_error)) {
+        error = "script line " + std::to_string(step->line) + ": command " + step->command + ": " + command_error;
+        return false;
+      }
+    }
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui::NewFrame();
+    DrawFrame(state, shell, frame * kFrameTimeS);
+    ImGui::Render();
+    target.Bind();
+    glClearColor(0.075f, 0.08f, 0.09f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    ++frame;
+    if (step && !step->screenshot_path.empty()) {
+      const std::string write_error = WritePng(step->screenshot_path, target.Read());
+      if (!write_error.empty()) {
+        error = "script line " + std::to_string(step->line) + ": screenshot: " + write_error;
+        return false;
+      }
+    }
+    return true;
+  };
+
+  bool ok = true;
+  for (int i = 0; ok && i < kWarmUpFrames; ++i) ok = run_frame(nullptr);
+  for (size_t i = 0; ok && i < script.steps.size(); ++i) ok = run_frame(&script.steps[i]);
+  for (int i = 0; ok && i < kSettleFrames; ++i) ok = run_frame(nullptr);
+  if (!ok) return Fail(error);
+
+  const std::string write_error = WritePng(options.output_png, target.Read());
+  if (!write_error.empty()) return Fail("cannot write " + options.output_png + ": " + write_error);
+  if (!options.report_path.empty()) {
+    const std::string report = BuildReport(*state, *shell, options, renderer, frame);
+    const std::string report_error = WriteFileAtomically(options.report_path, report);
+    if (!report_error.empty()) return Fail("cannot write " + options.report_path + ": " + report_error);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int RunGui(const GuiOptions& options) {
+  if (!HasDisplay()) {
+    std::fputs("facet: no display found; use 'facet render PROJECT -o SHOT.png' for offscreen rendering\n", stderr);
+    return 2;
+  }
+  AppState state;
+  ShellState shell;
+  const std::string layout_path = LayoutFilePath();
+  std::string imgui_ini;
+  if (!layout_path.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(ConfigDirectory(), ec);
+    imgui_ini = ConfigDirectory() + "/imgui.ini";
+    if (std::filesystem::exists(layout_path, ec)) {
+      std::string error;
+      if (!LoadLayoutFile(layout_path, &shell.layout, &error)) {
+        state.Log(LogLevel::kWarning, "Layout not restored (" + error + "); using the default layout");
+      }
+    }
+  }
+  if (!options.project_path.empty()) OpenProject(&state, options.project_path);
+
+  const int code = RunGlfwWindow(&state, &shell, imgui_ini);
+  if (code == 0 && !layout_path.empty()) {
+    std::string error;
+    if (!SaveLayoutFile(layout_path, shell.layout, &error)) std::fprintf(stderr, "facet: %s\n", error.c_str());
+  }
+  return code;
+}
+
+int RunOffscreen(const RenderOptions& options) {
+  if (options.output_png.empty()) return Fail("no output file (-o SHOT.png)");
+  if (options.width < 64 || options.height < 64 || options.width > 8192 || options.height > 8192) {
+    return Fail("size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
+                " is outside 64..8192 px");
+  }
+  Script script;
+  std::string error;
+  if (!options.script_path.empty() && !LoadScript(options.script_path, &script, &error)) return Fail(error);
+
+  AppState state;
+  ShellState shell;
+  shell.offscreen = true;  // the default layout, never the user's
+  if (!options.project_path.empty() && !OpenProject(&state, options.project_path)) {
+    return Fail("cannot open project " + options.project_path);
+  }
+
+  EglContext egl;
+  if (!egl.Create(&error)) return Fail("no offscreen OpenGL context: " + error);
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ConfigureImGui(/*offscreen=*/true);
+  if (!ImGui_ImplOpenGL3_Init("#version 330")) {
+    ImGui::DestroyContext();
+    return Fail("the ImGui OpenGL3 renderer failed to start on " + egl.Renderer());
+  }
+  const int code = RenderWithContext(options, &state, &shell, script, egl.Renderer());
+  ShutdownImagePanel(&shell.image_panel);
+  ShutdownViewportPanel(&shell.viewport_panel);
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui::DestroyContext();
+  return code;
+}
+
+}  // namespace facet::app

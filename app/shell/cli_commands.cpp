@@ -1,0 +1,153 @@
+#include "app/shell/cli_commands.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "core/io/calibrate_io.h"
+#include "core/io/calibrate_points_io.h"
+#include "core/io/export.h"
+#include "core/io/project_io.h"
+#include "core/io/relate_io.h"
+#include "core/solve/model_update.h"
+#include "core/texture/textured_mesh.h"
+
+namespace facet::app {
+namespace {
+
+bool LoadForCli(const std::string& path, Project* project) {
+  ProjectLoadResult loaded = LoadProject(path);
+  if (!loaded.ok()) {
+    std::cerr << "facet: cannot open " << path << ": " << loaded.error << "\n";
+    return false;
+  }
+  for (const std::string& w : loaded.warnings) std::cerr << "facet: warning: " << w << "\n";
+  *project = std::move(loaded.project);
+  return true;
+}
+
+// JSON has no NaN: pins that took no part in the solve are written as null.
+nlohmann::json NumberOrNull(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(); }
+
+}  // namespace
+
+int RunCalibrateCommand(const std::string& lines_path, const std::string& points_path) {
+  const CalibrateIoResult result = lines_path.empty() ? CalibratePointsFile(points_path) : CalibrateLinesFile(lines_path);
+  if (!result.ok()) {
+    std::cerr << "facet calibrate: " << result.error << "\n";
+    return 1;
+  }
+  std::cout << result.json << "\n";
+  return 0;
+}
+
+int RunRelateCommand(const std::string& matches_path) {
+  const RelateIoResult result = RelateMatchesFile(matches_path);
+  if (!result.ok()) {
+    std::cerr << "facet relate: " << result.error << "\n";
+    return 1;
+  }
+  std::cout << result.json << "\n";
+  return 0;
+}
+
+int RunSolveCommand(const std::string& project_path, const std::string& output_path) {
+  Project project;
+  if (!LoadForCli(project_path, &project)) return 1;
+  ModelUpdateOptions options;
+  options.solve.warm_start = false;  // a command-line solve starts from the linear initialisation
+  Project updated;
+  const ModelUpdateSummary update = UpdateModel(project, options, &updated);
+  const SceneSolveSummary& s = update.solve;
+
+  nlohmann::json out;
+  out["termination"] = SolveTerminationName(s.termination);
+  out["message"] = s.message;
+  out["iterations"] = s.iterations;
+  out["initial_cost"] = s.initial_cost;
+  out["final_cost"] = s.final_cost;
+  out["reprojection_rms_px"] = s.reprojection_rms_px;
+  out["reprojection_max_px"] = s.reprojection_max_px;
+  out["num_residuals"] = s.num_residuals;
+  out["num_parameters"] = s.num_parameters;
+  out["time_ms"] = s.time_ms;
+  out["update_time_ms"] = update.time_ms;
+  nlohmann::json pins = nlohmann::json::array();
+  for (double r : s.pin_residuals_px) pins.push_back(NumberOrNull(r));
+  out["pin_residuals_px"] = pins;
+  out["warnings"] = s.warnings;
+  nlohmann::json calibration = nlohmann::json::array();
+  for (const auto& [image_id, vp] : update.calibration) {
+    calibration.push_back({{"image_id", image_id}, {"success", vp.success}, {"message", vp.message},
+                           {"focal_px", vp.focal_px},
+                           {"principal_point", {vp.principal_point_px.x(), vp.principal_point_px.y()}},
+                           {"warnings", vp.warnings}});
+  }
+  out["calibration"] = calibration;
+  out["messages"] = update.messages;
+
+  const bool usable = update.ok;
+  if (usable) {
+    // Image paths are relative to the project file: keep them valid for the output's folder.
+    const std::filesystem::path to = std::filesystem::absolute(output_path).parent_path();
+    for (Image& image : updated.images) {
+      const std::filesystem::path resolved = ResolveImagePath(project_path, image.path);
+      image.path = std::filesystem::relative(resolved, to).generic_string();
+    }
+    const std::string error = SaveProject(updated, output_path);
+    if (!error.empty()) {
+      std::cerr << "facet solve: cannot write " << output_path << ": " << error << "\n";
+      return 1;
+    }
+  }
+  std::cout << out.dump(2) << "\n";
+  if (!usable) {
+    std::cerr << "facet solve: the solve failed; " << output_path << " was not written\n";
+    return 1;
+  }
+  return 0;
+}
+
+int RunExportCommand(const std::string& project_path, const std::string& output_path) {
+  Project project;
+  if (!LoadForCli(project_path, &project)) return 1;
+  // Each photo is read once and baked in place (the bake takes pointers, copies no pixels).
+  std::vector<ImageRgba8> photos(project.images.size());
+  std::vector<const ImageRgba8*> photo_pointers(project.images.size(), nullptr);
+  for (size_t i = 0; i < project.images.size(); ++i) {
+    ImageReadResult read = ReadImage(ResolveImagePath(project_path, project.images[i].path));
+    if (!read.ok()) {
+      std::cerr << "facet export: warning: " << read.error << " (its faces stay untextured)\n";
+      continue;
+    }
+    photos[i] = std::move(read.image);
+    photo_pointers[i] = &photos[i];
+  }
+  TexturedMesh mesh;
+  const TextureBakeSummary bake = BakeTexturedMesh(project, photo_pointers, TextureBakeOptions{}, &mesh);
+  if (!bake.success) {
+    std::cerr << "facet export: texture: " << bake.message << "\n";
+    mesh = BuildUntexturedMesh(project);
+  }
+  const std::string ext = std::filesystem::path(output_path).extension().string();
+  ExportSummary exported;
+  if (ext == ".glb") {
+    exported = ExportGlb(mesh, project, output_path);
+  } else if (ext == ".obj") {
+    exported = ExportObj(mesh, output_path);
+  } else {
+    std::cerr << "facet export: unknown format '" << ext << "': use FILE.glb or FILE.obj\n";
+    return 1;
+  }
+  if (!exported.success) {
+    std::cerr << "facet export: " << exported.message << "\n";
+    return 1;
+  }
+  for (const std::string& f : exported.files_written) std::cout << f << "\n";
+  return 0;
+}
+
+}  // namespace facet::app

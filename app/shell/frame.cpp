@@ -1,0 +1,821 @@
+#include "app/shell/frame.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+#include <imgui.h>
+#include <imgui_internal.h>  // the window's title-bar rectangle, for the Dock/Undock button
+#include <imgui_stdlib.h>
+#include <nlohmann/json.hpp>
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>  // key codes only
+
+#include "app/panels/camera_sections.h"
+#include "app/panels/image_panel.h"
+#include "app/panels/side_panels.h"
+#include "app/panels/viewport_panel.h"
+#include "app/shell/menu_bar.h"
+#include "app/state/add_photo.h"
+#include "app/state/model_edits.h"
+#include "app/state/move_tool.h"
+#include "core/io/export.h"
+
+namespace facet::app {
+namespace {
+
+constexpr float kWorkAreaMarginPx = 4.0f;
+constexpr float kTearOffDistancePx = 14.0f;
+const ImVec4 kDimText(0.55f, 0.57f, 0.62f, 1.0f);
+const ImVec4 kErrorText(1.00f, 0.42f, 0.40f, 1.0f);
+
+void OpenDialog(ShellState* shell, Dialog dialog, std::string path = {}) {
+  shell->dialog = dialog;
+  shell->dialog_just_opened = true;
+  shell->dialog_path = std::move(path);
+  shell->dialog_error.clear();
+}
+
+// FNV-1a (64 bit) of raw bytes: the `bake-status` fingerprints that let a test compare the
+// app's bake with its own, bit for bit, without shipping the atlas.
+std::uint64_t Fnv1a(const void* data, size_t bytes, std::uint64_t hash = 14695981039346656037ull) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
+  return hash;
+}
+
+template <typename T>
+std::string FingerprintHex(const std::vector<T>& values) {
+  char text[24];
+  std::snprintf(text, sizeof(text), "%016llx",
+                static_cast<unsigned long long>(Fnv1a(values.data(), values.size() * sizeof(T))));
+  return text;
+}
+
+// `bake-status PATH`: the background bake's state and the mesh shown, as JSON.
+bool WriteBakeStatus(const AppState& state, const std::string& path, std::string* error) {
+  const TexturedMesh& mesh = state.mesh;
+  nlohmann::json status = {
+      {"in_flight", BakeInFlight(state)},
+      {"texture_pending", TexturePending(state)},
+      {"input_revision", state.bake_input_revision},
+      {"baked_input_revision", state.baked_input_revision},
+      {"started", state.bake_stats.started},
+      {"collected", state.bake_stats.collected},
+      {"dropped", state.bake_stats.dropped},
+      {"start_refresh_ms", state.bake_stats.start_refresh_ms},
+      {"last_wait_ms", state.bake_stats.last_wait_ms},
+      {"bake_ms", state.last_bake.time_ms},
+      {"faces_textured", state.last_bake.faces_textured},
+      {"triangles", mesh.indices.size() / 3},
+      {"atlas_width", mesh.atlas.width},
+      {"atlas_height", mesh.atlas.height},
+      {"atlas_fnv", FingerprintHex(mesh.atlas.pixels)},
+      {"uvs_fnv", FingerprintHex(mesh.uvs)},
+      {"positions_fnv", FingerprintHex(mesh.positions)},
+  };
+  std::ofstream out(path);
+  out << status.dump(2) << "\n";
+  if (!out) {
+    *error = "bake-status: cannot write " + path;
+    return false;
+  }
+  return true;
+}
+
+std::string LastLoggedError(const AppState& state) {
+  for (auto it = state.log.rbegin(); it != state.log.rend(); ++it) {
+    if (it->level == LogLevel::kError) return it->text;
+  }
+  return "see the log";
+}
+
+void HandleGlobalShortcuts(AppState* state, ShellState* shell) {
+  const ImGuiIO& io = ImGui::GetIO();
+  if (io.WantTextInput || shell->dialog != Dialog::kNone || !io.KeyCtrl) return;
+  std::string error;
+  if (ImGui::IsKeyPressed(GLFW_KEY_Z, true)) {
+    if (io.KeyShift) Redo(state);
+    else Undo(state);
+  }
+  if (ImGui::IsKeyPressed(GLFW_KEY_Y, true)) Redo(state);
+  if (ImGui::IsKeyPressed(GLFW_KEY_S, false)) {
+    if (io.KeyShift || state->project_path.empty()) {
+      OpenDialog(shell, Dialog::kSaveAs, state->project_path.empty() ? "untitled.facet" : state->project_path);
+    } else {
+      SaveProjectAs(state, "");
+    }
+  }
+  if (ImGui::IsKeyPressed(GLFW_KEY_O, false)) OpenDialog(shell, Dialog::kOpen, state->project_path);
+  if (ImGui::IsKeyPressed(GLFW_KEY_N, false)) {
+    if (state->document.dirty()) OpenDialog(shell, Dialog::kConfirmNew);
+    else NewProject(state);
+  }
+  if (ImGui::IsKeyPressed(GLFW_KEY_Q, false)) RequestQuit(state, shell);
+}
+
+// The bars between tiled panels live in a background window that covers the work area.
+void DrawSplitters(ShellState* shell, const TiledLayout& tiled, const Rect& work) {
+  ImGui::SetNextWindowPos(ImVec2(work.x, work.y));
+  ImGui::SetNextWindowSize(ImVec2(work.w, work.h));
+  ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(0, 0));
+  ImGui::PushStyleVar(ImGuiStyleVar_WindowBorderSize, 0.0f);
+  const ImGuiWindowFlags flags = ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove |
+                                 ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoBringToFrontOnFocus |
+                                 ImGuiWindowFlags_NoNavFocus | ImGuiWindowFlags_NoBackground |
+                                 ImGuiWindowFlags_NoScrollWithMouse;
+  ImGui::Begin("##workspace", nullptr, flags);
+  ImGui::PopStyleVar(2);
+  // Behind every panel, also those created later: ImGui puts new windows that never come to
+  // the front at the bottom of the stack, which would otherwise leave this one above them.
+  ImGui::BringWindowToDisplayBack(ImGui::GetCurrentWindow());
+  ImDrawList* draw = ImGui::GetWindowDrawList();
+  for (size_t i = 0; i < tiled.splitters.size(); ++i) {
+    const Splitter& s = tiled.splitters[i];
+    ImGui::SetCursorScreenPos(ImVec2(s.bar.x, s.bar.y));
+    ImGui::PushID(s.split);
+    ImGui::InvisibleButton("##splitter", ImVec2(std::max(1.0f, s.bar.w), std::max(1.0f, s.bar.h)));
+    ImGui::PopID();
+    const bool hovered = ImGui::IsItemHovered();
+    const bool active = ImGui::IsItemActive();
+    if (hovered || active) ImGui::SetMouseCursor(s.side_by_side ? ImGuiMouseCursor_ResizeEW : ImGuiMouseCursor_ResizeNS);
+    if (active) {
+      const ImVec2 m = ImGui::GetIO().MousePos;
+      shell->layout.split_ratio[s.split] = SplitRatioForMouse(s, m.x, m.y);
+      shell->layout_changed = true;
+    }
+    if (hovered || active) {
+      draw->AddRectFilled(ImVec2(s.bar.x + 1, s.bar.y + 1), ImVec2(s.bar.x + s.bar.w - 1, s.bar.y + s.bar.h - 1),
+                          ImGui::GetColorU32(active ? ImGuiCol_SeparatorActive : ImGuiCol_SeparatorHovered), 2.0f);
+    }
+  }
+  ImGui::End();
+}
+
+void MakeFloating(ShellState* shell, int panel, const Rect& from) {
+  PanelPlacement& p = shell->layout.panels[panel];
+  p.floating = true;
+  const ImGuiViewport* vp = ImGui::GetMainViewport();
+  const float w = std::clamp(from.w, 240.0f, std::min(720.0f, vp->Size.x));
+  const float h = std::clamp(from.h, 160.0f, std::min(520.0f, vp->Size.y));
+  // Fully inside the window, so that the title bar (and its Dock button) stays reachable.
+  const float x = std::clamp(from.x + 24, vp->Pos.x, std::max(vp->Pos.x, vp->Pos.x + vp->Size.x - w));
+  const float y = std::clamp(from.y + 24, vp->Pos.y, std::max(vp->Pos.y, vp->Pos.y + vp->Size.y - h));
+  p.floating_rect = {x, y, w, h};
+  shell->floating_to_place = panel;
+  shell->layout_changed = true;
+}
+
+// A small button in the window's title bar, left of the close button; left out when the
+// bar is too narrow to show it beside the title (the title's context menu still works).
+bool TitleBarButton(const char* label, const char* window_title, const char* tooltip) {
+  ImGuiWindow* window = ImGui::GetCurrentWindow();
+  const ImGuiStyle& style = ImGui::GetStyle();
+  const ImRect title = window->TitleBarRect();
+  const float width = ImGui::CalcTextSize(label, nullptr, true).x + style.FramePadding.x * 2;
+  const float x = title.Max.x - style.FramePadding.x - ImGui::GetFontSize() - style.ItemInnerSpacing.x * 2 - width;
+  if (x < title.Min.x + style.FramePadding.x * 2 + ImGui::CalcTextSize(window_title).x + 8.0f) return false;
+  const ImVec2 cursor = ImGui::GetCursorScreenPos();
+  const ImVec2 max_pos = window->DC.CursorMaxPos;
+  ImGui::PushClipRect(title.Min, title.Max, false);
+  ImGui::SetCursorScreenPos(ImVec2(x, title.Min.y + (title.GetHeight() - ImGui::GetFontSize()) * 0.5f));
+  ImGui::PushStyleColor(ImGuiCol_Button, ImVec4(0, 0, 0, 0));
+  ImGui::PushStyleColor(ImGuiCol_Text, kDimText);
+  const bool pressed = ImGui::SmallButton(label);
+  ImGui::PopStyleColor(2);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tooltip);
+  ImGui::PopClipRect();
+  ImGui::SetCursorScreenPos(cursor);
+  window->DC.CursorMaxPos = max_pos;
+  return pressed;
+}
+
+void DrawPanelContents(AppState* state, ShellState* shell, PanelId panel) {
+  switch (panel) {
+    case PanelId::kTools: DrawToolsPanel(state); break;
+    case PanelId::kImage: DrawImagePanel(state, &shell->image_panel); break;
+    case PanelId::kViewport: DrawViewportPanel(state, &shell->viewport_panel); break;
+    case PanelId::kProperties: DrawPropertiesPanel(state, &shell->properties_panel); break;
+    case PanelId::kHistory: DrawHistoryPanel(state); break;
+    case PanelId::kLog: DrawLogPanel(state); break;
+  }
+}
+
+void DrawPanel(AppState* state, ShellState* shell, int index, const TiledLayout& tiled) {
+  const PanelId panel = static_cast<PanelId>(index);
+  PanelPlacement& placement = shell->layout.panels[index];
+  if (!placement.visible) return;
+  const bool floating = placement.floating;
+  const bool canvas = panel == PanelId::kImage || panel == PanelId::kViewport;
+  ImGuiWindowFlags flags = ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoSavedSettings;
+  if (canvas) flags |= ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoScrollWithMouse;
+  const ImGuiIO& io = ImGui::GetIO();
+
+  if (floating) {
+    Rect& r = placement.floating_rect;
+    if (shell->floating_to_place == index) {
+      ImGui::SetNextWindowPos(ImVec2(r.x, r.y), ImGuiCond_Always);
+      ImGui::SetNextWindowSize(ImVec2(r.w, r.h), ImGuiCond_Always);
+      ImGui::SetNextWindowFocus();
+    } else {
+      ImGui::SetNextWindowPos(ImVec2(r.x, r.y), ImGuiCond_Appearing);
+      ImGui::SetNextWindowSize(ImVec2(r.w, r.h), ImGuiCond_Appearing);
+    }
+    if (shell->tearing_panel == index && io.MouseDown[0]) {
+      // Still held after the tear-off: the window follows the cursor like a title-bar move.
+      ImGui::SetNextWindowPos(ImVec2(io.MousePos.x - 40, io.MousePos.y - 10), ImGuiCond_Always);
+    }
+  } else {
+    const std::optional<Rect>& r = tiled.docked_rects[index];
+    if (!r) return;
+    ImGui::SetNextWindowPos(ImVec2(r->x, r->y), ImGuiCond_Always);
+    ImGui::SetNextWindowSize(ImVec2(r->w, r->h), ImGuiCond_Always);
+    flags |= ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoBringToFrontOnFocus;
+  }
+
+  if (canvas) ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(3, 3));
+  bool open = true;
+  const bool expanded = ImGui::Begin(PanelTitle(panel), &open, flags);
+  if (canvas) ImGui::PopStyleVar();
+  if (floating && shell->floating_to_place == index) {
+    // A panel created while docked sits at the bottom of ImGui's window stack (docked
+    // windows never come to the front); once floating it must be above the tiled panels.
+    ImGui::BringWindowToDisplayFront(ImGui::GetCurrentWindow());
+  }
+  const ImVec2 pos = ImGui::GetWindowPos();
+  const ImVec2 size = ImGui::GetWindowSize();
+  const Rect window_rect{pos.x, pos.y, size.x, size.y};
+  shell->panel_rects[index] = window_rect;
+  shell->panel_drawn[index] = expanded;
+  const bool placed_now = floating && shell->floating_to_place == index;
+  if (placed_now) shell->floating_to_place = -1;
+  if (floating && !placed_now) {
+    if (window_rect.x != placement.floating_rect.x || window_rect.y != placement.floating_rect.y ||
+        window_rect.w != placement.floating_rect.w || window_rect.h != placement.floating_rect.h) {
+      shell->layout_changed = true;
+    }
+    placement.floating_rect = window_rect;
+  }
+
+  // Title bar: Dock/Undock button, context menu, and tear-off by dragging a docked title.
+  ImGuiWindow* window = ImGui::GetCurrentWindow();
+  const ImRect title = window->TitleBarRect();
+  bool toggle_dock = TitleBarButton(floating ? "Dock##dock" : "Undock##dock", PanelTitle(panel),
+                                    floating ? "Return to its place in the layout" : "Float as a separate window");
+  const bool title_hovered = ImGui::IsWindowHovered(ImGuiHoveredFlags_AllowWhenBlockedByActiveItem) &&
+                             title.Contains(io.MousePos) && !ImGui::IsAnyItemHovered();
+  if (title_hovered && ImGui::IsMouseReleased(ImGuiMouseButton_Right)) ImGui::OpenPopup("##panel_menu");
+  if (ImGui::BeginPopup("##panel_menu")) {
+    if (ImGui::MenuItem(floating ? "Dock" : "Undock")) toggle_dock = true;
+    if (ImGui::MenuItem("Hide")) open = false;
+    ImGui::EndPopup();
+  }
+  if (!floating && title_hovered && ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+    shell->tearing_panel = index;
+    shell->tear_press_x = io.MousePos.x;
+    shell->tear_press_y = io.MousePos.y;
+  }
+  if (!floating && shell->tearing_panel == index && io.MouseDown[0]) {
+    const float dx = io.MousePos.x - shell->tear_press_x, dy = io.MousePos.y - shell->tear_press_y;
+    if (dx * dx + dy * dy > kTearOffDistancePx * kTearOffDistancePx) {
+      MakeFloating(shell, index, {io.MousePos.x - 64, io.MousePos.y - 34, window_rect.w, window_rect.h});
+    }
+  }
+
+  if (expanded) DrawPanelContents(state, shell, panel);
+  ImGui::End();
+
+  if (toggle_dock) {
+    if (floating) {
+      placement.floating = false;
+      shell->layout_changed = true;
+    } else {
+      MakeFloating(shell, index, window_rect);
+    }
+  }
+  if (!open) {
+    placement.visible = false;
+    shell->layout_changed = true;
+  }
+}
+
+// The folder browser under the path field of the open/save/export dialogs.
+bool DrawFileList(ShellState* shell, const std::string& extension, double time_s) {
+  namespace fs = std::filesystem;
+  constexpr double kRelistAfterS = 2.0;
+  std::error_code ec;
+  const fs::path typed(shell->dialog_path);
+  fs::path dir = shell->dialog_path.empty() || shell->dialog_path.back() == '/' ? typed : typed.parent_path();
+  if (dir.empty()) dir = fs::current_path(ec);
+  if (dir.string() != shell->listed_dir || time_s - shell->listed_time_s > kRelistAfterS || time_s < shell->listed_time_s) {
+    shell->listed_dir = dir.string();
+    shell->listed_time_s = time_s;
+    shell->listed_dirs.clear();
+    shell->listed_files.clear();
+    constexpr size_t kMaxEntries = 2000;
+    for (const auto& e : fs::directory_iterator(dir, fs::directory_options::skip_permission_denied, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name.empty() || name[0] == '.') continue;
+      if (e.is_directory(ec)) shell->listed_dirs.push_back(name);
+      else if (extension.empty() || e.path().extension() == extension) shell->listed_files.push_back(name);
+      if (shell->listed_dirs.size() + shell->listed_files.size() > kMaxEntries) break;
+    }
+    std::sort(shell->listed_dirs.begin(), shell->listed_dirs.end());
+    std::sort(shell->listed_files.begin(), shell->listed_files.end());
+  }
+  bool accept = false;
+  ImGui::TextColored(kDimText, "%s", shell->listed_dir.c_str());
+  ImGui::BeginChild("##files", ImVec2(560, 220), true);
+  if (ImGui::Selectable("../")) shell->dialog_path = dir.parent_path().string() + "/";
+  for (const std::string& d : shell->listed_dirs) {
+    if (ImGui::Selectable((d + "/").c_str())) shell->dialog_path = (dir / d).string() + "/";
+  }
+  for (const std::string& f : shell->listed_files) {
+    const bool selected = dir / f == typed;
+    if (ImGui::Selectable(f.c_str(), selected, ImGuiSelectableFlags_AllowDoubleClick)) {
+      shell->dialog_path = (dir / f).string();
+      if (ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) accept = true;
+    }
+  }
+  ImGui::EndChild();
+  return accept;
+}
+
+const char* DialogTitle(Dialog dialog) {
+  switch (dialog) {
+    case Dialog::kOpen: return "Open project";
+    case Dialog::kSaveAs: return "Save project as";
+    case Dialog::kExport: return "Export model";
+    case Dialog::kAddPhoto: return "Add photo";
+    case Dialog::kAbout: return "About Facet";
+    case Dialog::kConfirmQuit: return "Unsaved changes##quit";
+    case Dialog::kConfirmNew: return "Unsaved changes##new";
+    case Dialog::kConfirmOpen: return "Unsaved changes##open";
+    case Dialog::kNone: break;
+  }
+  return "";
+}
+
+void CloseDialog(ShellState* shell) {
+  shell->dialog = Dialog::kNone;
+  ImGui::CloseCurrentPopup();
+}
+
+void DrawPathDialog(AppState* state, ShellState* shell) {
+  const Dialog d = shell->dialog;
+  const char* verb = d == Dialog::kOpen      ? "Open"
+                     : d == Dialog::kSaveAs  ? "Save"
+                     : d == Dialog::kAddPhoto ? "Add"
+                                              : "Export";
+  const std::string extension = d == Dialog::kExport || d == Dialog::kAddPhoto ? "" : ".facet";
+  if (d == Dialog::kAddPhoto) ImGui::TextColored(kDimText, "A JPEG or PNG photo; its EXIF focal length becomes a prior");
+  if (d == Dialog::kExport) ImGui::TextColored(kDimText, "The extension chooses the format: .glb (glTF) or .obj");
+  if (ImGui::IsWindowAppearing()) ImGui::SetKeyboardFocusHere();
+  ImGui::SetNextItemWidth(560);
+  bool accept = ImGui::InputText("##path", &shell->dialog_path, ImGuiInputTextFlags_EnterReturnsTrue);
+  accept |= DrawFileList(shell, extension, state->time_s);
+  if (!shell->dialog_error.empty()) ImGui::TextColored(kErrorText, "%s", shell->dialog_error.c_str());
+  accept |= ImGui::Button(verb, ImVec2(100, 0));
+  ImGui::SameLine();
+  if (ImGui::Button("Cancel", ImVec2(100, 0)) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) {
+    CloseDialog(shell);
+    return;
+  }
+  if (!accept) return;
+  const std::string path = shell->dialog_path;
+  if (path.empty() || path.back() == '/') {
+    shell->dialog_error = "Type a file name.";
+    return;
+  }
+  if (d == Dialog::kOpen && state->document.dirty()) {
+    ImGui::CloseCurrentPopup();
+    OpenDialog(shell, Dialog::kConfirmOpen, path);
+    return;
+  }
+  std::string error;
+  const char* command = d == Dialog::kOpen      ? "open"
+                        : d == Dialog::kSaveAs  ? "save"
+                        : d == Dialog::kAddPhoto ? "add-photo"
+                                                 : "export";
+  if (RunAppCommand(state, shell, command, {path}, &error)) {
+    CloseDialog(shell);
+    if (d == Dialog::kSaveAs && shell->quit_after_save) shell->quit_now = true;
+  } else {
+    shell->dialog_error = error;
+  }
+}
+
+void DrawDialogs(AppState* state, ShellState* shell) {
+  if (shell->dialog == Dialog::kNone) return;
+  const char* title = DialogTitle(shell->dialog);
+  if (shell->dialog_just_opened) {
+    ImGui::OpenPopup(title);
+    shell->dialog_just_opened = false;
+  }
+  const ImGuiViewport* vp = ImGui::GetMainViewport();
+  ImGui::SetNextWindowPos(ImVec2(vp->Pos.x + vp->Size.x * 0.5f, vp->Pos.y + vp->Size.y * 0.4f), ImGuiCond_Appearing,
+                          ImVec2(0.5f, 0.5f));
+  if (!ImGui::BeginPopupModal(title, nullptr, ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoSavedSettings)) {
+    shell->dialog = Dialog::kNone;
+    return;
+  }
+  const std::string name = state->project_path.empty() ? "the untitled project"
+                                                        : std::filesystem::path(state->project_path).filename().string();
+  switch (shell->dialog) {
+    case Dialog::kOpen:
+    case Dialog::kSaveAs:
+    case Dialog::kAddPhoto:
+    case Dialog::kExport: DrawPathDialog(state, shell); break;
+    case Dialog::kAbout:
+      ImGui::Text("Facet %s", "0.1");
+      ImGui::TextColored(kDimText, "Textured 3D models from uncalibrated photos:");
+      ImGui::TextColored(kDimText, "vanishing-point calibration, primitives, K-operators, pins.");
+      ImGui::TextColored(kDimText, "After Debevec, Taylor and Malik, SIGGRAPH 1996.");
+      ImGui::Spacing();
+      if (ImGui::Button("Close", ImVec2(100, 0)) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) CloseDialog(shell);
+      break;
+    case Dialog::kConfirmQuit:
+    case Dialog::kConfirmNew:
+    case Dialog::kConfirmOpen: {
+      const Dialog d = shell->dialog;
+      ImGui::Text("%s has unsaved changes.", name.c_str());
+      ImGui::TextColored(kDimText, d == Dialog::kConfirmQuit ? "Save them before quitting?" : "Save them first?");
+      ImGui::Spacing();
+      const std::string pending_path = shell->dialog_path;
+      auto proceed = [&]() {
+        if (d == Dialog::kConfirmQuit) {
+          shell->quit_now = true;
+        } else if (d == Dialog::kConfirmNew) {
+          NewProject(state);
+        } else {
+          std::string error;
+          RunAppCommand(state, shell, "open", {pending_path}, &error);
+        }
+      };
+      if (ImGui::Button("Save", ImVec2(110, 0))) {
+        if (state->project_path.empty()) {
+          CloseDialog(shell);
+          shell->quit_after_save = d == Dialog::kConfirmQuit;
+          OpenDialog(shell, Dialog::kSaveAs, "untitled.facet");
+          break;
+        }
+        if (SaveProjectAs(state, "")) proceed();
+        CloseDialog(shell);
+        break;
+      }
+      ImGui::SameLine();
+      if (ImGui::Button("Discard", ImVec2(110, 0))) {
+        proceed();
+        CloseDialog(shell);
+        break;
+      }
+      ImGui::SameLine();
+      if (ImGui::Button("Cancel", ImVec2(110, 0)) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) CloseDialog(shell);
+      break;
+    }
+    case Dialog::kNone: break;
+  }
+  ImGui::EndPopup();
+}
+
+std::optional<Tool> ToolFromName(const std::string& name) {
+  if (name == "select") return Tool::kSelect;
+  if (name == "line-x" || name == "linex" || name == "x") return Tool::kLineX;
+  if (name == "line-y" || name == "liney" || name == "y") return Tool::kLineY;
+  if (name == "line-z" || name == "linez" || name == "z") return Tool::kLineZ;
+  if (name == "pin") return Tool::kPin;
+  if (name == "add-primitive" || name == "add-box" || name == "addbox" || name == "box") return Tool::kAddPrimitive;
+  if (name == "split-edge" || name == "e-split") return Tool::kSplitEdge;
+  if (name == "delete-vertex" || name == "v-delete") return Tool::kDeleteVertex;
+  if (name == "connect-vertices" || name == "v-connect") return Tool::kConnectVertices;
+  if (name == "delete-edge" || name == "e-delete") return Tool::kDeleteEdge;
+  if (name == "push-pull" || name == "extrude") return Tool::kPushPull;
+  if (name == "move") return Tool::kMove;
+  if (name == "line-pin") return Tool::kLinePin;
+  return std::nullopt;
+}
+
+std::optional<PrimitiveKind> KindFromName(const std::string& name) {
+  for (PrimitiveKind kind : {PrimitiveKind::kBox, PrimitiveKind::kWedge, PrimitiveKind::kPrism, PrimitiveKind::kPyramid,
+                             PrimitiveKind::kCylinder, PrimitiveKind::kPlane}) {
+    if (name == PrimitiveKindName(kind)) return kind;
+  }
+  return std::nullopt;
+}
+
+std::vector<std::string> Words(const std::string& text) {
+  std::istringstream in(text);
+  std::vector<std::string> words;
+  for (std::string w; in >> w;) words.push_back(w);
+  return words;
+}
+
+// "select vertex|edge|face PRIMITIVE_ID ELEMENT_ID" or "select primitive ID" or "select none".
+bool RunSelectCommand(AppState* state, const std::string& arg, std::string* error) {
+  const std::vector<std::string> w = Words(arg);
+  if (w.size() == 1 && w[0] == "none") {
+    state->selection = {};
+    return true;
+  }
+  char* end = nullptr;
+  auto number = [&](const std::string& text, unsigned long long* value) {
+    *value = std::strtoull(text.c_str(), &end, 10);
+    return !text.empty() && *end == '\0';
+  };
+  unsigned long long primitive_id = 0, element = 0;
+  const Project& project = state->document.project();
+  if (w.size() == 2 && w[0] == "primitive" && number(w[1], &primitive_id)) {
+    if (!project.FindPrimitive(primitive_id)) {
+      *error = "select: no primitive " + w[1];
+      return false;
+    }
+    state->selection = {};
+    state->selection.primitive_id = primitive_id;
+    return true;
+  }
+  ElementRef ref;
+  if (w.size() == 3 && number(w[1], &primitive_id) && number(w[2], &element)) {
+    ref.kind = w[0] == "vertex" ? ElementKind::kVertex : w[0] == "edge" ? ElementKind::kEdge
+               : w[0] == "face" ? ElementKind::kFace : ElementKind::kNone;
+    ref.primitive_id = primitive_id;
+    ref.element = static_cast<std::uint32_t>(element);
+  }
+  if (ref.kind == ElementKind::kNone) {
+    *error = "select: expected 'vertex|edge|face PRIMITIVE_ID ELEMENT_ID', 'primitive ID' or 'none'";
+    return false;
+  }
+  if (!ElementExists(project, ref)) {
+    *error = "select: no " + DescribeElement(project, ref);
+    return false;
+  }
+  state->selection = Selection::Of(ref);
+  return true;
+}
+
+}  // namespace
+
+std::string WindowTitle(const AppState& state) {
+  const std::string name = state.project_path.empty()
+                               ? std::string("untitled")
+                               : std::filesystem::path(state.project_path).filename().string();
+  return "Facet - " + name + (state.document.dirty() ? " *" : "");
+}
+
+void RequestQuit(AppState* state, ShellState* shell) {
+  if (shell->offscreen || !state->document.dirty()) {
+    shell->quit_now = true;
+  } else {
+    OpenDialog(shell, Dialog::kConfirmQuit);
+  }
+}
+
+bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, const std::vector<std::string>& args,
+                   std::string* error) {
+  const std::string arg = args.empty() ? std::string() : args.front();
+  if (name == "new") {
+    NewProject(state);
+    return true;
+  }
+  if (name == "undo") {
+    Undo(state);
+    return true;
+  }
+  if (name == "redo") {
+    Redo(state);
+    return true;
+  }
+  if (name == "save") {
+    if (!SaveProjectAs(state, arg)) {
+      *error = LastLoggedError(*state);
+      return false;
+    }
+    return true;
+  }
+  if (name == "open") {
+    if (!OpenProject(state, arg)) {
+      *error = LastLoggedError(*state);
+      return false;
+    }
+    return true;
+  }
+  if (name == "tool") {
+    const std::optional<Tool> tool = ToolFromName(arg);
+    if (!tool) {
+      *error = "unknown tool '" + arg +
+               "' (select, line-x, line-y, line-z, pin, add-primitive, split-edge, delete-vertex, "
+               "connect-vertices, delete-edge, push-pull, move, line-pin)";
+      return false;
+    }
+    if (*tool == Tool::kAddPrimitive) {
+      if (arg == "add-box" || arg == "addbox" || arg == "box") state->add_kind = PrimitiveKind::kBox;
+      AddPrimitiveAction(state);
+    } else {
+      SetTool(state, *tool);
+    }
+    return true;
+  }
+  if (name == "add") {
+    // add KIND [on-top]
+    const std::vector<std::string> w = Words(arg);
+    const std::optional<PrimitiveKind> kind = w.empty() ? std::nullopt : KindFromName(w[0]);
+    if (!kind || w.size() > 2 || (w.size() == 2 && w[1] != "on-top")) {
+      *error = "add: expected 'KIND [on-top]' with KIND box, wedge, prism, pyramid, cylinder or plane";
+      return false;
+    }
+    Id base = kNoId;
+    if (w.size() == 2) {
+      const Primitive* b = AttachBaseFor(*state, *kind);
+      if (b == nullptr) {
+        *error = "add: 'on-top' needs a selected box and a wedge, pyramid or plane";
+        return false;
+      }
+      base = b->id;
+    }
+    state->add_kind = *kind;
+    if (!AddPrimitiveEdit(state, *kind, base)) {
+      *error = LastLoggedError(*state);
+      return false;
+    }
+    return true;
+  }
+  if (name == "select") return RunSelectCommand(state, arg, error);
+  if (name == "add-photo") {
+    if (!AddPhotoEdit(state, arg)) {
+      *error = LastLoggedError(*state);
+      return false;
+    }
+    return true;
+  }
+  if (name == "constrain") return RunConstrainCommand(state, arg, error);
+  if (name == "select-add") return RunSelectAddCommand(state, arg, error);
+  if (name == "line-pin") return RunLinePinCommand(state, arg, error);
+  if (name == "line-pin-move") return RunLinePinMoveCommand(state, arg, error);
+  if (name == "calibration") return RunCalibrationCommand(state, &shell->properties_panel.exif_feedback, arg, error);
+  if (name == "move-selection") return RunMoveCommand(state, arg, error);
+  if (name == "free-vertex" || name == "planar-face") {
+    const ElementRef& e = state->selection.element;
+    const bool vertex = name == "free-vertex";
+    if (e.kind != (vertex ? ElementKind::kVertex : ElementKind::kFace)) {
+      *error = name + ": select a " + (vertex ? "vertex" : "face") + " first";
+      return false;
+    }
+    const bool done = vertex ? ToggleFreeVertexEdit(state, e.primitive_id, e.element)
+                             : TogglePlanarFaceEdit(state, e.primitive_id, e.element);
+    if (!done) *error = LastLoggedError(*state);
+    return done;
+  }
+  if (name == "select-image") {
+    const auto& images = state->document.project().images;
+    char* end = nullptr;
+    const long index = std::strtol(arg.c_str(), &end, 10);
+    if (arg.empty() || *end != '\0' || index < 0 || index >= static_cast<long>(images.size())) {
+      *error = "select-image: index " + arg + " is not in 0.." + std::to_string(static_cast<long>(images.size()) - 1);
+      return false;
+    }
+    state->active_image_id = images[index].id;
+    return true;
+  }
+  if (name == "fit") {
+    RequestImageFit(&shell->image_panel);
+    return true;
+  }
+  if (name == "wait-bake") {
+    FinishBake(state);
+    return true;
+  }
+  if (name == "bake-status") return WriteBakeStatus(*state, arg, error);
+  if (name == "export") {
+    FinishBake(state);  // the model as it is now, textured
+    const std::string ext = std::filesystem::path(arg).extension().string();
+    if (state->mesh.indices.empty()) {
+      *error = "export: there is no model yet (add a primitive and pin it)";
+      return false;
+    }
+    ExportSummary summary;
+    if (ext == ".glb") {
+      summary = ExportGlb(state->mesh, state->document.project(), arg);
+    } else if (ext == ".obj") {
+      summary = ExportObj(state->mesh, arg);
+    } else {
+      *error = "export: the file name must end in .glb or .obj";
+      return false;
+    }
+    if (!summary.success) {
+      state->Log(LogLevel::kError, "Export failed: " + summary.message);
+      *error = summary.message;
+      return false;
+    }
+    state->Log(LogLevel::kInfo, "Exported " + arg);
+    return true;
+  }
+  *error = "unknown command '" + name + "'";
+  return false;
+}
+
+void DrawFrame(AppState* state, ShellState* shell, double time_s) {
+  state->time_s = time_s;
+  state->bake_mode = shell->offscreen ? BakeMode::kFinishNextFrame : BakeMode::kBackground;
+  RefreshDerived(state);
+  if (state->request_quit) {
+    state->request_quit = false;
+    RequestQuit(state, shell);
+  }
+  HandleGlobalShortcuts(state, shell);
+
+  const float menu_height = DrawMenuBar(state, shell);
+  const ImGuiViewport* vp = ImGui::GetMainViewport();
+  const Rect work{vp->Pos.x + kWorkAreaMarginPx, vp->Pos.y + menu_height + kWorkAreaMarginPx,
+                  vp->Size.x - 2 * kWorkAreaMarginPx, vp->Size.y - menu_height - 2 * kWorkAreaMarginPx};
+  const TiledLayout tiled = ComputeTiledLayout(shell->layout, work);
+
+  // Keep floating panels reachable after the window shrank.
+  for (PanelPlacement& p : shell->layout.panels) {
+    if (!p.floating) continue;
+    p.floating_rect.x = std::clamp(p.floating_rect.x, vp->Pos.x - p.floating_rect.w + 60, vp->Pos.x + vp->Size.x - 60);
+    p.floating_rect.y = std::clamp(p.floating_rect.y, vp->Pos.y, vp->Pos.y + vp->Size.y - 30);
+  }
+
+  shell->panel_drawn.fill(false);
+  state->item_rects.clear();
+  DrawSplitters(shell, tiled, work);
+  // Docked panels first: floating ones are created later and so stay in front.
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int i = 0; i < kNumPanels; ++i) {
+      if (shell->layout.panels[i].floating == (pass == 1)) DrawPanel(state, shell, i, tiled);
+    }
+  }
+  if (!ImGui::GetIO().MouseDown[0]) shell->tearing_panel = -1;
+
+  // The texture catches up with an edit in the background: say so over the 3D panel.
+  const int viewport = static_cast<int>(PanelId::kViewport);
+  if (BakeInFlight(*state) && shell->panel_drawn[viewport] && shell->dialog == Dialog::kNone) {
+    const Rect& r = shell->panel_rects[viewport];
+    const float line = ImGui::GetTextLineHeightWithSpacing();
+    ImGui::GetForegroundDrawList()->AddText(ImVec2(r.x + 8.0f, r.y + r.h - line - 6.0f),
+                                            ImGui::GetColorU32(kDimText), "baking texture...");
+  }
+
+  DrawDialogs(state, shell);
+  if (shell->dialog == Dialog::kNone) HandleToolShortcuts(state);
+}
+
+void ConfigureImGui(bool offscreen, float ui_scale) {
+  ui_scale = std::clamp(ui_scale, 1.0f, 4.0f);
+  ImGuiIO& io = ImGui::GetIO();
+  io.ConfigWindowsMoveFromTitleBarOnly = true;  // drags inside the image and 3D panels never move windows
+  io.ConfigFlags |= ImGuiConfigFlags_NavEnableKeyboard;
+
+  const char* font_path = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+  std::error_code ec;
+  if (std::filesystem::exists(font_path, ec)) {
+    ImFontConfig config;
+    config.OversampleH = 2;
+    io.Fonts->AddFontFromFileTTF(font_path, std::round(15.0f * ui_scale), &config);
+  } else {
+    io.Fonts->AddFontDefault();
+  }
+
+  ImGui::StyleColorsDark();
+  ImGuiStyle& style = ImGui::GetStyle();
+  style.WindowRounding = 3.0f;
+  style.ChildRounding = 2.0f;
+  style.FrameRounding = 3.0f;
+  style.PopupRounding = 3.0f;
+  style.GrabRounding = 3.0f;
+  style.ScrollbarRounding = 3.0f;
+  style.WindowBorderSize = 1.0f;
+  style.FramePadding = ImVec2(6, 4);
+  style.ItemSpacing = ImVec2(8, 5);
+  style.WindowPadding = ImVec2(8, 7);
+  style.WindowTitleAlign = ImVec2(0.0f, 0.5f);
+  ImVec4* c = style.Colors;
+  c[ImGuiCol_WindowBg] = ImVec4(0.125f, 0.133f, 0.145f, 1.0f);
+  c[ImGuiCol_ChildBg] = ImVec4(0.10f, 0.105f, 0.115f, 1.0f);
+  c[ImGuiCol_PopupBg] = ImVec4(0.14f, 0.15f, 0.16f, 0.98f);
+  c[ImGuiCol_MenuBarBg] = ImVec4(0.16f, 0.17f, 0.185f, 1.0f);
+  c[ImGuiCol_TitleBg] = ImVec4(0.16f, 0.17f, 0.185f, 1.0f);
+  c[ImGuiCol_TitleBgActive] = ImVec4(0.19f, 0.23f, 0.30f, 1.0f);
+  c[ImGuiCol_Border] = ImVec4(0.24f, 0.25f, 0.28f, 1.0f);
+  c[ImGuiCol_FrameBg] = ImVec4(0.19f, 0.20f, 0.22f, 1.0f);
+  c[ImGuiCol_FrameBgHovered] = ImVec4(0.24f, 0.27f, 0.31f, 1.0f);
+  c[ImGuiCol_Button] = ImVec4(0.21f, 0.23f, 0.26f, 1.0f);
+  c[ImGuiCol_ButtonHovered] = ImVec4(0.27f, 0.34f, 0.45f, 1.0f);
+  c[ImGuiCol_ButtonActive] = ImVec4(0.26f, 0.45f, 0.72f, 1.0f);
+  c[ImGuiCol_Header] = ImVec4(0.22f, 0.25f, 0.30f, 1.0f);
+  c[ImGuiCol_HeaderHovered] = ImVec4(0.27f, 0.34f, 0.45f, 1.0f);
+  c[ImGuiCol_HeaderActive] = ImVec4(0.26f, 0.45f, 0.72f, 1.0f);
+  c[ImGuiCol_SeparatorHovered] = ImVec4(0.30f, 0.50f, 0.80f, 0.8f);
+  c[ImGuiCol_SeparatorActive] = ImVec4(0.35f, 0.58f, 0.92f, 1.0f);
+
+  style.ScaleAllSizes(ui_scale);
+  if (offscreen) {
+    io.IniFilename = nullptr;  // deterministic screenshots: never read or write user settings
+  }
+}
+
+}  // namespace facet::app

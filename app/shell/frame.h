@@ -1,0 +1,81 @@
+// DrawFrame: the one per-frame UI function that the windowed (GLFW) and the offscreen (EGL)
+// modes both call between ImGui::NewFrame() and ImGui::Render(). It refreshes the derived
+// state, then draws the menu bar, the tiled and floating panels, the splitters and the
+// modal dialogs, and handles the global shortcuts. Everything the shell keeps between frames
+// that is neither document nor app state lives in ShellState, the panels' own state included.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "app/panels/image_panel.h"
+#include "app/panels/side_panels.h"
+#include "app/panels/viewport_panel.h"
+#include "app/shell/layout.h"
+#include "app/state/app_state.h"
+
+namespace facet::app {
+
+enum class Dialog { kNone, kOpen, kSaveAs, kExport, kAddPhoto, kAbout, kConfirmQuit, kConfirmNew, kConfirmOpen };
+
+struct ShellState {
+  Layout layout = DefaultLayout();
+  // The panels' own state between frames (views, GL resources, interactions). The GL side
+  // must be shut down (ShutdownImagePanel, ShutdownViewportPanel) while the context lives.
+  ImagePanelState image_panel;
+  ViewportPanelState viewport_panel;
+  PropertiesPanelState properties_panel;
+  bool offscreen = false;  // no quitting dialogs, no layout persistence
+
+  // Modal dialogs.
+  Dialog dialog = Dialog::kNone;
+  bool dialog_just_opened = false;
+  std::string dialog_path;  // the path field of the open/save/export dialogs
+  std::string dialog_error;
+  // The dialog's folder listing, re-read when the folder changes or after a while (not
+  // every frame: the frame loop does no file-system work of its own).
+  std::string listed_dir;
+  double listed_time_s = -1.0;
+  std::vector<std::string> listed_dirs, listed_files;  // file names, sorted
+
+  // Set when the user confirmed quitting (or there was nothing to save); the platform loop
+  // then exits.
+  bool quit_now = false;
+  bool quit_after_save = false;  // the Save As dialog was opened by the quit confirmation
+
+  // Splitter and tear-off interaction.
+  int active_splitter = -1;  // index into the last TiledLayout's splitters
+  int tearing_panel = -1;    // a docked panel whose title bar is being dragged
+  float tear_press_x = 0, tear_press_y = 0;
+  int floating_to_place = -1;  // a panel that became floating this frame: set its rect once
+  bool layout_changed = false;  // to persist the layout on exit
+
+  // What the last frame drew, for the render report (screen px).
+  std::array<Rect, kNumPanels> panel_rects{};
+  std::array<bool, kNumPanels> panel_drawn{};
+  Rect menu_bar_rect;
+};
+
+// Fonts, style and IO flags shared by both modes; `offscreen` also disables the ini file.
+// `ui_scale` enlarges fonts and sizes for high-density displays (1 offscreen).
+void ConfigureImGui(bool offscreen, float ui_scale = 1.0f);
+
+// Runs one frame's UI for the state. `time_s` is the time since start (fixed steps offscreen).
+void DrawFrame(AppState* state, ShellState* shell, double time_s);
+
+// "Facet - name*" (the star while the document has unsaved changes).
+std::string WindowTitle(const AppState& state);
+
+// Named app commands shared by the menus, the shortcuts and the input script: undo, redo,
+// save [PATH], open PATH, tool NAME, select-image INDEX, fit, export PATH, add KIND [on-top],
+// select vertex|edge|face PRIMITIVE_ID ELEMENT_ID | primitive ID | none, free-vertex,
+// planar-face (app/state/input_script.h documents them). Returns false with
+// *error set for unknown commands, bad arguments or a failed save/open/export.
+bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name,
+                   const std::vector<std::string>& args, std::string* error);
+
+// Asks to quit: quits at once when nothing is unsaved, else opens the confirmation dialog.
+void RequestQuit(AppState* state, ShellState* shell);
+
+}  // namespace facet::app

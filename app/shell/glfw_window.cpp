@@ -1,0 +1,118 @@
+#include "app/shell/glfw_window.h"
+
+#include <epoxy/gl.h>
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_impl_opengl3.h>
+
+#include "app/panels/image_panel.h"
+#include "app/panels/viewport_panel.h"
+
+namespace facet::app {
+namespace {
+
+constexpr char kNoDisplayMessage[] =
+    "facet: no display found; use 'facet render PROJECT -o SHOT.png' for offscreen rendering\n";
+
+void PrintGlfwError(int code, const char* description) {
+  // GLFW reports "no display" through glfwInit's failure, which RunGlfwWindow explains.
+  if (code != GLFW_PLATFORM_ERROR) std::fprintf(stderr, "facet: GLFW: %s\n", description);
+}
+
+}  // namespace
+
+bool HasDisplay() {
+  const char* x11 = std::getenv("DISPLAY");
+  const char* wayland = std::getenv("WAYLAND_DISPLAY");
+  return (x11 && *x11) || (wayland && *wayland);
+}
+
+int RunGlfwWindow(AppState* state, ShellState* shell, const std::string& imgui_ini_path) {
+  glfwSetErrorCallback(PrintGlfwError);
+  if (!HasDisplay() || !glfwInit()) {
+    std::fputs(kNoDisplayMessage, stderr);
+    return 2;
+  }
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  glfwWindowHint(GLFW_MAXIMIZED, GLFW_TRUE);
+  std::string title = WindowTitle(*state);
+  GLFWwindow* window = glfwCreateWindow(1600, 900, title.c_str(), nullptr, nullptr);
+  if (!window) {
+    std::fputs("facet: cannot create a window with an OpenGL 3.3 core context\n", stderr);
+    glfwTerminate();
+    return 1;
+  }
+  glfwMakeContextCurrent(window);
+  glfwSwapInterval(1);  // vsync: the loop never spins faster than the display
+
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  // Fonts and sizes follow the monitor's content scale (e.g. 2 on a HiDPI screen).
+  float scale_x = 1.0f, scale_y = 1.0f;
+  glfwGetWindowContentScale(window, &scale_x, &scale_y);
+  // Where the framebuffer is already denser than window coordinates (Wayland, macOS), ImGui's
+  // framebuffer scale does that part; only the rest enlarges the UI.
+  int window_w = 0, window_h = 0, fb_w = 0, fb_h = 0;
+  glfwGetWindowSize(window, &window_w, &window_h);
+  glfwGetFramebufferSize(window, &fb_w, &fb_h);
+  const float framebuffer_scale = window_w > 0 ? static_cast<float>(fb_w) / window_w : 1.0f;
+  ConfigureImGui(/*offscreen=*/false, std::max(scale_x, scale_y) / std::max(1.0f, framebuffer_scale));
+  ImGui::GetIO().IniFilename = imgui_ini_path.empty() ? nullptr : imgui_ini_path.c_str();
+  ImGui_ImplGlfw_InitForOpenGL(window, /*install_callbacks=*/true);
+  ImGui_ImplOpenGL3_Init("#version 330");
+
+  while (!shell->quit_now) {
+    // An iconified window needs no frames; wait for events instead of spinning.
+    if (glfwGetWindowAttrib(window, GLFW_ICONIFIED)) {
+      glfwWaitEventsTimeout(0.25);
+      continue;
+    }
+    glfwPollEvents();
+    if (glfwWindowShouldClose(window)) {
+      glfwSetWindowShouldClose(window, GLFW_FALSE);
+      RequestQuit(state, shell);
+    }
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    DrawFrame(state, shell, glfwGetTime());
+    ImGui::Render();
+
+    int fb_width = 0, fb_height = 0;
+    glfwGetFramebufferSize(window, &fb_width, &fb_height);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(0, 0, fb_width, fb_height);
+    glClearColor(0.075f, 0.08f, 0.09f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    glfwSwapBuffers(window);
+
+    const std::string new_title = WindowTitle(*state);
+    if (new_title != title) {
+      title = new_title;
+      glfwSetWindowTitle(window, title.c_str());
+    }
+  }
+
+  ShutdownImagePanel(&shell->image_panel);
+  ShutdownViewportPanel(&shell->viewport_panel);
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+  glfwDestroyWindow(window);
+  glfwTerminate();
+  return 0;
+}
+
+}  // namespace facet::app

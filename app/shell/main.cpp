@@ -1,0 +1,124 @@
+// facet: one executable for the GUI and the command line (calibrate, relate, solve, export,
+// render).
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <unistd.h>
+
+#include "app/shell/app.h"
+#include "app/shell/cli_commands.h"
+
+namespace {
+
+// The bundled sample: next to the executable in an install, else in the source tree.
+std::string SampleProjectPath() {
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  const std::filesystem::path candidates[] = {
+      exe.parent_path() / "../share/facet/samples/leuven/leuven.facet",
+      std::filesystem::path(FACET_SOURCE_DIR) / "assets/samples/leuven/leuven.facet",
+  };
+  for (const auto& c : candidates)
+    if (std::filesystem::exists(c, ec)) return std::filesystem::weakly_canonical(c, ec).string();
+  return {};
+}
+
+bool ParseSize(const std::string& text, int* width, int* height) {
+  const size_t x = text.find('x');
+  if (x == std::string::npos) return false;
+  try {
+    *width = std::stoi(text.substr(0, x));
+    *height = std::stoi(text.substr(x + 1));
+  } catch (...) {
+    return false;
+  }
+  return *width >= 64 && *height >= 64 && *width <= 16384 && *height <= 16384;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{
+      "Facet: interactive image-based modeling. Turn ordinary photos into a textured 3D model.\n"
+      "Without a command, opens the GUI on PROJECT (or the bundled sample)."};
+  cli.require_subcommand(0, 1);
+
+  std::string gui_project;
+  cli.add_option("project", gui_project, "Project file (*.facet) to open in the GUI");
+
+  auto* calibrate = cli.add_subcommand(
+      "calibrate", "Calibrate one camera from line families or from known 3D points; prints the camera as JSON");
+  std::string lines_path, points_path;
+  auto* lines_option =
+      calibrate
+          ->add_option("--lines", lines_path,
+                       "LINES.json: {\"image_size\": [w, h], \"families\": [{\"axis\": \"x\", \"segments\": "
+                       "[[x1, y1, x2, y2], ...]}, ...], \"principal_point\": \"solve\" | \"center\" | [cx, cy]}")
+          ->check(CLI::ExistingFile);
+  auto* points_option =
+      calibrate
+          ->add_option("--points", points_path,
+                       "POINTS.json: {\"image_size\": [w, h], \"points\": [{\"xyz\": [X, Y, Z], \"uv\": [u, v]}, "
+                       "...], \"distortion\": 0 | 1 | 2, \"focal_px\": F (optional: a known focal length, pose only)} "
+                       "(6+ points, or 4+ on one plane)")
+          ->check(CLI::ExistingFile);
+  lines_option->excludes(points_option);
+  calibrate->require_option(1);
+
+  auto* relate = cli.add_subcommand(
+      "relate", "Two-view geometry from matches: fundamental matrix, and relative pose when K is known; prints JSON");
+  std::string matches_path;
+  relate
+      ->add_option("--matches", matches_path,
+                   "MATCHES.json: {\"image_sizes\": [[w, h], [w, h]], \"matches\": [[u1, v1, u2, v2], ...], "
+                   "\"K\": [K1, K2] (optional)}")
+      ->required()
+      ->check(CLI::ExistingFile);
+
+  auto* solve = cli.add_subcommand("solve", "Re-calibrate and re-solve a project; writes the result and prints a JSON summary");
+  std::string solve_project, solve_out;
+  solve->add_option("project", solve_project, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
+  solve->add_option("-o,--output", solve_out, "Where to write the solved project")->required();
+
+  auto* exporter = cli.add_subcommand("export", "Export the textured model as binary glTF (.glb) or OBJ + MTL + PNG");
+  std::string export_project, export_out;
+  exporter->add_option("project", export_project, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
+  exporter->add_option("-o,--output", export_out, "FILE.glb or FILE.obj")->required();
+
+  auto* render = cli.add_subcommand("render", "Render the application offscreen (EGL, no display needed) to a PNG");
+  facet::app::RenderOptions render_options;
+  std::string render_size = "1600x900";
+  render->add_option("project", render_options.project_path, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
+  render->add_option("-o,--output", render_options.output_png, "SHOT.png")->required();
+  render->add_option("--size", render_size, "Window size WxH in pixels")->capture_default_str();
+  render->add_option("--script", render_options.script_path,
+                     "Input script: mouse, keys and app commands, one per line (see README)")
+      ->check(CLI::ExistingFile);
+  render->add_option("--report", render_options.report_path,
+                     "Also write a JSON report: panel rectangles, image view transform, history, project");
+
+  CLI11_PARSE(cli, argc, argv);
+
+  if (*calibrate) return facet::app::RunCalibrateCommand(lines_path, points_path);
+  if (*relate) return facet::app::RunRelateCommand(matches_path);
+  if (*solve) return facet::app::RunSolveCommand(solve_project, solve_out);
+  if (*exporter) return facet::app::RunExportCommand(export_project, export_out);
+  if (*render) {
+    if (!ParseSize(render_size, &render_options.width, &render_options.height)) {
+      std::cerr << "facet render: --size must be WxH, e.g. 1600x900 (64..16384 each)\n";
+      return 1;
+    }
+    return facet::app::RunOffscreen(render_options);
+  }
+
+  facet::app::GuiOptions gui;
+  gui.project_path = gui_project.empty() ? SampleProjectPath() : gui_project;
+  if (!gui_project.empty() && !std::filesystem::exists(gui_project)) {
+    std::cerr << "facet: no such project file: " << gui_project << "\n";
+    return 1;
+  }
+  return facet::app::RunGui(gui);
+}

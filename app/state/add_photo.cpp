@@ -1,0 +1,62 @@
+#include "app/state/add_photo.h"
+
+#include <filesystem>
+#include <system_error>
+
+#include "app/state/calgui_exif_prior.h"
+#include "core/image/image_io.h"
+
+namespace facet::app {
+namespace {
+
+// A first guess of the focal length, as wide as a typical phone's main camera (about 28 mm
+// equivalent); calibration or the pins replace it.
+constexpr double kDefaultFocalFactor = 1.2;
+
+std::string StoredPath(const std::string& project_path, const std::string& photo_path) {
+  std::error_code ec;
+  const std::filesystem::path absolute = std::filesystem::absolute(photo_path, ec);
+  if (ec || project_path.empty()) return ec ? photo_path : absolute.generic_string();
+  const std::filesystem::path folder = std::filesystem::absolute(project_path, ec).parent_path();
+  const std::filesystem::path relative = absolute.lexically_relative(folder);
+  return relative.empty() ? absolute.generic_string() : relative.generic_string();
+}
+
+}  // namespace
+
+bool AddPhotoEdit(AppState* state, const std::string& path) {
+  int width_px = 0, height_px = 0;
+  std::string error;
+  if (path.empty() || !ReadImageSize(path, &width_px, &height_px, &error)) {
+    state->Log(LogLevel::kError, "Add photo: " + (path.empty() ? std::string("no file name") : error));
+    return false;
+  }
+  Project edited = state->document.project();
+  Image image;
+  image.id = edited.NewId();
+  image.path = StoredPath(state->project_path, path);
+  image.width_px = width_px;
+  image.height_px = height_px;
+  image.camera.width_px = width_px;
+  image.camera.height_px = height_px;
+  image.camera.focal_px = kDefaultFocalFactor * std::max(width_px, height_px);
+  image.camera.principal_point_px = Eigen::Vector2d((width_px - 1) / 2.0, (height_px - 1) / 2.0);
+  const ExifFocalPrior prior = ReadExifFocalPrior(path, image);
+  if (prior.found) {
+    image.focal_mode = FocalMode::kPrior;
+    image.focal_prior_px = prior.focal_px;
+    image.focal_prior_std_px = prior.std_px;
+    image.camera.focal_px = prior.focal_px;
+  }
+  const Id id = image.id;
+  const std::string name = std::filesystem::path(path).filename().string();
+  edited.images.push_back(std::move(image));
+  CommitEdit(state, "Add photo " + name, std::move(edited));
+  if (state->document.project().FindImage(id) == nullptr) return false;
+  state->active_image_id = id;
+  state->Log(LogLevel::kInfo, name + ": " + std::to_string(width_px) + " x " + std::to_string(height_px) + " px; " +
+                                  (prior.found ? prior.message : "no EXIF focal length (calibrate from lines or pins)"));
+  return true;
+}
+
+}  // namespace facet::app

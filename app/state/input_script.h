@@ -1,0 +1,109 @@
+// The input-script driver of the offscreen mode: a small text format, one command per line,
+// '#' starts a comment. Parsing expands every command into frame steps; each step's input
+// is applied at the start of one frame, so ImGui sees every press and release.
+//
+//   frames N                      N frames with no new input
+//   move X Y                      mouse position (screen px)
+//   down|up left|right|middle     press / release a button
+//   click BUTTON X Y              move and press (1 frame), release (1 frame)
+//   drag BUTTON X1 Y1 X2 Y2 STEPS press at 1, move in STEPS frames to 2, release
+//   wheel DY [X Y]                vertical wheel (positive: away from the user), optional move
+//   key [ctrl+][shift+][alt+]KEY  press (1 frame), release (1 frame); e.g. key ctrl+z
+//   type TEXT                     text characters for the active text field (1 frame)
+//   hold|release shift|ctrl|alt   keep a modifier down / let it go
+//   command NAME [ARGS]           undo, redo, save PATH, open PATH, tool NAME,
+//                                 select-image INDEX, fit, export PATH, and for the model:
+//                                   add KIND [on-top]  K_create (box, wedge, prism, pyramid,
+//                                                      cylinder, plane), on the selected box
+//                                   select vertex|edge|face PRIMITIVE_ID ELEMENT_ID,
+//                                   select primitive ID, select none
+//                                   free-vertex        toggle the selected vertex's freedom
+//                                   planar-face        toggle the selected face's coplanarity
+//                                   constrain KIND [VALUE]  a spatial constraint on the
+//                                                      selection: along-x|y|z, length VALUE
+//                                                      (edge); parallel, perpendicular,
+//                                                      equal-length (first call stores the
+//                                                      edge, second adds; with two edges
+//                                                      selected, at once); coplanar (4+
+//                                                      vertices or two faces), collinear
+//                                                      (3+ vertices), parallel-faces;
+//                                                      fix (vertex); remove ID. Dispatched by
+//                                                      RunConstrainCommand (app/state/model_edits.h)
+//                                   add-photo PATH     a new image (app/state/add_photo.h)
+//                                   select-add vertex|edge|face PRIMITIVE_ID ELEMENT_ID
+//                                                      add to the selection (RunSelectAddCommand)
+//                                   line-pin IMAGE_INDEX X1 Y1 X2 Y2  the selected edge on the
+//                                                      image line through (X1, Y1), (X2, Y2)
+//                                                      (RunLinePinCommand, app/state/model_edits.h)
+//                                   line-pin-move IMAGE_INDEX PIN_INDEX END X Y  one end (0|a,
+//                                                      1|b) of the image's PIN_INDEX-th line
+//                                                      pin to (X, Y) (RunLinePinMoveCommand)
+//                                   calibration KEY VALUE  the active image's calibration
+//                                                      modes, each one undoable edit
+//                                                      (RunCalibrationCommand,
+//                                                      app/panels/camera_sections.h):
+//                                                      principal-point solve|center|
+//                                                      fixed X Y; focal solve|fixed F|
+//                                                      prior F STD|exif (px); horizon
+//                                                      off|level V|X1 Y1 X2 Y2 (px);
+//                                                      distortion on|off (estimate from
+//                                                      lines); distortion-lock,
+//                                                      focal-lock, principal-point-lock
+//                                                      on|off (what the joint solve keeps)
+//                                   move-selection ARGS  V_op on the selected vertex or
+//                                                      primitive (RunMoveCommand,
+//                                                      app/state/move_tool.h)
+//                                   wait-bake          block until the texture bake of the
+//                                                      current project is swapped in
+//                                   bake-status PATH   the background bake's state as JSON
+//                                                      (in flight, revisions, counters,
+//                                                      main-thread ms, mesh fingerprints)
+//                                 Tool names: select, line-x, line-y, line-z, pin,
+//                                 add-primitive (adds at once), split-edge, delete-vertex,
+//                                 connect-vertices, delete-edge, push-pull, move, line-pin
+//   screenshot PATH               write a PNG of the frame just rendered; that frame first
+//                                 waits for the texture bake (wait-bake), so the picture never
+//                                 depends on how fast the worker thread was
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace facet::app {
+
+// Key codes are GLFW's (letters are their upper-case ASCII codes) in both modes, so panels
+// can test io.KeysDown the same way with and without a window.
+struct ScriptKey {
+  int key_code = 0;
+  bool ctrl = false, shift = false, alt = false;
+  unsigned character = 0;  // text input sent along with the key (0: none)
+};
+
+struct ScriptStep {
+  int line = 0;  // source line, for error messages
+  std::optional<std::array<float, 2>> mouse_pos;
+  std::array<std::optional<bool>, 3> mouse_down;  // left, right, middle: press / release
+  float wheel = 0.0f;
+  std::optional<ScriptKey> key_press;  // held during this step only
+  std::string text;                    // characters typed this step
+  std::optional<bool> hold_shift, hold_ctrl, hold_alt;
+  std::string command;  // app command name; empty for none
+  std::vector<std::string> command_args;
+  std::string screenshot_path;  // written after this step's frame is rendered
+};
+
+struct Script {
+  std::vector<ScriptStep> steps;
+};
+
+// Returns false with "line N: what is wrong" in *error for unknown commands or bad arguments.
+bool ParseScript(const std::string& text, Script* script, std::string* error);
+bool LoadScript(const std::string& path, Script* script, std::string* error);
+
+// The GLFW key code for a key name ("a".."z", "0".."9", "delete", "escape", "f1", ...), or
+// -1 for an unknown name.
+int KeyCodeFromName(const std::string& name);
+
+}  // namespace facet::app
