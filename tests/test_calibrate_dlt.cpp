@@ -111,7 +111,7 @@ TEST_CASE("DLT: noise-free non-planar points give K, R, t exactly, from the line
 
   options.refine = false;
   const DltCalibrationSummary linear = CalibrateFromPoints(points, options);
-  REQUIRE_MESSAGE(linear.success, linear.message);
+  REQUIRE_MESSAGE(linear.IsUsable(), linear.message);
   CHECK_FALSE(linear.planar);
   CAPTURE(linear.fx);
   CAPTURE(linear.fy);
@@ -129,7 +129,7 @@ TEST_CASE("DLT: noise-free non-planar points give K, R, t exactly, from the line
 
   options.refine = true;
   const DltCalibrationSummary refined = CalibrateFromPoints(points, options);
-  REQUIRE_MESSAGE(refined.success, refined.message);
+  REQUIRE_MESSAGE(refined.IsUsable(), refined.message);
   CheckCameraExact(refined.camera, truth);
   CHECK(refined.reprojection_rms_px <= 1e-6);
   CHECK(refined.residuals_px.size() == points.size());
@@ -145,7 +145,7 @@ TEST_CASE("DLT: exactly 6 points suffice") {
   spec.seed = 7;
   const auto points = MakePoints(truth, spec, DefaultScene());
   const DltCalibrationSummary s = CalibrateFromPoints(points, OptionsFor(truth));
-  REQUIRE_MESSAGE(s.success, s.message);
+  REQUIRE_MESSAGE(s.IsUsable(), s.message);
   CheckCameraExact(s.camera, truth);
 }
 
@@ -166,7 +166,7 @@ TEST_CASE("DLT: with 0.5 px noise the errors match the fit's covariance over 40 
       spec.seed = seed;
       const auto points = MakePoints(truth, spec, DefaultScene());
       const DltCalibrationSummary s = CalibrateFromPoints(points, OptionsFor(truth));
-      REQUIRE_MESSAGE(s.success, s.message);
+      REQUIRE_MESSAGE(s.IsUsable(), s.message);
       const double f_error = s.camera.focal_px - truth.focal_px;
       CAPTURE(seed);
       CAPTURE(f_error);
@@ -214,12 +214,12 @@ TEST_CASE("Planar: noise-free points on a tilted plane give K, R, t exactly") {
     DltCalibrationOptions options = OptionsFor(truth);
     options.refine = false;
     const DltCalibrationSummary linear = CalibrateFromPoints(points, options);
-    REQUIRE_MESSAGE(linear.success, linear.message);
+    REQUIRE_MESSAGE(linear.IsUsable(), linear.message);
     CHECK(linear.planar);
     CheckCameraExact(linear.camera, truth);
     options.refine = true;
     const DltCalibrationSummary s = CalibrateFromPoints(points, options);
-    REQUIRE_MESSAGE(s.success, s.message);
+    REQUIRE_MESSAGE(s.IsUsable(), s.message);
     CheckCameraExact(s.camera, truth);
   }
   SUBCASE("principal point given off-centre") {
@@ -232,7 +232,7 @@ TEST_CASE("Planar: noise-free points on a tilted plane give K, R, t exactly") {
     options.principal_point_mode = PrincipalPointMode::kFixed;
     options.fixed_principal_point_px = truth.principal_point_px;
     const DltCalibrationSummary s = CalibrateFromPoints(points, options);
-    REQUIRE_MESSAGE(s.success, s.message);
+    REQUIRE_MESSAGE(s.IsUsable(), s.message);
     CHECK(s.planar);
     CheckCameraExact(s.camera, truth);
   }
@@ -252,7 +252,7 @@ TEST_CASE("Planar: with 0.5 px noise the errors match the fit's covariance over 
     spec.seed = seed;
     const auto points = MakePoints(truth, spec, scene);
     const DltCalibrationSummary s = CalibrateFromPoints(points, OptionsFor(truth));
-    REQUIRE_MESSAGE(s.success, s.message);
+    REQUIRE_MESSAGE(s.IsUsable(), s.message);
     const double f_error = s.camera.focal_px - truth.focal_px;
     CAPTURE(seed);
     CAPTURE(f_error);
@@ -289,13 +289,13 @@ TEST_CASE("Distortion: k1 = -0.2 is recovered and the RMS falls to the noise lev
     CAPTURE(planar);
 
     const DltCalibrationSummary pinhole = CalibrateFromPoints(points, options);
-    REQUIRE_MESSAGE(pinhole.success, pinhole.message);
+    REQUIRE_MESSAGE(pinhole.IsUsable(), pinhole.message);
     options.radial_distortion_terms = 1;
     const DltCalibrationSummary one = CalibrateFromPoints(points, options);
-    REQUIRE_MESSAGE(one.success, one.message);
+    REQUIRE_MESSAGE(one.IsUsable(), one.message);
     options.radial_distortion_terms = 2;
     const DltCalibrationSummary two = CalibrateFromPoints(points, options);
-    REQUIRE_MESSAGE(two.success, two.message);
+    REQUIRE_MESSAGE(two.IsUsable(), two.message);
 
     const double noise_rms = kNoisePx * std::sqrt(2.0);  // RMS of a 2D residual
     CAPTURE(pinhole.reprojection_rms_px);
@@ -340,7 +340,7 @@ TEST_CASE("Distortion: noise-free k1, k2 are recovered exactly from a pinhole st
     DltCalibrationOptions options = OptionsFor(truth);
     options.radial_distortion_terms = 2;
     const DltCalibrationSummary s = CalibrateFromPoints(points, options);
-    REQUIRE_MESSAGE(s.success, s.message);
+    REQUIRE_MESSAGE(s.IsUsable(), s.message);
     CAPTURE(planar);
     CAPTURE(s.initial_rms_px);
     CAPTURE(s.reprojection_rms_px);
@@ -370,7 +370,7 @@ TEST_CASE("DLT: a principal point held at the image centre is kept, and exact wh
   DltCalibrationOptions options = OptionsFor(truth);
   options.principal_point_mode = PrincipalPointMode::kImageCenter;
   const DltCalibrationSummary s = CalibrateFromPoints(points, options);
-  REQUIRE_MESSAGE(s.success, s.message);
+  REQUIRE_MESSAGE(s.IsUsable(), s.message);
   CHECK(s.camera.principal_point_px == Eigen::Vector2d((truth.width_px - 1) / 2.0, (truth.height_px - 1) / 2.0));
   CHECK(s.principal_point_std_px == Eigen::Vector2d::Zero());
   CheckCameraExact(s.camera, truth);
@@ -394,7 +394,7 @@ TEST_CASE("DLT: scaling the 3D points by 1e-3 and 1e3 gives the same K and a sca
       DltCalibrationOptions options = OptionsFor(truth);
       options.radial_distortion_terms = 1;
       const DltCalibrationSummary s = CalibrateFromPoints(points, options);
-      REQUIRE_MESSAGE(s.success, s.message);
+      REQUIRE_MESSAGE(s.IsUsable(), s.message);
       results.push_back(s);
       const double t_ratio = s.camera.cam_from_world_translation.norm() /
                              (results[0].camera.cam_from_world_translation.norm() * scale);
@@ -419,7 +419,7 @@ TEST_CASE("Degenerate input gives a clear error") {
                             const std::string& needle) {
     const DltCalibrationSummary s = CalibrateFromPoints(input, o);
     CAPTURE(s.message);
-    CHECK_FALSE(s.success);
+    CHECK_FALSE(s.IsUsable());
     CHECK_FALSE(s.IsUsable());
     CHECK(s.message.find(needle) != std::string::npos);
   };
@@ -495,7 +495,7 @@ TEST_CASE("Warnings: nearly coplanar points, a point behind the camera") {
       points[i].uv_px = truth.Project(points[i].xyz);
     }
     const DltCalibrationSummary s = CalibrateFromPoints(points, OptionsFor(truth));
-    REQUIRE_MESSAGE(s.success, s.message);
+    REQUIRE_MESSAGE(s.IsUsable(), s.message);
     CHECK_FALSE(s.planar);
     REQUIRE(!s.warnings.empty());
     CHECK(s.warnings[0].find("nearly coplanar") != std::string::npos);
@@ -508,7 +508,7 @@ TEST_CASE("Warnings: nearly coplanar points, a point behind the camera") {
     behind.uv_px = truth.Project(behind.xyz);
     points.push_back(behind);
     const DltCalibrationSummary s = CalibrateFromPoints(points, OptionsFor(truth));
-    REQUIRE_MESSAGE(s.success, s.message);
+    REQUIRE_MESSAGE(s.IsUsable(), s.message);
     bool warned = false;
     for (const auto& w : s.warnings) warned = warned || w.find("behind the camera") != std::string::npos;
     CHECK(warned);
@@ -641,7 +641,7 @@ TEST_CASE("Known focal: noise-free pose exact from 6 and 40 points, and on a til
     DltCalibrationOptions options = OptionsFor(truth);
     options.fixed_focal_px = truth.focal_px;
     const DltCalibrationSummary s = CalibrateFromPoints(points, options);
-    REQUIRE_MESSAGE(s.success, s.message);
+    REQUIRE_MESSAGE(s.IsUsable(), s.message);
     CHECK(s.focal_fixed);
     CHECK_FALSE(s.planar);
     CHECK(s.camera.focal_px == truth.focal_px);  // held, not refitted
@@ -659,7 +659,7 @@ TEST_CASE("Known focal: noise-free pose exact from 6 and 40 points, and on a til
   options.principal_point_mode = PrincipalPointMode::kFixed;
   options.fixed_principal_point_px = truth.principal_point_px;
   const DltCalibrationSummary s = CalibrateFromPoints(points, options);
-  REQUIRE_MESSAGE(s.success, s.message);
+  REQUIRE_MESSAGE(s.IsUsable(), s.message);
   CHECK(s.planar);
   CheckCameraExact(s.camera, truth);
 }
@@ -672,12 +672,12 @@ TEST_CASE("Known focal: a fronto-parallel plane the free DLT refuses gives the e
   DltCalibrationOptions options = OptionsFor(truth);
   const DltCalibrationSummary free_focal = CalibrateFromPoints(points, options);
   CAPTURE(free_focal.message);
-  CHECK_FALSE(free_focal.success);
+  CHECK_FALSE(free_focal.IsUsable());
   CHECK(free_focal.message.find("undetermined") != std::string::npos);
 
   options.fixed_focal_px = truth.focal_px;
   const DltCalibrationSummary fixed = CalibrateFromPoints(points, options);
-  REQUIRE_MESSAGE(fixed.success, fixed.message);
+  REQUIRE_MESSAGE(fixed.IsUsable(), fixed.message);
   CHECK(fixed.planar);
   CheckCameraExact(fixed.camera, truth);
 
@@ -687,7 +687,7 @@ TEST_CASE("Known focal: a fronto-parallel plane the free DLT refuses gives the e
   options.focal_prior_px = 1.1 * truth.focal_px;
   options.focal_prior_std_px = 200.0;
   const DltCalibrationSummary with_prior = CalibrateFromPoints(points, options);
-  REQUIRE_MESSAGE(with_prior.success, with_prior.message);
+  REQUIRE_MESSAGE(with_prior.IsUsable(), with_prior.message);
   CHECK(with_prior.focal_prior_used);
   CHECK_FALSE(with_prior.warnings.empty());
   CAPTURE(with_prior.camera.focal_px);
@@ -719,8 +719,8 @@ TEST_CASE("Known focal with 0.5 px noise: pose errors below the free-focal DLT's
       const DltCalibrationSummary free_focal = CalibrateFromPoints(points, options);
       options.fixed_focal_px = truth.focal_px;
       const DltCalibrationSummary fixed = CalibrateFromPoints(points, options);
-      REQUIRE_MESSAGE(free_focal.success, free_focal.message);
-      REQUIRE_MESSAGE(fixed.success, fixed.message);
+      REQUIRE_MESSAGE(free_focal.IsUsable(), free_focal.message);
+      REQUIRE_MESSAGE(fixed.IsUsable(), fixed.message);
       CHECK(fixed.camera.focal_px == truth.focal_px);
       const auto [rot_free, t_free] = PoseErrors(free_focal.camera, truth);
       const auto [rot_fixed, t_fixed] = PoseErrors(fixed.camera, truth);
@@ -767,7 +767,7 @@ TEST_CASE("Focal prior with 0.5 px noise: the focal error shrinks toward the pri
     options.focal_prior_std_px = 5.0;
     options.pixel_noise_px = kNoisePx;
     const DltCalibrationSummary prior = CalibrateFromPoints(points, options);
-    REQUIRE_MESSAGE(prior.success, prior.message);
+    REQUIRE_MESSAGE(prior.IsUsable(), prior.message);
     CHECK(prior.focal_prior_used);
     CHECK(prior.focal_std_px < free_focal.focal_std_px);
     sq_free += std::pow(free_focal.camera.focal_px - truth.focal_px, 2);
@@ -792,7 +792,7 @@ TEST_CASE("Known focal and prior: invalid values are rejected") {
     if (which == 2) options.pixel_noise_px = 0.0;
     const DltCalibrationSummary s = CalibrateFromPoints(points, options);
     CAPTURE(s.message);
-    CHECK_FALSE(s.success);
+    CHECK_FALSE(s.IsUsable());
     CHECK(s.message.find("invalid options") == 0);
   }
 }

@@ -66,7 +66,7 @@ void CheckCameraNear(const VpCalibrationSummary& summary, const Camera& truth, d
   CAPTURE(focal_error);
   CAPTURE(pp_error);
   CAPTURE(rotation_error);
-  REQUIRE(summary.success);
+  REQUIRE(summary.IsUsable());
   CHECK(focal_error < relative);
   CHECK(pp_error < relative);
   CHECK(rotation_error < rotation_rad);
@@ -140,7 +140,7 @@ TEST_CASE("segment residuals are endpoint distances to the fitted camera's vanis
     VpCalibrationOptions options = OptionsFor(scene, mode);
     options.fixed_principal_point_px = scene.true_camera.principal_point_px;
     const VpCalibrationSummary summary = CalibrateFromVanishingLines(scene.project.segments, options);
-    REQUIRE(summary.success);
+    REQUIRE(summary.IsUsable());
     REQUIRE(summary.segment_residuals_px.size() == scene.project.segments.size());
     Camera fitted = scene.true_camera;
     fitted.focal_px = summary.focal_px;
@@ -179,7 +179,7 @@ TEST_CASE("the vanishing point of a family minimises its segments' squared endpo
     std::vector<Eigen::Vector4d> raw;
     for (const Segment& s : family) raw.emplace_back(s.a_px.x(), s.a_px.y(), s.b_px.x(), s.b_px.y());
     const VanishingPointSummary fit = FitVanishingPoint(raw, options);
-    REQUIRE(fit.success);
+    REQUIRE(fit.IsUsable());
     CHECK(fit.final_rms_px <= fit.initial_rms_px);  // the refinement never makes it worse
     const Eigen::Vector2d center = fit.vp_px.head<2>() / fit.vp_px.z();
     double cost = 0.0;
@@ -219,7 +219,7 @@ TEST_CASE("0.5 px noise: errors stay within the first-order propagated noise") {
   const SyntheticScene clean = MakeBoxScene(base);
   const VpCalibrationOptions options = OptionsFor(clean, PrincipalPointMode::kSolve);
   const VpCalibrationSummary clean_summary = CalibrateFromVanishingLines(clean.project.segments, options);
-  REQUIRE(clean_summary.success);
+  REQUIRE(clean_summary.IsUsable());
   double var_f = 0.0, var_cx = 0.0, var_cy = 0.0, var_rot = 0.0;
   const double h = 1e-4;  // px; the response is linear at this step and far above rounding
   for (size_t i = 0; i < clean.project.segments.size(); ++i) {
@@ -227,7 +227,7 @@ TEST_CASE("0.5 px noise: errors stay within the first-order propagated noise") {
       std::vector<Segment> perturbed = clean.project.segments;
       (c < 2 ? perturbed[i].a_px : perturbed[i].b_px)(c % 2) += h;
       const VpCalibrationSummary s = CalibrateFromVanishingLines(perturbed, options);
-      REQUIRE(s.success);
+      REQUIRE(s.IsUsable());
       const double df = (s.focal_px - clean_summary.focal_px) / h;
       const Eigen::Vector2d dc = (s.principal_point_px - clean_summary.principal_point_px) / h;
       const double drot = RotationErrorRad(s.cam_from_world_rotation, clean_summary.cam_from_world_rotation) / h;
@@ -253,7 +253,7 @@ TEST_CASE("0.5 px noise: errors stay within the first-order propagated noise") {
     const VpCalibrationSummary s = CalibrateFromVanishingLines(scene.project.segments, OptionsFor(scene, PrincipalPointMode::kSolve));
     CAPTURE(seed);
     INFO(s.message);
-    REQUIRE(s.success);
+    REQUIRE(s.IsUsable());
     focal_errors.push_back(std::abs(s.focal_px - scene.true_camera.focal_px));
     pp_errors.push_back((s.principal_point_px - scene.true_camera.principal_point_px).norm());
     rotation_errors.push_back(
@@ -319,7 +319,7 @@ TEST_CASE("the camera does not depend on the scale of the scene") {
   const SyntheticScene unit = MakeBoxScene();
   const VpCalibrationSummary reference =
       CalibrateFromVanishingLines(unit.project.segments, OptionsFor(unit, PrincipalPointMode::kSolve));
-  REQUIRE(reference.success);
+  REQUIRE(reference.IsUsable());
   for (double scale : {1e-3, 1e3}) {
     CAPTURE(scale);
     SyntheticSceneOptions o;
@@ -327,7 +327,7 @@ TEST_CASE("the camera does not depend on the scale of the scene") {
     const SyntheticScene scene = MakeBoxScene(o);
     const VpCalibrationSummary s =
         CalibrateFromVanishingLines(scene.project.segments, OptionsFor(scene, PrincipalPointMode::kSolve));
-    REQUIRE(s.success);
+    REQUIRE(s.IsUsable());
     CHECK(std::abs(s.focal_px - reference.focal_px) < kNoiseFreeRelative * reference.focal_px);
     CHECK((s.principal_point_px - reference.principal_point_px).norm() < kNoiseFreeRelative * reference.focal_px);
     CHECK(RotationErrorRad(s.cam_from_world_rotation, reference.cam_from_world_rotation) < kNoiseFreeRotationRad);
@@ -356,14 +356,14 @@ TEST_CASE("a family parallel in the image: vanishing point at infinity") {
 
   // The x and z families alone: z at infinity says nothing about f.
   const VpCalibrationSummary two = CalibrateFromVanishingLines(SegmentsOfAxes(scene, {Axis::kX, Axis::kZ}), fixed);
-  CHECK_FALSE(two.success);
+  CHECK_FALSE(two.IsUsable());
   CHECK(two.message.find("undetermined") != std::string::npos);
 
   // Three points cannot place the principal point when one of them is at infinity.
   const VpCalibrationSummary solve =
       CalibrateFromVanishingLines(scene.project.segments, OptionsFor(scene, PrincipalPointMode::kSolve));
   INFO(solve.message);
-  CHECK_FALSE(solve.success);
+  CHECK_FALSE(solve.IsUsable());
   CHECK(solve.message.find("family z") != std::string::npos);
   CHECK(solve.message.find("parallel") != std::string::npos);
 }
@@ -392,7 +392,7 @@ void CheckFails(const std::vector<Segment>& segments, const VpCalibrationOptions
                 const std::vector<std::string>& words) {
   const VpCalibrationSummary s = CalibrateFromVanishingLines(segments, options);
   INFO("message: " << s.message);
-  CHECK_FALSE(s.success);
+  CHECK_FALSE(s.IsUsable());
   CHECK_FALSE(s.IsUsable());
   CHECK_FALSE(s.message.empty());
   for (const std::string& word : words) CHECK(s.message.find(word) != std::string::npos);
@@ -447,7 +447,7 @@ TEST_CASE("degenerate input fails with a message naming the problem") {
     AddPencil(Axis::kZ, {6000, 300}, &segments);
     const VpCalibrationSummary s = CalibrateFromVanishingLines(segments, options);
     INFO(s.message);
-    CHECK_FALSE(s.success);
+    CHECK_FALSE(s.IsUsable());
     CHECK_FALSE(s.message.empty());
   }
   SUBCASE("bad options") {
@@ -536,7 +536,7 @@ TEST_CASE("every mode recovers the noise-free camera from a start away from it")
     CheckStartIsNotTheAnswer(warm, cam);
     const VpCalibrationSummary s = CalibrateFromVanishingLines(segments, warm);
     CheckCameraNear(s, cam, kNoiseFreeRelative, kNoiseFreeRotationRad);
-    CHECK(s.joint_fit_iterations > 0);
+    CHECK(s.iterations > 0);
     CHECK(s.outlier_segments.empty());
     if (m.focal_prior && m.axes.size() == 1)
       CHECK(s.focal_std_px == options.focal_prior_std_px);  // the segments say nothing about f
@@ -597,7 +597,7 @@ TEST_CASE("0.5 px noise: focal_std_px and the vanishing-direction std match the 
       options.fixed_principal_point_px = scene.true_camera.principal_point_px;
       const VpCalibrationSummary s = CalibrateFromVanishingLines(SegmentsOfAxes(scene, c.axes), options);
       CAPTURE(seed);
-      REQUIRE(s.success);
+      REQUIRE(s.IsUsable());
       REQUIRE(s.focal_std_px > 0.0);
       const double error = s.focal_px - scene.true_camera.focal_px;
       max_z = std::max(max_z, std::abs(error) / s.focal_std_px);
@@ -638,11 +638,11 @@ TEST_CASE("a focal prior combines with the data as independent Gaussians") {
   options.fixed_principal_point_px = scene.true_camera.principal_point_px;
   const std::vector<Segment> segments = SegmentsOfAxes(scene, {Axis::kX, Axis::kZ});
   const VpCalibrationSummary data_only = CalibrateFromVanishingLines(segments, options);
-  REQUIRE(data_only.success);
+  REQUIRE(data_only.IsUsable());
   options.focal_prior_px = scene.true_camera.focal_px;
   options.focal_prior_std_px = data_only.focal_std_px;  // equal weights: std / sqrt(2)
   const VpCalibrationSummary with_prior = CalibrateFromVanishingLines(segments, options);
-  REQUIRE(with_prior.success);
+  REQUIRE(with_prior.IsUsable());
   CAPTURE(data_only.focal_std_px);
   CAPTURE(with_prior.focal_std_px);
   CHECK(std::abs(with_prior.focal_std_px - data_only.focal_std_px / std::sqrt(2.0)) < 0.1 * data_only.focal_std_px);
@@ -654,7 +654,7 @@ TEST_CASE("a focal prior combines with the data as independent Gaussians") {
   VpCalibrationOptions fixed = OptionsFor(scene, PrincipalPointMode::kSolve);
   fixed.fixed_focal_px = 1.03 * scene.true_camera.focal_px;
   const VpCalibrationSummary s = CalibrateFromVanishingLines(scene.project.segments, fixed);
-  REQUIRE(s.success);
+  REQUIRE(s.IsUsable());
   CHECK(s.focal_px == fixed.fixed_focal_px);
   CHECK(s.focal_std_px == 0.0);
   CHECK(s.principal_point_std_px.x() > 0.0);
@@ -678,9 +678,9 @@ TEST_CASE("a wrong segment is flagged, and the refit without it recovers the cam
   options.refit_without_outliers = true;
   const VpCalibrationSummary refit = CalibrateFromVanishingLines(segments, options);
   const VpCalibrationSummary clean = CalibrateFromVanishingLines(scene.project.segments, options);
-  REQUIRE(plain.success);
-  REQUIRE(refit.success);
-  REQUIRE(clean.success);
+  REQUIRE(plain.IsUsable());
+  REQUIRE(refit.IsUsable());
+  REQUIRE(clean.IsUsable());
   CAPTURE(plain.segment_residuals_px[kWrong]);
   CAPTURE(plain.outlier_threshold_px);
   // Without the refit the wrong segment drags the camera, and a neighbour may cross the
@@ -702,7 +702,7 @@ TEST_CASE("a wrong segment is flagged, and the refit without it recovers the cam
   std::vector<Segment> without = segments;
   without.erase(without.begin() + kWrong);
   const VpCalibrationSummary reference = CalibrateFromVanishingLines(without, options);
-  REQUIRE(reference.success);
+  REQUIRE(reference.IsUsable());
   CAPTURE(refit.focal_px);
   CAPTURE(reference.focal_px);
   CAPTURE(plain.focal_px);
@@ -719,7 +719,7 @@ TEST_CASE("degeneracy figures: angle spread, distance to the principal point, tr
   const SyntheticScene scene = MakeBoxScene();
   const VpCalibrationSummary s =
       CalibrateFromVanishingLines(scene.project.segments, OptionsFor(scene, PrincipalPointMode::kSolve));
-  REQUIRE(s.success);
+  REQUIRE(s.IsUsable());
   const Camera& truth = scene.true_camera;
   std::array<Eigen::Vector2d, 3> vps;
   for (int a = 0; a < 3; ++a) {
@@ -758,7 +758,7 @@ TEST_CASE("degeneracy figures: angle spread, distance to the principal point, tr
   VpCalibrationOptions centre = OptionsFor(scene, PrincipalPointMode::kImageCenter);
   const VpCalibrationSummary narrow = CalibrateFromVanishingLines(segments, centre);
   INFO(narrow.message);
-  REQUIRE(narrow.success);
+  REQUIRE(narrow.IsUsable());
   CHECK(narrow.family_angle_spread_deg[2] < 0.2);
   bool warned = false;
   for (const std::string& w : narrow.warnings) warned = warned || w.find("nearly parallel") != std::string::npos;
@@ -779,7 +779,7 @@ TEST_CASE("one family with the horizon: the modes it needs and refuses") {
   // kSolve falls back to the image centre with one family.
   options.principal_point_mode = PrincipalPointMode::kSolve;
   const VpCalibrationSummary s = CalibrateFromVanishingLines(SegmentsOfAxes(scene, {Axis::kX}), options);
-  REQUIRE(s.success);
+  REQUIRE(s.IsUsable());
   CHECK(s.warnings.size() >= 1);
   CHECK((s.principal_point_px - Eigen::Vector2d(511.5, 383.5)).norm() < 1e-12);
   // Bad option combinations.

@@ -120,7 +120,7 @@ TEST_CASE("noise-free plane: H, R, t direction, t / d and the normal exactly, fr
     const PlaneScene s = MakePlaneScene(n, 0.0, 3);
     const HomographyPoseSummary summary = EstimatePlanePose(s.uv1, s.uv2, s.camera1.K(), s.camera2.K(), {});
     INFO(Describe(summary));
-    REQUIRE(summary.success);
+    REQUIRE(summary.IsUsable());
     CHECK(summary.num_points == n);
     CHECK(summary.homography.num_inliers == n);
     CHECK(summary.homography.symmetric_transfer_rms_px < kExactTol * s.camera1.focal_px);
@@ -149,7 +149,7 @@ TEST_CASE("an ambiguous view pair: two poses reproduce H exactly, both reported,
   const PlaneScene s = MakePlaneScene(20, 0.0, 3, Eigen::Vector3d(9.0, -7.0, 7.0));
   const HomographyPoseSummary summary = EstimatePlanePose(s.uv1, s.uv2, s.camera1.K(), s.camera2.K(), {});
   INFO(Describe(summary));
-  REQUIRE(summary.success);
+  REQUIRE(summary.IsUsable());
   REQUIRE(summary.candidates.size() == 2);
   CHECK(summary.ambiguous);
   bool warned = false;
@@ -215,7 +215,7 @@ TEST_CASE("plane with 0.5 px noise: pose and normal within the noise over 10 see
       const PlaneScene s = MakePlaneScene(kPoints, noise_px, seed);
       const HomographyPoseSummary summary = EstimatePlanePose(s.uv1, s.uv2, s.camera1.K(), s.camera2.K(), {});
       INFO(Describe(summary));
-      REQUIRE(summary.success);
+      REQUIRE(summary.IsUsable());
       CHECK(summary.homography.num_inliers == kPoints);
       // The chosen candidate is the truth (the other decompositions fail cheirality here).
       REQUIRE(ClosestCandidate(summary, s) == 0);
@@ -234,7 +234,7 @@ TEST_CASE("plane with 0.5 px noise: pose and normal within the noise over 10 see
       CHECK(e.normal_rad < bound_rad);
       CHECK(summary.homography.symmetric_transfer_rms_px < 1.5 * 2.0 * noise_px);
       // The refinement moved off the DLT start and lowered the error it minimises.
-      CHECK(summary.homography.refine_iterations >= 1);
+      CHECK(summary.homography.iterations >= 1);
       CHECK(summary.homography.symmetric_transfer_rms_px < summary.homography.initial_symmetric_transfer_rms_px);
     }
     auto sq = [](const PoseErrors& e) {
@@ -255,7 +255,7 @@ TEST_CASE("a wrong click among 12 is flagged by RANSAC and the pose stays exact"
   s.uv2[7] += Eigen::Vector2d(18.0, -12.0);
   const HomographyPoseSummary summary = EstimatePlanePose(s.uv1, s.uv2, s.camera1.K(), s.camera2.K(), {});
   INFO(Describe(summary));
-  REQUIRE(summary.success);
+  REQUIRE(summary.IsUsable());
   CHECK(summary.homography.num_inliers == 11);
   CHECK_FALSE(summary.homography.inliers[7]);
   const int k = ClosestCandidate(summary, s);
@@ -269,7 +269,7 @@ TEST_CASE("a wrong click among 12 is flagged by RANSAC and the pose stays exact"
   HomographyPoseOptions options;
   options.homography.use_ransac = false;
   const HomographyPoseSummary plain = EstimatePlanePose(s.uv1, s.uv2, s.camera1.K(), s.camera2.K(), options);
-  REQUIRE(plain.success);
+  REQUIRE(plain.IsUsable());
   CHECK(plain.homography.num_inliers == 12);
   CHECK(plain.homography.symmetric_transfer_rms_px > 1.0);
 }
@@ -278,7 +278,7 @@ TEST_CASE("degenerate input gives a clear message") {
   const PlaneScene s = MakePlaneScene(8, 0.0, 4);
   auto expect = [](const HomographyPoseSummary& summary, const std::string& needle) {
     CAPTURE(summary.message);
-    CHECK_FALSE(summary.success);
+    CHECK_FALSE(summary.IsUsable());
     CHECK_FALSE(summary.IsUsable());
     CHECK(summary.message.find(needle) != std::string::npos);
   };

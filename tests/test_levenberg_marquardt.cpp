@@ -217,6 +217,49 @@ TEST_CASE("A step the problem vetoes (+inf cost) is rejected and lambda grows un
   CHECK(r.final_cost == 1.0);
 }
 
+TEST_CASE("max_trials_per_linearization stops after that many unaccepted trials in a row, failed solves included") {
+  // Trials 1 and 2 fail to solve, 3 is accepted, then every trial is rejected: with a cap of
+  // 4 the run ends after trials 4 to 7 (lambda 10 .. 1e4), far below max_lambda.
+  struct Stubborn {
+    int steps = 0;
+    int linearizations = 0;
+    bool Linearize() {
+      ++linearizations;
+      return false;
+    }
+    LmStepStatus Step(double, LmTrial* trial) {
+      ++steps;
+      if (steps <= 2) return LmStepStatus::kSolveFailed;
+      trial->cost = steps == 3 ? 0.5 : 2.0;
+      trial->step_squared_norm = 1.0;
+      return LmStepStatus::kSolved;
+    }
+    void Accept() {}
+  };
+  for (int cap : {0, 4}) {
+    CAPTURE(cap);
+    Stubborn p;
+    LmOptions o;
+    o.initial_lambda = 1.0;
+    o.lambda_increase = o.lambda_increase_on_failed_solve = 10.0;
+    o.lambda_decrease = 0.1;
+    o.max_lambda = 1e12;
+    o.max_trials_per_linearization = cap;
+    const LmResult r = MinimizeLevenbergMarquardt(1.0, o, p);
+    CHECK(r.termination == LmTermination::kNoDecrease);
+    CHECK(r.accepted_steps == 1);
+    CHECK(r.final_cost == 0.5);
+    CHECK(p.linearizations == 2);
+    // Without a cap the rejections go on until lambda reaches max_lambda: 1e1 .. 1e11.
+    CHECK(p.steps == (cap == 0 ? 3 + 11 : 3 + cap));
+  }
+  LmOptions bad;
+  bad.max_trials_per_linearization = -1;
+  std::string error;
+  CHECK_FALSE(bad.Check(&error));
+  CHECK(error.find("max_trials_per_linearization") != std::string::npos);
+}
+
 TEST_CASE("A damped system without a finite solution raises lambda, or stops when asked") {
   struct Failing {
     int steps = 0;

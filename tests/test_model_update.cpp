@@ -150,7 +150,7 @@ Project RunStep(const Step& step, ModelUpdateCache* cache) {
     CAPTURE(id);
     REQUIRE(cached.calibration.count(id) == 1);
     const VpCalibrationSummary& other = cached.calibration.at(id);
-    CHECK(other.success == vp.success);
+    CHECK(other.IsUsable() == vp.IsUsable());
     CHECK(other.message == vp.message);
     CHECK(std::memcmp(&other.focal_px, &vp.focal_px, sizeof(double)) == 0);
     CHECK(other.cam_from_world_rotation == vp.cam_from_world_rotation);

@@ -215,7 +215,7 @@ TEST_CASE("Noise-free lines: k1 and k2 recovered to 1e-9 from k = 0") {
     CAPTURE(summary.initial_rms_px);
     CAPTURE(summary.final_rms_px);
     CAPTURE(summary.iterations);
-    REQUIRE(summary.success);
+    REQUIRE(summary.IsUsable());
     CHECK(summary.k2_estimated);
     CHECK(summary.initial_rms_px > 1.0);  // the start (k = 0) is far from straight
     CHECK(std::abs(summary.distortion.k1 - kK1) < kTolerance);
@@ -237,7 +237,7 @@ TEST_CASE("Noise-free lines: k1 and k2 recovered to 1e-9 from k = 0") {
     CAPTURE(summary.message);
     CAPTURE(summary.distortion.k1);
     CAPTURE(summary.distortion.k2);
-    REQUIRE(summary.success);
+    REQUIRE(summary.IsUsable());
     CHECK(summary.initial_rms_px > 1.0);
     CHECK(std::abs(summary.distortion.k1 - kK1) < kTolerance);
     CHECK(std::abs(summary.distortion.k2 - kK2) < kTolerance);
@@ -247,7 +247,7 @@ TEST_CASE("Noise-free lines: k1 and k2 recovered to 1e-9 from k = 0") {
     const PlumbLineSummary summary = facet::EstimateRadialDistortion(k1_scene.lines, MakeOptions(k1_scene, false));
     CAPTURE(summary.message);
     CAPTURE(summary.distortion.k1);
-    REQUIRE(summary.success);
+    REQUIRE(summary.IsUsable());
     CHECK_FALSE(summary.k2_estimated);
     CHECK(summary.distortion.k2 == 0.0);
     CHECK(std::abs(summary.distortion.k1 - kK1) < kTolerance);
@@ -261,14 +261,14 @@ TEST_CASE("Two-point segments contribute through their family's vanishing point"
   CAPTURE(summary.message);
   CAPTURE(summary.distortion.k1);
   CAPTURE(summary.initial_rms_px);
-  REQUIRE(summary.success);
+  REQUIRE(summary.IsUsable());
   CHECK(summary.initial_rms_px > 1.0);
   CHECK(std::abs(summary.distortion.k1 - kK1) < 1e-9);
   // Without families, 2-point segments are always straight and say nothing.
   const PlumbLineSummary alone =
       facet::EstimateRadialDistortion(WithoutFamilies(scene.lines), MakeOptions(scene, false));
   CAPTURE(alone.message);
-  CHECK_FALSE(alone.success);
+  CHECK_FALSE(alone.IsUsable());
   CHECK(alone.distortion.k1 == 0.0);
   CHECK(alone.message.find("too few points") != std::string::npos);
 }
@@ -287,7 +287,7 @@ TEST_CASE("0.3 px noise: the error is consistent with the reported standard devi
       const LensScene scene = MakeLensScene(kK1, estimate_k2 ? kK2 : 0.0, 7, kNoisePx, 100 + trial);
       const PlumbLineSummary summary = facet::EstimateRadialDistortion(scene.lines, MakeOptions(scene, estimate_k2));
       CAPTURE(summary.message);
-      REQUIRE(summary.success);
+      REQUIRE(summary.IsUsable());
       REQUIRE(summary.k1_std > 0.0);
       const double z = (summary.distortion.k1 - kK1) / summary.k1_std;
       sum_squared_z += z * z;
@@ -319,8 +319,8 @@ TEST_CASE("k values do not depend on the image resolution") {
   const LensScene large = MakeLensScene(kK1, 0.0, 6, 0.0, 1, 3.0);
   const PlumbLineSummary a = facet::EstimateRadialDistortion(small.lines, MakeOptions(small, false));
   const PlumbLineSummary b = facet::EstimateRadialDistortion(large.lines, MakeOptions(large, false));
-  REQUIRE(a.success);
-  REQUIRE(b.success);
+  REQUIRE(a.IsUsable());
+  REQUIRE(b.IsUsable());
   CAPTURE(a.distortion.k1);
   CAPTURE(b.distortion.k1);
   CHECK(std::abs(a.distortion.k1 - b.distortion.k1) < 1e-9);
@@ -342,7 +342,7 @@ TEST_CASE("Lines through the centre carry no distortion information") {
   }
   const PlumbLineSummary summary = facet::EstimateRadialDistortion(lines, options);
   CAPTURE(summary.message);
-  CHECK_FALSE(summary.success);
+  CHECK_FALSE(summary.IsUsable());
   CHECK(summary.distortion.k1 == 0.0);
   CHECK(summary.distortion.k2 == 0.0);
   CHECK(summary.message.find("no distortion information") != std::string::npos);
@@ -357,26 +357,26 @@ TEST_CASE("Bad input gives a message and k = 0") {
   SUBCASE("one 3-point polyline is one constraint") {
     const PlumbLineSummary summary = facet::EstimateRadialDistortion({line}, options);
     CAPTURE(summary.message);
-    CHECK_FALSE(summary.success);
+    CHECK_FALSE(summary.IsUsable());
     CHECK(summary.message.find("too few points") != std::string::npos);
   }
   SUBCASE("a polyline of one point") {
     PlumbLine single;
     single.points_px = {{10.0, 10.0}};
     const PlumbLineSummary summary = facet::EstimateRadialDistortion({line, line, single}, options);
-    CHECK_FALSE(summary.success);
+    CHECK_FALSE(summary.IsUsable());
     CHECK(summary.message.find("polyline 2") != std::string::npos);
   }
   SUBCASE("a non-finite point") {
     PlumbLine bad = line;
     bad.points_px[1].x() = std::nan("");
     const PlumbLineSummary summary = facet::EstimateRadialDistortion({line, bad}, options);
-    CHECK_FALSE(summary.success);
+    CHECK_FALSE(summary.IsUsable());
     CHECK(summary.message.find("non-finite") != std::string::npos);
   }
   SUBCASE("no image size") {
     const PlumbLineSummary summary = facet::EstimateRadialDistortion({line, line}, PlumbLineOptions{});
-    CHECK_FALSE(summary.success);
+    CHECK_FALSE(summary.IsUsable());
     CHECK(summary.message.find("bad options") != std::string::npos);
   }
   SUBCASE("k2 asked for with too few constraints falls back to k1 with a warning") {
@@ -385,7 +385,7 @@ TEST_CASE("Bad input gives a message and k = 0") {
     options.estimate_k2 = true;
     const PlumbLineSummary summary = facet::EstimateRadialDistortion({line, other}, options);
     CAPTURE(summary.message);
-    REQUIRE(summary.success);
+    REQUIRE(summary.IsUsable());
     CHECK_FALSE(summary.k2_estimated);
     REQUIRE_FALSE(summary.warnings.empty());
     CHECK(summary.warnings.front().find("k2 not estimated") != std::string::npos);

@@ -38,7 +38,7 @@ Eigen::Vector4d DefaultHorizon(const AppState& state, const Image& image) {
   const double w = std::max(1, image.width_px - 1);
   const Eigen::Vector4d level = LevelHorizon(image, 0.5 * std::max(0, image.height_px - 1));
   const auto cal = state.last_update.calibration.find(image.id);
-  if (cal == state.last_update.calibration.end() || !cal->second.success) return level;
+  if (cal == state.last_update.calibration.end() || !cal->second.IsUsable()) return level;
   const Eigen::Vector3d& vx = cal->second.vanishing_points[0];
   const Eigen::Vector3d& vy = cal->second.vanishing_points[1];
   if (vx.squaredNorm() == 0.0 || vy.squaredNorm() == 0.0) return level;
@@ -246,12 +246,12 @@ void DrawCalibrationResult(AppState* state, const Image& image) {
     return;
   }
   const VpCalibrationSummary& c = cal->second;
-  ImGui::TextColored(c.success ? kGoodText : kErrorText, "%s", c.success ? "Calibrated" : "Failed");
+  ImGui::TextColored(c.IsUsable() ? kGoodText : kErrorText, "%s", c.IsUsable() ? "Calibrated" : "Failed");
   for (int a = 0; a < 3; ++a) {
     ImGui::SameLine();
     ImGui::TextColored(AxisColor(static_cast<Axis>(a)), "%s %d", AxisName(static_cast<Axis>(a)), c.segments_per_axis[a]);
   }
-  if (c.success) {
+  if (c.IsUsable()) {
     const Camera& cam = image.camera;
     if (image.focal_mode == FocalMode::kFixed) {
       LabelValue("Focal", "%.1f px (known)", c.focal_px);
@@ -279,10 +279,10 @@ void DrawCalibrationResult(AppState* state, const Image& image) {
     }
     if (image.use_horizon) LabelValue("Horizon", "%.2f px off", c.horizon_residual_px);
   }
-  if (!c.message.empty()) WrappedColored(c.success ? kDimText : kErrorText, c.message);
+  if (!c.message.empty()) WrappedColored(c.IsUsable() ? kDimText : kErrorText, c.message);
   for (const std::string& w : c.warnings) WrappedColored(kWarningText, w);
 
-  if (!c.success) return;
+  if (!c.IsUsable()) return;
   const bool details = ImGui::TreeNodeEx("Details##calibration", ImGuiTreeNodeFlags_SpanAvailWidth);
   RecordItem(state, "calibration.details");
   if (details) {
@@ -317,7 +317,7 @@ void DrawCalibrationResult(AppState* state, const Image& image) {
     if (c.closed_form_focal_px > 0.0) LabelValue("Closed form", "f %.1f px", c.closed_form_focal_px);
     if (c.max_orthogonality_error_deg > 0.0) LabelValue("Orth. error", "%.2f deg", c.max_orthogonality_error_deg);
     LabelValue("Residual", "%.3f px", c.rms_residual_px);
-    LabelValue("Fit", "%d it, %.1f ms%s", c.joint_fit_iterations, c.time_ms, c.refitted_without_outliers ? ", refit" : "");
+    LabelValue("Fit", "%d it, %.1f ms%s", c.iterations, c.time_ms, c.refitted_without_outliers ? ", refit" : "");
     ImGui::TreePop();
   }
 }

@@ -81,7 +81,7 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
   out["warnings"] = s.warnings;
   nlohmann::json calibration = nlohmann::json::array();
   for (const auto& [image_id, vp] : update.calibration) {
-    calibration.push_back({{"image_id", image_id}, {"success", vp.success}, {"message", vp.message},
+    calibration.push_back({{"image_id", image_id}, {"success", vp.IsUsable()}, {"message", vp.message},
                            {"focal_px", vp.focal_px},
                            {"principal_point", {vp.principal_point_px.x(), vp.principal_point_px.y()}},
                            {"warnings", vp.warnings}});

@@ -4,12 +4,19 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include <Eigen/Dense>
 #include <Eigen/SVD>
 
+#include "core/optim/damped_normal_step.h"
+#include "core/optim/levenberg_marquardt.h"
+#include "core/util/timer.h"
+
 namespace facet {
 namespace {
+
+using internal::FailedSummary;
 
 // Relative size of the smallest singular value of the centred 3D points below which they are
 // one plane (the planar path then projects them onto it; the refinement still uses their
@@ -154,56 +161,79 @@ Eigen::MatrixXd Jacobian(const Model& m, const std::vector<PointCorrespondence>&
   return j;
 }
 
-struct RefineResult {
-  Model model;
-  int iterations = 0;
-  Eigen::MatrixXd jacobian;  // at the final model, free parameters only
+// The refinement for the Levenberg-Marquardt driver: the free parameters of the model move
+// by Apply; Jacobian by central differences.
+class Refinement {
+ public:
+  Refinement(const std::vector<PointCorrespondence>& points, const std::vector<int>& free, double length_scale,
+             const FocalPrior& prior, Model* model)
+      : points_(points),
+        free_(free),
+        length_scale_(length_scale),
+        prior_(prior),
+        model_(model),
+        residuals_(Residuals(*model, points, prior)) {}
+
+  double Cost() const { return residuals_.squaredNorm(); }
+
+  bool Linearize() {
+    const Eigen::MatrixXd j = Jacobian(*model_, points_, free_, length_scale_, prior_);
+    normal_ = j.transpose() * j;
+    gradient_ = j.transpose() * residuals_;
+    damping_ = normal_.diagonal().cwiseMax(1e-300);  // a floor, only against a zero column
+    return !gradient_.allFinite() || gradient_.lpNorm<Eigen::Infinity>() == 0.0;
+  }
+
+  // A step without a finite solution gives a non-finite candidate cost, which the driver
+  // rejects like any other.
+  LmStepStatus Step(double lambda, LmTrial* trial) {
+    const Eigen::VectorXd step = DampedNormalStep(normal_, gradient_, lambda, damping_);
+    Eigen::Matrix<double, kNumParams, 1> delta = Eigen::Matrix<double, kNumParams, 1>::Zero();
+    for (size_t i = 0; i < free_.size(); ++i) delta(free_[i]) = step(i);
+    candidate_ = Apply(*model_, delta);
+    candidate_residuals_ = Residuals(candidate_, points_, prior_);
+    trial->cost = candidate_residuals_.squaredNorm();
+    // In Marquardt's scaled coordinates and relative to the residual norm, so that the stop
+    // test (a step below rounding in every scaled coordinate) does not depend on units.
+    const double scaled_step = (normal_.diagonal().cwiseSqrt().cwiseProduct(step)).norm();
+    trial->step_squared_norm = scaled_step * scaled_step / (Cost() + 1e-300);
+    return LmStepStatus::kSolved;
+  }
+
+  void Accept() {
+    *model_ = candidate_;
+    residuals_ = candidate_residuals_;
+  }
+
+ private:
+  const std::vector<PointCorrespondence>& points_;
+  const std::vector<int>& free_;
+  double length_scale_;
+  FocalPrior prior_;
+  Model* model_;
+  Eigen::VectorXd residuals_, candidate_residuals_, gradient_, damping_;
+  Eigen::MatrixXd normal_;
+  Model candidate_;
 };
 
 // Levenberg-Marquardt with Marquardt's diagonal scaling, which makes the step independent of
-// the units of f, t and the distortion coefficients.
-RefineResult Refine(const Model& start, const std::vector<PointCorrespondence>& points, const std::vector<int>& free,
-                    double length_scale, int max_iterations, const FocalPrior& prior) {
-  RefineResult result;
-  result.model = start;
-  Eigen::VectorXd r = Residuals(start, points, prior);
-  double cost = r.squaredNorm();
-  double lambda = 1e-4;
-  const int n = static_cast<int>(free.size());
-  for (int iteration = 0; iteration < max_iterations; ++iteration) {
-    const Eigen::MatrixXd j = Jacobian(result.model, points, free, length_scale, prior);
-    const Eigen::MatrixXd a = j.transpose() * j;
-    const Eigen::VectorXd g = j.transpose() * r;
-    if (!g.allFinite() || g.lpNorm<Eigen::Infinity>() == 0.0) break;
-    bool accepted = false;
-    bool converged = false;
-    for (int attempt = 0; attempt < 12 && !accepted; ++attempt) {
-      Eigen::MatrixXd damped = a;
-      for (int i = 0; i < n; ++i) damped(i, i) += lambda * std::max(a(i, i), 1e-300);
-      const Eigen::VectorXd step = damped.ldlt().solve(-g);
-      Eigen::Matrix<double, kNumParams, 1> delta = Eigen::Matrix<double, kNumParams, 1>::Zero();
-      for (int i = 0; i < n; ++i) delta(free[i]) = step(i);
-      const Model candidate = Apply(result.model, delta);
-      const Eigen::VectorXd candidate_r = Residuals(candidate, points, prior);
-      const double candidate_cost = candidate_r.squaredNorm();
-      if (std::isfinite(candidate_cost) && candidate_cost < cost) {
-        accepted = true;
-        // Relative decrease or a step below rounding in every scaled coordinate: done.
-        const double scaled_step = (a.diagonal().cwiseSqrt().cwiseProduct(step)).norm();
-        converged = cost - candidate_cost <= 1e-14 * cost || scaled_step <= 1e-12 * std::sqrt(cost + 1e-300);
-        result.model = candidate;
-        r = candidate_r;
-        cost = candidate_cost;
-        lambda = std::max(lambda / 10.0, 1e-12);
-      } else {
-        lambda *= 10.0;
-      }
-    }
-    result.iterations = iteration + 1;
-    if (!accepted || converged) break;
-  }
-  result.jacobian = Jacobian(result.model, points, free, length_scale, prior);
-  return result;
+// the units of f, t and the distortion coefficients; the cost is in px^2 (with the prior's row).
+LmResult Refine(const std::vector<PointCorrespondence>& points, const std::vector<int>& free, double length_scale,
+                int max_iterations, const FocalPrior& prior, Model* model) {
+  LmOptions options;
+  options.max_iterations = max_iterations;
+  // Marquardt's factors of 10 from lambda = 1e-4. No cap on lambda: 12 trials at most per
+  // linearisation.
+  options.initial_lambda = 1e-4;
+  options.lambda_decrease = 0.1;
+  options.lambda_increase = 10.0;
+  options.min_lambda = 1e-12;
+  options.max_lambda = std::numeric_limits<double>::infinity();
+  options.max_trials_per_linearization = 12;
+  options.relative_decrease_tolerance = 1e-14;
+  options.min_step_squared_norm = 1e-24;  // scaled step <= 1e-12 of the residual norm
+  Refinement refinement(points, free, length_scale, prior, model);
+  return MinimizeLevenbergMarquardt(refinement.Cost(), options, refinement);
 }
 
 struct LinearResult {
@@ -369,6 +399,136 @@ double Rms(const Eigen::VectorXd& r) {
   return r.size() == 0 ? 0.0 : std::sqrt(r.squaredNorm() / (r.size() / 2));
 }
 
+// The shape of the 3D points: their centroid, principal directions (columns of basis, the
+// largest spread first) and singular values of the centred points.
+struct PointShape {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d basis = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d singular_values = Eigen::Vector3d::Zero();
+};
+
+PointShape ShapeOf(const std::vector<PointCorrespondence>& points) {
+  const int n = static_cast<int>(points.size());
+  PointShape shape;
+  for (const auto& p : points) shape.centroid += p.xyz;
+  shape.centroid /= n;
+  Eigen::MatrixXd centred(n, 3);
+  for (int i = 0; i < n; ++i) centred.row(i) = (points[i].xyz - shape.centroid).transpose();
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(centred, Eigen::ComputeThinV);
+  shape.basis = svd.matrixV();
+  shape.singular_values = svd.singularValues();
+  return shape;
+}
+
+// The linear camera: the plane's homography with Zhang's focal length, or the DLT (6 or more
+// points). Fills the summary's linear figures and warnings. False (with *error) on a
+// configuration that does not determine a camera.
+bool LinearCamera(const std::vector<PointCorrespondence>& points, const PointShape& shape,
+                  const DltCalibrationOptions& options, const Eigen::Vector2d& given_principal_point, bool use_prior,
+                  LinearResult* linear, DltCalibrationSummary* summary, std::string* error) {
+  const int n = static_cast<int>(points.size());
+  if (summary->planar) {
+    Eigen::Matrix3d basis = shape.basis;
+    basis.col(2) = basis.col(0).cross(basis.col(1));
+    if (!LinearPlanar(points, shape.centroid, basis, given_principal_point, options.width_px, options.height_px,
+                      options.fixed_focal_px, use_prior ? options.focal_prior_px : 0.0, linear, &summary->warnings,
+                      error))
+      return false;
+  } else {
+    const double planarity = shape.singular_values(2) / shape.singular_values(0);
+    if (planarity < kNearlyPlanarRatio)
+      summary->warnings.push_back(Format("the points are nearly coplanar (thickness %.2g of their extent): the "
+                                         "linear estimate is poorly conditioned",
+                                         planarity));
+    if (!LinearNonPlanar(points, linear, error)) return false;
+  }
+  summary->P = linear->p;
+  summary->fx = linear->k(0, 0);
+  summary->fy = linear->k(1, 1);
+  summary->skew = linear->k(0, 1);
+  summary->linear_principal_point_px = linear->k.block<2, 1>(0, 2);
+  // The linear camera's own error: with its fx, fy and skew (pinhole).
+  Eigen::VectorXd r(2 * n);
+  for (int i = 0; i < n; ++i)
+    r.segment<2>(2 * i) = (linear->p * points[i].xyz.homogeneous()).hnormalized() - points[i].uv_px;
+  summary->initial_rms_px = Rms(r);
+  return true;
+}
+
+// The refined parameters: f unless known, the principal point when solved, R, t, and the
+// distortion terms asked for.
+std::vector<int> FreeParameters(const DltCalibrationOptions& options, bool focal_fixed, bool solve_principal_point) {
+  std::vector<int> free;
+  if (!focal_fixed) free.push_back(kFocal);
+  if (solve_principal_point) {
+    free.push_back(kCx);
+    free.push_back(kCy);
+  }
+  for (int p = kRotation; p < kTranslation + 3; ++p) free.push_back(p);  // R, then t
+  if (options.radial_distortion_terms >= 1) free.push_back(kK1);
+  if (options.radial_distortion_terms >= 2) free.push_back(kK2);
+  return free;
+}
+
+// One-sigma standard deviations of the free parameters from the covariance (J^T J)^-1 at the
+// refined model, scaled by the residual variance; a warning when J^T J is singular.
+void EstimateStd(const std::vector<PointCorrespondence>& points, const std::vector<int>& free, double length_scale,
+                 const FocalPrior& prior, const Model& model, DltCalibrationSummary* summary) {
+  const Eigen::MatrixXd jacobian = Jacobian(model, points, free, length_scale, prior);
+  const int dof = 2 * static_cast<int>(points.size()) + (prior.weight > 0.0 ? 1 : 0) - static_cast<int>(free.size());
+  const Eigen::MatrixXd information = jacobian.transpose() * jacobian;
+  const Eigen::JacobiSVD<Eigen::MatrixXd> info_svd(information, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  if (dof > 0 && info_svd.singularValues()(free.size() - 1) > 1e-14 * info_svd.singularValues()(0)) {
+    const double variance = Residuals(model, points, prior).squaredNorm() / dof;
+    const Eigen::MatrixXd covariance = variance * information.inverse();
+    for (size_t c = 0; c < free.size(); ++c) {
+      const double sd = std::sqrt(std::max(covariance(c, c), 0.0));
+      if (free[c] == kFocal) summary->focal_std_px = sd;
+      if (free[c] == kCx) summary->principal_point_std_px.x() = sd;
+      if (free[c] == kCy) summary->principal_point_std_px.y() = sd;
+      if (free[c] == kK1) summary->k1_std = sd;
+    }
+  } else if (dof > 0) {
+    summary->warnings.push_back("the refinement's parameters are not all determined by these points");
+  }
+}
+
+// The final camera, its reprojection errors, the points behind it and the one-line message.
+void ReportCamera(const std::vector<PointCorrespondence>& points, const Model& model,
+                  const DltCalibrationOptions& options, bool solve_principal_point, DltCalibrationSummary* summary) {
+  Camera& camera = summary->camera;
+  camera.width_px = options.width_px;
+  camera.height_px = options.height_px;
+  camera.focal_px = model.focal_px;
+  camera.principal_point_px = model.principal_point_px;
+  camera.cam_from_world_rotation = model.rotation;
+  camera.cam_from_world_translation = model.translation;
+  summary->k1 = model.k1;
+  summary->k2 = model.k2;
+
+  const int n = static_cast<int>(points.size());
+  const Eigen::VectorXd r = Residuals(model, points);
+  summary->residuals_px.resize(n);
+  int behind = 0;
+  for (int i = 0; i < n; ++i) {
+    summary->residuals_px[i] = r.segment<2>(2 * i).norm();
+    if (camera.CamFromWorld(points[i].xyz).z() <= 0.0) ++behind;
+  }
+  summary->reprojection_rms_px = Rms(r);
+  if (behind > 0)
+    summary->warnings.push_back(std::to_string(behind) + " point(s) lie behind the camera: a point or its pixel "
+                                "is probably wrong");
+  summary->message = Format(summary->planar ? "planar (homography), f = %.2f px, RMS %.3f px (linear %.3f px)"
+                                            : "DLT, f = %.2f px, RMS %.3f px (linear %.3f px)",
+                            camera.focal_px, summary->reprojection_rms_px, summary->initial_rms_px);
+  if (summary->focal_fixed) summary->message += "; focal length known (pose only)";
+  if (summary->focal_prior_used)
+    summary->message += Format("; focal prior %.1f +- %.1f px", options.focal_prior_px, options.focal_prior_std_px);
+  if (!solve_principal_point && (options.refine || summary->planar))
+    summary->message += Format("; principal point held at (%.1f, %.1f)", camera.principal_point_px.x(),
+                               camera.principal_point_px.y());
+}
+
 }  // namespace
 
 bool DltCalibrationOptions::Check(std::string* error) const {
@@ -414,44 +574,30 @@ bool DltCalibrationOptions::Check(std::string* error) const {
 
 DltCalibrationSummary CalibrateFromPoints(const std::vector<PointCorrespondence>& points,
                                           const DltCalibrationOptions& options) {
-  const auto start_time = std::chrono::steady_clock::now();
+  const auto start = std::chrono::steady_clock::now();
   DltCalibrationSummary summary;
-  auto finish = [&](DltCalibrationSummary& s) -> DltCalibrationSummary {
-    s.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_time).count();
-    return s;
-  };
   std::string error;
-  if (!options.Check(&error)) {
-    summary.message = "invalid options: " + error;
-    return finish(summary);
-  }
+  if (!options.Check(&error))
+    return FailedSummary(summary, "invalid options: " + error, start, SolverTermination::kInvalidInput);
   for (size_t i = 0; i < points.size(); ++i) {
-    if (!points[i].xyz.allFinite() || !points[i].uv_px.allFinite()) {
-      summary.message = "point " + std::to_string(i) + " has a non-finite coordinate";
-      return finish(summary);
-    }
+    if (!points[i].xyz.allFinite() || !points[i].uv_px.allFinite())
+      return FailedSummary(summary, "point " + std::to_string(i) + " has a non-finite coordinate", start,
+                           SolverTermination::kInvalidInput);
   }
   const int n = static_cast<int>(points.size());
-  if (n < 4) {
-    summary.message = "calibration needs 6 or more non-coplanar points or 4 or more coplanar points, got " +
-                      std::to_string(n);
-    return finish(summary);
-  }
+  if (n < 4)
+    return FailedSummary(summary,
+                         "calibration needs 6 or more non-coplanar points or 4 or more coplanar points, got " +
+                             std::to_string(n),
+                         start, SolverTermination::kInvalidInput);
 
   // Shape of the 3D points: a line, a plane, or a volume.
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const auto& p : points) centroid += p.xyz;
-  centroid /= n;
-  Eigen::MatrixXd centred(n, 3);
-  for (int i = 0; i < n; ++i) centred.row(i) = (points[i].xyz - centroid).transpose();
-  const Eigen::JacobiSVD<Eigen::MatrixXd> shape(centred, Eigen::ComputeThinV);
-  const Eigen::Vector3d s = shape.singularValues();
-  if (!(s(0) > 0.0) || s(1) < kCollinearRatio * s(0)) {
-    summary.message = "the 3D points are all on one line (or one point): they do not determine a camera";
-    return finish(summary);
-  }
-  const double planarity = s(2) / s(0);
-  summary.planar = planarity < kPlanarRatio;
+  const PointShape shape = ShapeOf(points);
+  const Eigen::Vector3d& s = shape.singular_values;
+  if (!(s(0) > 0.0) || s(1) < kCollinearRatio * s(0))
+    return FailedSummary(summary, "the 3D points are all on one line (or one point): they do not determine a camera",
+                         start, SolverTermination::kInvalidInput);
+  summary.planar = s(2) / s(0) < kPlanarRatio;
   const double length_scale = s(0) / std::sqrt(static_cast<double>(n));
   const Eigen::Vector2d image_center((options.width_px - 1) / 2.0, (options.height_px - 1) / 2.0);
   const Eigen::Vector2d given_principal_point =
@@ -463,48 +609,19 @@ DltCalibrationSummary CalibrateFromPoints(const std::vector<PointCorrespondence>
   if (use_prior) prior = {options.focal_prior_px, options.pixel_noise_px / options.focal_prior_std_px};
   summary.focal_fixed = focal_fixed;
 
+  if (!summary.planar && n < 6)
+    return FailedSummary(summary,
+                         "the points are not coplanar: that needs 6 or more points, got " + std::to_string(n) +
+                             " (or give 4 or more points on one plane)",
+                         start, SolverTermination::kInvalidInput);
   LinearResult linear;
-  if (summary.planar) {
-    Eigen::Matrix3d basis = shape.matrixV();
-    basis.col(2) = basis.col(0).cross(basis.col(1));
-    if (!LinearPlanar(points, centroid, basis, given_principal_point, options.width_px, options.height_px,
-                      options.fixed_focal_px, use_prior ? options.focal_prior_px : 0.0, &linear,
-                      &summary.warnings, &error)) {
-      summary.message = error;
-      return finish(summary);
-    }
-  } else {
-    if (n < 6) {
-      summary.message = "the points are not coplanar: that needs 6 or more points, got " + std::to_string(n) +
-                        " (or give 4 or more points on one plane)";
-      return finish(summary);
-    }
-    if (planarity < kNearlyPlanarRatio)
-      summary.warnings.push_back(Format("the points are nearly coplanar (thickness %.2g of their extent): the "
-                                        "linear estimate is poorly conditioned",
-                                        planarity));
-    if (!LinearNonPlanar(points, &linear, &error)) {
-      summary.message = error;
-      return finish(summary);
-    }
-  }
-  summary.P = linear.p;
-  summary.fx = linear.k(0, 0);
-  summary.fy = linear.k(1, 1);
-  summary.skew = linear.k(0, 1);
-  summary.linear_principal_point_px = linear.k.block<2, 1>(0, 2);
-
+  if (!LinearCamera(points, shape, options, given_principal_point, use_prior, &linear, &summary, &error))
+    return FailedSummary(summary, error, start);
   Model model;
   model.focal_px = 0.5 * (summary.fx + summary.fy);
   model.principal_point_px = summary.linear_principal_point_px;
   model.rotation = linear.rotation;
   model.translation = linear.translation;
-  {
-    // The linear camera's own error: with its fx, fy and skew (pinhole).
-    Eigen::VectorXd r(2 * n);
-    for (int i = 0; i < n; ++i) r.segment<2>(2 * i) = (linear.p * points[i].xyz.homogeneous()).hnormalized() - points[i].uv_px;
-    summary.initial_rms_px = Rms(r);
-  }
 
   const bool solve_principal_point = !summary.planar && options.principal_point_mode == PrincipalPointMode::kSolve;
   // Without refinement the camera stays the linear one (a non-planar DLT estimates its own
@@ -516,81 +633,32 @@ DltCalibrationSummary CalibrateFromPoints(const std::vector<PointCorrespondence>
     Eigen::Matrix3d k = Eigen::Matrix3d::Identity();
     k(0, 0) = k(1, 1) = model.focal_px;
     k.topRightCorner<2, 1>() = model.principal_point_px;
-    if (!TranslationGivenRotation(points, k, model.rotation, &model.translation)) {
-      summary.message = "the points do not determine the camera position for the known focal length";
-      return finish(summary);
-    }
+    if (!TranslationGivenRotation(points, k, model.rotation, &model.translation))
+      return FailedSummary(summary, "the points do not determine the camera position for the known focal length",
+                           start);
   }
   if (use_prior && options.refine) summary.focal_prior_used = true;
+  summary.termination = SolverTermination::kConverged;
   if (options.refine) {
-    std::vector<int> free;
-    if (!focal_fixed) free.push_back(kFocal);
-    if (solve_principal_point) free.insert(free.end(), {kCx, kCy});
-    free.insert(free.end(), {kRotation, kRotation + 1, kRotation + 2, kTranslation, kTranslation + 1, kTranslation + 2});
-    if (options.radial_distortion_terms >= 1) free.push_back(kK1);
-    if (options.radial_distortion_terms >= 2) free.push_back(kK2);
-    if (2 * n < static_cast<int>(free.size())) {
-      summary.message = "too few points for the requested model: " + std::to_string(free.size()) +
-                        " parameters need at least " + std::to_string((free.size() + 1) / 2) + " points";
-      return finish(summary);
-    }
-    const RefineResult refined = Refine(model, points, free, length_scale, options.max_iterations, prior);
-    model = refined.model;
+    const std::vector<int> free = FreeParameters(options, focal_fixed, solve_principal_point);
+    if (2 * n < static_cast<int>(free.size()))
+      return FailedSummary(summary,
+                           "too few points for the requested model: " + std::to_string(free.size()) +
+                               " parameters need at least " + std::to_string((free.size() + 1) / 2) + " points",
+                           start, SolverTermination::kInvalidInput);
+    const LmResult refined = Refine(points, free, length_scale, options.max_iterations, prior, &model);
     summary.iterations = refined.iterations;
-    const int dof = 2 * n + (use_prior ? 1 : 0) - static_cast<int>(free.size());
-    const Eigen::MatrixXd information = refined.jacobian.transpose() * refined.jacobian;
-    const Eigen::JacobiSVD<Eigen::MatrixXd> info_svd(information, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    if (dof > 0 && info_svd.singularValues()(free.size() - 1) > 1e-14 * info_svd.singularValues()(0)) {
-      const double variance = Residuals(model, points, prior).squaredNorm() / dof;
-      const Eigen::MatrixXd covariance = variance * information.inverse();
-      for (size_t c = 0; c < free.size(); ++c) {
-        const double sd = std::sqrt(std::max(covariance(c, c), 0.0));
-        if (free[c] == kFocal) summary.focal_std_px = sd;
-        if (free[c] == kCx) summary.principal_point_std_px.x() = sd;
-        if (free[c] == kCy) summary.principal_point_std_px.y() = sd;
-        if (free[c] == kK1) summary.k1_std = sd;
-      }
-    } else if (dof > 0) {
-      summary.warnings.push_back("the refinement's parameters are not all determined by these points");
-    }
+    summary.initial_cost = refined.initial_cost;
+    summary.final_cost = refined.final_cost;
+    if (refined.termination == LmTermination::kMaxIterations) summary.termination = SolverTermination::kMaxIterations;
+    EstimateStd(points, free, length_scale, prior, model, &summary);
   }
 
-  if (!(model.focal_px > 0.0) || !model.rotation.allFinite() || !model.translation.allFinite()) {
-    summary.message = "the calibration diverged (no positive focal length); check the points";
-    return finish(summary);
-  }
-  Camera& camera = summary.camera;
-  camera.width_px = options.width_px;
-  camera.height_px = options.height_px;
-  camera.focal_px = model.focal_px;
-  camera.principal_point_px = model.principal_point_px;
-  camera.cam_from_world_rotation = model.rotation;
-  camera.cam_from_world_translation = model.translation;
-  summary.k1 = model.k1;
-  summary.k2 = model.k2;
-
-  const Eigen::VectorXd r = Residuals(model, points);
-  summary.residuals_px.resize(n);
-  int behind = 0;
-  for (int i = 0; i < n; ++i) {
-    summary.residuals_px[i] = r.segment<2>(2 * i).norm();
-    if (camera.CamFromWorld(points[i].xyz).z() <= 0.0) ++behind;
-  }
-  summary.reprojection_rms_px = Rms(r);
-  if (behind > 0)
-    summary.warnings.push_back(std::to_string(behind) + " point(s) lie behind the camera: a point or its pixel "
-                               "is probably wrong");
-  summary.success = true;
-  summary.message = Format(summary.planar ? "planar (homography), f = %.2f px, RMS %.3f px (linear %.3f px)"
-                                          : "DLT, f = %.2f px, RMS %.3f px (linear %.3f px)",
-                           camera.focal_px, summary.reprojection_rms_px, summary.initial_rms_px);
-  if (focal_fixed) summary.message += "; focal length known (pose only)";
-  if (summary.focal_prior_used)
-    summary.message += Format("; focal prior %.1f +- %.1f px", options.focal_prior_px, options.focal_prior_std_px);
-  if (!solve_principal_point && (options.refine || summary.planar))
-    summary.message += Format("; principal point held at (%.1f, %.1f)", camera.principal_point_px.x(),
-                              camera.principal_point_px.y());
-  return finish(summary);
+  if (!(model.focal_px > 0.0) || !model.rotation.allFinite() || !model.translation.allFinite())
+    return FailedSummary(summary, "the calibration diverged (no positive focal length); check the points", start);
+  ReportCamera(points, model, options, solve_principal_point, &summary);
+  summary.time_ms = internal::MsSince(start);
+  return summary;
 }
 
 }  // namespace facet

@@ -32,7 +32,7 @@
 //   of squares with pixel noise pixel_noise_px; on the planar path a plane seen fronto-parallel
 //   (Zhang's constraints give no f) starts from the prior instead of failing.
 // Degenerate input (too few points, collinear points, non-finite values, a plane seen
-// fronto-parallel so that f is undetermined) gives success = false with a message. Nearly
+// fronto-parallel so that f is undetermined) gives a summary that is not IsUsable() with a message. Nearly
 // coplanar points on the non-planar path and points behind the camera give warnings.
 // References: Hartley & Zisserman, Multiple View Geometry, 2nd ed., sections 4.4, 6.1, 7.1,
 // A4.1 (RQ); Z. Zhang, "A flexible new technique for camera calibration", PAMI 2000.
@@ -45,6 +45,7 @@
 
 #include "core/geometry/camera.h"
 #include "core/geometry/intrinsics_modes.h"
+#include "core/optim/solver_summary.h"
 
 namespace facet {
 
@@ -82,10 +83,11 @@ struct DltCalibrationOptions {
   bool Check(std::string* error) const;
 };
 
-struct DltCalibrationSummary {
-  bool success = false;
-  std::string message;                // why it failed, or a one-line result
-  std::vector<std::string> warnings;  // usable result, but the user should know
+// SolverSummary: message says why it failed, or gives the result in one line; warnings: a
+// usable result the user should know about; iterations, initial_cost, final_cost: the
+// refinement's (linearisations; sum of squared reprojection residuals in px^2, plus the
+// focal prior's residual squared), zero without refinement.
+struct DltCalibrationSummary : SolverSummary {
   bool planar = false;                // which path was taken
   bool focal_fixed = false;           // fixed_focal_px was held (pose-only solve)
   bool focal_prior_used = false;      // the focal prior took part in the refinement
@@ -106,10 +108,6 @@ struct DltCalibrationSummary {
   double focal_std_px = 0.0;
   Eigen::Vector2d principal_point_std_px = Eigen::Vector2d::Zero();
   double k1_std = 0.0;
-  int iterations = 0;
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 DltCalibrationSummary CalibrateFromPoints(const std::vector<PointCorrespondence>& points,

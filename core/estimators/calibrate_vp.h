@@ -20,8 +20,9 @@
 
 #include <Eigen/Core>
 
-#include "core/geometry/segment.h"
 #include "core/geometry/intrinsics_modes.h"
+#include "core/geometry/segment.h"
+#include "core/optim/solver_summary.h"
 
 namespace facet {
 
@@ -73,10 +74,11 @@ struct VpCalibrationOptions {
   bool Check(std::string* error) const;
 };
 
-struct VpCalibrationSummary {
-  bool success = false;
-  std::string message;                // why it failed, or a one-line result
-  std::vector<std::string> warnings;  // usable result, but the user should know
+// SolverSummary: message says why it failed, or gives the result in one line; warnings: a
+// usable result the user should know about; iterations: accepted steps of the joint fit
+// (all its rounds); initial_cost / final_cost: its sum of squared residuals (segments,
+// horizon and prior rows) in px^2, at the start of the first round and at the end of the last.
+struct VpCalibrationSummary : SolverSummary {
   double focal_px = 0.0;
   Eigen::Vector2d principal_point_px = Eigen::Vector2d::Zero();
   // Columns: world x, y, z axes in the camera frame (core/geometry/conventions.h: z up). The world
@@ -98,7 +100,6 @@ struct VpCalibrationSummary {
   // camera to all segments; zero when it gave no real focal length.
   double closed_form_focal_px = 0.0;
   Eigen::Vector2d closed_form_principal_point_px = Eigen::Vector2d::Zero();
-  int joint_fit_iterations = 0;
 
   // Uncertainty of the joint fit, first order: covariance = (J_d^T J_d / sigma^2 + J_p^T J_p)^-1
   // at the solution, i.e. sigma^2 (J^T J)^-1 with the segment (and horizon) rows J_d at the
@@ -147,9 +148,6 @@ struct VpCalibrationSummary {
   // Per input segment (same order): distance in px of its endpoints to the line through its
   // midpoint and its family's vanishing point (RMS of the two).
   std::vector<double> segment_residuals_px;
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 // Calibrates from the segments of one image (their `axis` names the family). Modes: three
@@ -158,7 +156,8 @@ struct VpCalibrationSummary {
 // each with the focal length solved, fixed or under a prior. Degenerate input (a family
 // with fewer than 2 segments, parallel or coincident segments where a finite vanishing
 // point is needed, an obtuse vanishing-point triangle, too few families for the mode)
-// gives success = false and a message that says which.
+// gives a summary that is not IsUsable() (kInvalidInput or kFailed) and a message that says
+// which.
 VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& segments,
                                                  const VpCalibrationOptions& options);
 

@@ -13,6 +13,8 @@
 #include "core/util/timer.h"
 #include "core/geometry/cross_product_matrix.h"
 #include "core/geometry/hartley_normalization.h"
+#include "core/optim/damped_normal_step.h"
+#include "core/optim/levenberg_marquardt.h"
 #include "core/optim/solver_summary.h"
 
 namespace facet {
@@ -121,62 +123,93 @@ double TransferRms(const Eigen::Matrix3d& h, const std::vector<Eigen::Vector2d>&
                                         : std::numeric_limits<double>::infinity();
 }
 
-// Levenberg-Marquardt on the transfer residuals over H in normalised coordinates
-// (Hn = T2 H T1^-1, entries of order one), its largest entry held so the scale is fixed.
-Eigen::Matrix3d RefineHomography(const Eigen::Matrix3d& h_start, const std::vector<Eigen::Vector2d>& uv1,
-                                 const std::vector<Eigen::Vector2d>& uv2, int max_iterations, int* iterations) {
-  const Eigen::Matrix3d t1 = internal::HartleyNormalization(uv1), t2 = internal::HartleyNormalization(uv2);
-  const Eigen::Matrix3d t1_inverse = t1.inverse(), t2_inverse = t2.inverse();
-  Eigen::Matrix3d hn = t2 * h_start * t1_inverse;
-  hn /= hn.norm();
-  Eigen::Index held = 0;
-  hn.cwiseAbs().reshaped().maxCoeff(&held);
-  std::vector<int> free;
-  for (int k = 0; k < 9; ++k)
-    if (k != held) free.push_back(k);
-  auto to_pixels = [&](const Eigen::Matrix3d& m) -> Eigen::Matrix3d { return t2_inverse * m * t1; };
-  auto residuals = [&](const Eigen::Matrix3d& m) { return TransferResiduals(to_pixels(m), uv1, uv2); };
-  Eigen::VectorXd r = residuals(hn);
-  double cost = r.squaredNorm();
-  double lambda = 1e-4;
-  *iterations = 0;
-  if (!std::isfinite(cost)) return h_start;
-  for (int iteration = 0; iteration < max_iterations; ++iteration) {
-    Eigen::MatrixXd j(r.size(), 8);
+// The refinement for the Levenberg-Marquardt driver: H in normalised coordinates
+// (Hn = T2 H T1^-1, entries of order one), its largest entry held so the scale is fixed, the
+// other eight moved additively; Jacobian by central differences.
+class HomographyRefinement {
+ public:
+  HomographyRefinement(const std::vector<Eigen::Vector2d>& uv1, const std::vector<Eigen::Vector2d>& uv2,
+                       const Eigen::Matrix3d& h_start)
+      : uv1_(uv1), uv2_(uv2) {
+    const Eigen::Matrix3d t1 = internal::HartleyNormalization(uv1), t2 = internal::HartleyNormalization(uv2);
+    t1_ = t1;
+    t2_inverse_ = t2.inverse();
+    hn_ = t2 * h_start * t1.inverse();
+    hn_ /= hn_.norm();
+    Eigen::Index held = 0;
+    hn_.cwiseAbs().reshaped().maxCoeff(&held);
+    for (int k = 0; k < 9; ++k)
+      if (k != held) free_.push_back(k);
+    residuals_ = Residuals(hn_);
+  }
+
+  double Cost() const { return residuals_.squaredNorm(); }
+  Eigen::Matrix3d HomographyInPixels() const { return NormalizeH(ToPixels(hn_)); }
+
+  bool Linearize() {
+    Eigen::MatrixXd j(residuals_.size(), 8);
     constexpr double kStep = 1e-7;
     for (int c = 0; c < 8; ++c) {
-      Eigen::Matrix3d plus = hn, minus = hn;
-      plus.reshaped()(free[c]) += kStep;
-      minus.reshaped()(free[c]) -= kStep;
-      j.col(c) = (residuals(plus) - residuals(minus)) / (2.0 * kStep);
+      Eigen::Matrix3d plus = hn_, minus = hn_;
+      plus.reshaped()(free_[c]) += kStep;
+      minus.reshaped()(free_[c]) -= kStep;
+      j.col(c) = (Residuals(plus) - Residuals(minus)) / (2.0 * kStep);
     }
-    const Eigen::MatrixXd a = j.transpose() * j;
-    const Eigen::VectorXd g = j.transpose() * r;
-    if (!g.allFinite() || g.lpNorm<Eigen::Infinity>() == 0.0) break;
-    bool accepted = false, converged = false;
-    for (int attempt = 0; attempt < 12 && !accepted; ++attempt) {
-      Eigen::MatrixXd damped = a;
-      for (int i = 0; i < 8; ++i) damped(i, i) += lambda * std::max(a(i, i), 1e-300);
-      const Eigen::VectorXd step = damped.ldlt().solve(-g);
-      Eigen::Matrix3d candidate = hn;
-      for (int c = 0; c < 8; ++c) candidate.reshaped()(free[c]) += step(c);
-      const Eigen::VectorXd candidate_r = residuals(candidate);
-      const double candidate_cost = candidate_r.squaredNorm();
-      if (std::isfinite(candidate_cost) && candidate_cost < cost) {
-        accepted = true;
-        converged = cost - candidate_cost <= 1e-14 * cost || step.norm() <= 1e-14;
-        hn = candidate;
-        r = candidate_r;
-        cost = candidate_cost;
-        lambda = std::max(lambda / 10.0, 1e-12);
-      } else {
-        lambda *= 10.0;
-      }
-    }
-    *iterations = iteration + 1;
-    if (!accepted || converged) break;
+    normal_ = j.transpose() * j;
+    gradient_ = j.transpose() * residuals_;
+    damping_ = normal_.diagonal().cwiseMax(1e-300);  // a floor, only against a zero column
+    return !gradient_.allFinite() || gradient_.lpNorm<Eigen::Infinity>() == 0.0;
   }
-  return NormalizeH(to_pixels(hn));
+
+  // A step without a finite solution gives a non-finite candidate cost, which the driver
+  // rejects like any other.
+  LmStepStatus Step(double lambda, LmTrial* trial) {
+    const Eigen::VectorXd step = DampedNormalStep(normal_, gradient_, lambda, damping_);
+    candidate_ = hn_;
+    for (int c = 0; c < 8; ++c) candidate_.reshaped()(free_[c]) += step(c);
+    candidate_residuals_ = Residuals(candidate_);
+    trial->cost = candidate_residuals_.squaredNorm();
+    trial->step_squared_norm = step.squaredNorm();
+    return LmStepStatus::kSolved;
+  }
+
+  void Accept() {
+    hn_ = candidate_;
+    residuals_ = candidate_residuals_;
+  }
+
+ private:
+  Eigen::Matrix3d ToPixels(const Eigen::Matrix3d& hn) const { return t2_inverse_ * hn * t1_; }
+  Eigen::VectorXd Residuals(const Eigen::Matrix3d& hn) const { return TransferResiduals(ToPixels(hn), uv1_, uv2_); }
+
+  const std::vector<Eigen::Vector2d>& uv1_;
+  const std::vector<Eigen::Vector2d>& uv2_;
+  Eigen::Matrix3d t1_, t2_inverse_, hn_, candidate_;
+  std::vector<int> free_;
+  Eigen::VectorXd residuals_, candidate_residuals_, gradient_, damping_;
+  Eigen::MatrixXd normal_;
+};
+
+// Levenberg-Marquardt on the transfer residuals (cost in px^2) from h_start; h_start itself
+// when its cost is not finite.
+Eigen::Matrix3d RefineHomography(const Eigen::Matrix3d& h_start, const std::vector<Eigen::Vector2d>& uv1,
+                                 const std::vector<Eigen::Vector2d>& uv2, int max_iterations, LmResult* result) {
+  HomographyRefinement refinement(uv1, uv2, h_start);
+  LmOptions options;
+  options.max_iterations = max_iterations;
+  // Marquardt's factors of 10 from lambda = 1e-4. No cap on lambda: 12 trials at most per
+  // linearisation.
+  options.initial_lambda = 1e-4;
+  options.lambda_decrease = 0.1;
+  options.lambda_increase = 10.0;
+  options.min_lambda = 1e-12;
+  options.max_lambda = std::numeric_limits<double>::infinity();
+  options.max_trials_per_linearization = 12;
+  options.relative_decrease_tolerance = 1e-14;
+  options.min_step_squared_norm = 1e-28;  // |step| <= 1e-14 in normalised entries of H
+  *result = MinimizeLevenbergMarquardt(refinement.Cost(), options, refinement);
+  if (result->termination == LmTermination::kNonFiniteCost) return h_start;
+  return refinement.HomographyInPixels();
 }
 
 }  // namespace
@@ -208,72 +241,82 @@ std::vector<double> SymmetricTransferErrors(const Eigen::Matrix3d& H, const std:
   return errors;
 }
 
+// MSAC over 4-point samples: the inliers of the sample with the most (the smaller score
+// among equals), with the adaptive number of samples for options.ransac_confidence.
+std::vector<int> RansacInliers(const std::vector<Eigen::Vector2d>& uv1, const std::vector<Eigen::Vector2d>& uv2,
+                               const HomographyOptions& options, int* iterations) {
+  const int n = static_cast<int>(uv1.size());
+  std::mt19937 rng(options.seed);
+  int best_count = 0;
+  double best_score = std::numeric_limits<double>::infinity();
+  std::vector<int> best;
+  int needed = options.max_ransac_iterations;
+  const double threshold = options.inlier_threshold_px;
+  for (int iteration = 0; iteration < std::min(needed, options.max_ransac_iterations); ++iteration) {
+    *iterations = iteration + 1;
+    std::vector<int> sample;
+    while (sample.size() < 4) {
+      const int k = std::uniform_int_distribution<int>(0, n - 1)(rng);
+      if (std::find(sample.begin(), sample.end(), k) == sample.end()) sample.push_back(k);
+    }
+    const auto s1 = Select(uv1, sample), s2 = Select(uv2, sample);
+    Eigen::Matrix3d h;
+    if (DegenerateSample(s1, s2) || !HomographyDlt(s1, s2, &h)) continue;
+    const std::vector<double> errors = SymmetricTransferErrors(h, uv1, uv2);
+    std::vector<int> in;
+    double score = 0.0;  // MSAC: inliers' squared errors, outliers at the threshold
+    for (int i = 0; i < n; ++i) {
+      if (errors[i] < threshold) in.push_back(i);
+      score += std::min(errors[i] * errors[i], threshold * threshold);
+    }
+    if (static_cast<int>(in.size()) > best_count ||
+        (static_cast<int>(in.size()) == best_count && score < best_score)) {
+      best_count = static_cast<int>(in.size());
+      best_score = score;
+      best = in;
+      const double ratio = static_cast<double>(best_count) / n;
+      const double p_all = std::pow(ratio, 4);
+      if (p_all >= 1.0) {
+        needed = 0;
+      } else if (p_all > 0.0) {
+        needed = static_cast<int>(std::ceil(std::log(1.0 - options.ransac_confidence) / std::log(1.0 - p_all)));
+      }
+    }
+  }
+  return best;
+}
+
 HomographySummary EstimateHomography(const std::vector<Eigen::Vector2d>& uv1, const std::vector<Eigen::Vector2d>& uv2,
                                      const HomographyOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   HomographySummary summary;
   std::string error;
-  if (!options.Check(&error)) return FailedSummary(summary, "invalid options: " + error, start);
+  constexpr SolverTermination kInvalidInput = SolverTermination::kInvalidInput;
+  if (!options.Check(&error)) return FailedSummary(summary, "invalid options: " + error, start, kInvalidInput);
   if (uv1.size() != uv2.size())
-    return FailedSummary(summary, "the two images have different numbers of points", start);
+    return FailedSummary(summary, "the two images have different numbers of points", start, kInvalidInput);
   const int n = static_cast<int>(uv1.size());
   if (n < 4)
     return FailedSummary(summary, "a homography needs 4 or more matches on one plane, got " + std::to_string(n),
-                         start);
+                         start, kInvalidInput);
   for (int i = 0; i < n; ++i)
     if (!uv1[i].allFinite() || !uv2[i].allFinite())
-      return FailedSummary(summary, "match " + std::to_string(i) + " has a non-finite coordinate", start);
+      return FailedSummary(summary, "match " + std::to_string(i) + " has a non-finite coordinate", start,
+                           kInvalidInput);
   for (int image = 0; image < 2; ++image)
     if (Collinear(image == 0 ? uv1 : uv2))
       return FailedSummary(summary,
                            "the points of image " + std::to_string(image + 1) +
                                " are all on one line: they do not determine a homography (4 points, no 3 on a line)",
-                           start);
+                           start, kInvalidInput);
 
   std::vector<int> inlier_index(n);
   std::iota(inlier_index.begin(), inlier_index.end(), 0);
   const bool ransac = options.use_ransac && n >= 6;
   if (ransac) {
-    std::mt19937 rng(options.seed);
-    int best_count = 0;
-    double best_score = std::numeric_limits<double>::infinity();
-    std::vector<int> best;
-    int needed = options.max_ransac_iterations;
-    const double threshold = options.inlier_threshold_px;
-    for (int iteration = 0; iteration < std::min(needed, options.max_ransac_iterations); ++iteration) {
-      summary.ransac_iterations = iteration + 1;
-      std::vector<int> sample;
-      while (sample.size() < 4) {
-        const int k = std::uniform_int_distribution<int>(0, n - 1)(rng);
-        if (std::find(sample.begin(), sample.end(), k) == sample.end()) sample.push_back(k);
-      }
-      const auto s1 = Select(uv1, sample), s2 = Select(uv2, sample);
-      Eigen::Matrix3d h;
-      if (DegenerateSample(s1, s2) || !HomographyDlt(s1, s2, &h)) continue;
-      const std::vector<double> errors = SymmetricTransferErrors(h, uv1, uv2);
-      std::vector<int> in;
-      double score = 0.0;  // MSAC: inliers' squared errors, outliers at the threshold
-      for (int i = 0; i < n; ++i) {
-        if (errors[i] < threshold) in.push_back(i);
-        score += std::min(errors[i] * errors[i], threshold * threshold);
-      }
-      if (static_cast<int>(in.size()) > best_count ||
-          (static_cast<int>(in.size()) == best_count && score < best_score)) {
-        best_count = static_cast<int>(in.size());
-        best_score = score;
-        best = in;
-        const double ratio = static_cast<double>(best_count) / n;
-        const double p_all = std::pow(ratio, 4);
-        if (p_all >= 1.0) {
-          needed = 0;
-        } else if (p_all > 0.0) {
-          needed = static_cast<int>(std::ceil(std::log(1.0 - options.ransac_confidence) / std::log(1.0 - p_all)));
-        }
-      }
-    }
-    if (best_count < 4)
+    inlier_index = RansacInliers(uv1, uv2, options, &summary.ransac_iterations);
+    if (inlier_index.size() < 4)
       return FailedSummary(summary, "no 4 matches agree on a homography (no three of them on a line)", start);
-    inlier_index = best;
   }
 
   Eigen::Matrix3d h;
@@ -296,10 +339,18 @@ HomographySummary EstimateHomography(const std::vector<Eigen::Vector2d>& uv1, co
   }
   const auto in1 = Select(uv1, inlier_index), in2 = Select(uv2, inlier_index);
   summary.initial_symmetric_transfer_rms_px = TransferRms(h, in1, in2);
-  if (options.refine && inlier_index.size() > 4)
-    h = RefineHomography(h, in1, in2, options.max_refine_iterations, &summary.refine_iterations);
+  summary.initial_cost = TransferResiduals(h, in1, in2).squaredNorm();
+  summary.termination = SolverTermination::kConverged;
+  if (options.refine && inlier_index.size() > 4) {
+    LmResult refinement;
+    h = RefineHomography(h, in1, in2, options.max_refine_iterations, &refinement);
+    summary.iterations = refinement.iterations;
+    if (refinement.termination == LmTermination::kMaxIterations)
+      summary.termination = SolverTermination::kMaxIterations;
+  }
   summary.H = h;
   summary.symmetric_transfer_rms_px = TransferRms(h, in1, in2);
+  summary.final_cost = TransferResiduals(h, in1, in2).squaredNorm();
   summary.inliers.assign(n, false);
   for (int i : inlier_index) summary.inliers[i] = true;
   summary.num_inliers = static_cast<int>(inlier_index.size());
@@ -309,7 +360,6 @@ HomographySummary EstimateHomography(const std::vector<Eigen::Vector2d>& uv1, co
       summary.warnings.push_back("a match is off the homography by more than the threshold, but 5 matches cannot "
                                  "tell which one (6 or more flag wrong clicks)");
   }
-  summary.success = true;
   summary.message = "homography from " + std::to_string(summary.num_inliers) + " of " + std::to_string(n) +
                     " matches, symmetric transfer RMS " + FormatNumber(summary.symmetric_transfer_rms_px) + " px";
   summary.time_ms = MsSince(start);
@@ -383,12 +433,18 @@ HomographyPoseSummary EstimatePlanePose(const std::vector<Eigen::Vector2d>& uv1,
   const auto start = std::chrono::steady_clock::now();
   HomographyPoseSummary summary;
   std::string error;
-  if (!options.Check(&error)) return FailedSummary(summary, "invalid options: " + error, start);
+  if (!options.Check(&error))
+    return FailedSummary(summary, "invalid options: " + error, start, SolverTermination::kInvalidInput);
   if (!K1.allFinite() || !K2.allFinite() || !(std::abs(K1.determinant()) > 0.0) ||
       !(std::abs(K2.determinant()) > 0.0))
-    return FailedSummary(summary, "the intrinsics must be finite and invertible", start);
+    return FailedSummary(summary, "the intrinsics must be finite and invertible", start,
+                         SolverTermination::kInvalidInput);
   summary.homography = EstimateHomography(uv1, uv2, options.homography);
-  if (!summary.homography.success) return FailedSummary(summary, summary.homography.message, start);
+  if (!summary.homography.IsUsable())
+    return FailedSummary(summary, summary.homography.message, start, summary.homography.termination);
+  summary.iterations = summary.homography.iterations;
+  summary.initial_cost = summary.homography.initial_cost;
+  summary.final_cost = summary.homography.final_cost;
   for (const auto& w : summary.homography.warnings) summary.warnings.push_back(w);
 
   const Eigen::Matrix3d k1_inverse = K1.inverse(), k2_inverse = K2.inverse();
@@ -449,7 +505,7 @@ HomographyPoseSummary EstimatePlanePose(const std::vector<Eigen::Vector2d>& uv1,
     summary.warnings.push_back(std::to_string(summary.candidates.size()) +
                                " plane poses explain the matches equally well (a view pair of one plane is "
                                "ambiguous); the first is given, the other is in the candidates");
-  summary.success = true;
+  summary.termination = summary.homography.termination;
   summary.message = summary.homography.message + "; " +
                     (summary.pure_rotation ? std::string("pure rotation")
                                            : std::to_string(summary.candidates.size()) + " pose(s) pass cheirality");

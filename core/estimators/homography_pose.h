@@ -27,7 +27,7 @@
 //
 // Degenerate input: fewer than 4 matches, non-finite values, all points of an image on one
 // line (or three of four in a minimal set), a homography whose null space is not unique: a
-// summary with success = false and a message. RANSAC over 4-point samples flags wrong clicks
+// summary that is not IsUsable(), with a message. RANSAC over 4-point samples flags wrong clicks
 // when there are 6 or more matches (5 cannot tell a wrong one from a right one: any 4 fit).
 // References: Hartley & Zisserman, Multiple View Geometry, 2nd ed., 4.1-4.2 (normalised DLT,
 // symmetric transfer error), 4.7 (RANSAC), 13.1 (homography induced by a plane).
@@ -37,6 +37,8 @@
 #include <vector>
 
 #include <Eigen/Core>
+
+#include "core/optim/solver_summary.h"
 
 namespace facet {
 
@@ -56,20 +58,16 @@ struct HomographyOptions {
   bool Check(std::string* error) const;
 };
 
-struct HomographySummary {
-  bool success = false;
-  std::string message;
-  std::vector<std::string> warnings;
+// SolverSummary: iterations are the refinement's linearisations (0 without it); initial_cost /
+// final_cost the sum over the inliers of their four squared transfer residuals (px^2), for
+// the DLT on the inliers and for the final H.
+struct HomographySummary : SolverSummary {
   Eigen::Matrix3d H = Eigen::Matrix3d::Zero();  // unit Frobenius norm, H(2, 2) >= 0
   std::vector<bool> inliers;                    // per input match
   int num_inliers = 0;
   double initial_symmetric_transfer_rms_px = 0.0;  // the DLT on the inliers
   double symmetric_transfer_rms_px = 0.0;          // the final H
   int ransac_iterations = 0;
-  int refine_iterations = 0;
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 // H from 4 or more matches (uv1.size() == uv2.size()).
@@ -94,10 +92,9 @@ struct HomographyPoseOptions {
   bool Check(std::string* error) const;
 };
 
-struct HomographyPoseSummary {
-  bool success = false;
-  std::string message;
-  std::vector<std::string> warnings;
+// SolverSummary: termination, iterations and costs are the homography's (the decomposition is
+// closed form); warnings include the homography's.
+struct HomographyPoseSummary : SolverSummary {
   HomographySummary homography;
   // The chosen decomposition (candidates[0]), repeated for convenience.
   Eigen::Matrix3d cam2_from_cam1_rotation = Eigen::Matrix3d::Identity();
@@ -110,9 +107,6 @@ struct HomographyPoseSummary {
   bool ambiguous = false;
   bool pure_rotation = false;  // no measurable baseline
   int num_points = 0;          // inliers used
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 // Estimates H from the matches (options.homography) and decomposes it with K1, K2.

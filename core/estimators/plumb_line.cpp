@@ -10,8 +10,14 @@
 
 #include <Eigen/Dense>
 
+#include "core/optim/damped_normal_step.h"
+#include "core/optim/levenberg_marquardt.h"
+#include "core/util/timer.h"
+
 namespace facet {
 namespace {
+
+using internal::FailedSummary;
 
 // Inverting an odd polynomial radius map: Newton steps that stop below this (in the
 // normalised radius, ~1e-13 px at s = 1000 px).
@@ -233,48 +239,71 @@ Eigen::MatrixXd NumericJacobian(const Problem& problem, const State& state, cons
   return jacobian;
 }
 
-// Levenberg-Marquardt with Marquardt's diagonal scaling; returns accepted steps.
-int Minimise(const Problem& problem, const ActiveSet& active, int max_iterations, State* state) {
-  if (active.Size() == 0 || problem.num_residuals == 0) return 0;
-  Eigen::VectorXd residuals = Residuals(problem, *state);
-  double cost = residuals.squaredNorm();
-  if (!std::isfinite(cost)) return 0;
-  double lambda = 1e-4;
-  int accepted = 0;
-  for (int iteration = 0; iteration < max_iterations; ++iteration) {
-    if (cost == 0.0) break;
-    const Eigen::MatrixXd jacobian = NumericJacobian(problem, *state, active);
-    const Eigen::MatrixXd normal = jacobian.transpose() * jacobian;
-    const Eigen::VectorXd gradient = jacobian.transpose() * residuals;
-    if (gradient.cwiseAbs().maxCoeff() <= 1e-15 * std::max(cost, 1e-300)) break;
-    bool improved = false;
-    bool converged = false;
-    for (int attempt = 0; attempt < 30 && !improved; ++attempt) {
-      Eigen::MatrixXd damped = normal;
-      for (int i = 0; i < damped.rows(); ++i) damped(i, i) += lambda * std::max(normal(i, i), 1e-12);
-      const Eigen::VectorXd step = damped.ldlt().solve(-gradient);
-      if (!step.allFinite()) {
-        lambda *= 10.0;
-        continue;
-      }
-      const State candidate = Apply(*state, active, step);
-      const Eigen::VectorXd candidate_residuals = Residuals(problem, candidate);
-      const double candidate_cost = candidate_residuals.squaredNorm();
-      if (std::isfinite(candidate_cost) && candidate_cost <= cost) {
-        converged = cost - candidate_cost <= 1e-15 * cost || step.norm() <= 1e-14;
-        *state = candidate;
-        residuals = candidate_residuals;
-        cost = candidate_cost;
-        lambda = std::max(lambda * 0.1, 1e-12);
-        improved = true;
-        ++accepted;
-      } else {
-        lambda *= 10.0;
-      }
-    }
-    if (!improved || converged) break;
+// The plumb-line fit for the Levenberg-Marquardt driver: k moves additively, each vanishing
+// point on the unit sphere (Apply); Jacobian by central differences.
+class PlumbLineFit {
+ public:
+  PlumbLineFit(const Problem& problem, const ActiveSet& active, State* state)
+      : problem_(problem), active_(active), state_(state), residuals_(Residuals(problem, *state)) {}
+
+  double Cost() const { return residuals_.squaredNorm(); }
+
+  bool Linearize() {
+    const Eigen::MatrixXd jacobian = NumericJacobian(problem_, *state_, active_);
+    normal_ = jacobian.transpose() * jacobian;
+    gradient_ = jacobian.transpose() * residuals_;
+    damping_ = normal_.diagonal().cwiseMax(1e-12);  // a floor, not an addition
+    // Stationary to rounding: the largest gradient entry is below 1e-15 of the cost.
+    return gradient_.cwiseAbs().maxCoeff() <= 1e-15 * std::max(Cost(), 1e-300);
   }
-  return accepted;
+
+  LmStepStatus Step(double lambda, LmTrial* trial) {
+    const Eigen::VectorXd step = DampedNormalStep(normal_, gradient_, lambda, damping_);
+    if (!step.allFinite()) return LmStepStatus::kSolveFailed;
+    candidate_ = Apply(*state_, active_, step);
+    candidate_residuals_ = Residuals(problem_, candidate_);
+    trial->cost = candidate_residuals_.squaredNorm();
+    trial->step_squared_norm = step.squaredNorm();
+    return LmStepStatus::kSolved;
+  }
+
+  void Accept() {
+    *state_ = candidate_;
+    residuals_ = candidate_residuals_;
+  }
+
+ private:
+  const Problem& problem_;
+  const ActiveSet& active_;
+  State* state_;
+  Eigen::VectorXd residuals_, candidate_residuals_, gradient_, damping_;
+  Eigen::MatrixXd normal_;
+  State candidate_;
+};
+
+// Levenberg-Marquardt over the active parameters from *state.
+LmResult Minimise(const Problem& problem, const ActiveSet& active, int max_iterations, State* state) {
+  if (active.Size() == 0 || problem.num_residuals == 0) {
+    LmResult nothing_to_fit;
+    nothing_to_fit.termination = LmTermination::kConverged;
+    return nothing_to_fit;
+  }
+  LmOptions options;
+  options.max_iterations = max_iterations;
+  // Marquardt's factors of 10 from lambda = 1e-4. No cap on lambda: 30 trials at most per
+  // linearisation, a damped system without a finite solution counting as one.
+  options.initial_lambda = 1e-4;
+  options.lambda_decrease = 0.1;
+  options.lambda_increase = 10.0;
+  options.lambda_increase_on_failed_solve = 10.0;
+  options.min_lambda = 1e-12;
+  options.max_lambda = std::numeric_limits<double>::infinity();
+  options.max_lambda_on_failed_solve = std::numeric_limits<double>::infinity();
+  options.max_trials_per_linearization = 30;
+  options.relative_decrease_tolerance = 1e-15;
+  options.min_step_squared_norm = 1e-28;  // |step| <= 1e-14 (k, tangent coordinates)
+  PlumbLineFit fit(problem, active, state);
+  return MinimizeLevenbergMarquardt(fit.Cost(), options, fit);
 }
 
 // Pseudo-inverse of a symmetric positive semi-definite matrix: eigenvalues below a relative
@@ -329,6 +358,145 @@ std::string Format(const char* format, double a, double b = 0.0, double c = 0.0)
 
 double Rms(const Eigen::VectorXd& residuals, int count) {
   return count > 0 ? std::sqrt(residuals.squaredNorm() / count) : 0.0;
+}
+
+// What the polylines contribute: the input family of each vanishing point (slot), the points
+// that constrain anything and the independent constraints they give.
+struct ProblemLayout {
+  std::vector<int> family_of_slot;
+  int num_points = 0;
+  int num_constraints = 0;  // points minus line and vanishing-point dofs, >= 0
+};
+
+// The polylines in conditioned coordinates of `model`, with their residual ranges. Families
+// with two or more polylines get a vanishing point; a lone member is a free line. False
+// (with *error) on a polyline with fewer than 2 distinct or non-finite points.
+bool BuildProblem(const std::vector<PlumbLine>& lines, const RadialDistortion& model, Problem* problem,
+                  ProblemLayout* layout, std::string* error) {
+  std::map<int, int> family_sizes;
+  for (const auto& line : lines) {
+    if (line.family >= 0) ++family_sizes[line.family];
+  }
+  std::map<int, int> slot_of_family;
+  for (const auto& [family, size] : family_sizes) {
+    if (size >= 2) {
+      slot_of_family[family] = static_cast<int>(layout->family_of_slot.size());
+      layout->family_of_slot.push_back(family);
+    }
+  }
+  problem->num_families = static_cast<int>(layout->family_of_slot.size());
+  int num_constraints = -2 * problem->num_families;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const auto& points = lines[i].points_px;
+    if (points.size() < 2) {
+      *error = "polyline " + std::to_string(i) + " has fewer than 2 points";
+      return false;
+    }
+    Polyline polyline;
+    double extent = 0.0;
+    for (const auto& p : points) {
+      if (!p.allFinite()) {
+        *error = "polyline " + std::to_string(i) + " has a non-finite point";
+        return false;
+      }
+      polyline.points.push_back((p - model.center_px) / model.scale_px);
+      extent = std::max(extent, (p - points.front()).norm());
+    }
+    if (extent == 0.0) {
+      *error = "polyline " + std::to_string(i) + " has all its points at one pixel";
+      return false;
+    }
+    const auto slot = slot_of_family.find(lines[i].family);
+    polyline.family_slot = slot == slot_of_family.end() ? -1 : slot->second;
+    const int n = static_cast<int>(points.size());
+    if (polyline.family_slot >= 0 || n >= 3) {
+      polyline.first_residual = problem->num_residuals;
+      polyline.num_residuals = n;
+      problem->num_residuals += n;
+      layout->num_points += n;
+      num_constraints += polyline.family_slot >= 0 ? n - 1 : n - 2;
+    }
+    problem->polylines.push_back(std::move(polyline));
+  }
+  layout->num_constraints = std::max(num_constraints, 0);
+  return true;
+}
+
+// The coefficients to estimate, from the information about k at `state` net of the vanishing
+// points' freedom: k1 always, k2 when asked and the data can separate it from k1 (else a
+// warning). False (with *error) when the lines carry no distortion information.
+bool ChooseCoefficients(const Problem& problem, const State& state, const PlumbLineOptions& options,
+                        int num_constraints, ActiveSet* active, std::vector<std::string>* warnings,
+                        std::string* error) {
+  active->num_families = problem.num_families;
+  active->k2 = true;
+  const Eigen::MatrixXd information = ReducedInformation(NumericJacobian(problem, state, *active), 2);
+  const double k1_sensitivity = std::sqrt(std::max(information(0, 0), 0.0) / problem.num_residuals);
+  if (!(k1_sensitivity > kMinRelativeSensitivity)) {
+    *error =
+        "the lines carry no distortion information (they all pass through the centre of distortion, where radial "
+        "distortion keeps them straight); k = 0";
+    return false;
+  }
+  active->k2 = false;
+  if (!options.estimate_k2) return true;
+  const double product = information(0, 0) * information(1, 1);
+  const double correlation = product > 0.0 ? std::abs(information(0, 1)) / std::sqrt(product) : 1.0;
+  if (num_constraints < 3) {
+    warnings->push_back("k2 not estimated: it needs at least 3 independent constraints, there are " +
+                        std::to_string(num_constraints));
+  } else if (!(correlation < kMaxK1K2Correlation)) {
+    warnings->push_back(
+        Format("k2 not estimated: the points do not span enough radii to separate k2 from k1 (correlation %.6f)",
+               correlation));
+  } else {
+    active->k2 = true;
+  }
+  return true;
+}
+
+// One-sigma standard deviations of k from the Gauss-Newton covariance of the reduced
+// information, scaled by the residual variance; the noise sigma in px.
+void EstimateCoefficientStd(const Problem& problem, const State& state, const ActiveSet& active,
+                            int num_constraints, const Eigen::VectorXd& residuals, double scale,
+                            PlumbLineSummary* summary) {
+  const int num_k = active.k2 ? 2 : 1;
+  const int dof = num_constraints - num_k;
+  const Eigen::MatrixXd reduced = ReducedInformation(NumericJacobian(problem, state, active), num_k);
+  const double variance = dof > 0 ? residuals.squaredNorm() / dof : 0.0;
+  const Eigen::MatrixXd covariance = variance * PseudoInverseSymmetric(reduced);
+  summary->noise_sigma_px = scale * std::sqrt(variance);
+  summary->k1_std = std::sqrt(std::max(covariance(0, 0), 0.0));
+  summary->k2_std = active.k2 ? std::sqrt(std::max(covariance(1, 1), 0.0)) : 0.0;
+}
+
+// Straightness per polyline and the vanishing points in undistorted px.
+void ReportLines(const Problem& problem, const ProblemLayout& layout, const State& state,
+                 const Eigen::VectorXd& distances, const RadialDistortion& model, PlumbLineSummary* summary) {
+  const double scale = model.scale_px;
+  const Eigen::Vector2d& center = model.center_px;
+  summary->final_rms_px = scale * Rms(distances, layout.num_points);
+  for (size_t i = 0; i < problem.polylines.size(); ++i) {
+    const auto& polyline = problem.polylines[i];
+    if (polyline.num_residuals == 0) continue;
+    summary->line_rms_px[i] =
+        scale * Rms(distances.segment(polyline.first_residual, polyline.num_residuals), polyline.num_residuals);
+  }
+  int max_family = -1;
+  for (int family : layout.family_of_slot) max_family = std::max(max_family, family);
+  summary->vanishing_points_px.assign(max_family + 1, Eigen::Vector3d::Zero());
+  for (int slot = 0; slot < problem.num_families; ++slot) {
+    const Eigen::Vector3d& v = state.vanishing_points[slot];
+    Eigen::Vector3d v_px(scale * v.x() + center.x() * v.z(), scale * v.y() + center.y() * v.z(), v.z());
+    v_px.normalize();
+    if (v_px.z() < 0.0) v_px = -v_px;
+    summary->vanishing_points_px[layout.family_of_slot[slot]] = v_px;
+  }
+}
+
+SolverTermination TerminationOf(const LmResult& fit) {
+  return fit.termination == LmTermination::kMaxIterations ? SolverTermination::kMaxIterations
+                                                          : SolverTermination::kConverged;
 }
 
 }  // namespace
@@ -435,80 +603,26 @@ bool PlumbLineOptions::Check(std::string* error) const {
 }
 
 PlumbLineSummary EstimateRadialDistortion(const std::vector<PlumbLine>& lines, const PlumbLineOptions& options) {
-  const auto start_time = std::chrono::steady_clock::now();
+  const auto start = std::chrono::steady_clock::now();
   PlumbLineSummary summary;
-  auto finish = [&](PlumbLineSummary& s) -> PlumbLineSummary {
-    s.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_time).count();
-    return s;
-  };
   std::string error;
-  if (!options.Check(&error)) {
-    summary.message = "bad options: " + error;
-    return finish(summary);
-  }
+  if (!options.Check(&error))
+    return FailedSummary(summary, "bad options: " + error, start, SolverTermination::kInvalidInput);
   summary.distortion = MakeRadialDistortion(options.width_px, options.height_px, options.center_px);
-  const Eigen::Vector2d center = summary.distortion.center_px;
   const double scale = summary.distortion.scale_px;
   summary.line_rms_px.assign(lines.size(), 0.0);
 
-  // Families with two or more polylines get a vanishing point; a lone member is a free line.
-  std::map<int, int> family_sizes;
-  for (const auto& line : lines) {
-    if (line.family >= 0) ++family_sizes[line.family];
-  }
-  std::map<int, int> slot_of_family;
-  std::vector<int> family_of_slot;
-  for (const auto& [family, size] : family_sizes) {
-    if (size >= 2) {
-      slot_of_family[family] = static_cast<int>(family_of_slot.size());
-      family_of_slot.push_back(family);
-    }
-  }
-
   Problem problem;
-  problem.num_families = static_cast<int>(family_of_slot.size());
-  int num_constraints = -2 * problem.num_families;
-  int num_points = 0;
-  for (size_t i = 0; i < lines.size(); ++i) {
-    const auto& points = lines[i].points_px;
-    if (points.size() < 2) {
-      summary.message = "polyline " + std::to_string(i) + " has fewer than 2 points";
-      return finish(summary);
-    }
-    Polyline polyline;
-    double extent = 0.0;
-    for (const auto& p : points) {
-      if (!p.allFinite()) {
-        summary.message = "polyline " + std::to_string(i) + " has a non-finite point";
-        return finish(summary);
-      }
-      polyline.points.push_back((p - center) / scale);
-      extent = std::max(extent, (p - points.front()).norm());
-    }
-    if (extent == 0.0) {
-      summary.message = "polyline " + std::to_string(i) + " has all its points at one pixel";
-      return finish(summary);
-    }
-    const auto slot = slot_of_family.find(lines[i].family);
-    polyline.family_slot = slot == slot_of_family.end() ? -1 : slot->second;
-    const int n = static_cast<int>(points.size());
-    if (polyline.family_slot >= 0 || n >= 3) {
-      polyline.first_residual = problem.num_residuals;
-      polyline.num_residuals = n;
-      problem.num_residuals += n;
-      num_points += n;
-      num_constraints += polyline.family_slot >= 0 ? n - 1 : n - 2;
-    }
-    problem.polylines.push_back(std::move(polyline));
-  }
-  num_constraints = std::max(num_constraints, 0);
-  summary.num_constraints = num_constraints;
-  if (num_constraints < 2) {
-    summary.message = "too few points: " + std::to_string(num_constraints) +
-                      " independent constraint(s), k1 needs at least 2 (each polyline of n points "
-                      "gives n - 2, or n - 1 in a family of parallel lines, less 2 per family)";
-    return finish(summary);
-  }
+  ProblemLayout layout;
+  if (!BuildProblem(lines, summary.distortion, &problem, &layout, &error))
+    return FailedSummary(summary, error, start, SolverTermination::kInvalidInput);
+  summary.num_constraints = layout.num_constraints;
+  if (layout.num_constraints < 2)
+    return FailedSummary(summary,
+                         "too few points: " + std::to_string(layout.num_constraints) +
+                             " independent constraint(s), k1 needs at least 2 (each polyline of n points gives n - "
+                             "2, or n - 1 in a family of parallel lines, less 2 per family)",
+                         start, SolverTermination::kInvalidInput);
 
   // Start: k = 0 with the vanishing points refined for straight lines; that fit is also the
   // "before" straightness.
@@ -519,75 +633,28 @@ PlumbLineSummary EstimateRadialDistortion(const std::vector<PlumbLine>& lines, c
   ActiveSet vanishing_only;
   vanishing_only.k1 = false;
   vanishing_only.num_families = problem.num_families;
-  summary.iterations += Minimise(problem, vanishing_only, options.max_iterations, &state);
-  summary.initial_rms_px = scale * Rms(Residuals(problem, state, false), num_points);
+  summary.iterations += Minimise(problem, vanishing_only, options.max_iterations, &state).accepted_steps;
+  summary.initial_rms_px = scale * Rms(Residuals(problem, state, false), layout.num_points);
 
-  // Information about k at the start, net of the vanishing points' freedom.
   ActiveSet active;
-  active.k2 = true;
-  active.num_families = problem.num_families;
-  const Eigen::MatrixXd information = ReducedInformation(NumericJacobian(problem, state, active), 2);
-  const double k1_sensitivity = std::sqrt(std::max(information(0, 0), 0.0) / problem.num_residuals);
-  if (!(k1_sensitivity > kMinRelativeSensitivity)) {
-    summary.message =
-        "the lines carry no distortion information (they all pass through the centre of distortion, "
-        "where radial distortion keeps them straight); k = 0";
-    return finish(summary);
-  }
-  active.k2 = false;
-  if (options.estimate_k2) {
-    const double product = information(0, 0) * information(1, 1);
-    const double correlation = product > 0.0 ? std::abs(information(0, 1)) / std::sqrt(product) : 1.0;
-    if (num_constraints < 3) {
-      summary.warnings.push_back("k2 not estimated: it needs at least 3 independent constraints, there are " +
-                                 std::to_string(num_constraints));
-    } else if (!(correlation < kMaxK1K2Correlation)) {
-      summary.warnings.push_back(
-          Format("k2 not estimated: the points do not span enough radii to separate k2 from k1 "
-                 "(correlation %.6f)",
-                 correlation));
-    } else {
-      active.k2 = true;
-    }
-  }
+  if (!ChooseCoefficients(problem, state, options, layout.num_constraints, &active, &summary.warnings, &error))
+    return FailedSummary(summary, error, start);
   summary.k2_estimated = active.k2;
 
-  summary.iterations += Minimise(problem, active, options.max_iterations, &state);
+  summary.initial_cost = scale * scale * Residuals(problem, state).squaredNorm();
+  const LmResult fit = Minimise(problem, active, options.max_iterations, &state);
+  summary.iterations += fit.accepted_steps;
   const Eigen::VectorXd residuals = Residuals(problem, state);
   const Eigen::VectorXd distances = Residuals(problem, state, false);
-  if (!residuals.allFinite()) {
-    summary.message = "the fit diverged (a vanishing point coincides with a polyline's centroid); k = 0";
-    return finish(summary);
-  }
+  if (!residuals.allFinite())
+    return FailedSummary(summary, "the fit diverged (a vanishing point coincides with a polyline's centroid); k = 0",
+                         start);
+  summary.final_cost = scale * scale * residuals.squaredNorm();
 
-  const int num_k = active.k2 ? 2 : 1;
-  const int dof = num_constraints - num_k;
-  const Eigen::MatrixXd jacobian = NumericJacobian(problem, state, active);
-  const Eigen::MatrixXd reduced = ReducedInformation(jacobian, num_k);
-  const double variance = dof > 0 ? residuals.squaredNorm() / dof : 0.0;
-  const Eigen::MatrixXd covariance = variance * PseudoInverseSymmetric(reduced);
-  summary.noise_sigma_px = scale * std::sqrt(variance);
-  summary.k1_std = std::sqrt(std::max(covariance(0, 0), 0.0));
-  summary.k2_std = active.k2 ? std::sqrt(std::max(covariance(1, 1), 0.0)) : 0.0;
+  EstimateCoefficientStd(problem, state, active, layout.num_constraints, residuals, scale, &summary);
   summary.distortion.k1 = state.k1;
   summary.distortion.k2 = state.k2;
-  summary.final_rms_px = scale * Rms(distances, num_points);
-  for (size_t i = 0; i < problem.polylines.size(); ++i) {
-    const auto& polyline = problem.polylines[i];
-    if (polyline.num_residuals == 0) continue;
-    summary.line_rms_px[i] =
-        scale * Rms(distances.segment(polyline.first_residual, polyline.num_residuals), polyline.num_residuals);
-  }
-  int max_family = -1;
-  for (int family : family_of_slot) max_family = std::max(max_family, family);
-  summary.vanishing_points_px.assign(max_family + 1, Eigen::Vector3d::Zero());
-  for (int slot = 0; slot < problem.num_families; ++slot) {
-    const Eigen::Vector3d& v = state.vanishing_points[slot];
-    Eigen::Vector3d v_px(scale * v.x() + center.x() * v.z(), scale * v.y() + center.y() * v.z(), v.z());
-    v_px.normalize();
-    if (v_px.z() < 0.0) v_px = -v_px;
-    summary.vanishing_points_px[family_of_slot[slot]] = v_px;
-  }
+  ReportLines(problem, layout, state, distances, summary.distortion, &summary);
 
   if (summary.k1_std > options.poorly_determined_ratio * std::abs(state.k1)) {
     summary.warnings.push_back(Format("k1 is poorly determined: %.4g +- %.2g; add lines far from the centre",
@@ -597,11 +664,12 @@ PlumbLineSummary EstimateRadialDistortion(const std::vector<PlumbLine>& lines, c
     summary.warnings.push_back(Format("k2 is poorly determined: %.4g +- %.2g; consider k1 alone", state.k2,
                                       summary.k2_std));
   }
-  summary.success = true;
+  summary.termination = TerminationOf(fit);
   summary.message = active.k2 ? Format("k1 = %.5g, k2 = %.5g, straightness RMS %.3g px", state.k1, state.k2,
                                        summary.final_rms_px)
                               : Format("k1 = %.5g, straightness RMS %.3g px", state.k1, summary.final_rms_px);
-  return finish(summary);
+  summary.time_ms = internal::MsSince(start);
+  return summary;
 }
 
 }  // namespace facet

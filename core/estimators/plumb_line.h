@@ -21,6 +21,8 @@
 
 #include <Eigen/Core>
 
+#include "core/optim/solver_summary.h"
+
 namespace facet {
 
 // The model above with its centre and scale. The default (k1 = k2 = 0) is the identity.
@@ -94,11 +96,13 @@ struct PlumbLineOptions {
   bool Check(std::string* error) const;
 };
 
-struct PlumbLineSummary {
-  bool success = false;
-  std::string message;                // why it failed, or a one-line result
-  std::vector<std::string> warnings;  // usable result, but the user should know
-  // The estimate; k1 = k2 = 0 (identity) when success is false.
+// SolverSummary: message says why it failed, or gives the result in one line; warnings: a
+// usable result the user should know about; iterations: accepted steps of both fits (the
+// vanishing points at k = 0, then k with them); initial_cost / final_cost: the cost below
+// (squared distances in observed px, summed) at k = 0 with the vanishing points fitted, and
+// at the result.
+struct PlumbLineSummary : SolverSummary {
+  // The estimate; k1 = k2 = 0 (identity) when the summary is not IsUsable().
   RadialDistortion distortion;
   bool k2_estimated = false;
   // One-sigma standard deviations from the Gauss-Newton covariance scaled by the residual
@@ -119,10 +123,6 @@ struct PlumbLineSummary {
   // third coordinate >= 0 (zero at infinity); zero vector for an unused index.
   std::vector<Eigen::Vector3d> vanishing_points_px;
   int num_constraints = 0;  // independent residuals: points minus line and vanishing-point dofs
-  int iterations = 0;
-  double time_ms = 0.0;
-
-  bool IsUsable() const { return success; }
 };
 
 // Estimates k1 (and k2 when asked) from the polylines, starting from k = 0, by
@@ -136,7 +136,8 @@ struct PlumbLineSummary {
 // residuals). Fails with k = 0 and a message on: bad options, non-finite points, a
 // polyline with fewer than 2 points, fewer than (number of coefficients + 1) independent
 // constraints, or lines that carry no distortion information (all through the centre, where
-// radial distortion keeps them straight).
+// radial distortion keeps them straight) or a diverged fit (the input's faults are
+// kInvalidInput, the others kFailed).
 PlumbLineSummary EstimateRadialDistortion(const std::vector<PlumbLine>& lines, const PlumbLineOptions& options);
 
 }  // namespace facet

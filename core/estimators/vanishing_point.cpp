@@ -1,14 +1,21 @@
 #include "core/estimators/vanishing_point.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <sstream>
 
 #include <Eigen/Dense>
 
+#include "core/optim/damped_normal_step.h"
+#include "core/optim/levenberg_marquardt.h"
+#include "core/util/timer.h"
+
 namespace facet {
 namespace {
+
+using internal::FailedSummary;
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // All segments on one line: the second smallest singular value vanishes up to rounding.
@@ -62,52 +69,74 @@ Eigen::Matrix<double, 3, 2> TangentBasis(const Eigen::Vector3d& v) {
   return basis;
 }
 
-// Levenberg-Marquardt over the unit sphere; returns the number of accepted steps.
-int Refine(const std::vector<ConditionedSegment>& segments, int max_iterations, Eigen::Vector3d* v) {
-  double cost = Cost(segments, *v);
-  double lambda = 1e-3;
-  int accepted = 0;
-  const int n = static_cast<int>(segments.size());
-  Eigen::MatrixXd jacobian(n, 2);
-  Eigen::VectorXd residuals(n);
-  for (int iteration = 0; iteration < max_iterations; ++iteration) {
-    if (!std::isfinite(cost) || cost == 0.0) break;
-    const Eigen::Matrix<double, 3, 2> basis = TangentBasis(*v);
-    for (int i = 0; i < n; ++i) {
+// The refinement's least-squares problem for the driver: v on the unit sphere, each step
+// taken in the plane tangent to it at v and normalised back onto the sphere.
+class SphereProblem {
+ public:
+  SphereProblem(const std::vector<ConditionedSegment>& segments, Eigen::Vector3d* v)
+      : segments_(segments), v_(v), jacobian_(segments.size(), 2), residuals_(segments.size()) {}
+
+  bool Linearize() {
+    basis_ = TangentBasis(*v_);
+    for (size_t i = 0; i < segments_.size(); ++i) {
       Eigen::RowVector3d gradient;
-      residuals(i) = Residual(segments[i], *v, &gradient);
-      jacobian.row(i) = gradient * basis;
+      residuals_(i) = Residual(segments_[i], *v_, &gradient);
+      jacobian_.row(i) = gradient * basis_;
     }
-    const Eigen::Matrix2d jtj = jacobian.transpose() * jacobian;
-    const Eigen::Vector2d jtr = jacobian.transpose() * residuals;
-    bool improved = false;
-    while (lambda < 1e12) {
-      Eigen::Matrix2d damped = jtj;
-      damped.diagonal() += lambda * (jtj.diagonal().array() + 1e-12).matrix();
-      const Eigen::Vector2d step = -damped.ldlt().solve(jtr);
-      if (!step.allFinite()) break;
-      const Eigen::Vector3d candidate = (*v + basis * step).normalized();
-      const double candidate_cost = Cost(segments, candidate);
-      if (candidate_cost < cost) {
-        const double decrease = cost - candidate_cost;
-        *v = candidate;
-        cost = candidate_cost;
-        lambda = std::max(lambda * 0.1, 1e-12);
-        ++accepted;
-        improved = decrease > 1e-15 * cost && step.norm() > 1e-14;
-        break;
-      }
-      lambda *= 10.0;
-    }
-    if (!improved) break;
+    normal_ = jacobian_.transpose() * jacobian_;
+    gradient_ = jacobian_.transpose() * residuals_;
+    damping_ = (normal_.diagonal().array() + 1e-12).matrix();  // the floor is added, not a max
+    return false;
   }
-  return accepted;
+
+  LmStepStatus Step(double lambda, LmTrial* trial) {
+    const Eigen::Vector2d step = DampedNormalStep(normal_, gradient_, lambda, damping_);
+    if (!step.allFinite()) return LmStepStatus::kSolveFailed;
+    candidate_ = (*v_ + basis_ * step).normalized();
+    trial->cost = Cost(segments_, candidate_);
+    trial->step_squared_norm = step.squaredNorm();
+    return LmStepStatus::kSolved;
+  }
+
+  void Accept() { *v_ = candidate_; }
+
+ private:
+  const std::vector<ConditionedSegment>& segments_;
+  Eigen::Vector3d* v_;
+  Eigen::MatrixXd jacobian_;
+  Eigen::VectorXd residuals_;
+  Eigen::Matrix<double, 3, 2> basis_;
+  Eigen::Matrix2d normal_;
+  Eigen::Vector2d gradient_, damping_;
+  Eigen::Vector3d candidate_;
+};
+
+// Levenberg-Marquardt over the unit sphere from *v (the algebraic fit).
+LmResult Refine(const std::vector<ConditionedSegment>& segments, int max_iterations, Eigen::Vector3d* v) {
+  LmOptions options;
+  options.max_iterations = max_iterations;
+  // Marquardt's factors of 10 from lambda = 1e-3, rejections up to 1e12; a damped system
+  // without a finite solution ends the fit (two unknowns: it only fails on degenerate data).
+  options.initial_lambda = 1e-3;
+  options.lambda_decrease = 0.1;
+  options.lambda_increase = 10.0;
+  options.min_lambda = 1e-12;
+  options.max_lambda = 1e12;
+  options.stop_on_failed_solve = true;
+  options.relative_decrease_tolerance = 1e-15;
+  options.min_step_squared_norm = 1e-28;  // |step| <= 1e-14 on the unit sphere
+  SphereProblem problem(segments, v);
+  return MinimizeLevenbergMarquardt(Cost(segments, *v), options, problem);
+}
+
+double SumOfSquares(const std::vector<double>& values) {
+  double sum = 0.0;
+  for (double x : values) sum += x * x;
+  return sum;
 }
 
 double Rms(const std::vector<double>& values) {
-  double sum = 0.0;
-  for (double x : values) sum += x * x;
-  return values.empty() ? 0.0 : std::sqrt(sum / values.size());
+  return values.empty() ? 0.0 : std::sqrt(SumOfSquares(values) / values.size());
 }
 
 }  // namespace
@@ -136,13 +165,14 @@ double SegmentVanishingPointSignedDistance(const Eigen::Vector4d& segment, const
 
 VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segments_px,
                                         const VanishingPointOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
   VanishingPointSummary summary;
-  if (!options.Check(&summary.message)) return summary;
+  std::string error;
+  if (!options.Check(&error)) return FailedSummary(summary, error, start, SolverTermination::kInvalidInput);
   const int n = static_cast<int>(segments_px.size());
-  if (n < 2) {
-    summary.message = "needs at least 2 segments, got " + std::to_string(n);
-    return summary;
-  }
+  if (n < 2)
+    return FailedSummary(summary, "needs at least 2 segments, got " + std::to_string(n), start,
+                         SolverTermination::kInvalidInput);
 
   // Conditioned coordinates: a similarity, so distances scale by 1 / scale and back.
   const double scale = options.conditioning_scale_px;
@@ -151,18 +181,16 @@ VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segm
   Eigen::MatrixXd lines(n, 3);
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector4d& s = segments_px[i];
-    if (!s.allFinite()) {
-      summary.message = "segment " + std::to_string(i) + " has a non-finite coordinate";
-      return summary;
-    }
+    if (!s.allFinite())
+      return FailedSummary(summary, "segment " + std::to_string(i) + " has a non-finite coordinate", start,
+                           SolverTermination::kInvalidInput);
     const Eigen::Vector2d a = (s.head<2>() - options.conditioning_center_px) / scale;
     const Eigen::Vector2d b = (s.tail<2>() - options.conditioning_center_px) / scale;
     if ((b - a).norm() * scale < 1e-9 * std::max(1.0, scale)) {
       std::ostringstream out;
       out << "segment " << i << " has zero length (" << s.x() << ", " << s.y() << ") - (" << s.z() << ", "
           << s.w() << ")";
-      summary.message = out.str();
-      return summary;
+      return FailedSummary(summary, out.str(), start, SolverTermination::kInvalidInput);
     }
     // a x b is the segment's line scaled by its length: the length weighting for free.
     lines.row(i) = Eigen::Vector3d(a.x(), a.y(), 1.0).cross(Eigen::Vector3d(b.x(), b.y(), 1.0)).transpose();
@@ -172,10 +200,8 @@ VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segm
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(lines, Eigen::ComputeFullV);
   const Eigen::Vector3d singular = svd.singularValues();
   summary.line_spread = singular(0) > 0.0 ? singular(1) / singular(0) : 0.0;
-  if (summary.line_spread < kMinLineSpread) {
-    summary.message = "all segments lie on one line, so they do not fix a vanishing point";
-    return summary;
-  }
+  if (summary.line_spread < kMinLineSpread)
+    return FailedSummary(summary, "all segments lie on one line, so they do not fix a vanishing point", start);
   Eigen::Vector3d v = svd.matrixV().col(2);
 
   auto residuals_px = [&](const Eigen::Vector3d& vp) {
@@ -183,26 +209,30 @@ VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segm
     for (int i = 0; i < n; ++i) out[i] = std::abs(Residual(segments[i], vp, nullptr)) * scale;
     return out;
   };
-  summary.initial_rms_px = Rms(residuals_px(v));
+  const std::vector<double> initial_residuals_px = residuals_px(v);
+  summary.initial_rms_px = Rms(initial_residuals_px);
+  summary.initial_cost = SumOfSquares(initial_residuals_px);
+  summary.termination = SolverTermination::kConverged;
   if (options.refine) {
-    summary.iterations = Refine(segments, options.max_iterations, &v);
+    const LmResult refinement = Refine(segments, options.max_iterations, &v);
+    summary.iterations = refinement.accepted_steps;
     summary.refined = summary.iterations > 0;
+    if (refinement.termination == LmTermination::kMaxIterations)
+      summary.termination = SolverTermination::kMaxIterations;
   }
   if (v.z() < 0.0) v = -v;
-  if (!v.allFinite()) {
-    summary.message = "the vanishing point is not finite (numerical failure)";
-    return summary;
-  }
+  if (!v.allFinite()) return FailedSummary(summary, "the vanishing point is not finite (numerical failure)", start);
   summary.vp_conditioned = v;
   summary.residuals_px = residuals_px(v);
   summary.final_rms_px = Rms(summary.residuals_px);
+  summary.final_cost = SumOfSquares(summary.residuals_px);
   summary.distance_in_scales = v.z() > 0.0 ? v.head<2>().norm() / v.z() : kInfinity;
 
   // Undo the conditioning: v_px ~ T^-1 v with T = [I / scale, -center / scale; 0, 1].
   Eigen::Vector3d vp_px(scale * v.x() + options.conditioning_center_px.x() * v.z(),
                         scale * v.y() + options.conditioning_center_px.y() * v.z(), v.z());
   summary.vp_px = vp_px.normalized();
-  summary.success = true;
+  summary.time_ms = internal::MsSince(start);
   return summary;
 }
 

@@ -12,6 +12,8 @@
 
 #include <Eigen/Core>
 
+#include "core/optim/solver_summary.h"
+
 namespace facet {
 
 struct VanishingPointOptions {
@@ -25,9 +27,10 @@ struct VanishingPointOptions {
   bool Check(std::string* error) const;
 };
 
-struct VanishingPointSummary {
-  bool success = false;
-  std::string message;  // why it failed
+// SolverSummary: message says why it failed; iterations are the refinement's accepted steps;
+// initial_cost / final_cost are the sums over segments of residuals_px^2 (px^2) at the
+// algebraic fit and at the result.
+struct VanishingPointSummary : SolverSummary {
   // Unit-norm homogeneous vanishing point in pixels, and in conditioned coordinates; the
   // third coordinate is >= 0 (zero for a vanishing point at infinity).
   Eigen::Vector3d vp_px = Eigen::Vector3d::Zero();
@@ -43,15 +46,12 @@ struct VanishingPointSummary {
   std::vector<double> residuals_px;
   double initial_rms_px = 0.0;  // of the algebraic fit
   double final_rms_px = 0.0;
-  int iterations = 0;
   bool refined = false;  // the refinement ran and was kept
-
-  bool IsUsable() const { return success; }
 };
 
 // segments_px: one (x1, y1, x2, y2) per segment, 2 or more, none of zero length.
-// Fewer than 2 segments, a zero-length or non-finite segment, or all segments on one line
-// give success = false.
+// Fewer than 2 segments, a zero-length or non-finite segment (kInvalidInput), or all
+// segments on one line (kFailed) give a summary that is not IsUsable().
 VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segments_px,
                                         const VanishingPointOptions& options);
 

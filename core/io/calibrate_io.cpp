@@ -194,7 +194,7 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
                         {"center", {d.center_px.x(), d.center_px.y()}},
                         {"scale_px", d.scale_px},
                         {"model", "uv_u = c + (uv_d - c) (1 + k1 r^2 + k2 r^4), r = |uv_d - c| / scale_px"}};
-      if (plumb.success) {
+      if (plumb.IsUsable()) {
         for (Segment& s : segments) {
           s.a_px = d.Undistort(s.a_px);
           s.b_px = d.Undistort(s.b_px);
@@ -206,7 +206,7 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
     }
 
     const VpCalibrationSummary summary = CalibrateFromVanishingLines(segments, options);
-    if (!summary.success) return Error("calibration failed: " + summary.message);
+    if (!summary.IsUsable()) return Error("calibration failed: " + summary.message);
 
     Eigen::Matrix3d k = Eigen::Matrix3d::Identity();
     k(0, 0) = k(1, 1) = summary.focal_px;

@@ -118,7 +118,7 @@ CalibrateIoResult CalibratePointsJson(const std::string& points_json_text) {
     if (!ParseInput(doc, &points, &options, &error)) return Error(error);
 
     const DltCalibrationSummary summary = CalibrateFromPoints(points, options);
-    if (!summary.success) return Error("calibration failed: " + summary.message);
+    if (!summary.IsUsable()) return Error("calibration failed: " + summary.message);
 
     const Camera& camera = summary.camera;
     const Eigen::Vector3d& t = camera.cam_from_world_translation;

@@ -23,6 +23,7 @@ bool LmOptions::Check(std::string* error) const {
       (!(lambda_increase_on_failed_solve > 1.0) || !std::isfinite(lambda_increase_on_failed_solve))) {
     return fail("lambda_increase_on_failed_solve must be finite and above 1");
   }
+  if (max_trials_per_linearization < 0) return fail("max_trials_per_linearization must not be negative");
   if (!(min_lambda >= 0.0) || !(min_lambda < max_lambda)) return fail("min_lambda must lie in [0, max_lambda)");
   if (!(initial_lambda < max_lambda) || !(initial_lambda < max_lambda_on_failed_solve)) {
     return fail("initial_lambda must be below max_lambda and max_lambda_on_failed_solve");

@@ -58,6 +58,9 @@ struct LmOptions {
   double min_lambda = 1e-12;  // lambda never drops below it after an accepted step
   double max_lambda = 1e16;   // rejections up to it: no damping lowers the cost
   double max_lambda_on_failed_solve = 1e16;
+  // A cap on the trials at one linearisation instead of (or with) max_lambda: after this many
+  // unaccepted trials in a row (failed solves included) the run stops as kNoDecrease. 0: no cap.
+  int max_trials_per_linearization = 0;
   // kGainRatio: a step is accepted when it lowers the cost and rho exceeds this.
   double min_gain_ratio = 0.0;
   // An accepted step ends the run when it lowers the cost by at most this fraction of the
@@ -85,7 +88,7 @@ struct LmTrial {
 enum class LmTermination {
   kConverged,           // a negligible decrease or step, or the caller's step test
   kGradientConverged,   // the caller's gradient test at a linearisation
-  kNoDecrease,          // no damping up to max_lambda lowered the cost: a minimum to working precision
+  kNoDecrease,          // no damping up to max_lambda (or max_trials_per_linearization) lowered the cost
   kMaxIterations,       // max_iterations reached (0 included)
   kZeroCost,            // the start or an accepted step fits exactly
   kNonFiniteCost,       // the start's cost is not finite: nothing was tried
@@ -148,6 +151,7 @@ LmResult MinimizeLevenbergMarquardt(double cost, const LmOptions& options, Probl
     return result;
   };
   bool need_linearization = true;
+  int trials_at_linearization = 0;
   while (true) {
     if (need_linearization) {
       if (!std::isfinite(cost)) return finish(LmTermination::kNonFiniteCost);
@@ -157,6 +161,7 @@ LmResult MinimizeLevenbergMarquardt(double cost, const LmOptions& options, Probl
       }
       if (problem.Linearize()) return finish(LmTermination::kGradientConverged);
       need_linearization = false;
+      trials_at_linearization = 0;
       if (!options.count_every_trial) ++result.iterations;
     }
     if (options.count_every_trial) {
@@ -167,6 +172,7 @@ LmResult MinimizeLevenbergMarquardt(double cost, const LmOptions& options, Probl
     const double lambda = schedule.lambda;
     const LmStepStatus status = problem.Step(lambda, &trial);
     if (status == LmStepStatus::kStepNegligible) return finish(LmTermination::kConverged);
+    ++trials_at_linearization;
     bool accepted = false;
     bool converged = false;
     if (status == LmStepStatus::kSolveFailed) {
@@ -197,6 +203,10 @@ LmResult MinimizeLevenbergMarquardt(double cost, const LmOptions& options, Probl
     }
     if (converged) return finish(!(cost > 0.0) ? LmTermination::kZeroCost : LmTermination::kConverged);
     if (!accepted && status == LmStepStatus::kSolved && !(schedule.lambda < options.max_lambda)) {
+      return finish(LmTermination::kNoDecrease);
+    }
+    if (!accepted && options.max_trials_per_linearization > 0 &&
+        trials_at_linearization >= options.max_trials_per_linearization) {
       return finish(LmTermination::kNoDecrease);
     }
   }

@@ -180,7 +180,7 @@ ResectionResult Resect(const Project& project, const Image& image, const std::ve
   }
   while (true) {
     DltCalibrationSummary dlt = CalibrateFromPoints(points, dlt_options);
-    if (!dlt.success) {
+    if (!dlt.IsUsable()) {
       result.message = dlt.message;
       return result;
     }
@@ -349,7 +349,7 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
     h_options.homography.inlier_threshold_px = options.wrong_click_threshold_px;
     const HomographyPoseSummary pose =
         EstimatePlanePose(uv_a, uv_b, intrinsics_a.K(), intrinsics_b.K(), h_options);
-    if (!pose.success) {
+    if (!pose.IsUsable()) {
       result.message = "two views of one plane (" + Quoted(image_a) + " and " + Quoted(image_b) +
                        "): " + pose.message;
       return result;

@@ -165,7 +165,7 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
       std::vector<PlumbLine> lines;
       for (const Segment& s : segments) lines.push_back({{s.a_px, s.b_px}, static_cast<int>(s.axis)});
       const PlumbLineSummary plumb = EstimateRadialDistortion(lines, plumb_options);
-      if (plumb.success)
+      if (plumb.IsUsable())
         for (Segment& s : undistorted_segments) {
           s.a_px = plumb.distortion.Undistort(s.a_px);
           s.b_px = plumb.distortion.Undistort(s.b_px);
@@ -185,7 +185,7 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
           figures == &center ? PrincipalPointMode::kImageCenter : PrincipalPointMode::kSolve;
       const VpCalibrationSummary s =
           CalibrateFromVanishingLines(figures == &undistorted ? undistorted_segments : segments, options);
-      if (!s.success) {
+      if (!s.IsUsable()) {
         figures->failures.push_back(id + ": " + s.message);
         continue;
       }
@@ -295,7 +295,7 @@ TEST_CASE("York Urban: only the true principal point and a distortion tuned to t
       options.focal_prior_px = exif_by_photo[i].focal_px;
       options.focal_prior_std_px = app::ExifFocalPriorStdPx(exif_by_photo[i]);
       const VpCalibrationSummary s = CalibrateFromVanishingLines(segments, options);
-      REQUIRE_MESSAGE(s.success, folders[i].filename().string() << ": " << s.message);
+      REQUIRE_MESSAGE(s.IsUsable(), folders[i].filename().string() << ": " << s.message);
       errors_percent.push_back(100.0 * std::abs(s.focal_px - truth.focal_px) / truth.focal_px);
     }
     const double median = Percentile(errors_percent, 0.5);
