@@ -49,12 +49,7 @@ inline Camera MakeLookAtCamera(const SyntheticSceneOptions& o) {
                            o.principal_point_offset_px;
   const Eigen::Vector3d center = o.camera_center * o.scale;
   const Eigen::Vector3d forward = (o.look_at * o.scale - center).normalized();
-  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d down = forward.cross(right);
-  Eigen::Matrix3d cam_from_world;
-  cam_from_world.row(0) = right.transpose();
-  cam_from_world.row(1) = down.transpose();
-  cam_from_world.row(2) = forward.transpose();
+  const Eigen::Matrix3d cam_from_world = CamFromWorldLookingAlong(forward);
   const Eigen::Matrix3d roll =
       Eigen::AngleAxisd(o.roll_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   cam.SetPose(roll * cam_from_world, center);

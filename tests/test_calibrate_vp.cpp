@@ -10,6 +10,7 @@
 
 #include "core/estimators/calibrate_vp.h"
 #include "core/estimators/vanishing_point.h"
+#include "core/util/stats.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {
@@ -78,12 +79,6 @@ void CheckRotationRules(const Eigen::Matrix3d& r) {
   CHECK((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() < 1e-12);
   CHECK(r(1, 2) < 0.0);              // world z up: negative camera-y component
   CHECK(r(2, 0) + r(2, 1) > 0.0);    // x + y towards the front
-}
-
-double Median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
 TEST_CASE("three vanishing points recover focal length, principal point and rotation exactly") {
@@ -262,9 +257,9 @@ TEST_CASE("0.5 px noise: errors stay within the first-order propagated noise") {
     // with sigma 0.5 px, and both endpoints share it (RMS of two equal distances).
     for (double r : s.segment_residuals_px) CHECK(r < 5 * kNoisePx);
   }
-  const double median_f = Median(focal_errors), max_f = *std::max_element(focal_errors.begin(), focal_errors.end());
-  const double median_pp = Median(pp_errors), max_pp = *std::max_element(pp_errors.begin(), pp_errors.end());
-  const double median_rot = Median(rotation_errors),
+  const double median_f = internal::Median(focal_errors), max_f = *std::max_element(focal_errors.begin(), focal_errors.end());
+  const double median_pp = internal::Median(pp_errors), max_pp = *std::max_element(pp_errors.begin(), pp_errors.end());
+  const double median_rot = internal::Median(rotation_errors),
                max_rot = *std::max_element(rotation_errors.begin(), rotation_errors.end());
   MESSAGE("over " << kSeeds << " seeds: focal median " << median_f << " px, max " << max_f << " px; principal point median "
                   << median_pp << " px, max " << max_pp << " px; rotation median " << median_rot * 180 / M_PI

@@ -36,10 +36,7 @@ facet::Camera MakeCamera(double resolution_scale) {
   // Looking into the corner of a room (walls x = 0 and y = 0, floor z = 0) from inside it.
   const Eigen::Vector3d center(4.0, 3.5, 1.6);
   const Eigen::Vector3d forward = (Eigen::Vector3d(0.3, 0.2, 1.0) - center).normalized();
-  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d down = forward.cross(right);
-  Eigen::Matrix3d cam_from_world;
-  cam_from_world << right.transpose(), down.transpose(), forward.transpose();
+  const Eigen::Matrix3d cam_from_world = facet::CamFromWorldLookingAlong(forward);
   camera.SetPose(cam_from_world, center);
   return camera;
 }

@@ -33,15 +33,9 @@ Camera ViewCameraOf(const OrbitCamera& orbit, int width_px, int height_px) {
   camera.height_px = std::max(1, height_px);
   camera.focal_px = FocalPx(orbit.fov_y_deg, camera.height_px);
   camera.principal_point_px = Eigen::Vector2d((camera.width_px - 1) / 2.0, (camera.height_px - 1) / 2.0);
-  // Rows of cam_from_world are the camera axes in world: X right, Y down, Z forward. The
-  // pitch clamp keeps forward off world Z, so right is well defined.
+  // The pitch clamp keeps forward off world Z, so the camera's right axis is well defined.
   const Eigen::Vector3d forward = -EyeDirection(orbit.yaw_rad, orbit.pitch_rad);
-  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d down = forward.cross(right);
-  Eigen::Matrix3d cam_from_world;
-  cam_from_world.row(0) = right.transpose();
-  cam_from_world.row(1) = down.transpose();
-  cam_from_world.row(2) = forward.transpose();
+  const Eigen::Matrix3d cam_from_world = CamFromWorldLookingAlong(forward);
   camera.SetPose(cam_from_world, EyeOf(orbit));
   return camera;
 }

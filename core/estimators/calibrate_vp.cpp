@@ -15,6 +15,7 @@
 #include "core/optim/levenberg_marquardt.h"
 #include "core/util/format.h"
 #include "core/util/timer.h"
+#include "core/util/stats.h"
 
 namespace facet {
 namespace {
@@ -46,8 +47,6 @@ constexpr double kNoiseFloor = 3e-8;
 constexpr int kMaxOutlierRounds = 5;
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-
-std::string Fmt(double x) { return internal::FormatNumber(x, 6); }
 
 std::string FamilyName(int axis) { return std::string("family ") + AxisName(static_cast<Axis>(axis)); }
 
@@ -299,15 +298,6 @@ LmResult RefineJointly(const JointProblem& problem, JointCamera* camera) {
   return MinimizeLevenbergMarquardt(fit.Cost(), options, fit);
 }
 
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  const double upper = values[mid];
-  if (values.size() % 2) return upper;
-  return 0.5 * (upper + *std::max_element(values.begin(), values.begin() + mid));
-}
-
 // Largest angle in degrees between two of the segments in the image (orientations, so at
 // most 90): the spread of their doubled-angle directions about their mean.
 double AngleSpreadDeg(const std::vector<Eigen::Vector4d>& family) {
@@ -382,7 +372,7 @@ bool GroupFamilies(const std::vector<Segment>& segments, const VpCalibrationOpti
       return fail(FamilyName(axis) + ": segment " + std::to_string(i) + " has a non-finite coordinate");
     if ((s.b_px - s.a_px).norm() < 1e-9 * std::max(options.width_px, options.height_px))
       return fail(FamilyName(axis) + ": segment " + std::to_string(i) + " has zero length (both ends at (" +
-                  Fmt(s.a_px.x()) + ", " + Fmt(s.a_px.y()) + "))");
+                  internal::FormatNumber(s.a_px.x(), 6) + ", " + internal::FormatNumber(s.a_px.y(), 6) + "))");
     families->segments_px[axis].push_back(seg);
     families->input_indices[axis].push_back(i);
   }
@@ -580,9 +570,9 @@ bool SolveClosedForm(const VpCalibrationOptions& options, const Families& famili
   out->focal_prior_only = focal_prior && std::isnan(f_squared);
   if (out->focal_prior_only)
     summary->warnings.push_back("the segments do not fix the focal length; it is the prior's (" +
-                                Fmt(options.focal_prior_px) + " +- " + Fmt(options.focal_prior_std_px) + " px)");
+                                internal::FormatNumber(options.focal_prior_px, 6) + " +- " + internal::FormatNumber(options.focal_prior_std_px, 6) + " px)");
   out->no_real_focal =
-      "the vanishing points give no real focal length (f^2 = " + Fmt(f_squared * scale_px * scale_px) +
+      "the vanishing points give no real focal length (f^2 = " + internal::FormatNumber(f_squared * scale_px * scale_px, 6) +
       " px^2 <= 0): the vanishing-point triangle is obtuse or the families are not mutually orthogonal; check the "
       "family assignment of the segments";
   if (focal_fixed) {
@@ -709,7 +699,7 @@ std::vector<bool> FlagOutliers(const JointProblem& fitted, const JointProblem& f
   std::vector<double> abs_px(fitted.segments.size());
   for (size_t i = 0; i < fitted.segments.size(); ++i) abs_px[i] = std::abs(r(i)) * scale_px;
   const double threshold_px =
-      std::max(options.outlier_threshold_sigmas * 1.4826 * Median(abs_px), options.outlier_floor_px);
+      std::max(options.outlier_threshold_sigmas * 1.4826 * internal::Median(abs_px), options.outlier_floor_px);
   summary->outlier_threshold_px = threshold_px;
   full_problem.Residuals(camera, &r);
   const int num_segments = static_cast<int>(full_problem.segments.size());
@@ -897,22 +887,22 @@ void AddQualityWarnings(const VpCalibrationOptions& options, const Families& fam
     if (!families.present[a]) continue;
     if (summary->family_angle_spread_deg[a] < kMinAngleSpreadDeg && !free.at_infinity[a])
       warnings.push_back(FamilyName(a) + ": its segments are nearly parallel in the image (largest angle " +
-                         Fmt(summary->family_angle_spread_deg[a]) +
+                         internal::FormatNumber(summary->family_angle_spread_deg[a], 6) +
                          " deg between two), so its vanishing point is poorly fixed");
     if (free.at_infinity[a]) continue;
     const double to_plane_deg = std::asin(std::min(1.0, std::abs(directions(2, a)))) * kRadToDeg;
     if (to_plane_deg < kFarVanishingPointDeg)
-      warnings.push_back(FamilyName(a) + ": vanishing point very far from the image (direction " + Fmt(to_plane_deg) +
+      warnings.push_back(FamilyName(a) + ": vanishing point very far from the image (direction " + internal::FormatNumber(to_plane_deg, 6) +
                          " deg from the image plane); the focal length is poorly constrained");
     if (90.0 - to_plane_deg < kCentralVanishingPointDeg)
       warnings.push_back(FamilyName(a) + ": vanishing point near the principal point (" +
-                         Fmt(summary->vanishing_point_to_principal_point_px[a]) + " px, direction " +
-                         Fmt(90.0 - to_plane_deg) +
+                         internal::FormatNumber(summary->vanishing_point_to_principal_point_px[a], 6) + " px, direction " +
+                         internal::FormatNumber(90.0 - to_plane_deg, 6) +
                          " deg from the optical axis); the focal length is poorly constrained");
   }
   if (mode == PrincipalPointMode::kSolve && summary->vanishing_point_triangle_max_angle_deg > kMaxTriangleAngleDeg)
     warnings.push_back("the vanishing-point triangle is nearly degenerate (largest angle " +
-                       Fmt(summary->vanishing_point_triangle_max_angle_deg) +
+                       internal::FormatNumber(summary->vanishing_point_triangle_max_angle_deg, 6) +
                        " deg): the principal point and focal length are poorly fixed");
   if (!summary->outlier_segments.empty()) {
     std::string list;
@@ -920,14 +910,14 @@ void AddQualityWarnings(const VpCalibrationOptions& options, const Families& fam
       list += (k ? ", " : "") + std::to_string(summary->outlier_segments[k]);
     if (summary->outlier_segments.size() > 10) list += ", ...";
     warnings.push_back(std::to_string(summary->outlier_segments.size()) +
-                       " segment(s) flagged as outliers (residual above " + Fmt(summary->outlier_threshold_px) +
+                       " segment(s) flagged as outliers (residual above " + internal::FormatNumber(summary->outlier_threshold_px, 6) +
                        " px): " + list +
                        (summary->refitted_without_outliers ? "; the camera was refitted without them" : ""));
   }
   if (mode == PrincipalPointMode::kSolve) {
     const Eigen::Vector2d& c = summary->principal_point_px;
     if (c.x() < 0 || c.y() < 0 || c.x() > options.width_px - 1 || c.y() > options.height_px - 1)
-      warnings.push_back("the solved principal point (" + Fmt(c.x()) + ", " + Fmt(c.y()) +
+      warnings.push_back("the solved principal point (" + internal::FormatNumber(c.x(), 6) + ", " + internal::FormatNumber(c.y(), 6) +
                          ") lies outside the image: a cropped photo, or inaccurate vanishing points");
   }
 }
@@ -948,14 +938,14 @@ bool VpCalibrationOptions::Check(std::string* error) const {
     return false;
   }
   if (!(fixed_focal_px >= 0.0) || !std::isfinite(fixed_focal_px)) {
-    *error = "the fixed focal length must be finite and positive (0 to solve it), got " + Fmt(fixed_focal_px);
+    *error = "the fixed focal length must be finite and positive (0 to solve it), got " + internal::FormatNumber(fixed_focal_px, 6);
     return false;
   }
   const bool has_prior = focal_prior_px != 0.0 || focal_prior_std_px != 0.0;
   if (has_prior && (!(focal_prior_px > 0.0) || !(focal_prior_std_px > 0.0) || !std::isfinite(focal_prior_px) ||
                     !std::isfinite(focal_prior_std_px))) {
     *error = "the focal length prior needs a positive value and a positive standard deviation, got " +
-             Fmt(focal_prior_px) + " +- " + Fmt(focal_prior_std_px) + " px";
+             internal::FormatNumber(focal_prior_px, 6) + " +- " + internal::FormatNumber(focal_prior_std_px, 6) + " px";
     return false;
   }
   if (has_prior && fixed_focal_px > 0.0) {
@@ -1031,7 +1021,7 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
     if (!(summary.rms_residual_px <= kMaxJointRmsRatio * independent_rms_px + kJointRmsSlackPx))
       return FailedSummary(summary,
                            closed_form.no_real_focal + " (a fit with orthogonal directions leaves " +
-                               Fmt(summary.rms_residual_px) + " px RMS against " + Fmt(independent_rms_px) +
+                               internal::FormatNumber(summary.rms_residual_px, 6) + " px RMS against " + internal::FormatNumber(independent_rms_px, 6) +
                                " px for free vanishing points)",
                            start);
     summary.warnings.push_back(
@@ -1043,11 +1033,11 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
     return FailedSummary(summary, "the calibration is not finite (numerical failure)", start);
   AddQualityWarnings(options, families, free, directions, closed_form.mode, &summary);
 
-  summary.message = "f = " + Fmt(summary.focal_px) + " px";
+  summary.message = "f = " + internal::FormatNumber(summary.focal_px, 6) + " px";
   if (std::isfinite(summary.focal_std_px) && summary.focal_std_px > 0.0)
-    summary.message += " +- " + Fmt(summary.focal_std_px);
-  summary.message += ", principal point (" + Fmt(summary.principal_point_px.x()) + ", " +
-                     Fmt(summary.principal_point_px.y()) + ") px from " + std::to_string(families.count) +
+    summary.message += " +- " + internal::FormatNumber(summary.focal_std_px, 6);
+  summary.message += ", principal point (" + internal::FormatNumber(summary.principal_point_px.x(), 6) + ", " +
+                     internal::FormatNumber(summary.principal_point_px.y(), 6) + ") px from " + std::to_string(families.count) +
                      (families.count == 1 ? " vanishing point and the horizon" : " vanishing points");
   summary.time_ms = internal::MsSince(start);
   return summary;

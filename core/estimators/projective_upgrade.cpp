@@ -26,8 +26,6 @@ constexpr double kPlaneThroughCentre = 1e-12;
 
 using internal::FailedSummary;
 using internal::MsSince;
-std::string Fmt(double x) { return internal::FormatNumber(x, 4); }
-
 using internal::Skew;
 Eigen::Vector4d Canonical(Eigen::Vector4d x) {
   const double n = x.norm();
@@ -215,7 +213,7 @@ ProjectiveReconstructionSummary ReconstructProjective(const Eigen::Matrix3d& F, 
   summary.final_cost = sum;
   summary.termination = SolverTermination::kConverged;
   summary.message = "canonical cameras and " + std::to_string(uv1.size()) + " points, reprojection RMS " +
-                    Fmt(summary.reprojection_rms_px) + " px";
+                    internal::FormatNumber(summary.reprojection_rms_px) + " px";
   summary.time_ms = MsSince(start);
   return summary;
 }
@@ -278,11 +276,11 @@ AffineUpgradeSummary UpgradeToAffine(const std::vector<Matrix34d>& cameras,
   for (const auto& p : cameras) summary.cameras.push_back(p * h_inv);
   if (summary.plane_residual > options.plane_residual_warning)
     summary.warnings.push_back("the " + std::to_string(m) + " vanishing points fit one plane at infinity only to " +
-                               Fmt(summary.plane_residual) +
+                               internal::FormatNumber(summary.plane_residual) +
                                " (relative): a vanishing point or its match across the images is off");
   summary.termination = SolverTermination::kConverged;
   summary.message = "plane at infinity from " + std::to_string(m) + " vanishing points, residual " +
-                    Fmt(summary.plane_residual);
+                    internal::FormatNumber(summary.plane_residual);
   summary.time_ms = MsSince(start);
   return summary;
 }
@@ -403,11 +401,11 @@ MetricUpgradeSummary UpgradeToMetric(const std::vector<Matrix34d>& affine_camera
     summary.cameras.push_back(cam);
   }
   if (summary.max_rotation_residual > options.rotation_residual_warning)
-    summary.warnings.push_back("the intrinsics fit the affine cameras only to " + Fmt(summary.max_rotation_residual) +
+    summary.warnings.push_back("the intrinsics fit the affine cameras only to " + internal::FormatNumber(summary.max_rotation_residual) +
                                " (relative deviation from a rotation): check K and the vanishing points");
   summary.termination = SolverTermination::kConverged;
   summary.message = "metric upgrade of " + std::to_string(n) + " cameras, rotation residual " +
-                    Fmt(summary.max_rotation_residual);
+                    internal::FormatNumber(summary.max_rotation_residual);
   summary.time_ms = MsSince(start);
   return summary;
 }

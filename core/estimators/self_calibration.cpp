@@ -39,8 +39,6 @@ constexpr int kMaxInitialPairAttempts = 4;
 
 using internal::FailedSummary;
 using internal::MsSince;
-std::string Fmt(double x) { return internal::FormatNumber(x, 4); }
-
 using internal::Skew;
 Eigen::Vector2d ImageCentre(const SelfCalibrationView& v) { return {(v.width_px - 1) / 2.0, (v.height_px - 1) / 2.0}; }
 
@@ -661,7 +659,7 @@ BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& obser
   summary.termination = !(std::isfinite(cost) && cost <= initial_cost) ? SolverTermination::kFailed
                         : lm_result.termination == LmTermination::kMaxIterations ? SolverTermination::kMaxIterations
                                                                                   : SolverTermination::kConverged;
-  summary.message = "bundle adjustment: RMS " + Fmt(summary.initial_rms_px) + " -> " + Fmt(summary.final_rms_px) +
+  summary.message = "bundle adjustment: RMS " + internal::FormatNumber(summary.initial_rms_px) + " -> " + internal::FormatNumber(summary.final_rms_px) +
                     " px in " + std::to_string(summary.iterations) + " iterations";
   summary.time_ms = MsSince(start);
   return summary;
@@ -1264,8 +1262,8 @@ SelfCalibrationSummary SelfCalibrate(const std::vector<SelfCalibrationView>& vie
   summary.final_cost = final_rms * final_rms * 2.0 * summary.num_observations;
   if (!options.bundle_adjust) summary.termination = SolverTermination::kConverged;
   summary.message = "self-calibrated " + std::to_string(num_registered) + " views, focal " +
-                    Fmt(summary.cameras[va].focal_px) + " px (linear " + Fmt(summary.linear_focal_px[va]) +
-                    "), reprojection RMS " + Fmt(summary.reprojection_rms_px) + " px";
+                    internal::FormatNumber(summary.cameras[va].focal_px) + " px (linear " + internal::FormatNumber(summary.linear_focal_px[va]) +
+                    "), reprojection RMS " + internal::FormatNumber(summary.reprojection_rms_px) + " px";
   summary.time_ms = MsSince(start);
   return summary;
 }

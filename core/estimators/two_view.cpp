@@ -48,8 +48,6 @@ constexpr double kReadmitFactor = 2.0;
 
 using internal::FailedSummary;
 using internal::MsSince;
-std::string Fmt(double x) { return internal::FormatNumber(x, 4); }
-
 using internal::Skew;
 Eigen::Matrix<double, 9, 1> VecRowMajor(const Eigen::Matrix3d& m) {
   Eigen::Matrix<double, 9, 1> v;
@@ -633,7 +631,7 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
   if (options.use_ransac && n > 8) inliers = Ransac(uv1, uv2, options, &summary.ransac_iterations);
   if (Count(inliers) < 7)
     return fail("fewer than 7 matches agree on one fundamental matrix (" + std::to_string(Count(inliers)) +
-                " within " + Fmt(options.inlier_threshold_px) + " px)");
+                " within " + internal::FormatNumber(options.inlier_threshold_px) + " px)");
 
   // Linear estimate and refinement on the inliers. The RANSAC flags come from one sample's
   // F, which noise in its 7 matches tilts; the refined F decides the final set, and a
@@ -701,7 +699,7 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
   if (summary.num_inliers < n)
     summary.warnings.push_back(std::to_string(n - summary.num_inliers) + " of " + std::to_string(n) +
                                " matches disagree with the others by more than " +
-                               Fmt(options.inlier_threshold_px) + " px (flagged as outliers)");
+                               internal::FormatNumber(options.inlier_threshold_px) + " px (flagged as outliers)");
   if (summary.num_inliers >= 4) {
     Eigen::Matrix3d h;
     const Points in1 = Select(uv1, inliers), in2 = Select(uv2, inliers);
@@ -710,13 +708,13 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
       if (summary.homography_rms_px <= options.homography_warning_ratio * summary.symmetric_epipolar_rms_px +
                                            options.homography_warning_slack_px)
         summary.warnings.push_back("a homography explains the matches about as well (transfer RMS " +
-                                   Fmt(summary.homography_rms_px) +
+                                   internal::FormatNumber(summary.homography_rms_px) +
                                    " px): a planar scene or a camera that only rotated; F is poorly determined");
     }
   }
   summary.termination = RefineTermination(refine_result);
   summary.message = "F from " + std::to_string(summary.num_inliers) + " of " + std::to_string(n) +
-                    " matches, symmetric epipolar RMS " + Fmt(summary.symmetric_epipolar_rms_px) + " px";
+                    " matches, symmetric epipolar RMS " + internal::FormatNumber(summary.symmetric_epipolar_rms_px) + " px";
   summary.time_ms = MsSince(start);
   return summary;
 }
@@ -814,7 +812,7 @@ RelativePoseSummary EstimateRelativePose(const Eigen::Matrix3d& F, const Eigen::
   summary.termination = RefineTermination(refine_result);
   summary.message = "relative pose with " + std::to_string(summary.points_in_front) + " of " +
                     std::to_string(summary.num_points) + " points in front, symmetric epipolar RMS " +
-                    Fmt(summary.symmetric_epipolar_rms_px) + " px";
+                    internal::FormatNumber(summary.symmetric_epipolar_rms_px) + " px";
   summary.time_ms = MsSince(start);
   return summary;
 }

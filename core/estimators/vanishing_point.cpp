@@ -11,6 +11,7 @@
 #include "core/optim/damped_normal_step.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/util/timer.h"
+#include "core/util/stats.h"
 
 namespace facet {
 namespace {
@@ -135,10 +136,6 @@ double SumOfSquares(const std::vector<double>& values) {
   return sum;
 }
 
-double Rms(const std::vector<double>& values) {
-  return values.empty() ? 0.0 : std::sqrt(SumOfSquares(values) / values.size());
-}
-
 }  // namespace
 
 bool VanishingPointOptions::Check(std::string* error) const {
@@ -210,7 +207,7 @@ VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segm
     return out;
   };
   const std::vector<double> initial_residuals_px = residuals_px(v);
-  summary.initial_rms_px = Rms(initial_residuals_px);
+  summary.initial_rms_px = internal::RootMeanSquare(initial_residuals_px);
   summary.initial_cost = SumOfSquares(initial_residuals_px);
   summary.termination = SolverTermination::kConverged;
   if (options.refine) {
@@ -224,7 +221,7 @@ VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segm
   if (!v.allFinite()) return FailedSummary(summary, "the vanishing point is not finite (numerical failure)", start);
   summary.vp_conditioned = v;
   summary.residuals_px = residuals_px(v);
-  summary.final_rms_px = Rms(summary.residuals_px);
+  summary.final_rms_px = internal::RootMeanSquare(summary.residuals_px);
   summary.final_cost = SumOfSquares(summary.residuals_px);
   summary.distance_in_scales = v.z() > 0.0 ? v.head<2>().norm() / v.z() : kInfinity;
 

@@ -122,6 +122,16 @@ void Camera::SetPose(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& cen
   cam_from_world_translation = -rotation * center_in_world;
 }
 
+Eigen::Matrix3d CamFromWorldLookingAlong(const Eigen::Vector3d& forward) {
+  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d down = forward.cross(right);
+  Eigen::Matrix3d cam_from_world;
+  cam_from_world.row(0) = right.transpose();
+  cam_from_world.row(1) = down.transpose();
+  cam_from_world.row(2) = forward.transpose();
+  return cam_from_world;
+}
+
 Eigen::Matrix3d RotationFromAngleAxis(const Eigen::Vector3d& angle_axis) {
   const double angle = angle_axis.norm();
   if (angle < 1e-12) {

@@ -61,6 +61,11 @@ Eigen::Vector2d DistortNormalized(const Eigen::Vector2d& xy_undistorted, double 
 Eigen::Vector2d UndistortNormalized(const Eigen::Vector2d& xy_distorted, double k1, double k2);
 
 // Angle-axis vector (radians) <-> rotation matrix, stable near zero angle.
+// The rotation of a camera looking along the unit vector `forward` (not along world z) with
+// world z up in the image: rows are the camera axes in world, x right, y down, z forward
+// (core/geometry/conventions.h).
+Eigen::Matrix3d CamFromWorldLookingAlong(const Eigen::Vector3d& forward);
+
 Eigen::Matrix3d RotationFromAngleAxis(const Eigen::Vector3d& angle_axis);
 Eigen::Vector3d AngleAxisFromRotation(const Eigen::Matrix3d& rotation);
 

@@ -17,8 +17,6 @@ namespace {
 // The diagonal of a full-frame 35 mm sensor (36 x 24 mm), in mm.
 const double kFullFrameDiagonalMm = std::hypot(36.0, 24.0);
 
-std::string Fmt(double x) { return internal::FormatNumber(x, 6); }
-
 ExifFocal NotFound(std::string message) {
   ExifFocal result;
   result.message = std::move(message);
@@ -72,8 +70,8 @@ ExifFocal ReadExifFocalFromBuffer(const unsigned char* bytes, std::size_t size, 
     result.focal_px =
         result.focal_35mm_equivalent_mm / kFullFrameDiagonalMm * std::hypot(double(width_px), double(height_px));
     result.found = true;
-    result.message = "FocalLengthIn35mmFilm " + Fmt(result.focal_35mm_equivalent_mm) + " mm: f = " +
-                     Fmt(result.focal_px) + " px for " + std::to_string(width_px) + " x " +
+    result.message = "FocalLengthIn35mmFilm " + internal::FormatNumber(result.focal_35mm_equivalent_mm, 6) + " mm: f = " +
+                     internal::FormatNumber(result.focal_px, 6) + " px for " + std::to_string(width_px) + " x " +
                      std::to_string(height_px);
     return result;
   }
@@ -83,12 +81,12 @@ ExifFocal ReadExifFocalFromBuffer(const unsigned char* bytes, std::size_t size, 
     const double sensor_side_px = sensor_w > 0.0 && sensor_h > 0.0 ? std::max(sensor_w, sensor_h) : image_side_px;
     result.focal_px = result.focal_length_mm * result.focal_plane_pixels_per_mm * image_side_px / sensor_side_px;
     result.found = true;
-    result.message = "FocalLength " + Fmt(result.focal_length_mm) + " mm at " +
-                     Fmt(result.focal_plane_pixels_per_mm) + " sensor px/mm: f = " + Fmt(result.focal_px) + " px";
+    result.message = "FocalLength " + internal::FormatNumber(result.focal_length_mm, 6) + " mm at " +
+                     internal::FormatNumber(result.focal_plane_pixels_per_mm, 6) + " sensor px/mm: f = " + internal::FormatNumber(result.focal_px, 6) + " px";
     return result;
   }
   result.message = result.focal_length_mm > 0.0
-                       ? "EXIF gives FocalLength (" + Fmt(result.focal_length_mm) +
+                       ? "EXIF gives FocalLength (" + internal::FormatNumber(result.focal_length_mm, 6) +
                              " mm) but neither FocalLengthIn35mmFilm nor the sensor resolution"
                        : "EXIF has no focal length";
   return result;

@@ -122,10 +122,10 @@ inline facet::Project LoadProjectFile(const std::string& path) {
   return loaded.project;
 }
 
-// "x y" with full precision, for script coordinates.
-inline std::string FormatXY(const Eigen::Vector2d& p) {
+// "x y" for script coordinates, with full precision unless a test asks for fewer digits.
+inline std::string FormatXY(const Eigen::Vector2d& p, int significant_digits = 17) {
   std::ostringstream out;
-  out.precision(17);
+  out.precision(significant_digits);
   out << p.x() << " " << p.y();
   return out.str();
 }

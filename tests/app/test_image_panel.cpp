@@ -24,9 +24,11 @@
 
 #include "core/mesh/box.h"
 #include "core/io/project_io.h"
+#include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 
 namespace fs = std::filesystem;
+using facet::testing::FormatXY;
 using facet::testing::MakeBoxScene;
 using facet::testing::SyntheticScene;
 
@@ -150,13 +152,6 @@ nlohmann::json Render(const TempDir& dir, const Fixture& f, const std::string& n
   return ReadJson(dir / (name + ".json"));
 }
 
-std::string Fmt(const Eigen::Vector2d& s) {
-  std::ostringstream out;
-  out.precision(10);
-  out << s.x() << " " << s.y();
-  return out.str();
-}
-
 // ImGui floors mouse positions to whole screen pixels: scripts use whole pixels.
 Eigen::Vector2d Whole(const Eigen::Vector2d& s) { return {std::floor(s.x()), std::floor(s.y())}; }
 
@@ -185,7 +180,7 @@ TEST_CASE("image panel: the wheel zooms about the cursor and F fits the image ag
   // Zoom in at a point off the centre: that image point stays under the cursor.
   const Eigen::Vector2d cursor = Whole(fitted.ToScreen({300.25, 200.75}));
   REQUIRE(fitted.Inside(cursor, 10.0));
-  const View zoomed = ViewFromReport(Render(dir, f, "zoomed", "frames 2\nwheel 3 " + Fmt(cursor) + "\nframes 2\n"));
+  const View zoomed = ViewFromReport(Render(dir, f, "zoomed", "frames 2\nwheel 3 " + FormatXY(cursor, 10) + "\nframes 2\n"));
   CHECK(zoomed.zoom > fitted.zoom * 1.5);
   const Eigen::Vector2d before = fitted.ToImage(cursor), after = zoomed.ToImage(cursor);
   constexpr double kAnchorToleranceScreenPx = 0.05;  // float rounding of origin and zoom
@@ -198,7 +193,7 @@ TEST_CASE("image panel: the wheel zooms about the cursor and F fits the image ag
 
   // F (with the mouse over the view) restores the fitted transform.
   const View refit = ViewFromReport(
-      Render(dir, f, "refit", "frames 2\nwheel 3 " + Fmt(cursor) + "\nframes 2\nmove " + Fmt(cursor) + "\nkey f\nframes 2\n"));
+      Render(dir, f, "refit", "frames 2\nwheel 3 " + FormatXY(cursor, 10) + "\nframes 2\nmove " + FormatXY(cursor, 10) + "\nkey f\nframes 2\n"));
   CHECK(refit.zoom == doctest::Approx(fitted.zoom).epsilon(1e-6));
   CHECK(std::abs(refit.origin_x - fitted.origin_x) < 0.01);
   CHECK(std::abs(refit.origin_y - fitted.origin_y) < 0.01);
@@ -214,7 +209,7 @@ TEST_CASE("image panel: zoomed in past 1:1 every screen pixel shows its photo pi
   const Eigen::Vector2d cursor = fitted.ToScreen(seam_uv);
   REQUIRE(fitted.Inside(cursor, 10.0));
   const nlohmann::json report =
-      Render(dir, f, "zoomed", "frames 2\nwheel 12 " + Fmt(cursor) + "\nframes 3\n", "FACET_IMAGE_TILE_PX=64");
+      Render(dir, f, "zoomed", "frames 2\nwheel 12 " + FormatXY(cursor, 10) + "\nframes 3\n", "FACET_IMAGE_TILE_PX=64");
   const View view = ViewFromReport(report);
   REQUIRE(view.zoom > 2.0);
   const cv::Mat shot = cv::imread(dir / "zoomed.png", cv::IMREAD_COLOR);
@@ -256,8 +251,8 @@ TEST_CASE("image panel: a line tool drag adds one segment of its family where th
   const Eigen::Vector2d a = Whole(ViewCenter(view) + Eigen::Vector2d(-80, 40));
   const Eigen::Vector2d b = Whole(ViewCenter(view) + Eigen::Vector2d(60, -30));
   const Eigen::Vector2d tiny = a + Eigen::Vector2d(2, 1);  // under 3 px: ignored
-  const std::string script = "frames 2\ncommand tool line-y\ndrag left " + Fmt(a) + " " + Fmt(b) + " 8\nframes 2\n" +
-                             "drag left " + Fmt(a) + " " + Fmt(tiny) + " 3\nframes 2\n";
+  const std::string script = "frames 2\ncommand tool line-y\ndrag left " + FormatXY(a, 10) + " " + FormatXY(b, 10) + " 8\nframes 2\n" +
+                             "drag left " + FormatXY(a, 10) + " " + FormatXY(tiny, 10) + " 3\nframes 2\n";
   const nlohmann::json report = Render(dir, f, "line", script);
   const facet::Project project = ProjectFromReport(report);
   REQUIRE(project.segments.size() == 1);
@@ -305,14 +300,14 @@ TEST_CASE("image panel: Escape cancels an endpoint drag; Delete removes the sele
   const Eigen::Vector2d from = Whole(view.ToScreen(best_end == 0 ? best->a_px : best->b_px));
   const Eigen::Vector2d to = from + Eigen::Vector2d(25, 15);
 
-  const std::string cancel = "frames 2\nmove " + Fmt(from) + "\nframes 1\ndown left\nmove " + Fmt(from + (to - from) * 0.5) +
-                             "\nmove " + Fmt(to) + "\nframes 1\nkey escape\nup left\nframes 2\n";
+  const std::string cancel = "frames 2\nmove " + FormatXY(from, 10) + "\nframes 1\ndown left\nmove " + FormatXY(from + (to - from) * 0.5, 10) +
+                             "\nmove " + FormatXY(to, 10) + "\nframes 1\nkey escape\nup left\nframes 2\n";
   const nlohmann::json cancelled = Render(dir, f, "cancel", cancel);
   CHECK(cancelled.at("undo_stack").empty());
   CHECK(cancelled.at("project") == start.at("project"));
 
   // Without the Escape the same drag moves the endpoint (so the check above can fail).
-  const std::string moved_script = "frames 2\ndrag left " + Fmt(from) + " " + Fmt(to) + " 6\nframes 2\n";
+  const std::string moved_script = "frames 2\ndrag left " + FormatXY(from, 10) + " " + FormatXY(to, 10) + " 6\nframes 2\n";
   const facet::Project moved = ProjectFromReport(Render(dir, f, "moved", moved_script));
   const facet::Segment* m = moved.FindSegment(best->id);
   REQUIRE(m != nullptr);
@@ -320,7 +315,7 @@ TEST_CASE("image panel: Escape cancels an endpoint drag; Delete removes the sele
   CHECK(((best_end == 0 ? m->a_px : m->b_px) - expected).norm() < 0.01 / view.zoom);
 
   // A click selects the segment at its endpoint; Delete removes it as one undo entry.
-  const std::string del = "frames 2\nclick left " + Fmt(from) + "\nframes 1\nkey delete\nframes 2\n";
+  const std::string del = "frames 2\nclick left " + FormatXY(from, 10) + "\nframes 1\nkey delete\nframes 2\n";
   const nlohmann::json deleted = Render(dir, f, "delete", del);
   const facet::Project after = ProjectFromReport(deleted);
   CHECK(after.segments.size() == p.segments.size() - 1);
@@ -351,8 +346,8 @@ TEST_CASE("image panel: the pin tool pins a clicked box vertex where the next cl
   REQUIRE(best_gap > 20.0);
   const Eigen::Vector2d corner_screen = Whole(view.ToScreen(f.scene.true_camera.Project(corners[best])));
   const Eigen::Vector2d target = corner_screen + Eigen::Vector2d(-14, 9);
-  const std::string script = "frames 2\ncommand tool pin\nclick left " + Fmt(corner_screen) + "\nframes 1\nclick left " +
-                             Fmt(target) + "\nframes 2\n";
+  const std::string script = "frames 2\ncommand tool pin\nclick left " + FormatXY(corner_screen, 10) + "\nframes 1\nclick left " +
+                             FormatXY(target, 10) + "\nframes 2\n";
   const nlohmann::json report = Render(dir, f, "pin", script);
   const facet::Project project = ProjectFromReport(report);
   REQUIRE(project.pins.size() == 1);
@@ -372,8 +367,8 @@ TEST_CASE("image panel: with Shift held during a press the pointer moves at 1/ma
   const Eigen::Vector2d mouse_motion(40, -12);
   constexpr double kMagnification = 4.0;  // the loupe's default
   // Shift is down before the press: the press lands on the mouse, the motion is slowed.
-  const std::string script = "frames 2\ncommand tool line-z\nmove " + Fmt(a) + "\nhold shift\nframes 2\ndown left\nmove " +
-                             Fmt(a + 0.5 * mouse_motion) + "\nmove " + Fmt(a + mouse_motion) +
+  const std::string script = "frames 2\ncommand tool line-z\nmove " + FormatXY(a, 10) + "\nhold shift\nframes 2\ndown left\nmove " +
+                             FormatXY(a + 0.5 * mouse_motion, 10) + "\nmove " + FormatXY(a + mouse_motion, 10) +
                              "\nframes 1\nup left\nframes 1\nrelease shift\nframes 2\n";
   const facet::Project project = ProjectFromReport(Render(dir, f, "fine", script));
   REQUIRE(project.segments.size() == 1);

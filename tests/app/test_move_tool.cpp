@@ -71,17 +71,11 @@ std::string WriteFreeBox(const TempDir& dir, facet::Id* box_id) {
 
 Eigen::Vector2d Rounded(const Eigen::Vector2d& p) { return {std::round(p.x()), std::round(p.y())}; }
 
-std::string Fmt(const Eigen::Vector2d& p) {
-  std::ostringstream out;
-  out << p.x() << " " << p.y();
-  return out.str();
-}
-
 // Press at `from`, move there in `steps` frames, optional screenshot while held, release.
 std::string DragScript(const Eigen::Vector2d& from, const Eigen::Vector2d& to, int steps, const std::string& shot) {
   std::ostringstream s;
-  s << "move " << Fmt(from) << "\nframes 1\ndown left\nframes 1\n";
-  for (int i = 1; i <= steps; ++i) s << "move " << Fmt(from + (to - from) * i / steps) << "\nframes 1\n";
+  s << "move " << FormatXY(from, 6) << "\nframes 1\ndown left\nframes 1\n";
+  for (int i = 1; i <= steps; ++i) s << "move " << FormatXY(from + (to - from) * i / steps, 6) << "\nframes 1\n";
   if (!shot.empty()) s << "screenshot " << shot << "\n";
   s << "up left\nframes 2\n";
   return s.str();
@@ -155,9 +149,9 @@ TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the
   // Escape during a vertex drag cancels it: nothing changes, no history entry.
   const Eigen::Vector2d corner7 = Rounded(view.ToScreen(box0.mesh.vertex(7).position));
   std::ostringstream s;
-  s << prefix << "move " << Fmt(corner7) << "\nframes 1\ndown left\nframes 1\n";
-  for (int i = 1; i <= 3; ++i) s << "move " << Fmt(corner7 + Eigen::Vector2d(10.0 * i, 5.0 * i)) << "\nframes 1\n";
-  s << "key escape\nframes 1\nmove " << Fmt(corner7 + Eigen::Vector2d(50.0, 25.0)) << "\nframes 1\nup left\nframes 2\n";
+  s << prefix << "move " << FormatXY(corner7, 6) << "\nframes 1\ndown left\nframes 1\n";
+  for (int i = 1; i <= 3; ++i) s << "move " << FormatXY(corner7 + Eigen::Vector2d(10.0 * i, 5.0 * i), 6) << "\nframes 1\n";
+  s << "key escape\nframes 1\nmove " << FormatXY(corner7 + Eigen::Vector2d(50.0, 25.0), 6) << "\nframes 1\nup left\nframes 2\n";
   s << "command save " << (dir / "escaped.facet") << "\nframes 1\n";
   s << DragScript(from, to, 5, "") << "command save " << (dir / "dragged.facet") << "\nframes 1\n";
   // The command: the vertex to a position, then the primitive by a delta.

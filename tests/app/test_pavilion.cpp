@@ -130,13 +130,6 @@ Fixture WriteFixture(const TempDir& dir) {
   return f;
 }
 
-std::string Fmt(const Eigen::Vector2d& p) {
-  std::ostringstream out;
-  out.precision(10);
-  out << p.x() << " " << p.y();
-  return out.str();
-}
-
 nlohmann::json Render(const TempDir& dir, const Fixture& f, const std::string& name, const std::string& script) {
   WriteText(dir / (name + ".txt"), script);
   const RunResult run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / (name + ".png")) + "' --script '" +
@@ -198,29 +191,29 @@ TEST_CASE("pavilion: box, two E_splits, V_connect, free ridge vertices pinned to
   std::ostringstream s;
   s << "frames 2\ncommand add box\nframes 1\ncommand tool pin\n";
   for (int c : visible) {
-    s << "command select vertex " << f.box_id << " " << c << "\nclick left " << Fmt(Click(view, f, Corner(c)))
+    s << "command select vertex " << f.box_id << " " << c << "\nclick left " << FormatXY(Click(view, f, Corner(c)), 10)
       << "\nframes 1\n";
   }
   // The top edges across y (x = 0 and x = sx), split at their middles (the tool snaps there).
   const Eigen::Vector3d mid0 = 0.5 * (Corner(4) + Corner(6)), mid1 = 0.5 * (Corner(5) + Corner(7));
   s << "command tool split-edge\n"
-    << "click left " << Fmt(Screen(view, f, mid0)) << "\nframes 1\n"
-    << "click left " << Fmt(Screen(view, f, mid1)) << "\nframes 1\n";
+    << "click left " << FormatXY(Screen(view, f, mid0), 10) << "\nframes 1\n"
+    << "click left " << FormatXY(Screen(view, f, mid1), 10) << "\nframes 1\n";
   s << "command tool connect-vertices\n"
-    << "click left " << Fmt(Screen(view, f, mid0)) << "\nframes 1\n"
-    << "click left " << Fmt(Screen(view, f, mid1)) << "\nframes 1\n";
+    << "click left " << FormatXY(Screen(view, f, mid0), 10) << "\nframes 1\n"
+    << "click left " << FormatXY(Screen(view, f, mid1), 10) << "\nframes 1\n";
   // Free both (select tool, click, T), then keep the gable ends planar: the x = sx end faces
   // the camera (click inside it, K), the x = 0 end does not (select it by id: face 0, -X).
   s << "command tool select\n";
-  for (const Eigen::Vector3d& m : {mid0, mid1}) s << "click left " << Fmt(Screen(view, f, m)) << "\nframes 1\nkey t\nframes 1\n";
+  for (const Eigen::Vector3d& m : {mid0, mid1}) s << "click left " << FormatXY(Screen(view, f, m), 10) << "\nframes 1\nkey t\nframes 1\n";
   const Eigen::Vector3d in_right_end(kBoxSize.x(), 0.3 * kBoxSize.y(), 0.4 * kBoxSize.z());
-  s << "click left " << Fmt(Screen(view, f, in_right_end)) << "\nframes 1\nkey k\nframes 1\n";
+  s << "click left " << FormatXY(Screen(view, f, in_right_end), 10) << "\nframes 1\nkey k\nframes 1\n";
   s << "command select face " << f.box_id << " 0\ncommand planar-face\nframes 1\n";
   // Pin each new vertex: choose it where it is drawn, then click the ridge end in the photo.
   s << "command tool pin\n";
   for (int end = 0; end < 2; ++end) {
-    s << "click left " << Fmt(Screen(view, f, end == 0 ? mid0 : mid1)) << "\nframes 1\n"
-      << "click left " << Fmt(Click(view, f, Ridge(end))) << "\nframes 1\n";
+    s << "click left " << FormatXY(Screen(view, f, end == 0 ? mid0 : mid1), 10) << "\nframes 1\n"
+      << "click left " << FormatXY(Click(view, f, Ridge(end)), 10) << "\nframes 1\n";
   }
   const std::string saved = dir / "pavilion_done.facet";
   s << "frames 2\ncommand save " << saved << "\n";
@@ -321,11 +314,11 @@ TEST_CASE("pavilion: undo clears a selection it removes; a refused operator says
   std::ostringstream s;
   s << "frames 2\ncommand add box\nframes 1\ncommand tool pin\n";
   for (int c : {0, 1, 3, 4, 5, 6, 7}) {
-    s << "command select vertex " << f.box_id << " " << c << "\nclick left " << Fmt(Click(view, f, Corner(c)))
+    s << "command select vertex " << f.box_id << " " << c << "\nclick left " << FormatXY(Click(view, f, Corner(c)), 10)
       << "\nframes 1\n";
   }
   const Eigen::Vector3d mid0 = 0.5 * (Corner(4) + Corner(6));
-  s << "command tool split-edge\nclick left " << Fmt(Screen(view, f, mid0)) << "\nframes 2\n";
+  s << "command tool split-edge\nclick left " << FormatXY(Screen(view, f, mid0), 10) << "\nframes 2\n";
   const nlohmann::json split = Render(dir, f, "split", s.str());
   INFO("log:\n" << LogText(split));
   REQUIRE(split.at("undo_stack").back().get<std::string>() == "Split edge");
@@ -341,7 +334,7 @@ TEST_CASE("pavilion: undo clears a selection it removes; a refused operator says
   CHECK(after_undo.project.primitives.at(0).mesh.NumVertices() == 8);
 
   // V_delete on a box corner is refused: the core's message in the log, no history entry.
-  const std::string refuse = s.str() + "command tool delete-vertex\nclick left " + Fmt(Screen(view, f, Corner(5))) +
+  const std::string refuse = s.str() + "command tool delete-vertex\nclick left " + FormatXY(Screen(view, f, Corner(5)), 10) +
                              "\nframes 2\n";
   const nlohmann::json refused = Render(dir, f, "refused", refuse);
   CHECK(refused.at("undo_stack") == split.at("undo_stack"));
@@ -360,7 +353,7 @@ TEST_CASE("pavilion: the 3D panel picks a vertex, an edge and a face by ray, wit
   std::ostringstream s;
   s << "frames 2\ncommand add box\nframes 1\ncommand tool pin\n";
   for (int c : {0, 1, 3, 4, 5, 6, 7}) {
-    s << "command select vertex " << f.box_id << " " << c << "\nclick left " << Fmt(Click(view, f, Corner(c)))
+    s << "command select vertex " << f.box_id << " " << c << "\nclick left " << FormatXY(Click(view, f, Corner(c)), 10)
       << "\nframes 1\n";
   }
   // F over the 3D panel frames the model (the view was framed when the box came, before the
@@ -369,7 +362,7 @@ TEST_CASE("pavilion: the 3D panel picks a vertex, an edge and a face by ray, wit
   const auto& panel = before.at("panels").at("3D");
   const Eigen::Vector2d panel_centre(panel.at("x").get<double>() + panel.at("w").get<double>() / 2,
                                      panel.at("y").get<double>() + panel.at("h").get<double>() / 2);
-  s << "command tool select\ncommand select none\nmove " << Fmt(panel_centre) << "\nframes 1\nkey f\nframes 3\n";
+  s << "command tool select\ncommand select none\nmove " << FormatXY(panel_centre, 10) << "\nframes 1\nkey f\nframes 3\n";
   const nlohmann::json placed = Render(dir, f, "placed", s.str());
   const Viewport3d viewport = ViewportFromReport(placed);
   const facet::ProjectLoadResult loaded = facet::ProjectFromJson(placed.at("project").dump());
@@ -419,7 +412,7 @@ TEST_CASE("pavilion: the 3D panel picks a vertex, an edge and a face by ray, wit
     REQUIRE(inside_panel(p));
     const std::string name = std::string("pick_") + target.kind;
     const nlohmann::json report =
-        Render(dir, f, name, s.str() + "move " + Fmt(p) + "\nframes 2\nclick left " + Fmt(p) + "\nframes 2\n");
+        Render(dir, f, name, s.str() + "move " + FormatXY(p, 10) + "\nframes 2\nclick left " + FormatXY(p, 10) + "\nframes 2\n");
     INFO("hover " << report.at("hover").dump() << ", selection " << report.at("selection").dump());
     CHECK(report.at("hover").at("kind").get<std::string>() == target.kind);
     CHECK(report.at("hover").at("id").get<facet::Id>() == target.element);

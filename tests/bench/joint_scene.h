@@ -63,12 +63,7 @@ inline Camera LookAtCamera(const JointSceneOptions& o, const Eigen::Vector3d& ce
   camera.focal_px = o.focal_px;
   camera.principal_point_px = Eigen::Vector2d((o.width_px - 1) / 2.0, (o.height_px - 1) / 2.0);
   const Eigen::Vector3d forward = (look_at - center).normalized();
-  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const Eigen::Vector3d down = forward.cross(right);
-  Eigen::Matrix3d cam_from_world;
-  cam_from_world.row(0) = right.transpose();
-  cam_from_world.row(1) = down.transpose();
-  cam_from_world.row(2) = forward.transpose();
+  const Eigen::Matrix3d cam_from_world = CamFromWorldLookingAlong(forward);
   camera.SetPose(cam_from_world, center);
   return camera;
 }

@@ -22,6 +22,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/estimators/calibrate_dlt.h"
+#include "core/util/stats.h"
 
 namespace facet {
 namespace {
@@ -65,12 +66,6 @@ struct ViewResult {
   double focal_reference_pp_px = 0.0, rms_reference_pp_px = 0.0;
   double focal_small_window_px = 0.0, rms_small_window_px = 0.0;
 };
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 double Max(const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); }
 
@@ -231,16 +226,16 @@ TEST_CASE("Chessboard: one view through the planar path gives f within 3 % of ca
     std::string missing;
     for (const auto& name : not_found) missing += " " + name;
     REQUIRE_MESSAGE(results.size() >= 10, side << ": corners found in only " << results.size() << " views");
-    const double median_distorted = Median(err_distorted);
+    const double median_distorted = internal::Median(err_distorted);
     MESSAGE(side << " (reference f " << reference_f << " px, principal point " << reference_pp.transpose()
                  << "; ours held at the image centre): " << results.size() << " views (corners not found:"
                  << (missing.empty() ? " none" : missing) << "); focal error median / max %: k1 k2 "
-                 << median_distorted << " / " << Max(err_distorted) << ", pinhole " << Median(err_pinhole) << " / "
-                 << Max(err_pinhole) << ", cv::calibrateCamera one view " << Median(err_opencv) << " / "
-                 << Max(err_opencv) << ", k1 k2 at the reference principal point " << Median(err_reference_pp)
-                 << " / " << Max(err_reference_pp) << ", k1 k2 on 5x5 corners " << Median(err_small_window) << " / "
-                 << Max(err_small_window) << "; RMS k1 k2 median / max " << Median(rms_distorted) << " / "
-                 << Max(rms_distorted) << " px (5x5 corners " << Median(rms_small_window) << " / "
+                 << median_distorted << " / " << Max(err_distorted) << ", pinhole " << internal::Median(err_pinhole) << " / "
+                 << Max(err_pinhole) << ", cv::calibrateCamera one view " << internal::Median(err_opencv) << " / "
+                 << Max(err_opencv) << ", k1 k2 at the reference principal point " << internal::Median(err_reference_pp)
+                 << " / " << Max(err_reference_pp) << ", k1 k2 on 5x5 corners " << internal::Median(err_small_window) << " / "
+                 << Max(err_small_window) << "; RMS k1 k2 median / max " << internal::Median(rms_distorted) << " / "
+                 << Max(rms_distorted) << " px (5x5 corners " << internal::Median(rms_small_window) << " / "
                  << Max(rms_small_window) << " px)");
     CHECK(median_distorted <= kMaxMedianFocalErrorPercent);
   }

@@ -23,6 +23,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/estimators/plumb_line.h"
+#include "core/util/stats.h"
 
 namespace facet {
 namespace {
@@ -151,12 +152,6 @@ PlumbLineOptions Options(const Reference& reference, bool estimate_k2) {
   return options;
 }
 
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 // Largest distance between our undistortion and OpenCV's at the given pixels.
 double MaxDisagreementPx(const RadialDistortion& ours, const Reference& reference,
                          const std::vector<Eigen::Vector2d>& uv_px, bool radial_only = false) {
@@ -248,7 +243,7 @@ TEST_CASE("Chessboard plumb lines: distortion agrees with calibrateCamera, lines
                           << rms_ours_px << " px ours, " << rms_opencv_px << " px OpenCV's; vs OpenCV undistortion: "
                           << corners_disagreement_px << " px max over board corners, " << image_corner_disagreement_px
                           << " px at the image corners (where OpenCV moves them " << image_corner_shift_px
-                          << " px); median solve " << Median(times_ms) << " ms, " << joint.iterations
+                          << " px); median solve " << internal::Median(times_ms) << " ms, " << joint.iterations
                           << " iterations");
     CAPTURE(rms_ours_px);
     CAPTURE(corners_disagreement_px);
@@ -294,12 +289,12 @@ TEST_CASE("Chessboard plumb lines: one view at a time") {
                           << " px, max disagreement with OpenCV's radial undistortion over its board corners " << disagreements.back()
                           << " px");
   }
-  MESSAGE("per view: median k1 " << Median(k1_values) << " (min " << *std::min_element(k1_values.begin(), k1_values.end())
+  MESSAGE("per view: median k1 " << internal::Median(k1_values) << " (min " << *std::min_element(k1_values.begin(), k1_values.end())
                                  << ", max " << *std::max_element(k1_values.begin(), k1_values.end())
-                                 << "), median straightness " << Median(rms_before) << " -> " << Median(rms_after)
-                                 << " px, median disagreement " << Median(disagreements) << " px");
-  CHECK(Median(rms_after) < kMaxStraightnessRmsPx);
-  CHECK(Median(disagreements) < kMaxDisagreementFraction * board_shift_px);
+                                 << "), median straightness " << internal::Median(rms_before) << " -> " << internal::Median(rms_after)
+                                 << " px, median disagreement " << internal::Median(disagreements) << " px");
+  CHECK(internal::Median(rms_after) < kMaxStraightnessRmsPx);
+  CHECK(internal::Median(disagreements) < kMaxDisagreementFraction * board_shift_px);
 }
 
 }  // namespace facet
