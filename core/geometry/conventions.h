@@ -19,5 +19,5 @@
 //   uv = (f * X / Z + cx, f * Y / Z + cy) for p_in_cam = (X, Y, Z) with Z > 0.
 //
 // The conversion of a camera to OpenGL's view and projection matrices (Y up, looking down
-// -Z) happens in exactly one place: app/gl_camera.h.
+// -Z) happens in exactly one place: app/platform/gl_camera.h.
 #pragma once
