@@ -397,7 +397,7 @@ TEST_CASE("joint solve: a failing solve leaves the project unchanged and says wh
     RefreshAllPrimitives(&p);
     Project solved;
     const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
-    CHECK(summary.termination == JointSolveSummary::Termination::kFailed);
+    CHECK(summary.termination == SolverTermination::kFailed);
     CHECK(summary.message.find("behind") != std::string::npos);
     CHECK(solved == p);
   }
@@ -408,7 +408,7 @@ TEST_CASE("joint solve: a failing solve leaves the project unchanged and says wh
     Project solved;
     const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
     MESSAGE(summary.message);
-    CHECK(summary.termination == JointSolveSummary::Termination::kInvalidInput);
+    CHECK(summary.termination == SolverTermination::kInvalidInput);
     CHECK(summary.message.find("non-finite") != std::string::npos);
     CHECK(solved.images[0].camera.focal_px != solved.images[0].camera.focal_px);  // still NaN: unchanged copy
     CHECK(solved.primitives == p.primitives);

@@ -438,10 +438,10 @@ TEST_CASE("constraints: a line pin 3 px off converges to the constrained minimum
   REQUIRE(summary.IsUsable());
   const double after_px = LinePinDistancePx(solved, s);
   REQUIRE(summary.constraints.size() == 1);
-  MESSAGE("line pin: " << summary.iterations << " iterations, " << std::string(JointSolveTerminationName(summary.termination))
+  MESSAGE("line pin: " << summary.iterations << " iterations, " << std::string(SolverTerminationName(summary.termination))
                        << ", line " << after_px << " px, pin RMS " << summary.reprojection_rms_px << " px, cost "
                        << std::setprecision(15) << summary.final_cost);
-  CHECK(summary.termination == JointSolveSummary::Termination::kConverged);
+  CHECK(summary.termination == SolverTermination::kConverged);
   CHECK(summary.iterations <= kMaxLinePinIterations);
   CHECK(after_px < kLineHeldPx);
   CHECK(std::abs(summary.constraints[0].residual) < kLineHeldPx);

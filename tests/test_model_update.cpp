@@ -383,7 +383,7 @@ TEST_CASE("a failed solve leaves the project as the edit made it") {
       REQUIRE_FALSE(summary.messages.empty());
       CHECK(summary.messages.back().find("pin #") != std::string::npos);
       // The joint solve did not run on a failed geometry solve.
-      CHECK(summary.joint.termination == JointSolveSummary::Termination::kInvalidInput);
+      CHECK(summary.joint.termination == SolverTermination::kInvalidInput);
       CHECK(same_as_edited(updated));
     }
   }
@@ -397,7 +397,7 @@ TEST_CASE("nothing to solve is not a failure: the calibrated cameras are kept") 
   const ModelUpdateSummary summary = UpdateModel(scene.project, ModelUpdateOptions(), &updated);
   INFO(Messages(summary));
   CHECK(summary.ok);
-  CHECK(summary.solve.termination == SolveTermination::kNothingToSolve);
+  CHECK(summary.solve.termination == SolverTermination::kNothingToSolve);
   const double focal_error = std::abs(updated.images[0].camera.focal_px / scene.true_camera.focal_px - 1.0);
   CAPTURE(focal_error);
   CHECK(focal_error < 1e-9);

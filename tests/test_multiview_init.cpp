@@ -246,7 +246,7 @@ TEST_CASE("resection: 8 and 6 non-coplanar pins on known corners recover K, R, t
       Project out;
       const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, {}, &out);
       INFO(Messages(summary));
-      REQUIRE(summary.success);
+      REQUIRE(summary.IsUsable());
       const MultiViewImageReport& report = summary.images[1];
       REQUIRE(report.path == MultiViewInitPath::kResection);
       CHECK(report.initialized);
@@ -363,7 +363,7 @@ TEST_CASE("two views, known focal length, noise-free: relative pose exact, align
   Project out;
   const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, KnownFocal(s), &out);
   INFO(Messages(summary));
-  REQUIRE(summary.success);
+  REQUIRE(summary.IsUsable());
   for (int i : {0, 1}) {
     const MultiViewImageReport& report = summary.images[i];
     REQUIRE(report.path == MultiViewInitPath::kTwoView);
@@ -688,7 +688,7 @@ TEST_CASE("three uncalibrated views: self-calibration recovers the focal length"
   Project out;
   const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, {}, &out);
   INFO(Messages(summary));
-  REQUIRE(summary.success);
+  REQUIRE(summary.IsUsable());
   for (int i = 0; i < 3; ++i) {
     CAPTURE(i);
     const MultiViewImageReport& report = summary.images[i];
@@ -769,7 +769,7 @@ TEST_CASE("refusals: too few pins, too few shared vertices, collinear pins; the 
     Project out;
     const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, {}, &out);
     INFO(Messages(summary));
-    CHECK(summary.success);
+    CHECK(summary.IsUsable());
     CHECK(summary.num_initialized == 0);
     CHECK(summary.images[1].path == MultiViewInitPath::kNone);
     REQUIRE(summary.messages.size() == 1);
@@ -829,7 +829,7 @@ TEST_CASE("refusals: too few pins, too few shared vertices, collinear pins; the 
     options.wrong_click_threshold_px = -1.0;
     Project out;
     const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, options, &out);
-    CHECK_FALSE(summary.success);
+    CHECK_FALSE(summary.IsUsable());
     CHECK(summary.message.find("wrong_click_threshold_px") != std::string::npos);
     CHECK(out == s.project);
   }

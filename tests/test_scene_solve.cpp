@@ -282,7 +282,7 @@ TEST_CASE("0.5 px noise: errors agree with the Jacobian covariance and the RMS w
     CAPTURE(seed);
     INFO(summary.message, " ", AllWarnings(summary));
     REQUIRE(summary.IsUsable());
-    CHECK(summary.termination == SolveTermination::kConverged);
+    CHECK(summary.termination == SolverTermination::kConverged);
 
     internal::SceneState state;
     const internal::SceneProblem problem = internal::BuildSceneProblem(solved, &state);
@@ -421,7 +421,7 @@ TEST_CASE("degenerate inputs: nothing to solve, bad pins and bad options leave t
     scene.project.pins.clear();
     Project solved;
     const SceneSolveSummary summary = SolveScene(scene.project, SceneSolveOptions(), &solved);
-    CHECK(summary.termination == SolveTermination::kNothingToSolve);
+    CHECK(summary.termination == SolverTermination::kNothingToSolve);
     CHECK_FALSE(summary.IsUsable());
     CHECK(solved == scene.project);
   }
@@ -430,7 +430,7 @@ TEST_CASE("degenerate inputs: nothing to solve, bad pins and bad options leave t
     scene.project.primitives[0].param_locked = {true, true, true, true};
     Project solved;
     const SceneSolveSummary summary = SolveScene(scene.project, SceneSolveOptions(), &solved);
-    CHECK(summary.termination == SolveTermination::kNothingToSolve);
+    CHECK(summary.termination == SolverTermination::kNothingToSolve);
     CHECK(solved == scene.project);
     // The residuals of the locked scene are still reported.
     CHECK(summary.reprojection_rms_px < 1e-9);
@@ -441,8 +441,8 @@ TEST_CASE("degenerate inputs: nothing to solve, bad pins and bad options leave t
     Project solved;
     const SceneSolveSummary summary = SolveScene(scene.project, SceneSolveOptions(), &solved);
     INFO(summary.message);
-    CHECK((summary.termination == SolveTermination::kInvalidInput ||
-           summary.termination == SolveTermination::kFailed));
+    CHECK((summary.termination == SolverTermination::kInvalidInput ||
+           summary.termination == SolverTermination::kFailed));
     CHECK(summary.message.find("pin #") != std::string::npos);
     // NaN != NaN, so compare with the NaN replaced in both.
     Project a = solved, b = scene.project;
@@ -458,7 +458,7 @@ TEST_CASE("degenerate inputs: nothing to solve, bad pins and bad options leave t
     Project solved;
     const SceneSolveSummary summary = SolveScene(scene.project, warm, &solved);
     INFO(summary.message);
-    CHECK(summary.termination == SolveTermination::kFailed);
+    CHECK(summary.termination == SolverTermination::kFailed);
     CHECK_FALSE(summary.message.empty());
     CHECK(solved == scene.project);
   }
@@ -534,7 +534,7 @@ TEST_CASE("degenerate inputs: nothing to solve, bad pins and bad options leave t
       CHECK_FALSE(bad.Check(&error));
       Project solved;
       const SceneSolveSummary summary = SolveScene(scene.project, bad, &solved);
-      CHECK(summary.termination == SolveTermination::kInvalidInput);
+      CHECK(summary.termination == SolverTermination::kInvalidInput);
       CHECK_FALSE(summary.message.empty());
       CHECK(solved == scene.project);
     }

@@ -457,10 +457,7 @@ TEST_CASE("vertex move then model update: the solve starts from the moved state"
   REQUIRE(move.reached);
   REQUIRE(std::abs(moved.FindPrimitive(scene.box_id)->shape.params[1] - dragged_depth) < kReachTolerance);
 
-  ModelUpdateOptions warm;  // what the app runs after a commit (app_state.cpp FullUpdateOptions)
-  warm.solve.warm_start = true;
-  warm.solve.max_iterations = 100;
-  warm.joint.polish_constraints = true;
+  const ModelUpdateOptions warm = CommitUpdateOptions();  // what the app runs after a commit
   Project updated;
   const ModelUpdateSummary summary = UpdateModel(moved, warm, &updated);
   INFO("solve: " << summary.solve.message << ", joint: " << summary.joint.message);

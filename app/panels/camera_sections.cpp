@@ -331,9 +331,9 @@ std::string ImageLabel(const Project& project, Id image_id) {
 
 void DrawGeometrySolveFigures(const SceneSolveSummary& s, const char* title) {
   const bool usable = s.IsUsable();
-  const bool nothing = s.termination == SolveTermination::kNothingToSolve;
+  const bool nothing = s.termination == SolverTermination::kNothingToSolve;
   ImGui::TextColored(usable ? kGoodText : (nothing ? kDimText : kErrorText), "%s%s", title,
-                     SolveTerminationName(s.termination));
+                     SolverTerminationName(s.termination));
   if (usable) {
     LabelValue("Iterations", "%d", s.iterations);
     LabelValue("RMS", "%.3f px", s.reprojection_rms_px);
@@ -391,7 +391,7 @@ void DrawSolveSection(AppState* state) {
   if (j.IsUsable()) {
     // The geometry solve is the joint solve's start; with free vertices its RMS is not the
     // model's (tens of px where the joint solve reaches half a pixel), so it stays folded.
-    ImGui::TextColored(kGoodText, "Joint solve: %s", JointSolveTerminationName(j.termination));
+    ImGui::TextColored(kGoodText, "Joint solve: %s", SolverTerminationName(j.termination));
     LabelValue("RMS", "%.3f px", j.reprojection_rms_px);
     RecordItem(state, "solve.joint_rms");
     LabelValue("Max", "%.3f px", j.reprojection_max_px);
@@ -406,8 +406,8 @@ void DrawSolveSection(AppState* state) {
   } else {
     // Only the geometry solve's result stands: its figures are the model's.
     DrawGeometrySolveFigures(update.solve, "Geometry solve: ");
-    if (j.termination != JointSolveSummary::Termination::kInvalidInput || !j.message.empty()) {
-      ImGui::TextColored(kDimText, "Joint solve: %s", JointSolveTerminationName(j.termination));
+    if (j.termination != SolverTermination::kInvalidInput || !j.message.empty()) {
+      ImGui::TextColored(kDimText, "Joint solve: %s", SolverTerminationName(j.termination));
     }
   }
   if (!j.message.empty()) WrappedColored(kDimText, j.message);

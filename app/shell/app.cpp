@@ -158,11 +158,11 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
   report["hover"] = {{"kind", ElementKindName(state.hover.kind)},
                      {"primitive_id", state.hover.primitive_id},
                      {"id", state.hover.element}};
-  report["solve"] = {{"termination", SolveTerminationName(state.last_update.solve.termination)},
+  report["solve"] = {{"termination", SolverTerminationName(state.last_update.solve.termination)},
                      {"rms_px", state.last_update.solve.reprojection_rms_px},
                      {"max_px", state.last_update.solve.reprojection_max_px}};
   const JointSolveSummary& joint = state.last_update.joint;
-  report["joint_solve"] = {{"termination", JointSolveTerminationName(joint.termination)},
+  report["joint_solve"] = {{"termination", SolverTerminationName(joint.termination)},
                            {"message", joint.message},
                            {"rms_px", joint.reprojection_rms_px},
                            {"undetermined", joint.undetermined},

@@ -64,7 +64,7 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
   const SceneSolveSummary& s = update.solve;
 
   nlohmann::json out;
-  out["termination"] = SolveTerminationName(s.termination);
+  out["termination"] = SolverTerminationName(s.termination);
   out["message"] = s.message;
   out["iterations"] = s.iterations;
   out["initial_cost"] = s.initial_cost;

@@ -11,41 +11,12 @@
 namespace facet::app {
 namespace {
 
-// While a pin or endpoint is dragged, each frame gets a few warm-started iterations so the
-// frame never stalls; the full solve runs on release.
-constexpr int kDragIterationsPerFrame = 5;
-
-// A commit or a released drag: full solves, the SLSQP polish so constraints hold exactly,
-// and the diagnostics the properties panel shows.
-ModelUpdateOptions FullUpdateOptions() {
-  ModelUpdateOptions options;
-  options.solve.warm_start = true;
-  options.solve.max_iterations = 100;
-  options.joint.polish_constraints = true;
-  return options;
-}
-
-// One drag frame: the joint solve alone on the per-frame budget (the geometry solve only when
-// its warm result does not hold), no polish, no diagnostics (their SVD of the Jacobian is the
-// expensive part and the panel shows them after release), no camera initialisation from pins.
-ModelUpdateOptions DragUpdateOptions() {
-  ModelUpdateOptions options;
-  options.solve.warm_start = true;
-  options.solve.max_iterations = kDragIterationsPerFrame;
-  options.joint.max_iterations = kDragIterationsPerFrame;
-  options.joint.compute_diagnostics = false;
-  options.joint.polish_constraints = false;
-  options.initialize_from_pins = false;
-  options.geometry_solve_when_warm = false;
-  return options;
-}
-
 // After undo, redo or a cancelled drag the project is one the solver already produced; the
 // panels still need its vanishing points and residuals, so they are recomputed for display
 // without touching the project.
 void RefreshDiagnostics(AppState* state) {
   Project unused;
-  state->last_update = UpdateModel(state->document.project(), FullUpdateOptions(), &unused, &state->update_cache);
+  state->last_update = UpdateModel(state->document.project(), CommitUpdateOptions(), &unused, &state->update_cache);
 }
 
 void LogUpdate(AppState* state, const ModelUpdateSummary& summary) {
@@ -232,7 +203,7 @@ bool SaveProjectAs(AppState* state, const std::string& path) {
 
 void CommitEdit(AppState* state, const std::string& label, Project after) {
   Project updated;
-  state->last_update = UpdateModel(after, FullUpdateOptions(), &updated, &state->update_cache);
+  state->last_update = UpdateModel(after, CommitUpdateOptions(), &updated, &state->update_cache);
   LogUpdate(state, state->last_update);
   if (state->document.Commit(label, updated)) state->Log(LogLevel::kInfo, label);
 }
@@ -246,14 +217,14 @@ void BeginDrag(AppState* state, const std::string& label) {
 void UpdateDrag(AppState* state, Project edited) {
   if (!state->drag_start) return;
   Project updated;
-  state->last_update = UpdateModel(edited, DragUpdateOptions(), &updated, &state->update_cache);
+  state->last_update = UpdateModel(edited, DragFrameUpdateOptions(), &updated, &state->update_cache);
   *state->document.MutableProjectForPreview() = std::move(updated);
 }
 
 void EndDrag(AppState* state) {
   if (!state->drag_start) return;
   Project updated;
-  state->last_update = UpdateModel(state->document.project(), FullUpdateOptions(), &updated, &state->update_cache);
+  state->last_update = UpdateModel(state->document.project(), CommitUpdateOptions(), &updated, &state->update_cache);
   LogUpdate(state, state->last_update);
   *state->document.MutableProjectForPreview() = std::move(updated);
   if (state->document.CommitFrom(state->drag_label, *state->drag_start))

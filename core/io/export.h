@@ -9,6 +9,7 @@
 
 namespace facet {
 
+// Not a solver: what a file export did (success, the error or what was written, the files).
 struct ExportSummary {
   bool success = false;
   std::string message;  // the error, or what was written

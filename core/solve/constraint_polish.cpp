@@ -1,8 +1,10 @@
 #include "core/solve/constraint_polish.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <exception>
+#include <string>
 #include <vector>
 
 #include <nlopt.hpp>
@@ -58,20 +60,42 @@ double MaxViolation(const ConstraintPolishProblem& problem, const Eigen::VectorX
   return c.size() > 0 ? c.cwiseAbs().maxCoeff() : 0.0;
 }
 
+bool BudgetUsed(nlopt::result r) { return r == nlopt::MAXEVAL_REACHED || r == nlopt::MAXTIME_REACHED; }
+
 }  // namespace
+
+bool ConstraintPolishOptions::Check(std::string* error) const {
+  auto fail = [&](const std::string& why) {
+    if (error != nullptr) *error = why;
+    return false;
+  };
+  if (!(constraint_tolerance > 0.0) || !std::isfinite(constraint_tolerance)) {
+    return fail("constraint_tolerance must be positive and finite");
+  }
+  if (!(relative_x_tolerance >= 0.0)) return fail("relative_x_tolerance must be non-negative");
+  if (max_evaluations < 1) return fail("max_evaluations must be at least 1");
+  if (max_variables < 1) return fail("max_variables must be at least 1");
+  return true;
+}
 
 ConstraintPolishSummary PolishConstraints(const ConstraintPolishProblem& problem, const ConstraintPolishOptions& options,
                                           Eigen::VectorXd* x) {
+  const auto start = std::chrono::steady_clock::now();
   ConstraintPolishSummary summary;
+  std::string error;
+  if (!options.Check(&error)) {
+    return internal::FailedSummary(summary, "polish: invalid options: " + error, start, SolverTermination::kInvalidInput);
+  }
   if (problem.num_variables <= 0 || x == nullptr || x->size() != problem.num_variables || !problem.objective ||
       (problem.num_constraints > 0 && !problem.constraints)) {
-    summary.message = "polish: empty or inconsistent problem";
-    return summary;
+    return internal::FailedSummary(summary, "polish: empty or inconsistent problem", start,
+                                   SolverTermination::kInvalidInput);
   }
   if (problem.num_variables > options.max_variables) {
-    summary.message = "polish skipped: " + std::to_string(problem.num_variables) + " variables exceed the dense limit of " +
-                      std::to_string(options.max_variables);
-    return summary;
+    return internal::FailedSummary(summary,
+                                   "polish skipped: " + std::to_string(problem.num_variables) +
+                                       " variables exceed the dense limit of " + std::to_string(options.max_variables),
+                                   start, SolverTermination::kInvalidInput);
   }
   Context ctx;
   ctx.problem = &problem;
@@ -79,7 +103,7 @@ ConstraintPolishSummary PolishConstraints(const ConstraintPolishProblem& problem
   ctx.values.setZero(problem.num_constraints);
   ctx.jacobian.setZero(problem.num_constraints, problem.num_variables);
   try {
-    summary.initial_objective = problem.objective(*x, nullptr);
+    summary.initial_cost = problem.objective(*x, nullptr);
     summary.initial_max_violation = problem.num_constraints > 0 ? MaxViolation(problem, *x) : 0.0;
     nlopt::opt opt(nlopt::LD_SLSQP, static_cast<unsigned>(problem.num_variables));
     opt.set_min_objective(Objective, &ctx);
@@ -93,26 +117,27 @@ ConstraintPolishSummary PolishConstraints(const ConstraintPolishProblem& problem
     double f = 0.0;
     const nlopt::result result = opt.optimize(values, f);
     const Eigen::VectorXd polished = Eigen::Map<const Eigen::VectorXd>(values.data(), problem.num_variables);
-    summary.evaluations = ctx.evaluations;
-    if (!polished.allFinite()) {
-      summary.message = "polish: SLSQP returned a non-finite point";
-      return summary;
-    }
-    summary.final_objective = problem.objective(polished, nullptr);
+    summary.iterations = ctx.evaluations;
+    if (!polished.allFinite()) return internal::FailedSummary(summary, "polish: SLSQP returned a non-finite point", start);
+    summary.final_cost = problem.objective(polished, nullptr);
     summary.final_max_violation = problem.num_constraints > 0 ? MaxViolation(problem, polished) : 0.0;
     summary.message = std::string("SLSQP: ") + ResultName(result);
     // Keep the polished point only when it is feasible and no worse a point to stand on.
     if (summary.final_max_violation <= std::max(options.constraint_tolerance, summary.initial_max_violation)) {
       *x = polished;
-      summary.success = summary.final_max_violation <= options.constraint_tolerance;
+      const bool held = summary.final_max_violation <= options.constraint_tolerance;
+      summary.termination = !held                ? SolverTermination::kFailed
+                            : BudgetUsed(result) ? SolverTermination::kMaxIterations
+                                                 : SolverTermination::kConverged;
     } else {
+      summary.termination = SolverTermination::kFailed;
       summary.message += " (constraints not met; kept the start)";
     }
   } catch (const std::exception& e) {
-    summary.success = false;
-    summary.evaluations = ctx.evaluations;
-    summary.message = std::string("polish: SLSQP stopped: ") + e.what();
+    summary.iterations = ctx.evaluations;
+    return internal::FailedSummary(summary, std::string("polish: SLSQP stopped: ") + e.what(), start);
   }
+  summary.time_ms = internal::MsSince(start);
   return summary;
 }
 

@@ -13,6 +13,8 @@
 
 #include <Eigen/Core>
 
+#include "core/optim/solver_summary.h"
+
 namespace facet {
 
 struct ConstraintPolishProblem {
@@ -29,16 +31,18 @@ struct ConstraintPolishOptions {
   double relative_x_tolerance = 1e-12;
   int max_evaluations = 200;
   int max_variables = 400;  // larger problems are refused (dense SLSQP)
+
+  bool Check(std::string* error) const;
 };
 
-struct ConstraintPolishSummary {
-  bool success = false;  // x changed and the constraints hold within the tolerance
-  std::string message;   // NLopt's result or why the polish was refused
-  double initial_objective = 0.0;
-  double final_objective = 0.0;
+// SolverSummary's fields (core/optim/solver_summary.h): IsUsable() when x changed and the
+// constraints hold within the tolerance (kMaxIterations when SLSQP used its evaluation or time
+// budget to get there); kFailed when SLSQP failed or ended infeasible; kInvalidInput when the
+// problem or the options were refused (message says why). initial_cost and final_cost are
+// f(x) at the start and at SLSQP's point; iterations counts SLSQP's objective evaluations.
+struct ConstraintPolishSummary : SolverSummary {
   double initial_max_violation = 0.0;  // max |c_i|
   double final_max_violation = 0.0;
-  int evaluations = 0;
 };
 
 // Polishes *x in place; on failure *x is left unchanged. Never throws.

@@ -11,6 +11,7 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
+#include "core/optim/levenberg_marquardt.h"
 #include "core/solve/constraint_polish.h"
 #include "core/solve/joint_solve_internal.h"
 #include "core/solve/scene_solve.h"
@@ -32,22 +33,9 @@ bool JointSolveOptions::Check(std::string* error) const {
   return true;
 }
 
-const char* JointSolveTerminationName(JointSolveSummary::Termination termination) {
-  using T = JointSolveSummary::Termination;
-  switch (termination) {
-    case T::kConverged: return "converged";
-    case T::kMaxIterations: return "max iterations";
-    case T::kNothingToSolve: return "nothing to solve";
-    case T::kFailed: return "failed";
-    case T::kInvalidInput: return "invalid input";
-  }
-  return "?";
-}
-
 namespace {
 
 using namespace joint_solve_internal;
-using Termination = JointSolveSummary::Termination;
 
 constexpr double kInitialConstraintWeight = 1e3;  // sqrt(mu): a relative error of 1e-3 weighs 1 px
 constexpr double kMaxConstraintWeight = 1e7;
@@ -401,92 +389,238 @@ bool StateIsFinite(const JointState& state) {
   return true;
 }
 
-struct LmState {
-  double lambda = 1e-4;
-  double nu = 2.0;
+// What an inner LM run needs beyond the problem: the normal equations and the buffers of a
+// trial, kept across the outer rounds.
+struct LmWorkspace {
+  NormalEquations* normal = nullptr;
+  JointState trial;
+  Eigen::VectorXd delta;
+  int iterations = 0;  // over all rounds
   // The damping after the last accepted step: the next outer round starts from it, not from
   // the lambda that the rejections at the end of a converged run inflated.
   double accepted_lambda = 1e-4;
-  int iterations = 0;
 };
 
 enum class LmStop { kConverged, kBudget, kFailed };
+
+// The joint problem at fixed constraint weights and multipliers, for the LM driver
+// (core/optim/levenberg_marquardt.h).
+class JointLmProblem {
+ public:
+  JointLmProblem(const JointSolveOptions& options, int budget, double cost, JointProblem* problem, JointState* state,
+                 LmWorkspace* workspace)
+      : options_(options), budget_(budget), cost_(cost), problem_(problem), state_(state), workspace_(workspace) {}
+
+  // False when the blocks hold a rejected trial's evaluation rather than the state's.
+  bool evaluated_at_state() const { return evaluated_at_state_; }
+
+  bool Linearize() {
+    // The budget is tested before the linearisation: the last trial of a frame's budget must
+    // not pay for an assembly nobody uses. Returning false here lets the driver stop on it.
+    if (trials_ >= budget_) return false;
+    NormalEquations& normal = *workspace_->normal;
+    normal.Assemble(*problem_);
+    // Gradient with unit-norm columns: in px, whatever the parameters' units.
+    double max_gradient = 0.0;
+    for (int k = 0; k < problem_->num_parameters; ++k) {
+      const double h = normal.HessianDiagonal(k);
+      if (h > 0.0) max_gradient = std::max(max_gradient, std::abs(normal.gradient()(k)) / std::sqrt(h));
+    }
+    return max_gradient <= options_.gradient_tolerance;
+  }
+
+  LmStepStatus Step(double lambda, LmTrial* trial) {
+    ++trials_;
+    NormalEquations& normal = *workspace_->normal;
+    Eigen::VectorXd& delta = workspace_->delta;
+    if (!normal.Solve(lambda, &delta)) return LmStepStatus::kSolveFailed;
+    const Eigen::VectorXd& d = normal.damping();
+    double scaled_step = 0.0;
+    for (int k = 0; k < problem_->num_parameters; ++k) scaled_step += d(k) * delta(k) * delta(k);
+    const double predicted = 0.5 * (lambda * scaled_step - normal.gradient().dot(delta));
+    if (std::sqrt(scaled_step) <= options_.parameter_tolerance * (std::sqrt(2.0 * cost_) + options_.parameter_tolerance)) {
+      return LmStepStatus::kStepNegligible;
+    }
+    // The model promises less than the cost's working precision: every further step would be
+    // rounding noise, rejected one by one while lambda climbs to its cap.
+    if (predicted <= options_.function_tolerance * cost_) return LmStepStatus::kStepNegligible;
+    ApplyStep(*problem_, delta, *state_, &workspace_->trial);
+    const bool ok = EvaluateBlocks(problem_, workspace_->trial, true);
+    evaluated_at_state_ = false;
+    trial_cost_ = ok ? TotalCost(*problem_) : std::numeric_limits<double>::infinity();
+    trial->cost = trial_cost_;
+    trial->step_squared_norm = scaled_step;
+    trial->predicted_decrease = predicted;
+    return LmStepStatus::kSolved;
+  }
+
+  void Accept() {
+    std::swap(*state_, workspace_->trial);
+    cost_ = trial_cost_;
+    evaluated_at_state_ = true;
+  }
+
+ private:
+  const JointSolveOptions& options_;
+  const int budget_;
+  double cost_;
+  JointProblem* problem_;
+  JointState* state_;
+  LmWorkspace* workspace_;
+  int trials_ = 0;
+  double trial_cost_ = 0.0;
+  bool evaluated_at_state_ = true;
+};
 
 // Levenberg-Marquardt on the current problem (its constraint weights and multipliers fixed)
 // from *state, using at most `budget` iterations. The problem's blocks hold the evaluation at
 // *state on return.
 LmStop RunLevenbergMarquardt(const JointSolveOptions& options, int budget, JointProblem* problem, JointState* state,
-                             NormalEquations* normal, LmState* lm, JointState* trial, Eigen::VectorXd* delta,
-                             std::string* why) {
+                             LmWorkspace* workspace, std::string* why) {
   if (!EvaluateBlocks(problem, *state, true)) {
     *why = "a pinned vertex lies behind its camera";
     return LmStop::kFailed;
   }
-  double cost = TotalCost(*problem);
-  bool assembled = false;
-  bool evaluated_at_state = true;  // the blocks hold *state's evaluation, not a rejected trial's
-  auto converged = [&]() {
-    if (!evaluated_at_state) EvaluateBlocks(problem, *state, true);
-    return LmStop::kConverged;
-  };
-  lm->lambda = std::min(lm->accepted_lambda, options.initial_lambda);
-  lm->nu = 2.0;
-  const int n = problem->num_parameters;
-  for (int it = 0; it < budget; ++it) {
-    if (!assembled) {
-      normal->Assemble(*problem);
-      assembled = true;
-      // Gradient with unit-norm columns: in px, whatever the parameters' units.
-      double max_gradient = 0.0;
-      for (int k = 0; k < n; ++k) {
-        const double h = normal->HessianDiagonal(k);
-        if (h > 0.0) max_gradient = std::max(max_gradient, std::abs(normal->gradient()(k)) / std::sqrt(h));
-      }
-      if (max_gradient <= options.gradient_tolerance || cost == 0.0) return LmStop::kConverged;
+  JointLmProblem lm_problem(options, budget, TotalCost(*problem), problem, state, workspace);
+  LmOptions lm;
+  lm.max_iterations = budget;
+  lm.schedule = LmSchedule::kGainRatio;
+  lm.initial_lambda = std::min(workspace->accepted_lambda, options.initial_lambda);
+  lm.relative_decrease_tolerance = options.function_tolerance;
+  // Rules that differ from the defaults: every trial counts against the budget (the drag
+  // frame's 5 iterations are trials); a step is accepted only with rho > 1e-4 (a decrease that
+  // small next to the model's prediction is not trusted); a factorisation failure says nothing
+  // about the model's fit, so it raises lambda tenfold without touching nu, up to 1e32 before
+  // the solve fails; lambda's floor is 1e-16, so that near the minimum the steps are
+  // Gauss-Newton steps; the step tests are the caller's (Step's kStepNegligible: the relative
+  // step and the predicted-decrease pre-check), hence no absolute step bound.
+  lm.count_every_trial = true;
+  lm.min_gain_ratio = 1e-4;
+  lm.lambda_increase_on_failed_solve = 10.0;
+  lm.max_lambda_on_failed_solve = 1e32;
+  lm.min_lambda = 1e-16;
+  lm.min_step_squared_norm = 0.0;
+  const LmResult result = MinimizeLevenbergMarquardt(TotalCost(*problem), lm, lm_problem);
+  workspace->iterations += result.iterations;
+  workspace->accepted_lambda = result.final_lambda;
+  if (result.termination == LmTermination::kLinearSolveFailed) {
+    *why = "the normal equations cannot be solved";
+    return LmStop::kFailed;
+  }
+  if (!lm_problem.evaluated_at_state()) EvaluateBlocks(problem, *state, true);
+  // Exact zero cost after the budget's last trial is still the budget (it is tested first).
+  const bool budget_used = result.termination == LmTermination::kMaxIterations ||
+                           (result.termination == LmTermination::kZeroCost && result.iterations >= budget);
+  return budget_used ? LmStop::kBudget : LmStop::kConverged;
+}
+
+// Cold start: the geometry solve's linear initialisation (camera centres and dimensions
+// with intrinsics and rotations held) gives the start, when the scene is small enough for
+// its dense algebra; otherwise, or when it fails, the project's values are the start.
+// Returns the project the solve starts from (`project` or *initialised), *problem and *state
+// built from it.
+const Project* ColdStart(const Project& project, const JointSolveOptions& options, const BuildOptions& build,
+                         Project* initialised, JointProblem* problem, JointState* state) {
+  if (options.warm_start || problem->num_parameters == 0 || problem->num_parameters > kMaxColdStartParameters) {
+    return &project;
+  }
+  SceneSolveOptions scene_options;
+  scene_options.warm_start = false;
+  const SceneSolveSummary init = SolveScene(project, scene_options, initialised);
+  if (init.IsUsable()) {
+    *state = JointState();
+    *problem = BuildJointProblem(*initialised, build, state);
+    return initialised;
+  }
+  if (init.termination != SolverTermination::kNothingToSolve) {
+    problem->warnings.push_back("cold start: the geometry solve gave no start (" + init.message +
+                                "); started from the project's values");
+  }
+  return &project;
+}
+
+// The observation cost still to pay for the violation: sum |lambda_i c_i| with the updated
+// multipliers lambda + mu c (first order). A violation within constraint_tolerance can still
+// leave the cost far from its constrained minimum when a constraint fights the pins: a line
+// pin 3 px off has lambda ~ 3 px x focal, so c = 5e-10 rad left 2e-6 of the cost.
+double ConstraintCostGap(const JointProblem& problem, double mu) {
+  double cost_gap = 0.0;
+  for (const ResidualBlock& b : problem.blocks) {
+    if (b.kind != BlockKind::kConstraint) continue;
+    cost_gap += std::abs((problem.constraints[b.source].multiplier + mu * b.raw).dot(b.raw));
+  }
+  return cost_gap;
+}
+
+struct RoundsOutcome {
+  bool failed = false;
+  std::string why;  // when failed
+  bool budget_used = false;
+};
+
+// The augmented Lagrangian's outer rounds (joint_solve.h gives the schedule): an inner LM run
+// per round, then the multiplier update and a stiffer penalty when the violation did not drop
+// enough; without constraints, one LM run.
+RoundsOutcome RunOuterRounds(const JointSolveOptions& options, JointProblem* problem, JointState* state,
+                             LmWorkspace* lm) {
+  RoundsOutcome outcome;
+  double previous_violation = std::numeric_limits<double>::infinity();
+  const bool has_constraints = !problem->constraints.empty();
+  bool final_round = false;
+  for (int round = 0;; ++round) {
+    const int budget = options.max_iterations - lm->iterations;
+    if (budget <= 0) {
+      outcome.budget_used = true;
+      break;
     }
-    ++lm->iterations;
-    if (!normal->Solve(lm->lambda, delta)) {
-      lm->lambda *= 10.0;
-      if (lm->lambda > 1e32) {
-        *why = "the normal equations cannot be solved";
-        return LmStop::kFailed;
-      }
+    const LmStop stop = RunLevenbergMarquardt(options, budget, problem, state, lm, &outcome.why);
+    if (stop == LmStop::kFailed) {
+      outcome.failed = true;
+      return outcome;
+    }
+    if (stop == LmStop::kBudget) outcome.budget_used = true;
+    if (!has_constraints || outcome.budget_used || final_round) break;
+    const double violation = MaxConstraintViolation(*problem);
+    const double mu = problem->constraint_weight * problem->constraint_weight;
+    const double cost_gap = ConstraintCostGap(*problem, mu);
+    const bool held = violation <= options.constraint_tolerance;
+    if (held && cost_gap <= kCostGapTolerance * ObservationCost(*problem) + kCostGapFloorPx2) break;
+    if (!held && round + 1 >= kMaxOuterRounds) break;
+    // Multiplier update, then a stiffer penalty when the violation did not drop enough.
+    for (const ResidualBlock& b : problem->blocks) {
+      if (b.kind == BlockKind::kConstraint) problem->constraints[b.source].multiplier += mu * b.raw;
+    }
+    if (held) {
+      // One last round at the stiffest penalty: the multipliers are nearly exact by now, so
+      // it takes a step or two, and it resolves c to ~sqrt(2 eps cost) / weight where the
+      // AL's rounds at a moderate weight stall (the merit's rounding hides smaller c).
+      final_round = true;
+      problem->constraint_weight = kMaxConstraintWeight;
       continue;
     }
-    const Eigen::VectorXd& d = normal->damping();
-    double scaled_step = 0.0;
-    for (int k = 0; k < n; ++k) scaled_step += d(k) * (*delta)(k) * (*delta)(k);
-    const double predicted = 0.5 * (lm->lambda * scaled_step - normal->gradient().dot(*delta));
-    if (std::sqrt(scaled_step) <= options.parameter_tolerance * (std::sqrt(2.0 * cost) + options.parameter_tolerance)) {
-      return converged();
+    if (violation > 0.25 * previous_violation) {
+      problem->constraint_weight = std::min(problem->constraint_weight * std::sqrt(10.0), kMaxConstraintWeight);
     }
-    // The model promises less than the cost's working precision: every further step would be
-    // rounding noise, rejected one by one while lambda climbs to its cap.
-    if (predicted <= options.function_tolerance * cost) return converged();
-    ApplyStep(*problem, *delta, *state, trial);
-    const bool ok = EvaluateBlocks(problem, *trial, true);
-    const double new_cost = ok ? TotalCost(*problem) : std::numeric_limits<double>::infinity();
-    const double rho = predicted > 0.0 ? (cost - new_cost) / predicted : -1.0;
-    if (ok && std::isfinite(new_cost) && new_cost < cost && rho > 1e-4) {
-      std::swap(*state, *trial);
-      const double decrease = cost - new_cost;
-      cost = new_cost;
-      assembled = false;
-      lm->lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
-      lm->lambda = std::max(lm->lambda, 1e-16);
-      lm->accepted_lambda = lm->lambda;
-      lm->nu = 2.0;
-      evaluated_at_state = true;
-      if (decrease <= options.function_tolerance * (cost + decrease)) return converged();
-    } else {
-      evaluated_at_state = false;
-      lm->lambda *= lm->nu;
-      lm->nu *= 2.0;
-      if (lm->lambda > 1e16) return converged();  // no step decreases the cost: a minimum to working precision
-    }
+    previous_violation = violation;
   }
-  if (!evaluated_at_state) EvaluateBlocks(problem, *state, true);
-  return LmStop::kBudget;
+  return outcome;
+}
+
+// Why the solve's result must not be used, or "" when it may: non-finite values, a pinned
+// vertex behind its camera (`evaluated` false), or an observation cost above the merit the
+// solve started from.
+std::string WhyResultUnusable(const JointState& state, bool evaluated, double final_cost, double initial_merit) {
+  if (!StateIsFinite(state) || !std::isfinite(final_cost)) {
+    return "the solve diverged (non-finite values); the model is unchanged";
+  }
+  if (!evaluated) return "after the solve a pinned vertex lies behind its camera; the model is unchanged";
+  if (final_cost > initial_merit * (1.0 + 1e-9) + 1e-18) {
+    std::ostringstream text;
+    text << "the solve increased the cost from " << initial_merit << " to " << final_cost
+         << " px^2; the model is unchanged";
+    return text.str();
+  }
+  return "";
 }
 
 std::string Advice(const std::string& name) {
@@ -647,7 +781,7 @@ ConstraintPolishSummary Polish(const JointSolveOptions& options, JointProblem* p
   po.constraint_tolerance = options.constraint_tolerance;
   Eigen::VectorXd y = Eigen::VectorXd::Zero(n);
   ConstraintPolishSummary s = PolishConstraints(pp, po, &y);
-  if (s.success) {
+  if (s.IsUsable()) {
     ApplyStep(*problem, y.cwiseQuotient(scale), start, state);
   }
   EvaluateBlocks(problem, *state, true);
@@ -713,57 +847,41 @@ void FillDiagnostics(const Project& project, const JointSolveOptions& options, c
 JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& options, Project* solved) {
   const auto t0 = std::chrono::steady_clock::now();
   JointSolveSummary summary;
-  auto finish = [&](Termination termination, const std::string& message) {
+  auto finish = [&](SolverTermination termination, const std::string& message) {
     summary.termination = termination;
     summary.message = message;
     summary.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return summary;
   };
-  if (solved == nullptr) return finish(Termination::kInvalidInput, "no output project given");
+  if (solved == nullptr) return finish(SolverTermination::kInvalidInput, "no output project given");
   *solved = project;
   std::string error;
-  if (!options.Check(&error)) return finish(Termination::kInvalidInput, "invalid options: " + error);
+  if (!options.Check(&error)) return finish(SolverTermination::kInvalidInput, "invalid options: " + error);
 
   BuildOptions build;
   build.refine_intrinsics = options.refine_intrinsics;
   build.use_segments = options.use_segments;
   JointState state;
   JointProblem problem = BuildJointProblem(project, build, &state);
-  // Cold start: the geometry solve's linear initialisation (camera centres and dimensions
-  // with intrinsics and rotations held) gives the start, when the scene is small enough for
-  // its dense algebra; otherwise, or when it fails, the project's values are the start.
   Project initialised;
-  const Project* start = &project;
-  if (!options.warm_start && problem.num_parameters > 0 && problem.num_parameters <= kMaxColdStartParameters) {
-    SceneSolveOptions scene_options;
-    scene_options.warm_start = false;
-    const SceneSolveSummary init = SolveScene(project, scene_options, &initialised);
-    if (init.IsUsable()) {
-      start = &initialised;
-      state = JointState();
-      problem = BuildJointProblem(initialised, build, &state);
-    } else if (init.termination != SolveTermination::kNothingToSolve) {
-      problem.warnings.push_back("cold start: the geometry solve gave no start (" + init.message +
-                                 "); started from the project's values");
-    }
-  }
+  const Project* start = ColdStart(project, options, build, &initialised, &problem, &state);
   summary.warnings = problem.warnings;
   summary.num_parameters = problem.num_parameters;
   summary.num_residuals = problem.num_residuals;
   if (!StateIsFinite(state)) {
-    return finish(Termination::kInvalidInput, "a camera or primitive of the project has a non-finite value");
+    return finish(SolverTermination::kInvalidInput, "a camera or primitive of the project has a non-finite value");
   }
-  if (problem.blocks.empty()) return finish(Termination::kNothingToSolve, "no pins, segments or constraints to solve");
+  if (problem.blocks.empty()) return finish(SolverTermination::kNothingToSolve, "no pins, segments or constraints to solve");
   if (problem.num_parameters == 0) {
     EvaluateBlocks(&problem, state, false);
     FillDiagnostics(project, options, problem, true, &summary);
     summary.initial_cost = summary.final_cost = ObservationCost(problem);
-    return finish(Termination::kNothingToSolve, "every parameter is locked");
+    return finish(SolverTermination::kNothingToSolve, "every parameter is locked");
   }
   problem.constraint_weight = kInitialConstraintWeight;
 
   if (!EvaluateBlocks(&problem, state, true)) {
-    return finish(Termination::kFailed, "at the start a pinned vertex lies on or behind its camera; the model is unchanged");
+    return finish(SolverTermination::kFailed, "at the start a pinned vertex lies on or behind its camera; the model is unchanged");
   }
   summary.initial_cost = ObservationCost(problem);
   const double initial_merit = TotalCost(problem);
@@ -774,89 +892,37 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   NormalEquations* normal_ptr = &schur;
   if (options.linear_solver != JointSolveOptions::LinearSolver::kSchur || !schur.Init(problem)) {
     normal_ptr = &sparse;
-    if (!sparse.Init(problem)) return finish(Termination::kFailed, "the sparse normal equations could not be analysed");
+    if (!sparse.Init(problem)) return finish(SolverTermination::kFailed, "the sparse normal equations could not be analysed");
   }
   NormalEquations& normal = *normal_ptr;
-  LmState lm;
-  lm.lambda = lm.accepted_lambda = options.initial_lambda;
-  JointState trial = state;
-  Eigen::VectorXd delta(problem.num_parameters);
-  std::string why;
-  bool budget_used = false;
-  double previous_violation = std::numeric_limits<double>::infinity();
-  const bool has_constraints = !problem.constraints.empty();
-  bool final_round = false;
-  for (int round = 0;; ++round) {
-    const int budget = options.max_iterations - lm.iterations;
-    if (budget <= 0) {
-      budget_used = true;
-      break;
-    }
-    const LmStop stop = RunLevenbergMarquardt(options, budget, &problem, &state, &normal, &lm, &trial, &delta, &why);
-    if (stop == LmStop::kFailed) {
-      *solved = project;
-      summary.iterations = lm.iterations;
-      return finish(Termination::kFailed, "the solve failed (" + why + "); the model is unchanged");
-    }
-    if (stop == LmStop::kBudget) budget_used = true;
-    if (!has_constraints || budget_used || final_round) break;
-    const double violation = MaxConstraintViolation(problem);
-    const double mu = problem.constraint_weight * problem.constraint_weight;
-    // The observation cost still to pay for the violation: sum |lambda_i c_i| with the
-    // updated multipliers (first order). A violation within constraint_tolerance can still
-    // leave the cost far from its constrained minimum when a constraint fights the pins: a
-    // line pin 3 px off has lambda ~ 3 px x focal, so c = 5e-10 rad left 2e-6 of the cost.
-    double cost_gap = 0.0;
-    for (const ResidualBlock& b : problem.blocks) {
-      if (b.kind != BlockKind::kConstraint) continue;
-      cost_gap += std::abs((problem.constraints[b.source].multiplier + mu * b.raw).dot(b.raw));
-    }
-    const bool held = violation <= options.constraint_tolerance;
-    if (held && cost_gap <= kCostGapTolerance * ObservationCost(problem) + kCostGapFloorPx2) break;
-    if (!held && round + 1 >= kMaxOuterRounds) break;
-    // Multiplier update, then a stiffer penalty when the violation did not drop enough.
-    for (const ResidualBlock& b : problem.blocks) {
-      if (b.kind == BlockKind::kConstraint) problem.constraints[b.source].multiplier += mu * b.raw;
-    }
-    if (held) {
-      // One last round at the stiffest penalty: the multipliers are nearly exact by now, so
-      // it takes a step or two, and it resolves c to ~sqrt(2 eps cost) / weight where the
-      // AL's rounds at a moderate weight stall (the merit's rounding hides smaller c).
-      final_round = true;
-      problem.constraint_weight = kMaxConstraintWeight;
-      continue;
-    }
-    if (violation > 0.25 * previous_violation) {
-      problem.constraint_weight = std::min(problem.constraint_weight * std::sqrt(10.0), kMaxConstraintWeight);
-    }
-    previous_violation = violation;
+  LmWorkspace lm;
+  lm.normal = &normal;
+  lm.accepted_lambda = options.initial_lambda;
+  lm.trial = state;
+  lm.delta.resize(problem.num_parameters);
+  const RoundsOutcome rounds = RunOuterRounds(options, &problem, &state, &lm);
+  if (rounds.failed) {
+    *solved = project;
+    summary.iterations = lm.iterations;
+    return finish(SolverTermination::kFailed, "the solve failed (" + rounds.why + "); the model is unchanged");
   }
+  const bool budget_used = rounds.budget_used;
   summary.iterations = lm.iterations;
   EvaluateBlocks(&problem, state, true);
   normal.Assemble(problem);
 
-  if (options.polish_constraints && has_constraints) {
+  if (options.polish_constraints && !problem.constraints.empty()) {
     const ConstraintPolishSummary polish = Polish(options, &problem, &state, normal);
-    summary.polished = polish.success;
-    if (!polish.success) summary.warnings.push_back("constraint polish: " + polish.message);
+    summary.polished = polish.IsUsable();
+    if (!polish.IsUsable()) summary.warnings.push_back("constraint polish: " + polish.message);
   }
 
   const bool evaluated = EvaluateBlocks(&problem, state, true);
   summary.final_cost = ObservationCost(problem);
-  if (!StateIsFinite(state) || !std::isfinite(summary.final_cost)) {
+  const std::string unusable = WhyResultUnusable(state, evaluated, summary.final_cost, initial_merit);
+  if (!unusable.empty()) {
     *solved = project;
-    return finish(Termination::kFailed, "the solve diverged (non-finite values); the model is unchanged");
-  }
-  if (!evaluated) {
-    *solved = project;
-    return finish(Termination::kFailed, "after the solve a pinned vertex lies behind its camera; the model is unchanged");
-  }
-  if (summary.final_cost > initial_merit * (1.0 + 1e-9) + 1e-18) {
-    *solved = project;
-    std::ostringstream text;
-    text << "the solve increased the cost from " << initial_merit << " to " << summary.final_cost
-         << " px^2; the model is unchanged";
-    return finish(Termination::kFailed, text.str());
+    return finish(SolverTermination::kFailed, unusable);
   }
 
   FillDiagnostics(project, options, problem, !budget_used, &summary);
@@ -873,7 +939,7 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   std::ostringstream text;
   text << "RMS " << summary.reprojection_rms_px << " px over " << summary.pins.size() << " pins after "
        << summary.iterations << " iterations";
-  return finish(budget_used ? Termination::kMaxIterations : Termination::kConverged, text.str());
+  return finish(budget_used ? SolverTermination::kMaxIterations : SolverTermination::kConverged, text.str());
 }
 
 }  // namespace facet

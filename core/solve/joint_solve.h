@@ -55,6 +55,7 @@
 #include <string>
 #include <vector>
 
+#include "core/optim/solver_summary.h"
 #include "core/scene/project.h"
 
 namespace facet {
@@ -106,16 +107,10 @@ struct ConstraintDiagnostic {
   bool satisfied = false;  // within the tolerance
 };
 
-struct JointSolveSummary {
-  // Same meanings as core/solve/scene_solve.h: kConverged, kMaxIterations (usable), kNothingToSolve,
-  // kFailed (model left as it was), kInvalidInput.
-  enum class Termination { kConverged, kMaxIterations, kNothingToSolve, kFailed, kInvalidInput };
-  Termination termination = Termination::kInvalidInput;
-  std::string message;
-  std::vector<std::string> warnings;
-  int iterations = 0;
-  double initial_cost = 0.0;  // 0.5 * sum of squared residuals at the start
-  double final_cost = 0.0;
+// The joint solve's summary: SolverSummary's fields (core/optim/solver_summary.h), with
+// initial_cost and final_cost 0.5 * sum of squared observation residuals (px^2, pins and
+// segments) at the start and at the result.
+struct JointSolveSummary : SolverSummary {
   int num_residuals = 0;
   int num_parameters = 0;
   double reprojection_rms_px = 0.0;  // over the pins that took part
@@ -132,13 +127,7 @@ struct JointSolveSummary {
   // out, e.g. per frame).
   std::vector<std::string> conflicts;
   bool polished = false;
-  double time_ms = 0.0;
-
-  bool IsUsable() const {
-    return termination == Termination::kConverged || termination == Termination::kMaxIterations;
-  }
 };
-const char* JointSolveTerminationName(JointSolveSummary::Termination termination);
 
 // Solves and writes the result to *solved (cameras, primitive shapes and cached vertex
 // positions). When the summary is not usable, *solved is an unchanged copy of `project`.

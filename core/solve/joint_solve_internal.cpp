@@ -608,43 +608,53 @@ void SizeBlock(ResidualBlock* block) {
   block->d_camera.setZero(block->num_rows, 11);
 }
 
-}  // namespace
-
-JointProblem BuildJointProblem(const Project& project, const BuildOptions& options, JointState* state) {
-  JointProblem problem;
-  const int num_images = static_cast<int>(project.images.size());
-  const int num_primitives = static_cast<int>(project.primitives.size());
+// Project indices by id, for the pins', segments' and constraints' references.
+struct ProjectIndex {
   std::map<Id, int> image_lookup, primitive_lookup;
-  for (int i = 0; i < num_images; ++i) image_lookup[project.images[i].id] = i;
-  for (int i = 0; i < num_primitives; ++i) primitive_lookup[project.primitives[i].id] = i;
-  auto find_image = [&](Id id) {
+
+  explicit ProjectIndex(const Project& project) {
+    for (size_t i = 0; i < project.images.size(); ++i) image_lookup[project.images[i].id] = static_cast<int>(i);
+    for (size_t i = 0; i < project.primitives.size(); ++i) {
+      primitive_lookup[project.primitives[i].id] = static_cast<int>(i);
+    }
+  }
+  int FindImage(Id id) const {
     auto it = image_lookup.find(id);
     return it == image_lookup.end() ? -1 : it->second;
-  };
+  }
+};
 
-  // Which pins, constraints and segments take part.
-  std::vector<int> used_pins, used_constraints, used_segments;
-  std::vector<char> image_used(num_images, 0), primitive_used(num_primitives, 0);
+// The pins and constraints that take part (project indices), and the images and primitives
+// they use (a primitive's bases included).
+struct UsedInputs {
+  std::vector<int> pins, constraints;
+  std::vector<char> image_used, primitive_used;
+};
+
+UsedInputs SelectUsedInputs(const Project& project, const ProjectIndex& index, JointProblem* problem) {
+  UsedInputs used;
+  used.image_used.assign(project.images.size(), 0);
+  used.primitive_used.assign(project.primitives.size(), 0);
   auto use_vertex = [&](const VertexRef& ref) {
-    const int p = primitive_lookup.at(ref.primitive_id);
-    primitive_used[p] = 1;
-    for (int b : BaseChain(project, p)) primitive_used[b] = 1;
+    const int p = index.primitive_lookup.at(ref.primitive_id);
+    used.primitive_used[p] = 1;
+    for (int b : BaseChain(project, p)) used.primitive_used[b] = 1;
   };
   for (size_t i = 0; i < project.pins.size(); ++i) {
     const Pin& pin = project.pins[i];
-    const int im = find_image(pin.image_id);
+    const int im = index.FindImage(pin.image_id);
     std::string why;
     if (im < 0) why = "names a missing image";
     else if (!project.images[im].camera_calibrated) why = "is in an uncalibrated image";
     else if (project.FindVertex(pin.vertex) == nullptr) why = "names a missing vertex";
     else if (!pin.uv_px.allFinite()) why = "has a non-finite pixel";
     if (!why.empty()) {
-      ++problem.num_skipped_pins;
-      problem.warnings.push_back("pin " + std::to_string(pin.id) + " " + why + "; skipped");
+      ++problem->num_skipped_pins;
+      problem->warnings.push_back("pin " + std::to_string(pin.id) + " " + why + "; skipped");
       continue;
     }
-    used_pins.push_back(static_cast<int>(i));
-    image_used[im] = 1;
+    used.pins.push_back(static_cast<int>(i));
+    used.image_used[im] = 1;
     use_vertex(pin.vertex);
   }
   for (size_t i = 0; i < project.constraints.size(); ++i) {
@@ -655,23 +665,29 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
                            [&](const VertexRef& v) { return project.FindVertex(v) == nullptr; })) {
       why = "names a missing vertex";
     } else if (c.kind == ConstraintKind::kEdgeOnImageLine) {
-      const int im = find_image(c.image_id);
+      const int im = index.FindImage(c.image_id);
       if (im < 0 || !project.images[im].camera_calibrated) why = "is in a missing or uncalibrated image";
     }
     if (!why.empty()) {
-      problem.warnings.push_back(std::string("constraint ") + std::to_string(c.id) + " (" + ConstraintKindName(c.kind) +
-                                 ") " + why + "; skipped");
+      problem->warnings.push_back(std::string("constraint ") + std::to_string(c.id) + " (" + ConstraintKindName(c.kind) +
+                                  ") " + why + "; skipped");
       continue;
     }
-    used_constraints.push_back(static_cast<int>(i));
-    if (c.kind == ConstraintKind::kEdgeOnImageLine) image_used[find_image(c.image_id)] = 1;
+    used.constraints.push_back(static_cast<int>(i));
+    if (c.kind == ConstraintKind::kEdgeOnImageLine) used.image_used[index.FindImage(c.image_id)] = 1;
     for (const VertexRef& v : c.vertices) use_vertex(v);
   }
+  return used;
+}
 
-  // Cameras, then primitives, then free vertices.
-  int next = 0;
-  std::vector<int> camera_of_image(num_images, -1);
-  for (int i = 0; i < num_images; ++i) {
+// A camera block per calibrated image that a pin or constraint uses or whose segments can
+// move it; numbers its free parameters from *next. Returns the problem camera of each
+// project image (-1: none).
+std::vector<int> AddCameraBlocks(const Project& project, const BuildOptions& options,
+                                 const std::vector<char>& image_used, JointProblem* problem, JointState* state,
+                                 int* next) {
+  std::vector<int> camera_of_image(project.images.size(), -1);
+  for (size_t i = 0; i < project.images.size(); ++i) {
     const Image& image = project.images[i];
     if (!image.camera_calibrated) continue;
     const bool intrinsics_or_rotation_free =
@@ -683,23 +699,23 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
     }
     if (!image_used[i] && !has_segments) continue;
     CameraBlock block;
-    block.image_index = i;
-    if (options.refine_intrinsics && !image.focal_locked) block.focal_offset = next++;
+    block.image_index = static_cast<int>(i);
+    if (options.refine_intrinsics && !image.focal_locked) block.focal_offset = (*next)++;
     if (options.refine_intrinsics && !image.principal_point_locked) {
-      block.principal_point_offset = next;
-      next += 2;
+      block.principal_point_offset = *next;
+      *next += 2;
     }
     if (!image.pose_locked) {
-      block.rotation_offset = next;
-      block.center_offset = next + 3;
-      next += 6;
+      block.rotation_offset = *next;
+      block.center_offset = *next + 3;
+      *next += 6;
     }
     if (options.refine_intrinsics && !image.distortion_locked) {
-      block.distortion_offset = next;
-      next += 2;
+      block.distortion_offset = *next;
+      *next += 2;
     }
-    camera_of_image[i] = static_cast<int>(problem.cameras.size());
-    problem.cameras.push_back(block);
+    camera_of_image[i] = static_cast<int>(problem->cameras.size());
+    problem->cameras.push_back(block);
     const Camera& cam = image.camera;
     CameraState cs;
     cs.focal_px = cam.focal_px;
@@ -710,41 +726,53 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
     cs.k2 = cam.k2;
     state->cameras.push_back(cs);
   }
-  if (options.use_segments) {
-    for (size_t i = 0; i < project.segments.size(); ++i) {
-      const int im = find_image(project.segments[i].image_id);
-      if (im < 0 || camera_of_image[im] < 0) continue;
-      const CameraBlock& cb = problem.cameras[camera_of_image[im]];
-      if (cb.focal_offset < 0 && cb.principal_point_offset < 0 && cb.rotation_offset < 0 && cb.distortion_offset < 0) {
-        continue;
-      }
-      if ((project.segments[i].b_px - project.segments[i].a_px).norm() <= 0.0) continue;
-      used_segments.push_back(static_cast<int>(i));
-    }
-  }
+  return camera_of_image;
+}
 
-  std::vector<int> problem_primitive(num_primitives, -1);
-  for (int i = 0; i < num_primitives; ++i) {
-    if (!primitive_used[i]) continue;
-    problem_primitive[i] = static_cast<int>(problem.primitives.size());
-    problem.primitives.emplace_back();
-    problem.primitives.back().primitive_index = i;
+// The segments (project indices) of cameras whose intrinsics or rotation are free.
+std::vector<int> SelectUsedSegments(const Project& project, const BuildOptions& options, const ProjectIndex& index,
+                                    const std::vector<int>& camera_of_image, const JointProblem& problem) {
+  std::vector<int> used_segments;
+  if (!options.use_segments) return used_segments;
+  for (size_t i = 0; i < project.segments.size(); ++i) {
+    const int im = index.FindImage(project.segments[i].image_id);
+    if (im < 0 || camera_of_image[im] < 0) continue;
+    const CameraBlock& cb = problem.cameras[camera_of_image[im]];
+    if (cb.focal_offset < 0 && cb.principal_point_offset < 0 && cb.rotation_offset < 0 && cb.distortion_offset < 0) {
+      continue;
+    }
+    if ((project.segments[i].b_px - project.segments[i].a_px).norm() <= 0.0) continue;
+    used_segments.push_back(static_cast<int>(i));
   }
-  for (PrimitiveBlock& block : problem.primitives) {
+  return used_segments;
+}
+
+// A primitive block per used primitive; numbers its free parameters from *next. Returns the
+// problem primitive of each project primitive (-1: none).
+std::vector<int> AddPrimitiveBlocks(const Project& project, const std::vector<char>& primitive_used,
+                                    JointProblem* problem, JointState* state, int* next) {
+  std::vector<int> problem_primitive(project.primitives.size(), -1);
+  for (size_t i = 0; i < project.primitives.size(); ++i) {
+    if (!primitive_used[i]) continue;
+    problem_primitive[i] = static_cast<int>(problem->primitives.size());
+    problem->primitives.emplace_back();
+    problem->primitives.back().primitive_index = static_cast<int>(i);
+  }
+  for (PrimitiveBlock& block : problem->primitives) {
     const Primitive& p = project.primitives[block.primitive_index];
     for (int b : BaseChain(project, block.primitive_index)) block.bases.push_back(problem_primitive[b]);
     block.root = block.bases.empty() ? problem_primitive[block.primitive_index] : block.bases.back();
     const bool attached = !block.bases.empty();
     for (int k = attached ? 2 : 0; k < NumShapeParams(p.shape.kind); ++k) {
-      if (!p.param_locked[k]) block.param_offset[k] = next++;
+      if (!p.param_locked[k]) block.param_offset[k] = (*next)++;
     }
     if (!attached && !p.rotation_locked) {
-      block.rotation_offset = next;
-      next += 3;
+      block.rotation_offset = *next;
+      *next += 3;
     }
     if (!attached && !p.translation_locked) {
-      block.translation_offset = next;
-      next += 3;
+      block.translation_offset = *next;
+      *next += 3;
     }
     PrimitiveState ps;
     ps.params = p.shape.params;
@@ -752,81 +780,88 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
     ps.translation = p.shape.translation;
     state->primitives.push_back(ps);
   }
+  return problem_primitive;
+}
 
-  // Vertex terms, shared by the blocks that read the same vertex.
-  std::map<std::pair<Id, VertexId>, int> vertex_lookup;
+using VertexLookup = std::map<std::pair<Id, VertexId>, int>;
+
+// One vertex term per vertex the used pins and constraints read, shared by the blocks that
+// read it; a free vertex's offset is numbered from *next. Returns the term of each vertex.
+VertexLookup AddVertexTerms(const Project& project, const ProjectIndex& index, const UsedInputs& used,
+                            const std::vector<int>& problem_primitive, JointProblem* problem, JointState* state,
+                            int* next) {
+  VertexLookup vertex_lookup;
   auto vertex_term = [&](const VertexRef& ref) {
     const auto key = std::make_pair(ref.primitive_id, ref.vertex);
-    auto it = vertex_lookup.find(key);
-    if (it != vertex_lookup.end()) return it->second;
+    if (vertex_lookup.count(key) > 0) return;
     VertexTerm term;
     term.ref = ref;
-    term.primitive = problem_primitive[primitive_lookup.at(ref.primitive_id)];
+    term.primitive = problem_primitive[index.primitive_lookup.at(ref.primitive_id)];
     const MeshVertex& v = *project.FindVertex(ref);
     term.coefficients = v.local.Collapsed();
     if (v.local.free) {
-      term.free_vertex = static_cast<int>(problem.free_vertices.size());
+      term.free_vertex = static_cast<int>(problem->free_vertices.size());
       FreeVertexBlock fb;
       fb.ref = ref;
-      fb.offset = next;
-      next += 3;
-      problem.free_vertices.push_back(fb);
+      fb.offset = *next;
+      *next += 3;
+      problem->free_vertices.push_back(fb);
       state->free_offsets.push_back(v.local.offset);
     } else {
       term.fixed_offset = v.local.offset;
     }
-    const int index = static_cast<int>(problem.vertices.size());
-    problem.vertices.push_back(term);
-    vertex_lookup[key] = index;
-    return index;
+    vertex_lookup[key] = static_cast<int>(problem->vertices.size());
+    problem->vertices.push_back(term);
   };
-  for (int i : used_pins) vertex_term(project.pins[i].vertex);
-  for (int i : used_constraints) {
+  for (int i : used.pins) vertex_term(project.pins[i].vertex);
+  for (int i : used.constraints) {
     for (const VertexRef& v : project.constraints[i].vertices) vertex_term(v);
   }
-  problem.num_parameters = next;
-  for (VertexTerm& term : problem.vertices) {
-    term.cols = VertexColumns(problem, term);
-    term.jacobian.setZero(3, static_cast<Eigen::Index>(term.cols.size()));
-    EvaluateVertex(problem, *state, &term);
-  }
+  return vertex_lookup;
+}
 
-  // Model size: RMS spread of the used vertices (the scale of every length residual).
-  {
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    for (const VertexTerm& t : problem.vertices) centroid += t.position;
-    double spread = 0.0;
-    if (!problem.vertices.empty()) {
-      centroid /= static_cast<double>(problem.vertices.size());
-      for (const VertexTerm& t : problem.vertices) spread += (t.position - centroid).squaredNorm();
-      spread = std::sqrt(spread / static_cast<double>(problem.vertices.size()));
-    }
-    if (!(spread > 0.0)) {
-      for (const CameraState& c : state->cameras) spread = std::max(spread, (c.center_in_world - centroid).norm());
-    }
-    problem.model_size = spread > 0.0 && std::isfinite(spread) ? spread : 1.0;
+// Model size: RMS spread of the used vertices (the scale of every length residual); the
+// largest camera distance when they coincide, 1 when that fails too.
+double ModelSize(const JointProblem& problem, const JointState& state) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const VertexTerm& t : problem.vertices) centroid += t.position;
+  double spread = 0.0;
+  if (!problem.vertices.empty()) {
+    centroid /= static_cast<double>(problem.vertices.size());
+    for (const VertexTerm& t : problem.vertices) spread += (t.position - centroid).squaredNorm();
+    spread = std::sqrt(spread / static_cast<double>(problem.vertices.size()));
   }
+  if (!(spread > 0.0)) {
+    for (const CameraState& c : state.cameras) spread = std::max(spread, (c.center_in_world - centroid).norm());
+  }
+  return spread > 0.0 && std::isfinite(spread) ? spread : 1.0;
+}
 
-  // Residual blocks.
+void AddPinBlocks(const Project& project, const ProjectIndex& index, const std::vector<int>& used_pins,
+                  const std::vector<int>& camera_of_image, const VertexLookup& vertex_lookup, JointProblem* problem) {
   for (int i : used_pins) {
     const Pin& pin = project.pins[i];
     ResidualBlock block;
     block.kind = BlockKind::kPin;
     block.source = i;
-    block.camera = camera_of_image[find_image(pin.image_id)];
+    block.camera = camera_of_image[index.FindImage(pin.image_id)];
     block.num_rows = 2;
     block.uv_px = pin.uv_px;
-    AddCameraColumns(problem.cameras[block.camera], true, &block);
-    AddVertexColumns(problem, vertex_lookup.at({pin.vertex.primitive_id, pin.vertex.vertex}), &block);
+    AddCameraColumns(problem->cameras[block.camera], true, &block);
+    AddVertexColumns(*problem, vertex_lookup.at({pin.vertex.primitive_id, pin.vertex.vertex}), &block);
     SizeBlock(&block);
-    problem.blocks.push_back(std::move(block));
+    problem->blocks.push_back(std::move(block));
   }
+}
+
+void AddSegmentBlocks(const Project& project, const ProjectIndex& index, const std::vector<int>& used_segments,
+                      const std::vector<int>& camera_of_image, JointProblem* problem) {
   for (int i : used_segments) {
     const Segment& seg = project.segments[i];
     ResidualBlock block;
     block.kind = BlockKind::kSegment;
     block.source = i;
-    block.camera = camera_of_image[find_image(seg.image_id)];
+    block.camera = camera_of_image[index.FindImage(seg.image_id)];
     block.num_rows = 2;
     block.axis = static_cast<int>(seg.axis);
     const Eigen::Vector2d mid = 0.5 * (seg.a_px + seg.b_px);
@@ -834,132 +869,176 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
     block.segment_m << 0.0, -1.0, mid.y(), 1.0, 0.0, -mid.x();
     block.segment_a_px = seg.a_px;
     block.segment_b_px = seg.b_px;
-    AddCameraColumns(problem.cameras[block.camera], false, &block);
+    AddCameraColumns(problem->cameras[block.camera], false, &block);
     SizeBlock(&block);
-    problem.blocks.push_back(std::move(block));
+    problem->blocks.push_back(std::move(block));
   }
+}
+
+// The kind-specific part of a constraint term: the spanning vertices, kept components, scale,
+// point or image line. Returns why the constraint is degenerate at the start, or "".
+std::string SetUpConstraintTerm(const Constraint& c, const std::vector<Eigen::Vector3d>& p, int camera,
+                                const JointProblem& problem, const JointState& state, ConstraintTerm* term) {
+  const int n = static_cast<int>(p.size());
+  std::string degenerate;
+  const double tiny = 1e-12 * problem.model_size;
+  switch (c.kind) {
+    case ConstraintKind::kCoplanar:
+    case ConstraintKind::kCollinear: {
+      int i1 = 1;
+      for (int k = 1; k < n; ++k) {
+        if ((p[k] - p[0]).norm() > (p[i1] - p[0]).norm()) i1 = k;
+      }
+      if ((p[i1] - p[0]).norm() <= tiny) degenerate = "its vertices coincide";
+      if (c.kind == ConstraintKind::kCollinear) {
+        term->span = {0, i1, -1};
+        term->kept_components = OtherComponents(LargestComponent(p[i1] - p[0]));
+        break;
+      }
+      int i2 = -1;
+      double best = 0.0;
+      for (int k = 1; k < n; ++k) {
+        const double area = (p[i1] - p[0]).cross(p[k] - p[0]).norm();
+        if (k != i1 && area > best) {
+          best = area;
+          i2 = k;
+        }
+      }
+      if (i2 < 0 || best <= tiny * problem.model_size) degenerate = "its vertices are collinear";
+      term->span = {0, i1, std::max(i2, 0)};
+      break;
+    }
+    case ConstraintKind::kParallel:
+    case ConstraintKind::kPerpendicular:
+    case ConstraintKind::kEqualLength:
+      if ((p[1] - p[0]).norm() <= tiny || (p[3] - p[2]).norm() <= tiny) degenerate = "an edge has zero length";
+      term->kept_components = OtherComponents(LargestComponent(p[1] - p[0]));
+      break;
+    case ConstraintKind::kDistance:
+      if ((p[1] - p[0]).norm() <= tiny) degenerate = "its vertices coincide";
+      term->scale = c.value;
+      break;
+    case ConstraintKind::kFixedPoint: term->point = c.point; break;
+    case ConstraintKind::kAlongAxis:
+      if ((p[1] - p[0]).norm() <= tiny) degenerate = "its vertices coincide";
+      term->kept_components = OtherComponents(static_cast<int>(c.axis));
+      break;
+    case ConstraintKind::kEdgeOnImageLine: {
+      const Eigen::Vector3d a(c.line_a_px.x(), c.line_a_px.y(), 1.0);
+      const Eigen::Vector3d b(c.line_b_px.x(), c.line_b_px.y(), 1.0);
+      const Eigen::Vector3d line = a.cross(b);
+      term->line_px = line / line.head<2>().norm();
+      term->line_a_px = c.line_a_px;
+      term->line_b_px = c.line_b_px;
+      term->undistort_line = problem.cameras[term->camera].distortion_offset >= 0;
+      term->camera = camera;
+      term->scale = state.cameras[term->camera].focal_px;
+      break;
+    }
+  }
+  return degenerate;
+}
+
+void AddConstraintBlocks(const Project& project, const ProjectIndex& index, const std::vector<int>& used_constraints,
+                         const std::vector<int>& camera_of_image, const VertexLookup& vertex_lookup,
+                         const JointState& state, JointProblem* problem) {
   for (int i : used_constraints) {
     const Constraint& c = project.constraints[i];
     ConstraintTerm term;
     term.constraint_index = i;
     term.kind = c.kind;
     for (const VertexRef& v : c.vertices) term.vertices.push_back(vertex_lookup.at({v.primitive_id, v.vertex}));
-    const int n = static_cast<int>(term.vertices.size());
     std::vector<Eigen::Vector3d> p;
-    for (int v : term.vertices) p.push_back(problem.vertices[v].position);
-    term.scale = problem.model_size;
-    term.num_rows = ConstraintRows(c.kind, n);
-    std::string degenerate;
-    const double tiny = 1e-12 * problem.model_size;
-    switch (c.kind) {
-      case ConstraintKind::kCoplanar:
-      case ConstraintKind::kCollinear: {
-        int i1 = 1;
-        for (int k = 1; k < n; ++k) {
-          if ((p[k] - p[0]).norm() > (p[i1] - p[0]).norm()) i1 = k;
-        }
-        if ((p[i1] - p[0]).norm() <= tiny) degenerate = "its vertices coincide";
-        if (c.kind == ConstraintKind::kCollinear) {
-          term.span = {0, i1, -1};
-          term.kept_components = OtherComponents(LargestComponent(p[i1] - p[0]));
-          break;
-        }
-        int i2 = -1;
-        double best = 0.0;
-        for (int k = 1; k < n; ++k) {
-          const double area = (p[i1] - p[0]).cross(p[k] - p[0]).norm();
-          if (k != i1 && area > best) {
-            best = area;
-            i2 = k;
-          }
-        }
-        if (i2 < 0 || best <= tiny * problem.model_size) degenerate = "its vertices are collinear";
-        term.span = {0, i1, std::max(i2, 0)};
-        break;
-      }
-      case ConstraintKind::kParallel:
-      case ConstraintKind::kPerpendicular:
-      case ConstraintKind::kEqualLength:
-        if ((p[1] - p[0]).norm() <= tiny || (p[3] - p[2]).norm() <= tiny) degenerate = "an edge has zero length";
-        term.kept_components = OtherComponents(LargestComponent(p[1] - p[0]));
-        break;
-      case ConstraintKind::kDistance:
-        if ((p[1] - p[0]).norm() <= tiny) degenerate = "its vertices coincide";
-        term.scale = c.value;
-        break;
-      case ConstraintKind::kFixedPoint: term.point = c.point; break;
-      case ConstraintKind::kAlongAxis:
-        if ((p[1] - p[0]).norm() <= tiny) degenerate = "its vertices coincide";
-        term.kept_components = OtherComponents(static_cast<int>(c.axis));
-        break;
-      case ConstraintKind::kEdgeOnImageLine: {
-        const Eigen::Vector3d a(c.line_a_px.x(), c.line_a_px.y(), 1.0);
-        const Eigen::Vector3d b(c.line_b_px.x(), c.line_b_px.y(), 1.0);
-        const Eigen::Vector3d line = a.cross(b);
-        term.line_px = line / line.head<2>().norm();
-        term.line_a_px = c.line_a_px;
-        term.line_b_px = c.line_b_px;
-        term.undistort_line = problem.cameras[term.camera].distortion_offset >= 0;
-        term.camera = camera_of_image[find_image(c.image_id)];
-        term.scale = state->cameras[term.camera].focal_px;
-        break;
-      }
-    }
+    for (int v : term.vertices) p.push_back(problem->vertices[v].position);
+    term.scale = problem->model_size;
+    term.num_rows = ConstraintRows(c.kind, static_cast<int>(term.vertices.size()));
+    const int camera = c.kind == ConstraintKind::kEdgeOnImageLine ? camera_of_image[index.FindImage(c.image_id)] : -1;
+    const std::string degenerate = SetUpConstraintTerm(c, p, camera, *problem, state, &term);
     if (!degenerate.empty()) {
-      problem.warnings.push_back(std::string("constraint ") + std::to_string(c.id) + " (" + ConstraintKindName(c.kind) +
-                                 ") is degenerate (" + degenerate + "); skipped");
+      problem->warnings.push_back(std::string("constraint ") + std::to_string(c.id) + " (" +
+                                  ConstraintKindName(c.kind) + ") is degenerate (" + degenerate + "); skipped");
       continue;
     }
     term.multiplier.setZero(term.num_rows);
     ResidualBlock block;
     block.kind = BlockKind::kConstraint;
-    block.source = static_cast<int>(problem.constraints.size());
+    block.source = static_cast<int>(problem->constraints.size());
     block.num_rows = term.num_rows;
     if (term.camera >= 0) {
       block.camera = term.camera;
-      AddCameraColumns(problem.cameras[term.camera], true, &block);
+      AddCameraColumns(problem->cameras[term.camera], true, &block);
     }
-    for (int v : term.vertices) AddVertexColumns(problem, v, &block);
+    for (int v : term.vertices) AddVertexColumns(*problem, v, &block);
     SizeBlock(&block);
-    problem.constraints.push_back(std::move(term));
-    problem.blocks.push_back(std::move(block));
+    problem->constraints.push_back(std::move(term));
+    problem->blocks.push_back(std::move(block));
   }
-  problem.num_residuals = 0;
-  for (const ResidualBlock& b : problem.blocks) problem.num_residuals += b.num_rows;
+}
 
-  // Names for diagnostics.
-  problem.parameter_names.assign(problem.num_parameters, "");
+// Names for diagnostics, one per parameter.
+void NameParameters(const Project& project, JointProblem* problem) {
+  problem->parameter_names.assign(problem->num_parameters, "");
   const char* const kCamera[11] = {"focal length",     "principal point u", "principal point v", "rotation about x",
                                    "rotation about y", "rotation about z",  "position x",        "position y",
                                    "position z",       "distortion k1",     "distortion k2"};
-  for (const CameraBlock& cb : problem.cameras) {
+  for (const CameraBlock& cb : problem->cameras) {
     const std::array<int, 11> cols = CameraParameterColumns(cb);
     for (int i = 0; i < 11; ++i) {
-      if (cols[i] >= 0) problem.parameter_names[cols[i]] = ImageLabel(project.images[cb.image_index]) + ": " + kCamera[i];
+      if (cols[i] >= 0) problem->parameter_names[cols[i]] = ImageLabel(project.images[cb.image_index]) + ": " + kCamera[i];
     }
   }
   const char* const kPose[6] = {"rotation about x", "rotation about y", "rotation about z",
                                 "position x",       "position y",       "position z"};
-  for (const PrimitiveBlock& pb : problem.primitives) {
+  for (const PrimitiveBlock& pb : problem->primitives) {
     const Primitive& p = project.primitives[pb.primitive_index];
     const std::string label = PrimitiveLabel(p);
     for (int k = 0; k < kMaxPrimitiveParams; ++k) {
       if (pb.param_offset[k] < 0) continue;
-      problem.parameter_names[pb.param_offset[k]] =
+      problem->parameter_names[pb.param_offset[k]] =
           label + ": " + kParamNames[KindIndex(p.shape.kind)][std::min(k, 2)] + " (parameter " + std::to_string(k) + ")";
     }
     for (int i = 0; i < 3; ++i) {
-      if (pb.rotation_offset >= 0) problem.parameter_names[pb.rotation_offset + i] = label + ": " + kPose[i];
-      if (pb.translation_offset >= 0) problem.parameter_names[pb.translation_offset + i] = label + ": " + kPose[3 + i];
+      if (pb.rotation_offset >= 0) problem->parameter_names[pb.rotation_offset + i] = label + ": " + kPose[i];
+      if (pb.translation_offset >= 0) problem->parameter_names[pb.translation_offset + i] = label + ": " + kPose[3 + i];
     }
   }
-  for (const FreeVertexBlock& fb : problem.free_vertices) {
+  for (const FreeVertexBlock& fb : problem->free_vertices) {
     const Primitive& p = *project.FindPrimitive(fb.ref.primitive_id);
     for (int i = 0; i < 3; ++i) {
-      problem.parameter_names[fb.offset + i] = "the free vertex " + std::to_string(fb.ref.vertex) + " of " +
-                                               PrimitiveLabel(p) + ": offset " + "xyz"[i];
+      problem->parameter_names[fb.offset + i] = "the free vertex " + std::to_string(fb.ref.vertex) + " of " +
+                                                PrimitiveLabel(p) + ": offset " + "xyz"[i];
     }
   }
+}
+
+}  // namespace
+
+JointProblem BuildJointProblem(const Project& project, const BuildOptions& options, JointState* state) {
+  JointProblem problem;
+  const ProjectIndex index(project);
+  const UsedInputs used = SelectUsedInputs(project, index, &problem);
+
+  // Parameters numbered cameras first (SchurEquations relies on it), then primitives, then
+  // free vertices.
+  int next = 0;
+  const std::vector<int> camera_of_image = AddCameraBlocks(project, options, used.image_used, &problem, state, &next);
+  const std::vector<int> used_segments = SelectUsedSegments(project, options, index, camera_of_image, problem);
+  const std::vector<int> problem_primitive = AddPrimitiveBlocks(project, used.primitive_used, &problem, state, &next);
+  const VertexLookup vertex_lookup = AddVertexTerms(project, index, used, problem_primitive, &problem, state, &next);
+  problem.num_parameters = next;
+  for (VertexTerm& term : problem.vertices) {
+    term.cols = VertexColumns(problem, term);
+    term.jacobian.setZero(3, static_cast<Eigen::Index>(term.cols.size()));
+    EvaluateVertex(problem, *state, &term);
+  }
+  problem.model_size = ModelSize(problem, *state);
+
+  AddPinBlocks(project, index, used.pins, camera_of_image, vertex_lookup, &problem);
+  AddSegmentBlocks(project, index, used_segments, camera_of_image, &problem);
+  AddConstraintBlocks(project, index, used.constraints, camera_of_image, vertex_lookup, *state, &problem);
+  problem.num_residuals = 0;
+  for (const ResidualBlock& b : problem.blocks) problem.num_residuals += b.num_rows;
+  NameParameters(project, &problem);
   return problem;
 }
 

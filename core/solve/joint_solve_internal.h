@@ -190,6 +190,9 @@ struct JointProblem {
 struct BuildOptions {
   bool refine_intrinsics = true;
   bool use_segments = true;
+
+  // Every value is valid (two switches); present so that every options struct has one.
+  bool Check(std::string* error) const { return true; }
 };
 
 // Collects the usable pins, segments and constraints, numbers the free parameters and fills

@@ -160,6 +160,38 @@ void GeometrySolve(const Project& project, const SceneSolveOptions& options, Sce
 
 }  // namespace
 
+bool ModelUpdateOptions::Check(std::string* error) const {
+  std::string why;
+  auto fail = [&](const char* step) {
+    if (error != nullptr) *error = std::string(step) + ": " + why;
+    return false;
+  };
+  if (!solve.Check(&why)) return fail("geometry solve");
+  if (!multiview.Check(&why)) return fail("initialisation from pins");
+  if (!joint.Check(&why)) return fail("joint solve");
+  return true;
+}
+
+ModelUpdateOptions CommitUpdateOptions() {
+  ModelUpdateOptions options;
+  options.solve.warm_start = true;
+  options.solve.max_iterations = 100;
+  options.joint.polish_constraints = true;
+  return options;
+}
+
+ModelUpdateOptions DragFrameUpdateOptions(int iterations) {
+  ModelUpdateOptions options;
+  options.solve.warm_start = true;
+  options.solve.max_iterations = iterations;
+  options.joint.max_iterations = iterations;
+  options.joint.compute_diagnostics = false;
+  options.joint.polish_constraints = false;
+  options.initialize_from_pins = false;
+  options.geometry_solve_when_warm = false;
+  return options;
+}
+
 ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& options, Project* updated,
                                ModelUpdateCache* cache) {
   const auto start = std::chrono::steady_clock::now();
@@ -271,8 +303,8 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
   } else {
     // Nothing to do keeps the calibrated cameras; a failure leaves the whole project as the
     // edit made it (model_update.h: never half-updated).
-    *updated = summary.solve.termination == SolveTermination::kNothingToSolve ? std::move(calibrated) : edited;
-    if (summary.solve.termination != SolveTermination::kNothingToSolve) {
+    *updated = summary.solve.termination == SolverTermination::kNothingToSolve ? std::move(calibrated) : edited;
+    if (summary.solve.termination != SolverTermination::kNothingToSolve) {
       summary.ok = false;
       summary.messages.push_back("Solve: " + summary.solve.message);
     }
@@ -300,7 +332,7 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
         *updated = std::move(resolved);
       } else {
         *updated = std::move(initialised);
-        if (again.termination != SolveTermination::kNothingToSolve)
+        if (again.termination != SolverTermination::kNothingToSolve)
           summary.messages.push_back("Solve with the cameras from pins: " + again.message);
       }
     }
@@ -313,7 +345,7 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
     summary.joint = SolveJoint(*updated, joint_options, &joint_solved);
     if (summary.joint.IsUsable()) {
       *updated = std::move(joint_solved);
-    } else if (summary.joint.termination != JointSolveSummary::Termination::kNothingToSolve) {
+    } else if (summary.joint.termination != SolverTermination::kNothingToSolve) {
       // The geometry solve's result stands; the joint refinement says why it did not apply.
       summary.messages.push_back("Joint solve: " + summary.joint.message);
     }

@@ -37,7 +37,22 @@ struct ModelUpdateOptions {
   // solve already covers every parameter of the geometry solve (the per-frame drag path:
   // the dense geometry solve was most of a 10-box frame).
   bool geometry_solve_when_warm = true;
+
+  // The steps' own Check()s; UpdateModel needs no call, since each step checks its options
+  // and a step with invalid ones fails with the reason in its summary.
+  bool Check(std::string* error) const;
 };
+
+// What the app runs after a commit or a released drag: warm full solves, the SLSQP polish so
+// that constraints hold exactly, and the diagnostics the properties panel shows.
+ModelUpdateOptions CommitUpdateOptions();
+
+// What the app runs per frame while a pin or endpoint is dragged: `iterations` warm-started
+// iterations of each solve so that the frame never stalls, the joint solve alone (the
+// geometry solve only when its warm result does not hold), no polish, no diagnostics (their
+// SVD of the Jacobian is the expensive part and the panel shows them after release), no
+// camera initialisation from pins. Benchmarks of a drag frame time exactly this.
+ModelUpdateOptions DragFrameUpdateOptions(int iterations = 5);
 
 // What the calibration step of one image read and what it gave, kept between UpdateModel
 // calls so that a drag frame (which moves a pin, not a line) does not calibrate again. Owned
@@ -63,6 +78,8 @@ struct ModelUpdateCache {
   std::map<Id, ImageCalibrationCacheEntry> images;  // by image id; images calibrated last call
 };
 
+// Not a solver summary itself but the summaries of the steps it ran (each a SolverSummary or
+// an estimator's), with `ok` for the update as a whole and its user-facing messages.
 struct ModelUpdateSummary {
   std::map<Id, VpCalibrationSummary> calibration;  // by image id, images with segments only
   // By image id, images with estimate_distortion and segments only. The estimate is in the

@@ -602,10 +602,9 @@ MultiViewInitSummary CalibrateImagesFromPins(const Project& project, const Multi
   *out = project;
   std::string error;
   if (!options.Check(&error)) {
-    summary.message = "invalid options: " + error;
-    return summary;
+    return internal::FailedSummary(summary, "invalid options: " + error, start, SolverTermination::kInvalidInput);
   }
-  summary.success = true;
+  summary.termination = SolverTermination::kConverged;
 
   // Vertices the current model places: pinned in an image calibrated at input.
   std::set<VertexKey> known;

@@ -74,6 +74,7 @@
 
 #include "core/geometry/camera.h"
 #include "core/estimators/homography_pose.h"
+#include "core/optim/solver_summary.h"
 #include "core/scene/project.h"
 #include "core/estimators/self_calibration.h"
 #include "core/estimators/two_view.h"
@@ -153,18 +154,19 @@ struct MultiViewPairGeometry {
   int num_inliers = 0;
 };
 
-struct MultiViewInitSummary {
-  bool success = false;  // options valid (the call ran); per-image results in `images`
-  std::string message;   // invalid options, or a one-line account
+// SolverSummary's shape (core/optim/solver_summary.h) for a driver of several estimators:
+// termination kConverged when the call ran (options valid; per-image results in `images`,
+// which may all be "not initialised"), kInvalidInput otherwise; message: invalid options, or a
+// one-line account. iterations and the costs are not used (each image's estimator reports
+// its own in `images`).
+struct MultiViewInitSummary : SolverSummary {
   std::vector<MultiViewImageReport> images;  // one per project image, project order
   std::vector<MultiViewPairGeometry> pairs;
   // User-facing lines for images that have pins but could not be initialised, e.g.
   // "image 'b.jpg': 4 pins on known vertices; resection needs 6, or 4 on one face".
   std::vector<std::string> messages;
   int num_initialized = 0;
-  double time_ms = 0.0;
 
-  bool IsUsable() const { return success; }
   const MultiViewImageReport* Find(Id image_id) const;
 };
 

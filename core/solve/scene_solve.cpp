@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "core/geometry/camera.h"
+#include "core/optim/levenberg_marquardt.h"
 #include "core/solve/scene_solve_internal.h"
 
 namespace facet {
@@ -26,17 +27,6 @@ bool SceneSolveOptions::Check(std::string* error) const {
   if (!(parameter_tolerance >= 0.0)) return fail("parameter_tolerance must be non-negative");
   if (!(initial_lambda > 0.0) || !std::isfinite(initial_lambda)) return fail("initial_lambda must be positive and finite");
   return true;
-}
-
-const char* SolveTerminationName(SolveTermination termination) {
-  switch (termination) {
-    case SolveTermination::kConverged: return "converged";
-    case SolveTermination::kMaxIterations: return "max iterations";
-    case SolveTermination::kNothingToSolve: return "nothing to solve";
-    case SolveTermination::kFailed: return "failed";
-    case SolveTermination::kInvalidInput: return "invalid input";
-  }
-  return "?";
 }
 
 namespace {
@@ -74,102 +64,175 @@ bool StateIsFinite(const SceneState& state) {
          finite(state.primitive_translations);
 }
 
-struct LmResult {
-  SolveTermination termination = SolveTermination::kFailed;
+// How the geometry solve's LM ended, in the summary's terms.
+struct SceneLmOutcome {
+  SolverTermination termination = SolverTermination::kFailed;
   std::string message;
   int iterations = 0;
 };
 
-// Levenberg-Marquardt with Marquardt's scaling: the damping term is lambda * diag(J^T J),
-// taking the running maximum of each diagonal entry (More 1978) so a column that shrinks
-// for a while cannot make the step blow up. With this scaling the iterates do not depend on
-// the units of the parameters, and neither do the gradient and step tests, which are
-// measured in the same scaled coordinates. Lambda follows Nielsen's rule.
-LmResult RunLevenbergMarquardt(const SceneProblem& problem, const SceneSolveOptions& options, SceneState* state) {
-  const int n = problem.num_parameters;
-  LmResult result;
-  Eigen::VectorXd residuals, trial_residuals, gradient, delta, values;
-  Eigen::MatrixXd jacobian, trial_jacobian, normal, damped;
-  Eigen::VectorXd max_diagonal = Eigen::VectorXd::Zero(n), scale(n), damping(n);
-  int num_behind = scene_solve_internal::EvaluateScene(problem, *state, &residuals, &jacobian);
-  double cost = Cost(residuals);
-  double lambda = options.initial_lambda;
-  double nu = 2.0;
-  constexpr double kMaxLambda = 1e32;
-  SceneState trial;
-  auto stop = [&](SolveTermination termination, std::string message) {
-    result.termination = termination;
-    result.message = std::move(message);
-    return result;
-  };
+// The geometry solve's least squares for the LM driver (core/optim/levenberg_marquardt.h),
+// with Marquardt's scaling: the damping term is lambda * diag(J^T J), taking the running
+// maximum of each diagonal entry (More 1978) so a column that shrinks for a while cannot make
+// the step blow up. With this scaling the iterates do not depend on the units of the
+// parameters, and neither do the gradient and step tests, which are measured in the same
+// scaled coordinates.
+class SceneLmProblem {
+ public:
+  SceneLmProblem(const SceneProblem& problem, const SceneSolveOptions& options, SceneState* state)
+      : problem_(problem), options_(options), state_(state) {
+    num_behind_ = scene_solve_internal::EvaluateScene(problem_, *state_, &residuals_, &jacobian_);
+    max_diagonal_ = Eigen::VectorXd::Zero(problem_.num_parameters);
+  }
+  double cost() const { return Cost(residuals_); }
+  // True when the run ended on the relative step test (Step returned kStepNegligible).
+  bool step_negligible() const { return step_negligible_; }
 
-  bool need_normal = true;
-  while (true) {
-    if (need_normal) {
-      normal.noalias() = jacobian.transpose() * jacobian;
-      gradient.noalias() = jacobian.transpose() * residuals;
-      max_diagonal = max_diagonal.cwiseMax(normal.diagonal());
-      // A parameter no pin moves has a zero column; a tiny floor keeps the system solvable
-      // and its step zero (its gradient is zero).
-      const double floor = std::max(1e-12 * max_diagonal.maxCoeff(), std::numeric_limits<double>::min());
-      damping = max_diagonal.cwiseMax(floor);
-      scale = damping.cwiseSqrt();
-      need_normal = false;
-      if (cost == 0.0) return stop(SolveTermination::kConverged, "the residuals are zero");
-      const double scaled_gradient = (gradient.array() / scale.array()).abs().maxCoeff();
-      if (scaled_gradient <= options.gradient_tolerance) {
-        return stop(SolveTermination::kConverged, "gradient tolerance reached");
-      }
-    }
-    if (result.iterations >= options.max_iterations) {
-      return stop(SolveTermination::kMaxIterations, "iteration limit reached");
-    }
-    ++result.iterations;
+  bool Linearize() {
+    normal_.noalias() = jacobian_.transpose() * jacobian_;
+    gradient_.noalias() = jacobian_.transpose() * residuals_;
+    max_diagonal_ = max_diagonal_.cwiseMax(normal_.diagonal());
+    // A parameter no pin moves has a zero column; a tiny floor keeps the system solvable
+    // and its step zero (its gradient is zero).
+    const double floor = std::max(1e-12 * max_diagonal_.maxCoeff(), std::numeric_limits<double>::min());
+    damping_ = max_diagonal_.cwiseMax(floor);
+    scale_ = damping_.cwiseSqrt();
+    const double scaled_gradient = (gradient_.array() / scale_.array()).abs().maxCoeff();
+    return scaled_gradient <= options_.gradient_tolerance;
+  }
 
-    damped = normal;
-    damped.diagonal() += lambda * damping;
-    delta = damped.ldlt().solve(-gradient);
-    if (!delta.allFinite()) {
-      lambda *= nu;
-      nu *= 2.0;
-      if (lambda > kMaxLambda) return stop(SolveTermination::kFailed, "the normal equations cannot be solved");
-      continue;
+  LmStepStatus Step(double lambda, LmTrial* trial) {
+    damped_ = normal_;
+    damped_.diagonal() += lambda * damping_;
+    delta_ = damped_.ldlt().solve(-gradient_);
+    if (!delta_.allFinite()) return LmStepStatus::kSolveFailed;
+    ParameterValues(problem_, *state_, &values_);
+    const double step_norm = (delta_.array() * scale_.array()).matrix().norm();
+    const double value_norm = (values_.array() * scale_.array()).matrix().norm();
+    if (step_norm <= options_.parameter_tolerance * (value_norm + options_.parameter_tolerance)) {
+      step_negligible_ = true;
+      return LmStepStatus::kStepNegligible;
     }
-    ParameterValues(problem, *state, &values);
-    const double step_norm = (delta.array() * scale.array()).matrix().norm();
-    const double value_norm = (values.array() * scale.array()).matrix().norm();
-    if (step_norm <= options.parameter_tolerance * (value_norm + options.parameter_tolerance)) {
-      return stop(SolveTermination::kConverged, "parameter tolerance reached");
-    }
-
-    trial = *state;
-    scene_solve_internal::ApplySceneStep(problem, delta, &trial);
-    const int trial_behind = scene_solve_internal::EvaluateScene(problem, trial, &trial_residuals, &trial_jacobian);
-    const double trial_cost = Cost(trial_residuals);
+    trial_state_ = *state_;
+    scene_solve_internal::ApplySceneStep(problem_, delta_, &trial_state_);
+    trial_behind_ = scene_solve_internal::EvaluateScene(problem_, trial_state_, &trial_residuals_, &trial_jacobian_);
+    const double trial_cost = Cost(trial_residuals_);
+    // A trial that puts more pinned vertices behind their cameras is vetoed, whatever its cost.
+    const bool valid = std::isfinite(trial_cost) && trial_jacobian_.allFinite() && trial_behind_ <= num_behind_;
+    trial->cost = valid ? trial_cost : std::numeric_limits<double>::infinity();
+    trial->step_squared_norm = step_norm * step_norm;
     // Decrease of the linear model: -g.d - 0.5 d.JtJ.d = 0.5 d.(lambda D d - g).
-    const double predicted = 0.5 * delta.dot(lambda * damping.cwiseProduct(delta) - gradient);
-    const bool valid = std::isfinite(trial_cost) && trial_jacobian.allFinite() && trial_behind <= num_behind;
-    if (valid && trial_cost < cost && predicted > 0.0) {
-      const double rho = (cost - trial_cost) / predicted;
-      const double relative_decrease = (cost - trial_cost) / cost;
-      std::swap(*state, trial);
-      std::swap(residuals, trial_residuals);
-      std::swap(jacobian, trial_jacobian);
-      cost = trial_cost;
-      num_behind = trial_behind;
-      const double t = 2.0 * rho - 1.0;
-      lambda *= std::max(1.0 / 3.0, 1.0 - t * t * t);
-      nu = 2.0;
-      need_normal = true;
-      if (relative_decrease <= options.function_tolerance) {
-        return stop(SolveTermination::kConverged, "function tolerance reached");
-      }
-    } else {
-      lambda *= nu;
-      nu *= 2.0;
-      if (lambda > kMaxLambda) {
-        return stop(SolveTermination::kConverged, "no step decreases the cost any more");
-      }
+    trial->predicted_decrease = 0.5 * delta_.dot(lambda * damping_.cwiseProduct(delta_) - gradient_);
+    return LmStepStatus::kSolved;
+  }
+
+  void Accept() {
+    std::swap(*state_, trial_state_);
+    std::swap(residuals_, trial_residuals_);
+    std::swap(jacobian_, trial_jacobian_);
+    num_behind_ = trial_behind_;
+  }
+
+ private:
+  const SceneProblem& problem_;
+  const SceneSolveOptions& options_;
+  SceneState* state_;
+  SceneState trial_state_;
+  Eigen::VectorXd residuals_, trial_residuals_, gradient_, delta_, values_;
+  Eigen::MatrixXd jacobian_, trial_jacobian_, normal_, damped_;
+  Eigen::VectorXd max_diagonal_, scale_, damping_;
+  int num_behind_ = 0;
+  int trial_behind_ = 0;
+  bool step_negligible_ = false;
+};
+
+SceneLmOutcome RunLevenbergMarquardt(const SceneProblem& problem, const SceneSolveOptions& options, SceneState* state) {
+  SceneLmProblem lm_problem(problem, options, state);
+  LmOptions lm;
+  lm.max_iterations = options.max_iterations;
+  lm.schedule = LmSchedule::kGainRatio;
+  lm.initial_lambda = options.initial_lambda;
+  lm.relative_decrease_tolerance = options.function_tolerance;
+  // Rules that differ from the defaults: every trial counts as an iteration (the budget is
+  // in evaluations, as in Ceres); a damped system without a finite solution raises lambda as
+  // a rejection does (nu); lambda has no floor and may climb to 1e32 (the running-max
+  // scaling keeps it scale-free, so no fixed bound is meaningful below that); the step test
+  // is the caller's relative one (kStepNegligible), hence no absolute step bound.
+  lm.count_every_trial = true;
+  lm.lambda_increase_on_failed_solve = 0.0;
+  lm.min_lambda = 0.0;
+  lm.max_lambda = 1e32;
+  lm.max_lambda_on_failed_solve = 1e32;
+  lm.min_step_squared_norm = 0.0;
+  const LmResult result = MinimizeLevenbergMarquardt(lm_problem.cost(), lm, lm_problem);
+  SceneLmOutcome outcome;
+  outcome.iterations = result.iterations;
+  auto ended = [&](SolverTermination termination, std::string message) {
+    outcome.termination = termination;
+    outcome.message = std::move(message);
+    return outcome;
+  };
+  switch (result.termination) {
+    case LmTermination::kConverged:
+      return ended(SolverTermination::kConverged,
+                   lm_problem.step_negligible() ? "parameter tolerance reached" : "function tolerance reached");
+    case LmTermination::kGradientConverged: return ended(SolverTermination::kConverged, "gradient tolerance reached");
+    case LmTermination::kZeroCost: return ended(SolverTermination::kConverged, "the residuals are zero");
+    case LmTermination::kNoDecrease: return ended(SolverTermination::kConverged, "no step decreases the cost any more");
+    case LmTermination::kMaxIterations: return ended(SolverTermination::kMaxIterations, "iteration limit reached");
+    case LmTermination::kLinearSolveFailed: return ended(SolverTermination::kFailed, "the normal equations cannot be solved");
+    case LmTermination::kNonFiniteCost: return ended(SolverTermination::kFailed, "the reprojection is not finite at the start");
+    case LmTermination::kStoppedByCallback: break;  // no callback
+  }
+  return ended(SolverTermination::kFailed, "the solve stopped unexpectedly");
+}
+
+// Why the project cannot be solved as given (a non-finite pin, invalid intrinsics or
+// rotation, a non-finite camera position or primitive parameter), or "".
+std::string InvalidInputMessage(const Project& project, const SceneProblem& problem, const SceneState& state) {
+  for (const auto& obs : problem.observations) {
+    if (!obs.uv_px.allFinite()) {
+      return "pin #" + std::to_string(project.pins[obs.pin_index].id) + " has a non-finite pixel position";
+    }
+  }
+  for (const auto& cam : problem.cameras) {
+    if (!(cam.focal_px > 0.0) || !std::isfinite(cam.focal_px) || !cam.principal_point_px.allFinite() ||
+        !cam.cam_from_world_rotation.allFinite()) {
+      return "the camera of image #" + std::to_string(project.images[cam.image_index].id) +
+             " has invalid intrinsics or rotation";
+    }
+  }
+  if (!StateIsFinite(state)) return "a camera position or primitive parameter is not finite";
+  return "";
+}
+
+// The pins' reprojection errors at `state` into the summary (per pin, RMS, max); returns the
+// cost there.
+double RecordResiduals(const SceneProblem& problem, const SceneState& state, SceneSolveSummary* summary) {
+  Eigen::VectorXd residuals;
+  scene_solve_internal::EvaluateScene(problem, state, &residuals, nullptr);
+  double sum_sq = 0.0, max_px = 0.0;
+  for (size_t o = 0; o < problem.observations.size(); ++o) {
+    const double e = residuals.segment<2>(2 * o).norm();
+    summary->pin_residuals_px[problem.observations[o].pin_index] = e;
+    sum_sq += e * e;
+    max_px = std::max(max_px, e);
+  }
+  const size_t num = problem.observations.size();
+  summary->reprojection_rms_px = num > 0 ? std::sqrt(sum_sq / num) : 0.0;
+  summary->reprojection_max_px = max_px;
+  return Cost(residuals);
+}
+
+// A warning per pin whose vertex lies behind its image's camera in the solved project.
+void AddBehindCameraWarnings(const Project& project, const SceneProblem& problem, const Project& solved,
+                             std::vector<std::string>* warnings) {
+  for (const auto& obs : problem.observations) {
+    const Primitive& primitive = solved.primitives[problem.primitives[obs.primitive].primitive_index];
+    const Image& image = solved.images[problem.cameras[obs.camera].image_index];
+    if (image.camera.CamFromWorld(primitive.mesh.vertex(solved.pins[obs.pin_index].vertex.vertex).position).z() <= 0.0) {
+      warnings->push_back("pin #" + std::to_string(project.pins[obs.pin_index].id) +
+                          ": the vertex lies behind the camera of its image");
     }
   }
 }
@@ -184,7 +247,7 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
   assert(solved != nullptr && solved != &project);
   const auto start = std::chrono::steady_clock::now();
   SceneSolveSummary summary;
-  auto finish = [&](SolveTermination termination, std::string message) {
+  auto finish = [&](SolverTermination termination, std::string message) {
     summary.termination = termination;
     summary.message = std::move(message);
     if (!summary.IsUsable()) *solved = project;
@@ -194,7 +257,7 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
   summary.pin_residuals_px.assign(project.pins.size(), std::numeric_limits<double>::quiet_NaN());
 
   std::string error;
-  if (!options.Check(&error)) return finish(SolveTermination::kInvalidInput, "invalid options: " + error);
+  if (!options.Check(&error)) return finish(SolverTermination::kInvalidInput, "invalid options: " + error);
 
   SceneState state;
   const SceneProblem problem = scene_solve_internal::BuildSceneProblem(project, &state);
@@ -203,48 +266,17 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
   summary.num_residuals = 2 * static_cast<int>(problem.observations.size());
   summary.num_parameters = problem.num_parameters;
 
-  for (const auto& obs : problem.observations) {
-    if (!obs.uv_px.allFinite()) {
-      return finish(SolveTermination::kInvalidInput,
-                    "pin #" + std::to_string(project.pins[obs.pin_index].id) + " has a non-finite pixel position");
-    }
-  }
-  for (const auto& cam : problem.cameras) {
-    if (!(cam.focal_px > 0.0) || !std::isfinite(cam.focal_px) || !cam.principal_point_px.allFinite() ||
-        !cam.cam_from_world_rotation.allFinite()) {
-      return finish(SolveTermination::kInvalidInput,
-                    "the camera of image #" + std::to_string(project.images[cam.image_index].id) +
-                        " has invalid intrinsics or rotation");
-    }
-  }
-  if (!StateIsFinite(state)) {
-    return finish(SolveTermination::kInvalidInput, "a camera position or primitive parameter is not finite");
-  }
-
-  Eigen::VectorXd residuals;
-  auto record_residuals = [&](const SceneState& s) {
-    scene_solve_internal::EvaluateScene(problem, s, &residuals, nullptr);
-    double sum_sq = 0.0, max_px = 0.0;
-    for (size_t o = 0; o < problem.observations.size(); ++o) {
-      const double e = residuals.segment<2>(2 * o).norm();
-      summary.pin_residuals_px[problem.observations[o].pin_index] = e;
-      sum_sq += e * e;
-      max_px = std::max(max_px, e);
-    }
-    const size_t num = problem.observations.size();
-    summary.reprojection_rms_px = num > 0 ? std::sqrt(sum_sq / num) : 0.0;
-    summary.reprojection_max_px = max_px;
-    return Cost(residuals);
-  };
-
+  const std::string invalid = InvalidInputMessage(project, problem, state);
+  if (!invalid.empty()) return finish(SolverTermination::kInvalidInput, invalid);
+  auto record_residuals = [&](const SceneState& s) { return RecordResiduals(problem, s, &summary); };
   if (problem.observations.empty()) {
     *solved = project;
-    return finish(SolveTermination::kNothingToSolve, "no pins in calibrated images");
+    return finish(SolverTermination::kNothingToSolve, "no pins in calibrated images");
   }
   summary.initial_cost = summary.final_cost = record_residuals(state);
   if (problem.num_parameters == 0) {
     *solved = project;
-    return finish(SolveTermination::kNothingToSolve,
+    return finish(SolverTermination::kNothingToSolve,
                   "nothing is free: every camera pose and primitive parameter that the pins touch is locked");
   }
   // A cold start replaces the current values, so only its result has to be finite: a camera
@@ -258,7 +290,7 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
     }
   }
   if (!std::isfinite(summary.initial_cost) && !std::isfinite(record_residuals(state))) {
-    return finish(SolveTermination::kFailed,
+    return finish(SolverTermination::kFailed,
                   std::string("the reprojection is not finite at the start: a pinned vertex lies in the plane of its camera") +
                       (why.empty() ? "" : ", and the linear initialisation found no start (" + why + ")"));
   }
@@ -268,26 +300,26 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
   // cold start) and leaves the refinement to the joint solve's sparse LM, which UpdateModel
   // runs next (core/solve/model_update.h) and which is exact on the same residuals.
   if (problem.num_parameters > kMaxDenseParameters) {
-    if (!StateIsFinite(state)) return finish(SolveTermination::kFailed, "the linear start is not finite");
+    if (!StateIsFinite(state)) return finish(SolverTermination::kFailed, "the linear start is not finite");
     summary.final_cost = record_residuals(state);
     if (!std::isfinite(summary.final_cost))
-      return finish(SolveTermination::kFailed, "the reprojection is not finite at the linear start");
+      return finish(SolverTermination::kFailed, "the reprojection is not finite at the linear start");
     *solved = project;
     scene_solve_internal::WriteSceneState(problem, state, solved);
-    return finish(SolveTermination::kMaxIterations,
+    return finish(SolverTermination::kMaxIterations,
                   std::string(summary.linear_initialization_used ? "linear start only" : "start kept") + ": " +
                       std::to_string(problem.num_parameters) + " parameters are refined by the joint solve");
   }
   const auto lm = RunLevenbergMarquardt(problem, options, &state);
   summary.iterations = lm.iterations;
-  if (lm.termination == SolveTermination::kFailed) return finish(lm.termination, lm.message);
+  if (lm.termination == SolverTermination::kFailed) return finish(lm.termination, lm.message);
   if (!StateIsFinite(state)) {
-    return finish(SolveTermination::kFailed, "the solve diverged: a parameter is no longer finite");
+    return finish(SolverTermination::kFailed, "the solve diverged: a parameter is no longer finite");
   }
   const double final_cost = record_residuals(state);
   if (!std::isfinite(final_cost)) {
     summary.pin_residuals_px.assign(project.pins.size(), std::numeric_limits<double>::quiet_NaN());
-    return finish(SolveTermination::kFailed, "the solve diverged: the reprojection is not finite");
+    return finish(SolverTermination::kFailed, "the solve diverged: the reprojection is not finite");
   }
   summary.final_cost = final_cost;
 
@@ -296,14 +328,7 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
   for (const auto& w : scene_solve_internal::UndeterminedParameterWarnings(project, problem, state)) {
     summary.warnings.push_back(w);
   }
-  for (const auto& obs : problem.observations) {
-    const Primitive& primitive = solved->primitives[problem.primitives[obs.primitive].primitive_index];
-    const Image& image = solved->images[problem.cameras[obs.camera].image_index];
-    if (image.camera.CamFromWorld(primitive.mesh.vertex(solved->pins[obs.pin_index].vertex.vertex).position).z() <= 0.0) {
-      summary.warnings.push_back("pin #" + std::to_string(project.pins[obs.pin_index].id) +
-                                 ": the vertex lies behind the camera of its image");
-    }
-  }
+  AddBehindCameraWarnings(project, problem, *solved, &summary.warnings);
   return finish(lm.termination, lm.message);
 }
 

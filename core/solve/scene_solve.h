@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/optim/solver_summary.h"
 #include "core/scene/project.h"
 
 namespace facet {
@@ -34,22 +35,10 @@ struct SceneSolveOptions {
   bool Check(std::string* error) const;
 };
 
-enum class SolveTermination {
-  kConverged,      // a tolerance was met
-  kMaxIterations,  // budget used up; the result is the best found so far
-  kNothingToSolve, // no pins in calibrated images or no free parameters
-  kFailed,         // diverged or numerical failure; the project is left as it was
-  kInvalidInput,   // options or project rejected; see message
-};
-const char* SolveTerminationName(SolveTermination termination);
-
-struct SceneSolveSummary {
-  SolveTermination termination = SolveTermination::kInvalidInput;
-  std::string message;
-  std::vector<std::string> warnings;  // e.g. "the depth of box #3 is not determined by the pins"
-  int iterations = 0;
-  double initial_cost = 0.0;  // 0.5 * sum of squared residuals (px^2) at the project's values
-  double final_cost = 0.0;
+// The geometry solve's summary: SolverSummary's fields (core/optim/solver_summary.h), with
+// initial_cost and final_cost 0.5 * sum of squared residuals (px^2), initial_cost at the
+// project's values; warnings e.g. "the depth of box #3 is not determined by the pins".
+struct SceneSolveSummary : SolverSummary {
   // Over the pins that took part: root mean square and maximum of the distance (px) between
   // the projected vertex and the pin.
   double reprojection_rms_px = 0.0;
@@ -58,15 +47,9 @@ struct SceneSolveSummary {
   int num_parameters = 0;
   int num_skipped_pins = 0;  // pins in uncalibrated images or naming missing objects
   bool linear_initialization_used = false;  // false for a warm start or when it fell back
-  double time_ms = 0.0;
   // Per pin, in project.pins order: reprojection error in px after the solve (NaN for pins
   // that did not take part).
   std::vector<double> pin_residuals_px;
-
-  bool IsUsable() const {
-    return termination == SolveTermination::kConverged ||
-           termination == SolveTermination::kMaxIterations;
-  }
 };
 
 // Solves and writes the result to *solved (which may alias nothing in `project`). When the

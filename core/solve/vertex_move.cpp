@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include <Eigen/SVD>
+
+#include "core/util/format.h"
 
 namespace facet {
 namespace {
@@ -13,11 +14,9 @@ std::string Describe(const Primitive& primitive) {
   return std::string(PrimitiveKindName(primitive.shape.kind)) + " '" + primitive.name + "'";
 }
 
-std::string FormatNumber(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.6g", value);
-  return buffer;
-}
+// The messages give sizes and distances to 6 significant digits, not core/util/format.h's
+// default 4: a drag's change of 12.3456 -> 12.3461 must show.
+constexpr int kMessageDigits = 6;
 
 constexpr double kRoundOffRelative = 1e-14;
 
@@ -48,6 +47,117 @@ double PrimitiveSize(const Primitive& primitive) {
   double size = 0.0;
   for (int k = 0; k < count; ++k) size = std::max(size, std::abs(primitive.shape.params[k]));
   return std::max(1.0, size);
+}
+
+// The dragged vertex's position after the move, how far it is from the target, and how far
+// the primitive's other vertices moved, into the summary.
+void RecordPosition(const Primitive& source, const Project& moved, const VertexRef& vertex,
+                    const Eigen::Vector3d& target_in_world, double reach_distance, VertexMoveSummary* summary) {
+  const Primitive& after = *moved.FindPrimitive(vertex.primitive_id);
+  summary->position = after.mesh.vertex(vertex.vertex).position;
+  summary->distance_to_target = (summary->position - target_in_world).norm();
+  summary->reached = summary->distance_to_target <= reach_distance;
+  summary->params_after = after.shape.params;
+  summary->translation_after = after.shape.translation;
+  for (VertexId v = 0; v < after.mesh.VertexIdEnd(); ++v) {
+    if (v == vertex.vertex || !after.mesh.IsVertex(v)) continue;
+    summary->max_other_displacement = std::max(summary->max_other_displacement,
+                                               (after.mesh.vertex(v).position - source.mesh.vertex(v).position).norm());
+  }
+}
+
+// Whatever keeps the direction `missing` fixed, in the words of the properties panel.
+std::vector<std::string> LockReasons(const Project& project, const Primitive& source, const MeshVertex& dragged,
+                                     const Eigen::Matrix3d& world_from_primitive, bool attached,
+                                     const Eigen::Vector3d& missing) {
+  const PrimitiveShape& shape = source.shape;
+  std::vector<std::string> reasons;
+  if (attached) {
+    const Primitive* base = project.FindPrimitive(source.attached_to);
+    reasons.push_back("its footprint and position follow " + Describe(*base) + " (move the base's vertices)");
+  }
+  if (!attached && source.translation_locked) reasons.push_back("its translation is locked (unlock it to shift it)");
+  const ParamCoefficients c = dragged.local.Collapsed();
+  for (int k = 0; k < ShapeParamCount(shape.kind); ++k) {
+    if (!source.param_locked[k]) continue;
+    const Eigen::Vector3d column = world_from_primitive * c.col(k);
+    // A locked dimension limits the move only when it could have carried the vertex
+    // towards the target.
+    if (std::abs(column.dot(missing)) > 1e-12 * column.norm() * std::max(missing.norm(), 1e-300)) {
+      reasons.push_back(std::string(ShapeParamLabel(shape.kind, k)) + " is locked (unlock it to change it)");
+    }
+  }
+  return reasons;
+}
+
+// The step of the unknowns that takes the dragged vertex towards `wanted` and moves the
+// primitive's other vertices least (the header's nullspace method).
+Eigen::VectorXd SmallestStep(const Primitive& source, VertexId dragged, const std::vector<Unknown>& unknowns,
+                             const Eigen::Matrix3d& world_from_primitive, const Eigen::Vector3d& wanted,
+                             const VertexMoveOptions& options, double size) {
+  const int n = static_cast<int>(unknowns.size());
+  // A_i = d w_i / dx for every live vertex; row block 3 * i.
+  std::vector<VertexId> others;
+  for (VertexId v = 0; v < source.mesh.VertexIdEnd(); ++v) {
+    if (v != dragged && source.mesh.IsVertex(v)) others.push_back(v);
+  }
+  auto jacobian_of = [&](VertexId v) {
+    Eigen::Matrix<double, 3, Eigen::Dynamic> a(3, n);
+    const ParamCoefficients c = source.mesh.vertex(v).local.Collapsed();
+    for (int u = 0; u < n; ++u) {
+      a.col(u) = unknowns[u].is_param ? Eigen::Vector3d(world_from_primitive * c.col(unknowns[u].index))
+                                      : Eigen::Vector3d::Unit(unknowns[u].index);
+    }
+    return a;
+  };
+  const Eigen::MatrixXd a_dragged = jacobian_of(dragged);
+  Eigen::MatrixXd a_others(3 * others.size(), n);
+  for (size_t i = 0; i < others.size(); ++i) a_others.middleRows(3 * i, 3) = jacobian_of(others[i]);
+
+  // Nullspace method: x0 reaches the projection of `wanted` onto A_d's range (min norm), N
+  // spans the steps that leave the dragged vertex where x0 puts it, and z minimises the other
+  // vertices' displacement |A_o (x0 + N z)|^2 over them (min norm when that is not unique).
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a_dragged, Eigen::ComputeFullV | Eigen::ComputeThinU);
+  const Eigen::VectorXd& s = svd.singularValues();
+  int rank = 0;
+  while (rank < s.size() && s(rank) > options.rank_tolerance * s(0) && s(rank) > 0.0) ++rank;
+  Eigen::VectorXd x0 = Eigen::VectorXd::Zero(n);
+  for (int i = 0; i < rank; ++i) x0 += svd.matrixV().col(i) * (svd.matrixU().col(i).dot(wanted) / s(i));
+  const Eigen::MatrixXd nullspace = svd.matrixV().rightCols(n - rank);
+  Eigen::VectorXd dx = x0;
+  if (nullspace.cols() > 0 && a_others.rows() > 0) {
+    dx += nullspace * PseudoSolve(a_others * nullspace, -a_others * x0, options.rank_tolerance, nullptr);
+  }
+
+  // Round-off in directions the optimum leaves alone would show as "shifted by 1e-16".
+  for (int u = 0; u < n; ++u) {
+    if (std::abs(dx(u)) <= kRoundOffRelative * size) dx(u) = 0.0;
+  }
+  return dx;
+}
+
+// What the move changed ("box 'house': Size y 3 -> 4, shifted by 0.5"), and how far short of
+// the target it stopped and why.
+std::string DescribeMove(const Primitive& source, const PrimitiveShape& out, const VertexMoveSummary& summary) {
+  const PrimitiveShape& shape = source.shape;
+  std::string text = Describe(source) + ":";
+  for (int k = 0; k < ShapeParamCount(shape.kind); ++k) {
+    if (out.params[k] != shape.params[k]) {
+      text += std::string(" ") + ShapeParamLabel(shape.kind, k) + " " +
+              internal::FormatNumber(shape.params[k], kMessageDigits) + " -> " +
+              internal::FormatNumber(out.params[k], kMessageDigits) + ",";
+    }
+  }
+  if (out.translation != shape.translation) {
+    text += " shifted by " + internal::FormatNumber((out.translation - shape.translation).norm(), kMessageDigits) + ",";
+  }
+  text.pop_back();
+  if (!summary.reached) {
+    text += "; " + internal::FormatNumber(summary.distance_to_target, kMessageDigits) + " short of the target:";
+    for (const std::string& r : summary.limited_by) text += " " + r + ";";
+    text.pop_back();
+  }
+  return text;
 }
 
 }  // namespace
@@ -115,27 +225,13 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
   summary.translation_before = summary.translation_after = shape.translation;
   const double size = PrimitiveSize(*source);
 
-  auto finish_position = [&]() {
-    const Primitive& after = *moved->FindPrimitive(vertex.primitive_id);
-    summary.position = after.mesh.vertex(vertex.vertex).position;
-    summary.distance_to_target = (summary.position - target_in_world).norm();
-    summary.reached = summary.distance_to_target <= options.reach_tolerance * size;
-    summary.params_after = after.shape.params;
-    summary.translation_after = after.shape.translation;
-    for (VertexId v = 0; v < after.mesh.VertexIdEnd(); ++v) {
-      if (v == vertex.vertex || !after.mesh.IsVertex(v)) continue;
-      summary.max_other_displacement = std::max(
-          summary.max_other_displacement, (after.mesh.vertex(v).position - source->mesh.vertex(v).position).norm());
-    }
-  };
-
   if (dragged.local.free) {
     // The offset is in primitive-local units; the rotation maps the world step into them.
     primitive.mesh.vertex(vertex.vertex).local.offset += world_from_primitive.transpose() * wanted;
     RefreshPrimitive(moved, &primitive);
     summary.ok = true;
     summary.moved_offset = true;
-    finish_position();
+    RecordPosition(*source, *moved, vertex, target_in_world, options.reach_tolerance * size, &summary);
     summary.message = Describe(*source) + ": free vertex " + std::to_string(vertex.vertex) + " moved";
     return summary;
   }
@@ -153,29 +249,8 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
   }
   const int n = static_cast<int>(unknowns.size());
 
-  // Whatever keeps a direction fixed, in the words of the properties panel.
-  auto lock_reasons = [&](const Eigen::Vector3d& missing) {
-    std::vector<std::string> reasons;
-    if (attached) {
-      const Primitive* base = project.FindPrimitive(source->attached_to);
-      reasons.push_back("its footprint and position follow " + Describe(*base) + " (move the base's vertices)");
-    }
-    if (!attached && source->translation_locked) reasons.push_back("its translation is locked (unlock it to shift it)");
-    const ParamCoefficients c = dragged.local.Collapsed();
-    for (int k = 0; k < param_count; ++k) {
-      if (!source->param_locked[k]) continue;
-      const Eigen::Vector3d column = world_from_primitive * c.col(k);
-      // A locked dimension limits the move only when it could have carried the vertex
-      // towards the target.
-      if (std::abs(column.dot(missing)) > 1e-12 * column.norm() * std::max(missing.norm(), 1e-300)) {
-        reasons.push_back(std::string(ShapeParamLabel(shape.kind, k)) + " is locked (unlock it to change it)");
-      }
-    }
-    return reasons;
-  };
-
   if (n == 0) {
-    summary.limited_by = lock_reasons(wanted);
+    summary.limited_by = LockReasons(project, *source, dragged, world_from_primitive, attached, wanted);
     std::string text = Describe(*source) + " cannot change:";
     for (const std::string& r : summary.limited_by) text += " " + r + ";";
     if (summary.limited_by.empty()) text += " every dimension is locked;";
@@ -183,43 +258,7 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
     return refuse(text);
   }
 
-  // A_i = d w_i / dx for every live vertex; row block 3 * i.
-  std::vector<VertexId> others;
-  for (VertexId v = 0; v < source->mesh.VertexIdEnd(); ++v) {
-    if (v != vertex.vertex && source->mesh.IsVertex(v)) others.push_back(v);
-  }
-  auto jacobian_of = [&](VertexId v) {
-    Eigen::Matrix<double, 3, Eigen::Dynamic> a(3, n);
-    const ParamCoefficients c = source->mesh.vertex(v).local.Collapsed();
-    for (int u = 0; u < n; ++u) {
-      a.col(u) = unknowns[u].is_param ? Eigen::Vector3d(world_from_primitive * c.col(unknowns[u].index))
-                                      : Eigen::Vector3d::Unit(unknowns[u].index);
-    }
-    return a;
-  };
-  const Eigen::MatrixXd a_dragged = jacobian_of(vertex.vertex);
-  Eigen::MatrixXd a_others(3 * others.size(), n);
-  for (size_t i = 0; i < others.size(); ++i) a_others.middleRows(3 * i, 3) = jacobian_of(others[i]);
-
-  // Nullspace method: x0 reaches the projection of `wanted` onto A_d's range (min norm), N
-  // spans the steps that leave the dragged vertex where x0 puts it, and z minimises the other
-  // vertices' displacement |A_o (x0 + N z)|^2 over them (min norm when that is not unique).
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a_dragged, Eigen::ComputeFullV | Eigen::ComputeThinU);
-  const Eigen::VectorXd& s = svd.singularValues();
-  int rank = 0;
-  while (rank < s.size() && s(rank) > options.rank_tolerance * s(0) && s(rank) > 0.0) ++rank;
-  Eigen::VectorXd x0 = Eigen::VectorXd::Zero(n);
-  for (int i = 0; i < rank; ++i) x0 += svd.matrixV().col(i) * (svd.matrixU().col(i).dot(wanted) / s(i));
-  const Eigen::MatrixXd nullspace = svd.matrixV().rightCols(n - rank);
-  Eigen::VectorXd dx = x0;
-  if (nullspace.cols() > 0 && a_others.rows() > 0) {
-    dx += nullspace * PseudoSolve(a_others * nullspace, -a_others * x0, options.rank_tolerance, nullptr);
-  }
-
-  // Round-off in directions the optimum leaves alone would show as "shifted by 1e-16".
-  for (int u = 0; u < n; ++u) {
-    if (std::abs(dx(u)) <= kRoundOffRelative * size) dx(u) = 0.0;
-  }
+  const Eigen::VectorXd dx = SmallestStep(*source, vertex.vertex, unknowns, world_from_primitive, wanted, options, size);
   PrimitiveShape& out = primitive.shape;
   for (int u = 0; u < n; ++u) {
     if (unknowns[u].is_param) {
@@ -231,14 +270,14 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
   for (int k = 0; k < param_count; ++k) {
     if (!(out.params[k] > 0.0)) {
       return refuse(Describe(*source) + ": " + ShapeParamLabel(shape.kind, k) + " would become " +
-                    FormatNumber(out.params[k]) + " (the drag went through the opposite face)");
+                    internal::FormatNumber(out.params[k], kMessageDigits) + " (the drag went through the opposite face)");
     }
   }
   RefreshAllPrimitives(moved);
-  finish_position();
+  RecordPosition(*source, *moved, vertex, target_in_world, options.reach_tolerance * size, &summary);
 
   const Eigen::Vector3d missing = target_in_world - summary.position;
-  if (!summary.reached) summary.limited_by = lock_reasons(missing);
+  if (!summary.reached) summary.limited_by = LockReasons(project, *source, dragged, world_from_primitive, attached, missing);
   if (dx.norm() <= options.rank_tolerance * size && !summary.reached) {
     std::string text = Describe(*source) + ": vertex " + std::to_string(vertex.vertex) + " cannot move that way:";
     for (const std::string& r : summary.limited_by) text += " " + r + ";";
@@ -248,21 +287,7 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
   }
 
   summary.ok = true;
-  std::string text = Describe(*source) + ":";
-  for (int k = 0; k < param_count; ++k) {
-    if (out.params[k] != shape.params[k]) {
-      text += std::string(" ") + ShapeParamLabel(shape.kind, k) + " " + FormatNumber(shape.params[k]) + " -> " +
-              FormatNumber(out.params[k]) + ",";
-    }
-  }
-  if (out.translation != shape.translation) text += " shifted by " + FormatNumber((out.translation - shape.translation).norm()) + ",";
-  text.pop_back();
-  if (!summary.reached) {
-    text += "; " + FormatNumber(summary.distance_to_target) + " short of the target:";
-    for (const std::string& r : summary.limited_by) text += " " + r + ";";
-    text.pop_back();
-  }
-  summary.message = text;
+  summary.message = DescribeMove(*source, out, summary);
   return summary;
 }
 
@@ -291,7 +316,7 @@ PrimitiveMoveSummary MovePrimitive(const Project& project, Id primitive_id, cons
   moved->FindPrimitive(primitive_id)->shape.translation += delta_in_world;
   RefreshAllPrimitives(moved);
   summary.ok = true;
-  summary.message = Describe(*source) + " moved by " + FormatNumber(delta_in_world.norm());
+  summary.message = Describe(*source) + " moved by " + internal::FormatNumber(delta_in_world.norm(), kMessageDigits);
   return summary;
 }
 

@@ -50,6 +50,9 @@ struct VertexMoveOptions {
   bool Check(std::string* error) const;
 };
 
+// Not a solver summary (core/optim/solver_summary.h): the move is one direct constrained
+// least-squares step, with no iterations and no cost to report; `ok` and `message` say whether
+// it was applied and why not, the rest what it did.
 struct VertexMoveSummary {
   bool ok = false;
   // User-facing: what changed ("box 'house': size y 3 -> 4"), or why the move was refused.
@@ -77,6 +80,7 @@ struct VertexMoveSummary {
 VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, const Eigen::Vector3d& target_in_world,
                              const VertexMoveOptions& options, Project* moved);
 
+// Not a solver summary either: a translation, applied or refused.
 struct PrimitiveMoveSummary {
   bool ok = false;
   std::string message;  // user-facing

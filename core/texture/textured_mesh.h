@@ -48,6 +48,8 @@ struct TextureBakeOptions {
   bool Check(std::string* error) const;
 };
 
+// Not a solver summary (core/optim/solver_summary.h): a bake has no cost to minimise and no
+// iterations, so it keeps its own shape: success, the message, what was textured, the time.
 struct TextureBakeSummary {
   bool success = false;
   std::string message;

@@ -62,8 +62,8 @@ const Project* ConvergedScene(const JointSceneOptions& size, std::string* error)
   const JointScene scene = facet::testing::MakeJointScene(size);
   Project solved;
   const JointSolveSummary summary = facet::SolveJoint(scene.start, FullSolveOptions(false), &solved);
-  if (summary.termination != JointSolveSummary::Termination::kConverged) {
-    *error = std::string("the full solve did not converge: ") + facet::JointSolveTerminationName(summary.termination) +
+  if (summary.termination != facet::SolverTermination::kConverged) {
+    *error = std::string("the full solve did not converge: ") + facet::SolverTerminationName(summary.termination) +
              ": " + summary.message;
     return nullptr;
   }
@@ -141,7 +141,7 @@ void BM_JointCold(benchmark::State& state) {
     }
   }
   SetCounters(state, solved, summary);
-  state.counters["converged"] = summary.termination == JointSolveSummary::Termination::kConverged ? 1 : 0;
+  state.counters["converged"] = summary.termination == facet::SolverTermination::kConverged ? 1 : 0;
   state.counters["rms_px"] = summary.reprojection_rms_px;
   state.counters["warnings"] = static_cast<double>(summary.warnings.size());
 }

@@ -33,8 +33,8 @@ void BM_CalibrateThreeVanishingPoints(benchmark::State& state) {
 }
 BENCHMARK(BM_CalibrateThreeVanishingPoints)->Arg(4)->Arg(13)->Unit(benchmark::kMicrosecond);
 
-// One drag step: a pin moved by a pixel, calibration plus a warm-started solve of a few
-// iterations, exactly what the app runs per frame while a pin is dragged.
+// One drag step: a pin moved by a pixel, then exactly what the app runs per frame while a pin
+// is dragged (DragFrameUpdateOptions, with a calibration cache as the app keeps one).
 void BM_DragStep(benchmark::State& state) {
   SyntheticSceneOptions o;
   o.noise_px = 0.5;
@@ -42,14 +42,13 @@ void BM_DragStep(benchmark::State& state) {
   facet::Project current;
   facet::ModelUpdateOptions cold;
   facet::UpdateModel(scene.project, cold, &current);
-  facet::ModelUpdateOptions drag;
-  drag.solve.warm_start = true;
-  drag.solve.max_iterations = 5;
+  const facet::ModelUpdateOptions drag = facet::DragFrameUpdateOptions();
+  facet::ModelUpdateCache cache;
   int step = 0;
   for (auto _ : state) {
     current.pins[0].uv_px.x() += (step++ % 2 == 0) ? 1.0 : -1.0;
     facet::Project next;
-    benchmark::DoNotOptimize(facet::UpdateModel(current, drag, &next));
+    benchmark::DoNotOptimize(facet::UpdateModel(current, drag, &next, &cache));
     current = std::move(next);
   }
 }

@@ -67,7 +67,7 @@ BENCHMARK(BM_UpdateModelCold)
     ->Args({100, 10, 1000})
     ->Unit(benchmark::kMillisecond);
 
-// One drag frame of the app as a whole (app/state/app_state.cpp DragUpdateOptions: calibration and
+// One drag frame of the app as a whole (DragFrameUpdateOptions, core/solve/model_update.h: calibration and
 // the joint solve, warm on the 5-iteration budget, no diagnostics; the geometry solve only
 // when the joint result does not hold),
 // after the scene converged, with one pin moved by 2 px: what the user waits for per frame,
@@ -86,14 +86,7 @@ void BM_UpdateModelDragFrame(benchmark::State& state) {
   }
   facet::Project dragged = converged;
   dragged.pins[0].uv_px += Eigen::Vector2d(2.0, 0.0);
-  facet::ModelUpdateOptions frame;
-  frame.solve.warm_start = true;
-  frame.solve.max_iterations = 5;
-  frame.joint.max_iterations = 5;
-  frame.joint.compute_diagnostics = false;
-  frame.joint.polish_constraints = false;
-  frame.initialize_from_pins = false;
-  frame.geometry_solve_when_warm = false;
+  const facet::ModelUpdateOptions frame = facet::DragFrameUpdateOptions();
   facet::ModelUpdateSummary summary;
   facet::Project updated;
   for (auto _ : state) {
@@ -195,14 +188,7 @@ void BM_UpdateModelDragFrameLines(benchmark::State& state) {
     state.SkipWithError(first.messages.empty() ? "the scene did not converge" : first.messages.front().c_str());
     return;
   }
-  facet::ModelUpdateOptions frame;
-  frame.solve.warm_start = true;
-  frame.solve.max_iterations = facet::testing::kFrameIterations;
-  frame.joint.max_iterations = facet::testing::kFrameIterations;
-  frame.joint.compute_diagnostics = false;
-  frame.joint.polish_constraints = false;
-  frame.initialize_from_pins = false;
-  frame.geometry_solve_when_warm = false;
+  facet::ModelUpdateOptions frame = facet::DragFrameUpdateOptions(facet::testing::kFrameIterations);
   frame.joint.refine_intrinsics = distortion < 3;
   facet::ModelUpdateCache cache;
   facet::ModelUpdateSummary summary;
