@@ -930,8 +930,8 @@ std::string SetUpConstraintTerm(const Constraint& c, const std::vector<Eigen::Ve
       term->line_px = line / line.head<2>().norm();
       term->line_a_px = c.line_a_px;
       term->line_b_px = c.line_b_px;
-      term->undistort_line = problem.cameras[term->camera].distortion_offset >= 0;
       term->camera = camera;
+      term->undistort_line = problem.cameras[term->camera].distortion_offset >= 0;
       term->scale = state.cameras[term->camera].focal_px;
       break;
     }
