@@ -10,8 +10,8 @@
 
 #include <Eigen/Geometry>
 
-#include "core/mesh/box.h"
 #include "core/geometry/camera.h"
+#include "core/mesh/box.h"
 #include "core/scene/project.h"
 
 namespace facet::testing {
@@ -26,9 +26,9 @@ struct SyntheticSceneOptions {
   Eigen::Vector3d camera_center = {9.0, -7.0, 5.0};
   Eigen::Vector3d look_at = {2.0, 1.5, 1.0};
   double roll_deg = 3.0;
-  double scale = 1.0;             // multiplies every length in the scene
-  int extra_lines_per_axis = 4;   // lines on the box faces, beside the 4 edges per axis
-  double noise_px = 0.0;          // standard deviation of pixel noise on segments and pins
+  double scale = 1.0;            // multiplies every length in the scene
+  int extra_lines_per_axis = 4;  // lines on the box faces, beside the 4 edges per axis
+  double noise_px = 0.0;         // standard deviation of pixel noise on segments and pins
   unsigned seed = 1;
 };
 
@@ -45,8 +45,8 @@ inline Camera MakeLookAtCamera(const SyntheticSceneOptions& o) {
   cam.width_px = o.width_px;
   cam.height_px = o.height_px;
   cam.focal_px = o.focal_px;
-  cam.principal_point_px = Eigen::Vector2d((o.width_px - 1) / 2.0, (o.height_px - 1) / 2.0) +
-                           o.principal_point_offset_px;
+  cam.principal_point_px =
+      Eigen::Vector2d((o.width_px - 1) / 2.0, (o.height_px - 1) / 2.0) + o.principal_point_offset_px;
   const Eigen::Vector3d center = o.camera_center * o.scale;
   const Eigen::Vector3d forward = (o.look_at * o.scale - center).normalized();
   const Eigen::Matrix3d cam_from_world = CamFromWorldLookingAlong(forward);

@@ -58,8 +58,8 @@ std::vector<PointCorrespondence> MakePoints(const Camera& camera, const SceneSpe
     if (spec.planar)
       xyz = center + spec.scale * spec.extent * (2.0 * uniform(rng) * plane_u + 1.5 * uniform(rng) * plane_v);
     else
-      xyz = center + spec.scale * spec.extent *
-                         Eigen::Vector3d(2.0 * uniform(rng), 2.0 * uniform(rng), 1.5 * uniform(rng));
+      xyz = center +
+            spec.scale * spec.extent * Eigen::Vector3d(2.0 * uniform(rng), 2.0 * uniform(rng), 1.5 * uniform(rng));
     const Eigen::Vector2d uv = ProjectDistorted(camera, spec.k1, spec.k2, xyz);
     if (camera.CamFromWorld(xyz).z() <= 0.0 || uv.x() < 0 || uv.y() < 0 || uv.x() > camera.width_px - 1 ||
         uv.y() > camera.height_px - 1)
@@ -188,14 +188,14 @@ TEST_CASE("DLT: with 0.5 px noise the errors match the fit's covariance over 40 
       CHECK(std::abs(s.reprojection_rms_px - expected_rms) <= 0.25 * expected_rms);
       sum_sq_error += f_error * f_error;
       sum_sigma += s.focal_std_px;
-      max_rotation_deg = std::max(max_rotation_deg,
-                                  RotationErrorDeg(s.camera.cam_from_world_rotation, truth.cam_from_world_rotation));
+      max_rotation_deg =
+          std::max(max_rotation_deg, RotationErrorDeg(s.camera.cam_from_world_rotation, truth.cam_from_world_rotation));
     }
     const double observed = std::sqrt(sum_sq_error / kSeeds), predicted = sum_sigma / kSeeds;
     MESSAGE("DLT 0.5 px noise, 40 points, extent " << extent << ": f error RMS over seeds " << observed
-                                                  << " px, predicted sigma " << predicted << " px, max rotation error "
-                                                  << max_rotation_deg << " deg; linear start f error RMS "
-                                                  << std::sqrt(sum_sq_start_error / kSeeds) << " px");
+                                                   << " px, predicted sigma " << predicted << " px, max rotation error "
+                                                   << max_rotation_deg << " deg; linear start f error RMS "
+                                                   << std::sqrt(sum_sq_start_error / kSeeds) << " px");
     CHECK(observed < std::sqrt(sum_sq_start_error / kSeeds));
     CHECK(observed >= 0.6 * predicted);
     CHECK(observed <= 1.6 * predicted);
@@ -264,8 +264,8 @@ TEST_CASE("Planar: with 0.5 px noise the errors match the fit's covariance over 
     sum_sigma += s.focal_std_px;
   }
   const double observed = std::sqrt(sum_sq_error / kSeeds), predicted = sum_sigma / kSeeds;
-  MESSAGE("planar 0.5 px noise, 40 points: f error RMS over seeds " << observed << " px, predicted sigma "
-                                                                     << predicted << " px");
+  MESSAGE("planar 0.5 px noise, 40 points: f error RMS over seeds " << observed << " px, predicted sigma " << predicted
+                                                                    << " px");
   CHECK(observed >= 0.6 * predicted);
   CHECK(observed <= 1.6 * predicted);
 }
@@ -314,11 +314,9 @@ TEST_CASE("Distortion: k1 = -0.2 is recovered and the RMS falls to the noise lev
     CHECK(one.k1_std <= 0.01);
     CHECK(std::abs(one.camera.focal_px - truth.focal_px) <= 4.0 * one.focal_std_px);
     const std::string label = planar ? "planar" : "non-planar";
-    MESSAGE(label << " k1 = -0.2, 0.5 px noise: k1 = " << one.k1 << " +- "
-                                               << one.k1_std << ", RMS pinhole " << pinhole.reprojection_rms_px
-                                               << " px, k1 " << one.reprojection_rms_px << " px, k1+k2 "
-                                               << two.reprojection_rms_px << " px; f error "
-                                               << one.camera.focal_px - truth.focal_px << " px");
+    MESSAGE(label << " k1 = -0.2, 0.5 px noise: k1 = " << one.k1 << " +- " << one.k1_std << ", RMS pinhole "
+                  << pinhole.reprojection_rms_px << " px, k1 " << one.reprojection_rms_px << " px, k1+k2 "
+                  << two.reprojection_rms_px << " px; f error " << one.camera.focal_px - truth.focal_px << " px");
   }
 }
 
@@ -352,10 +350,9 @@ TEST_CASE("Distortion: noise-free k1, k2 are recovered exactly from a pinhole st
     CHECK(std::abs(s.k1 - kTrueK1) <= kExactRelative);
     CHECK(std::abs(s.k2 - kTrueK2) <= kExactRelative);
     const std::string label = planar ? "planar" : "non-planar";
-    MESSAGE(label << std::string(" noise-free k1, k2: errors ") << s.k1 - kTrueK1
-                                               << ", " << s.k2 - kTrueK2 << ", f error "
-                                               << s.camera.focal_px - truth.focal_px << " px, " << s.iterations
-                                               << " iterations from RMS " << s.initial_rms_px << " px");
+    MESSAGE(label << std::string(" noise-free k1, k2: errors ") << s.k1 - kTrueK1 << ", " << s.k2 - kTrueK2
+                  << ", f error " << s.camera.focal_px - truth.focal_px << " px, " << s.iterations
+                  << " iterations from RMS " << s.initial_rms_px << " px");
     CheckCameraExact(s.camera, truth);
   }
 }
@@ -396,8 +393,8 @@ TEST_CASE("DLT: scaling the 3D points by 1e-3 and 1e3 gives the same K and a sca
       const DltCalibrationSummary s = CalibrateFromPoints(points, options);
       REQUIRE_MESSAGE(s.IsUsable(), s.message);
       results.push_back(s);
-      const double t_ratio = s.camera.cam_from_world_translation.norm() /
-                             (results[0].camera.cam_from_world_translation.norm() * scale);
+      const double t_ratio =
+          s.camera.cam_from_world_translation.norm() / (results[0].camera.cam_from_world_translation.norm() * scale);
       CAPTURE(planar);
       CAPTURE(scale);
       CAPTURE(s.camera.focal_px);
@@ -443,8 +440,8 @@ TEST_CASE("Degenerate input gives a clear error") {
   {
     // Four coplanar points, three of them on one line: no homography.
     std::vector<PointCorrespondence> plane;
-    for (const Eigen::Vector3d xyz : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(2, 0, 0),
-                                      Eigen::Vector3d(0, 1, 0)}) {
+    for (const Eigen::Vector3d xyz :
+         {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(2, 0, 0), Eigen::Vector3d(0, 1, 0)}) {
       PointCorrespondence c;
       c.xyz = xyz;
       c.uv_px = truth.Project(xyz);
@@ -734,10 +731,10 @@ TEST_CASE("Known focal with 0.5 px noise: pose errors below the free-focal DLT's
     const double rot_free = std::sqrt(sq_rot_free / kSeeds), t_free = std::sqrt(sq_t_free / kSeeds);
     const double rot_fixed = std::sqrt(sq_rot_fixed / kSeeds), t_fixed = std::sqrt(sq_t_fixed / kSeeds);
     const double rms_fixed = std::sqrt(sq_rms_fixed / kSeeds);
-    MESSAGE(std::string(planar ? "plane" : "volume") << ", 0.5 px, 40 seeds: rotation error RMS free f " << rot_free
-                                          << " deg, known f " << rot_fixed << " deg; t error RMS free f " << t_free
-                                          << ", known f " << t_fixed << "; known-f reprojection RMS " << rms_fixed
-                                          << " px");
+    MESSAGE(std::string(planar ? "plane" : "volume")
+            << ", 0.5 px, 40 seeds: rotation error RMS free f " << rot_free << " deg, known f " << rot_fixed
+            << " deg; t error RMS free f " << t_free << ", known f " << t_fixed << "; known-f reprojection RMS "
+            << rms_fixed << " px");
     CHECK(moved == kSeeds);
     // The position improves several-fold; the rotation hardly depends on f (it follows from the
     // directions between points), so it only has to stay as good.

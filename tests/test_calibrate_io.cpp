@@ -11,8 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/io/calibrate_io.h"
 #include "core/estimators/calibrate_vp.h"
+#include "core/io/calibrate_io.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {
@@ -34,8 +34,8 @@ std::string LinesJson(const testing::SyntheticScene& scene, const std::vector<Ax
     bool first = true;
     for (const Segment& s : scene.project.segments) {
       if (s.axis != axes[f]) continue;
-      out << (first ? "" : ", ") << "[" << s.a_px.x() << ", " << s.a_px.y() << ", " << s.b_px.x() << ", "
-          << s.b_px.y() << "]";
+      out << (first ? "" : ", ") << "[" << s.a_px.x() << ", " << s.a_px.y() << ", " << s.b_px.x() << ", " << s.b_px.y()
+          << "]";
       first = false;
     }
     out << "]}";
@@ -71,7 +71,8 @@ TEST_CASE("LINES.json of a synthetic scene gives its camera") {
   const double focal_px = out.at("focal_px").get<double>();
   CAPTURE(focal_px);
   CHECK(std::abs(focal_px - truth.focal_px) < kNoiseFreeRelative * truth.focal_px);
-  const Eigen::Vector2d pp(out.at("principal_point").at(0).get<double>(), out.at("principal_point").at(1).get<double>());
+  const Eigen::Vector2d pp(out.at("principal_point").at(0).get<double>(),
+                           out.at("principal_point").at(1).get<double>());
   CHECK((pp - truth.principal_point_px).norm() < kNoiseFreeRelative * truth.focal_px);
   const Eigen::Matrix3d k = MatrixFromRows(out.at("K"));
   CHECK(k(0, 0) == focal_px);
@@ -94,7 +95,8 @@ TEST_CASE("LINES.json of a synthetic scene gives its camera") {
   CHECK(MatrixFromRows(out.at("R")) == core.cam_from_world_rotation);
   // The rotation is the truth up to the sign convention of the world axes.
   const Eigen::Matrix3d r = MatrixFromRows(out.at("R"));
-  for (int c = 0; c < 3; ++c) CHECK(std::abs(std::abs(r.col(c).dot(truth.cam_from_world_rotation.col(c))) - 1.0) < 1e-9);
+  for (int c = 0; c < 3; ++c)
+    CHECK(std::abs(std::abs(r.col(c).dot(truth.cam_from_world_rotation.col(c))) - 1.0) < 1e-9);
 
   CHECK(out.at("vanishing_point_axes") == json({"x", "y", "z"}));
   REQUIRE(out.at("vanishing_points").size() == 3);
@@ -114,11 +116,13 @@ TEST_CASE("LINES.json of a synthetic scene gives its camera") {
   CHECK(out.at("principal_point_std_px").size() == 2);
   CHECK(out.at("outlier_segments") == json::array());
   CHECK(out.at("outlier_threshold_px").get<double>() == core.outlier_threshold_px);
-  for (const char* key : {"vanishing_direction_std_deg", "family_angle_spread_deg", "vanishing_point_to_principal_point_px"})
+  for (const char* key :
+       {"vanishing_direction_std_deg", "family_angle_spread_deg", "vanishing_point_to_principal_point_px"})
     CHECK(out.at(key).size() == 3);
   for (int a = 0; a < 3; ++a) {
     CHECK(out["family_angle_spread_deg"][a].get<double>() == core.family_angle_spread_deg[a]);
-    CHECK(out["vanishing_point_to_principal_point_px"][a].get<double>() == core.vanishing_point_to_principal_point_px[a]);
+    CHECK(out["vanishing_point_to_principal_point_px"][a].get<double>() ==
+          core.vanishing_point_to_principal_point_px[a]);
   }
   CHECK(out.at("vanishing_point_triangle_max_angle_deg").get<double>() == core.vanishing_point_triangle_max_angle_deg);
   CHECK(out.at("min_family_angle_spread_deg").get<double>() == core.min_family_angle_spread_deg);
@@ -137,8 +141,8 @@ std::string Fixed17(double x) {
 TEST_CASE("focal length fixed or under a prior, the horizon, and flagged outliers") {
   const testing::SyntheticScene scene = testing::MakeBoxScene();
   const Camera& truth = scene.true_camera;
-  const std::string pp_field =
-      ", \"principal_point\": [" + Fixed17(truth.principal_point_px.x()) + ", " + Fixed17(truth.principal_point_px.y()) + "]";
+  const std::string pp_field = ", \"principal_point\": [" + Fixed17(truth.principal_point_px.x()) + ", " +
+                               Fixed17(truth.principal_point_px.y()) + "]";
 
   SUBCASE("a fixed focal length is kept and has no std") {
     const std::string field = ", \"focal_px\": " + Fixed17(1.02 * truth.focal_px);
@@ -150,8 +154,8 @@ TEST_CASE("focal length fixed or under a prior, the horizon, and flagged outlier
     CHECK(out.at("focal_std_px").get<double>() == 0.0);
   }
   SUBCASE("a prior: exact data outweigh it") {
-    const std::string field = pp_field + ", \"focal_prior_px\": " + Fixed17(1.05 * truth.focal_px) +
-                              ", \"focal_prior_std_px\": 20";
+    const std::string field =
+        pp_field + ", \"focal_prior_px\": " + Fixed17(1.05 * truth.focal_px) + ", \"focal_prior_std_px\": 20";
     const CalibrateIoResult r = CalibrateLinesJson(LinesJson(scene, {Axis::kX, Axis::kZ}, field));
     INFO("error: " << r.error);
     REQUIRE(r.ok());
@@ -292,11 +296,10 @@ TEST_CASE("bad LINES.json gives a message, never an exception") {
   // A single family.
   CheckError(LinesJson(scene, {Axis::kY}, ""), "two line families");
   // Parallel segments in every family: no finite vanishing point, no focal length.
-  CheckError(
-      R"({"image_size": [640, 480], "families": [)"
-      R"({"axis": "x", "segments": [[10, 10, 100, 10], [10, 50, 100, 50]]},)"
-      R"({"axis": "z", "segments": [[10, 10, 10, 100], [50, 10, 50, 100]]}]})",
-      "undetermined");
+  CheckError(R"({"image_size": [640, 480], "families": [)"
+             R"({"axis": "x", "segments": [[10, 10, 100, 10], [10, 50, 100, 50]]},)"
+             R"({"axis": "z", "segments": [[10, 10, 10, 100], [50, 10, 50, 100]]}]})",
+             "undetermined");
   CheckError(valid.substr(0, valid.size() - 1) + ", \"principal_point\": \"middle\"}", "principal_point");
   CheckError(valid.substr(0, valid.size() - 1) + ", \"principal_point\": [1]}", "principal_point");
   CheckError(valid.substr(0, valid.size() - 1) + ", \"focal_px\": -5}", "focal_px");
@@ -304,19 +307,19 @@ TEST_CASE("bad LINES.json gives a message, never an exception") {
   CheckError(valid.substr(0, valid.size() - 1) + ", \"focal_prior_px\": 900}", "go together");
   CheckError(valid.substr(0, valid.size() - 1) + ", \"focal_prior_px\": 900, \"focal_prior_std_px\": 0}",
              "focal_prior_std_px");
-  CheckError(valid.substr(0, valid.size() - 1) + ", \"focal_px\": 900, \"focal_prior_px\": 900, \"focal_prior_std_px\": 9}",
-             "not both");
+  CheckError(
+      valid.substr(0, valid.size() - 1) + ", \"focal_px\": 900, \"focal_prior_px\": 900, \"focal_prior_std_px\": 9}",
+      "not both");
   CheckError(valid.substr(0, valid.size() - 1) + ", \"horizon\": [1, 2, 3]}", "horizon");
   CheckError(valid.substr(0, valid.size() - 1) + ", \"horizon\": [1, 2, 1, 2]}", "horizon");
   CheckError(valid.substr(0, valid.size() - 1) + ", \"distortion\": 1}", "distortion");
   CheckError(valid.substr(0, valid.size() - 1) + ", \"refit_without_outliers\": \"yes\"}", "refit_without_outliers");
   // One family without a horizon, and with a horizon but no focal length.
   CheckError(LinesJson(scene, {Axis::kX}, ", \"horizon\": 300"), "known focal length");
-  CheckError(
-      R"({"image_size": [640, 480], "families": [)"
-      R"({"axis": "x", "segments": [[10, 10, 10, 10], [10, 50, 100, 50]]},)"
-      R"({"axis": "z", "segments": [[10, 10, 10, 100], [50, 10, 50, 100]]}]})",
-      "zero length");
+  CheckError(R"({"image_size": [640, 480], "families": [)"
+             R"({"axis": "x", "segments": [[10, 10, 10, 10], [10, 50, 100, 50]]},)"
+             R"({"axis": "z", "segments": [[10, 10, 10, 100], [50, 10, 50, 100]]}]})",
+             "zero length");
 }
 
 TEST_CASE("LINES.json from a file") {

@@ -77,8 +77,8 @@ void CheckRotationRules(const Eigen::Matrix3d& r) {
   CAPTURE(r);
   CHECK(std::abs(r.determinant() - 1.0) < 1e-12);
   CHECK((r.transpose() * r - Eigen::Matrix3d::Identity()).norm() < 1e-12);
-  CHECK(r(1, 2) < 0.0);              // world z up: negative camera-y component
-  CHECK(r(2, 0) + r(2, 1) > 0.0);    // x + y towards the front
+  CHECK(r(1, 2) < 0.0);            // world z up: negative camera-y component
+  CHECK(r(2, 0) + r(2, 1) > 0.0);  // x + y towards the front
 }
 
 TEST_CASE("three vanishing points recover focal length, principal point and rotation exactly") {
@@ -146,7 +146,8 @@ TEST_CASE("segment residuals are endpoint distances to the fitted camera's vanis
       const Segment& s = scene.project.segments[i];
       const Eigen::Vector3d& vp = summary.vanishing_points[static_cast<int>(s.axis)];
       // The reported points are the fitted camera's: K R e_axis.
-      const Eigen::Vector3d camera_vp = (fitted.K() * fitted.cam_from_world_rotation.col(static_cast<int>(s.axis))).normalized();
+      const Eigen::Vector3d camera_vp =
+          (fitted.K() * fitted.cam_from_world_rotation.col(static_cast<int>(s.axis))).normalized();
       CHECK(std::min((vp - camera_vp).norm(), (vp + camera_vp).norm()) < 1e-12);
       const double expected = EndpointDistance(s, vp.head<2>() / vp.z());
       CAPTURE(i);
@@ -245,7 +246,8 @@ TEST_CASE("0.5 px noise: errors stay within the first-order propagated noise") {
     o.noise_px = kNoisePx;
     o.seed = seed;
     const SyntheticScene scene = MakeBoxScene(o);
-    const VpCalibrationSummary s = CalibrateFromVanishingLines(scene.project.segments, OptionsFor(scene, PrincipalPointMode::kSolve));
+    const VpCalibrationSummary s =
+        CalibrateFromVanishingLines(scene.project.segments, OptionsFor(scene, PrincipalPointMode::kSolve));
     CAPTURE(seed);
     INFO(s.message);
     REQUIRE(s.IsUsable());
@@ -257,13 +259,14 @@ TEST_CASE("0.5 px noise: errors stay within the first-order propagated noise") {
     // with sigma 0.5 px, and both endpoints share it (RMS of two equal distances).
     for (double r : s.segment_residuals_px) CHECK(r < 5 * kNoisePx);
   }
-  const double median_f = internal::Median(focal_errors), max_f = *std::max_element(focal_errors.begin(), focal_errors.end());
+  const double median_f = internal::Median(focal_errors),
+               max_f = *std::max_element(focal_errors.begin(), focal_errors.end());
   const double median_pp = internal::Median(pp_errors), max_pp = *std::max_element(pp_errors.begin(), pp_errors.end());
   const double median_rot = internal::Median(rotation_errors),
                max_rot = *std::max_element(rotation_errors.begin(), rotation_errors.end());
-  MESSAGE("over " << kSeeds << " seeds: focal median " << median_f << " px, max " << max_f << " px; principal point median "
-                  << median_pp << " px, max " << max_pp << " px; rotation median " << median_rot * 180 / M_PI
-                  << " deg, max " << max_rot * 180 / M_PI << " deg");
+  MESSAGE("over " << kSeeds << " seeds: focal median " << median_f << " px, max " << max_f
+                  << " px; principal point median " << median_pp << " px, max " << max_pp << " px; rotation median "
+                  << median_rot * 180 / M_PI << " deg, max " << max_rot * 180 / M_PI << " deg");
   CHECK(median_f <= 1.5 * sigma_f);
   CHECK(max_f <= 4.5 * sigma_f);
   // The 2D principal-point distance is Rayleigh-like: median ~ 0.83 of its RMS, and its
@@ -495,13 +498,43 @@ TEST_CASE("every mode recovers the noise-free camera from a start away from it")
     bool fixed_focal, focal_prior, horizon;
   };
   const std::vector<Mode> modes = {
-      {"3 VPs, principal point solved", &scene, {Axis::kX, Axis::kY, Axis::kZ}, PrincipalPointMode::kSolve, false, false, false},
-      {"3 VPs, principal point fixed", &scene, {Axis::kX, Axis::kY, Axis::kZ}, PrincipalPointMode::kFixed, false, false, false},
-      {"3 VPs, image centre", &centred, {Axis::kX, Axis::kY, Axis::kZ}, PrincipalPointMode::kImageCenter, false, false, false},
-      {"3 VPs, fixed focal length, principal point solved", &scene, {Axis::kX, Axis::kY, Axis::kZ}, PrincipalPointMode::kSolve, true, false, false},
+      {"3 VPs, principal point solved",
+       &scene,
+       {Axis::kX, Axis::kY, Axis::kZ},
+       PrincipalPointMode::kSolve,
+       false,
+       false,
+       false},
+      {"3 VPs, principal point fixed",
+       &scene,
+       {Axis::kX, Axis::kY, Axis::kZ},
+       PrincipalPointMode::kFixed,
+       false,
+       false,
+       false},
+      {"3 VPs, image centre",
+       &centred,
+       {Axis::kX, Axis::kY, Axis::kZ},
+       PrincipalPointMode::kImageCenter,
+       false,
+       false,
+       false},
+      {"3 VPs, fixed focal length, principal point solved",
+       &scene,
+       {Axis::kX, Axis::kY, Axis::kZ},
+       PrincipalPointMode::kSolve,
+       true,
+       false,
+       false},
       {"3 VPs, focal prior", &scene, {Axis::kX, Axis::kY, Axis::kZ}, PrincipalPointMode::kSolve, false, true, false},
       {"2 VPs + principal point", &scene, {Axis::kX, Axis::kZ}, PrincipalPointMode::kFixed, false, false, false},
-      {"2 VPs + principal point + focal prior", &scene, {Axis::kY, Axis::kZ}, PrincipalPointMode::kFixed, false, true, false},
+      {"2 VPs + principal point + focal prior",
+       &scene,
+       {Axis::kY, Axis::kZ},
+       PrincipalPointMode::kFixed,
+       false,
+       true,
+       false},
       {"2 VPs + fixed focal length", &scene, {Axis::kX, Axis::kY}, PrincipalPointMode::kFixed, true, false, false},
       {"2 VPs + horizon", &scene, {Axis::kX, Axis::kY}, PrincipalPointMode::kFixed, false, false, true},
       {"1 VP + fixed focal length + horizon", &scene, {Axis::kX}, PrincipalPointMode::kFixed, true, false, true},
@@ -577,9 +610,10 @@ TEST_CASE("0.5 px noise: focal_std_px and the vanishing-direction std match the 
     PrincipalPointMode mode;
     std::vector<Axis> axes;
   };
-  for (const Case& c : {Case{"3 VPs, principal point solved", PrincipalPointMode::kSolve, {Axis::kX, Axis::kY, Axis::kZ}},
-                        Case{"3 VPs, principal point fixed", PrincipalPointMode::kFixed, {Axis::kX, Axis::kY, Axis::kZ}},
-                        Case{"2 VPs, principal point fixed", PrincipalPointMode::kFixed, {Axis::kX, Axis::kZ}}}) {
+  for (const Case& c :
+       {Case{"3 VPs, principal point solved", PrincipalPointMode::kSolve, {Axis::kX, Axis::kY, Axis::kZ}},
+        Case{"3 VPs, principal point fixed", PrincipalPointMode::kFixed, {Axis::kX, Axis::kY, Axis::kZ}},
+        Case{"2 VPs, principal point fixed", PrincipalPointMode::kFixed, {Axis::kX, Axis::kZ}}}) {
     CAPTURE(c.name);
     double sum_sq_error = 0.0, sum_std = 0.0, max_z = 0.0;
     std::array<double, 3> sum_sq_angle{}, sum_angle_std{};
@@ -736,7 +770,8 @@ TEST_CASE("degeneracy figures: angle spread, distance to the principal point, tr
   CHECK(s.min_family_angle_spread_deg ==
         *std::min_element(s.family_angle_spread_deg.begin(), s.family_angle_spread_deg.end()));
   CHECK(s.min_vanishing_point_to_principal_point_px ==
-        *std::min_element(s.vanishing_point_to_principal_point_px.begin(), s.vanishing_point_to_principal_point_px.end()));
+        *std::min_element(s.vanishing_point_to_principal_point_px.begin(),
+                          s.vanishing_point_to_principal_point_px.end()));
   // The triangle of the true vanishing points is acute, its orthocentre the principal point.
   double largest_angle = 0.0;
   for (int i = 0; i < 3; ++i) {

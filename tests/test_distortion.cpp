@@ -13,8 +13,8 @@
 
 #include <Eigen/Geometry>
 
-#include "core/mesh/box.h"
 #include "core/geometry/camera.h"
+#include "core/mesh/box.h"
 #include "core/solve/joint_solve_internal.h"
 #include "core/solve/model_update.h"
 #include "core/texture/textured_mesh.h"
@@ -53,12 +53,18 @@ CameraState StateOf(const Camera& camera) {
 // rotation 3, centre 3, k1, k2).
 CameraState Moved(const CameraState& camera, int k, double step) {
   CameraState c = camera;
-  if (k == 0) c.focal_px += step;
-  else if (k < 3) c.principal_point_px(k - 1) += step;
-  else if (k < 6) c.cam_from_world_rotation = RotationFromAngleAxis(step * Eigen::Vector3d::Unit(k - 3)) * c.cam_from_world_rotation;
-  else if (k < 9) c.center_in_world(k - 6) += step;
-  else if (k == 9) c.k1 += step;
-  else c.k2 += step;
+  if (k == 0)
+    c.focal_px += step;
+  else if (k < 3)
+    c.principal_point_px(k - 1) += step;
+  else if (k < 6)
+    c.cam_from_world_rotation = RotationFromAngleAxis(step * Eigen::Vector3d::Unit(k - 3)) * c.cam_from_world_rotation;
+  else if (k < 9)
+    c.center_in_world(k - 6) += step;
+  else if (k == 9)
+    c.k1 += step;
+  else
+    c.k2 += step;
   return c;
 }
 
@@ -283,7 +289,8 @@ Project DistortedLineScene(Camera* true_camera) {
   return p;
 }
 
-TEST_CASE("distortion: the model update's plumb-line estimate recovers the focal length that pinhole calibration misses") {
+TEST_CASE(
+    "distortion: the model update's plumb-line estimate recovers the focal length that pinhole calibration misses") {
   Camera truth;
   const Project edited = DistortedLineScene(&truth);
   ModelUpdateOptions options;
@@ -302,8 +309,8 @@ TEST_CASE("distortion: the model update's plumb-line estimate recovers the focal
   const double error_off = std::abs(c_off.focal_px - truth.focal_px);
   const double error_on = std::abs(c_on.focal_px - truth.focal_px);
   MESSAGE("focal " << truth.focal_px << " px: without the distortion estimate " << c_off.focal_px << " (error "
-                   << error_off << " px), with it " << c_on.focal_px << " (error " << error_on << " px); k1 "
-                   << c_on.k1 << " (true " << truth.k1 << "), k2 " << c_on.k2 << " (true " << truth.k2
+                   << error_off << " px), with it " << c_on.focal_px << " (error " << error_on << " px); k1 " << c_on.k1
+                   << " (true " << truth.k1 << "), k2 " << c_on.k2 << " (true " << truth.k2
                    << "); plumb-line straightness " << plumb.initial_rms_px << " -> " << plumb.final_rms_px
                    << " px; pin RMS " << without.joint.reprojection_rms_px << " -> " << with.joint.reprojection_rms_px
                    << " px");
@@ -366,8 +373,9 @@ TEST_CASE("distortion: a face baked from a distorted photo shows its checker und
     if (!box.mesh.IsFace(f)) continue;
     const std::vector<VertexId> v = FaceVertices(box.mesh, f);
     REQUIRE(v.size() == 4);
-    faces.push_back({f, {box.mesh.vertex(v[0]).position, box.mesh.vertex(v[1]).position,
-                         box.mesh.vertex(v[2]).position, box.mesh.vertex(v[3]).position}});
+    faces.push_back({f,
+                     {box.mesh.vertex(v[0]).position, box.mesh.vertex(v[1]).position, box.mesh.vertex(v[2]).position,
+                      box.mesh.vertex(v[3]).position}});
   }
   // Ray-cast photo through the distortion: each pixel shows the checker of the first face hit.
   ImageRgba8 photo;
@@ -456,7 +464,9 @@ TEST_CASE("distortion: a face baked from a distorted photo shows its checker und
   CHECK(without_k > 4.0 * kMaxMismatchFraction);  // the distortion path is what makes it match
 }
 
-TEST_CASE("distortion: on a pinhole photo with 0.5 px clicks the estimate is not significant and the camera stays a pinhole") {
+TEST_CASE(
+    "distortion: on a pinhole photo with 0.5 px clicks the estimate is not significant and the camera stays a "
+    "pinhole") {
   // The same lines through a lens without distortion, each endpoint off by 0.5 px (seeded):
   // the plumb-line k1 is within 3 of its standard deviations of 0, so it is not applied.
   constexpr double kNoisePx = 0.5;

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "core/scene/document.h"
 #include "core/mesh/extrude.h"
 #include "core/mesh/operators.h"
+#include "core/scene/document.h"
 #include "core/scene/project.h"
 #include "tests/synthetic_scene.h"
 
@@ -31,9 +31,7 @@ using facet::VertexRef;
 
 namespace {
 
-double Real(std::mt19937& rng, double lo, double hi) {
-  return std::uniform_real_distribution<double>(lo, hi)(rng);
-}
+double Real(std::mt19937& rng, double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
 size_t Pick(std::mt19937& rng, size_t n) {  // in [0, n)
   return std::uniform_int_distribution<size_t>(0, n - 1)(rng);
 }
@@ -347,8 +345,9 @@ TEST_CASE("random edit sequences: undo all returns the start, redo all returns t
       states.push_back(next);
       const Edit& edit = doc.undo_stack().back();
       for (const auto& c : edit.primitives) {
-        if (c.before && c.after && c.before->mesh.NumVertices() + c.before->mesh.NumFaces() !=
-                                       c.after->mesh.NumVertices() + c.after->mesh.NumFaces())
+        if (c.before && c.after &&
+            c.before->mesh.NumVertices() + c.before->mesh.NumFaces() !=
+                c.after->mesh.NumVertices() + c.after->mesh.NumFaces())
           ++topology_edits;
         if (!c.before) ++primitive_insertions;
       }

@@ -79,8 +79,8 @@ std::vector<uint8_t> JpegWithExif(const std::vector<uint8_t>& tiff) {
   REQUIRE(jpeg.size() > 2);
   if (tiff.empty()) return jpeg;
   const size_t length = 2 + 6 + tiff.size();
-  std::vector<uint8_t> app1 = {0xff, 0xe1, static_cast<uint8_t>(length >> 8), static_cast<uint8_t>(length & 0xff),
-                               'E',  'x',  'i', 'f', 0, 0};
+  std::vector<uint8_t> app1 = {
+      0xff, 0xe1, static_cast<uint8_t>(length >> 8), static_cast<uint8_t>(length & 0xff), 'E', 'x', 'i', 'f', 0, 0};
   app1.insert(app1.end(), tiff.begin(), tiff.end());
   jpeg.insert(jpeg.begin() + 2, app1.begin(), app1.end());
   return jpeg;
@@ -98,7 +98,8 @@ void CheckRelative(double value, double expected) {
 
 // The 35 mm convention: the full frame's diagonal, sqrt(36^2 + 24^2) mm, spans the image's.
 double EquivalentFocalPx(double focal_35mm, int width_px, int height_px) {
-  return focal_35mm / std::sqrt(36.0 * 36.0 + 24.0 * 24.0) * std::sqrt(double(width_px) * width_px + double(height_px) * height_px);
+  return focal_35mm / std::sqrt(36.0 * 36.0 + 24.0 * 24.0) *
+         std::sqrt(double(width_px) * width_px + double(height_px) * height_px);
 }
 
 TEST_CASE("FocalLengthIn35mmFilm maps the full frame's diagonal to the image's") {
@@ -165,7 +166,9 @@ TEST_CASE("absent, incomplete or corrupt EXIF gives found == false with a messag
   CHECK(mm_only.message.find("FocalLength") != std::string::npos);
 
   // A zero denominator, a truncated block and random bytes.
-  CHECK_FALSE(Read(JpegWithExif(TiffWithExifTags({{0xa20e, kRational, {1000, 0}}, {0x920a, kRational, {42, 0}}})), 640, 480).found);
+  CHECK_FALSE(
+      Read(JpegWithExif(TiffWithExifTags({{0xa20e, kRational, {1000, 0}}, {0x920a, kRational, {42, 0}}})), 640, 480)
+          .found);
   std::vector<uint8_t> truncated = JpegWithExif(TiffWithExifTags({{0xa405, kShort, {28}}}));
   truncated.resize(30);
   CHECK_FALSE(Read(truncated, 640, 480).found);

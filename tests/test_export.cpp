@@ -206,8 +206,8 @@ TEST_CASE("GLB: container, accessors, bounds, embedded atlas and triangles") {
   CHECK(g["textures"][texture].contains("sampler"));
   size_t png_length = 0;
   const std::uint8_t* png = ViewData(glb, image["bufferView"], &png_length);
-  const cv::Mat decoded = cv::imdecode(cv::Mat(1, static_cast<int>(png_length), CV_8UC1, const_cast<std::uint8_t*>(png)),
-                                       cv::IMREAD_UNCHANGED);
+  const cv::Mat decoded = cv::imdecode(
+      cv::Mat(1, static_cast<int>(png_length), CV_8UC1, const_cast<std::uint8_t*>(png)), cv::IMREAD_UNCHANGED);
   REQUIRE(!decoded.empty());
   CHECK(decoded.cols == f.mesh.atlas.width);
   CHECK(decoded.rows == f.mesh.atlas.height);
@@ -336,7 +336,8 @@ TEST_CASE("OBJ: counts, flipped UVs in [0,1], material and texture side by side"
       while (in >> corner) {
         ++corners;
         int vi = 0, ti = 0, ni = 0;
-        if (std::sscanf(corner.c_str(), "%d/%d/%d", &vi, &ti, &ni) != 3 && std::sscanf(corner.c_str(), "%d//%d", &vi, &ni) != 2) {
+        if (std::sscanf(corner.c_str(), "%d/%d/%d", &vi, &ti, &ni) != 3 &&
+            std::sscanf(corner.c_str(), "%d//%d", &vi, &ni) != 2) {
           ++bad_refs;
           continue;
         }

@@ -107,8 +107,10 @@ TEST_CASE("Near and far depths map to GL depth -1 and +1") {
   const double far_depth = 40.0;
   const GlCameraMatrices gl = GlMatricesFromCamera(camera, camera.width_px, camera.height_px, near_depth, far_depth);
   const Eigen::Vector3d axis = camera.cam_from_world_rotation.row(2).transpose();
-  const ViewportHit at_near = ProjectLikeGl(gl, camera.CenterInWorld() + near_depth * axis, camera.width_px, camera.height_px);
-  const ViewportHit at_far = ProjectLikeGl(gl, camera.CenterInWorld() + far_depth * axis, camera.width_px, camera.height_px);
+  const ViewportHit at_near =
+      ProjectLikeGl(gl, camera.CenterInWorld() + near_depth * axis, camera.width_px, camera.height_px);
+  const ViewportHit at_far =
+      ProjectLikeGl(gl, camera.CenterInWorld() + far_depth * axis, camera.width_px, camera.height_px);
   CAPTURE(at_near.ndc_depth);
   CAPTURE(at_far.ndc_depth);
   CHECK(std::abs(at_near.ndc_depth + 1.0) < kDepthTolerance);
@@ -128,8 +130,8 @@ TEST_CASE("In a viewport of another aspect the image is fitted, centred and unst
     double max_error_px = 0.0;
     for (const Eigen::Vector3d& p : PointsInFront(camera, 100)) {
       const ViewportHit hit = ProjectLikeGl(gl, p, w, h);
-      const Eigen::Vector2d expected = s * (camera.Project(p).array() + 0.5).matrix() + offset -
-                                       Eigen::Vector2d(0.5, 0.5);
+      const Eigen::Vector2d expected =
+          s * (camera.Project(p).array() + 0.5).matrix() + offset - Eigen::Vector2d(0.5, 0.5);
       max_error_px = std::max(max_error_px, (hit.uv_px - expected).norm());
     }
     CAPTURE(w);

@@ -130,8 +130,7 @@ TEST_CASE("noise-free plane: H, R, t direction, t / d and the normal exactly, fr
     const PlanePose& pose = summary.candidates[0];
     const PoseErrors e = Errors(pose, s);
     MESSAGE(n << " points noise-free: rotation " << e.rotation_rad << " rad, direction " << e.direction_rad
-              << " rad, normal " << e.normal_rad << " rad, t/d " << e.t_over_d_rel << ", " << summary.time_ms
-              << " ms");
+              << " rad, normal " << e.normal_rad << " rad, t/d " << e.t_over_d_rel << ", " << summary.time_ms << " ms");
     CHECK(RotationErrorRad(summary.cam2_from_cam1_rotation, s.rotation) < kExactTol);
     CHECK(AngleRad(summary.plane_normal_in_cam1, s.normal) < kExactTol);
     CHECK(e.rotation_rad < kExactTol);
@@ -225,8 +224,7 @@ TEST_CASE("plane with 0.5 px noise: pose and normal within the noise over 10 see
       if (level == 0)
         MESSAGE("plane 0.5 px, seed " << seed << ": rotation " << e.rotation_rad << " rad, direction "
                                       << e.direction_rad << " rad, normal " << e.normal_rad << " rad (bound "
-                                      << bound_rad
-                                      << "), t/d " << e.t_over_d_rel << ", transfer RMS "
+                                      << bound_rad << "), t/d " << e.t_over_d_rel << ", transfer RMS "
                                       << summary.homography.symmetric_transfer_rms_px << " px (DLT "
                                       << summary.homography.initial_symmetric_transfer_rms_px << ")");
       CHECK(e.rotation_rad < bound_rad);

@@ -148,7 +148,8 @@ TEST_CASE("a truncated JPEG is reported, not half-decoded") {
   for (double fraction : {0.3, 0.6, 0.95}) {
     CAPTURE(fraction);
     const fs::path cut = dir / "cut.jpg";
-    WriteBytes(cut, std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + static_cast<long>(bytes.size() * fraction)));
+    WriteBytes(cut,
+               std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + static_cast<long>(bytes.size() * fraction)));
     const facet::ImageReadResult read = facet::ReadImage(cut.string());
     CHECK_FALSE(read.ok());
     CHECK(read.image.empty());

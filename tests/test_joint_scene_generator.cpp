@@ -73,8 +73,8 @@ TEST_CASE("noise-free pins are the exact projections of the true scene and are v
 }
 
 TEST_CASE("pins are spread so that every primitive and every camera is determined") {
-  for (const auto& o : {Sizes(1, 2, 10, 0.5), Sizes(10, 3, 60, 0.5), Sizes(100, 10, 1000, 0.5),
-                        Sizes(300, 10, 3000, 0.5)}) {
+  for (const auto& o :
+       {Sizes(1, 2, 10, 0.5), Sizes(10, 3, 60, 0.5), Sizes(100, 10, 1000, 0.5), Sizes(300, 10, 3000, 0.5)}) {
     const JointScene scene = MakeJointScene(o);
     CAPTURE(o.num_primitives);
     CHECK(static_cast<int>(scene.truth.primitives.size()) == o.num_primitives);
@@ -149,7 +149,8 @@ TEST_CASE("the start is perturbed within its bounds, keeps the gauge and is not 
     if (truth.translation_locked) CHECK(moved_m.norm() == 0.0);
     // The cached vertex positions follow the perturbed shape.
     const Eigen::Vector3d cached = start.mesh.vertex(7).position;
-    const Eigen::Vector3d from_shape = facet::PrimitiveLocalToWorld(start.shape, start.mesh.vertex(7).LocalPosition(start.shape.params));
+    const Eigen::Vector3d from_shape =
+        facet::PrimitiveLocalToWorld(start.shape, start.mesh.vertex(7).LocalPosition(start.shape.params));
     CHECK((cached - from_shape).norm() <= kRoundingRel * (1.0 + from_shape.norm()));
   }
   // Exactly one gauge: primitive 0's translation and height.
@@ -166,9 +167,11 @@ TEST_CASE("the start is perturbed within its bounds, keeps the gauge and is not 
     const facet::Camera& truth = scene.truth.images[j].camera;
     const facet::Camera& start = scene.start.images[j].camera;
     const double distance_m = (truth.CenterInWorld() - scene.look_at).norm();
-    CHECK((start.CenterInWorld() - truth.CenterInWorld()).norm() <= o.start_fraction * distance_m * (1.0 + kRoundingRel));
+    CHECK((start.CenterInWorld() - truth.CenterInWorld()).norm() <=
+          o.start_fraction * distance_m * (1.0 + kRoundingRel));
     const double turn_deg =
-        Eigen::AngleAxisd(start.cam_from_world_rotation * truth.cam_from_world_rotation.transpose()).angle() * 180.0 / M_PI;
+        Eigen::AngleAxisd(start.cam_from_world_rotation * truth.cam_from_world_rotation.transpose()).angle() * 180.0 /
+        M_PI;
     CHECK(turn_deg == doctest::Approx(o.start_rotation_deg).epsilon(1e-6));
     CHECK(start.focal_px == truth.focal_px);
     CHECK(start.principal_point_px == truth.principal_point_px);

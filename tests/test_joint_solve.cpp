@@ -9,9 +9,9 @@
 #include <Eigen/Geometry>
 
 #include "core/mesh/box.h"
+#include "core/mesh/operators.h"
 #include "core/solve/joint_solve.h"
 #include "core/solve/joint_solve_internal.h"
-#include "core/mesh/operators.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {
@@ -103,7 +103,7 @@ Scene MakeScene(int num_boxes, int num_images, double scale, double noise_px, un
     REQUIRE(AddPrimitiveToProject(&p, shape, "box" + std::to_string(b), &id, nullptr));
     Primitive& box = p.primitives.back();
     box.param_locked = {false, false, b == 0, false};  // box 0's height fixes the scale
-    box.translation_locked = b == 0;                  // and its position the origin
+    box.translation_locked = b == 0;                   // and its position the origin
     s.boxes.push_back(id);
   }
   for (const Image& image : p.images) {
@@ -130,8 +130,8 @@ Project Perturb(const Project& truth, double fraction) {
   for (Image& image : start.images) {
     Camera& c = image.camera;
     if (!image.pose_locked) {
-      const Eigen::Matrix3d r = Eigen::AngleAxisd(0.01, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() *
-                                c.cam_from_world_rotation;
+      const Eigen::Matrix3d r =
+          Eigen::AngleAxisd(0.01, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() * c.cam_from_world_rotation;
       c.SetPose(r, c.CenterInWorld() * (1.0 + fraction));
     }
     if (!image.focal_locked) c.focal_px *= 1.0 + fraction;
@@ -174,7 +174,8 @@ TEST_CASE("joint solve: pin residual derivatives match central differences") {
   cam.principal_point_px = {500.0, 380.0};
   cam.cam_from_world_rotation = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
   cam.center_in_world = {-3.0, -8.0, 2.0};
-  const Eigen::Vector3d x = cam.center_in_world + cam.cam_from_world_rotation.transpose() * Eigen::Vector3d(1.0, -0.5, 7.0);
+  const Eigen::Vector3d x =
+      cam.center_in_world + cam.cam_from_world_rotation.transpose() * Eigen::Vector3d(1.0, -0.5, 7.0);
   const Eigen::Vector2d uv(480.0, 300.0);
   Eigen::Vector2d r;
   Eigen::Matrix<double, 2, 3> d_point;
@@ -193,10 +194,14 @@ TEST_CASE("joint solve: pin residual derivatives match central differences") {
     const double h = k < 3 ? 1e-3 : 1e-6;
     auto moved = [&](double s) {
       CameraState c = cam;
-      if (k == 0) c.focal_px += s;
-      else if (k < 3) c.principal_point_px(k - 1) += s;
-      else if (k < 6) c.cam_from_world_rotation = RotationFromAngleAxis(s * Eigen::Vector3d::Unit(k - 3)) * c.cam_from_world_rotation;
-      else c.center_in_world(k - 6) += s;
+      if (k == 0)
+        c.focal_px += s;
+      else if (k < 3)
+        c.principal_point_px(k - 1) += s;
+      else if (k < 6)
+        c.cam_from_world_rotation = RotationFromAngleAxis(s * Eigen::Vector3d::Unit(k - 3)) * c.cam_from_world_rotation;
+      else
+        c.center_in_world(k - 6) += s;
       Eigen::Vector2d out;
       PinResidual(c, x, uv, &out, nullptr, nullptr);
       return out;
@@ -207,7 +212,9 @@ TEST_CASE("joint solve: pin residual derivatives match central differences") {
   }
 }
 
-TEST_CASE("joint solve: the whole Jacobian (cameras, segments, primitives, attachment, free vertex) matches central differences") {
+TEST_CASE(
+    "joint solve: the whole Jacobian (cameras, segments, primitives, attachment, free vertex) matches central "
+    "differences") {
   testing::SyntheticSceneOptions o;
   testing::SyntheticScene s = testing::MakeBoxScene(o);
   Project& p = s.project;
@@ -487,7 +494,7 @@ TEST_CASE("joint solve: the pavilion's ridge height is recovered within 1 % at 0
   const double h0 = out.mesh.vertex(s1.vertex).position.z() - out.shape.params(2);
   const double h1 = out.mesh.vertex(s2.vertex).position.z() - out.shape.params(2);
   MESSAGE("pavilion ridge heights " << h0 << ", " << h1 << " (true " << ridge_height << "), RMS "
-                                     << summary.reprojection_rms_px << " px");
+                                    << summary.reprojection_rms_px << " px");
   CHECK(std::abs(h0 - ridge_height) <= 0.01 * ridge_height);
   CHECK(std::abs(h1 - ridge_height) <= 0.01 * ridge_height);
 }
@@ -611,16 +618,18 @@ TEST_CASE("joint solve: k1, k2 recovered from k = 0 with distortion unlocked, no
   REQUIRE(summary.IsUsable());
   const double k_err = MaxDistortionError(solved, scene.truth);
   const double shape_err = MaxRelativeShapeError(solved, scene.truth);
-  MESSAGE("noise-free, " << scene.truth.segments.size() << " segments, " << scene.truth.pins.size()
-                         << " pins: k error " << k_err << ", shape error " << shape_err << ", " << summary.iterations
-                         << " iterations, " << summary.time_ms << " ms");
+  MESSAGE("noise-free, " << scene.truth.segments.size() << " segments, " << scene.truth.pins.size() << " pins: k error "
+                         << k_err << ", shape error " << shape_err << ", " << summary.iterations << " iterations, "
+                         << summary.time_ms << " ms");
   CHECK(summary.undetermined.empty());
   CHECK(k_err <= kNoiseFreeTolerance * std::abs(kDistortionK1));
   CHECK(shape_err <= kNoiseFreeTolerance);
   CHECK(MaxCameraCentreError(solved, scene.truth, 10.0) <= kNoiseFreeTolerance);
 }
 
-TEST_CASE("joint solve: with 0.5 px noise k1, k2 land within 4 sigma of the covariance; locked at 0 the RMS stays far above the noise") {
+TEST_CASE(
+    "joint solve: with 0.5 px noise k1, k2 land within 4 sigma of the covariance; locked at 0 the RMS stays far above "
+    "the noise") {
   constexpr double kNoisePx = 0.5;
   const Scene scene = MakeDistortedScene(kNoisePx, 7);
   const Project start = WithoutDistortion(Perturb(scene.truth, 0.03));

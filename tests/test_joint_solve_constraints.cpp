@@ -16,9 +16,9 @@
 #include <Eigen/Geometry>
 
 #include "core/mesh/box.h"
+#include "core/mesh/operators.h"
 #include "core/solve/joint_solve.h"
 #include "core/solve/joint_solve_internal.h"
-#include "core/mesh/operators.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {
@@ -149,15 +149,13 @@ Constraint ConstraintFor(const ProbeScene& s, ConstraintKind kind) {
 
 const std::vector<Case>& Cases() {
   static const std::vector<Case> cases = {
-      {ConstraintKind::kCoplanar, {1.0, 2.0, 2.5}},      // on the top face's plane
-      {ConstraintKind::kCollinear, {6.0, 0.0, 0.0}},     // on the line of edge 0-1, beyond corner 1
-      {ConstraintKind::kParallel, {4.0, 0.0, 1.7}},      // 1 -> probe vertical like 0 -> 4
+      {ConstraintKind::kCoplanar, {1.0, 2.0, 2.5}},       // on the top face's plane
+      {ConstraintKind::kCollinear, {6.0, 0.0, 0.0}},      // on the line of edge 0-1, beyond corner 1
+      {ConstraintKind::kParallel, {4.0, 0.0, 1.7}},       // 1 -> probe vertical like 0 -> 4
       {ConstraintKind::kPerpendicular, {0.0, 1.2, 3.1}},  // 0 -> probe across edge 0-1
-      {ConstraintKind::kEqualLength, {0.0, 2.4, 3.2}},   // as long as edge 0-1 (4)
-      {ConstraintKind::kDistance, {1.0, -1.5, 2.0}},
-      {ConstraintKind::kFixedPoint, {2.0, -1.0, 3.0}},
-      {ConstraintKind::kAlongAxis, {4.0, 0.0, 1.7}},
-      {ConstraintKind::kEdgeOnImageLine, {1.0, -1.5, 2.0}},
+      {ConstraintKind::kEqualLength, {0.0, 2.4, 3.2}},    // as long as edge 0-1 (4)
+      {ConstraintKind::kDistance, {1.0, -1.5, 2.0}},     {ConstraintKind::kFixedPoint, {2.0, -1.0, 3.0}},
+      {ConstraintKind::kAlongAxis, {4.0, 0.0, 1.7}},     {ConstraintKind::kEdgeOnImageLine, {1.0, -1.5, 2.0}},
   };
   return cases;
 }
@@ -180,7 +178,8 @@ TEST_CASE("constraints: every kind's residual derivative matches central differe
     const ConstraintTerm& term = problem.constraints[0];
     // Points moved off any special configuration, so no derivative vanishes by symmetry.
     std::vector<Eigen::Vector3d> points;
-    for (int v : term.vertices) points.push_back(problem.vertices[v].position + 0.3 * Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    for (int v : term.vertices)
+      points.push_back(problem.vertices[v].position + 0.3 * Eigen::Vector3d(u(rng), u(rng), u(rng)));
     const CameraState* camera = term.camera >= 0 ? &state.cameras[term.camera] : nullptr;
     Eigen::VectorXd r, rp, rm;
     Eigen::MatrixXd d_points, d_camera;
@@ -206,10 +205,15 @@ TEST_CASE("constraints: every kind's residual derivative matches central differe
         const double hc = k < 3 ? 1e-3 : 1e-6;
         auto moved = [&](double step) {
           CameraState cam = *camera;
-          if (k == 0) cam.focal_px += step;
-          else if (k < 3) cam.principal_point_px(k - 1) += step;
-          else if (k < 6) cam.cam_from_world_rotation = RotationFromAngleAxis(step * Eigen::Vector3d::Unit(k - 3)) * cam.cam_from_world_rotation;
-          else cam.center_in_world(k - 6) += step;
+          if (k == 0)
+            cam.focal_px += step;
+          else if (k < 3)
+            cam.principal_point_px(k - 1) += step;
+          else if (k < 6)
+            cam.cam_from_world_rotation =
+                RotationFromAngleAxis(step * Eigen::Vector3d::Unit(k - 3)) * cam.cam_from_world_rotation;
+          else
+            cam.center_in_world(k - 6) += step;
           Eigen::VectorXd out;
           ConstraintResidual(term, points, &cam, &out, nullptr, nullptr);
           return out;
@@ -275,7 +279,8 @@ TEST_CASE("constraints: each kind fixes the free vertex's depth and is recovered
     REQUIRE(summary.constraints.size() == 1);
     CHECK(summary.constraints[0].satisfied);
     const double err = (ProbePosition(solved, s) - c.probe_true).norm() / kBoxSize.norm();
-    const double size_err = (solved.primitives[0].shape.params - s.truth.primitives[0].shape.params).norm() / kBoxSize.norm();
+    const double size_err =
+        (solved.primitives[0].shape.params - s.truth.primitives[0].shape.params).norm() / kBoxSize.norm();
     CAPTURE(err);
     CAPTURE(size_err);
     CHECK(err <= kNoiseFreeTolerance);
@@ -339,8 +344,8 @@ TEST_CASE("constraints: a distance sets the scale and a fixed point the origin")
   for (const std::string& u : summary.undetermined) MESSAGE(u);
   CHECK(summary.undetermined.empty());
   const PrimitiveShape& shape = solved.primitives[0].shape;
-  const double err = std::max((shape.params - s.truth.primitives[0].shape.params).norm(), shape.translation.norm()) /
-                     kBoxSize.norm();
+  const double err =
+      std::max((shape.params - s.truth.primitives[0].shape.params).norm(), shape.translation.norm()) / kBoxSize.norm();
   CAPTURE(err);
   CHECK(err <= kNoiseFreeTolerance);
 }
@@ -364,7 +369,6 @@ TEST_CASE("constraints: two distances that cannot both hold are named as conflic
   CHECK_FALSE(summary.constraints[0].satisfied);
   CHECK_FALSE(summary.constraints[1].satisfied);
 }
-
 
 // The Line pin tool's situation (tests/app/test_fops_ui.cpp) at core level: the synthetic box
 // scene with the top corners unpinned (and the segments ending there removed), solved, then
@@ -414,15 +418,16 @@ double LinePinDistancePx(const Project& p, const LinePinScene& s) {
   const Eigen::Vector2d d = (s.line_b_px - s.line_a_px).normalized();
   const Eigen::Vector2d n(-d.y(), d.x());
   double worst = 0.0;
-  for (const VertexRef& v : c.vertices) worst = std::max(worst, std::abs((cam.Project(VertexInWorld(p, v)) - s.line_a_px).dot(n)));
+  for (const VertexRef& v : c.vertices)
+    worst = std::max(worst, std::abs((cam.Project(VertexInWorld(p, v)) - s.line_a_px).dot(n)));
   return worst;
 }
 
 TEST_CASE("constraints: a line pin 3 px off converges to the constrained minimum, the line held to 1e-9 px") {
   constexpr double kShiftPx = 3.0;
-  constexpr int kMaxLinePinIterations = 40;    // 28 measured; the cap of 100 was hit before
+  constexpr int kMaxLinePinIterations = 40;  // 28 measured; the cap of 100 was hit before
   constexpr double kLineHeldPx = 1e-9;
-  constexpr double kCostTolerance = 1e-9;      // relative, against a much longer run
+  constexpr double kCostTolerance = 1e-9;  // relative, against a much longer run
   const LinePinScene s = MakeLinePinScene(kShiftPx);
   const double start_px = LinePinDistancePx(s.start, s);
   CAPTURE(start_px);
@@ -438,9 +443,10 @@ TEST_CASE("constraints: a line pin 3 px off converges to the constrained minimum
   REQUIRE(summary.IsUsable());
   const double after_px = LinePinDistancePx(solved, s);
   REQUIRE(summary.constraints.size() == 1);
-  MESSAGE("line pin: " << summary.iterations << " iterations, " << std::string(SolverTerminationName(summary.termination))
-                       << ", line " << after_px << " px, pin RMS " << summary.reprojection_rms_px << " px, cost "
-                       << std::setprecision(15) << summary.final_cost);
+  MESSAGE("line pin: " << summary.iterations << " iterations, "
+                       << std::string(SolverTerminationName(summary.termination)) << ", line " << after_px
+                       << " px, pin RMS " << summary.reprojection_rms_px << " px, cost " << std::setprecision(15)
+                       << summary.final_cost);
   CHECK(summary.termination == SolverTermination::kConverged);
   CHECK(summary.iterations <= kMaxLinePinIterations);
   CHECK(after_px < kLineHeldPx);
@@ -465,7 +471,7 @@ TEST_CASE("constraints: a line pin 3 px off converges to the constrained minimum
   CHECK(ref.polished);
   const double ref_px = LinePinDistancePx(reference, s);
   MESSAGE("longer run: " << ref.iterations << " iterations, line " << ref_px << " px, cost " << std::setprecision(15)
-                          << ref.final_cost);
+                         << ref.final_cost);
   CHECK(ref.iterations > 3 * summary.iterations);
   CHECK(ref_px < kLineHeldPx);
   const double cost_error = std::abs(summary.final_cost - ref.final_cost) / ref.final_cost;

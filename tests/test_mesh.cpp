@@ -20,9 +20,9 @@ namespace {
 constexpr double kGeomTol = 1e-9;  // noise-free geometry, metres
 
 std::vector<PrimitiveShape> AllKinds() {
-  std::vector<PrimitiveShape> p = {MakeBox(1, {2.0, 3.0, 1.5}),     MakeWedge(2, {4.0, 2.0, 1.0}),
-                              MakePrism(3, 5, 1.2, 2.0),        MakePyramid(4, {2.0, 2.5, 1.8}),
-                              MakeCylinder(5, 12, 0.7, 3.0),    MakePlane(6, 3.0, 2.0)};
+  std::vector<PrimitiveShape> p = {MakeBox(1, {2.0, 3.0, 1.5}),   MakeWedge(2, {4.0, 2.0, 1.0}),
+                                   MakePrism(3, 5, 1.2, 2.0),     MakePyramid(4, {2.0, 2.5, 1.8}),
+                                   MakeCylinder(5, 12, 0.7, 3.0), MakePlane(6, 3.0, 2.0)};
   for (std::size_t i = 0; i < p.size(); ++i) {
     p[i].rotation = Eigen::Vector3d(0.1 * i, -0.2, 0.3);
     p[i].translation = Eigen::Vector3d(5.0 * i, 1.0, -2.0);
@@ -181,7 +181,7 @@ TEST_CASE("AddPrimitive refuses bad parameters and leaves the mesh unchanged") {
   REQUIRE(AddPrimitive(&mesh, MakeBox(1, {1, 1, 1})).ok);
   const PolyMesh before = mesh;
   for (const PrimitiveShape& bad : {MakeBox(2, {1.0, 0.0, 1.0}), MakePrism(3, 2, 1.0, 1.0),
-                               MakeCylinder(4, 8, -1.0, 1.0), MakePlane(5, 1.0, NAN)}) {
+                                    MakeCylinder(4, 8, -1.0, 1.0), MakePlane(5, 1.0, NAN)}) {
     const AddPrimitiveResult r = AddPrimitive(&mesh, bad);
     CAPTURE(r.message);
     CHECK_FALSE(r.ok);

@@ -16,8 +16,8 @@
 #include <Eigen/Geometry>
 
 #include "core/geometry/camera.h"
-#include "core/mesh/mesh.h"
 #include "core/mesh/extrude.h"
+#include "core/mesh/mesh.h"
 #include "core/mesh/operators.h"
 #include "core/mesh/primitives.h"
 #include "core/mesh/triangulate.h"
@@ -29,8 +29,8 @@ namespace {
 constexpr double kGeomTol = 1e-9;  // noise-free geometry, scene units ~1 to 10
 
 using testing::AllKinds;
-using testing::MeshOf;
 using testing::FirstProblem;
+using testing::MeshOf;
 
 TEST_CASE("extruding every face of every primitive, out and in: counts, geometry, exact inverse") {
   for (const PrimitiveShape& p : AllKinds()) {

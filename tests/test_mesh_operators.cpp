@@ -24,8 +24,8 @@ namespace {
 constexpr double kGeomTol = 1e-9;  // noise-free geometry, metres
 
 using testing::AllKinds;
-using testing::MeshOf;
 using testing::FirstProblem;
+using testing::MeshOf;
 
 TEST_CASE("E_split then V_delete on every edge of every primitive") {
   for (const PrimitiveShape& p : AllKinds()) {
@@ -483,9 +483,8 @@ TEST_CASE("re-triangulating only the faces an operator touched matches a full tr
   for (FaceId f : {FaceId(5), c.new_face}) {
     for (const CornerTriangle& t : full.by_face[f]) {
       const Eigen::Vector3d a = mesh.vertex(mesh.Origin(t[0])).position;
-      const double area = 0.5 * (mesh.vertex(mesh.Origin(t[1])).position - a)
-                                     .cross(mesh.vertex(mesh.Origin(t[2])).position - a)
-                                     .norm();
+      const double area =
+          0.5 * (mesh.vertex(mesh.Origin(t[1])).position - a).cross(mesh.vertex(mesh.Origin(t[2])).position - a).norm();
       CHECK(area > 1e-6);
     }
   }

@@ -13,8 +13,8 @@
 #include <Eigen/Geometry>
 
 #include "core/geometry/camera.h"
-#include "core/solve/model_update.h"
 #include "core/scene/project.h"
+#include "core/solve/model_update.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {
@@ -44,7 +44,8 @@ void Perturb(SyntheticScene* scene, double scale) {
   camera.focal_px *= 1.2;
   camera.principal_point_px += Eigen::Vector2d(25.0, -15.0);
   const Eigen::Matrix3d tilt = RotationFromAngleAxis(Eigen::Vector3d(0.05, -0.03, 0.08));
-  camera.SetPose(tilt * camera.cam_from_world_rotation, camera.CenterInWorld() + scale * Eigen::Vector3d(1.2, -0.8, 0.6));
+  camera.SetPose(tilt * camera.cam_from_world_rotation,
+                 camera.CenterInWorld() + scale * Eigen::Vector3d(1.2, -0.8, 0.6));
   Primitive& box = scene->project.primitives[0];
   box.shape.params.x() *= 1.3;
   box.shape.params.y() *= 0.75;
@@ -110,9 +111,12 @@ Project TwoImageProject(double second_k1) {
 
 // Bit-for-bit equality of the doubles a camera holds (operator== would let -0.0 == 0.0 pass).
 bool SameBits(const Camera& a, const Camera& b) {
-  auto same = [](const auto& x, const auto& y) { return std::memcmp(x.data(), y.data(), sizeof(double) * x.size()) == 0; };
+  auto same = [](const auto& x, const auto& y) {
+    return std::memcmp(x.data(), y.data(), sizeof(double) * x.size()) == 0;
+  };
   return a.focal_px == b.focal_px && std::signbit(a.focal_px) == std::signbit(b.focal_px) &&
-         same(a.principal_point_px, b.principal_point_px) && same(a.cam_from_world_rotation, b.cam_from_world_rotation) &&
+         same(a.principal_point_px, b.principal_point_px) &&
+         same(a.cam_from_world_rotation, b.cam_from_world_rotation) &&
          same(a.cam_from_world_translation, b.cam_from_world_translation) &&
          std::memcmp(&a.k1, &b.k1, sizeof(double)) == 0 && std::memcmp(&a.k2, &b.k2, sizeof(double)) == 0;
 }
@@ -299,13 +303,13 @@ TEST_CASE("noise-free: calibration, geometry solve and joint solve recover camer
     const double focal_error = std::abs(camera.focal_px / truth.focal_px - 1.0);
     const double pp_error_px = (camera.principal_point_px - truth.principal_point_px).norm();
     const double rotation_error = RotationErrorRad(camera.cam_from_world_rotation, truth.cam_from_world_rotation);
-    const double center_error =
-        (camera.CenterInWorld() - truth.CenterInWorld()).norm() / truth.CenterInWorld().norm();
+    const double center_error = (camera.CenterInWorld() - truth.CenterInWorld()).norm() / truth.CenterInWorld().norm();
     const Primitive& box = updated.primitives[0];
     const double size_error = (Size(box) - Size(scene.true_box)).norm() / Size(scene.true_box).norm();
     double vertex_error = 0.0;  // the cached positions follow the solved shape
     for (VertexId v = 0; v < 8; ++v)
-      vertex_error = std::max(vertex_error, (box.mesh.vertex(v).position - scene.true_box.mesh.vertex(v).position).norm());
+      vertex_error =
+          std::max(vertex_error, (box.mesh.vertex(v).position - scene.true_box.mesh.vertex(v).position).norm());
     vertex_error /= Size(scene.true_box).norm();
     MESSAGE("scale " << scale << ": focal " << focal_error << ", principal point " << pp_error_px << " px, rotation "
                      << rotation_error << " rad, centre " << center_error << ", size " << size_error
@@ -344,8 +348,7 @@ TEST_CASE("0.5 px noise: the full update stays within bounds scaled to the noise
     INFO(Messages(summary));
     REQUIRE(summary.ok);
     REQUIRE(summary.joint.IsUsable());
-    const double size_error =
-        (Size(updated.primitives[0]) - Size(scene.true_box)).norm() / Size(scene.true_box).norm();
+    const double size_error = (Size(updated.primitives[0]) - Size(scene.true_box)).norm() / Size(scene.true_box).norm();
     const double focal_error = std::abs(updated.images[0].camera.focal_px / scene.true_camera.focal_px - 1.0);
     CAPTURE(size_error);
     CAPTURE(focal_error);

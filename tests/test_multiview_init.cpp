@@ -13,10 +13,10 @@
 
 #include <Eigen/Geometry>
 
+#include "core/estimators/two_view.h"
+#include "core/scene/project.h"
 #include "core/solve/model_update.h"
 #include "core/solve/multiview_init.h"
-#include "core/scene/project.h"
-#include "core/estimators/two_view.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {
@@ -258,8 +258,8 @@ TEST_CASE("resection: 8 and 6 non-coplanar pins on known corners recover K, R, t
       const CameraErrors e = Compare(out.images[1].camera, s.truth[1]);
       MESSAGE("resection scale " << scale << ", " << num_pins << " pins: focal " << e.focal_rel << ", pp "
                                  << e.principal_point_px << " px, rotation " << e.rotation_rad << " rad, t "
-                                 << e.translation_rel << ", RMS " << report.residual_px << " px, "
-                                 << summary.time_ms << " ms");
+                                 << e.translation_rel << ", RMS " << report.residual_px << " px, " << summary.time_ms
+                                 << " ms");
       CheckCameraExact(e);
       CHECK(e.principal_point_px / s.truth[1].focal_px < kExactTol);
       CHECK(report.residual_px < kExactTol * s.truth[1].focal_px);
@@ -379,8 +379,8 @@ TEST_CASE("two views, known focal length, noise-free: relative pose exact, align
   const CameraErrors e0 = Compare(out.images[0].camera, s.truth[0]);
   const CameraErrors e1 = Compare(out.images[1].camera, s.truth[1]);
   MESSAGE("two views noise-free: rotation " << rotation_error << " rad, direction " << direction_error
-                                            << " rad; absolute t " << e0.translation_rel << ", "
-                                            << e1.translation_rel << "; " << summary.time_ms << " ms");
+                                            << " rad; absolute t " << e0.translation_rel << ", " << e1.translation_rel
+                                            << "; " << summary.time_ms << " ms");
   CHECK(rotation_error < kExactTol);
   CHECK(direction_error < kExactTol);
   CHECK(e0.rotation_rad < kExactTol);
@@ -478,8 +478,8 @@ TEST_CASE("two views of one face, ambiguous pair: the model's positions pick the
     std::string warnings;
     for (const auto& w : report.warnings) warnings += "; " + w;
     const CameraErrors e = Compare(out.images[i].camera, s.truth[i]);
-    MESSAGE("one face, short baseline, view " << i << ": rotation " << e.rotation_rad << " rad, t "
-                                              << e.translation_rel << warnings);
+    MESSAGE("one face, short baseline, view " << i << ": rotation " << e.rotation_rad << " rad, t " << e.translation_rel
+                                              << warnings);
     CHECK(warnings.find("the model's vertices chose one") != std::string::npos);
     CHECK(e.rotation_rad < kExactTol);
     CHECK(e.translation_rel < kExactTol);
@@ -547,8 +547,7 @@ TEST_CASE("two views, keep-first-camera gauge: image 0 stays where it was") {
   const Camera& c0 = out.images[0].camera;
   CHECK(RotationErrorRad(c0.cam_from_world_rotation, placed.cam_from_world_rotation) < kExactTol);
   CHECK((c0.CenterInWorld() - placed.CenterInWorld()).norm() < kExactTol);
-  const auto [rotation_error, direction_error] =
-      RelativePoseErrors(s.truth[0], s.truth[1], c0, out.images[1].camera);
+  const auto [rotation_error, direction_error] = RelativePoseErrors(s.truth[0], s.truth[1], c0, out.images[1].camera);
   CHECK(rotation_error < kExactTol);
   CHECK(direction_error < kExactTol);
   // The baseline is scaled to the model: the true model spread gives the true baseline.
@@ -695,8 +694,8 @@ TEST_CASE("three uncalibrated views: self-calibration recovers the focal length"
     REQUIRE(report.path == MultiViewInitPath::kSelfCalibration);
     CHECK(report.focal_guessed);
     const CameraErrors e = Compare(out.images[i].camera, s.truth[i]);
-    MESSAGE("self-calibration view " << i << ": focal " << e.focal_rel << ", rotation " << e.rotation_rad
-                                     << " rad, t " << e.translation_rel << ", RMS " << report.residual_px << " px, "
+    MESSAGE("self-calibration view " << i << ": focal " << e.focal_rel << ", rotation " << e.rotation_rad << " rad, t "
+                                     << e.translation_rel << ", RMS " << report.residual_px << " px, "
                                      << summary.time_ms << " ms");
     // The start is not the answer: the guessed 1.2 x 1024 px is 37 % off.
     REQUIRE(std::abs(1.2 * 1024 / s.truth[i].focal_px - 1.0) > 0.3);
@@ -989,9 +988,9 @@ TEST_CASE("the recommended wiring: VP calibration and geometry solve, then pins 
   CHECK(step3.solve.num_skipped_pins == 0);
   const double size_error = (updated.primitives[0].shape.params.head<3>() - true_size).norm() / true_size.norm();
   const CameraErrors e1 = Compare(updated.images[1].camera, s.truth[1]);
-  MESSAGE("wiring: resection RMS " << init.images[1].residual_px << " px, joint RMS "
-                                   << step3.joint.reprojection_rms_px << " px, size " << size_error << ", camera 1 "
-                                   << e1.rotation_rad << " rad, t " << e1.translation_rel);
+  MESSAGE("wiring: resection RMS " << init.images[1].residual_px << " px, joint RMS " << step3.joint.reprojection_rms_px
+                                   << " px, size " << size_error << ", camera 1 " << e1.rotation_rad << " rad, t "
+                                   << e1.translation_rel);
   CHECK(step3.joint.reprojection_rms_px < kRmsTolPx);
   CHECK(size_error < kExactTol);
   CHECK(e1.rotation_rad < kExactTol);
@@ -1004,8 +1003,9 @@ TEST_CASE("UpdateModel initialises an image without line families from its pins 
   Scene s = MakeScene({});
   Image& image0 = s.project.images[0];
   image0.camera.focal_px *= 1.2;
-  image0.camera.SetPose(RotationFromAngleAxis(Eigen::Vector3d(0.05, -0.03, 0.08)) * image0.camera.cam_from_world_rotation,
-                        image0.camera.CenterInWorld() + Eigen::Vector3d(1.2, -0.8, 0.6));
+  image0.camera.SetPose(
+      RotationFromAngleAxis(Eigen::Vector3d(0.05, -0.03, 0.08)) * image0.camera.cam_from_world_rotation,
+      image0.camera.CenterInWorld() + Eigen::Vector3d(1.2, -0.8, 0.6));
   Primitive& box = s.project.primitives[0];
   box.shape.params.x() *= 1.3;
   RefreshPrimitive(&s.project, &box);

@@ -7,8 +7,8 @@
 #include <random>
 #include <vector>
 
-#include "core/geometry/camera.h"
 #include "core/estimators/plumb_line.h"
+#include "core/geometry/camera.h"
 
 namespace {
 
@@ -31,8 +31,8 @@ facet::Camera MakeCamera(double resolution_scale) {
   camera.width_px = static_cast<int>(kWidth * resolution_scale);
   camera.height_px = static_cast<int>(kHeight * resolution_scale);
   camera.focal_px = 800.0 * resolution_scale;
-  camera.principal_point_px =
-      Eigen::Vector2d((camera.width_px - 1) / 2.0, (camera.height_px - 1) / 2.0) + Eigen::Vector2d(10.0, -8.0) * resolution_scale;
+  camera.principal_point_px = Eigen::Vector2d((camera.width_px - 1) / 2.0, (camera.height_px - 1) / 2.0) +
+                              Eigen::Vector2d(10.0, -8.0) * resolution_scale;
   // Looking into the corner of a room (walls x = 0 and y = 0, floor z = 0) from inside it.
   const Eigen::Vector3d center(4.0, 3.5, 1.6);
   const Eigen::Vector3d forward = (Eigen::Vector3d(0.3, 0.2, 1.0) - center).normalized();
@@ -48,8 +48,8 @@ LensScene MakeLensScene(double k1, double k2, int points_per_line, double noise_
                         double resolution_scale = 1.0) {
   LensScene scene;
   scene.camera = MakeCamera(resolution_scale);
-  scene.distortion = facet::MakeRadialDistortion(scene.camera.width_px, scene.camera.height_px,
-                                                 scene.camera.principal_point_px);
+  scene.distortion =
+      facet::MakeRadialDistortion(scene.camera.width_px, scene.camera.height_px, scene.camera.principal_point_px);
   scene.distortion.k1 = k1;
   scene.distortion.k2 = k2;
   std::mt19937 rng(seed);
@@ -220,8 +220,7 @@ TEST_CASE("Noise-free lines: k1 and k2 recovered to 1e-9 from k = 0") {
     CHECK(summary.final_rms_px < 1e-7);
     // The vanishing points are those of the true pinhole camera.
     for (int axis = 0; axis < 3; ++axis) {
-      const Eigen::Vector3d expected =
-          (scene.camera.K() * scene.camera.cam_from_world_rotation.col(axis)).normalized();
+      const Eigen::Vector3d expected = (scene.camera.K() * scene.camera.cam_from_world_rotation.col(axis)).normalized();
       const double sine = summary.vanishing_points_px[axis].cross(expected).norm();
       CAPTURE(axis);
       CAPTURE(sine);

@@ -25,10 +25,10 @@
 #include <nlohmann/json.hpp>
 
 #include "core/geometry/camera.h"
+#include "core/io/project_io.h"
 #include "core/mesh/extrude.h"
 #include "core/mesh/operators.h"
 #include "core/scene/project.h"
-#include "core/io/project_io.h"
 #include "tests/synthetic_scene.h"
 
 namespace fs = std::filesystem;
@@ -195,7 +195,8 @@ Project MakeFullProject() {
     shape.params[0] += 0.1 * mask;
     shape.rotation = {0.01 * mask, -0.2, 0.3};
     shape.translation = {static_cast<double>(mask), -0.5 * mask, 0.125};
-    const std::string name = mask == 5 ? "Turm \xC3\xBC \"quoted\" \\ tab\t \xE2\x98\x83" : "primitive " + std::to_string(mask);
+    const std::string name =
+        mask == 5 ? "Turm \xC3\xBC \"quoted\" \\ tab\t \xE2\x98\x83" : "primitive " + std::to_string(mask);
     std::string message;
     REQUIRE_MESSAGE(facet::AddPrimitiveToProject(&p, shape, name, nullptr, &message), message);
     Primitive& prim = p.primitives.back();
@@ -354,7 +355,8 @@ TEST_CASE("each single field is written and read back") {
       {"camera.focal_px", [](Project& p) { p.images[0].camera.focal_px *= 1.5; }},
       {"camera.pp.x", [](Project& p) { p.images[0].camera.principal_point_px.x() += 0.5; }},
       {"camera.pp.y", [](Project& p) { p.images[0].camera.principal_point_px.y() += 0.5; }},
-      {"camera.rotation", [](Project& p) {
+      {"camera.rotation",
+       [](Project& p) {
          p.images[1].camera.cam_from_world_rotation = facet::RotationFromAngleAxis(Eigen::Vector3d(0.1, 0.2, 0.3));
        }},
       {"camera.translation", [](Project& p) { p.images[1].camera.cam_from_world_translation.z() = -4.0; }},
@@ -408,7 +410,8 @@ TEST_CASE("each single field is written and read back") {
       {"pin.uv_px", [](Project& p) { p.pins[0].uv_px.x() = -1.0; }},
       {"constraint.kind", [](Project& p) { p.constraints[2].kind = facet::ConstraintKind::kEqualLength; }},
       {"constraint.vertices", [](Project& p) { p.constraints[2].vertices[1].vertex = 3; }},
-      {"constraint.vertices.primitive", [](Project& p) { p.constraints[5].vertices[0].primitive_id = p.primitives[0].id; }},
+      {"constraint.vertices.primitive",
+       [](Project& p) { p.constraints[5].vertices[0].primitive_id = p.primitives[0].id; }},
       {"constraint.value", [](Project& p) { p.constraints[5].value = 1e-3; }},
       {"constraint.point", [](Project& p) { p.constraints[6].point.z() = -4.0; }},
       {"constraint.axis", [](Project& p) { p.constraints[7].axis = Axis::kX; }},
@@ -670,8 +673,7 @@ void CollectPaths(const Json& j, const Json::json_pointer& ptr, const std::strin
     for (auto it = j.begin(); it != j.end(); ++it)
       CollectPaths(it.value(), ptr / it.key(), name.empty() ? it.key() : name + "." + it.key(), out);
   } else if (j.is_array()) {
-    for (size_t i = 0; i < j.size(); ++i)
-      CollectPaths(j[i], ptr / i, name + "[" + std::to_string(i) + "]", out);
+    for (size_t i = 0; i < j.size(); ++i) CollectPaths(j[i], ptr / i, name + "[" + std::to_string(i) + "]", out);
   }
 }
 }  // namespace
@@ -729,8 +731,7 @@ TEST_CASE("every missing field and every wrong type is an error naming its path"
   const std::regex inside_reference(R"((constraints\[\d+\]\.vertices\[\d+\])\[\d+\])");
   for (const auto& [ptr, name_in_tree] : paths) {
     std::smatch match;
-    const std::string name =
-        std::regex_match(name_in_tree, match, inside_reference) ? match[1].str() : name_in_tree;
+    const std::string name = std::regex_match(name_in_tree, match, inside_reference) ? match[1].str() : name_in_tree;
     CAPTURE(name_in_tree);
     const bool in_object = good.at(ptr.parent_pointer()).is_object();
     // Fields added within version 2 (distortion, focal and horizon modes) may be absent:
@@ -780,7 +781,9 @@ TEST_CASE("out-of-range values and bad references name their location") {
   CheckErrorNames(with([](Json& j) { j["pins"][3]["vertex"] = -1; }), "pins[3].vertex");
   CheckErrorNames(with([](Json& j) { j["primitives"][2]["params"][1] = -0.5; }),
                   "primitives[2].params[1]: a dimension cannot be negative");
-  CheckErrorNames(with([](Json& j) { j["primitives"][2]["params"] = {1.0, 2.0}; }),
+  CheckErrorNames(with([](Json& j) {
+                    j["primitives"][2]["params"] = {1.0, 2.0};
+                  }),
                   "primitives[2].params: expected an array of 4 numbers");
   CheckErrorNames(with([](Json& j) { j["primitives"][2]["kind"] = "sphere"; }),
                   "primitives[2].kind: unknown primitive kind \"sphere\"");
@@ -792,7 +795,9 @@ TEST_CASE("out-of-range values and bad references name their location") {
                   "constraints[0].kind: unknown constraint kind");
   CheckErrorNames(with([](Json& j) { j["constraints"][8]["image_id"] = 9999; }),
                   "constraints[8].image_id: refers to a missing image");
-  CheckErrorNames(with([](Json& j) { j["constraints"][1]["vertices"][0] = {1, 2, 3}; }),
+  CheckErrorNames(with([](Json& j) {
+                    j["constraints"][1]["vertices"][0] = {1, 2, 3};
+                  }),
                   "constraints[1].vertices[0]: expected [primitive_id, vertex]");
   CheckErrorNames(with([](Json& j) { j["constraints"][1]["vertices"][2][0] = j["images"][0]["id"]; }),
                   "constraints[1].vertices[2]: refers to a missing primitive");
@@ -822,7 +827,8 @@ TEST_CASE("out-of-range values and bad references name their location") {
   CheckErrorNames(with([](Json& j) { j["images"][2]["camera"]["rotation"][0] = 2.0; }),
                   "images[2].camera.rotation: not a rotation matrix");
   CheckErrorNames(with([](Json& j) {  // a reflection is orthonormal but not a rotation
-                    for (int k = 0; k < 3; ++k) j["images"][2]["camera"]["rotation"][k] = -j["images"][2]["camera"]["rotation"][k].get<double>();
+                    for (int k = 0; k < 3; ++k)
+                      j["images"][2]["camera"]["rotation"][k] = -j["images"][2]["camera"]["rotation"][k].get<double>();
                   }),
                   "images[2].camera.rotation: not a rotation matrix");
   {  // a number beyond the range of a double
@@ -832,8 +838,8 @@ TEST_CASE("out-of-range values and bad references name their location") {
     const size_t at = text.find("-1e400");
     const size_t line = 1 + static_cast<size_t>(std::count(text.begin(), text.begin() + at, '\n'));
     const size_t column = at - text.rfind('\n', at);
-    CheckErrorNames(text, "line " + std::to_string(line) + ", column " + std::to_string(column) +
-                              ": number out of range '-1e400'");
+    CheckErrorNames(
+        text, "line " + std::to_string(line) + ", column " + std::to_string(column) + ": number out of range '-1e400'");
   }
 }
 
@@ -1093,10 +1099,13 @@ TEST_CASE("malformed mesh content is an error naming its JSON path") {
   SUBCASE("a constraint with the wrong number of vertices") {
     CheckErrorNames(with([](Json& j) { j["constraints"][2]["vertices"].erase(3); }),
                     "constraints[2].vertices: a parallel constraint takes 4 vertices, found 3");
-    CheckErrorNames(with([](Json& j) { j["constraints"][0]["vertices"] = Json::array({{1, 0}, {1, 1}, {1, 2}}); }),
+    CheckErrorNames(with([](Json& j) {
+                      j["constraints"][0]["vertices"] = Json::array({{1, 0}, {1, 1}, {1, 2}});
+                    }),
                     "constraints[0].vertices: a coplanar constraint takes 4 or more vertices, found 3");
-    CheckErrorNames(with([](Json& j) { j["constraints"][6]["vertices"].push_back(j["constraints"][6]["vertices"][0]); }),
-                    "constraints[6].vertices: a fixed_point constraint takes 1 vertices, found 2");
+    CheckErrorNames(
+        with([](Json& j) { j["constraints"][6]["vertices"].push_back(j["constraints"][6]["vertices"][0]); }),
+        "constraints[6].vertices: a fixed_point constraint takes 1 vertices, found 2");
   }
 }
 
@@ -1164,8 +1173,8 @@ TEST_CASE("the version-1 fixture keeps loading: boxes become box primitives, cor
   constexpr double kPositionTolerance = 1e-12;  // a few roundings of ~10 m coordinates
   const double s = std::sqrt(0.5);
   const Eigen::Vector3d expected[3] = {
-      Eigen::Vector3d(0.0, 0.0, 0.0),                                    // box 6, corner 0
-      Eigen::Vector3d(12.0, 0.0, 6.25),                                  // box 6, corner 5
+      Eigen::Vector3d(0.0, 0.0, 0.0),                                            // box 6, corner 0
+      Eigen::Vector3d(12.0, 0.0, 6.25),                                          // box 6, corner 5
       Eigen::Vector3d(12.0 + s * 3.0 - s * 2.0, 1.0 + s * 3.0 + s * 2.0, 2.5)};  // box 7 (45 deg), corner 7
   for (int i = 0; i < 3; ++i) {
     CAPTURE(i);

@@ -155,7 +155,8 @@ TEST_CASE("refinement lowers the linear triangulation's reprojection error under
   CAPTURE(linear.reprojection_rms_px);
   CAPTURE(refined.reprojection_rms_px);
   CHECK(refined.reprojection_rms_px < linear.reprojection_rms_px);
-  for (size_t i = 0; i < s.uv1.size(); ++i) CHECK(refined.reprojection_errors_px[i] <= linear.reprojection_errors_px[i] + 1e-9);
+  for (size_t i = 0; i < s.uv1.size(); ++i)
+    CHECK(refined.reprojection_errors_px[i] <= linear.reprojection_errors_px[i] + 1e-9);
 }
 
 TEST_CASE("noise-free: the stratified upgrade equals the truth up to a similarity, at every scale") {
@@ -166,7 +167,8 @@ TEST_CASE("noise-free: the stratified upgrade equals the truth up to a similarit
     const MetricResult m = Stratify(s, s.F);
     const double error = AlignedRelativeError(s, m);
     const Eigen::Matrix3d r_true = s.cam2.cam_from_world_rotation * s.cam1.cam_from_world_rotation.transpose();
-    const Eigen::Matrix3d r_est = m.cameras[1].cam_from_world_rotation * m.cameras[0].cam_from_world_rotation.transpose();
+    const Eigen::Matrix3d r_est =
+        m.cameras[1].cam_from_world_rotation * m.cameras[0].cam_from_world_rotation.transpose();
     CAPTURE(scale);
     CAPTURE(error);
     CAPTURE(RotationErrorDeg(r_true, r_est));
@@ -187,7 +189,8 @@ TEST_CASE("with pixel noise and 1 mrad vanishing directions the upgrade error fo
     const MetricResult m = Stratify(s, f.F);
     const double error = AlignedRelativeError(s, m);
     const Eigen::Matrix3d r_true = s.cam2.cam_from_world_rotation * s.cam1.cam_from_world_rotation.transpose();
-    const Eigen::Matrix3d r_est = m.cameras[1].cam_from_world_rotation * m.cameras[0].cam_from_world_rotation.transpose();
+    const Eigen::Matrix3d r_est =
+        m.cameras[1].cam_from_world_rotation * m.cameras[0].cam_from_world_rotation.transpose();
     CAPTURE(noise_px);
     CAPTURE(error);
     CAPTURE(RotationErrorDeg(r_true, r_est));
@@ -229,7 +232,8 @@ TEST_CASE("wrong intrinsics in the metric upgrade are reported") {
   Eigen::Matrix3d k2_wrong = s.cam2.K();
   k2_wrong(0, 0) *= 2.0;
   k2_wrong(1, 1) *= 2.0;
-  const MetricUpgradeSummary metric = UpgradeToMetric(affine.cameras, {s.cam1.K(), k2_wrong}, {}, MetricUpgradeOptions());
+  const MetricUpgradeSummary metric =
+      UpgradeToMetric(affine.cameras, {s.cam1.K(), k2_wrong}, {}, MetricUpgradeOptions());
   CAPTURE(metric.message);
   CAPTURE(metric.max_rotation_residual);
   const bool reported = !metric.IsUsable() || !metric.warnings.empty();

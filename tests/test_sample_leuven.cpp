@@ -17,16 +17,17 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/io/project_io.h"
 #include "core/mesh/box.h"
 #include "core/solve/model_update.h"
-#include "core/io/project_io.h"
 
 namespace {
 
 const std::string kSamplePath = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuven.facet";
 
 // Mean Sobel gradient magnitude along the segment a-b, shifted by `offset_px` along its normal.
-double MeanGradientAlong(const cv::Mat& gradient, const Eigen::Vector2d& a, const Eigen::Vector2d& b, double offset_px) {
+double MeanGradientAlong(const cv::Mat& gradient, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                         double offset_px) {
   const Eigen::Vector2d dir = (b - a).normalized();
   const Eigen::Vector2d normal(-dir.y(), dir.x());
   const int samples = std::max(2, static_cast<int>((b - a).norm()));
@@ -53,7 +54,8 @@ double SubPixelGradientAlong(const cv::Mat& gradient, const Eigen::Vector2d& a, 
   for (int i = 0; i <= samples; ++i) {
     const Eigen::Vector2d p = a + (b - a) * (static_cast<double>(i) / samples) + offset_px * normal;
     cv::Mat value;
-    cv::getRectSubPix(gradient, cv::Size(1, 1), cv::Point2f(static_cast<float>(p.x()), static_cast<float>(p.y())), value);
+    cv::getRectSubPix(gradient, cv::Size(1, 1), cv::Point2f(static_cast<float>(p.x()), static_cast<float>(p.y())),
+                      value);
     sum += value.at<float>(0, 0);
   }
   return sum / (samples + 1);
@@ -158,7 +160,8 @@ TEST_CASE("the sample's stored solution is what the model update computes") {
   const Eigen::Vector3d stored_center = loaded.project.images[0].camera.CenterInWorld();
   CHECK((stored_center - updated.images[0].camera.CenterInWorld()).norm() < kRelativeTolerance * stored_center.norm());
   const facet::Camera& stored_camera = loaded.project.images[0].camera;
-  CHECK(std::abs(updated.images[0].camera.focal_px - stored_camera.focal_px) < kRelativeTolerance * stored_camera.focal_px);
+  CHECK(std::abs(updated.images[0].camera.focal_px - stored_camera.focal_px) <
+        kRelativeTolerance * stored_camera.focal_px);
   // Intrinsics locked: the joint solve keeps what calibration gave.
   CHECK(updated.images[0].camera.focal_px == summary.calibration.at(updated.images[0].id).focal_px);
   MESSAGE("Leuven sample: focal " << updated.images[0].camera.focal_px << " px; pin RMS "

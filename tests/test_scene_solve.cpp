@@ -168,8 +168,8 @@ TEST_CASE("noise-free: box size and camera centre are recovered from a far start
     CHECK(summary.linear_initialization_used == !warm_start);
     CHECK(summary.num_residuals == 16);
     CHECK(summary.num_parameters == 5);
-    MESSAGE("noise-free, ", warm_start ? "warm" : "cold", ": ", summary.iterations, " iterations (",
-            summary.message, "), size error ", size_error, ", centre error ", center_error, " (relative), RMS ",
+    MESSAGE("noise-free, ", warm_start ? "warm" : "cold", ": ", summary.iterations, " iterations (", summary.message,
+            "), size error ", size_error, ", centre error ", center_error, " (relative), RMS ",
             summary.reprojection_rms_px, " px");
     CHECK(size_error < kRelativeTolerance);
     CHECK(center_error < kRelativeTolerance);
@@ -289,8 +289,7 @@ TEST_CASE("0.5 px noise: errors agree with the Jacobian covariance and the RMS w
     Eigen::VectorXd residuals;
     Eigen::MatrixXd jacobian;
     internal::EvaluateScene(problem, state, &residuals, &jacobian);
-    const Eigen::MatrixXd covariance =
-        kNoisePx * kNoisePx * (jacobian.transpose() * jacobian).inverse();
+    const Eigen::MatrixXd covariance = kNoisePx * kNoisePx * (jacobian.transpose() * jacobian).inverse();
     m = static_cast<int>(jacobian.rows());
     n = static_cast<int>(jacobian.cols());
 
@@ -322,8 +321,8 @@ TEST_CASE("0.5 px noise: errors agree with the Jacobian covariance and the RMS w
   CAPTURE(expected_rms_sq);
   CAPTURE(mean_rms_sq);
   MESSAGE("noise 0.5 px: mean RMS ", std::sqrt(mean_rms_sq), " px (per pin), expected ", std::sqrt(expected_rms_sq),
-          " px; per coordinate ", std::sqrt(mean_rms_sq / 2.0), " vs 0.5*sqrt((m-n)/m) = ",
-          kNoisePx * std::sqrt(double(m - n) / m));
+          " px; per coordinate ", std::sqrt(mean_rms_sq / 2.0),
+          " vs 0.5*sqrt((m-n)/m) = ", kNoisePx * std::sqrt(double(m - n) / m));
   CHECK(std::abs(mean_rms_sq / expected_rms_sq - 1.0) < 0.3);
   // The normalised squared errors average 1 if the covariance is right; 100 samples, though
   // correlated within a seed, give a mean well within [0.5, 1.6].
@@ -441,8 +440,8 @@ TEST_CASE("degenerate inputs: nothing to solve, bad pins and bad options leave t
     Project solved;
     const SceneSolveSummary summary = SolveScene(scene.project, SceneSolveOptions(), &solved);
     INFO(summary.message);
-    CHECK((summary.termination == SolverTermination::kInvalidInput ||
-           summary.termination == SolverTermination::kFailed));
+    CHECK(
+        (summary.termination == SolverTermination::kInvalidInput || summary.termination == SolverTermination::kFailed));
     CHECK(summary.message.find("pin #") != std::string::npos);
     // NaN != NaN, so compare with the NaN replaced in both.
     Project a = solved, b = scene.project;
@@ -471,8 +470,7 @@ TEST_CASE("degenerate inputs: nothing to solve, bad pins and bad options leave t
     const SceneSolveSummary summary = SolveScene(scene.project, SceneSolveOptions(), &solved);
     INFO(summary.message);
     REQUIRE(summary.IsUsable());
-    const double center_error =
-        (solved.images[0].camera.CenterInWorld() - scene.true_camera.CenterInWorld()).norm();
+    const double center_error = (solved.images[0].camera.CenterInWorld() - scene.true_camera.CenterInWorld()).norm();
     CHECK(center_error < 1e-9 * scene.true_camera.CenterInWorld().norm());
   }
   SUBCASE("a pin in an uncalibrated image is skipped with a warning") {

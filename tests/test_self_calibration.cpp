@@ -12,8 +12,8 @@
 
 #include <Eigen/Geometry>
 
-#include "core/estimators/self_calibration.h"
 #include "core/estimators/projective_bundle_adjustment.h"
+#include "core/estimators/self_calibration.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {
@@ -64,7 +64,8 @@ MultiViewScene MakeMultiViewScene(const MultiViewOptions& o) {
     for (int v = 0; v < o.num_views; ++v) {
       const Camera& c = s.cameras[v];
       const Eigen::Vector2d uv = c.Project(x);
-      if (c.CamFromWorld(x).z() <= 0 || uv.x() < 0 || uv.y() < 0 || uv.x() > c.width_px || uv.y() > c.height_px) continue;
+      if (c.CamFromWorld(x).z() <= 0 || uv.x() < 0 || uv.y() < 0 || uv.x() > c.width_px || uv.y() > c.height_px)
+        continue;
       track.push_back({v, uv + o.noise_px * Eigen::Vector2d(noise(rng), noise(rng))});
     }
     if (track.size() < 2) continue;
@@ -94,8 +95,10 @@ Errors Compare(const MultiViewScene& s, const SelfCalibrationSummary& r) {
   for (size_t v = 0; v < s.cameras.size(); ++v) {
     REQUIRE(r.registered[v]);
     e.max_focal_rel = std::max(e.max_focal_rel, std::abs(r.cameras[v].focal_px / s.cameras[v].focal_px - 1.0));
-    const Eigen::Matrix3d rel_true = s.cameras[v].cam_from_world_rotation * s.cameras[0].cam_from_world_rotation.transpose();
-    const Eigen::Matrix3d rel_est = r.cameras[v].cam_from_world_rotation * r.cameras[0].cam_from_world_rotation.transpose();
+    const Eigen::Matrix3d rel_true =
+        s.cameras[v].cam_from_world_rotation * s.cameras[0].cam_from_world_rotation.transpose();
+    const Eigen::Matrix3d rel_est =
+        r.cameras[v].cam_from_world_rotation * r.cameras[0].cam_from_world_rotation.transpose();
     e.max_rotation_deg = std::max(e.max_rotation_deg, RotationErrorDeg(rel_true, rel_est));
     a.push_back(r.cameras[v].CenterInWorld());
     b.push_back(s.cameras[v].CenterInWorld());
@@ -264,9 +267,9 @@ TEST_CASE("the reported focal standard deviation matches the spread of the estim
     spread = std::sqrt(spread);
     const double ratio = reported_rms / spread;
     const std::string mode_name = mode == PrincipalPointMode::kSolve ? "solved" : "at the centre";
-    MESSAGE("principal point " << mode_name << ": focal over " << kSeeds << " seeds: mean "
-                                    << mean << " px (truth " << true_focal << "), observed std " << spread
-                                    << " px, reported std " << reported_rms << " px, ratio " << ratio);
+    MESSAGE("principal point " << mode_name << ": focal over " << kSeeds << " seeds: mean " << mean << " px (truth "
+                               << true_focal << "), observed std " << spread << " px, reported std " << reported_rms
+                               << " px, ratio " << ratio);
     CHECK(spread > 0);
     CHECK(std::abs(ratio - 1.0) < kStdRelTol);
     // The mean is unbiased within the standard error of the mean (4 sigma).
@@ -354,7 +357,8 @@ MultiViewScene MakeChainedRingScene(int num_views, int num_points, double noise_
       const int v = (first + k) % num_views;
       const Camera& c = s.cameras[v];
       const Eigen::Vector2d uv = c.Project(x);
-      if (c.CamFromWorld(x).z() <= 0 || uv.x() < 0 || uv.y() < 0 || uv.x() > c.width_px || uv.y() > c.height_px) continue;
+      if (c.CamFromWorld(x).z() <= 0 || uv.x() < 0 || uv.y() < 0 || uv.x() > c.width_px || uv.y() > c.height_px)
+        continue;
       track.push_back({v, uv + noise_px * Eigen::Vector2d(noise(rng), noise(rng))});
     }
     if (track.size() < 2) continue;

@@ -51,7 +51,7 @@ struct TestFace {
   FaceId face = facet::kNoFace;
   std::vector<Eigen::Vector3d> corners;
   Eigen::Vector3d normal, c0, u_hat, v_hat;
-  Eigen::Vector2d st_min, st_max;  // unscaled frame coordinates of the bounding rectangle
+  Eigen::Vector2d st_min, st_max;        // unscaled frame coordinates of the bounding rectangle
   std::vector<Eigen::Vector2d> polygon;  // corners in unscaled frame coordinates
 
   Eigen::Vector2d Unscaled(const Eigen::Vector3d& p) const { return {(p - c0).dot(u_hat), (p - c0).dot(v_hat)}; }
@@ -182,8 +182,8 @@ struct FaceInAtlas {
   bool textured = false;
   int triangles = 0;
   Eigen::Matrix<double, 2, 3> texel_from_st;
-  double affine_residual_texels = 0.0;  // how far the corners' UVs are from one affine map
-  std::vector<Eigen::Vector2d> outline;  // the corners in texels
+  double affine_residual_texels = 0.0;             // how far the corners' UVs are from one affine map
+  std::vector<Eigen::Vector2d> outline;            // the corners in texels
   int x_min = 0, x_max = 0, y_min = 0, y_max = 0;  // texel bounds of the outline
 
   Eigen::Vector2d Texel(double s, double t) const { return texel_from_st * Eigen::Vector3d(s, t, 1.0); }
@@ -207,7 +207,8 @@ FaceInAtlas FindFace(const TexturedMesh& mesh, const TestFace& face) {
   for (std::uint32_t v : vertices) {
     for (size_t c = 0; c < face.corners.size(); ++c) {
       if ((mesh.positions[v].cast<double>() - face.corners[c]).norm() < 1e-4) {
-        texels[c] = Eigen::Vector2d(mesh.uvs[v].x() * mesh.atlas.width - 0.5, mesh.uvs[v].y() * mesh.atlas.height - 0.5);
+        texels[c] =
+            Eigen::Vector2d(mesh.uvs[v].x() * mesh.atlas.width - 0.5, mesh.uvs[v].y() * mesh.atlas.height - 0.5);
         found[c] = true;
       }
     }
@@ -306,8 +307,8 @@ Baked BakeBox(const facet::testing::SyntheticSceneOptions& o, const facet::Textu
   Baked b;
   b.scene = facet::testing::MakeBoxScene(o);
   b.faces = SceneFaces(b.scene.project);
-  b.summary = facet::BakeTexturedMesh(b.scene.project, {RenderPhoto(b.faces, b.scene.true_camera, paint)}, options,
-                                      &b.mesh);
+  b.summary =
+      facet::BakeTexturedMesh(b.scene.project, {RenderPhoto(b.faces, b.scene.true_camera, paint)}, options, &b.mesh);
   return b;
 }
 
@@ -434,8 +435,8 @@ TEST_CASE("bake: exactly the faces facing the camera are textured, each with its
   const Baked b = BakeBox({});
   const Camera& cam = b.scene.true_camera;
   REQUIRE_MESSAGE(b.summary.success, b.summary.message);
-  MESSAGE("bake of the 1024x768 synthetic box: " << b.summary.time_ms << " ms, atlas " << b.summary.atlas_width
-                                                 << "x" << b.summary.atlas_height << "; " << b.summary.message);
+  MESSAGE("bake of the 1024x768 synthetic box: " << b.summary.time_ms << " ms, atlas " << b.summary.atlas_width << "x"
+                                                 << b.summary.atlas_height << "; " << b.summary.message);
   REQUIRE(b.faces.size() == 6);
   // The whole box is inside the photo, so facing the camera is the whole visibility test.
   for (int c = 0; c < 8; ++c) {
@@ -550,8 +551,8 @@ TEST_CASE("bake: a wedge, every visible face in its own colour") {
   scene.project.primitives.clear();
   scene.project.pins.clear();
   std::string message;
-  REQUIRE_MESSAGE(facet::AddPrimitiveToProject(&scene.project, facet::MakeWedge(facet::kNoId, {4.0, 3.0, 2.5}),
-                                               "wedge", nullptr, &message),
+  REQUIRE_MESSAGE(facet::AddPrimitiveToProject(&scene.project, facet::MakeWedge(facet::kNoId, {4.0, 3.0, 2.5}), "wedge",
+                                               nullptr, &message),
                   message);
   CheckSolidBake(scene.project, scene.true_camera);
 }
@@ -622,7 +623,8 @@ TEST_CASE("bake: a non-convex face (V_connect, then a free vertex moved inside) 
   // vertex's neighbour: one of the two parts gets a reflex corner.
   const Eigen::Vector3d a_local = mesh.vertex(split_a.vertex).LocalPosition(plane.shape.params);
   const Eigen::Vector3d b_local = mesh.vertex(split_b.vertex).LocalPosition(plane.shape.params);
-  MoveVertexLocal(&scene.project, &plane, split_a.vertex, a_local + 0.5 * (b_local - a_local) + Eigen::Vector3d(-1.5, 0, 0));
+  MoveVertexLocal(&scene.project, &plane, split_a.vertex,
+                  a_local + 0.5 * (b_local - a_local) + Eigen::Vector3d(-1.5, 0, 0));
   REQUIRE(facet::Validate(mesh).empty());
   int reflex_faces = 0;
   for (const TestFace& f : SceneFaces(scene.project)) {
@@ -659,13 +661,14 @@ TEST_CASE("bake: a non-planar face (a free vertex moved off its edge) is baked t
   }
   REQUIRE(bent != nullptr);
   double off_plane = 0.0;
-  for (const auto& p : bent->corners) off_plane = std::max(off_plane, std::abs((p - bent->Centroid()).dot(bent->normal)));
+  for (const auto& p : bent->corners)
+    off_plane = std::max(off_plane, std::abs((p - bent->Centroid()).dot(bent->normal)));
   CAPTURE(off_plane);
   REQUIRE(off_plane > 0.05);
 
   TexturedMesh baked;
-  const auto summary = facet::BakeTexturedMesh(
-      scene.project, {RenderPhoto(faces, scene.true_camera, Paint::kSolid)}, {}, &baked);
+  const auto summary =
+      facet::BakeTexturedMesh(scene.project, {RenderPhoto(faces, scene.true_camera, Paint::kSolid)}, {}, &baked);
   REQUIRE_MESSAGE(summary.success, summary.message);
   CHECK(summary.faces_textured == 3);
   const FaceInAtlas fa = FindFace(baked, *bent);

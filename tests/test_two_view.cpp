@@ -11,8 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/io/relate_io.h"
 #include "core/estimators/two_view.h"
+#include "core/io/relate_io.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {
@@ -50,9 +50,7 @@ double RotationErrorRad(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
   return Eigen::AngleAxisd(a * b.transpose()).angle();
 }
 
-double AngleRad(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
+double AngleRad(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
 
 TwoViewScene MakeScene(const SceneOptions& o) {
   testing::SyntheticSceneOptions c1;
@@ -433,8 +431,8 @@ TEST_CASE("degenerate input gives an error that says why") {
     CHECK(rejected.termination == SolverTermination::kInvalidInput);
   }
   {
-    const RelativePoseSummary pose = EstimateRelativePose(s.F, Eigen::Matrix3d::Zero(), s.cam2.K(), s.uv1, s.uv2, {},
-                                                          RelativePoseOptions());
+    const RelativePoseSummary pose =
+        EstimateRelativePose(s.F, Eigen::Matrix3d::Zero(), s.cam2.K(), s.uv1, s.uv2, {}, RelativePoseOptions());
     CHECK(!pose.IsUsable());
     CHECK(pose.message.find("singular") != std::string::npos);
   }
@@ -523,7 +521,8 @@ TEST_CASE("relate JSON adapter: round trip with and without K, and bad input") {
   nlohmann::json in;
   in["image_sizes"] = {{s.cam1.width_px, s.cam1.height_px}, {s.cam2.width_px, s.cam2.height_px}};
   in["matches"] = nlohmann::json::array();
-  for (size_t i = 0; i < s.uv1.size(); ++i) in["matches"].push_back({s.uv1[i].x(), s.uv1[i].y(), s.uv2[i].x(), s.uv2[i].y()});
+  for (size_t i = 0; i < s.uv1.size(); ++i)
+    in["matches"].push_back({s.uv1[i].x(), s.uv1[i].y(), s.uv2[i].x(), s.uv2[i].y()});
 
   const RelateIoResult without_k = RelateMatchesJson(in.dump());
   REQUIRE_MESSAGE(without_k.ok(), without_k.error);

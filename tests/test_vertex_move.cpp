@@ -23,8 +23,8 @@ using namespace facet;
 
 namespace {
 
-constexpr double kReachTolerance = 1e-12;   // noise-free: the move is exact when reachable
-constexpr double kKktTolerance = 1e-9;      // optimality residual, relative
+constexpr double kReachTolerance = 1e-12;  // noise-free: the move is exact when reachable
+constexpr double kKktTolerance = 1e-9;     // optimality residual, relative
 constexpr double kUnchangedTolerance = 1e-15;
 
 struct Single {
@@ -352,7 +352,8 @@ TEST_CASE("vertex move: a roof on a box changes its own height; the base carries
   Id box_id = kNoId, roof_id = kNoId;
   std::string message;
   REQUIRE(AddPrimitiveToProject(&project, MakeBox(kNoId, Eigen::Vector3d(4.0, 3.0, 2.5)), "box", &box_id, &message));
-  REQUIRE(AddPrimitiveToProject(&project, MakeWedge(kNoId, Eigen::Vector3d(1.0, 1.0, 1.2)), "roof", &roof_id, &message));
+  REQUIRE(
+      AddPrimitiveToProject(&project, MakeWedge(kNoId, Eigen::Vector3d(1.0, 1.0, 1.2)), "roof", &roof_id, &message));
   project.FindPrimitive(roof_id)->attached_to = box_id;
   project.FindPrimitive(roof_id)->translation_locked = false;  // still follows the base
   RefreshAllPrimitives(&project);
@@ -370,7 +371,8 @@ TEST_CASE("vertex move: a roof on a box changes its own height; the base carries
   CHECK(KktResidual(roof, *moved.FindPrimitive(roof_id), ridge) < kKktTolerance);
 
   // Sideways the footprint would have to change: it follows the base, so not reachable.
-  summary = MoveVertex(project, {roof_id, ridge}, roof.mesh.vertex(ridge).position + Eigen::Vector3d(0.4, 0, 0), {}, &moved);
+  summary =
+      MoveVertex(project, {roof_id, ridge}, roof.mesh.vertex(ridge).position + Eigen::Vector3d(0.4, 0, 0), {}, &moved);
   INFO("roof sideways: " << summary.message);
   CHECK_FALSE(summary.ok);
   REQUIRE(!summary.limited_by.empty());
@@ -385,7 +387,8 @@ TEST_CASE("vertex move: a roof on a box changes its own height; the base carries
   const Primitive& roof_after = *moved.FindPrimitive(roof_id);
   for (VertexId v = 0; v < roof.mesh.VertexIdEnd(); ++v) {
     if (!roof.mesh.IsVertex(v)) continue;
-    const double error = (roof_after.mesh.vertex(v).position - (roof.mesh.vertex(v).position + Eigen::Vector3d(0, 0, 0.5))).norm();
+    const double error =
+        (roof_after.mesh.vertex(v).position - (roof.mesh.vertex(v).position + Eigen::Vector3d(0, 0, 0.5))).norm();
     CAPTURE(v);
     CAPTURE(error);
     CHECK(error < kReachTolerance);
@@ -397,7 +400,8 @@ TEST_CASE("primitive move: translation by a delta, locks and attachment refuse")
   Id box_id = kNoId, roof_id = kNoId;
   std::string message;
   REQUIRE(AddPrimitiveToProject(&project, MakeBox(kNoId, Eigen::Vector3d(4.0, 3.0, 2.5)), "box", &box_id, &message));
-  REQUIRE(AddPrimitiveToProject(&project, MakeWedge(kNoId, Eigen::Vector3d(1.0, 1.0, 1.2)), "roof", &roof_id, &message));
+  REQUIRE(
+      AddPrimitiveToProject(&project, MakeWedge(kNoId, Eigen::Vector3d(1.0, 1.0, 1.2)), "roof", &roof_id, &message));
   project.FindPrimitive(roof_id)->attached_to = box_id;
   RefreshAllPrimitives(&project);
   Project moved;

@@ -43,7 +43,8 @@ void DrawDashed(ImDrawList* draw_list, const Eigen::Vector2d& p0, const Eigen::V
 }
 
 Eigen::Vector2d Screen(const ViewTransform& view, double u, double v) {
-  return Eigen::Vector2d(view.origin.x + static_cast<double>(view.zoom) * u, view.origin.y + static_cast<double>(view.zoom) * v);
+  return Eigen::Vector2d(view.origin.x + static_cast<double>(view.zoom) * u,
+                         view.origin.y + static_cast<double>(view.zoom) * v);
 }
 
 // The user's horizon: dashed across the view, its two points as rings, labelled at the first.
@@ -122,9 +123,8 @@ void DrawEpipolarLines(ImDrawList* draw_list, const AppState& state, const Image
 
 }  // namespace
 
-void DrawCalibrationOverlay(ImDrawList* draw_list, const AppState& state, const Image& image,
-                            const ViewTransform& view, ImVec2 clip_min, ImVec2 clip_max,
-                            const Eigen::Vector2d* /*mouse_uv*/) {
+void DrawCalibrationOverlay(ImDrawList* draw_list, const AppState& state, const Image& image, const ViewTransform& view,
+                            ImVec2 clip_min, ImVec2 clip_max, const Eigen::Vector2d* /*mouse_uv*/) {
   draw_list->PushClipRect(clip_min, clip_max, true);
   if (image.use_horizon) DrawGivenHorizon(draw_list, image, view, clip_min, clip_max);
   DrawOutliers(draw_list, state, image, view);

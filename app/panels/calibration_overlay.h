@@ -14,8 +14,7 @@ namespace facet::app {
 
 // Draws over `image` in the screen rectangle [clip_min, clip_max], after the model overlays.
 // `mouse_uv` is the cursor in the image's pixels when it is over the view (else null).
-void DrawCalibrationOverlay(ImDrawList* draw_list, const AppState& state, const Image& image,
-                            const ViewTransform& view, ImVec2 clip_min, ImVec2 clip_max,
-                            const Eigen::Vector2d* mouse_uv);
+void DrawCalibrationOverlay(ImDrawList* draw_list, const AppState& state, const Image& image, const ViewTransform& view,
+                            ImVec2 clip_min, ImVec2 clip_max, const Eigen::Vector2d* mouse_uv);
 
 }  // namespace facet::app

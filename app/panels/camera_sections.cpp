@@ -3,8 +3,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <functional>
 #include <filesystem>
+#include <functional>
 #include <sstream>
 #include <vector>
 
@@ -42,7 +42,7 @@ Eigen::Vector4d DefaultHorizon(const AppState& state, const Image& image) {
   const Eigen::Vector3d& vx = cal->second.vanishing_points[0];
   const Eigen::Vector3d& vy = cal->second.vanishing_points[1];
   if (vx.squaredNorm() == 0.0 || vy.squaredNorm() == 0.0) return level;
-  const Eigen::Vector3d line = vx.cross(vy);  // a u + b v + c = 0
+  const Eigen::Vector3d line = vx.cross(vy);                            // a u + b v + c = 0
   if (std::abs(line.y()) < 1e-9 * line.head<2>().norm()) return level;  // vertical: not a horizon
   auto v_at = [&](double u) { return -(line.x() * u + line.z()) / line.y(); };
   return Eigen::Vector4d(0.0, v_at(0.0), w, v_at(w));
@@ -55,7 +55,8 @@ void SeedFocalMode(FocalMode mode, Image* image) {
   if (mode == FocalMode::kFixed && !(image->fixed_focal_px > 0.0)) image->fixed_focal_px = f;
   if (mode == FocalMode::kPrior && !(image->focal_prior_px > 0.0)) image->focal_prior_px = f;
   // 10 %: a guess, wider than an EXIF prior's few percent (app/state/calgui_exif_prior.h).
-  if (mode == FocalMode::kPrior && !(image->focal_prior_std_px > 0.0)) image->focal_prior_std_px = 0.1 * image->focal_prior_px;
+  if (mode == FocalMode::kPrior && !(image->focal_prior_std_px > 0.0))
+    image->focal_prior_std_px = 0.1 * image->focal_prior_px;
 }
 
 void SeedPrincipalPointMode(PrincipalPointMode mode, Image* image) {
@@ -129,20 +130,23 @@ void DrawCalibrationControls(AppState* state, const Image& image, ExifFeedback* 
   }
   RecordItem(state, "calibration.focal_mode");
   if (ImGui::IsItemHovered()) {
-    ImGui::SetTooltip("Solve: from the vanishing points. Known focal: a calibrated lens.\n"
-                      "Prior: solved, pulled towards a value +- std (e.g. from EXIF).");
+    ImGui::SetTooltip(
+        "Solve: from the vanishing points. Known focal: a calibrated lens.\n"
+        "Prior: solved, pulled towards a value +- std (e.g. from EXIF).");
   }
   ImGui::SameLine();
   if (ImGui::Button("EXIF")) FromExif(state, image, exif_feedback);
   RecordItem(state, "calibration.from_exif");
   if (ImGui::IsItemHovered()) {
-    ImGui::SetTooltip("From EXIF: focal prior from the photo's 35 mm-equivalent focal length,\n"
-                      "+- ~3 %% (the spread between the makers' equivalence conventions)");
+    ImGui::SetTooltip(
+        "From EXIF: focal prior from the photo's 35 mm-equivalent focal length,\n"
+        "+- ~3 %% (the spread between the makers' equivalence conventions)");
   }
   if (image.focal_mode == FocalMode::kFixed) {
     double f = image.fixed_focal_px;
     ImGui::SetNextItemWidth(full);
-    const bool changed = ImGui::DragScalar("##focal_fixed", ImGuiDataType_Double, &f, 1.0f, nullptr, nullptr, "%.1f px");
+    const bool changed =
+        ImGui::DragScalar("##focal_fixed", ImGuiDataType_Double, &f, 1.0f, nullptr, nullptr, "%.1f px");
     RecordItem(state, "calibration.focal_fixed");
     TrackImageEdit(state, id, "Known focal", changed && f > 0.0, [&](Image* im) { im->fixed_focal_px = f; });
   } else if (image.focal_mode == FocalMode::kPrior) {
@@ -171,24 +175,28 @@ void DrawCalibrationControls(AppState* state, const Image& image, ExifFeedback* 
   }
   RecordItem(state, "calibration.use_horizon");
   if (ImGui::IsItemHovered()) {
-    ImGui::SetTooltip("The image of the horizontal plane at infinity: with a known focal\n"
-                      "length, one horizontal line family is then enough");
+    ImGui::SetTooltip(
+        "The image of the horizontal plane at infinity: with a known focal\n"
+        "length, one horizontal line family is then enough");
   }
   if (image.use_horizon) {
     double h[4] = {image.horizon_px[0], image.horizon_px[1], image.horizon_px[2], image.horizon_px[3]};
     ImGui::SetNextItemWidth(full);
     const bool changed = DragDoubles("##horizon_a", h, 2, 0.5f, "%.1f");
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("First horizon point u, v (px)");
-    TrackImageEdit(state, id, "Horizon", changed, [&](Image* im) { im->horizon_px.head<2>() = Eigen::Vector2d(h[0], h[1]); });
+    TrackImageEdit(state, id, "Horizon", changed,
+                   [&](Image* im) { im->horizon_px.head<2>() = Eigen::Vector2d(h[0], h[1]); });
     ImGui::SetNextItemWidth(full);
     const bool changed_b = DragDoubles("##horizon_b", h + 2, 2, 0.5f, "%.1f");
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Second horizon point u, v (px)");
-    TrackImageEdit(state, id, "Horizon", changed_b, [&](Image* im) { im->horizon_px.tail<2>() = Eigen::Vector2d(h[2], h[3]); });
+    TrackImageEdit(state, id, "Horizon", changed_b,
+                   [&](Image* im) { im->horizon_px.tail<2>() = Eigen::Vector2d(h[2], h[3]); });
     double row = 0.5 * (h[1] + h[3]);
     ImGui::TextColored(kDimText, "Level at row");
     ImGui::SameLine(ImGui::GetFontSize() * 7.5f);
     ImGui::SetNextItemWidth(full);
-    const bool level = ImGui::DragScalar("##horizon_level", ImGuiDataType_Double, &row, 0.5f, nullptr, nullptr, "%.1f px");
+    const bool level =
+        ImGui::DragScalar("##horizon_level", ImGuiDataType_Double, &row, 0.5f, nullptr, nullptr, "%.1f px");
     RecordItem(state, "calibration.horizon_level");
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Sets a level horizon across the image at this row");
     TrackImageEdit(state, id, "Level horizon", level, [&](Image* im) { im->horizon_px = LevelHorizon(*im, row); });
@@ -249,7 +257,8 @@ void DrawCalibrationResult(AppState* state, const Image& image) {
   ImGui::TextColored(c.IsUsable() ? kGoodText : kErrorText, "%s", c.IsUsable() ? "Calibrated" : "Failed");
   for (int a = 0; a < 3; ++a) {
     ImGui::SameLine();
-    ImGui::TextColored(AxisColor(static_cast<Axis>(a)), "%s %d", AxisName(static_cast<Axis>(a)), c.segments_per_axis[a]);
+    ImGui::TextColored(AxisColor(static_cast<Axis>(a)), "%s %d", AxisName(static_cast<Axis>(a)),
+                       c.segments_per_axis[a]);
   }
   if (c.IsUsable()) {
     const Camera& cam = image.camera;
@@ -262,7 +271,8 @@ void DrawCalibrationResult(AppState* state, const Image& image) {
     const Eigen::Vector2d& pp = c.principal_point_px;
     if (image.principal_point_mode == PrincipalPointMode::kSolve && c.principal_point_std_px.squaredNorm() > 0.0) {
       LabelValue("Principal pt", "%.1f, %.1f px", pp.x(), pp.y());
-      LabelValue("", "+- %s, %s px", Std(c.principal_point_std_px.x()).c_str(), Std(c.principal_point_std_px.y()).c_str());
+      LabelValue("", "+- %s, %s px", Std(c.principal_point_std_px.x()).c_str(),
+                 Std(c.principal_point_std_px.y()).c_str());
     } else {
       LabelValue("Principal pt", "%.1f, %.1f px", pp.x(), pp.y());
     }
@@ -270,12 +280,14 @@ void DrawCalibrationResult(AppState* state, const Image& image) {
     if (std::abs(cam.focal_px - c.focal_px) > 1e-6 * c.focal_px) LabelValue("Joint focal", "%.1f px", cam.focal_px);
     if (cam.k1 != 0.0 || cam.k2 != 0.0) LabelValue("k1, k2", "%.4g, %.4g", cam.k1, cam.k2);
     LabelValue("Sigma", "%s px (%d dof)", Std(c.residual_sigma_px, "%.3f").c_str(), c.degrees_of_freedom);
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Noise level the segments show: RMS residual over the degrees of freedom");
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("Noise level the segments show: RMS residual over the degrees of freedom");
     const int n = static_cast<int>(c.segment_is_outlier.size());
     LabelValue("Outliers", "%d of %d%s", static_cast<int>(c.outlier_segments.size()), n,
                c.outlier_segments.empty() ? "" : " (marked)");
     if (ImGui::IsItemHovered()) {
-      ImGui::SetTooltip("Segments above %.2f px (crossed out in red in the image), fitted without", c.outlier_threshold_px);
+      ImGui::SetTooltip("Segments above %.2f px (crossed out in red in the image), fitted without",
+                        c.outlier_threshold_px);
     }
     if (image.use_horizon) LabelValue("Horizon", "%.2f px off", c.horizon_residual_px);
   }
@@ -293,13 +305,14 @@ void DrawCalibrationResult(AppState* state, const Image& image) {
       ImGui::SameLine(ImGui::GetFontSize() * 7.5f);
       ImGui::Text("rms %.2f px%s", c.vanishing_point_rms_px[a], c.vanishing_point_at_infinity[a] ? ", at inf." : "");
       if (ImGui::IsItemHovered()) {
-        ImGui::SetTooltip("RMS residual of the family's segments; %s\nDirection +- %.2f deg; segments spread over %.1f deg",
-                          c.vanishing_point_at_infinity[a] ? "vanishing point at infinity (parallel in the image)"
-                                                            : (std::to_string(static_cast<long>(std::lround(
-                                                                   c.vanishing_point_to_principal_point_px[a]))) +
-                                                               " px from the principal point")
-                                                                  .c_str(),
-                          c.vanishing_direction_std_deg[a], c.family_angle_spread_deg[a]);
+        ImGui::SetTooltip(
+            "RMS residual of the family's segments; %s\nDirection +- %.2f deg; segments spread over %.1f deg",
+            c.vanishing_point_at_infinity[a]
+                ? "vanishing point at infinity (parallel in the image)"
+                : (std::to_string(static_cast<long>(std::lround(c.vanishing_point_to_principal_point_px[a]))) +
+                   " px from the principal point")
+                      .c_str(),
+            c.vanishing_direction_std_deg[a], c.family_angle_spread_deg[a]);
       }
     }
     LabelValue("Min spread", "%.1f deg", c.min_family_angle_spread_deg);
@@ -312,7 +325,8 @@ void DrawCalibrationResult(AppState* state, const Image& image) {
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Near 0, a vanishing point says nothing about the focal length");
     if (c.vanishing_point_triangle_max_angle_deg > 0.0) {
       LabelValue("VP triangle", "%.1f deg", c.vanishing_point_triangle_max_angle_deg);
-      if (ImGui::IsItemHovered()) ImGui::SetTooltip("Largest angle of the vanishing-point triangle (near 90: poorly fixed)");
+      if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("Largest angle of the vanishing-point triangle (near 90: poorly fixed)");
     }
     if (c.closed_form_focal_px > 0.0) LabelValue("Closed form", "f %.1f px", c.closed_form_focal_px);
     if (c.max_orthogonality_error_deg > 0.0) LabelValue("Orth. error", "%.2f deg", c.max_orthogonality_error_deg);
@@ -447,8 +461,7 @@ bool ParseOnOff(const std::vector<std::string>& words, bool* on) {
 
 }  // namespace
 
-bool RunCalibrationCommand(AppState* state, ExifFeedback* exif_feedback, const std::string& arg,
-                           std::string* error) {
+bool RunCalibrationCommand(AppState* state, ExifFeedback* exif_feedback, const std::string& arg, std::string* error) {
   std::vector<std::string> w;
   std::istringstream in(arg);
   for (std::string word; in >> word;) w.push_back(word);
@@ -551,9 +564,8 @@ bool RunCalibrationCommand(AppState* state, ExifFeedback* exif_feedback, const s
     if (!ParseOnOff(w, &on)) return fail("on or off");
     const bool focal = key == "focal-lock";
     const std::string what = focal ? "focal" : "principal point";
-    CommitImageEdit(state, image.id, (on ? "Lock " : "Unlock ") + what, [&](Image* im) {
-      (focal ? im->focal_locked : im->principal_point_locked) = on;
-    });
+    CommitImageEdit(state, image.id, (on ? "Lock " : "Unlock ") + what,
+                    [&](Image* im) { (focal ? im->focal_locked : im->principal_point_locked) = on; });
     return true;
   }
   *error = "calibration: unknown key '" + key +

@@ -31,7 +31,6 @@ void DrawSolveSection(AppState* state);
 // documents the keys). Each command is one undoable edit; false with a message for bad
 // arguments or, for `focal exif`, a photo without an EXIF focal length (*exif_feedback then
 // says why, as the button does).
-bool RunCalibrationCommand(AppState* state, ExifFeedback* exif_feedback, const std::string& arg,
-                           std::string* error);
+bool RunCalibrationCommand(AppState* state, ExifFeedback* exif_feedback, const std::string& arg, std::string* error);
 
 }  // namespace facet::app

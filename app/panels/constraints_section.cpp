@@ -104,7 +104,8 @@ void DrawSelectionBuilder(AppState* state) {
       ConstrainVertexSetEdit(state, ConstraintKind::kCoplanar, selected, two_faces ? "Coplanar faces" : "");
     }
     RecordItem(state, "constraint.coplanar");
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Keep the selected vertices (and those of selected edges and faces) on one plane");
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("Keep the selected vertices (and those of selected edges and faces) on one plane");
   }
   if (faces == 0 && distinct >= 3) {
     next();
@@ -128,7 +129,8 @@ void DrawSelectionBuilder(AppState* state) {
     same_line = false;
     for (const auto& [kind, key] : pairs) {
       next();
-      if (ImGui::Button(ConstraintEditLabel(kind).c_str())) ConstrainEdgePairEdit(state, kind, selected[0], selected[1]);
+      if (ImGui::Button(ConstraintEditLabel(kind).c_str()))
+        ConstrainEdgePairEdit(state, kind, selected[0], selected[1]);
       RecordItem(state, std::string("constraint.") + key);
     }
   }
@@ -199,7 +201,8 @@ void DrawElementSection(AppState* state, const Primitive& primitive, const Eleme
     const MeshVertex& v = mesh.vertex(element.element);
     LabelValue("Position", "%.3f, %.3f, %.3f", v.position.x(), v.position.y(), v.position.z());
     LabelValue("Defined", "%s", v.local.on_edge ? "on an edge (split)" : "primitive corner");
-    if (v.local.free) LabelValue("Offset", "%.3f, %.3f, %.3f", v.local.offset.x(), v.local.offset.y(), v.local.offset.z());
+    if (v.local.free)
+      LabelValue("Offset", "%.3f, %.3f, %.3f", v.local.offset.x(), v.local.offset.y(), v.local.offset.z());
     bool free = v.local.free;
     char label[64];
     std::snprintf(label, sizeof(label), "Free vertex (%s)", kFreeVertexShortcut);
@@ -213,7 +216,8 @@ void DrawElementSection(AppState* state, const Primitive& primitive, const Eleme
     RecordItem(state, "constraint.fix");
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("A fixed-point constraint at the vertex's current position");
     int pins = 0;
-    for (const Pin& pin : state->document.project().pins) pins += pin.vertex == VertexRef{primitive.id, element.element};
+    for (const Pin& pin : state->document.project().pins)
+      pins += pin.vertex == VertexRef{primitive.id, element.element};
     LabelValue("Pins", "%d", pins);
   } else if (element.kind == ElementKind::kEdge) {
     const VertexId a = mesh.Origin(2 * element.element), b = mesh.Dest(2 * element.element);

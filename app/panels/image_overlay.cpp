@@ -24,8 +24,8 @@ constexpr ImU32 kSelectedElementColor = IM_COL32(255, 140, 30, 255);
 constexpr ImU32 kSelectedFaceColor = IM_COL32(255, 140, 30, 70);
 constexpr ImU32 kHoveredFaceColor = IM_COL32(255, 255, 255, 45);
 constexpr ImU32 kFreeVertexColor = IM_COL32(80, 230, 255, 255);
-constexpr ImU32 kLinePinColor = IM_COL32(0, 255, 200, 255);       // a line pin's photo line
-constexpr ImU32 kLinePinLineColor = IM_COL32(0, 255, 200, 110);   // ... extended across the view
+constexpr ImU32 kLinePinColor = IM_COL32(0, 255, 200, 255);      // a line pin's photo line
+constexpr ImU32 kLinePinLineColor = IM_COL32(0, 255, 200, 110);  // ... extended across the view
 constexpr ImU32 kLinePinResidualColor = IM_COL32(255, 70, 200, 255);
 
 Eigen::Vector2d ToScreenD(const ViewTransform& view, const Eigen::Vector2d& uv_px) {
@@ -44,8 +44,8 @@ struct ScreenRect {
 };
 
 // A screen-space line (double) clipped and drawn.
-void DrawScreenLine(ImDrawList* draw_list, Eigen::Vector2d a, Eigen::Vector2d b, const ScreenRect& rect,
-                    ImU32 color, float thickness_px) {
+void DrawScreenLine(ImDrawList* draw_list, Eigen::Vector2d a, Eigen::Vector2d b, const ScreenRect& rect, ImU32 color,
+                    float thickness_px) {
   const Eigen::Vector2d margin(kClipMarginPx, kClipMarginPx);
   if (!ClipSegmentToRect(&a, &b, rect.min - margin, rect.max + margin)) return;
   draw_list->AddLine(ToImVec(a), ToImVec(b), color, thickness_px);
@@ -125,7 +125,6 @@ void DrawVanishingPoint(ImDrawList* draw_list, Axis axis, const Eigen::Vector3d&
     DrawShadowedText(draw_list, ToImVec(text_pos), color, label.c_str());
   }
 }
-
 
 // An edge of camera-frame points p-q, cut at the near depth, in screen px; false when it is
 // wholly behind the camera.
@@ -255,7 +254,8 @@ void DrawModelVertices(ImDrawList* draw_list, const OverlayInput& input, const V
         draw_list->AddCircleFilled(c, 3.0f, kModelEdgeColor);
       }
       if (chosen) draw_list->AddCircleFilled(c, 3.0f, kSelectedElementColor);
-      if (hot || chosen) draw_list->AddCircle(c, chosen ? 9.0f : 7.0f, hot ? kHighlightColor : kSelectedElementColor, 0, 2.0f);
+      if (hot || chosen)
+        draw_list->AddCircle(c, chosen ? 9.0f : 7.0f, hot ? kHighlightColor : kSelectedElementColor, 0, 2.0f);
     }
   }
 }
@@ -368,7 +368,8 @@ void DrawLinePinPreview(ImDrawList* draw_list, const OverlayInput& input, const 
       if (input.image->camera.CamFromWorld(p).z() <= kNearDepth) continue;
       const Eigen::Vector2d uv = input.image->camera.Project(p);
       const Eigen::Vector2d foot = uv - (uv - a_px).dot(n) * n;
-      DrawDashedScreenLine(draw_list, ToScreenD(view, uv), ToScreenD(view, foot), rect, kLinePinResidualColor, 1.5f, 4.0);
+      DrawDashedScreenLine(draw_list, ToScreenD(view, uv), ToScreenD(view, foot), rect, kLinePinResidualColor, 1.5f,
+                           4.0);
     }
   }
   draw_list->PopClipRect();
@@ -421,8 +422,8 @@ void DrawImageLine(ImDrawList* draw_list, const ViewTransform& view, const Eigen
   DrawScreenLine(draw_list, ToScreenD(view, a_px), ToScreenD(view, b_px), rect, color, thickness_px);
 }
 
-void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view,
-                       ImVec2 clip_min, ImVec2 clip_max, const OverlayOptions& options) {
+void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view, ImVec2 clip_min,
+                       ImVec2 clip_max, const OverlayOptions& options) {
   if (input.project == nullptr || input.image == nullptr) return;
   const Project& project = *input.project;
   const Image& image = *input.image;
@@ -483,8 +484,8 @@ void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const V
       for (int end = 0; end < 2; ++end) {
         const Eigen::Vector2d& p = end == 0 ? a : b;
         if (!rect.Contains(p, kClipMarginPx)) continue;
-        const bool hot = (hovered && input.hover.segment_endpoint == end) ||
-                         (selected && input.selection.segment_endpoint == end);
+        const bool hot =
+            (hovered && input.hover.segment_endpoint == end) || (selected && input.selection.segment_endpoint == end);
         const float r = hot ? 5.0f : 3.0f;
         const ImVec2 c = ToImVec(p);
         draw_list->AddRectFilled(ImVec2(c.x - r - 1, c.y - r - 1), ImVec2(c.x + r + 1, c.y + r + 1), kShadowColor);

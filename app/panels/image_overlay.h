@@ -9,8 +9,8 @@
 #include <array>
 #include <vector>
 
-#include <Eigen/Core>
 #include <imgui.h>
+#include <Eigen/Core>
 
 #include "app/platform/image_tiles.h"
 #include "app/state/app_state.h"
@@ -41,7 +41,7 @@ struct OverlayOptions {
   bool show_vp_lines = false;  // faint lines from each segment towards its vanishing point
   bool show_model = true;
   bool show_pins = true;
-  bool show_labels = true;     // pin numbers, VP names
+  bool show_labels = true;  // pin numbers, VP names
 };
 
 // What is under the cursor, highlighted in addition to the state's selection.
@@ -49,18 +49,18 @@ struct OverlayHover {
   Id segment_id = kNoId;
   int segment_endpoint = -1;  // 0 = a, 1 = b, -1 = the segment itself
   Id pin_id = kNoId;
-  Id line_pin_id = kNoId;     // a kEdgeOnImageLine constraint of this image
+  Id line_pin_id = kNoId;      // a kEdgeOnImageLine constraint of this image
   int line_pin_endpoint = -1;  // 0 = line_a_px, 1 = line_b_px, -1 = the line itself
-  ElementRef element;  // a vertex, edge or face of the model
-  double edge_t = 0.5;  // for an edge: where E_split would split
+  ElementRef element;          // a vertex, edge or face of the model
+  double edge_t = 0.5;         // for an edge: where E_split would split
 };
 
 struct OverlayInput {
   const Project* project = nullptr;
   const Image* image = nullptr;
-  const VpCalibrationSummary* calibration = nullptr;  // may be null
+  const VpCalibrationSummary* calibration = nullptr;       // may be null
   const std::vector<ProjectedPrimitive>* model = nullptr;  // from ProjectModel
-  ElementRef other_hover;  // hovered in the 3D panel: highlighted here too
+  ElementRef other_hover;                                  // hovered in the 3D panel: highlighted here too
   Tool tool = Tool::kSelect;
   Selection selection;
   Id selected_line_pin = kNoId;  // drawn highlighted (with its edge, which the selection holds)
@@ -68,8 +68,8 @@ struct OverlayInput {
 };
 
 // Draws every overlay of input.image into the screen rectangle [clip_min, clip_max].
-void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view,
-                       ImVec2 clip_min, ImVec2 clip_max, const OverlayOptions& options);
+void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view, ImVec2 clip_min,
+                       ImVec2 clip_max, const OverlayOptions& options);
 
 // A line between two image points, clipped to the rectangle (for previews).
 void DrawImageLine(ImDrawList* draw_list, const ViewTransform& view, const Eigen::Vector2d& a_px,

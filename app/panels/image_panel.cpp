@@ -53,11 +53,11 @@ struct Interaction {
   DragKind kind = DragKind::kNone;
   int button = 0;
   Id image_id = kNoId;
-  bool began = false;        // BeginDrag was called (edit drags) / motion passed the threshold
+  bool began = false;           // BeginDrag was called (edit drags) / motion passed the threshold
   bool place_on_click = false;  // kPlacePin: a release without motion pins the vertex there
-  Id target_id = kNoId;      // segment or pin
+  Id target_id = kNoId;         // segment or pin
   int endpoint = -1;
-  VertexRef vertex;  // kPlacePin: the vertex being pinned
+  VertexRef vertex;          // kPlacePin: the vertex being pinned
   ElementRef press_element;  // kLinePin: the element under the press (a click selects it)
   double press_edge_t = 0.5;
   Id press_line_pin = kNoId;  // kLinePin: the line pin under the press (a click selects it too)
@@ -320,9 +320,11 @@ std::string DescribeHover(const AppState& state, const OverlayHover& hover) {
   if (const Constraint* c = hover.line_pin_id != kNoId ? project.FindConstraint(hover.line_pin_id) : nullptr) {
     const ElementRef edge = LinePinEdge(project, *c);
     const std::string what = edge.Empty() ? std::string("a deleted edge") : DescribeElement(project, edge);
-    const char* part = hover.line_pin_endpoint == 0 ? ", end a (drag to move)"
-                       : hover.line_pin_endpoint == 1 ? ", end b (drag to move)" : "";
-    std::snprintf(text, sizeof(text), "line pin %llu of %s%s", static_cast<unsigned long long>(c->id), what.c_str(), part);
+    const char* part = hover.line_pin_endpoint == 0   ? ", end a (drag to move)"
+                       : hover.line_pin_endpoint == 1 ? ", end b (drag to move)"
+                                                      : "";
+    std::snprintf(text, sizeof(text), "line pin %llu of %s%s", static_cast<unsigned long long>(c->id), what.c_str(),
+                  part);
     return text;
   }
   if (!hover.element.Empty()) {
@@ -365,9 +367,7 @@ void DeleteSelection(AppState* state, PanelState* panel) {
   }
 }
 
-Axis AxisOfTool(Tool tool) {
-  return tool == Tool::kLineY ? Axis::kY : tool == Tool::kLineZ ? Axis::kZ : Axis::kX;
-}
+Axis AxisOfTool(Tool tool) { return tool == Tool::kLineY ? Axis::kY : tool == Tool::kLineZ ? Axis::kZ : Axis::kX; }
 
 bool IsLineTool(Tool tool) { return tool == Tool::kLineX || tool == Tool::kLineY || tool == Tool::kLineZ; }
 
@@ -391,15 +391,12 @@ void UpdateEditDrag(AppState* state, Interaction* drag, const Eigen::Vector2d& m
     case DragKind::kMovePin:
       if (Pin* p = edited.FindPin(drag->target_id)) p->uv_px = target;
       break;
-    case DragKind::kPlacePin:
-      state->selection.pin_id = PinVertex(&edited, drag->image_id, drag->vertex, target);
-      break;
+    case DragKind::kPlacePin: state->selection.pin_id = PinVertex(&edited, drag->image_id, drag->vertex, target); break;
     case DragKind::kMoveLinePinEnd:
       // Too close to the other end: the line keeps its last valid position.
       if (!MoveLinePinEnd(&edited, drag->target_id, drag->endpoint, target)) return;
       break;
-    default:
-      return;
+    default: return;
   }
   UpdateDrag(state, std::move(edited));
 }
@@ -436,8 +433,7 @@ void StartLeftPress(AppState* state, PanelState* panel, const Image& image, cons
     drag.axis = AxisOfTool(tool);
     return;
   }
-  if ((tool == Tool::kLinePin || tool == Tool::kSelect) && hover.line_pin_id != kNoId &&
-      hover.line_pin_endpoint >= 0) {
+  if ((tool == Tool::kLinePin || tool == Tool::kSelect) && hover.line_pin_id != kNoId && hover.line_pin_endpoint >= 0) {
     // An end handle: a drag moves that end (the model re-solves live), a click selects it.
     const Constraint* c = project.FindConstraint(hover.line_pin_id);
     SelectLinePin(state, hover.line_pin_id);
@@ -680,8 +676,7 @@ std::string ToolHint(const AppState& state) {
   switch (state.tool) {
     case Tool::kLineX:
     case Tool::kLineY:
-    case Tool::kLineZ:
-      return std::string("drag to draw a ") + AxisName(AxisOfTool(state.tool)) + " line";
+    case Tool::kLineZ: return std::string("drag to draw a ") + AxisName(AxisOfTool(state.tool)) + " line";
     case Tool::kPin:
       if (state.selection.element.kind == ElementKind::kVertex) {
         return "click to pin " + DescribeElement(state.document.project(), state.selection.element);
@@ -709,20 +704,19 @@ std::string ToolHint(const AppState& state) {
       return state.selection.element.kind == ElementKind::kFace
                  ? "type the distance in the tools panel, then Extrude (Enter)"
                  : "click a face to push or pull it";
-    default:
-      return "";
+    default: return "";
   }
 }
 
 // What one frame of the image view works with, filled step by step by DrawImageView.
 struct ViewFrame {
-  const TiledTexture* texture = nullptr;  // null while the photo is not loaded
-  int width_px = 1, height_px = 1;        // the image's size
+  const TiledTexture* texture = nullptr;                   // null while the photo is not loaded
+  int width_px = 1, height_px = 1;                         // the image's size
   ImVec2 rect_min{0, 0}, rect_max{0, 0}, rect_size{0, 0};  // the view's screen rectangle
   bool hovered = false;
-  bool keys_for_us = false;  // keyboard shortcuts act on this view
-  bool fine = false;         // fine pointing (Shift during a press)
-  double pointer_scale = 1.0;  // screen px per image px of the pointer's motion
+  bool keys_for_us = false;                            // keyboard shortcuts act on this view
+  bool fine = false;                                   // fine pointing (Shift during a press)
+  double pointer_scale = 1.0;                          // screen px per image px of the pointer's motion
   Eigen::Vector2d mouse_uv = Eigen::Vector2d::Zero();  // the pointer, image px
   ImVec2 pointer_screen{0, 0};
   OverlayHover hover;
@@ -740,9 +734,9 @@ ViewFrame LayOutView(PanelState* panel, ImageViewState* view, bool* fit_now, boo
   frame.rect_min = ImGui::GetCursorScreenPos();
   frame.rect_max = ImVec2(frame.rect_min.x + frame.rect_size.x, frame.rect_min.y + frame.rect_size.y);
 
-  ImGui::InvisibleButton("##image_view", frame.rect_size,
-                         ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight |
-                             ImGuiButtonFlags_MouseButtonMiddle);
+  ImGui::InvisibleButton(
+      "##image_view", frame.rect_size,
+      ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight | ImGuiButtonFlags_MouseButtonMiddle);
   ImGui::SetItemUsingMouseWheel();
   frame.hovered = ImGui::IsItemHovered();
   const bool focused = ImGui::IsWindowFocused(ImGuiFocusedFlags_RootAndChildWindows);
@@ -767,8 +761,8 @@ void FitAndZoomView(PanelState* panel, ImageViewState* view, const ViewFrame& fr
   }
   view->last_size = frame.rect_size;
   if (one_to_one) {
-    ZoomImageViewAbout(view, 1.0f,
-                       ImVec2(frame.rect_min.x + 0.5f * frame.rect_size.x, frame.rect_min.y + 0.5f * frame.rect_size.y));
+    ZoomImageViewAbout(
+        view, 1.0f, ImVec2(frame.rect_min.x + 0.5f * frame.rect_size.x, frame.rect_min.y + 0.5f * frame.rect_size.y));
   }
   if (!frame.hovered) return;
   const float wheel = io.KeyShift && io.MouseWheel == 0.0f ? io.MouseWheelH : io.MouseWheel;
@@ -796,10 +790,10 @@ void UpdatePointer(PanelState* panel, const ImageViewState& view, const ViewTran
   }
   panel->fine_active = frame->fine;
   frame->pointer_scale = view.zoom * (frame->fine ? panel->loupe_magnification : 1.0f);
-  frame->mouse_uv = frame->fine ? Eigen::Vector2d(panel->fine_anchor_uv + (ToEigen(io.MousePos) -
-                                                                          ToEigen(panel->fine_anchor_screen)) /
-                                                                             frame->pointer_scale)
-                                : MouseUv(view);
+  frame->mouse_uv =
+      frame->fine ? Eigen::Vector2d(panel->fine_anchor_uv +
+                                    (ToEigen(io.MousePos) - ToEigen(panel->fine_anchor_screen)) / frame->pointer_scale)
+                  : MouseUv(view);
   frame->pointer_screen = transform.ToScreen(frame->mouse_uv.x(), frame->mouse_uv.y());
   panel->last_pointer_uv = frame->mouse_uv;
   panel->last_mouse_screen = io.MousePos;
@@ -880,7 +874,7 @@ void HandleIdleKeys(AppState* state, PanelState* panel) {
     DeleteSelection(state, panel);
   }
   if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
-    state->selection.connect_from = {};  // forget V_connect's first vertex
+    state->selection.connect_from = {};                            // forget V_connect's first vertex
     if (state->tool == Tool::kPin) state->selection.element = {};  // and the vertex to pin
     // The multi-selection goes back to its main element; the builder's pending first edge
     // is forgotten.
@@ -981,7 +975,8 @@ void DrawViewContents(const AppState& state, const PanelState& panel, const Imag
 }
 
 // Step 9: the hover tooltip and the status line (pointer, zoom, hover, tool hint).
-void DrawViewStatus(const AppState& state, const PanelState& panel, const ImageViewState& view, const ViewFrame& frame) {
+void DrawViewStatus(const AppState& state, const PanelState& panel, const ImageViewState& view,
+                    const ViewFrame& frame) {
   ImGuiIO& io = ImGui::GetIO();
   if (frame.hovered && panel.interaction.kind == DragKind::kNone && !io.KeyShift) {
     const std::string hover_text = DescribeHover(state, frame.hover);

@@ -13,8 +13,8 @@ namespace facet::app {
 // Image-to-screen transform of the visible image view, for tests and the render report.
 struct ImageViewReport {
   Id image_id = kNoId;
-  float origin_x = 0, origin_y = 0;  // screen position of image pixel (0, 0)'s centre
-  float zoom = 1;                    // screen px per image px
+  float origin_x = 0, origin_y = 0;                      // screen position of image pixel (0, 0)'s centre
+  float zoom = 1;                                        // screen px per image px
   float rect_x = 0, rect_y = 0, rect_w = 0, rect_h = 0;  // the view's screen rectangle
 };
 

@@ -35,8 +35,8 @@ void ZoomImageViewAbout(ImageViewState* view, float new_zoom, ImVec2 anchor) {
 
 void DrawLoupe(ImDrawList* draw_list, const TiledTexture* texture, const OverlayInput& overlay,
                const OverlayOptions& overlay_options, const ImageViewState& view, float magnification,
-               const Eigen::Vector2d& uv, const std::optional<LoupePreview>& preview, ImVec2 rect_min,
-               ImVec2 rect_max, int width_px, int height_px) {
+               const Eigen::Vector2d& uv, const std::optional<LoupePreview>& preview, ImVec2 rect_min, ImVec2 rect_max,
+               int width_px, int height_px) {
   const ImVec2 pointer = TransformOf(view).ToScreen(uv.x(), uv.y());
   const float size = std::min({kLoupeSizePx, rect_max.x - rect_min.x - 4.0f, rect_max.y - rect_min.y - 4.0f});
   if (size < 40.0f) return;
@@ -51,7 +51,8 @@ void DrawLoupe(ImDrawList* draw_list, const TiledTexture* texture, const Overlay
 
   ViewTransform loupe;
   loupe.zoom = std::min(view.zoom * magnification, kMaxImageZoom * 4.0f);
-  loupe.origin = ImVec2(static_cast<float>(center.x - loupe.zoom * uv.x()), static_cast<float>(center.y - loupe.zoom * uv.y()));
+  loupe.origin =
+      ImVec2(static_cast<float>(center.x - loupe.zoom * uv.x()), static_cast<float>(center.y - loupe.zoom * uv.y()));
 
   draw_list->AddRectFilled(ImVec2(p_min.x - 3, p_min.y - 3), ImVec2(p_max.x + 3, p_max.y + 3), IM_COL32(0, 0, 0, 220));
   draw_list->AddRectFilled(p_min, p_max, kImageViewBackground);

@@ -6,8 +6,8 @@
 
 #include <optional>
 
-#include <Eigen/Core>
 #include <imgui.h>
+#include <Eigen/Core>
 
 #include "app/panels/image_overlay.h"
 #include "app/platform/image_tiles.h"

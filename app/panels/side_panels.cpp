@@ -45,8 +45,7 @@ constexpr ToolButton kToolButtons[] = {
      "V_delete: click on a vertex made by a split to remove it."},
     {Tool::kConnectVertices, "Connect vertices", "C", GLFW_KEY_C,
      "V_connect: click two vertices of one face to split the face by a new edge."},
-    {Tool::kDeleteEdge, "Delete edge", "R", GLFW_KEY_R,
-     "E_delete: click on an edge between two faces to merge them."},
+    {Tool::kDeleteEdge, "Delete edge", "R", GLFW_KEY_R, "E_delete: click on an edge between two faces to merge them."},
     {Tool::kPushPull, "Push/pull", "U", GLFW_KEY_U,
      "Push/pull: select a face, type a distance (negative pushes in) and press Enter or Extrude."},
     {Tool::kMove, "Move", "M", GLFW_KEY_M,
@@ -87,7 +86,8 @@ void DrawPrimitiveSection(AppState* state, const Primitive primitive) {
     if (ImGui::Checkbox("##lock", &locked)) {
       Project edited = state->document.project();
       edited.FindPrimitive(id)->param_locked[i] = locked;
-      CommitEdit(state, std::string(locked ? "Keep " : "Free ") + ShapeParamName(primitive.shape.kind, i), std::move(edited));
+      CommitEdit(state, std::string(locked ? "Keep " : "Free ") + ShapeParamName(primitive.shape.kind, i),
+                 std::move(edited));
     }
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Keep while solving: a kept dimension is a known length (the scale)");
     ImGui::SameLine();
@@ -174,10 +174,12 @@ void DrawSegmentSection(AppState* state, const Segment segment) {
   }
   double a[2] = {segment.a_px.x(), segment.a_px.y()};
   const bool moved_a = DragDoubles("Start", a, 2, 0.25f, "%.2f");
-  TrackEdit(state, "Move line end", moved_a, [&](Project* p) { p->FindSegment(seg_id)->a_px = Eigen::Vector2d(a[0], a[1]); });
+  TrackEdit(state, "Move line end", moved_a,
+            [&](Project* p) { p->FindSegment(seg_id)->a_px = Eigen::Vector2d(a[0], a[1]); });
   double b[2] = {segment.b_px.x(), segment.b_px.y()};
   const bool moved_b = DragDoubles("End", b, 2, 0.25f, "%.2f");
-  TrackEdit(state, "Move line end", moved_b, [&](Project* p) { p->FindSegment(seg_id)->b_px = Eigen::Vector2d(b[0], b[1]); });
+  TrackEdit(state, "Move line end", moved_b,
+            [&](Project* p) { p->FindSegment(seg_id)->b_px = Eigen::Vector2d(b[0], b[1]); });
   ImGui::PopID();
   LabelValue("Length", "%.1f px", (segment.b_px - segment.a_px).norm());
   // Calibration residuals follow the order of the image's segments in the project.
@@ -248,7 +250,8 @@ void DrawPushPullOptions(AppState* state, float width) {
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Distance along the face's normal, project units (negative: in)");
   const bool clicked = ImGui::Button("Extrude##push_pull", ImVec2(width - 8.0f, 0.0f));
   RecordItem(state, "tool.push_pull_extrude");
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Extrude %s (Enter in the field)", DescribeElement(project, face).c_str());
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("Extrude %s (Enter in the field)", DescribeElement(project, face).c_str());
   if (entered || clicked) {
     const Id primitive_id = face.primitive_id;
     PushPullFaceEdit(state, primitive_id, face.element, state->push_pull_distance);
@@ -257,7 +260,6 @@ void DrawPushPullOptions(AppState* state, float width) {
 }
 
 }  // namespace
-
 
 void HandleToolShortcuts(AppState* state) {
   const ImGuiIO& io = ImGui::GetIO();

@@ -13,9 +13,8 @@
 namespace facet::app {
 
 // The kinds the tools panel and the Edit menu offer to add, in menu order.
-constexpr PrimitiveKind kPrimitiveKinds[] = {PrimitiveKind::kBox,     PrimitiveKind::kWedge,
-                                             PrimitiveKind::kPrism,   PrimitiveKind::kPyramid,
-                                             PrimitiveKind::kCylinder, PrimitiveKind::kPlane};
+constexpr PrimitiveKind kPrimitiveKinds[] = {PrimitiveKind::kBox,     PrimitiveKind::kWedge,    PrimitiveKind::kPrism,
+                                             PrimitiveKind::kPyramid, PrimitiveKind::kCylinder, PrimitiveKind::kPlane};
 
 // Tool buttons with their shortcuts, the kind to add, the selection actions and Solve.
 void DrawToolsPanel(AppState* state);
@@ -31,7 +30,6 @@ void DrawPropertiesPanel(AppState* state, PropertiesPanelState* panel);
 void DrawHistoryPanel(AppState* state);
 // The log, coloured by level.
 void DrawLogPanel(AppState* state);
-
 
 // Tool shortcuts (V, X, Y, Z, P, B, E, D, C, R) and the selection actions (T: free vertex,
 // K: keep face planar) when no text field is active and no modifier is down.

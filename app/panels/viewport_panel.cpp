@@ -6,9 +6,9 @@
 
 #include "app/platform/gl_util.h"  // epoxy first
 
+#include <imgui.h>
 #include <glm/glm.hpp>
 #include <glm/gtc/type_ptr.hpp>
-#include <imgui.h>
 
 #include <algorithm>
 #include <array>
@@ -141,10 +141,10 @@ struct GlResources {
 
 // Scene measures that size the grid, the frustums and the framing.
 struct SceneMeasure {
-  SceneBounds bounds;             // primitives and camera centres
-  SceneBounds frame_bounds;       // what Frame shows: the primitives (everything when none)
-  double size = 1.0;              // diagonal of the primitives (or of everything when none)
-  double frustum_depth = 0.3;     // world units from apex to image plane (at most)
+  SceneBounds bounds;          // primitives and camera centres
+  SceneBounds frame_bounds;    // what Frame shows: the primitives (everything when none)
+  double size = 1.0;           // diagonal of the primitives (or of everything when none)
+  double frustum_depth = 0.3;  // world units from apex to image plane (at most)
   double grid_minor = 0.1, grid_major = 1.0, grid_half_extent = 5.0;
   Eigen::Vector3d grid_center = Eigen::Vector3d::Zero();
 };
@@ -182,10 +182,7 @@ PanelState& Panel(ViewportPanelState* owner) {
   return *owner->impl;
 }
 
-ImTextureID ToImTexture(GLuint texture) {
-  return reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(texture));
-}
-
+ImTextureID ToImTexture(GLuint texture) { return reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(texture)); }
 
 // Uploads a double matrix as GL's float mat4 (column-major, as GLM stores it).
 void SetMatrix(GLint location, const glm::dmat4& m) {
@@ -209,27 +206,35 @@ bool BuildProgram(const char* vs, const char* fs, const char* name, Program* pro
 
 void SetupLineAttributes() {
   glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(LineVertex), reinterpret_cast<void*>(offsetof(LineVertex, position)));
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(LineVertex),
+                        reinterpret_cast<void*>(offsetof(LineVertex, position)));
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(LineVertex), reinterpret_cast<void*>(offsetof(LineVertex, rgba)));
+  glVertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(LineVertex),
+                        reinterpret_cast<void*>(offsetof(LineVertex, rgba)));
 }
 
 void SetupPhotoAttributes() {
   glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(PhotoVertex), reinterpret_cast<void*>(offsetof(PhotoVertex, position)));
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(PhotoVertex),
+                        reinterpret_cast<void*>(offsetof(PhotoVertex, position)));
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, sizeof(PhotoVertex), reinterpret_cast<void*>(offsetof(PhotoVertex, uv)));
+  glVertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, sizeof(PhotoVertex),
+                        reinterpret_cast<void*>(offsetof(PhotoVertex, uv)));
 }
 
 void SetupMeshAttributes() {
   glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex), reinterpret_cast<void*>(offsetof(GpuMeshVertex, position)));
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex),
+                        reinterpret_cast<void*>(offsetof(GpuMeshVertex, position)));
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex), reinterpret_cast<void*>(offsetof(GpuMeshVertex, normal)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex),
+                        reinterpret_cast<void*>(offsetof(GpuMeshVertex, normal)));
   glEnableVertexAttribArray(2);
-  glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex), reinterpret_cast<void*>(offsetof(GpuMeshVertex, uv)));
+  glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex),
+                        reinterpret_cast<void*>(offsetof(GpuMeshVertex, uv)));
   glEnableVertexAttribArray(3);
-  glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex), reinterpret_cast<void*>(offsetof(GpuMeshVertex, textured)));
+  glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex),
+                        reinterpret_cast<void*>(offsetof(GpuMeshVertex, textured)));
 }
 
 bool InitGl(GlResources* gl) {
@@ -325,8 +330,8 @@ void UploadMesh(const TexturedMesh& mesh, std::uint64_t revision, std::uint64_t 
   for (size_t t = 0; t < triangle_count; ++t) {
     std::uint32_t idx[3] = {mesh.indices[3 * t], mesh.indices[3 * t + 1], mesh.indices[3 * t + 2]};
     if (idx[0] >= mesh.positions.size() || idx[1] >= mesh.positions.size() || idx[2] >= mesh.positions.size()) continue;
-    Eigen::Vector3f face_normal = (mesh.positions[idx[1]] - mesh.positions[idx[0]])
-                                      .cross(mesh.positions[idx[2]] - mesh.positions[idx[0]]);
+    Eigen::Vector3f face_normal =
+        (mesh.positions[idx[1]] - mesh.positions[idx[0]]).cross(mesh.positions[idx[2]] - mesh.positions[idx[0]]);
     face_normal = face_normal.norm() > 0 ? face_normal.normalized() : Eigen::Vector3f::UnitZ();
     const bool textured = has_atlas && has_uvs && t < mesh.triangle_textured.size() && mesh.triangle_textured[t] != 0;
     for (std::uint32_t i : idx) {
@@ -433,14 +438,14 @@ void PushLine(std::vector<LineVertex>* lines, const Eigen::Vector3d& a, const Ei
 // top-right, bottom-right, bottom-left (pixel edges, so the quad covers the whole photo).
 std::array<Eigen::Vector3d, 4> ImagePlaneCorners(const Camera& camera, double depth) {
   const double w = camera.width_px, h = camera.height_px;
-  const std::array<Eigen::Vector2d, 4> corners_px = {
-      Eigen::Vector2d(-0.5, -0.5), Eigen::Vector2d(w - 0.5, -0.5), Eigen::Vector2d(w - 0.5, h - 0.5),
-      Eigen::Vector2d(-0.5, h - 0.5)};
+  const std::array<Eigen::Vector2d, 4> corners_px = {Eigen::Vector2d(-0.5, -0.5), Eigen::Vector2d(w - 0.5, -0.5),
+                                                     Eigen::Vector2d(w - 0.5, h - 0.5), Eigen::Vector2d(-0.5, h - 0.5)};
   std::array<Eigen::Vector3d, 4> out;
   const Eigen::Matrix3d world_from_cam = camera.cam_from_world_rotation.transpose();
   for (int i = 0; i < 4; ++i) {
     const Eigen::Vector3d p_in_cam((corners_px[i].x() - camera.principal_point_px.x()) / camera.focal_px * depth,
-                                   (corners_px[i].y() - camera.principal_point_px.y()) / camera.focal_px * depth, depth);
+                                   (corners_px[i].y() - camera.principal_point_px.y()) / camera.focal_px * depth,
+                                   depth);
     out[i] = world_from_cam * p_in_cam + camera.CenterInWorld();
   }
   return out;
@@ -593,7 +598,8 @@ ViewSetup MakeView(const OrbitCamera& orbit, const SceneMeasure& measure, int wi
                             std::max(measure.bounds.radius + measure.frustum_depth * 2.0, grid_reach);
   const double eye_to_center = (view.eye - all_center).norm();
   const double far_depth = std::max(eye_to_center + all_radius, 1e-3);
-  const double closest = std::min(eye_to_center - measure.bounds.radius - measure.frustum_depth * 2.0, std::abs(view.eye.z()));
+  const double closest =
+      std::min(eye_to_center - measure.bounds.radius - measure.frustum_depth * 2.0, std::abs(view.eye.z()));
   const double near_depth = std::max(far_depth * 2e-4, 0.5 * closest);
   view.gl = GlMatricesFromCamera(view.camera, width_px, height_px, near_depth, far_depth);
   view.clip_from_world = view.gl.projection * view.gl.view;
@@ -668,7 +674,8 @@ void RenderScene(const AppState& state, const PanelState& panel, const ViewSetup
   if (panel.show_grid) {
     glDepthMask(GL_FALSE);
     glUniform1i(gl.line_fade, 1);
-    glUniform3f(gl.line_fade_center, static_cast<float>(measure.grid_center.x()), static_cast<float>(measure.grid_center.y()), 0.0f);
+    glUniform3f(gl.line_fade_center, static_cast<float>(measure.grid_center.x()),
+                static_cast<float>(measure.grid_center.y()), 0.0f);
     glUniform1f(gl.line_fade_radius, static_cast<float>(measure.grid_half_extent));
     // Lines fade before their spacing shrinks to a few pixels.
     glUniform1f(gl.line_fade_eye_distance, static_cast<float>(measure.grid_minor * 250.0));
@@ -783,8 +790,8 @@ void DrawToolbar(AppState* state, PanelState* panel, const SceneMeasure& measure
   }
   // The "Show" button keeps its room; the combo takes what is left, up to a comfortable width.
   const float show_width = ImGui::CalcTextSize("Show").x + 2.0f * ImGui::GetStyle().FramePadding.x;
-  ImGui::SetNextItemWidth(std::clamp(ImGui::GetContentRegionAvail().x - show_width - ImGui::GetStyle().ItemSpacing.x,
-                                     80.0f, 260.0f));
+  ImGui::SetNextItemWidth(
+      std::clamp(ImGui::GetContentRegionAvail().x - show_width - ImGui::GetStyle().ItemSpacing.x, 80.0f, 260.0f));
   // As tall as the small buttons beside it.
   ImGui::PushStyleVar(ImGuiStyleVar_FramePadding, ImVec2(ImGui::GetStyle().FramePadding.x, 0.0f));
   const bool combo_open = ImGui::BeginCombo("##view_from_photo", preview.c_str());
@@ -868,13 +875,15 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
   const ImU32 kHoverColor = IM_COL32(255, 235, 90, 255);
   draw_element(state.selection.element, kSelectedColor, true);
   for (const ElementRef& extra : state.selection.extra) draw_element(extra, kSelectedColor, true);
-  if (!(state.selection.connect_from == state.selection.element)) draw_element(state.selection.connect_from, kSelectedColor, true);
+  if (!(state.selection.connect_from == state.selection.element))
+    draw_element(state.selection.connect_from, kSelectedColor, true);
   if (!(state.hover == state.selection.element)) draw_element(state.hover, kHoverColor, false);
   // Free vertices: cyan rings, so that the user sees what the solve may move.
   for (const Primitive& primitive : project.primitives) {
     for (VertexId v = 0; v < primitive.mesh.VertexIdEnd(); ++v) {
       ImVec2 p;
-      if (primitive.mesh.IsVertex(v) && primitive.mesh.vertex(v).local.free && to_screen(primitive.mesh.vertex(v).position, &p)) {
+      if (primitive.mesh.IsVertex(v) && primitive.mesh.vertex(v).local.free &&
+          to_screen(primitive.mesh.vertex(v).position, &p)) {
         draw->AddCircle(p, 4.5f, IM_COL32(80, 230, 255, 255), 0, 2.0f);
       }
     }
@@ -898,7 +907,8 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
     const std::string hint = MoveToolHint(panel.move_drag);
     const ImVec2 hint_min(box_min.x, box_min.y - line_h - 8.0f);
     const ImVec2 hint_size = ImGui::CalcTextSize(hint.c_str());
-    draw->AddRectFilled(hint_min, ImVec2(hint_min.x + hint_size.x + 8.0f, box_min.y - 2.0f), IM_COL32(0, 0, 0, 140), 3.0f);
+    draw->AddRectFilled(hint_min, ImVec2(hint_min.x + hint_size.x + 8.0f, box_min.y - 2.0f), IM_COL32(0, 0, 0, 140),
+                        3.0f);
     draw->AddText(ImVec2(hint_min.x + 4.0f, hint_min.y + 2.0f), IM_COL32(255, 210, 60, 255), hint.c_str());
   }
   if (panel.orbit.photo_image_id != kNoId) {
@@ -912,8 +922,8 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
 
 // Where the panel's canvas is this frame and what the mouse does on it.
 struct CanvasFrame {
-  ImVec2 origin{0, 0};  // screen position of the canvas's top-left
-  ImVec2 size{16, 16};  // screen px
+  ImVec2 origin{0, 0};                   // screen position of the canvas's top-left
+  ImVec2 size{16, 16};                   // screen px
   float scale_x = 1.0f, scale_y = 1.0f;  // framebuffer px per screen px
   int width_px = 1, height_px = 1;       // framebuffer px
   bool hovered = false, active = false;
@@ -924,10 +934,10 @@ struct CanvasFrame {
 
 // Frames the model when a project shows up (first frame, another file, first content); a
 // photo view of an image that lost its calibration (or was deleted) falls back to the orbit.
-void FollowProject(const AppState& state, PanelState* panel, const SceneMeasure& measure, int width_px,
-                   int height_px) {
+void FollowProject(const AppState& state, PanelState* panel, const SceneMeasure& measure, int width_px, int height_px) {
   const Project& project = state.document.project();
-  const bool has_content = !project.primitives.empty() || std::any_of(project.images.begin(), project.images.end(), Drawable);
+  const bool has_content =
+      !project.primitives.empty() || std::any_of(project.images.begin(), project.images.end(), Drawable);
   if (!panel->framed_once || panel->framed_project_path != state.project_path || (has_content && !panel->had_content)) {
     if (panel->orbit.photo_image_id == kNoId) OrbitFrame(&panel->orbit, measure.frame_bounds, width_px, height_px);
     panel->framed_once = true;
@@ -960,8 +970,9 @@ CanvasFrame PlaceCanvas(ImVec2 size, float scale_x, float scale_y) {
 // Submits the canvas's button and reads the mouse over it.
 void ReadCanvasInput(PanelState* panel, CanvasFrame* frame) {
   const ImGuiIO& io = ImGui::GetIO();
-  ImGui::InvisibleButton("##viewport_canvas", frame->size,
-                         ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight | ImGuiButtonFlags_MouseButtonMiddle);
+  ImGui::InvisibleButton(
+      "##viewport_canvas", frame->size,
+      ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight | ImGuiButtonFlags_MouseButtonMiddle);
   frame->hovered = ImGui::IsItemHovered();
   frame->active = ImGui::IsItemActive();
   const ImVec2 mouse(io.MousePos.x - frame->origin.x, io.MousePos.y - frame->origin.y);
@@ -981,11 +992,12 @@ void HandleViewGestures(const Project& project, PanelState* panel, const SceneMe
   const ImGuiIO& io = ImGui::GetIO();
   const int width_px = frame.width_px, height_px = frame.height_px;
   const ImVec2 delta_px = frame.delta_px;
-  if (frame.active && !MoveToolOwnsMouse(panel->move_drag) && ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) &&
-      (delta_px.x != 0 || delta_px.y != 0)) {
+  if (frame.active && !MoveToolOwnsMouse(panel->move_drag) &&
+      ImGui::IsMouseDragging(ImGuiMouseButton_Left, kClickSlopPx) && (delta_px.x != 0 || delta_px.y != 0)) {
     OrbitRotate(&panel->orbit, delta_px.x, delta_px.y, width_px, height_px);
   }
-  if (frame.active && (ImGui::IsMouseDragging(ImGuiMouseButton_Right, 1.0f) || ImGui::IsMouseDragging(ImGuiMouseButton_Middle, 1.0f)) &&
+  if (frame.active &&
+      (ImGui::IsMouseDragging(ImGuiMouseButton_Right, 1.0f) || ImGui::IsMouseDragging(ImGuiMouseButton_Middle, 1.0f)) &&
       (delta_px.x != 0 || delta_px.y != 0)) {
     OrbitPan(&panel->orbit, delta_px.x, delta_px.y, width_px, height_px);
   }
@@ -1046,7 +1058,8 @@ bool RenderToTarget(const AppState& state, PanelState* panel, const ViewSetup& v
                     const CanvasFrame& frame) {
   GlResources& gl = panel->gl;
   const SavedGlState saved = SavedGlState::Capture();
-  if (!gl.mesh_uploaded || gl.mesh_revision != state.mesh_revision) UploadMesh(state.mesh, state.mesh_revision, state.atlas_revision, &gl);
+  if (!gl.mesh_uploaded || gl.mesh_revision != state.mesh_revision)
+    UploadMesh(state.mesh, state.mesh_revision, state.atlas_revision, &gl);
   UpdatePhotoTextures(state, &gl);
   // The project may have changed (a tool click): read it again.
   const Project& current = state.document.project();
@@ -1095,7 +1108,8 @@ void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
   DrawToolbar(state, &panel, measure, std::max(1, static_cast<int>(avail_before_toolbar.x * scale_x)),
               std::max(1, static_cast<int>(avail_before_toolbar.y * scale_y)));
 
-  const ImVec2 size(std::max(ImGui::GetContentRegionAvail().x, 16.0f), std::max(ImGui::GetContentRegionAvail().y, 16.0f));
+  const ImVec2 size(std::max(ImGui::GetContentRegionAvail().x, 16.0f),
+                    std::max(ImGui::GetContentRegionAvail().y, 16.0f));
   CanvasFrame frame = PlaceCanvas(size, scale_x, scale_y);
   FollowProject(*state, &panel, measure, frame.width_px, frame.height_px);
   ReadCanvasInput(&panel, &frame);
@@ -1113,7 +1127,8 @@ void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
   if (!RenderToTarget(*state, &panel, view, measure, frame)) return;
   // A GL texture's first row is the bottom of the picture: flip V.
   ImGui::GetWindowDrawList()->AddImage(ToImTexture(gl.target.color_texture()), frame.origin,
-                                       ImVec2(frame.origin.x + size.x, frame.origin.y + size.y), ImVec2(0, 1), ImVec2(1, 0));
+                                       ImVec2(frame.origin.x + size.x, frame.origin.y + size.y), ImVec2(0, 1),
+                                       ImVec2(1, 0));
   DrawOverlay(*state, panel, view, frame.origin, size, ImVec2(scale_x, scale_y));
 }
 

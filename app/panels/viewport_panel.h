@@ -33,8 +33,8 @@ void DrawViewportPanel(AppState* state, ViewportPanelState* panel);
 // (divided by w), i.e. at screen (origin + that / framebuffer scale).
 struct ViewportReport {
   bool drawn = false;
-  float origin_x = 0, origin_y = 0;  // screen position of the panel's top-left
-  int width_px = 0, height_px = 0;   // framebuffer px
+  float origin_x = 0, origin_y = 0;          // screen position of the panel's top-left
+  int width_px = 0, height_px = 0;           // framebuffer px
   std::array<double, 16> clip_from_world{};  // column-major
 };
 ViewportReport LastViewportReport(const ViewportPanelState& panel);

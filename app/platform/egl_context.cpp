@@ -48,8 +48,9 @@ EglContext::~EglContext() {
 bool EglContext::Create(std::string* error) {
   const char* client_extensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
   if (!HasExtension(client_extensions, "EGL_MESA_platform_surfaceless")) {
-    *error = "EGL: the surfaceless platform (EGL_MESA_platform_surfaceless) is not available; install Mesa's EGL "
-             "driver (libegl-mesa0)";
+    *error =
+        "EGL: the surfaceless platform (EGL_MESA_platform_surfaceless) is not available; install Mesa's EGL "
+        "driver (libegl-mesa0)";
     return false;
   }
   auto get_platform_display =
@@ -81,8 +82,8 @@ bool EglContext::Create(std::string* error) {
     return false;
   }
   EGLConfig config = nullptr;
-  const EGLint config_attribs[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_RED_SIZE, 8, EGL_GREEN_SIZE, 8,
-                                   EGL_BLUE_SIZE, 8, EGL_NONE};
+  const EGLint config_attribs[] = {
+      EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_RED_SIZE, 8, EGL_GREEN_SIZE, 8, EGL_BLUE_SIZE, 8, EGL_NONE};
   EGLint num_configs = 0;
   if (!eglChooseConfig(display, config_attribs, &config, 1, &num_configs) || num_configs < 1) {
     if (!HasExtension(display_extensions, "EGL_KHR_no_config_context")) {
@@ -91,8 +92,9 @@ bool EglContext::Create(std::string* error) {
     }
     config = EGL_NO_CONFIG_KHR;
   }
-  const EGLint context_attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 3, EGL_CONTEXT_MINOR_VERSION, 3,
-                                    EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+  const EGLint context_attribs[] = {
+      EGL_CONTEXT_MAJOR_VERSION,           3,       EGL_CONTEXT_MINOR_VERSION, 3, EGL_CONTEXT_OPENGL_PROFILE_MASK,
+      EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
   EGLContext context = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attribs);
   if (context == EGL_NO_CONTEXT) {
     *error = "EGL: cannot create an OpenGL 3.3 core context (" + EglErrorName(eglGetError()) + ")";

@@ -48,9 +48,8 @@ struct GlCameraMatrices {
 // near_depth and far_depth are positive distances along the optical axis (0 < near < far)
 // and map to GL depth -1 and +1. A camera without size (width_px or height_px <= 0) is
 // treated as filling the viewport.
-inline GlCameraMatrices GlMatricesFromCamera(const Camera& camera, int viewport_width_px,
-                                             int viewport_height_px, double near_depth,
-                                             double far_depth) {
+inline GlCameraMatrices GlMatricesFromCamera(const Camera& camera, int viewport_width_px, int viewport_height_px,
+                                             double near_depth, double far_depth) {
   GlCameraMatrices out;
   const double viewport_w = std::max(1, viewport_width_px);
   const double viewport_h = std::max(1, viewport_height_px);

@@ -19,8 +19,8 @@ GLuint CompileShader(GLenum stage, const char* source, std::string* error) {
   std::string log(std::max(length, 1), '\0');
   glGetShaderInfoLog(shader, length, nullptr, log.data());
   if (error) {
-    *error = std::string(stage == GL_VERTEX_SHADER ? "vertex" : "fragment") +
-             " shader does not compile: " + log.c_str();
+    *error =
+        std::string(stage == GL_VERTEX_SHADER ? "vertex" : "fragment") + " shader does not compile: " + log.c_str();
   }
   glDeleteShader(shader);
   return 0;

@@ -53,9 +53,9 @@ class GlRenderTarget {
   int height_px_ = 0;
   int samples_ = 0;
   int requested_samples_ = 0;
-  GLuint resolve_fbo_ = 0;      // owns color_texture_ (and the depth buffer when single-sampled)
+  GLuint resolve_fbo_ = 0;  // owns color_texture_ (and the depth buffer when single-sampled)
   GLuint color_texture_ = 0;
-  GLuint msaa_fbo_ = 0;         // 0 when single-sampled
+  GLuint msaa_fbo_ = 0;  // 0 when single-sampled
   GLuint msaa_color_rb_ = 0;
   GLuint depth_rb_ = 0;
 };

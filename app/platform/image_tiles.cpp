@@ -34,9 +34,7 @@ void BindSamplerCallback(const ImDrawList*, const ImDrawCmd* cmd) {
   glBindSampler(0, static_cast<GLuint>(reinterpret_cast<std::uintptr_t>(cmd->UserCallbackData)));
 }
 
-void* SamplerAsUserData(GLuint sampler) {
-  return reinterpret_cast<void*>(static_cast<std::uintptr_t>(sampler));
-}
+void* SamplerAsUserData(GLuint sampler) { return reinterpret_cast<void*>(static_cast<std::uintptr_t>(sampler)); }
 
 }  // namespace
 
@@ -115,11 +113,11 @@ void DestroyTiledTexture(TiledTexture* texture) {
   *texture = TiledTexture();
 }
 
-void DrawTiledTexture(ImDrawList* draw_list, const TiledTexture& texture, const ViewTransform& view,
-                      ImVec2 clip_min, ImVec2 clip_max, ImU32 tint) {
+void DrawTiledTexture(ImDrawList* draw_list, const TiledTexture& texture, const ViewTransform& view, ImVec2 clip_min,
+                      ImVec2 clip_max, ImU32 tint) {
   if (texture.Empty() || view.zoom <= 0.0f) return;
-  draw_list->AddCallback(BindSamplerCallback, SamplerAsUserData(view.zoom > 1.0f ? texture.nearest_sampler
-                                                                                 : texture.linear_sampler));
+  draw_list->AddCallback(BindSamplerCallback,
+                         SamplerAsUserData(view.zoom > 1.0f ? texture.nearest_sampler : texture.linear_sampler));
   for (const ImageTile& tile : texture.tiles) {
     // The tile's drawn pixels cover [x0 - 0.5, x0 + w - 0.5] in image coordinates.
     const ImVec2 tile_min = view.ToScreen(tile.x0 - 0.5, tile.y0 - 0.5);
@@ -134,8 +132,8 @@ void DrawTiledTexture(ImDrawList* draw_list, const TiledTexture& texture, const 
                         static_cast<float>((v0 + 0.5 - tile.tex_y0) / tile.tex_h));
     const ImVec2 uv_max(static_cast<float>((u1 + 0.5 - tile.tex_x0) / tile.tex_w),
                         static_cast<float>((v1 + 0.5 - tile.tex_y0) / tile.tex_h));
-    draw_list->AddImage(reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(tile.texture)), p_min, p_max,
-                        uv_min, uv_max, tint);
+    draw_list->AddImage(reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(tile.texture)), p_min, p_max, uv_min,
+                        uv_max, tint);
   }
   // Back to the texture's own state (the backend's default) for everything drawn later.
   draw_list->AddCallback(BindSamplerCallback, SamplerAsUserData(0));

@@ -61,7 +61,7 @@ struct ViewTransform {
 // Draws the visible part of the texture into `clip` (screen rectangle, min/max corners),
 // with nearest filtering when zoom > 1 and trilinear otherwise. Only the visible part of
 // each tile becomes vertices, so extreme zooms keep float coordinates small.
-void DrawTiledTexture(ImDrawList* draw_list, const TiledTexture& texture, const ViewTransform& view,
-                      ImVec2 clip_min, ImVec2 clip_max, ImU32 tint = IM_COL32_WHITE);
+void DrawTiledTexture(ImDrawList* draw_list, const TiledTexture& texture, const ViewTransform& view, ImVec2 clip_min,
+                      ImVec2 clip_max, ImU32 tint = IM_COL32_WHITE);
 
 }  // namespace facet::app

@@ -22,9 +22,9 @@ struct RenderOptions {
   std::string output_png;    // the final frame
   int width = 1600;          // window size in px
   int height = 900;
-  std::string script_path;   // optional input script
-  std::string report_path;   // optional JSON report of the final frame (panel rectangles,
-                             // image view transform, undo stack, project)
+  std::string script_path;  // optional input script
+  std::string report_path;  // optional JSON report of the final frame (panel rectangles,
+                            // image view transform, undo stack, project)
 };
 
 // Renders the default layout (never the user's saved layout) offscreen at a fixed 60 Hz

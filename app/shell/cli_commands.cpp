@@ -35,7 +35,8 @@ nlohmann::json NumberOrNull(double value) { return std::isfinite(value) ? nlohma
 }  // namespace
 
 int RunCalibrateCommand(const std::string& lines_path, const std::string& points_path) {
-  const CalibrateIoResult result = lines_path.empty() ? CalibratePointsFile(points_path) : CalibrateLinesFile(lines_path);
+  const CalibrateIoResult result =
+      lines_path.empty() ? CalibratePointsFile(points_path) : CalibrateLinesFile(lines_path);
   if (!result.ok()) {
     std::cerr << "facet calibrate: " << result.error << "\n";
     return 1;
@@ -81,7 +82,9 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
   out["warnings"] = s.warnings;
   nlohmann::json calibration = nlohmann::json::array();
   for (const auto& [image_id, vp] : update.calibration) {
-    calibration.push_back({{"image_id", image_id}, {"success", vp.IsUsable()}, {"message", vp.message},
+    calibration.push_back({{"image_id", image_id},
+                           {"success", vp.IsUsable()},
+                           {"message", vp.message},
                            {"focal_px", vp.focal_px},
                            {"principal_point", {vp.principal_point_px.x(), vp.principal_point_px.y()}},
                            {"warnings", vp.warnings}});

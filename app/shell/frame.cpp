@@ -100,8 +100,10 @@ void HandleGlobalShortcuts(AppState* state, ShellState* shell) {
   if (io.WantTextInput || shell->dialog != Dialog::kNone || !io.KeyCtrl) return;
   std::string error;
   if (ImGui::IsKeyPressed(GLFW_KEY_Z, true)) {
-    if (io.KeyShift) Redo(state);
-    else Undo(state);
+    if (io.KeyShift)
+      Redo(state);
+    else
+      Undo(state);
   }
   if (ImGui::IsKeyPressed(GLFW_KEY_Y, true)) Redo(state);
   if (ImGui::IsKeyPressed(GLFW_KEY_S, false)) {
@@ -113,8 +115,10 @@ void HandleGlobalShortcuts(AppState* state, ShellState* shell) {
   }
   if (ImGui::IsKeyPressed(GLFW_KEY_O, false)) OpenDialog(shell, Dialog::kOpen, state->project_path);
   if (ImGui::IsKeyPressed(GLFW_KEY_N, false)) {
-    if (state->document.dirty()) OpenDialog(shell, Dialog::kConfirmNew);
-    else NewProject(state);
+    if (state->document.dirty())
+      OpenDialog(shell, Dialog::kConfirmNew);
+    else
+      NewProject(state);
   }
   if (ImGui::IsKeyPressed(GLFW_KEY_Q, false)) RequestQuit(state, shell);
 }
@@ -143,7 +147,8 @@ void DrawSplitters(ShellState* shell, const TiledLayout& tiled, const Rect& work
     ImGui::PopID();
     const bool hovered = ImGui::IsItemHovered();
     const bool active = ImGui::IsItemActive();
-    if (hovered || active) ImGui::SetMouseCursor(s.side_by_side ? ImGuiMouseCursor_ResizeEW : ImGuiMouseCursor_ResizeNS);
+    if (hovered || active)
+      ImGui::SetMouseCursor(s.side_by_side ? ImGuiMouseCursor_ResizeEW : ImGuiMouseCursor_ResizeNS);
     if (active) {
       const ImVec2 m = ImGui::GetIO().MousePos;
       shell->layout.split_ratio[s.split] = SplitRatioForMouse(s, m.x, m.y);
@@ -312,7 +317,8 @@ bool DrawFileList(ShellState* shell, const std::string& extension, double time_s
   const fs::path typed(shell->dialog_path);
   fs::path dir = shell->dialog_path.empty() || shell->dialog_path.back() == '/' ? typed : typed.parent_path();
   if (dir.empty()) dir = fs::current_path(ec);
-  if (dir.string() != shell->listed_dir || time_s - shell->listed_time_s > kRelistAfterS || time_s < shell->listed_time_s) {
+  if (dir.string() != shell->listed_dir || time_s - shell->listed_time_s > kRelistAfterS ||
+      time_s < shell->listed_time_s) {
     shell->listed_dir = dir.string();
     shell->listed_time_s = time_s;
     shell->listed_dirs.clear();
@@ -321,8 +327,10 @@ bool DrawFileList(ShellState* shell, const std::string& extension, double time_s
     for (const auto& e : fs::directory_iterator(dir, fs::directory_options::skip_permission_denied, ec)) {
       const std::string name = e.path().filename().string();
       if (name.empty() || name[0] == '.') continue;
-      if (e.is_directory(ec)) shell->listed_dirs.push_back(name);
-      else if (extension.empty() || e.path().extension() == extension) shell->listed_files.push_back(name);
+      if (e.is_directory(ec))
+        shell->listed_dirs.push_back(name);
+      else if (extension.empty() || e.path().extension() == extension)
+        shell->listed_files.push_back(name);
       if (shell->listed_dirs.size() + shell->listed_files.size() > kMaxEntries) break;
     }
     std::sort(shell->listed_dirs.begin(), shell->listed_dirs.end());
@@ -368,12 +376,13 @@ void CloseDialog(ShellState* shell) {
 
 void DrawPathDialog(AppState* state, ShellState* shell) {
   const Dialog d = shell->dialog;
-  const char* verb = d == Dialog::kOpen      ? "Open"
-                     : d == Dialog::kSaveAs  ? "Save"
+  const char* verb = d == Dialog::kOpen       ? "Open"
+                     : d == Dialog::kSaveAs   ? "Save"
                      : d == Dialog::kAddPhoto ? "Add"
                                               : "Export";
   const std::string extension = d == Dialog::kExport || d == Dialog::kAddPhoto ? "" : ".facet";
-  if (d == Dialog::kAddPhoto) ImGui::TextColored(kDimText, "A JPEG or PNG photo; its EXIF focal length becomes a prior");
+  if (d == Dialog::kAddPhoto)
+    ImGui::TextColored(kDimText, "A JPEG or PNG photo; its EXIF focal length becomes a prior");
   if (d == Dialog::kExport) ImGui::TextColored(kDimText, "The extension chooses the format: .glb (glTF) or .obj");
   if (ImGui::IsWindowAppearing()) ImGui::SetKeyboardFocusHere();
   ImGui::SetNextItemWidth(560);
@@ -398,8 +407,8 @@ void DrawPathDialog(AppState* state, ShellState* shell) {
     return;
   }
   std::string error;
-  const char* command = d == Dialog::kOpen      ? "open"
-                        : d == Dialog::kSaveAs  ? "save"
+  const char* command = d == Dialog::kOpen       ? "open"
+                        : d == Dialog::kSaveAs   ? "save"
                         : d == Dialog::kAddPhoto ? "add-photo"
                                                  : "export";
   if (RunAppCommand(state, shell, command, {path}, &error)) {
@@ -425,7 +434,7 @@ void DrawDialogs(AppState* state, ShellState* shell) {
     return;
   }
   const std::string name = state->project_path.empty() ? "the untitled project"
-                                                        : std::filesystem::path(state->project_path).filename().string();
+                                                       : std::filesystem::path(state->project_path).filename().string();
   switch (shell->dialog) {
     case Dialog::kOpen:
     case Dialog::kSaveAs:
@@ -540,8 +549,10 @@ bool RunSelectCommand(AppState* state, const std::string& arg, std::string* erro
   }
   ElementRef ref;
   if (w.size() == 3 && number(w[1], &primitive_id) && number(w[2], &element)) {
-    ref.kind = w[0] == "vertex" ? ElementKind::kVertex : w[0] == "edge" ? ElementKind::kEdge
-               : w[0] == "face" ? ElementKind::kFace : ElementKind::kNone;
+    ref.kind = w[0] == "vertex" ? ElementKind::kVertex
+               : w[0] == "edge" ? ElementKind::kEdge
+               : w[0] == "face" ? ElementKind::kFace
+                                : ElementKind::kNone;
     ref.primitive_id = primitive_id;
     ref.element = static_cast<std::uint32_t>(element);
   }
@@ -560,9 +571,8 @@ bool RunSelectCommand(AppState* state, const std::string& arg, std::string* erro
 }  // namespace
 
 std::string WindowTitle(const AppState& state) {
-  const std::string name = state.project_path.empty()
-                               ? std::string("untitled")
-                               : std::filesystem::path(state.project_path).filename().string();
+  const std::string name = state.project_path.empty() ? std::string("untitled")
+                                                      : std::filesystem::path(state.project_path).filename().string();
   return "Facet - " + name + (state.document.dirty() ? " *" : "");
 }
 
@@ -756,8 +766,8 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   if (BakeInFlight(*state) && shell->panel_drawn[viewport] && shell->dialog == Dialog::kNone) {
     const Rect& r = shell->panel_rects[viewport];
     const float line = ImGui::GetTextLineHeightWithSpacing();
-    ImGui::GetForegroundDrawList()->AddText(ImVec2(r.x + 8.0f, r.y + r.h - line - 6.0f),
-                                            ImGui::GetColorU32(kDimText), "baking texture...");
+    ImGui::GetForegroundDrawList()->AddText(ImVec2(r.x + 8.0f, r.y + r.h - line - 6.0f), ImGui::GetColorU32(kDimText),
+                                            "baking texture...");
   }
 
   DrawDialogs(state, shell);

@@ -48,7 +48,7 @@ struct ShellState {
   int active_splitter = -1;  // index into the last TiledLayout's splitters
   int tearing_panel = -1;    // a docked panel whose title bar is being dragged
   float tear_press_x = 0, tear_press_y = 0;
-  int floating_to_place = -1;  // a panel that became floating this frame: set its rect once
+  int floating_to_place = -1;   // a panel that became floating this frame: set its rect once
   bool layout_changed = false;  // to persist the layout on exit
 
   // What the last frame drew, for the render report (screen px).
@@ -72,8 +72,8 @@ std::string WindowTitle(const AppState& state);
 // select vertex|edge|face PRIMITIVE_ID ELEMENT_ID | primitive ID | none, free-vertex,
 // planar-face (app/state/input_script.h documents them). Returns false with
 // *error set for unknown commands, bad arguments or a failed save/open/export.
-bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name,
-                   const std::vector<std::string>& args, std::string* error);
+bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, const std::vector<std::string>& args,
+                   std::string* error);
 
 // Asks to quit: quits at once when nothing is unsaved, else opens the confirmation dialog.
 void RequestQuit(AppState* state, ShellState* shell);

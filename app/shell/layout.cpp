@@ -135,9 +135,7 @@ std::string LayoutToJson(const Layout& layout) {
   for (int i = 0; i < kNumPanels; ++i) {
     const PanelPlacement& p = layout.panels[i];
     const Rect& r = p.floating_rect;
-    j["panels"][kKeys[i]] = {{"visible", p.visible},
-                             {"floating", p.floating},
-                             {"rect", {r.x, r.y, r.w, r.h}}};
+    j["panels"][kKeys[i]] = {{"visible", p.visible}, {"floating", p.floating}, {"rect", {r.x, r.y, r.w, r.h}}};
   }
   return j.dump(2);
 }

@@ -50,7 +50,7 @@ struct Splitter {
 
 struct TiledLayout {
   std::array<std::optional<Rect>, kNumPanels> docked_rects;  // set for visible docked panels
-  std::vector<Splitter> splitters;                             // only between non-empty children
+  std::vector<Splitter> splitters;                           // only between non-empty children
 };
 
 // Tiles the visible docked panels into `work_area`. A subtree with no visible docked panel

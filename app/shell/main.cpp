@@ -5,8 +5,8 @@
 #include <iostream>
 #include <string>
 
-#include <CLI/CLI.hpp>
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include "app/shell/app.h"
 #include "app/shell/cli_commands.h"
@@ -78,7 +78,8 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
 
-  auto* solve = cli.add_subcommand("solve", "Re-calibrate and re-solve a project; writes the result and prints a JSON summary");
+  auto* solve =
+      cli.add_subcommand("solve", "Re-calibrate and re-solve a project; writes the result and prints a JSON summary");
   std::string solve_project, solve_out;
   solve->add_option("project", solve_project, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
   solve->add_option("-o,--output", solve_out, "Where to write the solved project")->required();
@@ -91,11 +92,14 @@ int main(int argc, char** argv) {
   auto* render = cli.add_subcommand("render", "Render the application offscreen (EGL, no display needed) to a PNG");
   facet::app::RenderOptions render_options;
   std::string render_size = "1600x900";
-  render->add_option("project", render_options.project_path, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
+  render->add_option("project", render_options.project_path, "Project file (*.facet)")
+      ->required()
+      ->check(CLI::ExistingFile);
   render->add_option("-o,--output", render_options.output_png, "SHOT.png")->required();
   render->add_option("--size", render_size, "Window size WxH in pixels")->capture_default_str();
-  render->add_option("--script", render_options.script_path,
-                     "Input script: mouse, keys and app commands, one per line (see README)")
+  render
+      ->add_option("--script", render_options.script_path,
+                   "Input script: mouse, keys and app commands, one per line (see README)")
       ->check(CLI::ExistingFile);
   render->add_option("--report", render_options.report_path,
                      "Also write a JSON report: panel rectangles, image view transform, history, project");

@@ -54,8 +54,9 @@ bool AddPhotoEdit(AppState* state, const std::string& path) {
   CommitEdit(state, "Add photo " + name, std::move(edited));
   if (state->document.project().FindImage(id) == nullptr) return false;
   state->active_image_id = id;
-  state->Log(LogLevel::kInfo, name + ": " + std::to_string(width_px) + " x " + std::to_string(height_px) + " px; " +
-                                  (prior.found ? prior.message : "no EXIF focal length (calibrate from lines or pins)"));
+  state->Log(LogLevel::kInfo,
+             name + ": " + std::to_string(width_px) + " x " + std::to_string(height_px) + " px; " +
+                 (prior.found ? prior.message : "no EXIF focal length (calibrate from lines or pins)"));
   return true;
 }
 

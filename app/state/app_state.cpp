@@ -69,7 +69,8 @@ bool ElementExists(const Project& project, const ElementRef& ref) {
 std::string DescribeElement(const Project& project, const ElementRef& ref) {
   const Primitive* primitive = project.FindPrimitive(ref.primitive_id);
   std::string text = primitive ? primitive->name : std::string("?");
-  if (ref.kind != ElementKind::kNone) text += std::string(" ") + ElementKindName(ref.kind) + " " + std::to_string(ref.element);
+  if (ref.kind != ElementKind::kNone)
+    text += std::string(" ") + ElementKindName(ref.kind) + " " + std::to_string(ref.element);
   return text;
 }
 
@@ -91,7 +92,8 @@ std::vector<ElementRef> SelectedElements(const Selection& selection) {
 
 bool IsSelected(const Selection& selection, const ElementRef& ref) {
   if (ref.Empty()) return false;
-  return selection.element == ref || std::find(selection.extra.begin(), selection.extra.end(), ref) != selection.extra.end();
+  return selection.element == ref ||
+         std::find(selection.extra.begin(), selection.extra.end(), ref) != selection.extra.end();
 }
 
 void ToggleSelected(Selection* selection, const ElementRef& ref) {
@@ -227,8 +229,7 @@ void EndDrag(AppState* state) {
   state->last_update = UpdateModel(state->document.project(), CommitUpdateOptions(), &updated, &state->update_cache);
   LogUpdate(state, state->last_update);
   *state->document.MutableProjectForPreview() = std::move(updated);
-  if (state->document.CommitFrom(state->drag_label, *state->drag_start))
-    state->Log(LogLevel::kInfo, state->drag_label);
+  if (state->document.CommitFrom(state->drag_label, *state->drag_start)) state->Log(LogLevel::kInfo, state->drag_label);
   state->drag_start.reset();
 }
 
@@ -328,9 +329,8 @@ void StartBake(AppState* state) {
   BakeJob job;
   job.input_revision = state->bake_input_revision;
   try {
-    job.result = std::async(std::launch::async, [snapshot = project, photos = std::move(photos)]() {
-      return Bake(snapshot, photos);
-    });
+    job.result = std::async(std::launch::async,
+                            [snapshot = project, photos = std::move(photos)]() { return Bake(snapshot, photos); });
   } catch (const std::system_error& e) {
     // No thread to be had: bake here rather than leave the model untextured.
     state->Log(LogLevel::kWarning, std::string("Texture: baking on the main thread (") + e.what() + ")");
@@ -405,9 +405,8 @@ void RefreshDerived(AppState* state) {
   }
   for (const Image& image : project.images) {
     if (state->photos.count(image.id) || state->photo_errors.count(image.id)) continue;
-    const std::string path = state->project_path.empty()
-                                 ? image.path
-                                 : ResolveImagePath(state->project_path, image.path);
+    const std::string path =
+        state->project_path.empty() ? image.path : ResolveImagePath(state->project_path, image.path);
     ImageReadResult read = ReadImage(path);
     if (read.ok()) {
       state->photos.emplace(image.id, std::move(read.image));
@@ -421,8 +420,7 @@ void RefreshDerived(AppState* state) {
 
   // The mesh depends on the primitives, the cameras and the loaded photos only.
   const bool inputs_unchanged = state->mesh_inputs_known && state->mesh_primitives == project.primitives &&
-                                state->mesh_images == project.images &&
-                                state->mesh_photo_count == state->photos.size();
+                                state->mesh_images == project.images && state->mesh_photo_count == state->photos.size();
   if (!inputs_unchanged) {
     state->mesh_inputs_known = true;
     state->mesh_primitives = project.primitives;

@@ -23,8 +23,8 @@
 namespace facet::app {
 
 enum class Tool {
-  kSelect,           // pick vertices, edges, faces; drag segment endpoints and pins
-  kLineX,            // draw a segment of the x family
+  kSelect,  // pick vertices, edges, faces; drag segment endpoints and pins
+  kLineX,   // draw a segment of the x family
   kLineY,
   kLineZ,
   kPin,              // click a model vertex, then click in the image: V_proj
@@ -60,13 +60,13 @@ struct Selection {
   Id segment_id = kNoId;
   int segment_endpoint = -1;  // 0 = a, 1 = b, -1 = whole segment
   Id pin_id = kNoId;
-  Id primitive_id = kNoId;    // the primitive the properties panel edits
-  ElementRef element;         // a vertex, edge or face of it (the pin tool pins a vertex)
+  Id primitive_id = kNoId;  // the primitive the properties panel edits
+  ElementRef element;       // a vertex, edge or face of it (the pin tool pins a vertex)
   // Multi-selection (Shift+click, `select-add`): further vertices, edges or faces, of any
   // primitives, in the order they were added; never `element` itself, never twice. The
   // constraint builder reads element + extra (SelectedElements).
   std::vector<ElementRef> extra;
-  ElementRef connect_from;    // V_connect: the first vertex clicked
+  ElementRef connect_from;  // V_connect: the first vertex clicked
   // The selected line pin (a kEdgeOnImageLine constraint) and the edge it pins, which is
   // `element`: it holds while the selection is exactly that edge (the image panel checks).
   Id line_pin_id = kNoId;
@@ -131,7 +131,7 @@ struct AppState {
   Selection selection;
   Tool tool = Tool::kSelect;
   PrimitiveKind add_kind = PrimitiveKind::kBox;  // what kAddPrimitive adds
-  bool add_on_top = true;  // a wedge, pyramid or plane goes on top of the selected box
+  bool add_on_top = true;                        // a wedge, pyramid or plane goes on top of the selected box
   // Push/pull: the distance field's value (project units) and the face it was defaulted for;
   // a newly selected face gets the default again (and the field the keyboard focus).
   double push_pull_distance = 0.0;
@@ -163,7 +163,7 @@ struct AppState {
   TexturedMesh mesh;
   std::uint64_t mesh_revision = 0;   // increments whenever mesh changes
   std::uint64_t atlas_revision = 0;  // increments when mesh.atlas changes (a subset of the above)
-  ModelUpdateSummary last_update;   // calibration and solve figures of the last change
+  ModelUpdateSummary last_update;    // calibration and solve figures of the last change
   // Calibration results reused while an image's inputs are unchanged (core/solve/model_update.h):
   // drag frames then skip the vanishing-point and plumb-line fits of untouched images.
   ModelUpdateCache update_cache;

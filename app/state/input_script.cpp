@@ -65,12 +65,12 @@ std::string Rest(const std::string& line, int words) {
 // Argument counts of the app commands: {min, max}.
 const std::map<std::string, std::pair<int, int>>& CommandArity() {
   static const std::map<std::string, std::pair<int, int>> arity = {
-      {"undo", {0, 0}}, {"redo", {0, 0}},         {"save", {0, 1}},   {"open", {1, 1}},
-      {"tool", {1, 1}}, {"select-image", {1, 1}}, {"fit", {0, 0}},    {"export", {1, 1}},
-      {"add", {1, 1}},  {"select", {1, 1}},       {"free-vertex", {0, 0}}, {"planar-face", {0, 0}},
-      {"constrain", {1, 1}},  {"select-add", {1, 1}},   {"line-pin", {1, 1}}, {"line-pin-move", {1, 1}},
-      {"calibration", {1, 1}}, {"move-selection", {1, 1}}, {"add-photo", {1, 1}},
-      {"wait-bake", {0, 0}},  {"bake-status", {1, 1}},
+      {"undo", {0, 0}},        {"redo", {0, 0}},           {"save", {0, 1}},        {"open", {1, 1}},
+      {"tool", {1, 1}},        {"select-image", {1, 1}},   {"fit", {0, 0}},         {"export", {1, 1}},
+      {"add", {1, 1}},         {"select", {1, 1}},         {"free-vertex", {0, 0}}, {"planar-face", {0, 0}},
+      {"constrain", {1, 1}},   {"select-add", {1, 1}},     {"line-pin", {1, 1}},    {"line-pin-move", {1, 1}},
+      {"calibration", {1, 1}}, {"move-selection", {1, 1}}, {"add-photo", {1, 1}},   {"wait-bake", {0, 0}},
+      {"bake-status", {1, 1}},
   };
   return arity;
 }
@@ -85,14 +85,17 @@ int KeyCodeFromName(const std::string& raw) {
     if (c >= '0' && c <= '9') return GLFW_KEY_0 + (c - '0');
   }
   static const std::map<std::string, int> named = {
-      {"delete", GLFW_KEY_DELETE},       {"backspace", GLFW_KEY_BACKSPACE}, {"escape", GLFW_KEY_ESCAPE},
-      {"esc", GLFW_KEY_ESCAPE},          {"enter", GLFW_KEY_ENTER},         {"return", GLFW_KEY_ENTER},
-      {"tab", GLFW_KEY_TAB},             {"space", GLFW_KEY_SPACE},         {"left", GLFW_KEY_LEFT},
-      {"right", GLFW_KEY_RIGHT},         {"up", GLFW_KEY_UP},               {"down", GLFW_KEY_DOWN},
-      {"home", GLFW_KEY_HOME},           {"end", GLFW_KEY_END},             {"pageup", GLFW_KEY_PAGE_UP},
-      {"pagedown", GLFW_KEY_PAGE_DOWN},  {"insert", GLFW_KEY_INSERT},       {"minus", GLFW_KEY_MINUS},
-      {"equal", GLFW_KEY_EQUAL},         {"plus", GLFW_KEY_EQUAL},          {"period", GLFW_KEY_PERIOD},
-      {"comma", GLFW_KEY_COMMA},
+      {"delete", GLFW_KEY_DELETE},  {"backspace", GLFW_KEY_BACKSPACE},
+      {"escape", GLFW_KEY_ESCAPE},  {"esc", GLFW_KEY_ESCAPE},
+      {"enter", GLFW_KEY_ENTER},    {"return", GLFW_KEY_ENTER},
+      {"tab", GLFW_KEY_TAB},        {"space", GLFW_KEY_SPACE},
+      {"left", GLFW_KEY_LEFT},      {"right", GLFW_KEY_RIGHT},
+      {"up", GLFW_KEY_UP},          {"down", GLFW_KEY_DOWN},
+      {"home", GLFW_KEY_HOME},      {"end", GLFW_KEY_END},
+      {"pageup", GLFW_KEY_PAGE_UP}, {"pagedown", GLFW_KEY_PAGE_DOWN},
+      {"insert", GLFW_KEY_INSERT},  {"minus", GLFW_KEY_MINUS},
+      {"equal", GLFW_KEY_EQUAL},    {"plus", GLFW_KEY_EQUAL},
+      {"period", GLFW_KEY_PERIOD},  {"comma", GLFW_KEY_COMMA},
   };
   if (auto it = named.find(name); it != named.end()) return it->second;
   if (name.size() >= 2 && name[0] == 'f') {
@@ -146,8 +149,8 @@ std::string ParseDrag(const std::vector<std::string>& t, ScriptStep step, Steps*
   float x1, y1, x2, y2;
   int count = 0;
   const int b = n == 6 ? ButtonIndex(Lower(t[1])) : -1;
-  if (b < 0 || !ParseFloat(t[2], &x1) || !ParseFloat(t[3], &y1) || !ParseFloat(t[4], &x2) ||
-      !ParseFloat(t[5], &y2) || !ParseInt(t[6], &count) || count < 1 || count > 10000) {
+  if (b < 0 || !ParseFloat(t[2], &x1) || !ParseFloat(t[3], &y1) || !ParseFloat(t[4], &x2) || !ParseFloat(t[5], &y2) ||
+      !ParseInt(t[6], &count) || count < 1 || count > 10000) {
     return "'drag BUTTON X1 Y1 X2 Y2 STEPS' needs a button, four numbers and 1..10000 steps";
   }
   step.mouse_pos = std::array<float, 2>{x1, y1};
@@ -212,10 +215,14 @@ std::string ParseKey(const std::vector<std::string>& t, ScriptStep step, Steps* 
     const size_t plus = spec.find('+');
     if (plus == std::string::npos || plus == 0 || plus + 1 == spec.size()) break;
     const std::string mod = spec.substr(0, plus);
-    if (mod == "ctrl" || mod == "control") key.ctrl = true;
-    else if (mod == "shift") key.shift = true;
-    else if (mod == "alt") key.alt = true;
-    else return "unknown modifier '" + mod + "' (ctrl, shift, alt)";
+    if (mod == "ctrl" || mod == "control")
+      key.ctrl = true;
+    else if (mod == "shift")
+      key.shift = true;
+    else if (mod == "alt")
+      key.alt = true;
+    else
+      return "unknown modifier '" + mod + "' (ctrl, shift, alt)";
     spec = spec.substr(plus + 1);
   }
   key.key_code = KeyCodeFromName(spec);
@@ -238,17 +245,20 @@ std::string ParseKey(const std::vector<std::string>& t, ScriptStep step, Steps* 
 std::string ParseModifier(const std::string& cmd, const std::vector<std::string>& t, ScriptStep step, Steps* steps) {
   const bool down = cmd == "hold";
   const std::string mod = t.size() == 2 ? Lower(t[1]) : std::string();
-  if (mod == "shift") step.hold_shift = down;
-  else if (mod == "ctrl" || mod == "control") step.hold_ctrl = down;
-  else if (mod == "alt") step.hold_alt = down;
-  else return "'" + cmd + "' needs shift, ctrl or alt";
+  if (mod == "shift")
+    step.hold_shift = down;
+  else if (mod == "ctrl" || mod == "control")
+    step.hold_ctrl = down;
+  else if (mod == "alt")
+    step.hold_alt = down;
+  else
+    return "'" + cmd + "' needs shift, ctrl or alt";
   steps->push_back(step);
   return "";
 }
 
 // command NAME [ARGS]: checked against CommandArity; the arguments stay one string.
-std::string ParseAppCommand(const std::string& line, const std::vector<std::string>& t, ScriptStep step,
-                            Steps* steps) {
+std::string ParseAppCommand(const std::string& line, const std::vector<std::string>& t, ScriptStep step, Steps* steps) {
   if (t.size() < 2) return "'command NAME [ARGS]' needs a name";
   step.command = Lower(t[1]);
   const auto& arity = CommandArity();
@@ -256,7 +266,8 @@ std::string ParseAppCommand(const std::string& line, const std::vector<std::stri
   if (it == arity.end()) {
     return "unknown app command '" + t[1] +
            "' (undo, redo, save, open, tool, select-image, fit, export, add, select, free-vertex, "
-           "planar-face, constrain, select-add, line-pin, line-pin-move, calibration, move-selection, add-photo, wait-bake, "
+           "planar-face, constrain, select-add, line-pin, line-pin-move, calibration, move-selection, add-photo, "
+           "wait-bake, "
            "bake-status)";
   }
   const std::string rest = Rest(line, 2);

@@ -114,7 +114,8 @@ bool DeletePrimitiveEdit(AppState* state, Id primitive_id) {
   std::erase_if(edited.primitives, [&](const Primitive& p) { return p.id == primitive_id; });
   std::erase_if(edited.pins, [&](const Pin& pin) { return pin.vertex.primitive_id == primitive_id; });
   std::erase_if(edited.constraints, [&](const Constraint& c) {
-    return std::any_of(c.vertices.begin(), c.vertices.end(), [&](const VertexRef& v) { return v.primitive_id == primitive_id; });
+    return std::any_of(c.vertices.begin(), c.vertices.end(),
+                       [&](const VertexRef& v) { return v.primitive_id == primitive_id; });
   });
   for (Primitive& p : edited.primitives) {
     if (p.attached_to == primitive_id) p.attached_to = kNoId;
@@ -274,9 +275,11 @@ bool SameConstraint(const Constraint& a, const Constraint& b) {
       return edges(a) == edges(b);
     }
     case ConstraintKind::kDistance:
-      return a.value == b.value && UnorderedEdge(a.vertices[0], a.vertices[1]) == UnorderedEdge(b.vertices[0], b.vertices[1]);
+      return a.value == b.value &&
+             UnorderedEdge(a.vertices[0], a.vertices[1]) == UnorderedEdge(b.vertices[0], b.vertices[1]);
     case ConstraintKind::kAlongAxis:
-      return a.axis == b.axis && UnorderedEdge(a.vertices[0], a.vertices[1]) == UnorderedEdge(b.vertices[0], b.vertices[1]);
+      return a.axis == b.axis &&
+             UnorderedEdge(a.vertices[0], a.vertices[1]) == UnorderedEdge(b.vertices[0], b.vertices[1]);
     case ConstraintKind::kEdgeOnImageLine:
       return a.image_id == b.image_id && a.vertices == b.vertices && a.line_a_px == b.line_a_px &&
              a.line_b_px == b.line_b_px;
@@ -428,7 +431,8 @@ bool ConstrainVertexSetEdit(AppState* state, ConstraintKind kind, const std::vec
   if (vertices.size() < need) {
     return Refuse(state, label,
                   "needs " + std::to_string(need) + " or more different vertices (" + std::to_string(vertices.size()) +
-                      " selected" + (coplanar ? "; 3 points are always coplanar)" : "; 2 points are always collinear)"));
+                      " selected" +
+                      (coplanar ? "; 3 points are always coplanar)" : "; 2 points are always collinear)"));
   }
   std::vector<Eigen::Vector3d> p;
   for (const VertexRef& v : vertices) p.push_back(VertexInWorld(project, v));
@@ -647,8 +651,8 @@ bool ConstraintPairStep(AppState* state, ConstraintKind kind) {
   const ElementRef edge = state->selection.element;
   const std::string label = ConstraintEditLabel(kind);
   if (edge.kind != ElementKind::kEdge) return Refuse(state, label, "select an edge first");
-  const bool pending = state->constraint_first_kind == kind && ElementExists(state->document.project(),
-                                                                              state->constraint_first_edge);
+  const bool pending =
+      state->constraint_first_kind == kind && ElementExists(state->document.project(), state->constraint_first_edge);
   if (!pending) {
     state->constraint_first_edge = edge;
     state->constraint_first_kind = kind;
@@ -829,8 +833,10 @@ bool RunSelectAddCommand(AppState* state, const std::string& arg, std::string* e
   unsigned long long primitive_id = 0, element = 0;
   ElementRef ref;
   if (in >> kind >> primitive_id >> element && !(in >> extra)) {
-    ref.kind = kind == "vertex" ? ElementKind::kVertex : kind == "edge" ? ElementKind::kEdge
-               : kind == "face" ? ElementKind::kFace : ElementKind::kNone;
+    ref.kind = kind == "vertex" ? ElementKind::kVertex
+               : kind == "edge" ? ElementKind::kEdge
+               : kind == "face" ? ElementKind::kFace
+                                : ElementKind::kNone;
     ref.primitive_id = static_cast<Id>(primitive_id);
     ref.element = static_cast<std::uint32_t>(element);
   }

@@ -101,9 +101,9 @@ double ClosestEdgeParameter(const Eigen::Vector3d& a, const Eigen::Vector3d& b, 
   return std::clamp(t, 0.0, 1.0);
 }
 
-ElementPick PickInImage(const Project& project, const std::vector<ProjectedPrimitive>& projected,
-                        const Camera& camera, double zoom, const Eigen::Vector2d& origin_screen,
-                        const Eigen::Vector2d& mouse_screen, const PickFilter& filter, double radius_px) {
+ElementPick PickInImage(const Project& project, const std::vector<ProjectedPrimitive>& projected, const Camera& camera,
+                        double zoom, const Eigen::Vector2d& origin_screen, const Eigen::Vector2d& mouse_screen,
+                        const PickFilter& filter, double radius_px) {
   auto screen = [&](const Eigen::Vector2d& uv) -> Eigen::Vector2d { return origin_screen + zoom * uv; };
   const Eigen::Vector3d eye = camera.CenterInWorld();
   const Eigen::Vector2d mouse_uv = (mouse_screen - origin_screen) / zoom;
@@ -188,8 +188,7 @@ ElementPick PickInImage(const Project& project, const std::vector<ProjectedPrimi
 bool ProjectToPanel(const PickRay& ray, const Eigen::Vector3d& p_in_world, Eigen::Vector2d* px) {
   const glm::dvec4 clip = ray.clip_from_world * HomogeneousGlm(p_in_world);
   if (clip.w <= 1e-9) return false;
-  *px = Eigen::Vector2d((clip.x / clip.w + 1.0) * 0.5 * ray.width_px,
-                        (1.0 - clip.y / clip.w) * 0.5 * ray.height_px);
+  *px = Eigen::Vector2d((clip.x / clip.w + 1.0) * 0.5 * ray.width_px, (1.0 - clip.y / clip.w) * 0.5 * ray.height_px);
   return true;
 }
 
@@ -202,9 +201,9 @@ ElementPick PickByRay(const Project& project, const PickRay& ray, const PickFilt
     for (FaceId f = 0; f < mesh.FaceIdEnd(); ++f) {
       if (!mesh.IsFace(f)) continue;
       for (const CornerTriangle& tri : TriangulateFace(mesh, f)) {
-        const double t = RayTriangle(ray.origin, ray.direction, mesh.vertex(mesh.Origin(tri[0])).position,
-                                     mesh.vertex(mesh.Origin(tri[1])).position,
-                                     mesh.vertex(mesh.Origin(tri[2])).position);
+        const double t =
+            RayTriangle(ray.origin, ray.direction, mesh.vertex(mesh.Origin(tri[0])).position,
+                        mesh.vertex(mesh.Origin(tri[1])).position, mesh.vertex(mesh.Origin(tri[2])).position);
         if (t < hit_t) {
           hit_t = t;
           // Only a face seen from outside is pickable; from inside the hit still hides.

@@ -61,9 +61,9 @@ struct ElementPick {
 
 // Picks in an image: `to_screen` maps image px to screen px (the panel's view), `mouse` is
 // in screen px, `camera` is the image's camera (for the 3D edge parameter).
-ElementPick PickInImage(const Project& project, const std::vector<ProjectedPrimitive>& projected,
-                        const Camera& camera, double zoom, const Eigen::Vector2d& origin_screen,
-                        const Eigen::Vector2d& mouse_screen, const PickFilter& filter, double radius_px);
+ElementPick PickInImage(const Project& project, const std::vector<ProjectedPrimitive>& projected, const Camera& camera,
+                        double zoom, const Eigen::Vector2d& origin_screen, const Eigen::Vector2d& mouse_screen,
+                        const PickFilter& filter, double radius_px);
 
 // A view ray for picking in the 3D panel, with a projection to panel px. Origin and direction
 // are world points in core's Eigen (they meet the meshes); clip_from_world is the frame's GL
@@ -71,8 +71,8 @@ ElementPick PickInImage(const Project& project, const std::vector<ProjectedPrimi
 struct PickRay {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();  // unit
-  glm::dmat4 clip_from_world = glm::dmat4(1.0);  // GL's, as the frame drew (app/platform/gl_camera.h)
-  int width_px = 1, height_px = 1;  // the panel in px (device)
+  glm::dmat4 clip_from_world = glm::dmat4(1.0);          // GL's, as the frame drew (app/platform/gl_camera.h)
+  int width_px = 1, height_px = 1;                       // the panel in px (device)
   Eigen::Vector2d mouse_px = Eigen::Vector2d::Zero();
 };
 

@@ -24,7 +24,8 @@ bool RayPlane(const PickRay& ray, const Eigen::Vector3d& point, const Eigen::Vec
 }
 
 // The point of the line point + s * axis (axis unit) closest to the ray.
-bool ClosestOnAxis(const PickRay& ray, const Eigen::Vector3d& point, const Eigen::Vector3d& axis, Eigen::Vector3d* out) {
+bool ClosestOnAxis(const PickRay& ray, const Eigen::Vector3d& point, const Eigen::Vector3d& axis,
+                   Eigen::Vector3d* out) {
   const Eigen::Vector3d w0 = point - ray.origin;
   const double b = axis.dot(ray.direction);
   const double denominator = 1.0 - b * b;
@@ -177,8 +178,8 @@ bool RunMoveCommand(AppState* state, const std::string& arg, std::string* error)
       *error = "move-selection vertex: select a vertex first";
       return false;
     }
-    const VertexMoveSummary summary =
-        MoveVertex(project, {selection.element.primitive_id, selection.element.element}, value, VertexMoveOptions{}, &moved);
+    const VertexMoveSummary summary = MoveVertex(project, {selection.element.primitive_id, selection.element.element},
+                                                 value, VertexMoveOptions{}, &moved);
     if (!summary.ok) {
       *error = "move-selection vertex: " + summary.message;
       return false;

@@ -31,23 +31,23 @@ struct MoveDrag {
   bool vertex = false;    // a vertex, or the whole primitive
   VertexRef ref;
   Id primitive_id = kNoId;
-  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();        // world point under the mouse at the press
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();         // world point under the mouse at the press
   Eigen::Vector3d plane_normal = Eigen::Vector3d::UnitZ();  // the drag plane through the anchor
   Eigen::Vector2d press_px = Eigen::Vector2d::Zero();
   bool cancelled = false;  // Escape: the rest of the press does nothing (no orbit either)
-  bool accepted = false;  // some frame's move was accepted into the preview
+  bool accepted = false;   // some frame's move was accepted into the preview
   std::string accepted_message;
-  std::string hint;       // last result or refusal
+  std::string hint;  // last result or refusal
 };
 
 // One frame of the 3D panel's input for the Move tool.
 struct MoveToolInput {
-  PickRay ray;           // through the mouse, with the frame's projection
+  PickRay ray;             // through the mouse, with the frame's projection
   ElementPick pressed_on;  // what the left press hit (valid when `pressed`)
-  bool pressed = false;  // the left button went down on the panel this frame
-  bool released = false; // the left button went up this frame
-  bool shift = false;    // along the world z axis
-  bool cancel = false;   // Escape
+  bool pressed = false;    // the left button went down on the panel this frame
+  bool released = false;   // the left button went up this frame
+  bool shift = false;      // along the world z axis
+  bool cancel = false;     // Escape
 };
 
 // Advances the tool; call every frame while the Move tool is active or a move drag runs.

@@ -48,7 +48,8 @@ void OrbitLeavePhotoView(OrbitCamera* orbit, int width_px, int height_px) {
   const double image_h = photo.height_px > 0 ? photo.height_px : std::max(1, height_px);
   const double fit = std::min(std::max(1, width_px) / image_w, std::max(1, height_px) / image_h);
   const double focal_in_panel_px = std::max(1e-6, fit * photo.focal_px);
-  orbit->fov_y_deg = std::clamp(2.0 * std::atan(0.5 * std::max(1, height_px) / focal_in_panel_px) * 180.0 / kPi, 5.0, 120.0);
+  orbit->fov_y_deg =
+      std::clamp(2.0 * std::atan(0.5 * std::max(1, height_px) / focal_in_panel_px) * 180.0 / kPi, 5.0, 120.0);
   orbit->photo_image_id = kNoId;
 }
 

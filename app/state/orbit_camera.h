@@ -13,10 +13,10 @@ namespace facet::app {
 
 struct OrbitCamera {
   Eigen::Vector3d target = Eigen::Vector3d::Zero();  // world point the view turns about
-  double yaw_rad = -0.9;    // direction from target to eye, about world Z from +X
-  double pitch_rad = 0.45;  // elevation of the eye above the target's horizontal plane
-  double distance = 10.0;   // eye to target, world units
-  double fov_y_deg = 45.0;  // vertical field of view of the panel
+  double yaw_rad = -0.9;                             // direction from target to eye, about world Z from +X
+  double pitch_rad = 0.45;                           // elevation of the eye above the target's horizontal plane
+  double distance = 10.0;                            // eye to target, world units
+  double fov_y_deg = 45.0;                           // vertical field of view of the panel
 
   // While photo_image_id is set, the view is photo_camera (its pose, focal length and
   // principal point, the photo fitted into the panel).

@@ -263,8 +263,9 @@ bool LinearNonPlanar(const std::vector<PointCorrespondence>& points, LinearResul
   }
   Eigen::VectorXd v;
   if (!NullVector(a, &v)) {
-    *error = "the points do not determine a projection matrix (a degenerate configuration, e.g. points on a "
-             "line and a plane, or coplanar up to noise)";
+    *error =
+        "the points do not determine a projection matrix (a degenerate configuration, e.g. points on a "
+        "line and a plane, or coplanar up to noise)";
     return false;
   }
   Matrix34d p_normalised;
@@ -310,8 +311,9 @@ bool LinearPlanar(const std::vector<PointCorrespondence>& points, const Eigen::V
   }
   Eigen::VectorXd v;
   if (!NullVector(a, &v)) {
-    *error = "the plane's points do not determine a homography (three of four points on a line, or the "
-             "plane seen edge-on)";
+    *error =
+        "the plane's points do not determine a homography (three of four points on a line, or the "
+        "plane seen edge-on)";
     return false;
   }
   Eigen::Matrix3d h_normalised;
@@ -333,22 +335,25 @@ bool LinearPlanar(const std::vector<PointCorrespondence>& points, const Eigen::V
   if (!(focal_px > 0.0)) {
     const bool determined = inverse_f2 > 0.0 && std::isfinite(1.0 / std::sqrt(inverse_f2));
     if (!determined && !(fallback_focal_px > 0.0)) {
-      *error = "the focal length is undetermined from this plane: it is seen (nearly) fronto-parallel, or the "
-               "principal point is far from the one assumed";
+      *error =
+          "the focal length is undetermined from this plane: it is seen (nearly) fronto-parallel, or the "
+          "principal point is far from the one assumed";
       return false;
     }
     if (determined) {
       focal_px = 1.0 / std::sqrt(inverse_f2);
       const double diagonal_px = std::hypot(width_px, height_px);
       if (focal_px > 20.0 * diagonal_px)
-        warnings->push_back(Format("the focal length (%.0f px) is weakly determined: the plane is seen nearly "
-                                   "fronto-parallel; tilt it or use non-coplanar points",
-                                   focal_px));
+        warnings->push_back(
+            Format("the focal length (%.0f px) is weakly determined: the plane is seen nearly "
+                   "fronto-parallel; tilt it or use non-coplanar points",
+                   focal_px));
     } else {
       focal_px = fallback_focal_px;
-      warnings->push_back(Format("the plane does not determine the focal length (seen fronto-parallel): it "
-                                 "starts from the prior, %.0f px",
-                                 focal_px));
+      warnings->push_back(
+          Format("the plane does not determine the focal length (seen fronto-parallel): it "
+                 "starts from the prior, %.0f px",
+                 focal_px));
     }
   }
 
@@ -395,9 +400,7 @@ bool TranslationGivenRotation(const std::vector<PointCorrespondence>& points, co
   return translation->allFinite();
 }
 
-double Rms(const Eigen::VectorXd& r) {
-  return r.size() == 0 ? 0.0 : std::sqrt(r.squaredNorm() / (r.size() / 2));
-}
+double Rms(const Eigen::VectorXd& r) { return r.size() == 0 ? 0.0 : std::sqrt(r.squaredNorm() / (r.size() / 2)); }
 
 // The shape of the 3D points: their centroid, principal directions (columns of basis, the
 // largest spread first) and singular values of the centred points.
@@ -437,9 +440,10 @@ bool LinearCamera(const std::vector<PointCorrespondence>& points, const PointSha
   } else {
     const double planarity = shape.singular_values(2) / shape.singular_values(0);
     if (planarity < kNearlyPlanarRatio)
-      summary->warnings.push_back(Format("the points are nearly coplanar (thickness %.2g of their extent): the "
-                                         "linear estimate is poorly conditioned",
-                                         planarity));
+      summary->warnings.push_back(
+          Format("the points are nearly coplanar (thickness %.2g of their extent): the "
+                 "linear estimate is poorly conditioned",
+                 planarity));
     if (!LinearNonPlanar(points, linear, error)) return false;
   }
   summary->P = linear->p;
@@ -516,7 +520,8 @@ void ReportCamera(const std::vector<PointCorrespondence>& points, const Model& m
   }
   summary->reprojection_rms_px = Rms(r);
   if (behind > 0)
-    summary->warnings.push_back(std::to_string(behind) + " point(s) lie behind the camera: a point or its pixel "
+    summary->warnings.push_back(std::to_string(behind) +
+                                " point(s) lie behind the camera: a point or its pixel "
                                 "is probably wrong");
   summary->message = Format(summary->planar ? "planar (homography), f = %.2f px, RMS %.3f px (linear %.3f px)"
                                             : "DLT, f = %.2f px, RMS %.3f px (linear %.3f px)",
@@ -525,8 +530,8 @@ void ReportCamera(const std::vector<PointCorrespondence>& points, const Model& m
   if (summary->focal_prior_used)
     summary->message += Format("; focal prior %.1f +- %.1f px", options.focal_prior_px, options.focal_prior_std_px);
   if (!solve_principal_point && (options.refine || summary->planar))
-    summary->message += Format("; principal point held at (%.1f, %.1f)", camera.principal_point_px.x(),
-                               camera.principal_point_px.y());
+    summary->message +=
+        Format("; principal point held at (%.1f, %.1f)", camera.principal_point_px.x(), camera.principal_point_px.y());
 }
 
 }  // namespace
@@ -586,10 +591,10 @@ DltCalibrationSummary CalibrateFromPoints(const std::vector<PointCorrespondence>
   }
   const int n = static_cast<int>(points.size());
   if (n < 4)
-    return FailedSummary(summary,
-                         "calibration needs 6 or more non-coplanar points or 4 or more coplanar points, got " +
-                             std::to_string(n),
-                         start, SolverTermination::kInvalidInput);
+    return FailedSummary(
+        summary,
+        "calibration needs 6 or more non-coplanar points or 4 or more coplanar points, got " + std::to_string(n), start,
+        SolverTermination::kInvalidInput);
 
   // Shape of the 3D points: a line, a plane, or a volume.
   const PointShape shape = ShapeOf(points);

@@ -88,11 +88,11 @@ struct DltCalibrationOptions {
 // refinement's (linearisations; sum of squared reprojection residuals in px^2, plus the
 // focal prior's residual squared), zero without refinement.
 struct DltCalibrationSummary : SolverSummary {
-  bool planar = false;                // which path was taken
-  bool focal_fixed = false;           // fixed_focal_px was held (pose-only solve)
-  bool focal_prior_used = false;      // the focal prior took part in the refinement
-  Camera camera;                      // final camera (refined when options.refine)
-  double k1 = 0.0;                    // radial distortion, zero unless estimated
+  bool planar = false;            // which path was taken
+  bool focal_fixed = false;       // fixed_focal_px was held (pose-only solve)
+  bool focal_prior_used = false;  // the focal prior took part in the refinement
+  Camera camera;                  // final camera (refined when options.refine)
+  double k1 = 0.0;                // radial distortion, zero unless estimated
   double k2 = 0.0;
   // The linear step's projection matrix (pixels, world units), scaled to unit Frobenius norm
   // with det of its left 3x3 > 0; for the planar path K [R | t] of the first camera.

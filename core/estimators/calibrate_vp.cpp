@@ -14,8 +14,8 @@
 #include "core/optim/damped_normal_step.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/util/format.h"
-#include "core/util/timer.h"
 #include "core/util/stats.h"
+#include "core/util/timer.h"
 
 namespace facet {
 namespace {
@@ -203,7 +203,8 @@ struct JointProblem {
       const Eigen::Vector2d mv = s.m_cross * v;
       const double n = mv.norm();
       if (n > 0.0) {
-        const Eigen::RowVector3d dr_dv = s.g.transpose() / n - (s.g.dot(v) / (n * n * n)) * (mv.transpose() * s.m_cross);
+        const Eigen::RowVector3d dr_dv =
+            s.g.transpose() / n - (s.g.dot(v) / (n * n * n)) * (mv.transpose() * s.m_cross);
         jacobian->row(i) = dr_dv * dv_dparams[s.axis];
       }
       ++i;
@@ -384,7 +385,8 @@ bool GroupFamilies(const std::vector<Segment>& segments, const VpCalibrationOpti
     families->present[a] = size >= 2;
     if (families->present[a]) {
       ++families->count;
-      present_names += present_names.empty() ? AxisName(static_cast<Axis>(a)) : std::string(", ") + AxisName(static_cast<Axis>(a));
+      present_names +=
+          present_names.empty() ? AxisName(static_cast<Axis>(a)) : std::string(", ") + AxisName(static_cast<Axis>(a));
     }
   }
   families->one_family_mode = families->count == 1 && options.use_horizon;
@@ -436,7 +438,8 @@ bool FitFreeVanishingPoints(const Families& families, const Conditioning& condit
       free->sum_squared_residuals_px += fit.residuals_px[k] * fit.residuals_px[k];
     }
     if (fit.line_spread < kNearlyCollinearSpread)
-      summary->warnings.push_back(FamilyName(a) + ": its segments lie nearly on one line, so its vanishing point is poorly fixed");
+      summary->warnings.push_back(FamilyName(a) +
+                                  ": its segments lie nearly on one line, so its vanishing point is poorly fixed");
   }
   if (families.count == 3 && !free->at_infinity[0] && !free->at_infinity[1] && !free->at_infinity[2]) {
     std::array<Eigen::Vector2d, 3> points;
@@ -536,8 +539,8 @@ bool SolveClosedForm(const VpCalibrationOptions& options, const Families& famili
                                 " cannot fix the principal point; it was set to the image centre");
   }
   const FamilyPairs pairs = PresentPairs(families.present);
-  const double known_f = focal_fixed ? options.fixed_focal_px / scale_px
-                                     : (focal_prior ? options.focal_prior_px / scale_px : 0.0);
+  const double known_f =
+      focal_fixed ? options.fixed_focal_px / scale_px : (focal_prior ? options.focal_prior_px / scale_px : 0.0);
   double f_squared = 0.0;
   if (out->mode == PrincipalPointMode::kSolve) {
     for (int a = 0; a < 3; ++a)
@@ -570,9 +573,11 @@ bool SolveClosedForm(const VpCalibrationOptions& options, const Families& famili
   out->focal_prior_only = focal_prior && std::isnan(f_squared);
   if (out->focal_prior_only)
     summary->warnings.push_back("the segments do not fix the focal length; it is the prior's (" +
-                                internal::FormatNumber(options.focal_prior_px, 6) + " +- " + internal::FormatNumber(options.focal_prior_std_px, 6) + " px)");
+                                internal::FormatNumber(options.focal_prior_px, 6) + " +- " +
+                                internal::FormatNumber(options.focal_prior_std_px, 6) + " px)");
   out->no_real_focal =
-      "the vanishing points give no real focal length (f^2 = " + internal::FormatNumber(f_squared * scale_px * scale_px, 6) +
+      "the vanishing points give no real focal length (f^2 = " +
+      internal::FormatNumber(f_squared * scale_px * scale_px, 6) +
       " px^2 <= 0): the vanishing-point triangle is obtuse or the families are not mutually orthogonal; check the "
       "family assignment of the segments";
   if (focal_fixed) {
@@ -654,14 +659,12 @@ JointProblem MakeJointProblem(const VpCalibrationOptions& options, const Familie
   for (int a = 0; a < 3; ++a)
     for (size_t k = 0; k < families.segments_px[a].size(); ++k) {
       const Eigen::Vector4d& s = families.segments_px[a][k];
-      problem.segments.push_back(MakeJointSegment(conditioning.FromPixels(s.head<2>()),
-                                                  conditioning.FromPixels(s.tail<2>()), a,
-                                                  families.input_indices[a][k]));
+      problem.segments.push_back(MakeJointSegment(
+          conditioning.FromPixels(s.head<2>()), conditioning.FromPixels(s.tail<2>()), a, families.input_indices[a][k]));
     }
   if (problem.solve_pp && options.principal_point_prior_std_px >= 0.0) {
-    const double prior_std_px = options.principal_point_prior_std_px > 0.0
-                                    ? options.principal_point_prior_std_px
-                                    : kPrincipalPointPriorSigma * scale_px;
+    const double prior_std_px = options.principal_point_prior_std_px > 0.0 ? options.principal_point_prior_std_px
+                                                                           : kPrincipalPointPriorSigma * scale_px;
     problem.pp_prior_weight = noise / (prior_std_px / scale_px);
   }
   if (problem.solve_focal && options.focal_prior_px > 0.0) {
@@ -731,14 +734,13 @@ std::vector<bool> SegmentsToRemove(const JointProblem& full_problem, const Joint
 // without them until the set is stable. On return *problem is the problem the camera was
 // last fitted to. Fills the summary's iterations, costs (px^2), termination and outliers.
 void FitJointly(const VpCalibrationOptions& options, const JointProblem& full_problem, double scale_px,
-                size_t num_input_segments, JointProblem* problem, JointCamera* camera,
-                VpCalibrationSummary* summary) {
+                size_t num_input_segments, JointProblem* problem, JointCamera* camera, VpCalibrationSummary* summary) {
   const double px_squared = scale_px * scale_px;
   auto record = [&](const LmResult& fit) {
     summary->iterations += fit.accepted_steps;
     summary->final_cost = fit.final_cost * px_squared;
     summary->termination = fit.termination == LmTermination::kMaxIterations ? SolverTermination::kMaxIterations
-                                                                              : SolverTermination::kConverged;
+                                                                            : SolverTermination::kConverged;
   };
   *problem = full_problem;
   const LmResult first = RefineJointly(*problem, camera);
@@ -781,7 +783,7 @@ void EstimateUncertainty(const VpCalibrationOptions& options, const Families& fa
   const int num_params = problem.NumParams();
   summary->degrees_of_freedom = problem.NumResiduals() - num_params;
   const double nan = std::nan("");
-  summary->focal_std_px = options.fixed_focal_px > 0.0        ? 0.0
+  summary->focal_std_px = options.fixed_focal_px > 0.0   ? 0.0
                           : closed_form.focal_prior_only ? options.focal_prior_std_px
                                                          : nan;
   summary->principal_point_std_px = problem.solve_pp ? Eigen::Vector2d(nan, nan) : Eigen::Vector2d::Zero();
@@ -826,9 +828,9 @@ void EstimateUncertainty(const VpCalibrationOptions& options, const Families& fa
 // The fitted camera in pixels, its vanishing points and the residuals of every segment
 // against them (so that camera, points and residuals agree), the per-family figures and the
 // horizon's residual.
-void ReportFinalCamera(const std::vector<Segment>& segments, const Families& families,
-                       const JointProblem& full_problem, const JointProblem& problem, const JointCamera& camera,
-                       const Conditioning& conditioning, VpCalibrationSummary* summary) {
+void ReportFinalCamera(const std::vector<Segment>& segments, const Families& families, const JointProblem& full_problem,
+                       const JointProblem& problem, const JointCamera& camera, const Conditioning& conditioning,
+                       VpCalibrationSummary* summary) {
   const double scale_px = conditioning.scale_px;
   summary->focal_px = camera.f * scale_px;
   summary->principal_point_px = conditioning.center_px + scale_px * camera.pp;
@@ -877,9 +879,8 @@ void ReportFinalCamera(const std::vector<Segment>& segments, const Families& fam
 // The warnings about a usable calibration: an ambiguous vertical, nearly parallel families,
 // vanishing points far away or near the principal point, a nearly degenerate triangle,
 // outliers, a principal point outside the image. directions: the closed form's.
-void AddQualityWarnings(const VpCalibrationOptions& options, const Families& families,
-                        const FreeVanishingPoints& free, const Eigen::Matrix3d& directions, PrincipalPointMode mode,
-                        VpCalibrationSummary* summary) {
+void AddQualityWarnings(const VpCalibrationOptions& options, const Families& families, const FreeVanishingPoints& free,
+                        const Eigen::Matrix3d& directions, PrincipalPointMode mode, VpCalibrationSummary* summary) {
   std::vector<std::string>& warnings = summary->warnings;
   if (std::abs(summary->cam_from_world_rotation(1, 2)) < 1e-3)
     warnings.push_back("the vertical (family z) is nearly parallel to the image rows: up and down are ambiguous");
@@ -892,12 +893,13 @@ void AddQualityWarnings(const VpCalibrationOptions& options, const Families& fam
     if (free.at_infinity[a]) continue;
     const double to_plane_deg = std::asin(std::min(1.0, std::abs(directions(2, a)))) * kRadToDeg;
     if (to_plane_deg < kFarVanishingPointDeg)
-      warnings.push_back(FamilyName(a) + ": vanishing point very far from the image (direction " + internal::FormatNumber(to_plane_deg, 6) +
+      warnings.push_back(FamilyName(a) + ": vanishing point very far from the image (direction " +
+                         internal::FormatNumber(to_plane_deg, 6) +
                          " deg from the image plane); the focal length is poorly constrained");
     if (90.0 - to_plane_deg < kCentralVanishingPointDeg)
       warnings.push_back(FamilyName(a) + ": vanishing point near the principal point (" +
-                         internal::FormatNumber(summary->vanishing_point_to_principal_point_px[a], 6) + " px, direction " +
-                         internal::FormatNumber(90.0 - to_plane_deg, 6) +
+                         internal::FormatNumber(summary->vanishing_point_to_principal_point_px[a], 6) +
+                         " px, direction " + internal::FormatNumber(90.0 - to_plane_deg, 6) +
                          " deg from the optical axis); the focal length is poorly constrained");
   }
   if (mode == PrincipalPointMode::kSolve && summary->vanishing_point_triangle_max_angle_deg > kMaxTriangleAngleDeg)
@@ -910,14 +912,15 @@ void AddQualityWarnings(const VpCalibrationOptions& options, const Families& fam
       list += (k ? ", " : "") + std::to_string(summary->outlier_segments[k]);
     if (summary->outlier_segments.size() > 10) list += ", ...";
     warnings.push_back(std::to_string(summary->outlier_segments.size()) +
-                       " segment(s) flagged as outliers (residual above " + internal::FormatNumber(summary->outlier_threshold_px, 6) +
-                       " px): " + list +
+                       " segment(s) flagged as outliers (residual above " +
+                       internal::FormatNumber(summary->outlier_threshold_px, 6) + " px): " + list +
                        (summary->refitted_without_outliers ? "; the camera was refitted without them" : ""));
   }
   if (mode == PrincipalPointMode::kSolve) {
     const Eigen::Vector2d& c = summary->principal_point_px;
     if (c.x() < 0 || c.y() < 0 || c.x() > options.width_px - 1 || c.y() > options.height_px - 1)
-      warnings.push_back("the solved principal point (" + internal::FormatNumber(c.x(), 6) + ", " + internal::FormatNumber(c.y(), 6) +
+      warnings.push_back("the solved principal point (" + internal::FormatNumber(c.x(), 6) + ", " +
+                         internal::FormatNumber(c.y(), 6) +
                          ") lies outside the image: a cropped photo, or inaccurate vanishing points");
   }
 }
@@ -938,7 +941,8 @@ bool VpCalibrationOptions::Check(std::string* error) const {
     return false;
   }
   if (!(fixed_focal_px >= 0.0) || !std::isfinite(fixed_focal_px)) {
-    *error = "the fixed focal length must be finite and positive (0 to solve it), got " + internal::FormatNumber(fixed_focal_px, 6);
+    *error = "the fixed focal length must be finite and positive (0 to solve it), got " +
+             internal::FormatNumber(fixed_focal_px, 6);
     return false;
   }
   const bool has_prior = focal_prior_px != 0.0 || focal_prior_std_px != 0.0;
@@ -952,8 +956,8 @@ bool VpCalibrationOptions::Check(std::string* error) const {
     *error = "give either a fixed focal length or a focal length prior, not both";
     return false;
   }
-  if (use_horizon && (!horizon_px.allFinite() || (horizon_px.head<2>() - horizon_px.tail<2>()).norm() <
-                                                     1e-6 * std::max(width_px, height_px))) {
+  if (use_horizon && (!horizon_px.allFinite() ||
+                      (horizon_px.head<2>() - horizon_px.tail<2>()).norm() < 1e-6 * std::max(width_px, height_px))) {
     *error = "the horizon needs two distinct finite points";
     return false;
   }
@@ -1004,12 +1008,12 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
   // numerically singular.
   const int num_segments = static_cast<int>(segments.size());
   const double independent_rms_px = std::sqrt(free.sum_squared_residuals_px / num_segments);
-  const double noise = std::max(
-      std::sqrt(free.sum_squared_residuals_px / std::max(1, num_segments - 2 * families.count)) / scale_px,
-      kNoiseFloor);
+  const double noise =
+      std::max(std::sqrt(free.sum_squared_residuals_px / std::max(1, num_segments - 2 * families.count)) / scale_px,
+               kNoiseFloor);
   const JointProblem full_problem = MakeJointProblem(options, families, conditioning, closed_form, noise, horizon);
-  JointCamera camera = StartCamera(options, full_problem, conditioning, closed_form,
-                                   NearestRotation(ChooseAxisSigns(directions)));
+  JointCamera camera =
+      StartCamera(options, full_problem, conditioning, closed_form, NearestRotation(ChooseAxisSigns(directions)));
   JointProblem problem;
   FitJointly(options, full_problem, scale_px, segments.size(), &problem, &camera, &summary);
   EstimateUncertainty(options, families, closed_form, problem, camera, noise, scale_px, &summary);
@@ -1021,8 +1025,8 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
     if (!(summary.rms_residual_px <= kMaxJointRmsRatio * independent_rms_px + kJointRmsSlackPx))
       return FailedSummary(summary,
                            closed_form.no_real_focal + " (a fit with orthogonal directions leaves " +
-                               internal::FormatNumber(summary.rms_residual_px, 6) + " px RMS against " + internal::FormatNumber(independent_rms_px, 6) +
-                               " px for free vanishing points)",
+                               internal::FormatNumber(summary.rms_residual_px, 6) + " px RMS against " +
+                               internal::FormatNumber(independent_rms_px, 6) + " px for free vanishing points)",
                            start);
     summary.warnings.push_back(
         "the three vanishing points alone give no real focal length (a vanishing point far from the image makes "
@@ -1037,7 +1041,8 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
   if (std::isfinite(summary.focal_std_px) && summary.focal_std_px > 0.0)
     summary.message += " +- " + internal::FormatNumber(summary.focal_std_px, 6);
   summary.message += ", principal point (" + internal::FormatNumber(summary.principal_point_px.x(), 6) + ", " +
-                     internal::FormatNumber(summary.principal_point_px.y(), 6) + ") px from " + std::to_string(families.count) +
+                     internal::FormatNumber(summary.principal_point_px.y(), 6) + ") px from " +
+                     std::to_string(families.count) +
                      (families.count == 1 ? " vanishing point and the horizon" : " vanishing points");
   summary.time_ms = internal::MsSince(start);
   return summary;

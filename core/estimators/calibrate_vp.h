@@ -88,7 +88,7 @@ struct VpCalibrationSummary : SolverSummary {
   // Homogeneous vanishing point per axis (x, y, z) of the fitted camera (K R e_axis), unit
   // norm, third coordinate >= 0; zero when the family is absent.
   std::array<Eigen::Vector3d, 3> vanishing_points{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
-                                                   Eigen::Vector3d::Zero()};
+                                                  Eigen::Vector3d::Zero()};
   // A family whose segments are parallel in the image (within ~1e-5 rad at the camera).
   std::array<bool, 3> vanishing_point_at_infinity = {false, false, false};
   // RMS over a family's segments of segment_residuals_px; zero when the family is absent.

@@ -9,13 +9,13 @@
 
 #include <Eigen/Dense>
 
-#include "core/util/format.h"
-#include "core/util/timer.h"
 #include "core/geometry/cross_product_matrix.h"
 #include "core/geometry/hartley_normalization.h"
 #include "core/optim/damped_normal_step.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/optim/solver_summary.h"
+#include "core/util/format.h"
+#include "core/util/timer.h"
 
 namespace facet {
 namespace {
@@ -269,8 +269,7 @@ std::vector<int> RansacInliers(const std::vector<Eigen::Vector2d>& uv1, const st
       if (errors[i] < threshold) in.push_back(i);
       score += std::min(errors[i] * errors[i], threshold * threshold);
     }
-    if (static_cast<int>(in.size()) > best_count ||
-        (static_cast<int>(in.size()) == best_count && score < best_score)) {
+    if (static_cast<int>(in.size()) > best_count || (static_cast<int>(in.size()) == best_count && score < best_score)) {
       best_count = static_cast<int>(in.size());
       best_score = score;
       best = in;
@@ -297,8 +296,8 @@ HomographySummary EstimateHomography(const std::vector<Eigen::Vector2d>& uv1, co
     return FailedSummary(summary, "the two images have different numbers of points", start, kInvalidInput);
   const int n = static_cast<int>(uv1.size());
   if (n < 4)
-    return FailedSummary(summary, "a homography needs 4 or more matches on one plane, got " + std::to_string(n),
-                         start, kInvalidInput);
+    return FailedSummary(summary, "a homography needs 4 or more matches on one plane, got " + std::to_string(n), start,
+                         kInvalidInput);
   for (int i = 0; i < n; ++i)
     if (!uv1[i].allFinite() || !uv2[i].allFinite())
       return FailedSummary(summary, "match " + std::to_string(i) + " has a non-finite coordinate", start,
@@ -357,8 +356,9 @@ HomographySummary EstimateHomography(const std::vector<Eigen::Vector2d>& uv1, co
   if (!ransac && n == 5) {
     const std::vector<double> errors = SymmetricTransferErrors(h, uv1, uv2);
     if (*std::max_element(errors.begin(), errors.end()) > options.inlier_threshold_px)
-      summary.warnings.push_back("a match is off the homography by more than the threshold, but 5 matches cannot "
-                                 "tell which one (6 or more flag wrong clicks)");
+      summary.warnings.push_back(
+          "a match is off the homography by more than the threshold, but 5 matches cannot "
+          "tell which one (6 or more flag wrong clicks)");
   }
   summary.message = "homography from " + std::to_string(summary.num_inliers) + " of " + std::to_string(n) +
                     " matches, symmetric transfer RMS " + FormatNumber(summary.symmetric_transfer_rms_px) + " px";
@@ -435,8 +435,7 @@ HomographyPoseSummary EstimatePlanePose(const std::vector<Eigen::Vector2d>& uv1,
   std::string error;
   if (!options.Check(&error))
     return FailedSummary(summary, "invalid options: " + error, start, SolverTermination::kInvalidInput);
-  if (!K1.allFinite() || !K2.allFinite() || !(std::abs(K1.determinant()) > 0.0) ||
-      !(std::abs(K2.determinant()) > 0.0))
+  if (!K1.allFinite() || !K2.allFinite() || !(std::abs(K1.determinant()) > 0.0) || !(std::abs(K2.determinant()) > 0.0))
     return FailedSummary(summary, "the intrinsics must be finite and invertible", start,
                          SolverTermination::kInvalidInput);
   summary.homography = EstimateHomography(uv1, uv2, options.homography);
@@ -465,15 +464,15 @@ HomographyPoseSummary EstimatePlanePose(const std::vector<Eigen::Vector2d>& uv1,
     summary.pure_rotation = true;
     summary.candidates = all;
     summary.candidates[0].points_in_front = summary.num_points;
-    summary.warnings.push_back("the homography is a pure rotation: the cameras share their centre, so the baseline "
-                               "and the plane are undetermined");
+    summary.warnings.push_back(
+        "the homography is a pure rotation: the cameras share their centre, so the baseline "
+        "and the plane are undetermined");
   } else {
     for (PlanePose& pose : all) {
       if (pose.points_in_front < summary.num_points || !pose.centres_on_one_side) continue;
-      const Eigen::Matrix3d h = K2 *
-                                (pose.cam2_from_cam1_rotation +
-                                 pose.translation_over_distance * pose.plane_normal_in_cam1.transpose()) *
-                                k1_inverse;
+      const Eigen::Matrix3d h =
+          K2 * (pose.cam2_from_cam1_rotation + pose.translation_over_distance * pose.plane_normal_in_cam1.transpose()) *
+          k1_inverse;
       pose.reprojection_rms_px = TransferRms(h, in1, in2);
       summary.candidates.push_back(pose);
     }
@@ -486,10 +485,9 @@ HomographyPoseSummary EstimatePlanePose(const std::vector<Eigen::Vector2d>& uv1,
                                "): wrong clicks, or wrong intrinsics",
                            start);
     }
-    std::stable_sort(summary.candidates.begin(), summary.candidates.end(),
-                     [](const PlanePose& a, const PlanePose& b) {
-                       return a.reprojection_rms_px < b.reprojection_rms_px;
-                     });
+    std::stable_sort(summary.candidates.begin(), summary.candidates.end(), [](const PlanePose& a, const PlanePose& b) {
+      return a.reprojection_rms_px < b.reprojection_rms_px;
+    });
     summary.ambiguous = summary.candidates.size() > 1;
   }
   const PlanePose& best = summary.candidates[0];

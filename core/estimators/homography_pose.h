@@ -77,10 +77,10 @@ HomographySummary EstimateHomography(const std::vector<Eigen::Vector2d>& uv1, co
 // One decomposition of a calibrated homography.
 struct PlanePose {
   Eigen::Matrix3d cam2_from_cam1_rotation = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d translation_over_distance = Eigen::Vector3d::Zero();  // t / d
+  Eigen::Vector3d translation_over_distance = Eigen::Vector3d::Zero();   // t / d
   Eigen::Vector3d cam2_from_cam1_translation = Eigen::Vector3d::Zero();  // unit norm (zero if t = 0)
   Eigen::Vector3d plane_normal_in_cam1 = Eigen::Vector3d::UnitZ();       // unit, away from camera 1
-  int points_in_front = 0;  // inliers in front of both cameras, out of the summary's num_points
+  int points_in_front = 0;           // inliers in front of both cameras, out of the summary's num_points
   bool centres_on_one_side = false;  // both camera centres on the near side of the plane
   // RMS (px) over both images of the inliers triangulated on this plane and reprojected.
   double reprojection_rms_px = 0.0;

@@ -184,8 +184,8 @@ Eigen::VectorXd Residuals(const Problem& problem, const State& state, bool in_ob
           state.vanishing_points[polyline.family_slot].cross(Eigen::Vector3d(centroid.x(), centroid.y(), 1.0));
       const double norm = line.head<2>().norm();
       if (norm == 0.0) {
-        residuals.segment(polyline.first_residual, polyline.num_residuals).setConstant(
-            std::numeric_limits<double>::infinity());
+        residuals.segment(polyline.first_residual, polyline.num_residuals)
+            .setConstant(std::numeric_limits<double>::infinity());
         continue;
       }
       normal = line.head<2>() / norm;
@@ -457,9 +457,8 @@ bool ChooseCoefficients(const Problem& problem, const State& state, const PlumbL
 
 // One-sigma standard deviations of k from the Gauss-Newton covariance of the reduced
 // information, scaled by the residual variance; the noise sigma in px.
-void EstimateCoefficientStd(const Problem& problem, const State& state, const ActiveSet& active,
-                            int num_constraints, const Eigen::VectorXd& residuals, double scale,
-                            PlumbLineSummary* summary) {
+void EstimateCoefficientStd(const Problem& problem, const State& state, const ActiveSet& active, int num_constraints,
+                            const Eigen::VectorXd& residuals, double scale, PlumbLineSummary* summary) {
   const int num_k = active.k2 ? 2 : 1;
   const int dof = num_constraints - num_k;
   const Eigen::MatrixXd reduced = ReducedInformation(NumericJacobian(problem, state, active), num_k);
@@ -536,8 +535,8 @@ RadialDistortion MakeRadialDistortion(int width_px, int height_px, const std::op
 }
 
 RadialDistortion RadialDistortionFromOpenCv(const OpenCvRadialCoefficients& opencv, double focal_px,
-                                            const Eigen::Vector2d& center_px, double scale_px,
-                                            double max_radius_px, bool fit_k2, double* max_error_px) {
+                                            const Eigen::Vector2d& center_px, double scale_px, double max_radius_px,
+                                            bool fit_k2, double* max_error_px) {
   RadialDistortion distortion;
   distortion.center_px = center_px;
   distortion.scale_px = scale_px;
@@ -657,17 +656,17 @@ PlumbLineSummary EstimateRadialDistortion(const std::vector<PlumbLine>& lines, c
   ReportLines(problem, layout, state, distances, summary.distortion, &summary);
 
   if (summary.k1_std > options.poorly_determined_ratio * std::abs(state.k1)) {
-    summary.warnings.push_back(Format("k1 is poorly determined: %.4g +- %.2g; add lines far from the centre",
-                                      state.k1, summary.k1_std));
+    summary.warnings.push_back(
+        Format("k1 is poorly determined: %.4g +- %.2g; add lines far from the centre", state.k1, summary.k1_std));
   }
   if (active.k2 && summary.k2_std > options.poorly_determined_ratio * std::abs(state.k2)) {
-    summary.warnings.push_back(Format("k2 is poorly determined: %.4g +- %.2g; consider k1 alone", state.k2,
-                                      summary.k2_std));
+    summary.warnings.push_back(
+        Format("k2 is poorly determined: %.4g +- %.2g; consider k1 alone", state.k2, summary.k2_std));
   }
   summary.termination = TerminationOf(fit);
-  summary.message = active.k2 ? Format("k1 = %.5g, k2 = %.5g, straightness RMS %.3g px", state.k1, state.k2,
-                                       summary.final_rms_px)
-                              : Format("k1 = %.5g, straightness RMS %.3g px", state.k1, summary.final_rms_px);
+  summary.message =
+      active.k2 ? Format("k1 = %.5g, k2 = %.5g, straightness RMS %.3g px", state.k1, state.k2, summary.final_rms_px)
+                : Format("k1 = %.5g, straightness RMS %.3g px", state.k1, summary.final_rms_px);
   summary.time_ms = internal::MsSince(start);
   return summary;
 }

@@ -66,9 +66,8 @@ struct OpenCvRadialCoefficients {
 // *max_error_px (optional) receives the largest radial disagreement in px over that range.
 // fit_k2 = false fits k1 alone (k2 = 0 / k2_cv = 0); k3 of the result is always 0.
 RadialDistortion RadialDistortionFromOpenCv(const OpenCvRadialCoefficients& opencv, double focal_px,
-                                            const Eigen::Vector2d& center_px, double scale_px,
-                                            double max_radius_px, bool fit_k2 = true,
-                                            double* max_error_px = nullptr);
+                                            const Eigen::Vector2d& center_px, double scale_px, double max_radius_px,
+                                            bool fit_k2 = true, double* max_error_px = nullptr);
 OpenCvRadialCoefficients OpenCvFromRadialDistortion(const RadialDistortion& distortion, double focal_px,
                                                     double max_radius_px, bool fit_k2 = true,
                                                     double* max_error_px = nullptr);
@@ -87,9 +86,9 @@ struct PlumbLineOptions {
   int width_px = 0;  // image size: fixes the scale s and the default centre; both > 0
   int height_px = 0;
   std::optional<Eigen::Vector2d> center_px;  // centre of distortion; unset: the image centre
-  bool estimate_k2 = false;  // k2 only when asked; still dropped (with a warning) when the data
-                             // cannot separate it from k1
-  int max_iterations = 100;  // Levenberg-Marquardt iterations
+  bool estimate_k2 = false;                  // k2 only when asked; still dropped (with a warning) when the data
+                                             // cannot separate it from k1
+  int max_iterations = 100;                  // Levenberg-Marquardt iterations
   // A warning says k1 is poorly determined when std(k1) > poorly_determined_ratio * |k1|.
   double poorly_determined_ratio = 0.5;
 

@@ -103,9 +103,9 @@ void ApplyProjectiveStep(const ProjectiveState& state, const SchurStep& step, st
   *pts = state.pts;
   for (size_t v = 0; v < cams->size(); ++v)
     if (state.camera_used[v])
-      (*cams)[v] = FromRowMajor(RowMajor(state.cams[v]) +
-                                state.cam_basis[v] * step.camera.segment<kCameraDof>(kCameraDof * v))
-                       .normalized();
+      (*cams)[v] =
+          FromRowMajor(RowMajor(state.cams[v]) + state.cam_basis[v] * step.camera.segment<kCameraDof>(kCameraDof * v))
+              .normalized();
   for (size_t j = 0; j < pts->size(); ++j)
     if (state.point_used[j]) (*pts)[j] = (state.pts[j] + state.point_basis[j] * step.points[j]).normalized();
 }
@@ -198,9 +198,9 @@ ProjectiveBundleSummary ProjectiveBundleAdjust(const std::vector<ProjectiveBundl
   summary.final_cost = cost;
   summary.final_rms_px = std::sqrt(cost / (2.0 * observations.size()));
   const bool usable = std::isfinite(cost) && cost <= initial_cost;
-  summary.termination = !usable ? SolverTermination::kFailed
+  summary.termination = !usable                                                  ? SolverTermination::kFailed
                         : lm_result.termination == LmTermination::kMaxIterations ? SolverTermination::kMaxIterations
-                                                                                  : SolverTermination::kConverged;
+                                                                                 : SolverTermination::kConverged;
   if (usable) {
     *cameras = state.cams;
     *points = state.pts;

@@ -1,9 +1,9 @@
 #include "core/estimators/projective_upgrade.h"
-#include "core/util/format.h"
-#include "core/util/timer.h"
 #include "core/geometry/cross_product_matrix.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/optim/solver_summary.h"
+#include "core/util/format.h"
+#include "core/util/timer.h"
 
 #include <algorithm>
 #include <chrono>
@@ -245,7 +245,8 @@ AffineUpgradeSummary UpgradeToAffine(const std::vector<Matrix34d>& cameras,
     if (vanishing[k].size() != cameras.size())
       return fail("vanishing point " + std::to_string(k) + " is not given in every view");
     for (const auto& v : vanishing[k])
-      if (!v.allFinite() || !(v.norm() > 0)) return fail("vanishing point " + std::to_string(k) + " is zero or not finite");
+      if (!v.allFinite() || !(v.norm() > 0))
+        return fail("vanishing point " + std::to_string(k) + " is zero or not finite");
     const Eigen::Vector4d x = TriangulateLinear(cameras, vanishing[k]);
     summary.vanishing_points_3d.push_back(x);
     a.row(k) = x.transpose();
@@ -254,8 +255,9 @@ AffineUpgradeSummary UpgradeToAffine(const std::vector<Matrix34d>& cameras,
   Eigen::Vector4d sv = Eigen::Vector4d::Zero();
   sv.head(std::min(m, 4)) = svd.singularValues().head(std::min(m, 4));
   if (!(sv(2) > kIndependentDirectionsRatio * sv(0)))
-    return fail("the vanishing points give fewer than 3 independent directions (two are the same direction, or all "
-                "lie on one line of the image)");
+    return fail(
+        "the vanishing points give fewer than 3 independent directions (two are the same direction, or all "
+        "lie on one line of the image)");
   const Eigen::Vector4d pi = svd.matrixV().col(3).normalized();
   summary.plane_at_infinity = pi;
   summary.plane_residual = sv(3) / sv(0);
@@ -319,7 +321,8 @@ bool DecomposeProjectionMatrix(const Matrix34d& P, Eigen::Matrix3d* K, Eigen::Ma
   return K->allFinite() && R->allFinite() && t->allFinite();
 }
 
-MetricUpgradeSummary UpgradeToMetric(const std::vector<Matrix34d>& affine_cameras, const std::vector<Eigen::Matrix3d>& K,
+MetricUpgradeSummary UpgradeToMetric(const std::vector<Matrix34d>& affine_cameras,
+                                     const std::vector<Eigen::Matrix3d>& K,
                                      const std::vector<Eigen::Vector4d>& affine_points,
                                      const MetricUpgradeOptions& options) {
   const auto start = Clock::now();
@@ -362,8 +365,9 @@ MetricUpgradeSummary UpgradeToMetric(const std::vector<Matrix34d>& affine_camera
   for (int u = 0; u < 6; ++u) c(pairs[u][0], pairs[u][1]) = c(pairs[u][1], pairs[u][0]) = z(u);
   Eigen::LLT<Eigen::Matrix3d> llt(c);
   if (llt.info() != Eigen::Success || !(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues()(0) > 0))
-    return fail("the intrinsics do not fit the affine reconstruction (the transported absolute conic is not positive "
-                "definite): wrong K, or the plane at infinity is wrong");
+    return fail(
+        "the intrinsics do not fit the affine reconstruction (the transported absolute conic is not positive "
+        "definite): wrong K, or the plane at infinity is wrong");
   Eigen::Matrix4d g = Eigen::Matrix4d::Identity();
   g.topLeftCorner<3, 3>() = llt.matrixL();
   g /= std::cbrt(g.topLeftCorner<3, 3>().determinant());
@@ -401,7 +405,8 @@ MetricUpgradeSummary UpgradeToMetric(const std::vector<Matrix34d>& affine_camera
     summary.cameras.push_back(cam);
   }
   if (summary.max_rotation_residual > options.rotation_residual_warning)
-    summary.warnings.push_back("the intrinsics fit the affine cameras only to " + internal::FormatNumber(summary.max_rotation_residual) +
+    summary.warnings.push_back("the intrinsics fit the affine cameras only to " +
+                               internal::FormatNumber(summary.max_rotation_residual) +
                                " (relative deviation from a rotation): check K and the vanishing points");
   summary.termination = SolverTermination::kConverged;
   summary.message = "metric upgrade of " + std::to_string(n) + " cameras, rotation residual " +
@@ -410,7 +415,8 @@ MetricUpgradeSummary UpgradeToMetric(const std::vector<Matrix34d>& affine_camera
   return summary;
 }
 
-std::vector<Eigen::Vector4d> TransformPoints(const Eigen::Matrix4d& b_from_a, const std::vector<Eigen::Vector4d>& points) {
+std::vector<Eigen::Vector4d> TransformPoints(const Eigen::Matrix4d& b_from_a,
+                                             const std::vector<Eigen::Vector4d>& points) {
   std::vector<Eigen::Vector4d> out;
   out.reserve(points.size());
   for (const auto& x : points) out.push_back(Canonical(b_from_a * x));

@@ -58,7 +58,7 @@ struct ProjectiveReconstructionOptions {
 // the matches, both images, after the linear triangulation and after the refinement.
 struct ProjectiveReconstructionSummary : SolverSummary {
   Matrix34d P1 = Matrix34d::Zero(), P2 = Matrix34d::Zero();  // canonical pair
-  std::vector<Eigen::Vector4d> points;                        // per match, unit norm
+  std::vector<Eigen::Vector4d> points;                       // per match, unit norm
   // Per match: the RMS of its two reprojection errors (px).
   std::vector<double> reprojection_errors_px;
   double reprojection_rms_px = 0.0;  // over all matches, both images
@@ -82,11 +82,11 @@ struct AffineUpgradeOptions {
 // A linear solve: no iterations, and initial_cost / final_cost stay 0 (plane_residual is the
 // fit's measure).
 struct AffineUpgradeSummary : SolverSummary {
-  Eigen::Vector4d plane_at_infinity = Eigen::Vector4d::Zero();  // in the projective frame, unit norm
+  Eigen::Vector4d plane_at_infinity = Eigen::Vector4d::Zero();           // in the projective frame, unit norm
   Eigen::Matrix4d affine_from_projective = Eigen::Matrix4d::Identity();  // X_a = H X_p
-  std::vector<Matrix34d> cameras;                                      // P_a = P_p H^-1
-  std::vector<Eigen::Vector4d> vanishing_points_3d;  // triangulated, projective frame, unit norm
-  double plane_residual = 0.0;                       // see the option
+  std::vector<Matrix34d> cameras;                                        // P_a = P_p H^-1
+  std::vector<Eigen::Vector4d> vanishing_points_3d;                      // triangulated, projective frame, unit norm
+  double plane_residual = 0.0;                                           // see the option
 };
 
 // Plane at infinity from 3 or more vanishing points matched across the views (vanishing[k][v]
@@ -156,6 +156,7 @@ bool AlignSimilarity(const std::vector<Eigen::Vector3d>& points_a, const std::ve
                      Similarity3d* b_from_a);
 
 // Applies X_b = H X_a to homogeneous points (unit norm out, last coordinate >= 0).
-std::vector<Eigen::Vector4d> TransformPoints(const Eigen::Matrix4d& b_from_a, const std::vector<Eigen::Vector4d>& points);
+std::vector<Eigen::Vector4d> TransformPoints(const Eigen::Matrix4d& b_from_a,
+                                             const std::vector<Eigen::Vector4d>& points);
 
 }  // namespace facet

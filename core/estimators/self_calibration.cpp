@@ -11,14 +11,14 @@
 
 #include <Eigen/Dense>
 
-#include "core/optim/levenberg_marquardt.h"
-#include "core/optim/schur_step.h"
 #include "core/estimators/projective_bundle_adjustment.h"
 #include "core/estimators/two_view.h"
+#include "core/geometry/cross_product_matrix.h"
+#include "core/optim/levenberg_marquardt.h"
+#include "core/optim/schur_step.h"
+#include "core/optim/solver_summary.h"
 #include "core/util/format.h"
 #include "core/util/timer.h"
-#include "core/geometry/cross_product_matrix.h"
-#include "core/optim/solver_summary.h"
 
 namespace facet {
 namespace {
@@ -52,9 +52,9 @@ Eigen::Matrix3d NormalisingK(const SelfCalibrationView& v) {
 
 // The reconstruction in normalised image coordinates (x = N^-1 uv).
 struct Projective {
-  std::vector<Eigen::Matrix3d> n;        // per view
-  std::vector<Matrix34d> P;              // per view
-  std::vector<bool> registered;          // per view
+  std::vector<Eigen::Matrix3d> n;               // per view
+  std::vector<Matrix34d> P;                     // per view
+  std::vector<bool> registered;                 // per view
   std::vector<std::vector<Eigen::Vector2d>> x;  // per track, per observation
   std::vector<std::vector<bool>> ok;            // per track, per observation
   std::vector<Eigen::Vector4d> X;               // per track
@@ -128,14 +128,16 @@ bool Resect(const std::vector<Track>& tracks, int v, double threshold_px, unsign
   std::vector<std::pair<int, int>> obs;  // (track, observation)
   for (size_t t = 0; t < tracks.size(); ++t)
     for (size_t k = 0; k < tracks[t].size(); ++k)
-      if (tracks[t][k].view == v && p->ok[t][k] && p->has_point[t]) obs.emplace_back(static_cast<int>(t), static_cast<int>(k));
+      if (tracks[t][k].view == v && p->ok[t][k] && p->has_point[t])
+        obs.emplace_back(static_cast<int>(t), static_cast<int>(k));
   const int count = static_cast<int>(obs.size());
   if (count < kMinResectionTracks) return false;
   Eigen::Matrix4d moment = Eigen::Matrix4d::Zero();
   for (const auto& [t, k] : obs) moment += p->X[t] * p->X[t].transpose();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(moment / count);
   if (!(eig.eigenvalues()(0) > 1e-14 * eig.eigenvalues()(3))) return false;
-  const Eigen::Matrix4d whiten = eig.eigenvalues().cwiseSqrt().cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
+  const Eigen::Matrix4d whiten =
+      eig.eigenvalues().cwiseSqrt().cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
   std::vector<Eigen::Vector4d> Y(count);
   std::vector<Eigen::Vector2d> x(count);
   for (int i = 0; i < count; ++i) {
@@ -555,7 +557,8 @@ std::vector<double> FocalStandardDeviations(const SchurNormalEquations& normal, 
     Eigen::Vector3d inverse_values = Eigen::Vector3d::Zero();
     for (int k = 0; k < 3; ++k)
       if (eig_v.eigenvalues()(k) > 1e-12 * largest) inverse_values(k) = 1.0 / eig_v.eigenvalues()(k);
-    const Eigen::Matrix3d v_pinv = eig_v.eigenvectors() * inverse_values.asDiagonal() * eig_v.eigenvectors().transpose();
+    const Eigen::Matrix3d v_pinv =
+        eig_v.eigenvectors() * inverse_values.asDiagonal() * eig_v.eigenvectors().transpose();
     s.noalias() -= normal.w[j] * v_pinv * normal.w[j].transpose();
   }
   const int num_points_used = static_cast<int>(std::count(normal.point_used.begin(), normal.point_used.end(), true));
@@ -649,18 +652,19 @@ BundleAdjustmentSummary BundleAdjust(const std::vector<BundleObservation>& obser
   summary.iterations = lm_result.iterations;
 
   build();
-  summary.focal_std_px = FocalStandardDeviations(normal, layout, cams, static_cast<int>(observations.size()),
-                                                 prior.num_residuals, cost);
+  summary.focal_std_px =
+      FocalStandardDeviations(normal, layout, cams, static_cast<int>(observations.size()), prior.num_residuals, cost);
   *cameras = cams;
   *points = pts;
   summary.final_rms_px = std::sqrt(ReprojectionCost(observations, cams, pts) / (2.0 * observations.size()));
   summary.initial_cost = initial_cost;
   summary.final_cost = cost;
-  summary.termination = !(std::isfinite(cost) && cost <= initial_cost) ? SolverTermination::kFailed
+  summary.termination = !(std::isfinite(cost) && cost <= initial_cost)           ? SolverTermination::kFailed
                         : lm_result.termination == LmTermination::kMaxIterations ? SolverTermination::kMaxIterations
-                                                                                  : SolverTermination::kConverged;
-  summary.message = "bundle adjustment: RMS " + internal::FormatNumber(summary.initial_rms_px) + " -> " + internal::FormatNumber(summary.final_rms_px) +
-                    " px in " + std::to_string(summary.iterations) + " iterations";
+                                                                                 : SolverTermination::kConverged;
+  summary.message = "bundle adjustment: RMS " + internal::FormatNumber(summary.initial_rms_px) + " -> " +
+                    internal::FormatNumber(summary.final_rms_px) + " px in " + std::to_string(summary.iterations) +
+                    " iterations";
   summary.time_ms = MsSince(start);
   return summary;
 }
@@ -723,11 +727,12 @@ bool FindInitialPairs(const std::vector<Track>& tracks, const TrackInput& in, co
     for (int b = a + 1; b < n; ++b)
       if (in.shared_count(a, b) >= kMinTracks) candidates.push_back({in.shared_count(a, b), {a, b}});
   if (candidates.empty()) {
-    *error = "no pair of views shares " + std::to_string(kMinTracks) + " tracks (best: " +
-             std::to_string(in.shared_count.maxCoeff()) + ")";
+    *error = "no pair of views shares " + std::to_string(kMinTracks) +
+             " tracks (best: " + std::to_string(in.shared_count.maxCoeff()) + ")";
     return false;
   }
-  std::stable_sort(candidates.begin(), candidates.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const auto& x, const auto& y) { return x.first > y.first; });
   if (static_cast<int>(candidates.size()) > kMaxInitialPairCandidates) candidates.resize(kMaxInitialPairCandidates);
   FundamentalOptions f_options;
   f_options.inlier_threshold_px = options.inlier_threshold_px;
@@ -754,7 +759,7 @@ bool FindInitialPairs(const std::vector<Track>& tracks, const TrackInput& in, co
     if (!pair.f.IsUsable()) continue;
     if (pair.f.homography_rms_px > 0 &&
         pair.f.homography_rms_px <= f_options.homography_warning_ratio * pair.f.symmetric_epipolar_rms_px +
-                                         f_options.homography_warning_slack_px) {
+                                        f_options.homography_warning_slack_px) {
       ++*degenerate_pairs;
       continue;
     }
@@ -924,7 +929,7 @@ Eigen::Matrix4d AbsoluteDualQuadric(const std::vector<SelfCalibrationView>& view
 
 // The cameras and points upgraded by the rectifying homography of Q, and the metric frame.
 struct MetricFrame {
-  std::vector<Matrix34d> cams;                                       // per view
+  std::vector<Matrix34d> cams;                                           // per view
   Eigen::Matrix4d metric_from_projective = Eigen::Matrix4d::Identity();  // of the unconditioned frame
   int negative_eigenvalues = 0;  // of Q, besides the one dropped: > 0 means the upgrade is unreliable
 };
@@ -1008,8 +1013,8 @@ struct MetricTracks {
   const std::vector<std::vector<bool>>& duplicate;
   Projective& p;
   std::vector<Camera>& cameras;
-  std::vector<Eigen::Vector3d> points;   // per track
-  std::vector<bool> keep;                // per track: a point with 2 or more observations
+  std::vector<Eigen::Vector3d> points;  // per track
+  std::vector<bool> keep;               // per track: a point with 2 or more observations
   std::vector<BundleObservation> observations;
 
   int NumTracks() const { return static_cast<int>(tracks.size()); }
@@ -1262,8 +1267,9 @@ SelfCalibrationSummary SelfCalibrate(const std::vector<SelfCalibrationView>& vie
   summary.final_cost = final_rms * final_rms * 2.0 * summary.num_observations;
   if (!options.bundle_adjust) summary.termination = SolverTermination::kConverged;
   summary.message = "self-calibrated " + std::to_string(num_registered) + " views, focal " +
-                    internal::FormatNumber(summary.cameras[va].focal_px) + " px (linear " + internal::FormatNumber(summary.linear_focal_px[va]) +
-                    "), reprojection RMS " + internal::FormatNumber(summary.reprojection_rms_px) + " px";
+                    internal::FormatNumber(summary.cameras[va].focal_px) + " px (linear " +
+                    internal::FormatNumber(summary.linear_focal_px[va]) + "), reprojection RMS " +
+                    internal::FormatNumber(summary.reprojection_rms_px) + " px";
   summary.time_ms = MsSince(start);
   return summary;
 }

@@ -52,9 +52,9 @@
 
 #include <Eigen/Core>
 
+#include "core/estimators/projective_upgrade.h"
 #include "core/geometry/camera.h"
 #include "core/geometry/intrinsics_modes.h"
-#include "core/estimators/projective_upgrade.h"
 #include "core/optim/solver_summary.h"
 
 namespace facet {
@@ -120,18 +120,18 @@ struct SelfCalibrationOptions {
 // sum of squared reprojection errors (px^2) of the metric cameras right after the linear
 // upgrade and at the end.
 struct SelfCalibrationSummary : SolverSummary {
-  std::vector<Camera> cameras;    // per view; meaningful where registered
-  std::vector<bool> registered;   // per view
-  std::vector<Eigen::Vector3d> points;  // per track, world
-  std::vector<bool> triangulated;       // per track: reconstructed and kept
+  std::vector<Camera> cameras;                   // per view; meaningful where registered
+  std::vector<bool> registered;                  // per view
+  std::vector<Eigen::Vector3d> points;           // per track, world
+  std::vector<bool> triangulated;                // per track: reconstructed and kept
   int initial_view_a = -1, initial_view_b = -1;  // the pair of step 1
   // Focal lengths from the linear absolute dual quadric (per view; before the adjustment).
   std::vector<double> linear_focal_px;
   // One-sigma focal length uncertainty (px) from the adjustment's covariance, per view.
   std::vector<double> focal_std_px;
   Eigen::Matrix4d metric_from_projective = Eigen::Matrix4d::Identity();  // the rectifying H^-1 (normalised frame)
-  double projective_rms_px = 0.0;  // reprojection RMS of the projective reconstruction
-  double linear_rms_px = 0.0;      // of the metric cameras right after the upgrade
+  double projective_rms_px = 0.0;    // reprojection RMS of the projective reconstruction
+  double linear_rms_px = 0.0;        // of the metric cameras right after the upgrade
   double reprojection_rms_px = 0.0;  // final
   int num_observations = 0;          // used in the final adjustment
 };

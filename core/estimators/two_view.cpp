@@ -12,12 +12,12 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/geometry/camera.h"
-#include "core/util/format.h"
-#include "core/util/timer.h"
 #include "core/geometry/cross_product_matrix.h"
 #include "core/geometry/hartley_normalization.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/optim/solver_summary.h"
+#include "core/util/format.h"
+#include "core/util/timer.h"
 
 namespace facet {
 namespace {
@@ -306,7 +306,8 @@ bool LinearFundamental(const Points& uv1, const Points& uv2, Eigen::Matrix3d* F,
 
 std::vector<bool> Classify(const Eigen::Matrix3d& F, const Points& uv1, const Points& uv2, double threshold_px) {
   std::vector<bool> inliers(uv1.size());
-  for (size_t i = 0; i < uv1.size(); ++i) inliers[i] = MatchSquaredError(F, uv1[i], uv2[i]) < threshold_px * threshold_px;
+  for (size_t i = 0; i < uv1.size(); ++i)
+    inliers[i] = MatchSquaredError(F, uv1[i], uv2[i]) < threshold_px * threshold_px;
   return inliers;
 }
 
@@ -350,8 +351,9 @@ std::vector<bool> Ransac(const Points& uv1, const Points& uv2, const Fundamental
         if (p_good >= 1.0 - 1e-12) {
           needed = kMinRansacIterations;
         } else if (p_good > 0) {
-          needed = std::max(kMinRansacIterations,
-                            static_cast<int>(std::ceil(std::log(1 - options.ransac_confidence) / std::log(1 - p_good))));
+          needed =
+              std::max(kMinRansacIterations,
+                       static_cast<int>(std::ceil(std::log(1 - options.ransac_confidence) / std::log(1 - p_good))));
         }
       }
     }
@@ -630,8 +632,8 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
   std::vector<bool> inliers(n, true);
   if (options.use_ransac && n > 8) inliers = Ransac(uv1, uv2, options, &summary.ransac_iterations);
   if (Count(inliers) < 7)
-    return fail("fewer than 7 matches agree on one fundamental matrix (" + std::to_string(Count(inliers)) +
-                " within " + internal::FormatNumber(options.inlier_threshold_px) + " px)");
+    return fail("fewer than 7 matches agree on one fundamental matrix (" + std::to_string(Count(inliers)) + " within " +
+                internal::FormatNumber(options.inlier_threshold_px) + " px)");
 
   // Linear estimate and refinement on the inliers. The RANSAC flags come from one sample's
   // F, which noise in its 7 matches tilts; the refined F decides the final set, and a
@@ -645,9 +647,8 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
     *result = LmResult();
     result->termination = LmTermination::kConverged;
     if (options.refine) {
-      const internal::OrthonormalFundamental start_state =
-          internal::OrthonormalFundamental::FromF(*linear, internal::HartleyNormalization(in1),
-                                                  internal::HartleyNormalization(in2));
+      const internal::OrthonormalFundamental start_state = internal::OrthonormalFundamental::FromF(
+          *linear, internal::HartleyNormalization(in1), internal::HartleyNormalization(in2));
       *refined = MinimizeSymmetricEpipolar<7>(start_state, in1, in2, options.max_refine_iterations, result).F();
     }
     return true;
@@ -665,8 +666,8 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
   // and kept when the refit F holds it and every inlier within the threshold.
   if (robust) {
     for (int i = 0; i < n; ++i) {
-      if (inliers[i] || MatchSquaredError(f_final, uv1[i], uv2[i]) >=
-                            std::pow(kReadmitFactor * options.inlier_threshold_px, 2))
+      if (inliers[i] ||
+          MatchSquaredError(f_final, uv1[i], uv2[i]) >= std::pow(kReadmitFactor * options.inlier_threshold_px, 2))
         continue;
       std::vector<bool> trial = inliers;
       trial[i] = true;
@@ -705,8 +706,8 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
     const Points in1 = Select(uv1, inliers), in2 = Select(uv2, inliers);
     if (HomographyDlt(in1, in2, &h)) {
       summary.homography_rms_px = HomographyTransferRms(h, in1, in2);
-      if (summary.homography_rms_px <= options.homography_warning_ratio * summary.symmetric_epipolar_rms_px +
-                                           options.homography_warning_slack_px)
+      if (summary.homography_rms_px <=
+          options.homography_warning_ratio * summary.symmetric_epipolar_rms_px + options.homography_warning_slack_px)
         summary.warnings.push_back("a homography explains the matches about as well (transfer RMS " +
                                    internal::FormatNumber(summary.homography_rms_px) +
                                    " px): a planar scene or a camera that only rotated; F is poorly determined");
@@ -714,7 +715,8 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
   }
   summary.termination = RefineTermination(refine_result);
   summary.message = "F from " + std::to_string(summary.num_inliers) + " of " + std::to_string(n) +
-                    " matches, symmetric epipolar RMS " + internal::FormatNumber(summary.symmetric_epipolar_rms_px) + " px";
+                    " matches, symmetric epipolar RMS " + internal::FormatNumber(summary.symmetric_epipolar_rms_px) +
+                    " px";
   summary.time_ms = MsSince(start);
   return summary;
 }
@@ -744,9 +746,9 @@ int CountInFront(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, const Point
 
 }  // namespace
 
-RelativePoseSummary EstimateRelativePose(const Eigen::Matrix3d& F, const Eigen::Matrix3d& K1,
-                                         const Eigen::Matrix3d& K2, const Points& uv1, const Points& uv2,
-                                         const std::vector<bool>& inliers, const RelativePoseOptions& options) {
+RelativePoseSummary EstimateRelativePose(const Eigen::Matrix3d& F, const Eigen::Matrix3d& K1, const Eigen::Matrix3d& K2,
+                                         const Points& uv1, const Points& uv2, const std::vector<bool>& inliers,
+                                         const RelativePoseOptions& options) {
   const auto start = Clock::now();
   RelativePoseSummary summary;
   auto fail = [&](std::string message) { return FailedSummary(summary, std::move(message), start); };

@@ -108,8 +108,8 @@ struct RelativePoseSummary : SolverSummary {
 // cameras most often, then the optional refinement. inliers may be empty (all matches are
 // used) or have one flag per match. Fewer than 5 points, a non-invertible K, non-finite
 // input, or no decomposition with a majority in front give an unusable summary.
-RelativePoseSummary EstimateRelativePose(const Eigen::Matrix3d& F, const Eigen::Matrix3d& K1,
-                                         const Eigen::Matrix3d& K2, const std::vector<Eigen::Vector2d>& uv1,
+RelativePoseSummary EstimateRelativePose(const Eigen::Matrix3d& F, const Eigen::Matrix3d& K1, const Eigen::Matrix3d& K2,
+                                         const std::vector<Eigen::Vector2d>& uv1,
                                          const std::vector<Eigen::Vector2d>& uv2, const std::vector<bool>& inliers,
                                          const RelativePoseOptions& options);
 

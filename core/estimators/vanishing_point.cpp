@@ -10,8 +10,8 @@
 
 #include "core/optim/damped_normal_step.h"
 #include "core/optim/levenberg_marquardt.h"
-#include "core/util/timer.h"
 #include "core/util/stats.h"
+#include "core/util/timer.h"
 
 namespace facet {
 namespace {
@@ -139,8 +139,7 @@ double SumOfSquares(const std::vector<double>& values) {
 }  // namespace
 
 bool VanishingPointOptions::Check(std::string* error) const {
-  if (!(conditioning_scale_px > 0.0) || !std::isfinite(conditioning_scale_px) ||
-      !conditioning_center_px.allFinite()) {
+  if (!(conditioning_scale_px > 0.0) || !std::isfinite(conditioning_scale_px) || !conditioning_center_px.allFinite()) {
     *error = "vanishing point: the conditioning centre and scale must be finite, the scale positive";
     return false;
   }
@@ -185,8 +184,8 @@ VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segm
     const Eigen::Vector2d b = (s.tail<2>() - options.conditioning_center_px) / scale;
     if ((b - a).norm() * scale < 1e-9 * std::max(1.0, scale)) {
       std::ostringstream out;
-      out << "segment " << i << " has zero length (" << s.x() << ", " << s.y() << ") - (" << s.z() << ", "
-          << s.w() << ")";
+      out << "segment " << i << " has zero length (" << s.x() << ", " << s.y() << ") - (" << s.z() << ", " << s.w()
+          << ")";
       return FailedSummary(summary, out.str(), start, SolverTermination::kInvalidInput);
     }
     // a x b is the segment's line scaled by its length: the length weighting for free.

@@ -8,7 +8,7 @@
 namespace facet {
 
 enum class Axis { kX = 0, kY = 1, kZ = 2 };
-const char* AxisName(Axis axis);                           // "x", "y", "z"
+const char* AxisName(Axis axis);                            // "x", "y", "z"
 std::optional<Axis> AxisFromName(const std::string& name);  // inverse of AxisName
 
 }  // namespace facet

@@ -102,8 +102,10 @@ Eigen::Vector2d UndistortNormalized(const Eigen::Vector2d& xy_distorted, double 
   for (int it = 0; it < 100; ++it) {
     const double f = radius(r) - rd;
     if (f == 0.0) break;
-    if (f < 0.0) lo = r;
-    else hi = r;
+    if (f < 0.0)
+      lo = r;
+    else
+      hi = r;
     const double s = r * r;
     const double slope = 1.0 + s * (3.0 * k1 + 5.0 * k2 * s);
     double next = slope > 0.0 ? r - f / slope : 0.5 * (lo + hi);
@@ -137,8 +139,7 @@ Eigen::Matrix3d RotationFromAngleAxis(const Eigen::Vector3d& angle_axis) {
   if (angle < 1e-12) {
     // First-order expansion keeps the map smooth at zero.
     Eigen::Matrix3d skew;
-    skew << 0, -angle_axis.z(), angle_axis.y(), angle_axis.z(), 0, -angle_axis.x(),
-        -angle_axis.y(), angle_axis.x(), 0;
+    skew << 0, -angle_axis.z(), angle_axis.y(), angle_axis.z(), 0, -angle_axis.x(), -angle_axis.y(), angle_axis.x(), 0;
     return Eigen::Matrix3d::Identity() + skew;
   }
   return Eigen::AngleAxisd(angle, angle_axis / angle).toRotationMatrix();

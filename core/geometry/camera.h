@@ -8,7 +8,7 @@
 namespace facet {
 
 struct Camera {
-  int width_px = 0;   // image size the intrinsics refer to
+  int width_px = 0;  // image size the intrinsics refer to
   int height_px = 0;
   double focal_px = 1000.0;
   Eigen::Vector2d principal_point_px = Eigen::Vector2d::Zero();

@@ -29,17 +29,14 @@ double EntryValue(ExifData* data, ExifTag tag) {
   if (!entry || !entry->data || entry->components < 1) return 0.0;
   const ExifByteOrder order = exif_data_get_byte_order(data);
   switch (entry->format) {
-    case EXIF_FORMAT_SHORT:
-      return entry->size >= 2 ? exif_get_short(entry->data, order) : 0.0;
-    case EXIF_FORMAT_LONG:
-      return entry->size >= 4 ? exif_get_long(entry->data, order) : 0.0;
+    case EXIF_FORMAT_SHORT: return entry->size >= 2 ? exif_get_short(entry->data, order) : 0.0;
+    case EXIF_FORMAT_LONG: return entry->size >= 4 ? exif_get_long(entry->data, order) : 0.0;
     case EXIF_FORMAT_RATIONAL: {
       if (entry->size < 8) return 0.0;
       const ExifRational r = exif_get_rational(entry->data, order);
       return r.denominator ? static_cast<double>(r.numerator) / r.denominator : 0.0;
     }
-    default:
-      return 0.0;
+    default: return 0.0;
   }
 }
 
@@ -70,9 +67,9 @@ ExifFocal ReadExifFocalFromBuffer(const unsigned char* bytes, std::size_t size, 
     result.focal_px =
         result.focal_35mm_equivalent_mm / kFullFrameDiagonalMm * std::hypot(double(width_px), double(height_px));
     result.found = true;
-    result.message = "FocalLengthIn35mmFilm " + internal::FormatNumber(result.focal_35mm_equivalent_mm, 6) + " mm: f = " +
-                     internal::FormatNumber(result.focal_px, 6) + " px for " + std::to_string(width_px) + " x " +
-                     std::to_string(height_px);
+    result.message = "FocalLengthIn35mmFilm " + internal::FormatNumber(result.focal_35mm_equivalent_mm, 6) +
+                     " mm: f = " + internal::FormatNumber(result.focal_px, 6) + " px for " + std::to_string(width_px) +
+                     " x " + std::to_string(height_px);
     return result;
   }
   if (result.focal_length_mm > 0.0 && result.focal_plane_pixels_per_mm > 0.0) {
@@ -82,7 +79,8 @@ ExifFocal ReadExifFocalFromBuffer(const unsigned char* bytes, std::size_t size, 
     result.focal_px = result.focal_length_mm * result.focal_plane_pixels_per_mm * image_side_px / sensor_side_px;
     result.found = true;
     result.message = "FocalLength " + internal::FormatNumber(result.focal_length_mm, 6) + " mm at " +
-                     internal::FormatNumber(result.focal_plane_pixels_per_mm, 6) + " sensor px/mm: f = " + internal::FormatNumber(result.focal_px, 6) + " px";
+                     internal::FormatNumber(result.focal_plane_pixels_per_mm, 6) +
+                     " sensor px/mm: f = " + internal::FormatNumber(result.focal_px, 6) + " px";
     return result;
   }
   result.message = result.focal_length_mm > 0.0

@@ -25,8 +25,8 @@ namespace facet {
 
 struct ExifFocal {
   bool found = false;
-  std::string message;        // where the value came from, or why there is none
-  double focal_px = 0.0;      // for the image size given to the reader
+  std::string message;    // where the value came from, or why there is none
+  double focal_px = 0.0;  // for the image size given to the reader
   // The tags as read; 0 when absent.
   double focal_35mm_equivalent_mm = 0.0;
   double focal_length_mm = 0.0;

@@ -10,10 +10,10 @@
 #include <cstring>
 #include <fstream>
 
+#include <stb_image.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <stb_image.h>
 
 namespace facet {
 namespace {
@@ -37,7 +37,9 @@ bool ReadFileBytes(const std::string& path, std::vector<std::uint8_t>* bytes, st
   return true;
 }
 
-bool IsJpeg(const std::vector<std::uint8_t>& b) { return b.size() >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF; }
+bool IsJpeg(const std::vector<std::uint8_t>& b) {
+  return b.size() >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF;
+}
 
 // Walks the marker segments of the primary image and its entropy-coded scans and returns
 // true when the end-of-image marker is reached. Segment payloads are skipped by their

@@ -14,16 +14,15 @@
 namespace facet {
 namespace {
 
-using nlohmann::json;
 using json_io::ReadNumber;
 using json_io::Rows;
+using nlohmann::json;
 
 CalibrateIoResult Error(std::string message) {
   CalibrateIoResult result;
   result.error = std::move(message);
   return result;
 }
-
 
 // Fills *error and returns false when the document does not have the documented shape.
 // An optional positive number; false with *error for any other value.
@@ -156,7 +155,6 @@ bool ParseInput(const json& doc, std::vector<Segment>* segments, VpCalibrationOp
   return true;
 }
 
-
 }  // namespace
 
 CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
@@ -253,10 +251,9 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
     out["family_angle_spread_deg"] = spread;
     out["vanishing_point_to_principal_point_px"] = to_pp;
     out["min_family_angle_spread_deg"] = summary.min_family_angle_spread_deg;
-    out["min_vanishing_point_to_principal_point_px"] =
-        std::isfinite(summary.min_vanishing_point_to_principal_point_px)
-            ? json(summary.min_vanishing_point_to_principal_point_px)
-            : json(nullptr);
+    out["min_vanishing_point_to_principal_point_px"] = std::isfinite(summary.min_vanishing_point_to_principal_point_px)
+                                                           ? json(summary.min_vanishing_point_to_principal_point_px)
+                                                           : json(nullptr);
     out["vanishing_point_triangle_max_angle_deg"] = summary.vanishing_point_triangle_max_angle_deg;
     if (options.use_horizon) out["horizon_residual_px"] = summary.horizon_residual_px;
     if (distortion) out["distortion"] = distortion_out;

@@ -12,18 +12,16 @@
 namespace facet {
 namespace {
 
-using nlohmann::json;
 using json_io::ReadNumber;
 using json_io::ReadVector;
 using json_io::Rows;
+using nlohmann::json;
 
 CalibrateIoResult Error(std::string message) {
   CalibrateIoResult result;
   result.error = std::move(message);
   return result;
 }
-
-
 
 // Fills *error and returns false when the document does not have the documented shape.
 bool ParseInput(const json& doc, std::vector<PointCorrespondence>* points, DltCalibrationOptions* options,
@@ -100,7 +98,6 @@ bool ParseInput(const json& doc, std::vector<PointCorrespondence>* points, DltCa
     return false;
   return true;
 }
-
 
 }  // namespace
 

@@ -60,7 +60,8 @@ std::string ValidateMesh(const TexturedMesh& mesh) {
       return "vertex " + std::to_string(v) + " is not finite";
     }
   }
-  if (!mesh.atlas.empty() && mesh.atlas.pixels.size() != static_cast<size_t>(mesh.atlas.width) * mesh.atlas.height * 4) {
+  if (!mesh.atlas.empty() &&
+      mesh.atlas.pixels.size() != static_cast<size_t>(mesh.atlas.width) * mesh.atlas.height * 4) {
     return "the atlas pixel buffer does not match its size";
   }
   return "";
@@ -164,9 +165,8 @@ ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const 
   accessors[position_accessor]["max"] = {hi.x(), hi.y(), hi.z()};
   const int normal_accessor = add_vertex_accessor(normals.data(), n * sizeof(Eigen::Vector3f), "VEC3");
   // UVs only when some primitive samples the atlas; validators flag unused accessors.
-  const int uv_accessor = textured_indices.empty()
-                              ? -1
-                              : add_vertex_accessor(mesh.uvs.data(), n * sizeof(Eigen::Vector2f), "VEC2");
+  const int uv_accessor =
+      textured_indices.empty() ? -1 : add_vertex_accessor(mesh.uvs.data(), n * sizeof(Eigen::Vector2f), "VEC2");
   static_assert(sizeof(Eigen::Vector3f) == 12 && sizeof(Eigen::Vector2f) == 8, "tightly packed vectors");
 
   Json materials = Json::array(), primitives = Json::array();
@@ -185,26 +185,27 @@ ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const 
     materials.push_back({{"name", "facet_textured"},
                          {"pbrMetallicRoughness",
                           {{"baseColorTexture", {{"index", 0}}}, {"metallicFactor", 0.0}, {"roughnessFactor", 1.0}}}});
-    accessors.push_back({{"bufferView", bin.AddView(textured_indices.data(), textured_indices.size() * 4,
-                                                    kElementArrayBuffer, &views)},
-                         {"componentType", kUnsignedInt},
-                         {"count", textured_indices.size()},
-                         {"type", "SCALAR"}});
-    primitives.push_back({{"attributes", {{"POSITION", position_accessor}, {"NORMAL", normal_accessor},
-                                          {"TEXCOORD_0", uv_accessor}}},
-                          {"indices", accessors.size() - 1},
-                          {"material", materials.size() - 1},
-                          {"mode", kTriangles}});
+    accessors.push_back(
+        {{"bufferView", bin.AddView(textured_indices.data(), textured_indices.size() * 4, kElementArrayBuffer, &views)},
+         {"componentType", kUnsignedInt},
+         {"count", textured_indices.size()},
+         {"type", "SCALAR"}});
+    primitives.push_back(
+        {{"attributes", {{"POSITION", position_accessor}, {"NORMAL", normal_accessor}, {"TEXCOORD_0", uv_accessor}}},
+         {"indices", accessors.size() - 1},
+         {"material", materials.size() - 1},
+         {"mode", kTriangles}});
   }
   if (!plain_indices.empty()) {
-    materials.push_back({{"name", "facet_untextured"},
-                         {"pbrMetallicRoughness",
-                          {{"baseColorFactor", {0.7, 0.7, 0.7, 1.0}}, {"metallicFactor", 0.0}, {"roughnessFactor", 1.0}}}});
-    accessors.push_back({{"bufferView", bin.AddView(plain_indices.data(), plain_indices.size() * 4,
-                                                    kElementArrayBuffer, &views)},
-                         {"componentType", kUnsignedInt},
-                         {"count", plain_indices.size()},
-                         {"type", "SCALAR"}});
+    materials.push_back(
+        {{"name", "facet_untextured"},
+         {"pbrMetallicRoughness",
+          {{"baseColorFactor", {0.7, 0.7, 0.7, 1.0}}, {"metallicFactor", 0.0}, {"roughnessFactor", 1.0}}}});
+    accessors.push_back(
+        {{"bufferView", bin.AddView(plain_indices.data(), plain_indices.size() * 4, kElementArrayBuffer, &views)},
+         {"componentType", kUnsignedInt},
+         {"count", plain_indices.size()},
+         {"type", "SCALAR"}});
     primitives.push_back({{"attributes", {{"POSITION", position_accessor}, {"NORMAL", normal_accessor}}},
                           {"indices", accessors.size() - 1},
                           {"material", materials.size() - 1},
@@ -252,7 +253,8 @@ ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const 
   std::string json_text = root.dump();
   while (json_text.size() % 4 != 0) json_text.push_back(' ');
   const size_t total = 12 + 8 + json_text.size() + 8 + bin_bytes.size();
-  if (total > std::numeric_limits<std::uint32_t>::max()) return Failure(path + ": the model exceeds the 4 GiB GLB limit");
+  if (total > std::numeric_limits<std::uint32_t>::max())
+    return Failure(path + ": the model exceeds the 4 GiB GLB limit");
   std::string glb;
   glb.reserve(total);
   AppendU32(&glb, kGlbMagic);
@@ -270,11 +272,11 @@ ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const 
   ExportSummary summary;
   summary.success = true;
   summary.files_written = {path};
-  summary.message = "wrote " + path + ": " + std::to_string(mesh.indices.size() / 3) + " triangles, " +
-                    std::to_string(cameras.size()) + " cameras" +
-                    (HasAtlas(mesh) ? ", " + std::to_string(mesh.atlas.width) + "x" +
-                                          std::to_string(mesh.atlas.height) + " texture"
-                                    : "");
+  summary.message =
+      "wrote " + path + ": " + std::to_string(mesh.indices.size() / 3) + " triangles, " +
+      std::to_string(cameras.size()) + " cameras" +
+      (HasAtlas(mesh) ? ", " + std::to_string(mesh.atlas.width) + "x" + std::to_string(mesh.atlas.height) + " texture"
+                      : "");
   return summary;
 }
 
@@ -299,7 +301,8 @@ ExportSummary ExportObj(const TexturedMesh& mesh, const std::string& path) {
   if (!textured_indices.empty()) {
     mtl += "newmtl facet_textured\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nd 1\nillum 1\nmap_Kd " + stem + ".png\n\n";
   }
-  if (!plain_indices.empty()) mtl += "newmtl facet_untextured\nKa 0.7 0.7 0.7\nKd 0.7 0.7 0.7\nKs 0 0 0\nd 1\nillum 1\n";
+  if (!plain_indices.empty())
+    mtl += "newmtl facet_untextured\nKa 0.7 0.7 0.7\nKd 0.7 0.7 0.7\nKs 0 0 0\nd 1\nillum 1\n";
 
   std::string obj = "# Facet model, Y up (world z up written as y)\nmtllib " + stem + ".mtl\no facet_model\n";
   obj.reserve(mesh.positions.size() * 120 + mesh.indices.size() * 12);

@@ -28,9 +28,7 @@ constexpr const char* kFormatName = "facet-project";
 
 std::string ErrnoText(int err) { return std::strerror(err); }
 
-std::string Join(const std::string& base, const std::string& key) {
-  return base.empty() ? key : base + "." + key;
-}
+std::string Join(const std::string& base, const std::string& key) { return base.empty() ? key : base + "." + key; }
 std::string Index(const std::string& base, size_t i) { return base + "[" + std::to_string(i) + "]"; }
 
 const char* PrincipalPointModeName(PrincipalPointMode mode) {
@@ -90,8 +88,7 @@ class Writer {
 
   OrderedJson Number(const std::string& path, double v) {
     if (!std::isfinite(v) && error_.empty()) {
-      error_ = path + ": " + (std::isnan(v) ? "NaN" : "infinity") +
-               " cannot be saved (JSON has no NaN or infinity)";
+      error_ = path + ": " + (std::isnan(v) ? "NaN" : "infinity") + " cannot be saved (JSON has no NaN or infinity)";
     }
     return v;
   }
@@ -197,18 +194,15 @@ OrderedJson WriteProject(const Project& p, Writer* w) {
     cam["width_px"] = im.camera.width_px;
     cam["height_px"] = im.camera.height_px;
     cam["focal_px"] = w->Number(Join(cam_at, "focal_px"), im.camera.focal_px);
-    cam["principal_point_px"] =
-        w->Numbers(Join(cam_at, "principal_point_px"), im.camera.principal_point_px);
+    cam["principal_point_px"] = w->Numbers(Join(cam_at, "principal_point_px"), im.camera.principal_point_px);
     cam["rotation"] = w->Matrix(Join(cam_at, "rotation"), im.camera.cam_from_world_rotation);
-    cam["translation"] =
-        w->Numbers(Join(cam_at, "translation"), im.camera.cam_from_world_translation);
+    cam["translation"] = w->Numbers(Join(cam_at, "translation"), im.camera.cam_from_world_translation);
     cam["k1"] = w->Number(Join(cam_at, "k1"), im.camera.k1);
     cam["k2"] = w->Number(Join(cam_at, "k2"), im.camera.k2);
     j["camera"] = std::move(cam);
     j["camera_calibrated"] = im.camera_calibrated;
     j["principal_point_mode"] = PrincipalPointModeName(im.principal_point_mode);
-    j["fixed_principal_point_px"] =
-        w->Numbers(Join(at, "fixed_principal_point_px"), im.fixed_principal_point_px);
+    j["fixed_principal_point_px"] = w->Numbers(Join(at, "fixed_principal_point_px"), im.fixed_principal_point_px);
     j["pose_locked"] = im.pose_locked;
     j["focal_locked"] = im.focal_locked;
     j["principal_point_locked"] = im.principal_point_locked;
@@ -347,13 +341,11 @@ class Reader {
   }
 
   template <int N>
-  bool Vector(const Json& obj, const std::string& obj_path, const char* key,
-              Eigen::Matrix<double, N, 1>* out) {
+  bool Vector(const Json& obj, const std::string& obj_path, const char* key, Eigen::Matrix<double, N, 1>* out) {
     const Json* j = Field(obj, obj_path, key);
     if (!j) return false;
     const std::string path = Join(obj_path, key);
-    if (!j->is_array() || j->size() != N)
-      return Fail(path, "expected an array of " + std::to_string(N) + " numbers");
+    if (!j->is_array() || j->size() != N) return Fail(path, "expected an array of " + std::to_string(N) + " numbers");
     for (int i = 0; i < N; ++i)
       if (!Double((*j)[i], Index(path, i), &(*out)(i))) return false;
     return true;
@@ -423,9 +415,7 @@ class Reader {
     if (j.is_object()) return "an object";
     return "an unknown value";
   }
-  static std::string Describe(const Json& j) {
-    return j.is_number() ? j.dump() : TypeName(j);
-  }
+  static std::string Describe(const Json& j) { return j.is_number() ? j.dump() : TypeName(j); }
 
  private:
   std::string error_;
@@ -433,11 +423,11 @@ class Reader {
 };
 
 bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
-  if (!r->Object(j, at, {"id", "path", "width_px", "height_px", "camera", "camera_calibrated",
-                         "principal_point_mode", "fixed_principal_point_px", "pose_locked", "focal_locked",
-                         "principal_point_locked", "focal_mode", "fixed_focal_px", "focal_prior_px",
-                         "focal_prior_std_px", "use_horizon", "horizon_px", "estimate_distortion",
-                         "distortion_locked"}))
+  if (!r->Object(j, at,
+                 {"id", "path", "width_px", "height_px", "camera", "camera_calibrated", "principal_point_mode",
+                  "fixed_principal_point_px", "pose_locked", "focal_locked", "principal_point_locked", "focal_mode",
+                  "fixed_focal_px", "focal_prior_px", "focal_prior_std_px", "use_horizon", "horizon_px",
+                  "estimate_distortion", "distortion_locked"}))
     return false;
   constexpr int kMaxSize = std::numeric_limits<int>::max();
   if (!r->IdField(j, at, "id", &im->id) || !r->String(j, at, "path", &im->path) ||
@@ -446,8 +436,9 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
     return false;
   const Json* cam = r->Field(j, at, "camera");
   const std::string cam_at = Join(at, "camera");
-  if (!cam || !r->Object(*cam, cam_at, {"width_px", "height_px", "focal_px", "principal_point_px",
-                                        "rotation", "translation", "k1", "k2"}))
+  if (!cam ||
+      !r->Object(*cam, cam_at,
+                 {"width_px", "height_px", "focal_px", "principal_point_px", "rotation", "translation", "k1", "k2"}))
     return false;
   Camera& c = im->camera;
   if (!r->Int(*cam, cam_at, "width_px", 0, kMaxSize, &c.width_px) ||
@@ -467,12 +458,11 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
   const Eigen::Matrix3d& rot = c.cam_from_world_rotation;
   const double orthonormality_error = (rot.transpose() * rot - Eigen::Matrix3d::Identity()).norm();
   if (orthonormality_error > 1e-6 || rot.determinant() < 0)
-    return r->Fail(Join(cam_at, "rotation"), "not a rotation matrix (|R^T R - I| = " +
-                                                 std::to_string(orthonormality_error) +
-                                                 ", det = " + std::to_string(rot.determinant()) + ")");
+    return r->Fail(Join(cam_at, "rotation"),
+                   "not a rotation matrix (|R^T R - I| = " + std::to_string(orthonormality_error) +
+                       ", det = " + std::to_string(rot.determinant()) + ")");
   std::string mode;
-  if (!r->Bool(j, at, "camera_calibrated", &im->camera_calibrated) ||
-      !r->String(j, at, "principal_point_mode", &mode))
+  if (!r->Bool(j, at, "camera_calibrated", &im->camera_calibrated) || !r->String(j, at, "principal_point_mode", &mode))
     return false;
   const auto parsed_mode = PrincipalPointModeFromName(mode);
   if (!parsed_mode)
@@ -513,9 +503,8 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
 
 bool ReadSegment(const Json& j, const std::string& at, Reader* r, Segment* s) {
   std::string axis;
-  if (!r->Object(j, at, {"id", "image_id", "axis", "a_px", "b_px"}) ||
-      !r->IdField(j, at, "id", &s->id) || !r->IdField(j, at, "image_id", &s->image_id) ||
-      !r->String(j, at, "axis", &axis))
+  if (!r->Object(j, at, {"id", "image_id", "axis", "a_px", "b_px"}) || !r->IdField(j, at, "id", &s->id) ||
+      !r->IdField(j, at, "image_id", &s->image_id) || !r->String(j, at, "axis", &axis))
     return false;
   const auto parsed_axis = AxisFromName(axis);
   if (!parsed_axis) return r->Fail(Join(at, "axis"), "expected \"x\", \"y\" or \"z\", found \"" + axis + "\"");
@@ -533,8 +522,8 @@ bool ReadLink(const Json& obj, const std::string& obj_path, const char* key, std
     return true;
   }
   if (!j->is_number_unsigned() || j->get<std::uint64_t>() >= end)
-    return r->Fail(Join(obj_path, key), "expected -1 or an id below " + std::to_string(end) + ", found " +
-                                            Reader::Describe(*j));
+    return r->Fail(Join(obj_path, key),
+                   "expected -1 or an id below " + std::to_string(end) + ", found " + Reader::Describe(*j));
   *out = static_cast<std::uint32_t>(j->get<std::uint64_t>());
   return true;
 }
@@ -551,8 +540,8 @@ bool ReadMesh(const Json& j, const std::string& at, PrimitiveId primitive, Reade
   constexpr int kMaxIds = 1 << 30;
   int vertex_end = 0, edge_end = 0, face_end = 0;
   if (!r->Object(j, at, {"vertex_id_end", "edge_id_end", "face_id_end", "vertices", "edges", "faces"}) ||
-      !r->Int(j, at, "vertex_id_end", 0, kMaxIds, &vertex_end) || !r->Int(j, at, "edge_id_end", 0, kMaxIds, &edge_end) ||
-      !r->Int(j, at, "face_id_end", 0, kMaxIds, &face_end))
+      !r->Int(j, at, "vertex_id_end", 0, kMaxIds, &vertex_end) ||
+      !r->Int(j, at, "edge_id_end", 0, kMaxIds, &edge_end) || !r->Int(j, at, "face_id_end", 0, kMaxIds, &face_end))
     return false;
   *mesh = PolyMesh();
   mesh->GrowIdSpace(vertex_end, edge_end, face_end);
@@ -596,7 +585,8 @@ bool ReadMesh(const Json& j, const std::string& at, PrimitiveId primitive, Reade
       const std::string hat = Index(Join(eat, "halfedges"), side);
       MeshHalfedge& h = mesh->halfedge(PolyMesh::EdgeHalfedge(id, side));
       if (!r->Object(jh, hat, {"origin", "next", "prev", "face", "uv"}) ||
-          !ReadLink(jh, hat, "origin", vertex_end, r, &h.origin) || !ReadLink(jh, hat, "next", halfedge_end, r, &h.next) ||
+          !ReadLink(jh, hat, "origin", vertex_end, r, &h.origin) ||
+          !ReadLink(jh, hat, "next", halfedge_end, r, &h.next) ||
           !ReadLink(jh, hat, "prev", halfedge_end, r, &h.prev) || !ReadLink(jh, hat, "face", face_end, r, &h.face) ||
           !r->Vector<2>(jh, hat, "uv", &h.uv))
         return false;
@@ -623,10 +613,10 @@ bool ReadMesh(const Json& j, const std::string& at, PrimitiveId primitive, Reade
 
 bool ReadPrimitive(const Json& j, const std::string& at, Reader* r, Primitive* prim) {
   std::string kind;
-  if (!r->Object(j, at, {"id", "name", "kind", "params", "segments", "rotation", "translation", "param_locked",
-                         "rotation_locked", "translation_locked", "attached_to", "mesh"}) ||
-      !r->IdField(j, at, "id", &prim->id) || !r->String(j, at, "name", &prim->name) ||
-      !r->String(j, at, "kind", &kind))
+  if (!r->Object(j, at,
+                 {"id", "name", "kind", "params", "segments", "rotation", "translation", "param_locked",
+                  "rotation_locked", "translation_locked", "attached_to", "mesh"}) ||
+      !r->IdField(j, at, "id", &prim->id) || !r->String(j, at, "name", &prim->name) || !r->String(j, at, "kind", &kind))
     return false;
   PrimitiveShape& shape = prim->shape;
   shape.id = prim->id;
@@ -671,9 +661,8 @@ bool ReadPrimitive(const Json& j, const std::string& at, Reader* r, Primitive* p
 
 bool ReadPin(const Json& j, const std::string& at, Reader* r, Pin* p) {
   int vertex = 0;
-  if (!(r->Object(j, at, {"id", "image_id", "primitive_id", "vertex", "uv_px"}) &&
-        r->IdField(j, at, "id", &p->id) && r->IdField(j, at, "image_id", &p->image_id) &&
-        r->IdField(j, at, "primitive_id", &p->vertex.primitive_id) &&
+  if (!(r->Object(j, at, {"id", "image_id", "primitive_id", "vertex", "uv_px"}) && r->IdField(j, at, "id", &p->id) &&
+        r->IdField(j, at, "image_id", &p->image_id) && r->IdField(j, at, "primitive_id", &p->vertex.primitive_id) &&
         r->Int(j, at, "vertex", 0, std::numeric_limits<int>::max(), &vertex) &&
         r->Vector<2>(j, at, "uv_px", &p->uv_px)))
     return false;
@@ -746,7 +735,8 @@ bool CheckReferences(const Project& p, Reader* r) {
   Id max_id = 0;
   auto claim = [&](Id id, const std::string& at) {
     auto [it, inserted] = owner.emplace(id, at);
-    if (!inserted) return r->Fail(Join(at, "id"), "duplicate id " + std::to_string(id) + " (also used by " + it->second + ")");
+    if (!inserted)
+      return r->Fail(Join(at, "id"), "duplicate id " + std::to_string(id) + " (also used by " + it->second + ")");
     max_id = std::max(max_id, id);
     return true;
   };
@@ -761,7 +751,8 @@ bool CheckReferences(const Project& p, Reader* r) {
   for (size_t i = 0; i < p.primitives.size(); ++i) {
     const Id base = p.primitives[i].attached_to;
     if (base != kNoId && (base == p.primitives[i].id || p.FindPrimitive(base) == nullptr))
-      return r->Fail(Join(Index("primitives", i), "attached_to"), "refers to a missing primitive " + std::to_string(base));
+      return r->Fail(Join(Index("primitives", i), "attached_to"),
+                     "refers to a missing primitive " + std::to_string(base));
   }
   // "vertex 3 of primitive 7", checked against the mesh.
   auto check_vertex = [&](const VertexRef& ref, const std::string& at) {
@@ -902,15 +893,16 @@ bool ReadProject(Json& root, Reader* r, Project* p) {
   const Json* version = r->Field(root, "", "version");
   if (!version) return false;
   if (version->is_number_unsigned() && version->get<std::uint64_t>() > Project::kFormatVersion)
-    return r->Fail("version", "written by a newer Facet: version " + version->dump() +
-                                  ", this build reads up to " + std::to_string(Project::kFormatVersion));
+    return r->Fail("version", "written by a newer Facet: version " + version->dump() + ", this build reads up to " +
+                                  std::to_string(Project::kFormatVersion));
   if (!version->is_number_unsigned() || version->get<std::uint64_t>() < 1)
     return r->Fail("version", "expected a positive integer, found " + Reader::Describe(*version));
   std::string migrate_error;
   if (!MigrateToCurrent(&root, version->get<int>(), &migrate_error)) return r->Fail("", migrate_error);
 
-  if (!r->Object(root, "", {"format", "version", "units", "next_id", "images", "segments", "primitives", "pins",
-                            "constraints"}) ||
+  if (!r->Object(
+          root, "",
+          {"format", "version", "units", "next_id", "images", "segments", "primitives", "pins", "constraints"}) ||
       !r->String(root, "", "units", &p->units) || !r->IdField(root, "", "next_id", &p->next_id) ||
       !ReadList(root, "images", r, ReadImage, &p->images) ||
       !ReadList(root, "segments", r, ReadSegment, &p->segments) ||
@@ -999,8 +991,8 @@ ProjectLoadResult ProjectFromJson(const std::string& text) {
       const size_t open = what.find('\'');
       const size_t close = what.rfind('\'');
       const size_t at = open < close ? text.find(what.substr(open + 1, close - open - 1)) : std::string::npos;
-      result.error = (at == std::string::npos ? "" : LineColumn(text, at + 1) + ": ") +
-                     "number out of range" + (open < close ? " " + what.substr(open) : "");
+      result.error = (at == std::string::npos ? "" : LineColumn(text, at + 1) + ": ") + "number out of range" +
+                     (open < close ? " " + what.substr(open) : "");
       return result;
     }
     Reader reader(&result.warnings);
@@ -1066,13 +1058,11 @@ std::string RelativeImagePath(const std::string& project_path, const std::string
   return relative.empty() ? image.lexically_normal().generic_string() : relative.generic_string();
 }
 
-void RebaseImagePaths(const std::string& old_project_path, const std::string& new_project_path,
-                      Project* project) {
+void RebaseImagePaths(const std::string& old_project_path, const std::string& new_project_path, Project* project) {
   for (Image& image : project->images) {
     if (image.path.empty()) continue;
     std::error_code ec;
-    const std::string absolute =
-        std::filesystem::absolute(ResolveImagePath(old_project_path, image.path), ec).string();
+    const std::string absolute = std::filesystem::absolute(ResolveImagePath(old_project_path, image.path), ec).string();
     if (!ec) image.path = RelativeImagePath(new_project_path, absolute);
   }
 }
@@ -1096,9 +1086,8 @@ std::string WriteFileAtomically(const std::string& requested_path, const std::st
   };
   // mkstemp makes the file private (0600); keep the replaced file's mode, else the usual 0644.
   struct stat existing {};
-  const mode_t mode = ::stat(path.c_str(), &existing) == 0 && S_ISREG(existing.st_mode)
-                          ? (existing.st_mode & 07777)
-                          : 0644;
+  const mode_t mode =
+      ::stat(path.c_str(), &existing) == 0 && S_ISREG(existing.st_mode) ? (existing.st_mode & 07777) : 0644;
   if (::fchmod(fd, mode) != 0) return fail("setting permissions", errno);
   size_t written = 0;
   while (written < bytes.size()) {

@@ -22,7 +22,7 @@ namespace facet {
 
 struct ProjectLoadResult {
   Project project;
-  std::string error;  // empty on success
+  std::string error;                  // empty on success
   std::vector<std::string> warnings;  // e.g. an image file that is missing on disk
   bool ok() const { return error.empty(); }
 };
@@ -47,8 +47,7 @@ std::string ResolveImagePath(const std::string& project_path, const std::string&
 // The path to store for an image file: relative to the project file's folder, forward slashes.
 std::string RelativeImagePath(const std::string& project_path, const std::string& image_file_path);
 // For "Save as" into another folder: re-expresses every image path relative to the new file.
-void RebaseImagePaths(const std::string& old_project_path, const std::string& new_project_path,
-                      Project* project);
+void RebaseImagePaths(const std::string& old_project_path, const std::string& new_project_path, Project* project);
 // Writes bytes atomically: a temporary file in the same folder, fsync, then rename.
 std::string WriteFileAtomically(const std::string& path, const std::string& bytes);
 

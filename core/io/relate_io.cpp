@@ -12,18 +12,16 @@
 namespace facet {
 namespace {
 
-using nlohmann::json;
 using json_io::ReadMatrix3;
 using json_io::ReadNumber;
 using json_io::Rows;
+using nlohmann::json;
 
 RelateIoResult Error(std::string message) {
   RelateIoResult result;
   result.error = std::move(message);
   return result;
 }
-
-
 
 struct Input {
   std::vector<Eigen::Vector2d> uv1, uv2;
@@ -80,7 +78,6 @@ bool ParseInput(const json& doc, Input* in, std::string* error) {
   }
   return true;
 }
-
 
 }  // namespace
 

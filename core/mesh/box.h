@@ -6,7 +6,6 @@
 
 #include <Eigen/Core>
 
-
 namespace facet {
 
 // Corner i of a box of the given size in box-local coordinates (bit 0: x, 1: y, 2: z).

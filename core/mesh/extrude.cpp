@@ -164,11 +164,11 @@ ExtrudeResult ExtrudeFace(PolyMesh* mesh, const PrimitiveShape& shape, FaceId fa
   for (size_t i = 0; i < n; ++i) {
     const size_t i1 = (i + 1) % n, im = (i + n - 1) % n;
     const HalfedgeId base = loop[i];
-    const HalfedgeId up = PolyMesh::EdgeHalfedge(r.side_edges[i], 0);      // v_i -> w_i, in side i-1
-    const HalfedgeId down = PolyMesh::EdgeHalfedge(r.side_edges[i], 1);    // w_i -> v_i, in side i
-    const HalfedgeId up1 = PolyMesh::EdgeHalfedge(r.side_edges[i1], 0);    // v_{i+1} -> w_{i+1}, in side i
-    const HalfedgeId cap = PolyMesh::EdgeHalfedge(r.cap_edges[i], 0);      // w_i -> w_{i+1}, in face
-    const HalfedgeId cap_in = PolyMesh::EdgeHalfedge(r.cap_edges[i], 1);   // w_{i+1} -> w_i, in side i
+    const HalfedgeId up = PolyMesh::EdgeHalfedge(r.side_edges[i], 0);     // v_i -> w_i, in side i-1
+    const HalfedgeId down = PolyMesh::EdgeHalfedge(r.side_edges[i], 1);   // w_i -> v_i, in side i
+    const HalfedgeId up1 = PolyMesh::EdgeHalfedge(r.side_edges[i1], 0);   // v_{i+1} -> w_{i+1}, in side i
+    const HalfedgeId cap = PolyMesh::EdgeHalfedge(r.cap_edges[i], 0);     // w_i -> w_{i+1}, in face
+    const HalfedgeId cap_in = PolyMesh::EdgeHalfedge(r.cap_edges[i], 1);  // w_{i+1} -> w_i, in side i
     const HalfedgeId cap_prev = PolyMesh::EdgeHalfedge(r.cap_edges[im], 0);
     const HalfedgeId cap_next = PolyMesh::EdgeHalfedge(r.cap_edges[i1], 0);
     const FaceId side = r.side_faces[i];
@@ -247,10 +247,10 @@ ExtrusionDistanceResult SetExtrusionDistance(PolyMesh* mesh, const PrimitiveShap
   for (size_t i = 0; i < n; ++i) {
     const VertexId w = extrusion->new_vertices[i];
     r.undo.vertices.emplace_back(w, mesh->vertex(w));
-    for (HalfedgeId h : {mesh->Next(PolyMesh::EdgeHalfedge(extrusion->side_edges[i], 1)),
-                         PolyMesh::EdgeHalfedge(extrusion->side_edges[(i + 1) % n], 0),
-                         PolyMesh::EdgeHalfedge(extrusion->cap_edges[i], 1),
-                         PolyMesh::EdgeHalfedge(extrusion->side_edges[i], 1)})
+    for (HalfedgeId h :
+         {mesh->Next(PolyMesh::EdgeHalfedge(extrusion->side_edges[i], 1)),
+          PolyMesh::EdgeHalfedge(extrusion->side_edges[(i + 1) % n], 0),
+          PolyMesh::EdgeHalfedge(extrusion->cap_edges[i], 1), PolyMesh::EdgeHalfedge(extrusion->side_edges[i], 1)})
       r.undo.halfedges.emplace_back(h, mesh->halfedge(h));
   }
   extrusion->distance = distance;

@@ -38,16 +38,16 @@ namespace facet {
 struct ExtrudeResult {
   bool ok = false;
   std::string message;
-  FaceId face = kNoFace;  // the extruded face (same id before and after)
-  double distance = 0.0;  // along `direction`, primitive-local units
+  FaceId face = kNoFace;                                             // the extruded face (same id before and after)
+  double distance = 0.0;                                             // along `direction`, primitive-local units
   Eigen::Vector3d direction_in_primitive = Eigen::Vector3d::Zero();  // unit face normal
   // Index i in these lists is the face's corner i, starting at the face's first half-edge.
-  std::vector<VertexId> base_vertices;  // v_i
-  std::vector<VertexId> new_vertices;   // w_i
+  std::vector<VertexId> base_vertices;        // v_i
+  std::vector<VertexId> new_vertices;         // w_i
   std::vector<Eigen::Vector3d> base_offsets;  // v_i's local offset when extruded
-  std::vector<EdgeId> side_edges;   // v_i - w_i; half-edge 2e runs v_i -> w_i
-  std::vector<EdgeId> cap_edges;    // w_i - w_{i+1}; half-edge 2e runs w_i -> w_{i+1}, in `face`
-  std::vector<FaceId> side_faces;   // side face i holds v_i -> v_{i+1}
+  std::vector<EdgeId> side_edges;             // v_i - w_i; half-edge 2e runs v_i -> w_i
+  std::vector<EdgeId> cap_edges;              // w_i - w_{i+1}; half-edge 2e runs w_i -> w_{i+1}, in `face`
+  std::vector<FaceId> side_faces;             // side face i holds v_i -> v_{i+1}
   MeshUndo undo;
 };
 

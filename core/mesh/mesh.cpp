@@ -1,7 +1,7 @@
 #include "core/mesh/mesh.h"
 
-#include <cassert>
 #include <algorithm>
+#include <cassert>
 #include <map>
 #include <sstream>
 #include <unordered_map>
@@ -86,15 +86,13 @@ void PolyMesh::KillFace(FaceId f) {
 namespace {
 
 bool SameVertex(const MeshVertex& a, const MeshVertex& b) {
-  return a.halfedge == b.halfedge && a.primitive == b.primitive && a.local.a == b.local.a &&
-         a.local.b == b.local.b && a.local.t == b.local.t && a.local.on_edge == b.local.on_edge &&
-         a.local.free == b.local.free && a.local.offset == b.local.offset &&
-         a.position == b.position;
+  return a.halfedge == b.halfedge && a.primitive == b.primitive && a.local.a == b.local.a && a.local.b == b.local.b &&
+         a.local.t == b.local.t && a.local.on_edge == b.local.on_edge && a.local.free == b.local.free &&
+         a.local.offset == b.local.offset && a.position == b.position;
 }
 
 bool SameHalfedge(const MeshHalfedge& a, const MeshHalfedge& b) {
-  return a.origin == b.origin && a.next == b.next && a.prev == b.prev && a.face == b.face &&
-         a.uv == b.uv;
+  return a.origin == b.origin && a.next == b.next && a.prev == b.prev && a.face == b.face && a.uv == b.uv;
 }
 
 bool SameFace(const MeshFace& a, const MeshFace& b) {
@@ -104,8 +102,7 @@ bool SameFace(const MeshFace& a, const MeshFace& b) {
 }  // namespace
 
 bool operator==(const PolyMesh& a, const PolyMesh& b) {
-  if (a.NumVertices() != b.NumVertices() || a.NumEdges() != b.NumEdges() ||
-      a.NumFaces() != b.NumFaces()) {
+  if (a.NumVertices() != b.NumVertices() || a.NumEdges() != b.NumEdges() || a.NumFaces() != b.NumFaces()) {
     return false;
   }
   for (VertexId v = 0; v < std::max(a.VertexIdEnd(), b.VertexIdEnd()); ++v) {
@@ -128,9 +125,8 @@ bool operator==(const PolyMesh& a, const PolyMesh& b) {
 }
 
 std::vector<FaceId> AddPolygons(PolyMesh* mesh, const std::vector<VertexId>& vertex_ids,
-                                const std::vector<std::vector<int>>& polygons,
-                                const std::vector<int>& materials, PrimitiveId primitive,
-                                std::string* message) {
+                                const std::vector<std::vector<int>>& polygons, const std::vector<int>& materials,
+                                PrimitiveId primitive, std::string* message) {
   auto fail = [&](const std::string& text) {
     if (message) *message = text;
     return std::vector<FaceId>();
@@ -146,8 +142,9 @@ std::vector<FaceId> AddPolygons(PolyMesh* mesh, const std::vector<VertexId>& ver
       if (a < 0 || a >= n || b < 0 || b >= n) return fail("polygon index out of range");
       if (a == b) return fail("polygon " + std::to_string(p) + " repeats a vertex");
       if (!directed.emplace(std::make_pair(a, b), 1).second) {
-        return fail("edge used twice in the same direction: non-manifold or inconsistent "
-                    "orientation");
+        return fail(
+            "edge used twice in the same direction: non-manifold or inconsistent "
+            "orientation");
       }
     }
   }
@@ -260,9 +257,7 @@ HalfedgeId FindHalfedge(const PolyMesh& mesh, VertexId a, VertexId b) {
   return kNoElement;
 }
 
-int EulerCharacteristic(const PolyMesh& mesh) {
-  return mesh.NumVertices() - mesh.NumEdges() + mesh.NumFaces();
-}
+int EulerCharacteristic(const PolyMesh& mesh) { return mesh.NumVertices() - mesh.NumEdges() + mesh.NumFaces(); }
 
 Eigen::Vector3d FaceNormal(const PolyMesh& mesh, FaceId f) {
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
@@ -335,8 +330,8 @@ std::vector<std::string> Validate(const PolyMesh& mesh) {
     if ((h & 1u) == 0u) {
       const VertexId lo = std::min(he.origin, dest), hi = std::max(he.origin, dest);
       if (!vertex_pairs.insert((std::uint64_t(lo) << 32) | hi).second) {
-        add("edge " + std::to_string(h / 2) + ": a second edge between vertices " +
-            std::to_string(lo) + " and " + std::to_string(hi) + " (non-manifold edge)");
+        add("edge " + std::to_string(h / 2) + ": a second edge between vertices " + std::to_string(lo) + " and " +
+            std::to_string(hi) + " (non-manifold edge)");
       }
     }
   }

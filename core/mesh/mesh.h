@@ -54,14 +54,12 @@ struct LocalDefinition {
   ParamCoefficients a = ParamCoefficients::Zero();
   ParamCoefficients b = ParamCoefficients::Zero();
   double t = 0.0;
-  bool on_edge = false;  // true for a vertex created by E_split
-  bool free = false;     // the solve may move it off its definition through `offset`
+  bool on_edge = false;                              // true for a vertex created by E_split
+  bool free = false;                                 // the solve may move it off its definition through `offset`
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();  // primitive-local units
 
   ParamCoefficients Collapsed() const { return (1.0 - t) * a + t * b; }
-  Eigen::Vector3d LocalPosition(const PrimitiveParams& params) const {
-    return Collapsed() * params + offset;
-  }
+  Eigen::Vector3d LocalPosition(const PrimitiveParams& params) const { return Collapsed() * params + offset; }
   static LocalDefinition Corner(const ParamCoefficients& c) {
     LocalDefinition d;
     d.a = c;
@@ -77,9 +75,7 @@ struct MeshVertex {
   LocalDefinition local;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // world, cached from local and pose
 
-  Eigen::Vector3d LocalPosition(const PrimitiveParams& params) const {
-    return local.LocalPosition(params);
-  }
+  Eigen::Vector3d LocalPosition(const PrimitiveParams& params) const { return local.LocalPosition(params); }
 };
 
 struct MeshHalfedge {
@@ -87,7 +83,7 @@ struct MeshHalfedge {
   VertexId origin = kNoElement;
   HalfedgeId next = kNoElement;
   HalfedgeId prev = kNoElement;
-  FaceId face = kNoFace;  // kNoFace on the boundary
+  FaceId face = kNoFace;                         // kNoFace on the boundary
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // corner attribute at origin in face
 };
 
@@ -165,9 +161,8 @@ bool operator==(const PolyMesh& a, const PolyMesh& b);
 // Returns the new face ids in polygon order, or an empty vector (mesh unchanged) and a
 // message if the polygons are not an oriented manifold.
 std::vector<FaceId> AddPolygons(PolyMesh* mesh, const std::vector<VertexId>& vertex_ids,
-                                const std::vector<std::vector<int>>& polygons,
-                                const std::vector<int>& materials, PrimitiveId primitive,
-                                std::string* message);
+                                const std::vector<std::vector<int>>& polygons, const std::vector<int>& materials,
+                                PrimitiveId primitive, std::string* message);
 
 // Number of vertices (= half-edges) in a face loop.
 int FaceDegree(const PolyMesh& mesh, FaceId f);

@@ -61,8 +61,7 @@ HalfedgeId CornerOf(const PolyMesh& mesh, FaceId f, VertexId v) {
 
 // Splits half-edge h0 (a -> b) at t: h0 becomes a -> m, its twin m -> a, and the new edge's
 // half-edges run m -> b (in h0's face) and b -> m (in the twin's face).
-ESplitResult SplitHalfedge(PolyMesh* mesh, HalfedgeId h0, double t, VertexId reuse_vertex,
-                           EdgeId reuse_edge) {
+ESplitResult SplitHalfedge(PolyMesh* mesh, HalfedgeId h0, double t, VertexId reuse_vertex, EdgeId reuse_edge) {
   ESplitResult r;
   const HalfedgeId h1 = M::Twin(h0);
   const VertexId a = mesh->Origin(h0), b = mesh->Origin(h1);
@@ -127,8 +126,8 @@ ESplitResult SplitHalfedge(PolyMesh* mesh, HalfedgeId h0, double t, VertexId reu
 
 // Splits face f by a new edge v1 -> v2 (half-edge 2e); new_face_side says which new
 // half-edge's loop becomes the new face (-1: the loop without face.halfedge).
-VConnectResult ConnectVertices(PolyMesh* mesh, FaceId f, VertexId v1, VertexId v2, EdgeId reuse_edge,
-                               FaceId reuse_face, int new_face_side) {
+VConnectResult ConnectVertices(PolyMesh* mesh, FaceId f, VertexId v1, VertexId v2, EdgeId reuse_edge, FaceId reuse_face,
+                               int new_face_side) {
   VConnectResult r;
   const HalfedgeId h1 = CornerOf(*mesh, f, v1), h2 = CornerOf(*mesh, f, v2);
   const HalfedgeId p1 = mesh->Prev(h1), p2 = mesh->Prev(h2);
@@ -249,8 +248,8 @@ VDeleteResult VDelete(PolyMesh* mesh, VertexId m) {
     return r;
   }
   if (FindHalfedge(*mesh, x, y) != kNoElement) {
-    r.message = name + ": its neighbours " + std::to_string(x) + " and " + std::to_string(y) +
-                " are already joined by an edge";
+    r.message =
+        name + ": its neighbours " + std::to_string(x) + " and " + std::to_string(y) + " are already joined by an edge";
     return r;
   }
   for (HalfedgeId h : {ro, ri}) {
@@ -312,8 +311,8 @@ VConnectResult VConnect(PolyMesh* mesh, FaceId face, VertexId v1, VertexId v2) {
     return r;
   }
   if (mesh->Dest(h1) == v2 || mesh->Dest(h2) == v1) {
-    r.message = name + "vertices " + std::to_string(v1) + " and " + std::to_string(v2) +
-                " are adjacent on face " + std::to_string(face) + ": the edge exists already";
+    r.message = name + "vertices " + std::to_string(v1) + " and " + std::to_string(v2) + " are adjacent on face " +
+                std::to_string(face) + ": the edge exists already";
     return r;
   }
   if (FindHalfedge(*mesh, v1, v2) != kNoElement) {

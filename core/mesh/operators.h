@@ -58,11 +58,11 @@ ESplitResult ESplit(PolyMesh* mesh, EdgeId edge, double t);
 struct VDeleteResult {
   bool ok = false;
   std::string message;
-  VertexId vertex = kNoElement;         // removed
-  EdgeId removed_edge = kNoElement;     // the newer of the vertex's two edges
-  EdgeId kept_edge = kNoElement;        // now spans the vertex's two neighbours
+  VertexId vertex = kNoElement;           // removed
+  EdgeId removed_edge = kNoElement;       // the newer of the vertex's two edges
+  EdgeId kept_edge = kNoElement;          // now spans the vertex's two neighbours
   HalfedgeId kept_halfedge = kNoElement;  // of kept_edge, the one whose origin did not change
-  double t = 0.0;                       // the vertex's parameter along kept_halfedge
+  double t = 0.0;                         // the vertex's parameter along kept_halfedge
   MeshUndo undo;
 };
 
@@ -74,8 +74,8 @@ VDeleteResult VDelete(PolyMesh* mesh, VertexId vertex);
 struct VConnectResult {
   bool ok = false;
   std::string message;
-  EdgeId edge = kNoElement;      // half-edge 2 * edge runs from v1 to v2
-  FaceId new_face = kNoFace;     // the part of `face` that does not hold face.halfedge
+  EdgeId edge = kNoElement;   // half-edge 2 * edge runs from v1 to v2
+  FaceId new_face = kNoFace;  // the part of `face` that does not hold face.halfedge
   MeshUndo undo;
 };
 
@@ -88,11 +88,11 @@ VConnectResult VConnect(PolyMesh* mesh, FaceId face, VertexId v1, VertexId v2);
 struct EDeleteResult {
   bool ok = false;
   std::string message;
-  EdgeId edge = kNoElement;          // removed
-  FaceId kept_face = kNoFace;        // the smaller id of the two faces
+  EdgeId edge = kNoElement;    // removed
+  FaceId kept_face = kNoFace;  // the smaller id of the two faces
   FaceId removed_face = kNoFace;
-  int removed_side = 0;              // removed_face was the face of half-edge 2 * edge + side
-  VertexId v1 = kNoElement;          // origin of half-edge 2 * edge
+  int removed_side = 0;      // removed_face was the face of half-edge 2 * edge + side
+  VertexId v1 = kNoElement;  // origin of half-edge 2 * edge
   VertexId v2 = kNoElement;
   MeshUndo undo;
 };

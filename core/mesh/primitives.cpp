@@ -4,8 +4,8 @@
 
 #include <Eigen/Geometry>
 
-#include "core/mesh/box.h"
 #include "core/geometry/camera.h"
+#include "core/mesh/box.h"
 
 namespace facet {
 
@@ -42,8 +42,7 @@ Template BoxTemplate() {
 
 Template WedgeTemplate() {
   Template t;
-  t.coefficients = {Coeff(0, 0, 0), Coeff(1, 0, 0), Coeff(1, 1, 0), Coeff(0, 1, 0),
-                    Coeff(0, 0.5, 1), Coeff(1, 0.5, 1)};
+  t.coefficients = {Coeff(0, 0, 0), Coeff(1, 0, 0), Coeff(1, 1, 0), Coeff(0, 1, 0), Coeff(0, 0.5, 1), Coeff(1, 0.5, 1)};
   t.polygons = {{0, 3, 2, 1}, {0, 1, 5, 4}, {2, 3, 4, 5}, {0, 4, 3}, {1, 2, 5}};
   t.materials = {0, 1, 2, 3, 4};
   return t;
@@ -51,8 +50,7 @@ Template WedgeTemplate() {
 
 Template PyramidTemplate() {
   Template t;
-  t.coefficients = {Coeff(0, 0, 0), Coeff(1, 0, 0), Coeff(1, 1, 0), Coeff(0, 1, 0),
-                    Coeff(0.5, 0.5, 1)};
+  t.coefficients = {Coeff(0, 0, 0), Coeff(1, 0, 0), Coeff(1, 1, 0), Coeff(0, 1, 0), Coeff(0.5, 0.5, 1)};
   t.polygons = {{0, 3, 2, 1}, {0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}};
   t.materials = {0, 1, 2, 3, 4};
   return t;
@@ -99,10 +97,8 @@ int NumParams(PrimitiveKind kind) {
   switch (kind) {
     case PrimitiveKind::kPrism:
     case PrimitiveKind::kCylinder:
-    case PrimitiveKind::kPlane:
-      return 2;
-    default:
-      return 3;
+    case PrimitiveKind::kPlane: return 2;
+    default: return 3;
   }
 }
 
@@ -140,9 +136,7 @@ const char* PrimitiveKindName(PrimitiveKind kind) {
   return "?";
 }
 
-PrimitiveShape MakeBox(PrimitiveId id, const Eigen::Vector3d& size) {
-  return MakeSized(id, PrimitiveKind::kBox, size);
-}
+PrimitiveShape MakeBox(PrimitiveId id, const Eigen::Vector3d& size) { return MakeSized(id, PrimitiveKind::kBox, size); }
 PrimitiveShape MakeWedge(PrimitiveId id, const Eigen::Vector3d& size) {
   return MakeSized(id, PrimitiveKind::kWedge, size);
 }
@@ -172,8 +166,8 @@ AddPrimitiveResult AddPrimitive(PolyMesh* mesh, const PrimitiveShape& primitive)
   const int num_params = NumParams(primitive.kind);
   for (int i = 0; i < num_params; ++i) {
     if (!(primitive.params[i] > 0.0) || !std::isfinite(primitive.params[i])) {
-      result.message = std::string(PrimitiveKindName(primitive.kind)) + ": parameter " +
-                       std::to_string(i) + " must be positive and finite";
+      result.message = std::string(PrimitiveKindName(primitive.kind)) + ": parameter " + std::to_string(i) +
+                       " must be positive and finite";
       return result;
     }
   }

@@ -14,8 +14,8 @@ double Cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::V
 
 // Inside or on the boundary: a vertex on an ear's diagonal (the reflex corner of an L)
 // forbids that ear, since the diagonal would pass through it.
-bool InsideOrOn(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
-                const Eigen::Vector2d& c, double eps) {
+bool InsideOrOn(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                double eps) {
   return Cross2(a, b, p) >= -eps && Cross2(b, c, p) >= -eps && Cross2(c, a, p) >= -eps;
 }
 

@@ -74,9 +74,9 @@ struct LmOptions {
 };
 
 enum class LmStepStatus {
-  kSolved,           // the trial holds a candidate
-  kSolveFailed,      // the damped system has no finite solution at this lambda
-  kStepNegligible,   // the caller's own step test says the state has converged
+  kSolved,          // the trial holds a candidate
+  kSolveFailed,     // the damped system has no finite solution at this lambda
+  kStepNegligible,  // the caller's own step test says the state has converged
 };
 
 struct LmTrial {
@@ -86,13 +86,13 @@ struct LmTrial {
 };
 
 enum class LmTermination {
-  kConverged,           // a negligible decrease or step, or the caller's step test
-  kGradientConverged,   // the caller's gradient test at a linearisation
-  kNoDecrease,          // no damping up to max_lambda (or max_trials_per_linearization) lowered the cost
-  kMaxIterations,       // max_iterations reached (0 included)
-  kZeroCost,            // the start or an accepted step fits exactly
-  kNonFiniteCost,       // the start's cost is not finite: nothing was tried
-  kLinearSolveFailed,   // no damping up to max_lambda_on_failed_solve gave a finite step
+  kConverged,          // a negligible decrease or step, or the caller's step test
+  kGradientConverged,  // the caller's gradient test at a linearisation
+  kNoDecrease,         // no damping up to max_lambda (or max_trials_per_linearization) lowered the cost
+  kMaxIterations,      // max_iterations reached (0 included)
+  kZeroCost,           // the start or an accepted step fits exactly
+  kNonFiniteCost,      // the start's cost is not finite: nothing was tried
+  kLinearSolveFailed,  // no damping up to max_lambda_on_failed_solve gave a finite step
   kStoppedByCallback,
 };
 const char* LmTerminationName(LmTermination termination);
@@ -227,8 +227,7 @@ LmResult MinimizeLevenbergMarquardt(double cost, const LmOptions& options, Linea
       return false;
     }
     LmStepStatus Step(double lambda, LmTrial* trial) {
-      return step(lambda, &trial->cost, &trial->step_squared_norm) ? LmStepStatus::kSolved
-                                                                    : LmStepStatus::kSolveFailed;
+      return step(lambda, &trial->cost, &trial->step_squared_norm) ? LmStepStatus::kSolved : LmStepStatus::kSolveFailed;
     }
     void Accept() { accept(); }
   } adapter{linearize, step, accept};

@@ -90,8 +90,8 @@ void ApplyDirection(const Edit& edit, bool forward, Project* project) {
 }  // namespace
 
 bool Edit::Empty() const {
-  return images.empty() && segments.empty() && primitives.empty() && pins.empty() && constraints.empty() && !units_after &&
-         next_id_after == kNoId;
+  return images.empty() && segments.empty() && primitives.empty() && pins.empty() && constraints.empty() &&
+         !units_after && next_id_after == kNoId;
 }
 
 Edit DiffProjects(const std::string& label, const Project& before, const Project& after) {

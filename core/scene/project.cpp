@@ -114,21 +114,19 @@ Pin* Project::FindPin(Id id) { return FindById(pins, id); }
 
 bool operator==(const Camera& a, const Camera& b) {
   return a.width_px == b.width_px && a.height_px == b.height_px && a.focal_px == b.focal_px &&
-         a.principal_point_px == b.principal_point_px &&
-         a.cam_from_world_rotation == b.cam_from_world_rotation &&
+         a.principal_point_px == b.principal_point_px && a.cam_from_world_rotation == b.cam_from_world_rotation &&
          a.cam_from_world_translation == b.cam_from_world_translation && a.k1 == b.k1 && a.k2 == b.k2;
 }
 bool operator==(const Image& a, const Image& b) {
-  return a.id == b.id && a.path == b.path && a.width_px == b.width_px &&
-         a.height_px == b.height_px && a.camera == b.camera &&
-         a.camera_calibrated == b.camera_calibrated &&
-         a.principal_point_mode == b.principal_point_mode &&
-         a.fixed_principal_point_px == b.fixed_principal_point_px && a.pose_locked == b.pose_locked &&
-         a.focal_locked == b.focal_locked && a.principal_point_locked == b.principal_point_locked &&
-         a.focal_mode == b.focal_mode && a.fixed_focal_px == b.fixed_focal_px &&
-         a.focal_prior_px == b.focal_prior_px && a.focal_prior_std_px == b.focal_prior_std_px &&
-         a.use_horizon == b.use_horizon && a.horizon_px == b.horizon_px &&
-         a.estimate_distortion == b.estimate_distortion && a.distortion_locked == b.distortion_locked;
+  return a.id == b.id && a.path == b.path && a.width_px == b.width_px && a.height_px == b.height_px &&
+         a.camera == b.camera && a.camera_calibrated == b.camera_calibrated &&
+         a.principal_point_mode == b.principal_point_mode && a.fixed_principal_point_px == b.fixed_principal_point_px &&
+         a.pose_locked == b.pose_locked && a.focal_locked == b.focal_locked &&
+         a.principal_point_locked == b.principal_point_locked && a.focal_mode == b.focal_mode &&
+         a.fixed_focal_px == b.fixed_focal_px && a.focal_prior_px == b.focal_prior_px &&
+         a.focal_prior_std_px == b.focal_prior_std_px && a.use_horizon == b.use_horizon &&
+         a.horizon_px == b.horizon_px && a.estimate_distortion == b.estimate_distortion &&
+         a.distortion_locked == b.distortion_locked;
 }
 bool operator==(const PrimitiveShape& a, const PrimitiveShape& b) {
   return a.id == b.id && a.kind == b.kind && a.params == b.params && a.segments == b.segments &&
@@ -140,16 +138,15 @@ bool operator==(const Primitive& a, const Primitive& b) {
          a.translation_locked == b.translation_locked && a.attached_to == b.attached_to;
 }
 bool operator==(const Constraint& a, const Constraint& b) {
-  return a.id == b.id && a.kind == b.kind && a.vertices == b.vertices && a.value == b.value &&
-         a.point == b.point && a.axis == b.axis && a.image_id == b.image_id &&
-         a.line_a_px == b.line_a_px && a.line_b_px == b.line_b_px;
+  return a.id == b.id && a.kind == b.kind && a.vertices == b.vertices && a.value == b.value && a.point == b.point &&
+         a.axis == b.axis && a.image_id == b.image_id && a.line_a_px == b.line_a_px && a.line_b_px == b.line_b_px;
 }
 bool operator==(const Pin& a, const Pin& b) {
   return a.id == b.id && a.image_id == b.image_id && a.vertex == b.vertex && a.uv_px == b.uv_px;
 }
 bool operator==(const Project& a, const Project& b) {
-  return a.images == b.images && a.segments == b.segments && a.primitives == b.primitives &&
-         a.pins == b.pins && a.constraints == b.constraints && a.units == b.units && a.next_id == b.next_id;
+  return a.images == b.images && a.segments == b.segments && a.primitives == b.primitives && a.pins == b.pins &&
+         a.constraints == b.constraints && a.units == b.units && a.next_id == b.next_id;
 }
 
 }  // namespace facet

@@ -13,9 +13,9 @@
 
 #include <Eigen/Core>
 
+#include "core/geometry/axis.h"
 #include "core/geometry/camera.h"
 #include "core/geometry/ids.h"
-#include "core/geometry/axis.h"
 #include "core/geometry/intrinsics_modes.h"
 #include "core/geometry/segment.h"
 #include "core/mesh/mesh.h"

@@ -78,13 +78,14 @@ bool ConstraintPolishOptions::Check(std::string* error) const {
   return true;
 }
 
-ConstraintPolishSummary PolishConstraints(const ConstraintPolishProblem& problem, const ConstraintPolishOptions& options,
-                                          Eigen::VectorXd* x) {
+ConstraintPolishSummary PolishConstraints(const ConstraintPolishProblem& problem,
+                                          const ConstraintPolishOptions& options, Eigen::VectorXd* x) {
   const auto start = std::chrono::steady_clock::now();
   ConstraintPolishSummary summary;
   std::string error;
   if (!options.Check(&error)) {
-    return internal::FailedSummary(summary, "polish: invalid options: " + error, start, SolverTermination::kInvalidInput);
+    return internal::FailedSummary(summary, "polish: invalid options: " + error, start,
+                                   SolverTermination::kInvalidInput);
   }
   if (problem.num_variables <= 0 || x == nullptr || x->size() != problem.num_variables || !problem.objective ||
       (problem.num_constraints > 0 && !problem.constraints)) {
@@ -118,7 +119,8 @@ ConstraintPolishSummary PolishConstraints(const ConstraintPolishProblem& problem
     const nlopt::result result = opt.optimize(values, f);
     const Eigen::VectorXd polished = Eigen::Map<const Eigen::VectorXd>(values.data(), problem.num_variables);
     summary.iterations = ctx.evaluations;
-    if (!polished.allFinite()) return internal::FailedSummary(summary, "polish: SLSQP returned a non-finite point", start);
+    if (!polished.allFinite())
+      return internal::FailedSummary(summary, "polish: SLSQP returned a non-finite point", start);
     summary.final_cost = problem.objective(polished, nullptr);
     summary.final_max_violation = problem.num_constraints > 0 ? MaxViolation(problem, polished) : 0.0;
     summary.message = std::string("SLSQP: ") + ResultName(result);

@@ -46,7 +46,7 @@ struct ConstraintPolishSummary : SolverSummary {
 };
 
 // Polishes *x in place; on failure *x is left unchanged. Never throws.
-ConstraintPolishSummary PolishConstraints(const ConstraintPolishProblem& problem, const ConstraintPolishOptions& options,
-                                          Eigen::VectorXd* x);
+ConstraintPolishSummary PolishConstraints(const ConstraintPolishProblem& problem,
+                                          const ConstraintPolishOptions& options, Eigen::VectorXd* x);
 
 }  // namespace facet

@@ -27,7 +27,8 @@ bool JointSolveOptions::Check(std::string* error) const {
   if (!(function_tolerance >= 0.0)) return fail("function_tolerance must be non-negative");
   if (!(gradient_tolerance >= 0.0)) return fail("gradient_tolerance must be non-negative");
   if (!(parameter_tolerance >= 0.0)) return fail("parameter_tolerance must be non-negative");
-  if (!(initial_lambda > 0.0) || !std::isfinite(initial_lambda)) return fail("initial_lambda must be positive and finite");
+  if (!(initial_lambda > 0.0) || !std::isfinite(initial_lambda))
+    return fail("initial_lambda must be positive and finite");
   if (!(constraint_tolerance > 0.0)) return fail("constraint_tolerance must be positive");
   if (!(conflict_tolerance > 0.0)) return fail("conflict_tolerance must be positive");
   return true;
@@ -103,7 +104,8 @@ class SparseEquations : public NormalEquations {
       std::vector<int> idx;
       idx.reserve(b.cols.size() * (b.cols.size() + 1) / 2);
       for (size_t i = 0; i < b.cols.size(); ++i) {
-        for (size_t j = 0; j <= i; ++j) idx.push_back(index(std::max(b.cols[i], b.cols[j]), std::min(b.cols[i], b.cols[j])));
+        for (size_t j = 0; j <= i; ++j)
+          idx.push_back(index(std::max(b.cols[i], b.cols[j]), std::min(b.cols[i], b.cols[j])));
       }
       block_index_.push_back(std::move(idx));
     }
@@ -183,8 +185,10 @@ class SchurEquations : public NormalEquations {
       int first = -1;
       for (int c : b.cols) {
         if (c < nc_) continue;
-        if (first < 0) first = c;
-        else parent[find(c)] = find(first);
+        if (first < 0)
+          first = c;
+        else
+          parent[find(c)] = find(first);
       }
     }
     group_of_.assign(n, -1);
@@ -210,7 +214,8 @@ class SchurEquations : public NormalEquations {
         for (int p : b.cols) {
           if (p < nc_) continue;
           Group& g = groups_[group_of_[p]];
-          if (std::find(g.camera_rows.begin(), g.camera_rows.end(), c) == g.camera_rows.end()) g.camera_rows.push_back(c);
+          if (std::find(g.camera_rows.begin(), g.camera_rows.end(), c) == g.camera_rows.end())
+            g.camera_rows.push_back(c);
         }
       }
     }
@@ -438,7 +443,8 @@ class JointLmProblem {
     double scaled_step = 0.0;
     for (int k = 0; k < problem_->num_parameters; ++k) scaled_step += d(k) * delta(k) * delta(k);
     const double predicted = 0.5 * (lambda * scaled_step - normal.gradient().dot(delta));
-    if (std::sqrt(scaled_step) <= options_.parameter_tolerance * (std::sqrt(2.0 * cost_) + options_.parameter_tolerance)) {
+    if (std::sqrt(scaled_step) <=
+        options_.parameter_tolerance * (std::sqrt(2.0 * cost_) + options_.parameter_tolerance)) {
       return LmStepStatus::kStepNegligible;
     }
     // The model promises less than the cost's working precision: every further step would be
@@ -871,7 +877,8 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   if (!StateIsFinite(state)) {
     return finish(SolverTermination::kInvalidInput, "a camera or primitive of the project has a non-finite value");
   }
-  if (problem.blocks.empty()) return finish(SolverTermination::kNothingToSolve, "no pins, segments or constraints to solve");
+  if (problem.blocks.empty())
+    return finish(SolverTermination::kNothingToSolve, "no pins, segments or constraints to solve");
   if (problem.num_parameters == 0) {
     EvaluateBlocks(&problem, state, false);
     FillDiagnostics(project, options, problem, true, &summary);
@@ -881,7 +888,8 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   problem.constraint_weight = kInitialConstraintWeight;
 
   if (!EvaluateBlocks(&problem, state, true)) {
-    return finish(SolverTermination::kFailed, "at the start a pinned vertex lies on or behind its camera; the model is unchanged");
+    return finish(SolverTermination::kFailed,
+                  "at the start a pinned vertex lies on or behind its camera; the model is unchanged");
   }
   summary.initial_cost = ObservationCost(problem);
   const double initial_merit = TotalCost(problem);
@@ -892,7 +900,8 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   NormalEquations* normal_ptr = &schur;
   if (options.linear_solver != JointSolveOptions::LinearSolver::kSchur || !schur.Init(problem)) {
     normal_ptr = &sparse;
-    if (!sparse.Init(problem)) return finish(SolverTermination::kFailed, "the sparse normal equations could not be analysed");
+    if (!sparse.Init(problem))
+      return finish(SolverTermination::kFailed, "the sparse normal equations could not be analysed");
   }
   NormalEquations& normal = *normal_ptr;
   LmWorkspace lm;

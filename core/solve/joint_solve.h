@@ -61,7 +61,7 @@
 namespace facet {
 
 struct JointSolveOptions {
-  int max_iterations = 100;       // LM iterations (the per-frame budget while dragging)
+  int max_iterations = 100;  // LM iterations (the per-frame budget while dragging)
   double function_tolerance = 1e-14;
   double gradient_tolerance = 1e-14;
   double parameter_tolerance = 1e-14;
@@ -115,8 +115,8 @@ struct JointSolveSummary : SolverSummary {
   int num_parameters = 0;
   double reprojection_rms_px = 0.0;  // over the pins that took part
   double reprojection_max_px = 0.0;
-  std::vector<PinDiagnostic> pins;            // project.pins order
-  std::vector<ImageDiagnostic> images;        // calibrated images with pins
+  std::vector<PinDiagnostic> pins;                // project.pins order
+  std::vector<ImageDiagnostic> images;            // calibrated images with pins
   std::vector<ConstraintDiagnostic> constraints;  // project.constraints order
   // Parameters the residuals do not determine (from the rank of the column-scaled Jacobian),
   // one sentence each: "the box 'house' depth is free: pin a vertex on its back face or add a

@@ -8,8 +8,8 @@
 #include <utility>
 
 #include "core/geometry/camera.h"
-#include "core/mesh/primitives.h"
 #include "core/geometry/cross_product_matrix.h"
+#include "core/mesh/primitives.h"
 
 namespace facet::joint_solve_internal {
 
@@ -24,9 +24,7 @@ int LargestComponent(const Eigen::Vector3d& v) {
   return k;
 }
 
-std::array<int, 2> OtherComponents(int dropped) {
-  return {dropped == 0 ? 1 : 0, dropped == 2 ? 1 : 2};
-}
+std::array<int, 2> OtherComponents(int dropped) { return {dropped == 0 ? 1 : 0, dropped == 2 ? 1 : 2}; }
 
 // The base a primitive follows (AttachOnTop's rule: a box base and a top with a rectangular
 // footprint), or -1.
@@ -80,8 +78,10 @@ int KindIndex(PrimitiveKind kind) {
 
 std::string PrimitiveLabel(const Primitive& p) {
   std::string label = std::string("the ") + PrimitiveKindName(p.shape.kind);
-  if (!p.name.empty()) label += " '" + p.name + "'";
-  else label += " " + std::to_string(p.id);
+  if (!p.name.empty())
+    label += " '" + p.name + "'";
+  else
+    label += " " + std::to_string(p.id);
   return label;
 }
 
@@ -104,8 +104,10 @@ bool ValidConstraintShape(const Constraint& c, std::string* why) {
     case ConstraintKind::kPerpendicular:
     case ConstraintKind::kEqualLength: return need(n == 4, "needs 4 vertices (two edges)");
     case ConstraintKind::kDistance:
-      return need(n == 2, "needs 2 vertices") && need(c.value > 0.0 && std::isfinite(c.value), "needs a positive distance");
-    case ConstraintKind::kFixedPoint: return need(n == 1, "needs 1 vertex") && need(c.point.allFinite(), "needs a finite point");
+      return need(n == 2, "needs 2 vertices") &&
+             need(c.value > 0.0 && std::isfinite(c.value), "needs a positive distance");
+    case ConstraintKind::kFixedPoint:
+      return need(n == 1, "needs 1 vertex") && need(c.point.allFinite(), "needs a finite point");
     case ConstraintKind::kAlongAxis: return need(n == 2, "needs 2 vertices");
     case ConstraintKind::kEdgeOnImageLine:
       return need(n == 2, "needs 2 vertices") &&
@@ -152,7 +154,8 @@ bool ProjectInCamera(const CameraState& camera, const Eigen::Vector3d& p_in_cam,
     *uv_px = f * d * xy + camera.principal_point_px;
     if (d_p != nullptr) {
       // d(xy d)/d xy = d I + 2 (k1 + 2 k2 r^2) xy xy^T, times d xy / d p.
-      const Eigen::Matrix2d j = d * Eigen::Matrix2d::Identity() + 2.0 * (camera.k1 + 2.0 * camera.k2 * r2) * xy * xy.transpose();
+      const Eigen::Matrix2d j =
+          d * Eigen::Matrix2d::Identity() + 2.0 * (camera.k1 + 2.0 * camera.k2 * r2) * xy * xy.transpose();
       Eigen::Matrix<double, 2, 3> d_xy;
       d_xy << inv_z, 0.0, -x * inv_z, 0.0, inv_z, -y * inv_z;
       d_p->noalias() = f * j * d_xy;
@@ -178,7 +181,8 @@ Eigen::Vector2d UndistortDrawnPixel(const CameraState& camera, const Eigen::Vect
   if (d_camera != nullptr) {
     const double r2 = xu.squaredNorm();
     const double d = 1.0 + r2 * (camera.k1 + camera.k2 * r2);
-    const Eigen::Matrix2d j = d * Eigen::Matrix2d::Identity() + 2.0 * (camera.k1 + 2.0 * camera.k2 * r2) * xu * xu.transpose();
+    const Eigen::Matrix2d j =
+        d * Eigen::Matrix2d::Identity() + 2.0 * (camera.k1 + 2.0 * camera.k2 * r2) * xu * xu.transpose();
     const Eigen::Matrix2d j_inv = j.inverse();
     d_camera->col(0) = xu - j_inv * xd;
     d_camera->middleCols<2>(1) = Eigen::Matrix2d::Identity() - j_inv;
@@ -228,8 +232,8 @@ int NumShapeParams(PrimitiveKind kind) {
 }
 
 bool PinResidual(const CameraState& camera, const Eigen::Vector3d& point, const Eigen::Vector2d& uv_px,
-                 Eigen::Vector2d* residual, Eigen::Matrix<double, 2, 3>* d_point,
-                 Eigen::Matrix<double, 2, 9>* d_camera, Eigen::Matrix<double, 2, 2>* d_distortion) {
+                 Eigen::Vector2d* residual, Eigen::Matrix<double, 2, 3>* d_point, Eigen::Matrix<double, 2, 9>* d_camera,
+                 Eigen::Matrix<double, 2, 2>* d_distortion) {
   const Eigen::Vector3d rel = point - camera.center_in_world;
   const Eigen::Vector3d p = camera.cam_from_world_rotation * rel;
   Eigen::Vector2d uv;
@@ -644,10 +648,14 @@ UsedInputs SelectUsedInputs(const Project& project, const ProjectIndex& index, J
     const Pin& pin = project.pins[i];
     const int im = index.FindImage(pin.image_id);
     std::string why;
-    if (im < 0) why = "names a missing image";
-    else if (!project.images[im].camera_calibrated) why = "is in an uncalibrated image";
-    else if (project.FindVertex(pin.vertex) == nullptr) why = "names a missing vertex";
-    else if (!pin.uv_px.allFinite()) why = "has a non-finite pixel";
+    if (im < 0)
+      why = "names a missing image";
+    else if (!project.images[im].camera_calibrated)
+      why = "is in an uncalibrated image";
+    else if (project.FindVertex(pin.vertex) == nullptr)
+      why = "names a missing vertex";
+    else if (!pin.uv_px.allFinite())
+      why = "has a non-finite pixel";
     if (!why.empty()) {
       ++problem->num_skipped_pins;
       problem->warnings.push_back("pin " + std::to_string(pin.id) + " " + why + "; skipped");
@@ -669,8 +677,8 @@ UsedInputs SelectUsedInputs(const Project& project, const ProjectIndex& index, J
       if (im < 0 || !project.images[im].camera_calibrated) why = "is in a missing or uncalibrated image";
     }
     if (!why.empty()) {
-      problem->warnings.push_back(std::string("constraint ") + std::to_string(c.id) + " (" + ConstraintKindName(c.kind) +
-                                  ") " + why + "; skipped");
+      problem->warnings.push_back(std::string("constraint ") + std::to_string(c.id) + " (" +
+                                  ConstraintKindName(c.kind) + ") " + why + "; skipped");
       continue;
     }
     used.constraints.push_back(static_cast<int>(i));
@@ -691,8 +699,8 @@ std::vector<int> AddCameraBlocks(const Project& project, const BuildOptions& opt
     const Image& image = project.images[i];
     if (!image.camera_calibrated) continue;
     const bool intrinsics_or_rotation_free =
-        !image.pose_locked || (options.refine_intrinsics && (!image.focal_locked || !image.principal_point_locked ||
-                                                             !image.distortion_locked));
+        !image.pose_locked || (options.refine_intrinsics &&
+                               (!image.focal_locked || !image.principal_point_locked || !image.distortion_locked));
     bool has_segments = false;
     if (options.use_segments && intrinsics_or_rotation_free) {
       for (const Segment& s : project.segments) has_segments = has_segments || s.image_id == image.id;
@@ -984,7 +992,8 @@ void NameParameters(const Project& project, JointProblem* problem) {
   for (const CameraBlock& cb : problem->cameras) {
     const std::array<int, 11> cols = CameraParameterColumns(cb);
     for (int i = 0; i < 11; ++i) {
-      if (cols[i] >= 0) problem->parameter_names[cols[i]] = ImageLabel(project.images[cb.image_index]) + ": " + kCamera[i];
+      if (cols[i] >= 0)
+        problem->parameter_names[cols[i]] = ImageLabel(project.images[cb.image_index]) + ": " + kCamera[i];
     }
   }
   const char* const kPose[6] = {"rotation about x", "rotation about y", "rotation about z",
@@ -994,8 +1003,9 @@ void NameParameters(const Project& project, JointProblem* problem) {
     const std::string label = PrimitiveLabel(p);
     for (int k = 0; k < kMaxPrimitiveParams; ++k) {
       if (pb.param_offset[k] < 0) continue;
-      problem->parameter_names[pb.param_offset[k]] =
-          label + ": " + kParamNames[KindIndex(p.shape.kind)][std::min(k, 2)] + " (parameter " + std::to_string(k) + ")";
+      problem->parameter_names[pb.param_offset[k]] = label + ": " +
+                                                     kParamNames[KindIndex(p.shape.kind)][std::min(k, 2)] +
+                                                     " (parameter " + std::to_string(k) + ")";
     }
     for (int i = 0; i < 3; ++i) {
       if (pb.rotation_offset >= 0) problem->parameter_names[pb.rotation_offset + i] = label + ": " + kPose[i];
@@ -1005,8 +1015,8 @@ void NameParameters(const Project& project, JointProblem* problem) {
   for (const FreeVertexBlock& fb : problem->free_vertices) {
     const Primitive& p = *project.FindPrimitive(fb.ref.primitive_id);
     for (int i = 0; i < 3; ++i) {
-      problem->parameter_names[fb.offset + i] = "the free vertex " + std::to_string(fb.ref.vertex) + " of " +
-                                                PrimitiveLabel(p) + ": offset " + "xyz"[i];
+      problem->parameter_names[fb.offset + i] =
+          "the free vertex " + std::to_string(fb.ref.vertex) + " of " + PrimitiveLabel(p) + ": offset " + "xyz"[i];
     }
   }
 }
@@ -1093,8 +1103,8 @@ bool EvaluateBlocks(JointProblem* problem, const JointState& state, bool with_ja
           break;
         }
         Eigen::Matrix<double, 1, 6> d_cam;
-        const double r = SegmentResidual(camera, block.segment_g, block.segment_m, block.axis,
-                                         with_jacobian ? &d_cam : nullptr);
+        const double r =
+            SegmentResidual(camera, block.segment_g, block.segment_m, block.axis, with_jacobian ? &d_cam : nullptr);
         block.residual << r, -r;
         if (with_jacobian) {
           for (int i = 0; i < 6; ++i) {
@@ -1107,7 +1117,8 @@ bool EvaluateBlocks(JointProblem* problem, const JointState& state, bool with_ja
       }
       case BlockKind::kConstraint: {
         const ConstraintTerm& term = problem->constraints[block.source];
-        for (size_t i = 0; i < block.vertices.size(); ++i) block.points[i] = problem->vertices[block.vertices[i]].position;
+        for (size_t i = 0; i < block.vertices.size(); ++i)
+          block.points[i] = problem->vertices[block.vertices[i]].position;
         const CameraState* camera = term.camera >= 0 ? &state.cameras[term.camera] : nullptr;
         if (!ConstraintResidual(term, block.points, camera, &block.raw, with_jacobian ? &block.d_points : nullptr,
                                 with_jacobian ? &block.d_camera : nullptr)) {
@@ -1147,7 +1158,8 @@ void ApplyStep(const JointProblem& problem, const Eigen::VectorXd& delta, const 
     if (cb.focal_offset >= 0) cs.focal_px += delta(cb.focal_offset);
     if (cb.principal_point_offset >= 0) cs.principal_point_px += delta.segment<2>(cb.principal_point_offset);
     if (cb.rotation_offset >= 0) {
-      cs.cam_from_world_rotation = RotationFromAngleAxis(delta.segment<3>(cb.rotation_offset)) * cs.cam_from_world_rotation;
+      cs.cam_from_world_rotation =
+          RotationFromAngleAxis(delta.segment<3>(cb.rotation_offset)) * cs.cam_from_world_rotation;
     }
     if (cb.center_offset >= 0) cs.center_in_world += delta.segment<3>(cb.center_offset);
     if (cb.distortion_offset >= 0) {
@@ -1211,8 +1223,8 @@ void WriteState(const JointProblem& problem, const JointState& state, Project* p
   RefreshAllPrimitives(project);
 }
 
-double NaturalConstraintResidual(const JointProblem& problem, const ConstraintTerm& term,
-                                 const Eigen::VectorXd& scaled, std::string* unit) {
+double NaturalConstraintResidual(const JointProblem& problem, const ConstraintTerm& term, const Eigen::VectorXd& scaled,
+                                 std::string* unit) {
   const double norm = scaled.size() > 0 ? scaled.cwiseAbs().maxCoeff() : 0.0;
   constexpr double kDeg = 180.0 / M_PI;
   switch (term.kind) {

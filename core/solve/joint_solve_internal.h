@@ -63,13 +63,13 @@ struct PrimitiveState {
 
 // The values the solve changes.
 struct JointState {
-  std::vector<CameraState> cameras;          // JointProblem::cameras order
-  std::vector<PrimitiveState> primitives;    // JointProblem::primitives order
+  std::vector<CameraState> cameras;           // JointProblem::cameras order
+  std::vector<PrimitiveState> primitives;     // JointProblem::primitives order
   std::vector<Eigen::Vector3d> free_offsets;  // JointProblem::free_vertices order
 };
 
 struct CameraBlock {
-  int image_index = -1;  // into Project::images
+  int image_index = -1;   // into Project::images
   int focal_offset = -1;  // -1: not a parameter
   int principal_point_offset = -1;
   int rotation_offset = -1;
@@ -95,8 +95,8 @@ struct FreeVertexBlock {
 // per iteration and shared by the blocks that read it.
 struct VertexTerm {
   VertexRef ref;
-  int primitive = -1;    // problem primitive
-  int free_vertex = -1;  // into JointProblem::free_vertices, or -1
+  int primitive = -1;                                          // problem primitive
+  int free_vertex = -1;                                        // into JointProblem::free_vertices, or -1
   ParamCoefficients coefficients = ParamCoefficients::Zero();  // LocalDefinition::Collapsed()
   Eigen::Vector3d fixed_offset = Eigen::Vector3d::Zero();      // offset of a vertex that is not free
   std::vector<int> cols;
@@ -123,20 +123,20 @@ struct VertexTerm {
 struct ConstraintTerm {
   int constraint_index = -1;  // into Project::constraints
   ConstraintKind kind = ConstraintKind::kCoplanar;
-  std::vector<int> vertices;     // vertex terms, in the constraint's order
-  std::array<int, 3> span = {0, 1, 2};  // kCoplanar / kCollinear spanning vertices (positions in `vertices`)
+  std::vector<int> vertices;                    // vertex terms, in the constraint's order
+  std::array<int, 3> span = {0, 1, 2};          // kCoplanar / kCollinear spanning vertices (positions in `vertices`)
   std::array<int, 2> kept_components = {0, 1};  // kCollinear / kParallel / kAlongAxis
-  int camera = -1;               // kEdgeOnImageLine
-  Eigen::Vector3d line_px = Eigen::Vector3d::Zero();  // normalised image line (a, b, c), a^2 + b^2 = 1
+  int camera = -1;                              // kEdgeOnImageLine
+  Eigen::Vector3d line_px = Eigen::Vector3d::Zero();    // normalised image line (a, b, c), a^2 + b^2 = 1
   Eigen::Vector2d line_a_px = Eigen::Vector2d::Zero();  // the line's points on the photo (distorted)
   Eigen::Vector2d line_b_px = Eigen::Vector2d::Zero();
   // The camera's k is a parameter: take the undistorted-line path even at k = 0 so that the
   // derivatives with respect to k are there.
   bool undistort_line = false;
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();    // kFixedPoint target
-  double scale = 1.0;            // the divisor of the residual
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // kFixedPoint target
+  double scale = 1.0;                               // the divisor of the residual
   int num_rows = 0;
-  Eigen::VectorXd multiplier;    // augmented-Lagrangian multipliers, one per row
+  Eigen::VectorXd multiplier;  // augmented-Lagrangian multipliers, one per row
 };
 
 enum class BlockKind { kPin, kSegment, kConstraint };
@@ -181,8 +181,8 @@ struct JointProblem {
   int num_parameters = 0;
   int num_residuals = 0;
   int num_skipped_pins = 0;
-  double model_size = 1.0;         // RMS distance of the used vertices from their centroid at the start
-  double constraint_weight = 1e3;  // sqrt(mu) of the augmented Lagrangian
+  double model_size = 1.0;                   // RMS distance of the used vertices from their centroid at the start
+  double constraint_weight = 1e3;            // sqrt(mu) of the augmented Lagrangian
   std::vector<std::string> parameter_names;  // one per parameter, for diagnostics
   std::vector<std::string> warnings;
 };
@@ -221,8 +221,8 @@ bool ConstraintResidual(const ConstraintTerm& term, const std::vector<Eigen::Vec
 // point, the camera (focal, principal point, rotation, centre: 2 x 9) and, when asked, the
 // distortion (k1, k2: 2 x 2). Returns false when the point lies on or behind the camera.
 bool PinResidual(const CameraState& camera, const Eigen::Vector3d& point, const Eigen::Vector2d& uv_px,
-                 Eigen::Vector2d* residual, Eigen::Matrix<double, 2, 3>* d_point,
-                 Eigen::Matrix<double, 2, 9>* d_camera, Eigen::Matrix<double, 2, 2>* d_distortion = nullptr);
+                 Eigen::Vector2d* residual, Eigen::Matrix<double, 2, 3>* d_point, Eigen::Matrix<double, 2, 9>* d_camera,
+                 Eigen::Matrix<double, 2, 2>* d_distortion = nullptr);
 
 // Segment residual (px, endpoint a) of a pinhole camera (k ignored) from the line constants
 // built from the drawn endpoints, and its derivative with respect to the camera's focal,
@@ -236,8 +236,7 @@ double DistortedSegmentResidual(const CameraState& camera, const Eigen::Vector2d
                                 int axis, Eigen::Matrix<double, 1, 8>* d_camera);
 
 // state <- state "+" delta.
-void ApplyStep(const JointProblem& problem, const Eigen::VectorXd& delta, const JointState& state,
-               JointState* stepped);
+void ApplyStep(const JointProblem& problem, const Eigen::VectorXd& delta, const JointState& state, JointState* stepped);
 
 // Dense Jacobian (num_residuals x num_parameters) and residual of the last evaluation.
 void DenseJacobian(const JointProblem& problem, Eigen::MatrixXd* jacobian, Eigen::VectorXd* residual);
@@ -247,7 +246,7 @@ void DenseJacobian(const JointProblem& problem, Eigen::MatrixXd* jacobian, Eigen
 void WriteState(const JointProblem& problem, const JointState& state, Project* project);
 
 // Constraint residual in its natural unit (see ConstraintDiagnostic) from the scale-free one.
-double NaturalConstraintResidual(const JointProblem& problem, const ConstraintTerm& term,
-                                 const Eigen::VectorXd& scaled, std::string* unit);
+double NaturalConstraintResidual(const JointProblem& problem, const ConstraintTerm& term, const Eigen::VectorXd& scaled,
+                                 std::string* unit);
 
 }  // namespace facet::joint_solve_internal

@@ -225,7 +225,8 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
         }
         summary.distortion[image.id] = entry.distortion;
         if (!entry.distortion.IsUsable()) {
-          summary.messages.push_back("Image '" + image.path + "': distortion not estimated: " + entry.distortion.message);
+          summary.messages.push_back("Image '" + image.path +
+                                     "': distortion not estimated: " + entry.distortion.message);
         }
         plumb = &entry.distortion;
       }

@@ -13,10 +13,10 @@
 #include <vector>
 
 #include "core/estimators/calibrate_vp.h"
-#include "core/solve/joint_solve.h"
-#include "core/solve/multiview_init.h"
 #include "core/estimators/plumb_line.h"
 #include "core/scene/project.h"
+#include "core/solve/joint_solve.h"
+#include "core/solve/multiview_init.h"
 #include "core/solve/scene_solve.h"
 
 namespace facet {
@@ -86,9 +86,9 @@ struct ModelUpdateSummary {
   // plumb-line model (core/estimators/plumb_line.h); the camera's k1, k2 are its OpenCV conversion with
   // the calibrated focal length.
   std::map<Id, PlumbLineSummary> distortion;
-  SceneSolveSummary solve;  // termination kInvalidInput with an empty message when it did not run
-  MultiViewInitSummary multiview;  // cameras initialised from pins (num_initialized 0: none)
-  JointSolveSummary joint;  // termination kInvalidInput when it did not run
+  SceneSolveSummary solve;            // termination kInvalidInput with an empty message when it did not run
+  MultiViewInitSummary multiview;     // cameras initialised from pins (num_initialized 0: none)
+  JointSolveSummary joint;            // termination kInvalidInput when it did not run
   std::vector<std::string> messages;  // user-facing: what failed and why
   // The calibration step per image with segments: run, or taken from the cache (the plumb-line
   // estimate counts apart: it is reused whenever the image and its segments are unchanged,

@@ -201,7 +201,9 @@ ResectionResult Resect(const Project& project, const Image& image, const std::ve
       result.focal_std_px = dlt.focal_std_px;
       result.message = std::string(dlt.planar ? "resection (planar)" : "resection") + " from " +
                        std::to_string(points.size()) + " pins, f = " + Format("%.1f px", dlt.camera.focal_px) +
-                       (dlt.focal_fixed ? " (known, held)" : dlt.focal_prior_used ? " (with the prior)" : "") +
+                       (dlt.focal_fixed        ? " (known, held)"
+                        : dlt.focal_prior_used ? " (with the prior)"
+                                               : "") +
                        ", RMS " + Format("%.3f px", dlt.reprojection_rms_px);
       for (const auto& w : dlt.warnings) result.warnings.push_back(w);
       return result;
@@ -331,8 +333,8 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
       return result;
     }
     for (const auto& w : f.warnings) result.warnings.push_back("F: " + w);
-    const RelativePoseSummary pose = EstimateRelativePose(f.F, intrinsics_a.K(), intrinsics_b.K(), uv_a, uv_b,
-                                                          f.inliers, options.relative_pose);
+    const RelativePoseSummary pose =
+        EstimateRelativePose(f.F, intrinsics_a.K(), intrinsics_b.K(), uv_a, uv_b, f.inliers, options.relative_pose);
     if (!pose.IsUsable()) {
       result.message = "relative pose of " + Quoted(image_b) + " to " + Quoted(image_a) + ": " + pose.message;
       return result;
@@ -347,11 +349,9 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
     HomographyPoseOptions h_options;
     h_options.homography = options.homography;
     h_options.homography.inlier_threshold_px = options.wrong_click_threshold_px;
-    const HomographyPoseSummary pose =
-        EstimatePlanePose(uv_a, uv_b, intrinsics_a.K(), intrinsics_b.K(), h_options);
+    const HomographyPoseSummary pose = EstimatePlanePose(uv_a, uv_b, intrinsics_a.K(), intrinsics_b.K(), h_options);
     if (!pose.IsUsable()) {
-      result.message = "two views of one plane (" + Quoted(image_a) + " and " + Quoted(image_b) +
-                       "): " + pose.message;
+      result.message = "two views of one plane (" + Quoted(image_a) + " and " + Quoted(image_b) + "): " + pose.message;
       return result;
     }
     if (pose.pure_rotation) {
@@ -385,8 +385,9 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
                                 Format("%.3g", misfit[best]) + " against " + Format("%.3g", second) +
                                 " of their spread)");
       if (!(second > 2.0 * misfit[best] + 1e-3))
-        result.warnings.push_back("plane: the model hardly tells the poses apart: the camera may be the mirror "
-                                  "pose; pin a vertex off the face");
+        result.warnings.push_back(
+            "plane: the model hardly tells the poses apart: the camera may be the mirror "
+            "pose; pin a vertex off the face");
     }
     relative_rotation = chosen->cam2_from_cam1_rotation;
     relative_translation = chosen->cam2_from_cam1_translation;
@@ -440,8 +441,8 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
   }
   result.rms_px = epipolar_rms_px;
   result.ok = true;
-  result.message = "two views with " + Quoted(image_a) + " and " + Quoted(image_b) + ": " + method +
-                   ", epipolar RMS " + Format("%.3f px", epipolar_rms_px) + "; " + gauge;
+  result.message = "two views with " + Quoted(image_a) + " and " + Quoted(image_b) + ": " + method + ", epipolar RMS " +
+                   Format("%.3f px", epipolar_rms_px) + "; " + gauge;
   return result;
 }
 
@@ -524,8 +525,8 @@ SelfCalibrationResult SelfCalibrateImages(const Project& project, const std::vec
       if (!sc.registered[v]) continue;
       const Camera& camera = sc.cameras[v];
       const bool in_front = camera.CamFromWorld(sc.points[t]).z() > 0;
-      const double error = in_front ? (camera.Project(sc.points[t]) - pin->uv_px).norm()
-                                    : std::numeric_limits<double>::infinity();
+      const double error =
+          in_front ? (camera.Project(sc.points[t]) - pin->uv_px).norm() : std::numeric_limits<double>::infinity();
       if (error > options.wrong_click_threshold_px) {
         result.flagged[v].push_back(pin->id);
       } else {
@@ -651,8 +652,8 @@ MultiViewInitSummary CalibrateImagesFromPins(const Project& project, const Multi
             std::to_string(known_pins.size()) + " pins on known vertices; resection needs 6, or 4 on one face";
         left.push_back(static_cast<int>(i));
       } else {
-        resection_notes[i] = std::to_string(known_pins.size()) + " pins on known vertices, resection failed (" +
-                             r.message + ")";
+        resection_notes[i] =
+            std::to_string(known_pins.size()) + " pins on known vertices, resection failed (" + r.message + ")";
         left.push_back(static_cast<int>(i));
       }
     } else if (known_pins.empty()) {

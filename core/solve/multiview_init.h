@@ -72,12 +72,12 @@
 
 #include <Eigen/Core>
 
-#include "core/geometry/camera.h"
 #include "core/estimators/homography_pose.h"
-#include "core/optim/solver_summary.h"
-#include "core/scene/project.h"
 #include "core/estimators/self_calibration.h"
 #include "core/estimators/two_view.h"
+#include "core/geometry/camera.h"
+#include "core/optim/solver_summary.h"
+#include "core/scene/project.h"
 
 namespace facet {
 
@@ -127,19 +127,19 @@ struct MultiViewImageReport {
   Id image_id = kNoId;
   std::string image_path;
   MultiViewInitPath path = MultiViewInitPath::kNone;
-  bool initialized = false;  // its camera was set by this call
-  int num_pins = 0;          // pins on existing vertices with finite pixels
-  int num_known_pins = 0;    // of those, on vertices pinned in a calibrated image
+  bool initialized = false;     // its camera was set by this call
+  int num_pins = 0;             // pins on existing vertices with finite pixels
+  int num_known_pins = 0;       // of those, on vertices pinned in a calibrated image
   Id partner_image_id = kNoId;  // two views: the other image
   // Resection and self-calibration: reprojection RMS (px) over the pins used; two views: the
   // symmetric epipolar RMS (core/estimators/two_view.h) of the final relative pose.
   double residual_px = 0.0;
-  double focal_px = 0.0;       // of the initialised camera
+  double focal_px = 0.0;  // of the initialised camera
   // One-sigma focal uncertainty (px): resection from the DLT refinement, self-calibration from
   // its bundle adjustment; 0 for two views (the focal length is given or guessed there).
   double focal_std_px = 0.0;
-  bool focal_guessed = false;  // two views: default_focal_factor; self-calibration: no prior
-  bool two_view_plane = false;  // two views through the plane's homography (shared vertices on one face)
+  bool focal_guessed = false;    // two views: default_focal_factor; self-calibration: no prior
+  bool two_view_plane = false;   // two views through the plane's homography (shared vertices on one face)
   std::vector<Id> flagged_pins;  // wrong clicks in this image, by pin id
   std::string message;           // one line: what was done, or why nothing could be
   std::vector<std::string> warnings;
@@ -173,8 +173,7 @@ struct MultiViewInitSummary : SolverSummary {
 // Leaves calibrated images alone; initialises each uncalibrated image with pins by the paths
 // above. *out receives a copy of `project` with the initialised cameras (out may not alias
 // project).
-MultiViewInitSummary CalibrateImagesFromPins(const Project& project, const MultiViewInitOptions& options,
-                                             Project* out);
+MultiViewInitSummary CalibrateImagesFromPins(const Project& project, const MultiViewInitOptions& options, Project* out);
 
 // Epipolar geometry for teaching display.
 

@@ -25,7 +25,8 @@ bool SceneSolveOptions::Check(std::string* error) const {
   if (!(function_tolerance >= 0.0)) return fail("function_tolerance must be non-negative");
   if (!(gradient_tolerance >= 0.0)) return fail("gradient_tolerance must be non-negative");
   if (!(parameter_tolerance >= 0.0)) return fail("parameter_tolerance must be non-negative");
-  if (!(initial_lambda > 0.0) || !std::isfinite(initial_lambda)) return fail("initial_lambda must be positive and finite");
+  if (!(initial_lambda > 0.0) || !std::isfinite(initial_lambda))
+    return fail("initial_lambda must be positive and finite");
   return true;
 }
 
@@ -180,8 +181,10 @@ SceneLmOutcome RunLevenbergMarquardt(const SceneProblem& problem, const SceneSol
     case LmTermination::kZeroCost: return ended(SolverTermination::kConverged, "the residuals are zero");
     case LmTermination::kNoDecrease: return ended(SolverTermination::kConverged, "no step decreases the cost any more");
     case LmTermination::kMaxIterations: return ended(SolverTermination::kMaxIterations, "iteration limit reached");
-    case LmTermination::kLinearSolveFailed: return ended(SolverTermination::kFailed, "the normal equations cannot be solved");
-    case LmTermination::kNonFiniteCost: return ended(SolverTermination::kFailed, "the reprojection is not finite at the start");
+    case LmTermination::kLinearSolveFailed:
+      return ended(SolverTermination::kFailed, "the normal equations cannot be solved");
+    case LmTermination::kNonFiniteCost:
+      return ended(SolverTermination::kFailed, "the reprojection is not finite at the start");
     case LmTermination::kStoppedByCallback: break;  // no callback
   }
   return ended(SolverTermination::kFailed, "the solve stopped unexpectedly");
@@ -230,7 +233,8 @@ void AddBehindCameraWarnings(const Project& project, const SceneProblem& problem
   for (const auto& obs : problem.observations) {
     const Primitive& primitive = solved.primitives[problem.primitives[obs.primitive].primitive_index];
     const Image& image = solved.images[problem.cameras[obs.camera].image_index];
-    if (image.camera.CamFromWorld(primitive.mesh.vertex(solved.pins[obs.pin_index].vertex.vertex).position).z() <= 0.0) {
+    if (image.camera.CamFromWorld(primitive.mesh.vertex(solved.pins[obs.pin_index].vertex.vertex).position).z() <=
+        0.0) {
       warnings->push_back("pin #" + std::to_string(project.pins[obs.pin_index].id) +
                           ": the vertex lies behind the camera of its image");
     }
@@ -290,9 +294,10 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
     }
   }
   if (!std::isfinite(summary.initial_cost) && !std::isfinite(record_residuals(state))) {
-    return finish(SolverTermination::kFailed,
-                  std::string("the reprojection is not finite at the start: a pinned vertex lies in the plane of its camera") +
-                      (why.empty() ? "" : ", and the linear initialisation found no start (" + why + ")"));
+    return finish(
+        SolverTermination::kFailed,
+        std::string("the reprojection is not finite at the start: a pinned vertex lies in the plane of its camera") +
+            (why.empty() ? "" : ", and the linear initialisation found no start (" + why + ")"));
   }
 
   // This LM and the rank analysis below are dense (n^2 work per residual): above

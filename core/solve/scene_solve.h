@@ -21,7 +21,7 @@ namespace facet {
 
 struct SceneSolveOptions {
   int max_iterations = 100;
-  double function_tolerance = 1e-14;   // relative decrease of the cost that stops the solve
+  double function_tolerance = 1e-14;  // relative decrease of the cost that stops the solve
   // max |J^T r| that stops the solve, with J's columns scaled to unit norm (so in px and
   // independent of the scene's units)
   double gradient_tolerance = 1e-14;
@@ -43,9 +43,9 @@ struct SceneSolveSummary : SolverSummary {
   // the projected vertex and the pin.
   double reprojection_rms_px = 0.0;
   double reprojection_max_px = 0.0;
-  int num_residuals = 0;   // 2 per pin that took part
+  int num_residuals = 0;  // 2 per pin that took part
   int num_parameters = 0;
-  int num_skipped_pins = 0;  // pins in uncalibrated images or naming missing objects
+  int num_skipped_pins = 0;                 // pins in uncalibrated images or naming missing objects
   bool linear_initialization_used = false;  // false for a warm start or when it fell back
   // Per pin, in project.pins order: reprojection error in px after the solve (NaN for pins
   // that did not take part).

@@ -58,11 +58,13 @@ SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
   const int num_images = static_cast<int>(project.images.size());
   const int num_primitives = static_cast<int>(project.primitives.size());
   auto image_index = [&](Id id) {
-    for (int i = 0; i < num_images; ++i) if (project.images[i].id == id) return i;
+    for (int i = 0; i < num_images; ++i)
+      if (project.images[i].id == id) return i;
     return -1;
   };
   auto primitive_index = [&](Id id) {
-    for (int i = 0; i < num_primitives; ++i) if (project.primitives[i].id == id) return i;
+    for (int i = 0; i < num_primitives; ++i)
+      if (project.primitives[i].id == id) return i;
     return -1;
   };
 
@@ -94,8 +96,7 @@ SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
   }
   for (const auto& [ii, count] : uncalibrated_pin_counts) {
     problem.warnings.push_back(std::to_string(count) + (count == 1 ? " pin" : " pins") + " in image " +
-                               ImageLabel(project.images[ii]) +
-                               " skipped: the image is not calibrated");
+                               ImageLabel(project.images[ii]) + " skipped: the image is not calibrated");
   }
 
   // Blocks in project order, so that the parameter numbering does not depend on pin order.
@@ -187,8 +188,7 @@ int EvaluateScene(const SceneProblem& problem, const SceneState& state, Eigen::V
     const Eigen::Vector3d corner_rotated =
         world_from_primitive * (obs.coefficients * state.primitive_params[obs.primitive] + obs.offset);
     const Eigen::Vector3d corner_in_world = corner_rotated + state.primitive_translations[obs.primitive];
-    const Eigen::Vector3d p_in_cam =
-        cam.cam_from_world_rotation * (corner_in_world - state.camera_centers[obs.camera]);
+    const Eigen::Vector3d p_in_cam = cam.cam_from_world_rotation * (corner_in_world - state.camera_centers[obs.camera]);
     if (!(p_in_cam.z() > 0.0)) ++num_behind;
     const double inv_z = 1.0 / p_in_cam.z();
     const int row = 2 * static_cast<int>(o);
@@ -421,9 +421,9 @@ bool SolveLinearInitSchur(const SceneProblem& problem, const SceneState& state, 
   const int r = 3 * num_reduced;
 
   struct PrimitiveSystem {
-    Eigen::MatrixXd u;                                  // U_b
-    Eigen::VectorXd b;                                  // primitive part of A^T rhs
-    std::vector<std::pair<int, Eigen::MatrixXd>> w;     // (reduced offset, W_bc)
+    Eigen::MatrixXd u;                               // U_b
+    Eigen::VectorXd b;                               // primitive part of A^T rhs
+    std::vector<std::pair<int, Eigen::MatrixXd>> w;  // (reduced offset, W_bc)
   };
   std::vector<PrimitiveSystem> prim(num_primitives);
   for (size_t b = 0; b < num_primitives; ++b) {
@@ -569,13 +569,11 @@ bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::s
   // exact and names the rank for small systems, the Schur complement over the primitive blocks
   // keeps large scenes (hundreds of primitives) linear in their size.
   Eigen::VectorXd solution;
-  const bool dense = method == LinearInitMethod::kDense ||
-                     (method == LinearInitMethod::kAuto && n <= kDenseLinearInitMaxUnknowns);
-  const bool solved = dense
-                          ? SolveLinearInitDense(problem, *state, size_col, translation_col, camera_col, n, current,
-                                                 &solution, why)
-                          : SolveLinearInitSchur(problem, *state, size_col, translation_col, camera_col, n, current,
-                                                 &solution, why);
+  const bool dense =
+      method == LinearInitMethod::kDense || (method == LinearInitMethod::kAuto && n <= kDenseLinearInitMaxUnknowns);
+  const bool solved =
+      dense ? SolveLinearInitDense(problem, *state, size_col, translation_col, camera_col, n, current, &solution, why)
+            : SolveLinearInitSchur(problem, *state, size_col, translation_col, camera_col, n, current, &solution, why);
   if (!solved) return false;
   if (!solution.allFinite()) {
     *why = "the linear solution is not finite";
@@ -591,7 +589,8 @@ bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::s
   }
   for (size_t c = 0; c < problem.cameras.size(); ++c) {
     if (camera_col[c] >= 0) {
-      trial.camera_centers[c] = -problem.cameras[c].cam_from_world_rotation.transpose() * solution.segment<3>(camera_col[c]);
+      trial.camera_centers[c] =
+          -problem.cameras[c].cam_from_world_rotation.transpose() * solution.segment<3>(camera_col[c]);
     }
   }
   Eigen::VectorXd residuals;
@@ -653,13 +652,13 @@ std::vector<std::string> UndeterminedParameterWarnings(const Project& project, c
           value = axis < 0 ? state.camera_centers[info.block](info.component) : (info.component == axis ? 1.0 : 0.0);
           break;
         case ParameterKind::kPrimitiveTranslation:
-          value = axis < 0 ? state.primitive_translations[info.block](info.component) : (info.component == axis ? 1.0 : 0.0);
+          value = axis < 0 ? state.primitive_translations[info.block](info.component)
+                           : (info.component == axis ? 1.0 : 0.0);
           break;
         case ParameterKind::kPrimitiveParam:
           value = axis < 0 ? state.primitive_params[info.block](info.component) : 0.0;
           break;
-        case ParameterKind::kPrimitiveRotation:
-          break;
+        case ParameterKind::kPrimitiveRotation: break;
       }
       g(j) = value * col_norm(j);
     }
@@ -683,7 +682,8 @@ std::vector<std::string> UndeterminedParameterWarnings(const Project& project, c
   }
   if (position_free) {
     warnings.push_back(
-        "the position of the scene is not fixed by the pins: lock the translation of a primitive or the pose of a camera");
+        "the position of the scene is not fixed by the pins: lock the translation of a primitive or the pose of a "
+        "camera");
   }
   for (const auto& g : gauges) null_space -= g * (g.transpose() * null_space);
   if (!gauges.empty() && null_space.cols() > 0) {
@@ -723,8 +723,7 @@ std::vector<std::string> UndeterminedParameterWarnings(const Project& project, c
           const bool boxy = shape_kind != PrimitiveKind::kPrism && shape_kind != PrimitiveKind::kCylinder && k < 3;
           warnings.push_back("the " + ParamName(shape_kind, k) + " of " + PrimitiveLabel(primitive) +
                              " is not determined by the pins: pin a vertex on the " +
-                             (boxy ? std::string(kBoxFaceNames[k]) + " face" : "far side") +
-                             " or add a second image");
+                             (boxy ? std::string(kBoxFaceNames[k]) + " face" : "far side") + " or add a second image");
         }
         break;
       case ParameterKind::kPrimitiveRotation:
@@ -735,8 +734,7 @@ std::vector<std::string> UndeterminedParameterWarnings(const Project& project, c
         warnings.push_back("the " + JoinComponents(components) + " position of " + PrimitiveLabel(primitive) +
                            " is not determined by the pins: pin more of its vertices or lock its translation");
         break;
-      case ParameterKind::kCameraCenter:
-        break;
+      case ParameterKind::kCameraCenter: break;
     }
   }
   return warnings;

@@ -31,7 +31,7 @@ struct CameraBlock {
 };
 
 struct PrimitiveBlock {
-  int primitive_index = -1;  // into Project::primitives
+  int primitive_index = -1;                                              // into Project::primitives
   std::array<int, kMaxPrimitiveParams> param_offset = {-1, -1, -1, -1};  // -1: locked or unused
   int rotation_offset = -1;
   int translation_offset = -1;
@@ -64,7 +64,7 @@ struct SceneState {
 };
 
 struct SceneProblem {
-  std::vector<CameraBlock> cameras;  // calibrated cameras that see at least one used pin
+  std::vector<CameraBlock> cameras;        // calibrated cameras that see at least one used pin
   std::vector<PrimitiveBlock> primitives;  // primitives with at least one used pin
   std::vector<Observation> observations;
   std::vector<ParameterInfo> parameters;  // size num_parameters

@@ -258,7 +258,8 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
     return refuse(text);
   }
 
-  const Eigen::VectorXd dx = SmallestStep(*source, vertex.vertex, unknowns, world_from_primitive, wanted, options, size);
+  const Eigen::VectorXd dx =
+      SmallestStep(*source, vertex.vertex, unknowns, world_from_primitive, wanted, options, size);
   PrimitiveShape& out = primitive.shape;
   for (int u = 0; u < n; ++u) {
     if (unknowns[u].is_param) {
@@ -270,14 +271,16 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
   for (int k = 0; k < param_count; ++k) {
     if (!(out.params[k] > 0.0)) {
       return refuse(Describe(*source) + ": " + ShapeParamLabel(shape.kind, k) + " would become " +
-                    internal::FormatNumber(out.params[k], kMessageDigits) + " (the drag went through the opposite face)");
+                    internal::FormatNumber(out.params[k], kMessageDigits) +
+                    " (the drag went through the opposite face)");
     }
   }
   RefreshAllPrimitives(moved);
   RecordPosition(*source, *moved, vertex, target_in_world, options.reach_tolerance * size, &summary);
 
   const Eigen::Vector3d missing = target_in_world - summary.position;
-  if (!summary.reached) summary.limited_by = LockReasons(project, *source, dragged, world_from_primitive, attached, missing);
+  if (!summary.reached)
+    summary.limited_by = LockReasons(project, *source, dragged, world_from_primitive, attached, missing);
   if (dx.norm() <= options.rank_tolerance * size && !summary.reached) {
     std::string text = Describe(*source) + ": vertex " + std::to_string(vertex.vertex) + " cannot move that way:";
     for (const std::string& r : summary.limited_by) text += " " + r + ";";

@@ -57,10 +57,10 @@ struct VertexMoveSummary {
   bool ok = false;
   // User-facing: what changed ("box 'house': size y 3 -> 4"), or why the move was refused.
   std::string message;
-  bool reached = false;          // the vertex is at the target (within reach_tolerance)
-  bool moved_offset = false;     // a free vertex: only its offset changed
+  bool reached = false;                                // the vertex is at the target (within reach_tolerance)
+  bool moved_offset = false;                           // a free vertex: only its offset changed
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // the vertex's world position after the move
-  double distance_to_target = 0.0;                       // |position - target|
+  double distance_to_target = 0.0;                     // |position - target|
   // Why the target was out of reach: one short phrase per lock or rule that kept a direction
   // fixed ("translation is locked", "Size z is locked", "footprint follows base 'box'"),
   // and what to unlock. Empty when reached.

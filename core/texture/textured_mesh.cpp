@@ -6,8 +6,8 @@
 #include <cmath>
 #include <limits>
 
-#include <Eigen/Geometry>
 #include <stb_rect_pack.h>
+#include <Eigen/Geometry>
 
 #include "core/mesh/triangulate.h"
 
@@ -163,7 +163,8 @@ bool SegmentMeetsBox(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const E
 
 // Moller-Trumbore: whether the segment a -> b crosses the triangle strictly between its
 // ends (kRayEndMargin), so a ray starting on a face that touches the triangle is not hidden.
-bool SegmentHitsTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const std::array<Eigen::Vector3d, 3>& tri) {
+bool SegmentHitsTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                         const std::array<Eigen::Vector3d, 3>& tri) {
   const Eigen::Vector3d d = b - a;
   const Eigen::Vector3d e1 = tri[1] - tri[0];
   const Eigen::Vector3d e2 = tri[2] - tri[0];
@@ -192,7 +193,8 @@ double UnoccludedFraction(const FaceGeometry& face, const Eigen::Vector3d& cente
       // Only other primitives: a primitive's own faces facing the camera are not hidden by
       // the rest of it as long as it is convex, which the primitives are up to free vertices.
       if (o == face.primitive_index || occluders[o].triangles.empty() ||
-          !SegmentMeetsBox(p, center, occluders[o].lo, occluders[o].hi)) continue;
+          !SegmentMeetsBox(p, center, occluders[o].lo, occluders[o].hi))
+        continue;
       for (const auto& tri : occluders[o].triangles) {
         if (SegmentHitsTriangle(p, center, tri)) {
           hidden = true;

@@ -18,15 +18,15 @@
 #include <vector>
 
 #include <doctest/doctest.h>
+#include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <Eigen/Dense>
 
+#include "core/io/project_io.h"
 #include "core/mesh/box.h"
 #include "core/scene/project.h"
-#include "core/io/project_io.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet::testing {
@@ -88,7 +88,8 @@ inline void WriteText(const std::string& path, const std::string& text) {
 // The report's log, one "level: text" line per entry (for failure messages).
 inline std::string ReportLog(const nlohmann::json& report) {
   std::string text;
-  for (const auto& e : report.at("log")) text += e.at("level").get<std::string>() + ": " + e.at("text").get<std::string>() + "\n";
+  for (const auto& e : report.at("log"))
+    text += e.at("level").get<std::string>() + ": " + e.at("text").get<std::string>() + "\n";
   return text;
 }
 
@@ -108,8 +109,8 @@ inline nlohmann::json RenderScript(const TempDir& dir, const std::string& projec
 inline std::string RenderScriptRefused(const TempDir& dir, const std::string& project_path, const std::string& name,
                                        const std::string& script) {
   WriteText(dir / (name + ".txt"), script);
-  const RunResult run = RunRender(dir, "'" + project_path + "' -o '" + (dir / (name + ".png")) + "' --script '" +
-                                           (dir / (name + ".txt")) + "'");
+  const RunResult run = RunRender(
+      dir, "'" + project_path + "' -o '" + (dir / (name + ".png")) + "' --script '" + (dir / (name + ".txt")) + "'");
   CHECK(run.exit_code != 0);
   return run.stderr_text;
 }
@@ -134,7 +135,8 @@ inline std::string FormatXY(const Eigen::Vector2d& p, int significant_digits = 1
 inline std::string ItemCenter(const nlohmann::json& items, const std::string& name) {
   const nlohmann::json& r = items.at(name);
   std::ostringstream s;
-  s << r.at("x").get<double>() + 0.5 * r.at("w").get<double>() << " " << r.at("y").get<double>() + 0.5 * r.at("h").get<double>();
+  s << r.at("x").get<double>() + 0.5 * r.at("w").get<double>() << " "
+    << r.at("y").get<double>() + 0.5 * r.at("h").get<double>();
   return s.str();
 }
 

@@ -9,8 +9,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/solve/model_update.h"
 #include "core/io/project_io.h"
+#include "core/solve/model_update.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 
@@ -44,11 +44,11 @@ TEST_CASE("Add photo: a new uncalibrated image with its size and a relative path
   REQUIRE(cv::imwrite(dir / "second.png", cv::Mat(600, 800, CV_8UC3, cv::Scalar(60, 80, 100))));
   WriteText(dir / "broken.jpg", "not a photo");
 
-  const RunResult added = Render(dir, project,
-                                 "frames 2\ncommand add-photo " + (dir / "second.png") +
-                                     "\nframes 2\ncommand save\ncommand undo\nframes 2\ncommand save " +
-                                     (dir / "undone.facet") + "\n",
-                                 "add");
+  const RunResult added =
+      Render(dir, project,
+             "frames 2\ncommand add-photo " + (dir / "second.png") +
+                 "\nframes 2\ncommand save\ncommand undo\nframes 2\ncommand save " + (dir / "undone.facet") + "\n",
+             "add");
   INFO(added.stderr_text);
   REQUIRE(added.exit_code == 0);
   const facet::Project saved = Load(project);
@@ -67,8 +67,8 @@ TEST_CASE("Add photo: a new uncalibrated image with its size and a relative path
   // Undo (in the same session) took the photo out again; the broken file stops the script
   // with the reason.
   CHECK(Load(dir / "undone.facet").images.size() == 1);
-  const RunResult broken = Render(dir, dir / "undone.facet",
-                                  "frames 2\ncommand add-photo " + (dir / "broken.jpg") + "\n", "broken");
+  const RunResult broken =
+      Render(dir, dir / "undone.facet", "frames 2\ncommand add-photo " + (dir / "broken.jpg") + "\n", "broken");
   CHECK(broken.exit_code != 0);
   CHECK(broken.stderr_text.find("broken.jpg") != std::string::npos);
 }

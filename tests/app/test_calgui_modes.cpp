@@ -25,10 +25,10 @@ using namespace facet::testing;
 
 namespace {
 
-constexpr double kTrueFocalPx = 900.0;      // SyntheticSceneOptions default
-constexpr double kFixedFocalPx = 950.0;     // the known lens the test types in
-constexpr double kExifFocal35mm = 26.0;     // the photo's FocalLengthIn35mmFilm
-constexpr double kNoisePx = 0.5;            // pixel noise of the modes scene's segments
+constexpr double kTrueFocalPx = 900.0;       // SyntheticSceneOptions default
+constexpr double kFixedFocalPx = 950.0;      // the known lens the test types in
+constexpr double kExifFocal35mm = 26.0;      // the photo's FocalLengthIn35mmFilm
+constexpr double kNoisePx = 0.5;             // pixel noise of the modes scene's segments
 constexpr double kExifRelTolerance = 1e-12;  // a product and a quotient of a few doubles
 // Noise-free: the closed form and the fit recover the vertical to rounding.
 constexpr double kVerticalTolerance = 1e-6;
@@ -40,25 +40,27 @@ void WriteJpegWithExifFocal(const std::string& path, int width, int height, int 
   REQUIRE(cv::imencode(".jpg", cv::Mat(height, width, CV_8UC3, cv::Scalar(90, 110, 120)), jpeg));
   std::vector<uint8_t> tiff(8 + 18 + 18, 0);
   auto put16 = [&](size_t at, uint32_t v) { tiff[at] = v & 0xff, tiff[at + 1] = (v >> 8) & 0xff; };
-  auto put32 = [&](size_t at, uint32_t v) { for (int k = 0; k < 4; ++k) tiff[at + k] = (v >> (8 * k)) & 0xff; };
+  auto put32 = [&](size_t at, uint32_t v) {
+    for (int k = 0; k < 4; ++k) tiff[at + k] = (v >> (8 * k)) & 0xff;
+  };
   tiff[0] = 'I', tiff[1] = 'I';
   put16(2, 42);
   put32(4, 8);
-  put16(8, 1);          // IFD0: one entry
-  put16(10, 0x8769);    // ExifIFDPointer, LONG, 1, -> 26
+  put16(8, 1);        // IFD0: one entry
+  put16(10, 0x8769);  // ExifIFDPointer, LONG, 1, -> 26
   put16(12, 4);
   put32(14, 1);
   put32(18, 26);
   put32(22, 0);
-  put16(26, 1);         // Exif IFD: one entry
-  put16(28, 0xa405);    // FocalLengthIn35mmFilm, SHORT, 1
+  put16(26, 1);       // Exif IFD: one entry
+  put16(28, 0xa405);  // FocalLengthIn35mmFilm, SHORT, 1
   put16(30, 3);
   put32(32, 1);
   put16(36, static_cast<uint32_t>(focal_35mm));
   put32(40, 0);
   const size_t length = 2 + 6 + tiff.size();
-  std::vector<uint8_t> app1 = {0xff, 0xe1, static_cast<uint8_t>(length >> 8), static_cast<uint8_t>(length & 0xff),
-                               'E',  'x',  'i', 'f', 0, 0};
+  std::vector<uint8_t> app1 = {
+      0xff, 0xe1, static_cast<uint8_t>(length >> 8), static_cast<uint8_t>(length & 0xff), 'E', 'x', 'i', 'f', 0, 0};
   app1.insert(app1.end(), tiff.begin(), tiff.end());
   jpeg.insert(jpeg.begin() + 2, app1.begin(), app1.end());
   std::ofstream out(path, std::ios::binary);
@@ -154,7 +156,8 @@ TEST_CASE("calibration modes from the script: known focal, undo, prior strength,
   const Eigen::Vector4d horizon = TrueHorizon(scene.true_camera);
   s.precision(17);
   s << "command calibration horizon " << horizon[0] << " " << horizon[1] << " " << horizon[2] << " " << horizon[3]
-    << "\nframes 1\n" << save("last.facet");
+    << "\nframes 1\n"
+    << save("last.facet");
   s << "frames 3\n";
   const RunResult run = Render(dir, project_path, s.str(), "modes");
   INFO("stderr: " << run.stderr_text);
@@ -260,7 +263,8 @@ TEST_CASE("one line family, a known focal length and the horizon give the camera
   project.images[0].camera = facet::Camera();
   project.images[0].camera_calibrated = false;
   project.images[0].path = "photo.png";
-  REQUIRE(cv::imwrite(dir / "photo.png", cv::Mat(options.height_px, options.width_px, CV_8UC3, cv::Scalar(80, 90, 100))));
+  REQUIRE(
+      cv::imwrite(dir / "photo.png", cv::Mat(options.height_px, options.width_px, CV_8UC3, cv::Scalar(80, 90, 100))));
   const std::string project_path = dir / "horizon.facet";
   REQUIRE(facet::SaveProject(project, project_path) == "");
 
@@ -304,13 +308,14 @@ TEST_CASE("overlay: an outlier segment is crossed out, the given horizon dashed 
   wrong.b_px += 25.0 * Eigen::Vector2d(-dir_ab.y(), dir_ab.x());
   const Eigen::Vector2d wrong_mid = 0.5 * (wrong.a_px + wrong.b_px);
   project.images[0].path = "photo.png";
-  REQUIRE(cv::imwrite(dir / "photo.png", cv::Mat(options.height_px, options.width_px, CV_8UC3, cv::Scalar(40, 40, 40))));
+  REQUIRE(
+      cv::imwrite(dir / "photo.png", cv::Mat(options.height_px, options.width_px, CV_8UC3, cv::Scalar(40, 40, 40))));
   const std::string project_path = dir / "overlay.facet";
   REQUIRE(facet::SaveProject(project, project_path) == "");
   constexpr double kRow = 60.0;  // above the box: nothing else is drawn there
-  const RunResult run = Render(dir, project_path,
-                               "frames 2\ncommand calibration horizon level " + std::to_string(kRow) + "\nframes 3\n",
-                               "overlay");
+  const RunResult run =
+      Render(dir, project_path, "frames 2\ncommand calibration horizon level " + std::to_string(kRow) + "\nframes 3\n",
+             "overlay");
   INFO("stderr: " << run.stderr_text);
   REQUIRE(run.exit_code == 0);
   const nlohmann::json report = ReadJson(dir / "overlay.json");
@@ -336,8 +341,8 @@ TEST_CASE("overlay: an outlier segment is crossed out, the given horizon dashed 
   CHECK(cross >= 10);
   // The horizon: dashes (10 of every 16 px) along the row across the image's width.
   const Eigen::Vector2d left = view.ToScreen({0.0, kRow}), right = view.ToScreen({options.width_px - 1.0, kRow});
-  const int dashes = count_color(int(left.x()) + 40, int(left.y()) - 1, int(right.x()) - 10, int(left.y()) + 1,
-                                 {255, 160, 60});
+  const int dashes =
+      count_color(int(left.x()) + 40, int(left.y()) - 1, int(right.x()) - 10, int(left.y()) + 1, {255, 160, 60});
   const int span = int(right.x()) - 10 - (int(left.x()) + 40);
   CAPTURE(dashes);
   CAPTURE(span);
@@ -352,12 +357,12 @@ TEST_CASE("intrinsics locks from the script: focal and principal point unlocked 
   REQUIRE(facet::SaveProject(scene.project, project) == "");
   REQUIRE(scene.project.images[0].focal_locked);
   REQUIRE(scene.project.images[0].principal_point_locked);
-  const RunResult run = Render(dir, project,
-                               "frames 2\ncommand calibration focal-lock off\nframes 1\n"
-                               "command calibration principal-point-lock off\nframes 1\ncommand save " +
-                                   (dir / "unlocked.facet") + "\ncommand undo\nframes 1\ncommand save " +
-                                   (dir / "relocked.facet") + "\n",
-                               "locks");
+  const RunResult run =
+      Render(dir, project,
+             "frames 2\ncommand calibration focal-lock off\nframes 1\n"
+             "command calibration principal-point-lock off\nframes 1\ncommand save " +
+                 (dir / "unlocked.facet") + "\ncommand undo\nframes 1\ncommand save " + (dir / "relocked.facet") + "\n",
+             "locks");
   INFO(run.stderr_text);
   REQUIRE(run.exit_code == 0);
   const facet::Image unlocked = SavedImage(dir / "unlocked.facet");

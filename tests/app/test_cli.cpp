@@ -15,8 +15,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/mesh/box.h"
 #include "core/io/project_io.h"
+#include "core/mesh/box.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 
@@ -25,7 +25,6 @@ using facet::testing::MakeBoxScene;
 using facet::testing::TempDir;
 
 namespace {
-
 
 struct CliResult {
   int exit_code = -1;
@@ -61,7 +60,8 @@ nlohmann::json LinesJsonFor(const facet::Project& project, const facet::Image& i
       if (s.axis == axis) segments.push_back({s.a_px.x(), s.a_px.y(), s.b_px.x(), s.b_px.y()});
     families.push_back({{"axis", facet::AxisName(axis)}, {"segments", segments}});
   }
-  return {{"image_size", {image.width_px, image.height_px}}, {"families", families}, {"principal_point", principal_point}};
+  return {
+      {"image_size", {image.width_px, image.height_px}}, {"families", families}, {"principal_point", principal_point}};
 }
 
 }  // namespace
@@ -93,9 +93,7 @@ TEST_CASE("calibrate --lines recovers the synthetic camera and rejects bad input
   TempDir dir("calibrate");
   const auto scene = MakeBoxScene();
   const auto& image = scene.project.images[0];
-  {
-    std::ofstream(dir / "lines.json") << LinesJsonFor(scene.project, image, "solve").dump();
-  }
+  { std::ofstream(dir / "lines.json") << LinesJsonFor(scene.project, image, "solve").dump(); }
   const CliResult r = RunFacet(dir, "calibrate --lines '" + (dir / "lines.json") + "'");
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
@@ -204,7 +202,9 @@ TEST_CASE("calibrate --points recovers a camera from known 3D points") {
       points.push_back({{"xyz", {x.x(), x.y(), x.z()}}, {"uv", {uv.x(), uv.y()}}});
     }
   }
-  std::ofstream(dir / "points.json") << nlohmann::json{{"image_size", {truth.width_px, truth.height_px}}, {"points", points}}.dump();
+  std::ofstream(dir / "points.json") << nlohmann::json{
+      {"image_size", {truth.width_px, truth.height_px}},
+      {"points", points}}.dump();
   const CliResult r = RunFacet(dir, "calibrate --points '" + (dir / "points.json") + "'");
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
@@ -247,7 +247,8 @@ TEST_CASE("relate --matches gives F and, with K, the relative pose") {
   const Eigen::Matrix3d r_true = c2.cam_from_world_rotation * c1.cam_from_world_rotation.transpose();
   double max_error = 0.0;
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) max_error = std::max(max_error, std::abs(out.at("R")[i][j].get<double>() - r_true(i, j)));
+    for (int j = 0; j < 3; ++j)
+      max_error = std::max(max_error, std::abs(out.at("R")[i][j].get<double>() - r_true(i, j)));
   CHECK(max_error < 1e-6);
 
   std::ofstream(dir / "bad.json") << R"({"image_sizes": [[640, 480]], "matches": []})";

@@ -11,17 +11,17 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/mesh/primitives.h"
 #include "core/io/project_io.h"
+#include "core/mesh/primitives.h"
 #include "tests/app/app_test_util.h"
 
 using namespace facet::testing;
 
 namespace {
 
-constexpr double kLength = 2.5;                  // typed into the known-length field
-constexpr double kLengthRelTolerance = 1e-6;     // the joint solve's constraint tolerance
-constexpr double kAxisTolerance = 1e-9;          // a box edge stays axis-aligned exactly
+constexpr double kLength = 2.5;               // typed into the known-length field
+constexpr double kLengthRelTolerance = 1e-6;  // the joint solve's constraint tolerance
+constexpr double kAxisTolerance = 1e-9;       // a box edge stays axis-aligned exactly
 
 // An edge of a box whose endpoints differ only in x.
 facet::EdgeId XEdge(const facet::PolyMesh& mesh) {

@@ -18,9 +18,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/io/project_io.h"
 #include "core/mesh/operators.h"
 #include "core/mesh/primitives.h"
-#include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 
@@ -86,9 +86,9 @@ facet::EdgeId EdgeBetween(const facet::PolyMesh& mesh, facet::VertexId a, facet:
 struct FreeVertexBox {
   std::string path;
   facet::Id box_id = facet::kNoId;
-  std::vector<facet::VertexId> split;     // the four new vertices
-  std::vector<facet::EdgeId> split_edge;  // which edge each split (now origin -> new vertex)
-  std::vector<facet::EdgeId> new_edge;    // new vertex -> the split edge's old destination
+  std::vector<facet::VertexId> split;               // the four new vertices
+  std::vector<facet::EdgeId> split_edge;            // which edge each split (now origin -> new vertex)
+  std::vector<facet::EdgeId> new_edge;              // new vertex -> the split edge's old destination
   facet::VertexId plain_split = facet::kNoElement;  // edge 7 split, not freed: on its edge's line
   facet::VertexId plain_ends[2] = {facet::kNoElement, facet::kNoElement};
   facet::Project project;
@@ -210,14 +210,15 @@ TEST_CASE("multi-selection: collinear on three vertices and parallel between two
   const facet::PolyMesh& mesh = f.project.FindPrimitive(f.box_id)->mesh;
   // Edge 0's split vertex and the two corners of that edge (its ends before the split).
   const facet::VertexId m = f.split[0];
-  const facet::VertexId a = mesh.Origin(2 * f.split_edge[0]) == m ? mesh.Dest(2 * f.split_edge[0])
-                                                                  : mesh.Origin(2 * f.split_edge[0]);
+  const facet::VertexId a =
+      mesh.Origin(2 * f.split_edge[0]) == m ? mesh.Dest(2 * f.split_edge[0]) : mesh.Origin(2 * f.split_edge[0]);
   const facet::EdgeId new_edge = f.new_edge[0];
   const facet::VertexId b = mesh.Dest(2 * new_edge) == m ? mesh.Origin(2 * new_edge) : mesh.Dest(2 * new_edge);
   REQUIRE(b != m);
   REQUIRE(a != b);
   REQUIRE(a != m);
-  const double start_off = LineDistance(P(f.project, f.box_id, a), P(f.project, f.box_id, b), P(f.project, f.box_id, m));
+  const double start_off =
+      LineDistance(P(f.project, f.box_id, a), P(f.project, f.box_id, b), P(f.project, f.box_id, m));
   CAPTURE(start_off);
   REQUIRE(start_off > kStartOffRel * size);
 
@@ -288,11 +289,10 @@ TEST_CASE("multi-selection: collinear on three vertices and parallel between two
     const std::string err2 = RenderScriptRefused(dir, f.path, "refuse_collinear", three_collinear);
     CHECK(err2.find("are collinear: with a fourth point they are always coplanar") != std::string::npos);
     // The bottom face's corners (box vertices 0..3, core/mesh/box.h), constrained twice.
-    const std::string twice =
-        SelectScript(Vertex("select", f.box_id, 0), f.box_id,
-                     {Vertex("select-add", f.box_id, 1), Vertex("select-add", f.box_id, 2),
-                      Vertex("select-add", f.box_id, 3)}) +
-        "command constrain coplanar\nframes 2\ncommand constrain coplanar\n";
+    const std::string twice = SelectScript(Vertex("select", f.box_id, 0), f.box_id,
+                                           {Vertex("select-add", f.box_id, 1), Vertex("select-add", f.box_id, 2),
+                                            Vertex("select-add", f.box_id, 3)}) +
+                              "command constrain coplanar\nframes 2\ncommand constrain coplanar\n";
     const std::string err3 = RenderScriptRefused(dir, f.path, "refuse_twice", twice);
     CHECK(err3.find("the same constraint exists already") != std::string::npos);
     const std::string same_edge =
@@ -314,8 +314,8 @@ TEST_CASE("line pin: the selected edge on an image line, by the script and by a 
 
   SUBCASE("script") {
     std::ostringstream s;
-    s << "frames 2\n" << Edge("select", box, edge) << "\nframes 1\ncommand line-pin 0 " << FormatXY(a) << " " << FormatXY(b)
-      << "\n";
+    s << "frames 2\n"
+      << Edge("select", box, edge) << "\nframes 1\ncommand line-pin 0 " << FormatXY(a) << " " << FormatXY(b) << "\n";
     const History h = RunWithHistory(dir, f.path, "linepin", s.str());
     INFO("log: " << ReportLog(h.report));
     REQUIRE(h.after.constraints.size() == 1);
@@ -392,9 +392,9 @@ TEST_CASE("Shift+click in the image panel: a multi-selection, highlighted, toggl
   const nlohmann::json report = RenderScript(dir, f.path, "shift", s.str());
   // Escape over the image panel leaves the main element only: collinear then has 1 vertex.
   const Eigen::Vector2d over_image(f.view.rect_x + 5.0, f.view.rect_y + 5.0);
-  const std::string err = RenderScriptRefused(dir, f.path, "escape",
-                                        selected + "move " + FormatXY(over_image) +
-                                            "\nframes 1\nkey escape\nframes 1\ncommand constrain collinear\n");
+  const std::string err = RenderScriptRefused(
+      dir, f.path, "escape",
+      selected + "move " + FormatXY(over_image) + "\nframes 1\nkey escape\nframes 1\ncommand constrain collinear\n");
   CHECK(err.find("needs 3 or more different vertices (1 selected") != std::string::npos);
   INFO("log: " << ReportLog(report));
   const facet::Project after = LoadProjectFile(dir / "after.facet");
@@ -445,7 +445,8 @@ TEST_CASE("selection upkeep: an undo drops gone extras and the builder's first e
   // stores a first edge again instead of pairing with the stale one.
   std::ostringstream undo_first;
   undo_first << add << Edge("select", box, 0) << "\ncommand constrain parallel\nframes 1\ncommand undo\nframes 2\n"
-             << "command redo\nframes 2\n" << Edge("select", box, 1) << "\ncommand constrain parallel\nframes 2\n";
+             << "command redo\nframes 2\n"
+             << Edge("select", box, 1) << "\ncommand constrain parallel\nframes 2\n";
   nlohmann::json report = RenderScript(dir, path, "undo_first", undo_first.str());
   INFO("log: " << ReportLog(report));
   CHECK(report.at("project").at("constraints").empty());
@@ -466,8 +467,10 @@ TEST_CASE("selection upkeep: an undo drops gone extras and the builder's first e
 
   // A multi-selection whose box an undo removes is gone after the redo.
   std::ostringstream extras;
-  extras << add << Vertex("select", box, 0) << "\n" << Vertex("select-add", box, 1) << "\n"
-         << Vertex("select-add", box, 2) << "\n" << Vertex("select-add", box, 3)
+  extras << add << Vertex("select", box, 0) << "\n"
+         << Vertex("select-add", box, 1) << "\n"
+         << Vertex("select-add", box, 2) << "\n"
+         << Vertex("select-add", box, 3)
          << "\nframes 1\ncommand undo\nframes 2\ncommand redo\nframes 2\ncommand constrain coplanar\n";
   const std::string err = RenderScriptRefused(dir, path, "extras", extras.str());
   CHECK(err.find("(0 selected") != std::string::npos);
@@ -502,8 +505,8 @@ TEST_CASE("parallel faces: two parallel-edge constraints in one edit; perpendicu
   };
   const std::string add = "frames 2\ncommand add box\nframes 1\ncommand tool select\nframes 1\n";
   const nlohmann::json report = RenderScript(dir, path, "faces",
-                                       add + face("select", top) + face("select-add", bottom) +
-                                           "frames 1\ncommand constrain parallel-faces\nframes 2\n");
+                                             add + face("select", top) + face("select-add", bottom) +
+                                                 "frames 1\ncommand constrain parallel-faces\nframes 2\n");
   INFO("log: " << ReportLog(report));
   const facet::ProjectLoadResult after = facet::ProjectFromJson(report.at("project").dump());
   REQUIRE(after.ok());
@@ -513,13 +516,15 @@ TEST_CASE("parallel faces: two parallel-edge constraints in one edit; perpendicu
     REQUIRE(c.vertices.size() == 4);
     // Edge a on the top face (z = 1), edge b on the bottom one (z = 0).
     const facet::Primitive& p = after.project.primitives.at(0);
-    CHECK(std::abs(p.mesh.vertex(c.vertices[0].vertex).position.z() - p.mesh.vertex(c.vertices[1].vertex).position.z()) < 1e-12);
-    CHECK(std::abs(p.mesh.vertex(c.vertices[2].vertex).position.z() - p.mesh.vertex(c.vertices[3].vertex).position.z()) < 1e-12);
+    CHECK(std::abs(p.mesh.vertex(c.vertices[0].vertex).position.z() -
+                   p.mesh.vertex(c.vertices[1].vertex).position.z()) < 1e-12);
+    CHECK(std::abs(p.mesh.vertex(c.vertices[2].vertex).position.z() -
+                   p.mesh.vertex(c.vertices[3].vertex).position.z()) < 1e-12);
   }
   CHECK(report.at("undo_stack").size() == 2);  // add box, parallel faces
   CHECK(report.at("undo_stack").back().dump().find("Parallel faces") != std::string::npos);
-  const std::string err = RenderScriptRefused(dir, path, "faces_refused",
-                                        add + face("select", top) + face("select-add", front) +
-                                            "frames 1\ncommand constrain parallel-faces\n");
+  const std::string err = RenderScriptRefused(
+      dir, path, "faces_refused",
+      add + face("select", top) + face("select-add", front) + "frames 1\ncommand constrain parallel-faces\n");
   CHECK(err.find("no two pairs of edges within 15 deg of parallel") != std::string::npos);
 }

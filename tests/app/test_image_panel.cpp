@@ -22,8 +22,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/mesh/box.h"
 #include "core/io/project_io.h"
+#include "core/mesh/box.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 
@@ -115,8 +115,12 @@ nlohmann::json ReadJson(const std::string& path) {
 struct View {
   double origin_x = 0, origin_y = 0, zoom = 1;
   double rect_x = 0, rect_y = 0, rect_w = 0, rect_h = 0;
-  Eigen::Vector2d ToScreen(const Eigen::Vector2d& uv) const { return {origin_x + zoom * uv.x(), origin_y + zoom * uv.y()}; }
-  Eigen::Vector2d ToImage(const Eigen::Vector2d& s) const { return {(s.x() - origin_x) / zoom, (s.y() - origin_y) / zoom}; }
+  Eigen::Vector2d ToScreen(const Eigen::Vector2d& uv) const {
+    return {origin_x + zoom * uv.x(), origin_y + zoom * uv.y()};
+  }
+  Eigen::Vector2d ToImage(const Eigen::Vector2d& s) const {
+    return {(s.x() - origin_x) / zoom, (s.y() - origin_y) / zoom};
+  }
   bool Inside(const Eigen::Vector2d& s, double margin) const {
     return s.x() >= rect_x + margin && s.y() >= rect_y + margin && s.x() < rect_x + rect_w - margin &&
            s.y() < rect_y + rect_h - margin;
@@ -140,8 +144,8 @@ facet::Project ProjectFromReport(const nlohmann::json& report) {
 // Renders `script` (may be empty) and returns the report.
 nlohmann::json Render(const TempDir& dir, const Fixture& f, const std::string& name, const std::string& script,
                       const std::string& env = "") {
-  std::string args = "'" + f.project_path + "' -o '" + (dir / (name + ".png")) + "' --report '" +
-                     (dir / (name + ".json")) + "'";
+  std::string args =
+      "'" + f.project_path + "' -o '" + (dir / (name + ".png")) + "' --report '" + (dir / (name + ".json")) + "'";
   if (!script.empty()) {
     WriteText(dir / (name + ".txt"), script);
     args += " --script '" + (dir / (name + ".txt")) + "'";
@@ -180,7 +184,8 @@ TEST_CASE("image panel: the wheel zooms about the cursor and F fits the image ag
   // Zoom in at a point off the centre: that image point stays under the cursor.
   const Eigen::Vector2d cursor = Whole(fitted.ToScreen({300.25, 200.75}));
   REQUIRE(fitted.Inside(cursor, 10.0));
-  const View zoomed = ViewFromReport(Render(dir, f, "zoomed", "frames 2\nwheel 3 " + FormatXY(cursor, 10) + "\nframes 2\n"));
+  const View zoomed =
+      ViewFromReport(Render(dir, f, "zoomed", "frames 2\nwheel 3 " + FormatXY(cursor, 10) + "\nframes 2\n"));
   CHECK(zoomed.zoom > fitted.zoom * 1.5);
   const Eigen::Vector2d before = fitted.ToImage(cursor), after = zoomed.ToImage(cursor);
   constexpr double kAnchorToleranceScreenPx = 0.05;  // float rounding of origin and zoom
@@ -192,8 +197,9 @@ TEST_CASE("image panel: the wheel zooms about the cursor and F fits the image ag
   CHECK((ViewCenter(fitted) - cursor).norm() > 20.0);
 
   // F (with the mouse over the view) restores the fitted transform.
-  const View refit = ViewFromReport(
-      Render(dir, f, "refit", "frames 2\nwheel 3 " + FormatXY(cursor, 10) + "\nframes 2\nmove " + FormatXY(cursor, 10) + "\nkey f\nframes 2\n"));
+  const View refit = ViewFromReport(Render(dir, f, "refit",
+                                           "frames 2\nwheel 3 " + FormatXY(cursor, 10) + "\nframes 2\nmove " +
+                                               FormatXY(cursor, 10) + "\nkey f\nframes 2\n"));
   CHECK(refit.zoom == doctest::Approx(fitted.zoom).epsilon(1e-6));
   CHECK(std::abs(refit.origin_x - fitted.origin_x) < 0.01);
   CHECK(std::abs(refit.origin_y - fitted.origin_y) < 0.01);
@@ -251,8 +257,9 @@ TEST_CASE("image panel: a line tool drag adds one segment of its family where th
   const Eigen::Vector2d a = Whole(ViewCenter(view) + Eigen::Vector2d(-80, 40));
   const Eigen::Vector2d b = Whole(ViewCenter(view) + Eigen::Vector2d(60, -30));
   const Eigen::Vector2d tiny = a + Eigen::Vector2d(2, 1);  // under 3 px: ignored
-  const std::string script = "frames 2\ncommand tool line-y\ndrag left " + FormatXY(a, 10) + " " + FormatXY(b, 10) + " 8\nframes 2\n" +
-                             "drag left " + FormatXY(a, 10) + " " + FormatXY(tiny, 10) + " 3\nframes 2\n";
+  const std::string script = "frames 2\ncommand tool line-y\ndrag left " + FormatXY(a, 10) + " " + FormatXY(b, 10) +
+                             " 8\nframes 2\n" + "drag left " + FormatXY(a, 10) + " " + FormatXY(tiny, 10) +
+                             " 3\nframes 2\n";
   const nlohmann::json report = Render(dir, f, "line", script);
   const facet::Project project = ProjectFromReport(report);
   REQUIRE(project.segments.size() == 1);
@@ -300,14 +307,16 @@ TEST_CASE("image panel: Escape cancels an endpoint drag; Delete removes the sele
   const Eigen::Vector2d from = Whole(view.ToScreen(best_end == 0 ? best->a_px : best->b_px));
   const Eigen::Vector2d to = from + Eigen::Vector2d(25, 15);
 
-  const std::string cancel = "frames 2\nmove " + FormatXY(from, 10) + "\nframes 1\ndown left\nmove " + FormatXY(from + (to - from) * 0.5, 10) +
-                             "\nmove " + FormatXY(to, 10) + "\nframes 1\nkey escape\nup left\nframes 2\n";
+  const std::string cancel = "frames 2\nmove " + FormatXY(from, 10) + "\nframes 1\ndown left\nmove " +
+                             FormatXY(from + (to - from) * 0.5, 10) + "\nmove " + FormatXY(to, 10) +
+                             "\nframes 1\nkey escape\nup left\nframes 2\n";
   const nlohmann::json cancelled = Render(dir, f, "cancel", cancel);
   CHECK(cancelled.at("undo_stack").empty());
   CHECK(cancelled.at("project") == start.at("project"));
 
   // Without the Escape the same drag moves the endpoint (so the check above can fail).
-  const std::string moved_script = "frames 2\ndrag left " + FormatXY(from, 10) + " " + FormatXY(to, 10) + " 6\nframes 2\n";
+  const std::string moved_script =
+      "frames 2\ndrag left " + FormatXY(from, 10) + " " + FormatXY(to, 10) + " 6\nframes 2\n";
   const facet::Project moved = ProjectFromReport(Render(dir, f, "moved", moved_script));
   const facet::Segment* m = moved.FindSegment(best->id);
   REQUIRE(m != nullptr);
@@ -335,7 +344,9 @@ TEST_CASE("image panel: the pin tool pins a clicked box vertex where the next cl
   for (int i = 0; i < 8; ++i) {
     double gap = 1e9;
     for (int j = 0; j < 8; ++j) {
-      if (j != i) gap = std::min(gap, (f.scene.true_camera.Project(corners[i]) - f.scene.true_camera.Project(corners[j])).norm() * view.zoom);
+      if (j != i)
+        gap = std::min(gap, (f.scene.true_camera.Project(corners[i]) - f.scene.true_camera.Project(corners[j])).norm() *
+                                view.zoom);
     }
     if (gap > best_gap && view.Inside(view.ToScreen(f.scene.true_camera.Project(corners[i])), 40.0)) {
       best_gap = gap;
@@ -346,8 +357,8 @@ TEST_CASE("image panel: the pin tool pins a clicked box vertex where the next cl
   REQUIRE(best_gap > 20.0);
   const Eigen::Vector2d corner_screen = Whole(view.ToScreen(f.scene.true_camera.Project(corners[best])));
   const Eigen::Vector2d target = corner_screen + Eigen::Vector2d(-14, 9);
-  const std::string script = "frames 2\ncommand tool pin\nclick left " + FormatXY(corner_screen, 10) + "\nframes 1\nclick left " +
-                             FormatXY(target, 10) + "\nframes 2\n";
+  const std::string script = "frames 2\ncommand tool pin\nclick left " + FormatXY(corner_screen, 10) +
+                             "\nframes 1\nclick left " + FormatXY(target, 10) + "\nframes 2\n";
   const nlohmann::json report = Render(dir, f, "pin", script);
   const facet::Project project = ProjectFromReport(report);
   REQUIRE(project.pins.size() == 1);
@@ -367,8 +378,9 @@ TEST_CASE("image panel: with Shift held during a press the pointer moves at 1/ma
   const Eigen::Vector2d mouse_motion(40, -12);
   constexpr double kMagnification = 4.0;  // the loupe's default
   // Shift is down before the press: the press lands on the mouse, the motion is slowed.
-  const std::string script = "frames 2\ncommand tool line-z\nmove " + FormatXY(a, 10) + "\nhold shift\nframes 2\ndown left\nmove " +
-                             FormatXY(a + 0.5 * mouse_motion, 10) + "\nmove " + FormatXY(a + mouse_motion, 10) +
+  const std::string script = "frames 2\ncommand tool line-z\nmove " + FormatXY(a, 10) +
+                             "\nhold shift\nframes 2\ndown left\nmove " + FormatXY(a + 0.5 * mouse_motion, 10) +
+                             "\nmove " + FormatXY(a + mouse_motion, 10) +
                              "\nframes 1\nup left\nframes 1\nrelease shift\nframes 2\n";
   const facet::Project project = ProjectFromReport(Render(dir, f, "fine", script));
   REQUIRE(project.segments.size() == 1);

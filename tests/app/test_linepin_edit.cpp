@@ -13,8 +13,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/mesh/mesh.h"
 #include "core/io/project_io.h"
+#include "core/mesh/mesh.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 
@@ -22,11 +22,11 @@ using namespace facet::testing;
 
 namespace {
 
-constexpr double kShiftPx = 3.0;             // the line pin's line, off the true edge (image px)
-constexpr int kMoveScreenPx = 6;             // how far the end handle is dragged (screen px)
-constexpr double kEndTolerancePx = 1e-9;     // stored end vs. the release pixel's image point
+constexpr double kShiftPx = 3.0;              // the line pin's line, off the true edge (image px)
+constexpr int kMoveScreenPx = 6;              // how far the end handle is dragged (screen px)
+constexpr double kEndTolerancePx = 1e-9;      // stored end vs. the release pixel's image point
 constexpr double kLinePinTolerancePx = 1e-6;  // the joint solve's hard-constraint residual
-constexpr double kStartOffPx = 0.5;          // a start this far from the new line is not the answer
+constexpr double kStartOffPx = 0.5;           // a start this far from the new line is not the answer
 
 Eigen::Vector2d Round(const Eigen::Vector2d& p) { return {std::round(p.x()), std::round(p.y())}; }
 
@@ -43,7 +43,7 @@ struct PinnedScene {
   LineScene f;
   Eigen::Vector2d a = Eigen::Vector2d::Zero(), b = Eigen::Vector2d::Zero();
   Eigen::Vector2d pinned_b = Eigen::Vector2d::Zero();  // the line pin's end b
-  std::string setup;  // the script up to here
+  std::string setup;                                   // the script up to here
 };
 
 PinnedScene MakePinnedScene(const TempDir& dir, const std::string& tool,
@@ -142,8 +142,9 @@ TEST_CASE("line pin end handle: hovered, dragged with a live re-solve, one undoa
     // the release's full solve.
     const double start_px = LinePinDistancePx(before, moved);
     const double after_px = LinePinDistancePx(after, moved);
-    MESSAGE(tool << ": end moved " << (moved.line_b_px - old_pin.line_b_px).norm() << " image px; edge from the new line "
-                 << after_px << " px after the solve (" << start_px << " px before the drag)");
+    MESSAGE(tool << ": end moved " << (moved.line_b_px - old_pin.line_b_px).norm()
+                 << " image px; edge from the new line " << after_px << " px after the solve (" << start_px
+                 << " px before the drag)");
     CHECK(start_px > kStartOffPx);
     CHECK(after_px < kLinePinTolerancePx);
 
@@ -246,8 +247,9 @@ TEST_CASE("line pin: the script command line-pin-move sets one end, as one undoa
   TempDir dir("linepin_move_command");
   const PinnedScene p = MakePinnedScene(dir, "select", Eigen::Vector2d(0.0, kMoveScreenPx));
   std::ostringstream s;
-  s << p.setup << "command line-pin-move 0 0 b " << FormatXY(p.b) << "\nframes 3\ncommand save " << (dir / "after.facet")
-    << "\nframes 1\ncommand undo\nframes 2\ncommand save " << (dir / "undone.facet") << "\nframes 1\n";
+  s << p.setup << "command line-pin-move 0 0 b " << FormatXY(p.b) << "\nframes 3\ncommand save "
+    << (dir / "after.facet") << "\nframes 1\ncommand undo\nframes 2\ncommand save " << (dir / "undone.facet")
+    << "\nframes 1\n";
   const nlohmann::json report = RenderScript(dir, p.f.path, "command", s.str());
   INFO("log: " << ReportLog(report));
   const facet::Project before = LoadProjectFile(dir / "before.facet");

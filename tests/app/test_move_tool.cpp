@@ -14,8 +14,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/mesh/primitives.h"
 #include "core/io/project_io.h"
+#include "core/mesh/primitives.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 
@@ -23,15 +23,15 @@ using namespace facet::testing;
 
 namespace {
 
-constexpr double kExact = 1e-12;          // moves without a solve are exact
-constexpr double kMousePx = 0.05;         // the dragged vertex under the (integer) release pixel
-constexpr double kPlaneRelative = 1e-9;   // the vertex stays in its plane facing the camera
-constexpr double kSolvedDepth = 1e-9;     // an undetermined depth is not touched by the solve
-
+constexpr double kExact = 1e-12;         // moves without a solve are exact
+constexpr double kMousePx = 0.05;        // the dragged vertex under the (integer) release pixel
+constexpr double kPlaneRelative = 1e-9;  // the vertex stays in its plane facing the camera
+constexpr double kSolvedDepth = 1e-9;    // an undetermined depth is not touched by the solve
 
 std::string LogText(const nlohmann::json& report) {
   std::string text;
-  for (const auto& e : report.at("log")) text += e.at("level").get<std::string>() + ": " + e.at("text").get<std::string>() + "\n";
+  for (const auto& e : report.at("log"))
+    text += e.at("level").get<std::string>() + ": " + e.at("text").get<std::string>() + "\n";
   return text;
 }
 
@@ -150,8 +150,10 @@ TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the
   const Eigen::Vector2d corner7 = Rounded(view.ToScreen(box0.mesh.vertex(7).position));
   std::ostringstream s;
   s << prefix << "move " << FormatXY(corner7, 6) << "\nframes 1\ndown left\nframes 1\n";
-  for (int i = 1; i <= 3; ++i) s << "move " << FormatXY(corner7 + Eigen::Vector2d(10.0 * i, 5.0 * i), 6) << "\nframes 1\n";
-  s << "key escape\nframes 1\nmove " << FormatXY(corner7 + Eigen::Vector2d(50.0, 25.0), 6) << "\nframes 1\nup left\nframes 2\n";
+  for (int i = 1; i <= 3; ++i)
+    s << "move " << FormatXY(corner7 + Eigen::Vector2d(10.0 * i, 5.0 * i), 6) << "\nframes 1\n";
+  s << "key escape\nframes 1\nmove " << FormatXY(corner7 + Eigen::Vector2d(50.0, 25.0), 6)
+    << "\nframes 1\nup left\nframes 2\n";
   s << "command save " << (dir / "escaped.facet") << "\nframes 1\n";
   s << DragScript(from, to, 5, "") << "command save " << (dir / "dragged.facet") << "\nframes 1\n";
   // The command: the vertex to a position, then the primitive by a delta.
@@ -181,7 +183,8 @@ TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the
   CHECK(miss < kExact);
   const facet::Primitive primitive_moved = *Load(dir / "primitive.facet").FindPrimitive(box_id);
   for (facet::VertexId v = 0; v < 8; ++v) {
-    const double error = (primitive_moved.mesh.vertex(v).position - vertex_moved.mesh.vertex(v).position - delta).norm();
+    const double error =
+        (primitive_moved.mesh.vertex(v).position - vertex_moved.mesh.vertex(v).position - delta).norm();
     CAPTURE(v);
     CAPTURE(error);
     CHECK(error < kExact);
@@ -199,8 +202,9 @@ TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the
   // Shift: the vertex moves along the world z axis only. A run of its own: saving under a new
   // name re-frames the 3D view, so the start view holds only until the model changes and is saved.
   std::ostringstream z;
-  z << prefix << "hold shift\n" << DragScript(corner7, corner7 + Eigen::Vector2d(0.0, -30.0), 4, "")
-    << "release shift\ncommand save " << (dir / "shift.facet") << "\nframes 1\n";
+  z << prefix << "hold shift\n"
+    << DragScript(corner7, corner7 + Eigen::Vector2d(0.0, -30.0), 4, "") << "release shift\ncommand save "
+    << (dir / "shift.facet") << "\nframes 1\n";
   const nlohmann::json shift_report = Render(dir, path, "shift", z.str());
   INFO("shift log:\n" << LogText(shift_report));
   const Eigen::Vector3d p7_before = box0.mesh.vertex(7).position;

@@ -48,12 +48,12 @@ facet::Camera PavilionCamera() {
 std::vector<std::vector<Eigen::Vector3d>> HouseFaces() {
   const Eigen::Vector3d r0 = Ridge(0), r1 = Ridge(1);
   return {
-      {Corner(0), Corner(1), Corner(5), Corner(4)},             // y = 0
-      {Corner(2), Corner(6), Corner(7), Corner(3)},             // y = sy
-      {Corner(0), Corner(4), r0, Corner(6), Corner(2)},         // x = 0, gable end
-      {Corner(1), Corner(3), Corner(7), r1, Corner(5)},         // x = sx, gable end
-      {Corner(4), Corner(5), r1, r0},                           // roof, front
-      {Corner(6), r0, r1, Corner(7)},                           // roof, back
+      {Corner(0), Corner(1), Corner(5), Corner(4)},      // y = 0
+      {Corner(2), Corner(6), Corner(7), Corner(3)},      // y = sy
+      {Corner(0), Corner(4), r0, Corner(6), Corner(2)},  // x = 0, gable end
+      {Corner(1), Corner(3), Corner(7), r1, Corner(5)},  // x = sx, gable end
+      {Corner(4), Corner(5), r1, r0},                    // roof, front
+      {Corner(6), r0, r1, Corner(7)},                    // roof, back
   };
 }
 
@@ -63,7 +63,8 @@ cv::Mat MakePhoto(const facet::Camera& cam) {
   cv::Mat photo(cam.height_px, cam.width_px, CV_8UC3, cv::Scalar(200, 170, 120));
   cv::rectangle(photo, cv::Point(0, cam.height_px / 2), cv::Point(cam.width_px, cam.height_px), cv::Scalar(70, 110, 90),
                 cv::FILLED);
-  const cv::Scalar colors[] = {{90, 90, 200}, {90, 90, 200}, {160, 200, 230}, {140, 180, 210}, {40, 40, 140}, {40, 40, 140}};
+  const cv::Scalar colors[] = {{90, 90, 200},   {90, 90, 200}, {160, 200, 230},
+                               {140, 180, 210}, {40, 40, 140}, {40, 40, 140}};
   const Eigen::Vector3d centre = 0.5 * kBoxSize + Eigen::Vector3d(0, 0, 0.2);
   const Eigen::Vector3d eye = cam.CenterInWorld();
   const auto faces = HouseFaces();
@@ -141,7 +142,8 @@ nlohmann::json Render(const TempDir& dir, const Fixture& f, const std::string& n
 
 std::string LogText(const nlohmann::json& report) {
   std::string text;
-  for (const auto& e : report.at("log")) text += e.at("level").get<std::string>() + ": " + e.at("text").get<std::string>() + "\n";
+  for (const auto& e : report.at("log"))
+    text += e.at("level").get<std::string>() + ": " + e.at("text").get<std::string>() + "\n";
   return text;
 }
 
@@ -165,9 +167,10 @@ Eigen::Vector2d ImageOf(const View& view, const Eigen::Vector2d& screen) {
 double DistanceToHouseEdges(const View& view, const Fixture& f, const Eigen::Vector2d& s) {
   const Eigen::Vector3d r0 = Ridge(0), r1 = Ridge(1);
   const std::vector<std::array<Eigen::Vector3d, 2>> edges = {
-      {Corner(0), Corner(1)}, {Corner(2), Corner(3)}, {Corner(0), Corner(2)}, {Corner(1), Corner(3)},
-      {Corner(0), Corner(4)}, {Corner(1), Corner(5)}, {Corner(2), Corner(6)}, {Corner(3), Corner(7)},
-      {Corner(4), Corner(5)}, {Corner(6), Corner(7)}, {Corner(4), r0},        {r0, Corner(6)},
+      {Corner(0), Corner(1)}, {Corner(2), Corner(3)}, {Corner(0), Corner(2)},
+      {Corner(1), Corner(3)}, {Corner(0), Corner(4)}, {Corner(1), Corner(5)},
+      {Corner(2), Corner(6)}, {Corner(3), Corner(7)}, {Corner(4), Corner(5)},
+      {Corner(6), Corner(7)}, {Corner(4), r0},        {r0, Corner(6)},
       {Corner(5), r1},        {r1, Corner(7)},        {r0, r1}};
   double best = 1e300;
   for (const auto& e : edges) {
@@ -205,7 +208,8 @@ TEST_CASE("pavilion: box, two E_splits, V_connect, free ridge vertices pinned to
   // Free both (select tool, click, T), then keep the gable ends planar: the x = sx end faces
   // the camera (click inside it, K), the x = 0 end does not (select it by id: face 0, -X).
   s << "command tool select\n";
-  for (const Eigen::Vector3d& m : {mid0, mid1}) s << "click left " << FormatXY(Screen(view, f, m), 10) << "\nframes 1\nkey t\nframes 1\n";
+  for (const Eigen::Vector3d& m : {mid0, mid1})
+    s << "click left " << FormatXY(Screen(view, f, m), 10) << "\nframes 1\nkey t\nframes 1\n";
   const Eigen::Vector3d in_right_end(kBoxSize.x(), 0.3 * kBoxSize.y(), 0.4 * kBoxSize.z());
   s << "click left " << FormatXY(Screen(view, f, in_right_end), 10) << "\nframes 1\nkey k\nframes 1\n";
   s << "command select face " << f.box_id << " 0\ncommand planar-face\nframes 1\n";
@@ -260,8 +264,9 @@ TEST_CASE("pavilion: box, two E_splits, V_connect, free ridge vertices pinned to
   for (facet::VertexId v : ridge) {
     CAPTURE(v);
     CHECK(mesh.vertex(v).local.free);
-    const auto pin = std::find_if(p.pins.begin(), p.pins.end(),
-                                  [&](const facet::Pin& q) { return q.vertex == facet::VertexRef{box.id, v}; });
+    const auto pin = std::find_if(p.pins.begin(), p.pins.end(), [&](const facet::Pin& q) {
+      return q.vertex == facet::VertexRef{box.id, v};
+    });
     REQUIRE(pin != p.pins.end());
     const Eigen::Vector3d x = mesh.vertex(v).position;
     const int end = x.x() > 0.5 * kBoxSize.x() ? 1 : 0;
@@ -270,8 +275,8 @@ TEST_CASE("pavilion: box, two E_splits, V_connect, free ridge vertices pinned to
     // pixels, up to 1 / zoom image px off); the start (on the top face) was 100 % off.
     constexpr double kRelativeTolerance = 0.02;
     const double height = x.z() - top_z;
-    MESSAGE("ridge vertex " << v << ": height " << height << " (true " << kRidgeHeight << "), off the true ridge end by "
-                            << (x - Ridge(end)).norm());
+    MESSAGE("ridge vertex " << v << ": height " << height << " (true " << kRidgeHeight
+                            << "), off the true ridge end by " << (x - Ridge(end)).norm());
     CAPTURE(x.transpose());
     CAPTURE(height);
     CHECK(std::abs(height - kRidgeHeight) <= kRelativeTolerance * kRidgeHeight);
@@ -334,8 +339,8 @@ TEST_CASE("pavilion: undo clears a selection it removes; a refused operator says
   CHECK(after_undo.project.primitives.at(0).mesh.NumVertices() == 8);
 
   // V_delete on a box corner is refused: the core's message in the log, no history entry.
-  const std::string refuse = s.str() + "command tool delete-vertex\nclick left " + FormatXY(Screen(view, f, Corner(5)), 10) +
-                             "\nframes 2\n";
+  const std::string refuse =
+      s.str() + "command tool delete-vertex\nclick left " + FormatXY(Screen(view, f, Corner(5)), 10) + "\nframes 2\n";
   const nlohmann::json refused = Render(dir, f, "refused", refuse);
   CHECK(refused.at("undo_stack") == split.at("undo_stack"));
   CHECK(refused.at("project") == split.at("project"));
@@ -344,7 +349,6 @@ TEST_CASE("pavilion: undo clears a selection it removes; a refused operator says
   CHECK(last.at("level").get<std::string>() == "error");
   CHECK(last.at("text").get<std::string>().rfind("Delete vertex: ", 0) == 0);
 }
-
 
 TEST_CASE("pavilion: the 3D panel picks a vertex, an edge and a face by ray, with hover") {
   TempDir dir("pavilion_3d");
@@ -362,7 +366,8 @@ TEST_CASE("pavilion: the 3D panel picks a vertex, an edge and a face by ray, wit
   const auto& panel = before.at("panels").at("3D");
   const Eigen::Vector2d panel_centre(panel.at("x").get<double>() + panel.at("w").get<double>() / 2,
                                      panel.at("y").get<double>() + panel.at("h").get<double>() / 2);
-  s << "command tool select\ncommand select none\nmove " << FormatXY(panel_centre, 10) << "\nframes 1\nkey f\nframes 3\n";
+  s << "command tool select\ncommand select none\nmove " << FormatXY(panel_centre, 10)
+    << "\nframes 1\nkey f\nframes 3\n";
   const nlohmann::json placed = Render(dir, f, "placed", s.str());
   const Viewport3d viewport = ViewportFromReport(placed);
   const facet::ProjectLoadResult loaded = facet::ProjectFromJson(placed.at("project").dump());
@@ -379,11 +384,13 @@ TEST_CASE("pavilion: the 3D panel picks a vertex, an edge and a face by ray, wit
   // corner, and the centre of a face turned towards the eye.
   int near_corner = 0;
   for (int c = 1; c < 8; ++c) {
-    if ((box.mesh.vertex(c).position - eye).norm() < (box.mesh.vertex(near_corner).position - eye).norm()) near_corner = c;
+    if ((box.mesh.vertex(c).position - eye).norm() < (box.mesh.vertex(near_corner).position - eye).norm())
+      near_corner = c;
   }
   const facet::HalfedgeId h = box.mesh.vertex(near_corner).halfedge;
   const facet::EdgeId edge = facet::PolyMesh::EdgeOf(h);
-  const Eigen::Vector3d edge_mid = 0.5 * (box.mesh.vertex(box.mesh.Origin(h)).position + box.mesh.vertex(box.mesh.Dest(h)).position);
+  const Eigen::Vector3d edge_mid =
+      0.5 * (box.mesh.vertex(box.mesh.Origin(h)).position + box.mesh.vertex(box.mesh.Dest(h)).position);
   facet::FaceId face = facet::kNoFace;
   Eigen::Vector3d face_centre = Eigen::Vector3d::Zero();
   double best_facing = 0.0;
@@ -405,14 +412,16 @@ TEST_CASE("pavilion: the 3D panel picks a vertex, an edge and a face by ray, wit
     facet::Id element;
     Eigen::Vector3d at;
   };
-  for (const Target& target : {Target{"vertex", static_cast<facet::Id>(near_corner), box.mesh.vertex(near_corner).position},
-                               Target{"edge", edge, edge_mid}, Target{"face", face, face_centre}}) {
+  for (const Target& target :
+       {Target{"vertex", static_cast<facet::Id>(near_corner), box.mesh.vertex(near_corner).position},
+        Target{"edge", edge, edge_mid}, Target{"face", face, face_centre}}) {
     CAPTURE(target.kind);
     const Eigen::Vector2d p = viewport.ToScreen(target.at);
     REQUIRE(inside_panel(p));
     const std::string name = std::string("pick_") + target.kind;
     const nlohmann::json report =
-        Render(dir, f, name, s.str() + "move " + FormatXY(p, 10) + "\nframes 2\nclick left " + FormatXY(p, 10) + "\nframes 2\n");
+        Render(dir, f, name,
+               s.str() + "move " + FormatXY(p, 10) + "\nframes 2\nclick left " + FormatXY(p, 10) + "\nframes 2\n");
     INFO("hover " << report.at("hover").dump() << ", selection " << report.at("selection").dump());
     CHECK(report.at("hover").at("kind").get<std::string>() == target.kind);
     CHECK(report.at("hover").at("id").get<facet::Id>() == target.element);
@@ -445,6 +454,7 @@ TEST_CASE("pavilion: a wedge added on top of the selected box takes its footprin
   CHECK(std::abs(wedge.shape.params[0] - box.shape.params[0]) <= kTolerance);
   CHECK(std::abs(wedge.shape.params[1] - box.shape.params[1]) <= kTolerance);
   double min_z = 1e300;
-  for (facet::VertexId v = 0; v < wedge.mesh.VertexIdEnd(); ++v) min_z = std::min(min_z, wedge.mesh.vertex(v).position.z());
+  for (facet::VertexId v = 0; v < wedge.mesh.VertexIdEnd(); ++v)
+    min_z = std::min(min_z, wedge.mesh.vertex(v).position.z());
   CHECK(std::abs(min_z - (box.shape.translation.z() + box.shape.params[2])) <= kTolerance);
 }

@@ -11,8 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/mesh/primitives.h"
 #include "core/io/project_io.h"
+#include "core/mesh/primitives.h"
 #include "tests/app/app_test_util.h"
 
 using namespace facet::testing;
@@ -31,7 +31,8 @@ facet::FaceId TopFace(const facet::PolyMesh& mesh) {
   for (facet::FaceId f = 0; f < mesh.FaceIdEnd(); ++f) {
     if (!mesh.IsFace(f)) continue;
     bool all_top = true;
-    for (facet::VertexId v : facet::FaceVertices(mesh, f)) all_top &= std::abs(mesh.vertex(v).position.z() - top_z) < 1e-12;
+    for (facet::VertexId v : facet::FaceVertices(mesh, f))
+      all_top &= std::abs(mesh.vertex(v).position.z() - top_z) < 1e-12;
     if (all_top) return f;
   }
   return facet::kNoFace;

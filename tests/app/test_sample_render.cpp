@@ -8,8 +8,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/mesh/box.h"
 #include "core/io/project_io.h"
+#include "core/mesh/box.h"
 #include "tests/app/app_test_util.h"
 
 using namespace facet::testing;  // app_test_util.h
@@ -74,7 +74,8 @@ TEST_CASE("sample render: dragging a pin re-solves the box as one history entry;
   REQUIRE(sample.ok());
   const std::string start_json = facet::ProjectToJson(sample.project);
 
-  RunResult run = RunRender(dir, "'" + kSample + "' -o '" + (dir / "start.png") + "' --report '" + (dir / "start.json") + "'");
+  RunResult run =
+      RunRender(dir, "'" + kSample + "' -o '" + (dir / "start.png") + "' --report '" + (dir / "start.json") + "'");
   REQUIRE(run.exit_code == 0);
   const View view = ViewFromReport(ReadJson(dir / "start.json"));
 

@@ -22,9 +22,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/io/project_io.h"
 #include "core/mesh/box.h"
 #include "core/mesh/mesh.h"
-#include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 
@@ -36,7 +36,6 @@ using namespace facet::testing;  // app_test_util.h
 namespace {
 
 constexpr int kCheckerCellPx = 48;
-
 
 // BGR colour of the checker cell (i, j): six distinct colours, none close to the model's yellow.
 cv::Vec3b CheckerColor(int i, int j) {
@@ -51,10 +50,11 @@ cv::Mat MakePhoto(const SyntheticScene& scene, bool with_box) {
   const facet::Camera& cam = scene.true_camera;
   cv::Mat photo(cam.height_px, cam.width_px, CV_8UC3);
   for (int y = 0; y < photo.rows; ++y) {
-    for (int x = 0; x < photo.cols; ++x) photo.at<cv::Vec3b>(y, x) = CheckerColor(x / kCheckerCellPx, y / kCheckerCellPx);
+    for (int x = 0; x < photo.cols; ++x)
+      photo.at<cv::Vec3b>(y, x) = CheckerColor(x / kCheckerCellPx, y / kCheckerCellPx);
   }
   if (with_box) {
-    const cv::Scalar face_colors[] = {{200, 90, 170}, {70, 200, 230}, {230, 230, 90},
+    const cv::Scalar face_colors[] = {{200, 90, 170},  {70, 200, 230}, {230, 230, 90},
                                       {120, 120, 240}, {40, 140, 255}, {250, 250, 250}};
     const auto corners = BoxCorners(scene.true_box);
     const Eigen::Vector3d eye = cam.CenterInWorld();
@@ -99,10 +99,6 @@ Fixture WriteFixture(const TempDir& dir, bool with_box, bool with_pins) {
   return f;
 }
 
-
-
-
-
 int MaxChannelDifference(const cv::Vec3b& a, const cv::Vec3b& b) {
   int d = 0;
   for (int c = 0; c < 3; ++c) d = std::max(d, std::abs(int(a[c]) - int(b[c])));
@@ -122,15 +118,14 @@ double CheckerMatchFraction(const cv::Mat& shot, const cv::Mat& photo, const Vie
       if (!view.Inside(s, 2.0)) continue;
       ++total;
       const cv::Vec3b expected = photo.at<cv::Vec3b>(static_cast<int>(uv.y()), static_cast<int>(uv.x()));
-      const cv::Vec3b seen = shot.at<cv::Vec3b>(static_cast<int>(std::floor(s.y())), static_cast<int>(std::floor(s.x())));
+      const cv::Vec3b seen =
+          shot.at<cv::Vec3b>(static_cast<int>(std::floor(s.y())), static_cast<int>(std::floor(s.x())));
       if (MaxChannelDifference(expected, seen) <= tolerance) ++matched;
     }
   }
   *samples = total;
   return total ? static_cast<double>(matched) / total : 0.0;
 }
-
-
 
 }  // namespace
 
@@ -139,15 +134,14 @@ TEST_CASE("render: the PNG has the requested size and every panel is inside the 
   const Fixture f = WriteFixture(dir, /*with_box=*/true, /*with_pins=*/true);
   // A saved user layout that hides panels must not affect offscreen renders.
   fs::create_directories(dir.path / "config" / "facet");
-  const std::string user_layout =
-      R"({"format":"facet-layout","version":1,"split_ratio":[0.5,0.5,0.5,0.5,0.5],)"
-      R"("panels":{"tools":{"visible":false,"floating":false,"rect":[0,0,0,0]}}})";
+  const std::string user_layout = R"({"format":"facet-layout","version":1,"split_ratio":[0.5,0.5,0.5,0.5,0.5],)"
+                                  R"("panels":{"tools":{"visible":false,"floating":false,"rect":[0,0,0,0]}}})";
   WriteText(dir / "config/facet/layout.json", user_layout);
 
   constexpr int kWidth = 1280, kHeight = 800;
-  const RunResult run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "shot.png") + "' --size " +
-                                            std::to_string(kWidth) + "x" + std::to_string(kHeight) + " --report '" +
-                                            (dir / "report.json") + "'");
+  const RunResult run =
+      RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "shot.png") + "' --size " + std::to_string(kWidth) + "x" +
+                         std::to_string(kHeight) + " --report '" + (dir / "report.json") + "'");
   INFO("stderr: " << run.stderr_text);
   REQUIRE(run.exit_code == 0);
   const cv::Mat shot = cv::imread(dir / "shot.png", cv::IMREAD_COLOR);
@@ -176,8 +170,10 @@ TEST_CASE("render: the PNG has the requested size and every panel is inside the 
   }
   for (size_t a = 0; a < rects.size(); ++a) {
     for (size_t b = a + 1; b < rects.size(); ++b) {
-      const double ox = std::min(rects[a][0] + rects[a][2], rects[b][0] + rects[b][2]) - std::max(rects[a][0], rects[b][0]);
-      const double oy = std::min(rects[a][1] + rects[a][3], rects[b][1] + rects[b][3]) - std::max(rects[a][1], rects[b][1]);
+      const double ox =
+          std::min(rects[a][0] + rects[a][2], rects[b][0] + rects[b][2]) - std::max(rects[a][0], rects[b][0]);
+      const double oy =
+          std::min(rects[a][1] + rects[a][3], rects[b][1] + rects[b][3]) - std::max(rects[a][1], rects[b][1]);
       INFO(names[a] << " and " << names[b] << " overlap by " << ox << " x " << oy << " px");
       CHECK((ox <= 0 || oy <= 0));
     }
@@ -198,8 +194,8 @@ TEST_CASE("render: the PNG has the requested size and every panel is inside the 
 TEST_CASE("render: the image panel shows the photo under the reported image-to-screen transform") {
   TempDir dir("photo");
   const Fixture f = WriteFixture(dir, /*with_box=*/false, /*with_pins=*/false);
-  const RunResult run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "shot.png") + "' --report '" +
-                                            (dir / "report.json") + "'");
+  const RunResult run = RunRender(
+      dir, "'" + f.project_path + "' -o '" + (dir / "shot.png") + "' --report '" + (dir / "report.json") + "'");
   INFO("stderr: " << run.stderr_text);
   REQUIRE(run.exit_code == 0);
   const cv::Mat shot = cv::imread(dir / "shot.png", cv::IMREAD_COLOR);
@@ -236,8 +232,8 @@ TEST_CASE("render: the image panel shows the photo under the reported image-to-s
 TEST_CASE("render: the projected box edges land on the photo's box edges") {
   TempDir dir("edges");
   const Fixture f = WriteFixture(dir, /*with_box=*/true, /*with_pins=*/false);
-  const RunResult run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "shot.png") + "' --report '" +
-                                            (dir / "report.json") + "'");
+  const RunResult run = RunRender(
+      dir, "'" + f.project_path + "' -o '" + (dir / "shot.png") + "' --report '" + (dir / "report.json") + "'");
   INFO("stderr: " << run.stderr_text);
   REQUIRE(run.exit_code == 0);
   const cv::Mat shot = cv::imread(dir / "shot.png", cv::IMREAD_COLOR);
@@ -268,7 +264,8 @@ TEST_CASE("render: the projected box edges land on the photo's box edges") {
         continue;
       }
       ++photo_samples;
-      if (MaxChannelDifference(photo.at<cv::Vec3b>(int(p.y()), int(p.x())), photo.at<cv::Vec3b>(int(q.y()), int(q.x()))) > 30) {
+      if (MaxChannelDifference(photo.at<cv::Vec3b>(int(p.y()), int(p.x())),
+                               photo.at<cv::Vec3b>(int(q.y()), int(q.x()))) > 30) {
         ++photo_edges;
       }
     }
@@ -292,7 +289,8 @@ TEST_CASE("render: the projected box edges land on the photo's box edges") {
       // Skip points that come close to another edge.
       bool near_other = false;
       for (const auto& o : facet::BoxEdges()) {
-        const Eigen::Vector2d oa = view.ToScreen(cam.Project(corners[o[0]])), ob = view.ToScreen(cam.Project(corners[o[1]]));
+        const Eigen::Vector2d oa = view.ToScreen(cam.Project(corners[o[0]])),
+                              ob = view.ToScreen(cam.Project(corners[o[1]]));
         const double t = std::clamp((s - oa).dot(ob - oa) / (ob - oa).squaredNorm(), 0.0, 1.0);
         if ((oa + t * (ob - oa) - s).norm() < 8.0) near_other = true;
       }
@@ -312,8 +310,8 @@ TEST_CASE("render: a scripted pin drag is one undo entry and ctrl+z restores the
   const std::string start_json = facet::ProjectToJson(facet::LoadProject(f.project_path).project);
 
   // Locate the pins on screen from a first render.
-  RunResult run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "start.png") + "' --report '" +
-                                     (dir / "start.json") + "'");
+  RunResult run = RunRender(
+      dir, "'" + f.project_path + "' -o '" + (dir / "start.png") + "' --report '" + (dir / "start.json") + "'");
   INFO("stderr: " << run.stderr_text);
   REQUIRE(run.exit_code == 0);
   const nlohmann::json start = ReadJson(dir / "start.json");
@@ -367,8 +365,8 @@ TEST_CASE("render: a scripted pin drag is one undo entry and ctrl+z restores the
   CHECK(facet::ProjectToJson(dragged.project) != start_json);
   CHECK(after_drag.at("project") == nlohmann::json::parse(facet::ProjectToJson(dragged.project)));
 
-  run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "undo.png") + "' --script '" +
-                           (dir / "drag_undo.txt") + "' --report '" + (dir / "undo.json") + "'");
+  run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "undo.png") + "' --script '" + (dir / "drag_undo.txt") +
+                           "' --report '" + (dir / "undo.json") + "'");
   REQUIRE(run.exit_code == 0);
   const nlohmann::json undone = ReadJson(dir / "undo.json");
   CHECK(undone.at("undo_stack").empty());
@@ -380,15 +378,16 @@ TEST_CASE("render: script errors name the line and exit with 1") {
   TempDir dir("script_error");
   const Fixture f = WriteFixture(dir, /*with_box=*/false, /*with_pins=*/false);
   WriteText(dir / "bad.txt", "frames 1\n# a comment\nclick left 10\n");
-  RunResult run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "shot.png") + "' --script '" +
-                                     (dir / "bad.txt") + "'");
+  RunResult run =
+      RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "shot.png") + "' --script '" + (dir / "bad.txt") + "'");
   CAPTURE(run.stderr_text);
   CHECK(run.exit_code == 1);
   CHECK(run.stderr_text.find("line 3") != std::string::npos);
   CHECK(!fs::exists(dir / "shot.png"));
 
   WriteText(dir / "unknown.txt", "jump 3\n");
-  run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "shot.png") + "' --script '" + (dir / "unknown.txt") + "'");
+  run = RunRender(dir,
+                  "'" + f.project_path + "' -o '" + (dir / "shot.png") + "' --script '" + (dir / "unknown.txt") + "'");
   CAPTURE(run.stderr_text);
   CHECK(run.exit_code == 1);
   CHECK(run.stderr_text.find("line 1") != std::string::npos);
@@ -396,7 +395,8 @@ TEST_CASE("render: script errors name the line and exit with 1") {
 
   // A command that fails while running (opening a missing project) also names its line.
   WriteText(dir / "missing.txt", "frames 1\ncommand open " + (dir / "missing.facet") + "\n");
-  run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "shot.png") + "' --script '" + (dir / "missing.txt") + "'");
+  run = RunRender(dir,
+                  "'" + f.project_path + "' -o '" + (dir / "shot.png") + "' --script '" + (dir / "missing.txt") + "'");
   CAPTURE(run.stderr_text);
   CHECK(run.exit_code == 1);
   CHECK(run.stderr_text.find("line 2") != std::string::npos);
@@ -420,8 +420,8 @@ TEST_CASE("gui: without a display the app says how to render offscreen and exits
 TEST_CASE("render: a splitter drag resizes its neighbours; title-bar drag and Undock float panels, Dock returns them") {
   TempDir dir("layout_edit");
   const Fixture f = WriteFixture(dir, /*with_box=*/false, /*with_pins=*/false);
-  RunResult run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "start.png") + "' --report '" +
-                                     (dir / "start.json") + "'");
+  RunResult run = RunRender(
+      dir, "'" + f.project_path + "' -o '" + (dir / "start.png") + "' --report '" + (dir / "start.json") + "'");
   INFO("stderr: " << run.stderr_text);
   REQUIRE(run.exit_code == 0);
   const nlohmann::json start = ReadJson(dir / "start.json").at("panels");
@@ -446,8 +446,8 @@ TEST_CASE("render: a splitter drag resizes its neighbours; title-bar drag and Un
          << "drag left " << num(history, "x") + 80 << " " << num(history, "y") + 10 << " 500 300 10\n"
          << "frames 2\n";
   WriteText(dir / "layout.txt", script.str());
-  run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "edited.png") + "' --script '" +
-                           (dir / "layout.txt") + "' --report '" + (dir / "edited.json") + "'");
+  run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "edited.png") + "' --script '" + (dir / "layout.txt") +
+                           "' --report '" + (dir / "edited.json") + "'");
   REQUIRE(run.exit_code == 0);
   const nlohmann::json edited = ReadJson(dir / "edited.json").at("panels");
   INFO("panels after the edits: " << edited.dump());
@@ -481,8 +481,8 @@ TEST_CASE("render: a property drag is one undo entry; clicking the first history
   TempDir dir("properties");
   const Fixture f = WriteFixture(dir, /*with_box=*/true, /*with_pins=*/false);
   const std::string start_json = facet::ProjectToJson(facet::LoadProject(f.project_path).project);
-  RunResult run = RunRender(dir, "'" + f.project_path + "' -o '" + (dir / "start.png") + "' --report '" +
-                                     (dir / "start.json") + "'");
+  RunResult run = RunRender(
+      dir, "'" + f.project_path + "' -o '" + (dir / "start.png") + "' --report '" + (dir / "start.json") + "'");
   INFO("stderr: " << run.stderr_text);
   REQUIRE(run.exit_code == 0);
   const View view = ViewFromReport(ReadJson(dir / "start.json"));

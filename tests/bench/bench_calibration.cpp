@@ -124,8 +124,8 @@ void BM_OpenCvCalibrateCameraOneView(benchmark::State& state) {
     cv::Matx33d camera(k(0, 0), 0, k(0, 2), 0, k(1, 1), k(1, 2), 0, 0, 1);
     cv::Mat dist = cv::Mat::zeros(5, 1, CV_64F);
     std::vector<cv::Mat> rvecs, tvecs;
-    benchmark::DoNotOptimize(cv::calibrateCamera(object, image, cv::Size(s.camera.width_px, s.camera.height_px),
-                                                 camera, dist, rvecs, tvecs, flags));
+    benchmark::DoNotOptimize(cv::calibrateCamera(object, image, cv::Size(s.camera.width_px, s.camera.height_px), camera,
+                                                 dist, rvecs, tvecs, flags));
   }
 }
 BENCHMARK(BM_OpenCvCalibrateCameraOneView)->Unit(benchmark::kMicrosecond);

@@ -7,9 +7,9 @@
 
 #include <string>
 
-#include "core/scene/document.h"
 #include "core/mesh/operators.h"
 #include "core/mesh/primitives.h"
+#include "core/scene/document.h"
 #include "core/scene/project.h"
 #include "core/texture/textured_mesh.h"
 

@@ -72,7 +72,8 @@ const Project* ConvergedScene(const JointSceneOptions& size, std::string* error)
 
 // One frame of a drag: pin 0 moved by 2 px (back and forth), then the warm-started solve
 // with the per-frame budget, exactly what the app runs while the mouse moves.
-void RunInteractive(benchmark::State& state, const JointSceneOptions& size, JointSolveOptions::LinearSolver linear_solver) {
+void RunInteractive(benchmark::State& state, const JointSceneOptions& size,
+                    JointSolveOptions::LinearSolver linear_solver) {
   std::string error;
   const Project* converged = ConvergedScene(size, &error);
   if (converged == nullptr) {

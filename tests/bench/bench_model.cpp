@@ -83,7 +83,8 @@ void BM_OpenCvSolvePnPReference(benchmark::State& state) {
   const cv::Matx33d camera(k(0, 0), 0, k(0, 2), 0, k(1, 1), k(1, 2), 0, 0, 1);
   for (auto _ : state) {
     cv::Vec3d rvec, tvec;
-    benchmark::DoNotOptimize(cv::solvePnP(object, image, camera, cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_ITERATIVE));
+    benchmark::DoNotOptimize(
+        cv::solvePnP(object, image, camera, cv::noArray(), rvec, tvec, false, cv::SOLVEPNP_ITERATIVE));
   }
 }
 BENCHMARK(BM_OpenCvSolvePnPReference)->Unit(benchmark::kMicrosecond);

@@ -13,8 +13,8 @@
 #include <cmath>
 #include <random>
 
-#include "core/mesh/box.h"
 #include "core/estimators/calibrate_vp.h"
+#include "core/mesh/box.h"
 #include "core/solve/model_update.h"
 #include "tests/bench/joint_scene.h"
 
@@ -22,7 +22,8 @@ namespace {
 
 facet::Project ColdStart(const facet::Project& truth) {
   facet::Project cold = truth;
-  for (facet::Image& image : cold.images) image.camera.SetPose(image.camera.cam_from_world_rotation, Eigen::Vector3d::Zero());
+  for (facet::Image& image : cold.images)
+    image.camera.SetPose(image.camera.cam_from_world_rotation, Eigen::Vector3d::Zero());
   for (size_t i = 1; i < cold.primitives.size(); ++i) {
     facet::Primitive& p = cold.primitives[i];
     for (int k = 0; k < facet::kMaxPrimitiveParams; ++k)
@@ -55,7 +56,8 @@ void BM_UpdateModelCold(benchmark::State& state) {
     for (int k = 0; k < 3; ++k)
       max_dimension_error_m = std::max(max_dimension_error_m, std::abs(updated.primitives[i].shape.params[k] -
                                                                        scene.truth.primitives[i].shape.params[k]));
-  state.counters["rms_px"] = summary.joint.IsUsable() ? summary.joint.reprojection_rms_px : summary.solve.reprojection_rms_px;
+  state.counters["rms_px"] =
+      summary.joint.IsUsable() ? summary.joint.reprojection_rms_px : summary.solve.reprojection_rms_px;
   state.counters["linear_init"] = summary.solve.linear_initialization_used ? 1 : 0;
   state.counters["geometry_ms"] = summary.solve.time_ms;
   state.counters["joint_ms"] = summary.joint.time_ms;
@@ -158,7 +160,8 @@ facet::Project WithSegments(const facet::Project& project, int segments_per_imag
     options.height_px = image.height_px;
     const facet::VpCalibrationSummary vp = facet::CalibrateFromVanishingLines(segments, options);
     if (!vp.IsUsable() ||
-        Eigen::AngleAxisd(vp.cam_from_world_rotation * image.camera.cam_from_world_rotation.transpose()).angle() > 0.5 * M_PI)
+        Eigen::AngleAxisd(vp.cam_from_world_rotation * image.camera.cam_from_world_rotation.transpose()).angle() >
+            0.5 * M_PI)
       continue;
     out.segments.insert(out.segments.end(), segments.begin(), segments.end());
   }

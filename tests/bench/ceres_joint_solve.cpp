@@ -191,7 +191,9 @@ ceres::Solver::Options SolverOptions(CeresModel* m, const ceres::Problem& proble
 }
 
 const char* LinearSolverName(int linear_solver) {
-  return linear_solver == kSparseSchur ? "SPARSE_SCHUR" : linear_solver == kSparseNormalCholesky ? "SPARSE_NORMAL_CHOLESKY" : "DENSE_SCHUR";
+  return linear_solver == kSparseSchur            ? "SPARSE_SCHUR"
+         : linear_solver == kSparseNormalCholesky ? "SPARSE_NORMAL_CHOLESKY"
+                                                  : "DENSE_SCHUR";
 }
 
 ceres::Solver::Summary SolveModel(CeresModel* m, int linear_solver, int iterations) {

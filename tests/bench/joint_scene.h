@@ -35,8 +35,8 @@ struct JointSceneOptions {
   int width_px = 1920;
   int height_px = 1080;
   double focal_px = 1000.0;
-  double pitch_m = 4.0;        // grid spacing between box origins
-  double noise_px = 0.5;       // standard deviation of each pin coordinate's noise
+  double pitch_m = 4.0;   // grid spacing between box origins
+  double noise_px = 0.5;  // standard deviation of each pin coordinate's noise
   // The start point: each free box dimension and each camera centre's distance to the scene
   // centre off by up to this fraction; each free translation off by up to this fraction of
   // its box's diagonal per axis; each camera rotation by up to `start_rotation_deg`.
@@ -46,8 +46,8 @@ struct JointSceneOptions {
 };
 
 struct JointScene {
-  Project truth;  // true cameras and primitives; pins with noise
-  Project start;  // the same images, primitives and pins with perturbed cameras and shapes
+  Project truth;                            // true cameras and primitives; pins with noise
+  Project start;                            // the same images, primitives and pins with perturbed cameras and shapes
   std::vector<Eigen::Vector2d> true_uv_px;  // noise-free projection of each pin (pins order)
   Eigen::Vector3d look_at = Eigen::Vector3d::Zero();
   double ring_radius_m = 0.0;
@@ -55,8 +55,7 @@ struct JointScene {
 
 namespace joint_scene_detail {
 
-inline Camera LookAtCamera(const JointSceneOptions& o, const Eigen::Vector3d& center,
-                           const Eigen::Vector3d& look_at) {
+inline Camera LookAtCamera(const JointSceneOptions& o, const Eigen::Vector3d& center, const Eigen::Vector3d& look_at) {
   Camera camera;
   camera.width_px = o.width_px;
   camera.height_px = o.height_px;
@@ -169,15 +168,17 @@ inline JointScene MakeJointScene(const JointSceneOptions& o) {
       if (!box.param_locked[k]) box.shape.params[k] *= 1.0 + o.start_fraction * uniform(rng);
     }
     if (!box.translation_locked) {
-      box.shape.translation += o.start_fraction * diagonal_m * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng));
+      box.shape.translation +=
+          o.start_fraction * diagonal_m * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng));
     }
   }
   RefreshAllPrimitives(&s);
   for (Image& image : s.images) {
     const Eigen::Vector3d center = image.camera.CenterInWorld();
     const double distance_m = (center - scene.look_at).norm();
-    const Eigen::Vector3d moved =
-        center + o.start_fraction * distance_m * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)) / std::sqrt(3.0);
+    const Eigen::Vector3d moved = center + o.start_fraction * distance_m *
+                                               Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)) /
+                                               std::sqrt(3.0);
     const Eigen::Vector3d axis = Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)).normalized();
     const Eigen::Matrix3d turn = Eigen::AngleAxisd(o.start_rotation_deg * M_PI / 180.0, axis).toRotationMatrix();
     image.camera.SetPose(turn * image.camera.cam_from_world_rotation, moved);
@@ -187,11 +188,11 @@ inline JointScene MakeJointScene(const JointSceneOptions& o) {
 
 // The benchmark's settings, shared by our solve and the Ceres comparison so both run the
 // same problem with the same budget.
-constexpr int kFrameIterations = 5;      // the app's per-frame budget while a pin is dragged
-constexpr int kFullIterations = 100;     // a full solve (cold start, or when a drag ends)
+constexpr int kFrameIterations = 5;        // the app's per-frame budget while a pin is dragged
+constexpr int kFullIterations = 100;       // a full solve (cold start, or when a drag ends)
 constexpr double kSolveTolerance = 1e-14;  // function, gradient and parameter tolerances
 constexpr double kInitialLambda = 1e-4;    // LM damping; Ceres's trust region is its inverse
-constexpr double kDragStepPx = 2.0;      // how far the dragged pin moves between frames
+constexpr double kDragStepPx = 2.0;        // how far the dragged pin moves between frames
 
 inline JointSceneOptions JointSceneSize(int primitives, int images, int pins) {
   JointSceneOptions o;

@@ -170,15 +170,15 @@ TEST_CASE("Chessboard: one view through the planar path gives f within 3 % of ca
       // (h - 1) / 2 in OpenCV's initialisation), fx = fy, radial k1, k2 only.
       cv::Mat camera_matrix = cv::Mat::eye(3, 3, CV_64F), dist;
       std::vector<cv::Mat> rvecs, tvecs;
-      const int flags = cv::CALIB_FIX_PRINCIPAL_POINT | cv::CALIB_FIX_ASPECT_RATIO | cv::CALIB_ZERO_TANGENT_DIST |
-                        cv::CALIB_FIX_K3;
+      const int flags =
+          cv::CALIB_FIX_PRINCIPAL_POINT | cv::CALIB_FIX_ASPECT_RATIO | cv::CALIB_ZERO_TANGENT_DIST | cv::CALIB_FIX_K3;
       std::vector<cv::Point3f> object;
       for (const PointCorrespondence& p : points)
         object.emplace_back(static_cast<float>(p.xyz.x()), static_cast<float>(p.xyz.y()), 0.0f);
       const auto opencv_start = std::chrono::steady_clock::now();
       r.rms_opencv_px = cv::calibrateCamera(std::vector<std::vector<cv::Point3f>>{object},
-                                            std::vector<std::vector<cv::Point2f>>{corners}, gray.size(),
-                                            camera_matrix, dist, rvecs, tvecs, flags);
+                                            std::vector<std::vector<cv::Point2f>>{corners}, gray.size(), camera_matrix,
+                                            dist, rvecs, tvecs, flags);
       r.opencv_time_ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - opencv_start).count();
       r.focal_opencv_px = camera_matrix.at<double>(0, 0);
@@ -217,11 +217,11 @@ TEST_CASE("Chessboard: one view through the planar path gives f within 3 % of ca
       MESSAGE(r.name << ": f (error %, RMS px): pinhole " << r.focal_pinhole_px << " (" << err_pinhole.back() << ", "
                      << r.rms_pinhole_px << "); k1 k2 " << r.focal_distorted_px << " (" << err_distorted.back() << ", "
                      << r.rms_distorted_px << ", k1 " << r.k1 << ", k2 " << r.k2 << ", " << r.time_ms
-                     << " ms); cv::calibrateCamera one view " << r.focal_opencv_px << " (" << err_opencv.back()
-                     << ", " << r.rms_opencv_px << ", " << r.opencv_time_ms << " ms); k1 k2 at the reference principal point "
+                     << " ms); cv::calibrateCamera one view " << r.focal_opencv_px << " (" << err_opencv.back() << ", "
+                     << r.rms_opencv_px << ", " << r.opencv_time_ms << " ms); k1 k2 at the reference principal point "
                      << r.focal_reference_pp_px << " (" << err_reference_pp.back() << ", " << r.rms_reference_pp_px
-                     << "); k1 k2 on 5x5-window corners " << r.focal_small_window_px << " ("
-                     << err_small_window.back() << ", " << r.rms_small_window_px << ")");
+                     << "); k1 k2 on 5x5-window corners " << r.focal_small_window_px << " (" << err_small_window.back()
+                     << ", " << r.rms_small_window_px << ")");
     }
     std::string missing;
     for (const auto& name : not_found) missing += " " + name;
@@ -229,13 +229,13 @@ TEST_CASE("Chessboard: one view through the planar path gives f within 3 % of ca
     const double median_distorted = internal::Median(err_distorted);
     MESSAGE(side << " (reference f " << reference_f << " px, principal point " << reference_pp.transpose()
                  << "; ours held at the image centre): " << results.size() << " views (corners not found:"
-                 << (missing.empty() ? " none" : missing) << "); focal error median / max %: k1 k2 "
-                 << median_distorted << " / " << Max(err_distorted) << ", pinhole " << internal::Median(err_pinhole) << " / "
+                 << (missing.empty() ? " none" : missing) << "); focal error median / max %: k1 k2 " << median_distorted
+                 << " / " << Max(err_distorted) << ", pinhole " << internal::Median(err_pinhole) << " / "
                  << Max(err_pinhole) << ", cv::calibrateCamera one view " << internal::Median(err_opencv) << " / "
                  << Max(err_opencv) << ", k1 k2 at the reference principal point " << internal::Median(err_reference_pp)
-                 << " / " << Max(err_reference_pp) << ", k1 k2 on 5x5 corners " << internal::Median(err_small_window) << " / "
-                 << Max(err_small_window) << "; RMS k1 k2 median / max " << internal::Median(rms_distorted) << " / "
-                 << Max(rms_distorted) << " px (5x5 corners " << internal::Median(rms_small_window) << " / "
+                 << " / " << Max(err_reference_pp) << ", k1 k2 on 5x5 corners " << internal::Median(err_small_window)
+                 << " / " << Max(err_small_window) << "; RMS k1 k2 median / max " << internal::Median(rms_distorted)
+                 << " / " << Max(rms_distorted) << " px (5x5 corners " << internal::Median(rms_small_window) << " / "
                  << Max(rms_small_window) << " px)");
     CHECK(median_distorted <= kMaxMedianFocalErrorPercent);
   }

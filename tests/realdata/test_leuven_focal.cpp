@@ -91,11 +91,11 @@ std::string DescribeFamilies(const VpCalibrationSummary& s) {
   for (int axis = 0; axis < 3; ++axis) {
     const Eigen::Vector3d& vp = s.vanishing_points[axis];
     out << "\n  " << AxisName(static_cast<Axis>(axis)) << ": " << s.segments_per_axis[axis] << " segments, RMS "
-        << s.vanishing_point_rms_px[axis] << " px, spread " << s.family_angle_spread_deg[axis]
-        << " deg, direction std " << s.vanishing_direction_std_deg[axis] << " deg, vanishing point ";
+        << s.vanishing_point_rms_px[axis] << " px, spread " << s.family_angle_spread_deg[axis] << " deg, direction std "
+        << s.vanishing_direction_std_deg[axis] << " deg, vanishing point ";
     if (std::abs(vp.z()) > 1e-12)
-      out << "(" << vp.x() / vp.z() << ", " << vp.y() / vp.z() << "), "
-          << s.vanishing_point_to_principal_point_px[axis] << " px from the principal point";
+      out << "(" << vp.x() / vp.z() << ", " << vp.y() / vp.z() << "), " << s.vanishing_point_to_principal_point_px[axis]
+          << " px from the principal point";
     else
       out << "at infinity";
   }
@@ -118,12 +118,11 @@ TEST_CASE("the Leuven sample's lines with its EXIF prior give the reference foca
   REQUIRE(s.IsUsable());
   const double focal_error = std::abs(s.focal_px - reference_focal_px) / reference_focal_px;
   const double prior_error = std::abs(image.focal_prior_px - reference_focal_px) / reference_focal_px;
-  MESSAGE("Leuven sample with the EXIF prior (" << image.focal_prior_px << " px +- " << image.focal_prior_std_px
-                                                << ", " << 100.0 * prior_error << " % off alone): f " << s.focal_px
-                                                << " px +- " << s.focal_std_px << ", reference " << reference_focal_px
-                                                << " px, error " << 100.0 * focal_error << " % = "
-                                                << std::abs(s.focal_px - reference_focal_px) / s.focal_std_px
-                                                << " sigma");
+  MESSAGE("Leuven sample with the EXIF prior ("
+          << image.focal_prior_px << " px +- " << image.focal_prior_std_px << ", " << 100.0 * prior_error
+          << " % off alone): f " << s.focal_px << " px +- " << s.focal_std_px << ", reference " << reference_focal_px
+          << " px, error " << 100.0 * focal_error
+          << " % = " << std::abs(s.focal_px - reference_focal_px) / s.focal_std_px << " sigma");
   CHECK(focal_error < kTargetFocalError);
   CHECK(std::abs(s.focal_px - reference_focal_px) < kMaxFocalErrorSigmas * s.focal_std_px);
   // The prior and the lines each carry weight: the result lies strictly between them.
@@ -145,8 +144,8 @@ TEST_CASE("the Leuven sample's lines alone give the reference focal length withi
   MESSAGE("Leuven sample, lines alone (" << calibration.project.segments.size()
                                          << " segments, principal point at the centre): f " << s.focal_px << " px +- "
                                          << s.focal_std_px << " (1 sigma), reference " << reference_focal_px
-                                         << " px, error " << 100.0 * focal_error << " % = "
-                                         << std::abs(s.focal_px - reference_focal_px) / s.focal_std_px
+                                         << " px, error " << 100.0 * focal_error
+                                         << " % = " << std::abs(s.focal_px - reference_focal_px) / s.focal_std_px
                                          << " sigma; residual sigma " << s.residual_sigma_px << " px"
                                          << DescribeFamilies(s));
   CHECK(focal_error < kMaxFocalErrorLinesOnly);
@@ -180,16 +179,11 @@ TEST_CASE("on the Leuven sample a solved principal point leaves the focal length
   const SampleCalibration solved = CalibrateSample(PrincipalPointMode::kSolve);
   REQUIRE(centred.summary.IsUsable());
   REQUIRE(solved.summary.IsUsable());
-  MESSAGE("principal point solved (prior at the centre, default std): f " << solved.summary.focal_px << " px +- "
-                                                                          << solved.summary.focal_std_px
-                                                                          << ", principal point ("
-                                                                          << solved.summary.principal_point_px.x()
-                                                                          << ", "
-                                                                          << solved.summary.principal_point_px.y()
-                                                                          << ") +- "
-                                                                          << solved.summary.principal_point_std_px.y()
-                                                                          << " px vertically; reference f "
-                                                                          << reference_focal_px << " px");
+  MESSAGE("principal point solved (prior at the centre, default std): f "
+          << solved.summary.focal_px << " px +- " << solved.summary.focal_std_px << ", principal point ("
+          << solved.summary.principal_point_px.x() << ", " << solved.summary.principal_point_px.y() << ") +- "
+          << solved.summary.principal_point_std_px.y() << " px vertically; reference f " << reference_focal_px
+          << " px");
   // The near-infinite x point leaves the principal point's row to the prior alone, and f
   // moves with that row (f^2 ~ its distance to the horizon times the vertical point's
   // distance): the sample keeps the principal point at the centre for this reason.

@@ -95,8 +95,8 @@ std::vector<View> DetectLeftViews() {
     REQUIRE(gray.cols == kWidthPx);
     REQUIRE(gray.rows == kHeightPx);
     std::vector<cv::Point2f> corners;
-    const bool found = cv::findChessboardCorners(gray, kPattern, corners,
-                                                 cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+    const bool found =
+        cv::findChessboardCorners(gray, kPattern, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
     REQUIRE_MESSAGE(found, "no board in " << file.filename().string());
     cv::cornerSubPix(gray, corners, cv::Size(11, 11), cv::Size(-1, -1),
                      cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
@@ -178,8 +178,9 @@ TEST_CASE("Chessboard plumb lines: distortion agrees with calibrateCamera, lines
   // OpenCV's model converted to ours (2 terms), over the radius of the farthest image corner.
   const RadialDistortion identity = MakeRadialDistortion(kWidthPx, kHeightPx, reference.principal_point_px);
   double max_radius_px = 0.0;
-  for (const Eigen::Vector2d corner : {Eigen::Vector2d(0, 0), Eigen::Vector2d(kWidthPx - 1, 0),
-                                       Eigen::Vector2d(0, kHeightPx - 1), Eigen::Vector2d(kWidthPx - 1, kHeightPx - 1)}) {
+  for (const Eigen::Vector2d corner :
+       {Eigen::Vector2d(0, 0), Eigen::Vector2d(kWidthPx - 1, 0), Eigen::Vector2d(0, kHeightPx - 1),
+        Eigen::Vector2d(kWidthPx - 1, kHeightPx - 1)}) {
     max_radius_px = std::max(max_radius_px, (corner - identity.center_px).norm());
   }
   const OpenCvRadialCoefficients opencv{reference.distortion.at<double>(0), reference.distortion.at<double>(1),
@@ -286,12 +287,13 @@ TEST_CASE("Chessboard plumb lines: one view at a time") {
                                                 reference, views[v].corners_px, true));
     MESSAGE(views[v].name << ": k1 " << summary.distortion.k1 << " +- " << summary.k1_std << ", straightness "
                           << summary.initial_rms_px << " -> " << summary.final_rms_px
-                          << " px, max disagreement with OpenCV's radial undistortion over its board corners " << disagreements.back()
-                          << " px");
+                          << " px, max disagreement with OpenCV's radial undistortion over its board corners "
+                          << disagreements.back() << " px");
   }
-  MESSAGE("per view: median k1 " << internal::Median(k1_values) << " (min " << *std::min_element(k1_values.begin(), k1_values.end())
-                                 << ", max " << *std::max_element(k1_values.begin(), k1_values.end())
-                                 << "), median straightness " << internal::Median(rms_before) << " -> " << internal::Median(rms_after)
+  MESSAGE("per view: median k1 " << internal::Median(k1_values) << " (min "
+                                 << *std::min_element(k1_values.begin(), k1_values.end()) << ", max "
+                                 << *std::max_element(k1_values.begin(), k1_values.end()) << "), median straightness "
+                                 << internal::Median(rms_before) << " -> " << internal::Median(rms_after)
                                  << " px, median disagreement " << internal::Median(disagreements) << " px");
   CHECK(internal::Median(rms_after) < kMaxStraightnessRmsPx);
   CHECK(internal::Median(disagreements) < kMaxDisagreementFraction * board_shift_px);

@@ -171,8 +171,7 @@ TEST_CASE("Strecha fountain: relative pose and F from 30 SIFT matches per pair")
 
     const Eigen::Matrix3d true_r = c2.cam_from_world_rotation * c1.cam_from_world_rotation.transpose();
     const Eigen::Vector3d true_t = c2.cam_from_world_translation - true_r * c1.cam_from_world_translation;
-    const double rot_err_deg =
-        Eigen::AngleAxisd(pose.cam2_from_cam1_rotation * true_r.transpose()).angle() * kRadToDeg;
+    const double rot_err_deg = Eigen::AngleAxisd(pose.cam2_from_cam1_rotation * true_r.transpose()).angle() * kRadToDeg;
     const Eigen::Vector3d& t = pose.cam2_from_cam1_translation;
     const double t_err_deg = std::atan2(t.cross(true_t).norm(), t.dot(true_t)) * kRadToDeg;
 
@@ -195,15 +194,15 @@ TEST_CASE("Strecha fountain: relative pose and F from 30 SIFT matches per pair")
 
     // OpenCV on the same matches, all judged by our metric on our inliers.
     const double ours = f.symmetric_epipolar_rms_px;
-    const double cv_8point_inliers = SymmetricEpipolarRms(OpenCvFundamental(uv1, uv2, cv::FM_8POINT, f.inliers), uv1,
-                                                          uv2, f.inliers);
+    const double cv_8point_inliers =
+        SymmetricEpipolarRms(OpenCvFundamental(uv1, uv2, cv::FM_8POINT, f.inliers), uv1, uv2, f.inliers);
     const double cv_8point_all =
         SymmetricEpipolarRms(OpenCvFundamental(uv1, uv2, cv::FM_8POINT, {}), uv1, uv2, f.inliers);
     const double cv_ransac = SymmetricEpipolarRms(OpenCvFundamental(uv1, uv2, cv::FM_RANSAC, {}), uv1, uv2, f.inliers);
     const double cv_lmeds = SymmetricEpipolarRms(OpenCvFundamental(uv1, uv2, cv::FM_LMEDS, {}), uv1, uv2, f.inliers);
     MESSAGE(name1 << "-" << name2 << ": " << f.num_inliers << "/" << uv1.size() << " inliers, rotation error "
-                  << rot_err_deg << " deg, translation direction error " << t_err_deg
-                  << " deg, points in front " << pose.points_in_front << "/" << pose.num_points
+                  << rot_err_deg << " deg, translation direction error " << t_err_deg << " deg, points in front "
+                  << pose.points_in_front << "/" << pose.num_points
                   << "; symmetric epipolar RMS (px, on our inliers): ours " << ours << " (8-point start "
                   << f.initial_symmetric_epipolar_rms_px << ", pose-constrained " << pose.symmetric_epipolar_rms_px
                   << "), OpenCV FM_8POINT on our inliers " << cv_8point_inliers << ", FM_8POINT on all 30 "

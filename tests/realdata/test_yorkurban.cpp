@@ -15,8 +15,8 @@
 
 #include "app/state/calgui_exif_prior.h"
 #include "core/estimators/calibrate_vp.h"
-#include "core/image/exif.h"
 #include "core/estimators/plumb_line.h"
+#include "core/image/exif.h"
 
 namespace facet {
 namespace {
@@ -181,8 +181,7 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
         options.focal_prior_px = exif_focal.focal_px;
         options.focal_prior_std_px = app::ExifFocalPriorStdPx(exif_focal);
       }
-      options.principal_point_mode =
-          figures == &center ? PrincipalPointMode::kImageCenter : PrincipalPointMode::kSolve;
+      options.principal_point_mode = figures == &center ? PrincipalPointMode::kImageCenter : PrincipalPointMode::kSolve;
       const VpCalibrationSummary s =
           CalibrateFromVanishingLines(figures == &undistorted ? undistorted_segments : segments, options);
       if (!s.IsUsable()) {
@@ -203,8 +202,8 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
   }
 
   for (auto* figures : {&solve, &center, &undistorted, &exif}) {
-    const std::string name = figures == &solve        ? "3 VPs, principal point solved"
-                             : figures == &center     ? "3 VPs, principal point at image centre"
+    const std::string name = figures == &solve         ? "3 VPs, principal point solved"
+                             : figures == &center      ? "3 VPs, principal point at image centre"
                              : figures == &undistorted ? "3 VPs, principal point solved, after plumb-line undistortion"
                                                        : "3 VPs, principal point solved, EXIF focal prior";
     std::ostringstream failures;
@@ -221,12 +220,11 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
                  << Percentile(figures->times_ms, 0.5) << " ms");
   }
   REQUIRE(!closed_form_errors_percent.empty());
-  MESSAGE("three-point closed form before the joint fit (" << closed_form_errors_percent.size()
-                                                         << " images; no real focal length in " << closed_form_failures
-                                                         << ", only two families in " << two_family_images
-                                                         << "): focal error median "
-                                                         << Percentile(closed_form_errors_percent, 0.5) << " %, p90 "
-                                                         << Percentile(closed_form_errors_percent, 0.9) << " %");
+  MESSAGE("three-point closed form before the joint fit ("
+          << closed_form_errors_percent.size() << " images; no real focal length in " << closed_form_failures
+          << ", only two families in " << two_family_images << "): focal error median "
+          << Percentile(closed_form_errors_percent, 0.5) << " %, p90 " << Percentile(closed_form_errors_percent, 0.9)
+          << " %");
   CHECK(Percentile(solve.focal_errors_percent, 0.5) <= kMaxMedianFocalErrorPercentSolved);
   CHECK(Percentile(solve.focal_errors_percent, 0.9) <= kMaxP90FocalErrorPercentSolved);
   CHECK(Percentile(center.focal_errors_percent, 0.5) <= kMaxMedianFocalErrorPercentCentred);
@@ -254,8 +252,8 @@ TEST_CASE("York Urban train split: focal length and principal point from three v
     double worst = 0.0;
     for (int a = 0; a < 3; ++a)
       for (int b = a + 1; b < 3; ++b)
-        worst = std::max(worst, std::asin(std::min(1.0, std::abs(v.col(a).normalized().dot(v.col(b).normalized())))) *
-                                    180.0 / M_PI);
+        worst = std::max(
+            worst, std::asin(std::min(1.0, std::abs(v.col(a).normalized().dot(v.col(b).normalized())))) * 180.0 / M_PI);
     orthogonality_deg.push_back(worst);
   }
   MESSAGE("ground-truth vanishing directions from orthogonal (worst pair per image): median "
@@ -306,7 +304,7 @@ TEST_CASE("York Urban: only the true principal point and a distortion tuned to t
     }
   }
   MESSAGE("oracle (true principal point, EXIF prior, best k1 = " << best_k1 << " for the set): focal error median "
-                                                                  << best_median << " %, p90 " << best_p90 << " %");
+                                                                 << best_median << " %, p90 " << best_p90 << " %");
   CHECK(best_median > kOracleMedianFloorPercent);
 }
 
