@@ -220,14 +220,9 @@ class Refinement {
 // the units of f, t and the distortion coefficients; the cost is in px^2 (with the prior's row).
 LmResult Refine(const std::vector<PointCorrespondence>& points, const std::vector<int>& free, double length_scale,
                 int max_iterations, const FocalPrior& prior, Model* model) {
-  LmOptions options;
-  options.max_iterations = max_iterations;
-  // Marquardt's factors of 10 from lambda = 1e-4. No cap on lambda: 12 trials at most per
+  LmOptions options = TenfoldLmOptions(max_iterations);
+  // No cap on lambda: 12 trials at most per
   // linearisation.
-  options.initial_lambda = 1e-4;
-  options.lambda_decrease = 0.1;
-  options.lambda_increase = 10.0;
-  options.min_lambda = 1e-12;
   options.max_lambda = std::numeric_limits<double>::infinity();
   options.max_trials_per_linearization = 12;
   options.relative_decrease_tolerance = 1e-14;

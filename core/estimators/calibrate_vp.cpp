@@ -283,14 +283,9 @@ class JointFit {
 
 // Levenberg-Marquardt on the joint problem from *camera; the cost is in conditioned units.
 LmResult RefineJointly(const JointProblem& problem, JointCamera* camera) {
-  LmOptions options;
-  options.max_iterations = 100;
-  // Marquardt's factors of 10 from lambda = 1e-4, rejections up to 1e12; a damped system
+  LmOptions options = TenfoldLmOptions(100);
+  // Rejections up to 1e12; a damped system
   // without a finite solution ends the fit (as in core/estimators/vanishing_point.cpp).
-  options.initial_lambda = 1e-4;
-  options.lambda_decrease = 0.1;
-  options.lambda_increase = 10.0;
-  options.min_lambda = 1e-12;
   options.max_lambda = 1e12;
   options.stop_on_failed_solve = true;
   options.relative_decrease_tolerance = 1e-15;

@@ -195,14 +195,9 @@ class HomographyRefinement {
 Eigen::Matrix3d RefineHomography(const Eigen::Matrix3d& h_start, const std::vector<Eigen::Vector2d>& uv1,
                                  const std::vector<Eigen::Vector2d>& uv2, int max_iterations, LmResult* result) {
   HomographyRefinement refinement(uv1, uv2, h_start);
-  LmOptions options;
-  options.max_iterations = max_iterations;
-  // Marquardt's factors of 10 from lambda = 1e-4. No cap on lambda: 12 trials at most per
+  LmOptions options = TenfoldLmOptions(max_iterations);
+  // No cap on lambda: 12 trials at most per
   // linearisation.
-  options.initial_lambda = 1e-4;
-  options.lambda_decrease = 0.1;
-  options.lambda_increase = 10.0;
-  options.min_lambda = 1e-12;
   options.max_lambda = std::numeric_limits<double>::infinity();
   options.max_trials_per_linearization = 12;
   options.relative_decrease_tolerance = 1e-14;

@@ -10,6 +10,7 @@
 
 #include <Eigen/Dense>
 
+#include "core/geometry/tangent_basis.h"
 #include "core/optim/damped_normal_step.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/util/timer.h"
@@ -88,17 +89,6 @@ bool InvertOddPolynomial(const std::array<double, 3>& a, double target, double* 
 }
 
 Eigen::Vector2d Perpendicular(const Eigen::Vector2d& d) { return Eigen::Vector2d(-d.y(), d.x()); }
-
-// Two unit vectors spanning the plane orthogonal to the unit vector v.
-Eigen::Matrix<double, 3, 2> TangentBasis(const Eigen::Vector3d& v) {
-  Eigen::Index smallest;
-  v.cwiseAbs().minCoeff(&smallest);
-  const Eigen::Vector3d e1 = v.cross(Eigen::Vector3d::Unit(smallest)).normalized();
-  Eigen::Matrix<double, 3, 2> basis;
-  basis.col(0) = e1;
-  basis.col(1) = v.cross(e1);
-  return basis;
-}
 
 // A polyline in conditioned coordinates (uv - c) / s, with its role in the cost.
 struct Polyline {
@@ -215,7 +205,7 @@ State Apply(const State& base, const ActiveSet& active, const Eigen::VectorXd& d
   if (active.k2) state.k2 += delta(index++);
   for (int f = 0; f < active.num_families; ++f) {
     const Eigen::Vector3d v = base.vanishing_points[f];
-    state.vanishing_points[f] = (v + TangentBasis(v) * delta.segment<2>(index)).normalized();
+    state.vanishing_points[f] = (v + internal::TangentBasis(v) * delta.segment<2>(index)).normalized();
     index += 2;
   }
   return state;
@@ -288,15 +278,9 @@ LmResult Minimise(const Problem& problem, const ActiveSet& active, int max_itera
     nothing_to_fit.termination = LmTermination::kConverged;
     return nothing_to_fit;
   }
-  LmOptions options;
-  options.max_iterations = max_iterations;
-  // Marquardt's factors of 10 from lambda = 1e-4. No cap on lambda: 30 trials at most per
+  LmOptions options = TenfoldLmOptions(max_iterations);
+  // No cap on lambda: 30 trials at most per
   // linearisation, a damped system without a finite solution counting as one.
-  options.initial_lambda = 1e-4;
-  options.lambda_decrease = 0.1;
-  options.lambda_increase = 10.0;
-  options.lambda_increase_on_failed_solve = 10.0;
-  options.min_lambda = 1e-12;
   options.max_lambda = std::numeric_limits<double>::infinity();
   options.max_lambda_on_failed_solve = std::numeric_limits<double>::infinity();
   options.max_trials_per_linearization = 30;

@@ -8,6 +8,7 @@
 
 #include <Eigen/Dense>
 
+#include "core/geometry/tangent_basis.h"
 #include "core/optim/damped_normal_step.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/util/stats.h"
@@ -59,17 +60,6 @@ double Cost(const std::vector<ConditionedSegment>& segments, const Eigen::Vector
   return cost;
 }
 
-// Two unit vectors spanning the plane orthogonal to the unit vector v.
-Eigen::Matrix<double, 3, 2> TangentBasis(const Eigen::Vector3d& v) {
-  Eigen::Index smallest;
-  v.cwiseAbs().minCoeff(&smallest);
-  const Eigen::Vector3d e1 = v.cross(Eigen::Vector3d::Unit(smallest)).normalized();
-  Eigen::Matrix<double, 3, 2> basis;
-  basis.col(0) = e1;
-  basis.col(1) = v.cross(e1);
-  return basis;
-}
-
 // The refinement's least-squares problem for the driver: v on the unit sphere, each step
 // taken in the plane tangent to it at v and normalised back onto the sphere.
 class SphereProblem {
@@ -78,7 +68,7 @@ class SphereProblem {
       : segments_(segments), v_(v), jacobian_(segments.size(), 2), residuals_(segments.size()) {}
 
   bool Linearize() {
-    basis_ = TangentBasis(*v_);
+    basis_ = internal::TangentBasis(*v_);
     for (size_t i = 0; i < segments_.size(); ++i) {
       Eigen::RowVector3d gradient;
       residuals_(i) = Residual(segments_[i], *v_, &gradient);
@@ -114,14 +104,10 @@ class SphereProblem {
 
 // Levenberg-Marquardt over the unit sphere from *v (the algebraic fit).
 LmResult Refine(const std::vector<ConditionedSegment>& segments, int max_iterations, Eigen::Vector3d* v) {
-  LmOptions options;
-  options.max_iterations = max_iterations;
+  LmOptions options = TenfoldLmOptions(max_iterations);
   // Marquardt's factors of 10 from lambda = 1e-3, rejections up to 1e12; a damped system
   // without a finite solution ends the fit (two unknowns: it only fails on degenerate data).
   options.initial_lambda = 1e-3;
-  options.lambda_decrease = 0.1;
-  options.lambda_increase = 10.0;
-  options.min_lambda = 1e-12;
   options.max_lambda = 1e12;
   options.stop_on_failed_solve = true;
   options.relative_decrease_tolerance = 1e-15;

@@ -37,6 +37,17 @@ bool LmOptions::Check(std::string* error) const {
   return true;
 }
 
+LmOptions TenfoldLmOptions(int max_iterations) {
+  LmOptions options;
+  options.max_iterations = max_iterations;
+  options.initial_lambda = 1e-4;
+  options.lambda_decrease = 0.1;
+  options.lambda_increase = 10.0;
+  options.lambda_increase_on_failed_solve = 10.0;
+  options.min_lambda = 1e-12;
+  return options;
+}
+
 const char* LmTerminationName(LmTermination termination) {
   switch (termination) {
     case LmTermination::kConverged: return "converged";

@@ -73,6 +73,11 @@ struct LmOptions {
   bool Check(std::string* error) const;
 };
 
+// Marquardt's schedule with factors of 10: lambda from 1e-4, x0.1 after an accepted step (not
+// below 1e-12), x10 after a rejected step or a failed solve. The small dense calibration
+// problems share it; each sets its own cap or trial limit and tolerances at the call.
+LmOptions TenfoldLmOptions(int max_iterations);
+
 enum class LmStepStatus {
   kSolved,          // the trial holds a candidate
   kSolveFailed,     // the damped system has no finite solution at this lambda
