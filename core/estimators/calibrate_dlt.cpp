@@ -221,8 +221,7 @@ class Refinement {
 LmResult Refine(const std::vector<PointCorrespondence>& points, const std::vector<int>& free, double length_scale,
                 int max_iterations, const FocalPrior& prior, Model* model) {
   LmOptions options = TenfoldLmOptions(max_iterations);
-  // No cap on lambda: 12 trials at most per
-  // linearisation.
+  // No cap on lambda: 12 trials at most per linearisation.
   options.max_lambda = std::numeric_limits<double>::infinity();
   options.max_trials_per_linearization = 12;
   options.relative_decrease_tolerance = 1e-14;

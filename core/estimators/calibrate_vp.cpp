@@ -284,8 +284,8 @@ class JointFit {
 // Levenberg-Marquardt on the joint problem from *camera; the cost is in conditioned units.
 LmResult RefineJointly(const JointProblem& problem, JointCamera* camera) {
   LmOptions options = TenfoldLmOptions(100);
-  // Rejections up to 1e12; a damped system
-  // without a finite solution ends the fit (as in core/estimators/vanishing_point.cpp).
+  // Rejections up to 1e12; a damped system without a finite solution ends the fit (as in
+  // core/estimators/vanishing_point.cpp).
   options.max_lambda = 1e12;
   options.stop_on_failed_solve = true;
   options.relative_decrease_tolerance = 1e-15;

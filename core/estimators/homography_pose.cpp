@@ -196,8 +196,7 @@ Eigen::Matrix3d RefineHomography(const Eigen::Matrix3d& h_start, const std::vect
                                  const std::vector<Eigen::Vector2d>& uv2, int max_iterations, LmResult* result) {
   HomographyRefinement refinement(uv1, uv2, h_start);
   LmOptions options = TenfoldLmOptions(max_iterations);
-  // No cap on lambda: 12 trials at most per
-  // linearisation.
+  // No cap on lambda: 12 trials at most per linearisation.
   options.max_lambda = std::numeric_limits<double>::infinity();
   options.max_trials_per_linearization = 12;
   options.relative_decrease_tolerance = 1e-14;

@@ -279,8 +279,8 @@ LmResult Minimise(const Problem& problem, const ActiveSet& active, int max_itera
     return nothing_to_fit;
   }
   LmOptions options = TenfoldLmOptions(max_iterations);
-  // No cap on lambda: 30 trials at most per
-  // linearisation, a damped system without a finite solution counting as one.
+  // No cap on lambda: 30 trials at most per linearisation, a damped system without a finite
+  // solution counting as one.
   options.max_lambda = std::numeric_limits<double>::infinity();
   options.max_lambda_on_failed_solve = std::numeric_limits<double>::infinity();
   options.max_trials_per_linearization = 30;
