@@ -132,13 +132,18 @@ std::string FloatText(float v) {
   return buffer;
 }
 
-}  // namespace
+// The mesh's vertices in glTF's Y-up frame, with their bounding box.
+struct YUpVertices {
+  std::vector<Eigen::Vector3f> positions, normals;
+  Eigen::Vector3f lo, hi;  // the positions' bounds
+};
 
-ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const std::string& path) {
-  const std::string invalid = ValidateMesh(mesh);
-  if (!invalid.empty()) return Failure(path + ": " + invalid);
-
-  std::vector<Eigen::Vector3f> positions(mesh.positions.size()), normals(mesh.normals.size());
+YUpVertices ToYUpVertices(const TexturedMesh& mesh) {
+  YUpVertices out;
+  std::vector<Eigen::Vector3f>& positions = out.positions;
+  std::vector<Eigen::Vector3f>& normals = out.normals;
+  positions.resize(mesh.positions.size());
+  normals.resize(mesh.normals.size());
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
   Eigen::Vector3f hi = -lo;
   for (size_t v = 0; v < positions.size(); ++v) {
@@ -147,6 +152,61 @@ ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const 
     lo = lo.cwiseMin(positions[v]);
     hi = hi.cwiseMax(positions[v]);
   }
+  out.lo = lo;
+  out.hi = hi;
+  return out;
+}
+
+// One glTF perspective camera and its node for each calibrated image with a size.
+void AddCameras(const Project& project, double znear, Json* cameras, Json* nodes) {
+  for (const Image& image : project.images) {
+    if (!image.camera_calibrated) continue;
+    const Camera& cam = image.camera;
+    const int w = cam.width_px > 0 ? cam.width_px : image.width_px;
+    const int h = cam.height_px > 0 ? cam.height_px : image.height_px;
+    if (w <= 0 || h <= 0 || !(cam.focal_px > 0.0)) continue;
+    cameras->push_back({{"name", image.path},
+                        {"type", "perspective"},
+                        {"perspective",
+                         {{"yfov", 2.0 * std::atan(h / (2.0 * cam.focal_px))},
+                          {"aspectRatio", static_cast<double>(w) / h},
+                          {"znear", znear}}},
+                        // glTF has no principal point; keep the full intrinsics for tools that want them.
+                        {"extras",
+                         {{"focal_px", cam.focal_px},
+                          {"principal_point_px", {cam.principal_point_px.x(), cam.principal_point_px.y()}},
+                          {"image_size_px", {w, h}}}}});
+    nodes->push_back(CameraNode(image, static_cast<int>(cameras->size()) - 1));
+  }
+}
+
+// The GLB container: header, then the JSON and the binary chunk (both padded to 4 bytes).
+std::string PackGlb(const std::string& json_text, const std::vector<std::uint8_t>& bin_bytes, size_t total) {
+  std::string glb;
+  glb.reserve(total);
+  AppendU32(&glb, kGlbMagic);
+  AppendU32(&glb, kGlbVersion);
+  AppendU32(&glb, static_cast<std::uint32_t>(total));
+  AppendU32(&glb, static_cast<std::uint32_t>(json_text.size()));
+  AppendU32(&glb, kChunkJson);
+  glb += json_text;
+  AppendU32(&glb, static_cast<std::uint32_t>(bin_bytes.size()));
+  AppendU32(&glb, kChunkBin);
+  glb.append(reinterpret_cast<const char*>(bin_bytes.data()), bin_bytes.size());
+  return glb;
+}
+
+}  // namespace
+
+ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const std::string& path) {
+  const std::string invalid = ValidateMesh(mesh);
+  if (!invalid.empty()) return Failure(path + ": " + invalid);
+
+  const YUpVertices vertices = ToYUpVertices(mesh);
+  const std::vector<Eigen::Vector3f>& positions = vertices.positions;
+  const std::vector<Eigen::Vector3f>& normals = vertices.normals;
+  const Eigen::Vector3f& lo = vertices.lo;
+  const Eigen::Vector3f& hi = vertices.hi;
   std::vector<std::uint32_t> textured_indices, plain_indices;
   SplitIndices(mesh, &textured_indices, &plain_indices);
 
@@ -216,25 +276,7 @@ ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const 
   Json cameras = Json::array();
   // A near plane well inside the model's scale, so the views show the whole model.
   const double znear = std::max(1e-6, 1e-3 * static_cast<double>((hi - lo).norm()));
-  for (const Image& image : project.images) {
-    if (!image.camera_calibrated) continue;
-    const Camera& cam = image.camera;
-    const int w = cam.width_px > 0 ? cam.width_px : image.width_px;
-    const int h = cam.height_px > 0 ? cam.height_px : image.height_px;
-    if (w <= 0 || h <= 0 || !(cam.focal_px > 0.0)) continue;
-    cameras.push_back({{"name", image.path},
-                       {"type", "perspective"},
-                       {"perspective",
-                        {{"yfov", 2.0 * std::atan(h / (2.0 * cam.focal_px))},
-                         {"aspectRatio", static_cast<double>(w) / h},
-                         {"znear", znear}}},
-                       // glTF has no principal point; keep the full intrinsics for tools that want them.
-                       {"extras",
-                        {{"focal_px", cam.focal_px},
-                         {"principal_point_px", {cam.principal_point_px.x(), cam.principal_point_px.y()}},
-                         {"image_size_px", {w, h}}}}});
-    nodes.push_back(CameraNode(image, static_cast<int>(cameras.size()) - 1));
-  }
+  AddCameras(project, znear, &cameras, &nodes);
   Json scene_nodes = Json::array();
   for (size_t i = 0; i < nodes.size(); ++i) scene_nodes.push_back(i);
 
@@ -255,17 +297,7 @@ ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const 
   const size_t total = 12 + 8 + json_text.size() + 8 + bin_bytes.size();
   if (total > std::numeric_limits<std::uint32_t>::max())
     return Failure(path + ": the model exceeds the 4 GiB GLB limit");
-  std::string glb;
-  glb.reserve(total);
-  AppendU32(&glb, kGlbMagic);
-  AppendU32(&glb, kGlbVersion);
-  AppendU32(&glb, static_cast<std::uint32_t>(total));
-  AppendU32(&glb, static_cast<std::uint32_t>(json_text.size()));
-  AppendU32(&glb, kChunkJson);
-  glb += json_text;
-  AppendU32(&glb, static_cast<std::uint32_t>(bin_bytes.size()));
-  AppendU32(&glb, kChunkBin);
-  glb.append(reinterpret_cast<const char*>(bin_bytes.data()), bin_bytes.size());
+  const std::string glb = PackGlb(json_text, bin_bytes, total);
 
   const std::string error = WriteFileAtomically(path, glb);
   if (!error.empty()) return Failure(error);  // names the file

@@ -78,35 +78,29 @@ bool RingIntact(const PolyMesh& mesh, const ExtrudeResult& x, std::string* why) 
   return true;
 }
 
-}  // namespace
+// A face's corners in its primitive's frame, with its centroid and unit normal.
+struct FacePlane {
+  std::vector<Eigen::Vector3d> local;
+  Eigen::Vector3d centroid;
+  Eigen::Vector3d normal;
+};
 
-ExtrudeResult ExtrudeFace(PolyMesh* mesh, const PrimitiveShape& shape, FaceId face, double distance) {
-  ExtrudeResult r;
-  const std::string name = FaceName(face);
-  if (!mesh->IsFace(face)) {
-    r.message = name + " does not exist";
-    return r;
-  }
-  if (mesh->face(face).primitive != shape.id) {
-    r.message = name + " belongs to primitive " + std::to_string(mesh->face(face).primitive) + ", not " +
-                std::to_string(shape.id);
-    return r;
-  }
-  if (!std::isfinite(distance) || distance == 0.0) {
-    r.message = "extrude: the distance must be non-zero and finite (got " + std::to_string(distance) + ")";
-    return r;
-  }
-  const std::vector<HalfedgeId> loop = FaceHalfedges(*mesh, face);
+// False (message says why) when the face is degenerate or not planar.
+bool MeasurePlanarFace(const PolyMesh& mesh, const PrimitiveShape& shape, const std::vector<HalfedgeId>& loop,
+                       const std::string& name, FacePlane* plane, std::string* message) {
   const size_t n = loop.size();
-  std::vector<Eigen::Vector3d> local(n);
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d>& local = plane->local;
+  local.resize(n);
+  Eigen::Vector3d& centroid = plane->centroid;
+  centroid.setZero();
   for (size_t i = 0; i < n; ++i) {
-    local[i] = mesh->vertex(mesh->Origin(loop[i])).LocalPosition(shape.params);
+    local[i] = mesh.vertex(mesh.Origin(loop[i])).LocalPosition(shape.params);
     centroid += local[i];
   }
   centroid /= static_cast<double>(n);
   // Newell's normal about the centroid: exact for planar faces, robust far from the origin.
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  Eigen::Vector3d& normal = plane->normal;
+  normal.setZero();
   double size = 0.0;
   for (size_t i = 0; i < n; ++i) {
     normal += (local[i] - centroid).cross(local[(i + 1) % n] - centroid);
@@ -115,26 +109,25 @@ ExtrudeResult ExtrudeFace(PolyMesh* mesh, const PrimitiveShape& shape, FaceId fa
   // Twice the area against the size squared: a sliver (e.g. V_connect between the two ends of
   // a split edge) has an area of rounding noise and no meaningful normal.
   if (!(size > 0.0) || !(normal.norm() > kDegenerateArea * size * size)) {
-    r.message = name + " is degenerate (no area)";
-    return r;
+    *message = name + " is degenerate (no area)";
+    return false;
   }
   normal.normalize();
   double off_plane = 0.0;
   for (size_t i = 0; i < n; ++i) off_plane = std::max(off_plane, std::abs((local[i] - centroid).dot(normal)));
   if (off_plane > kPlanarityTolerance * size) {
-    r.message = name + " is not planar (a vertex lies " + std::to_string(off_plane / size) +
-                " of its size off its plane); only a planar face can be pushed or pulled";
-    return r;
+    *message = name + " is not planar (a vertex lies " + std::to_string(off_plane / size) +
+               " of its size off its plane); only a planar face can be pushed or pulled";
+    return false;
   }
+  return true;
+}
 
-  r.face = face;
-  r.distance = distance;
-  r.direction_in_primitive = normal;
-  MeshUndo& undo = r.undo;
-  const MeshFace face_before = mesh->face(face);
-  undo.faces.emplace_back(face, face_before);
-  for (HalfedgeId h : loop) undo.halfedges.emplace_back(h, mesh->halfedge(h));
-
+// The new vertices (each base vertex moved by distance along the normal), edges and side faces;
+// their connectivity is LinkExtrusion's.
+void CreateExtrudedElements(PolyMesh* mesh, const PrimitiveShape& shape, const std::vector<HalfedgeId>& loop,
+                            const Eigen::Vector3d& normal, double distance, ExtrudeResult* r) {
+  const size_t n = loop.size();
   const Eigen::Matrix3d world_from_primitive = RotationFromAngleAxis(shape.rotation);
   for (size_t i = 0; i < n; ++i) {
     const VertexId v = mesh->Origin(loop[i]);
@@ -149,14 +142,19 @@ ExtrudeResult ExtrudeFace(PolyMesh* mesh, const PrimitiveShape& shape, FaceId fa
     vw.local.free = false;
     vw.local.offset = base.local.offset + normal * distance;
     vw.position = WorldOf(shape, world_from_primitive, vw);
-    r.base_vertices.push_back(v);
-    r.new_vertices.push_back(w);
-    r.base_offsets.push_back(base.local.offset);
+    r->base_vertices.push_back(v);
+    r->new_vertices.push_back(w);
+    r->base_offsets.push_back(base.local.offset);
   }
-  for (size_t i = 0; i < n; ++i) r.side_edges.push_back(mesh->NewEdge());
-  for (size_t i = 0; i < n; ++i) r.cap_edges.push_back(mesh->NewEdge());
-  for (size_t i = 0; i < n; ++i) r.side_faces.push_back(mesh->NewFace());
+  for (size_t i = 0; i < n; ++i) r->side_edges.push_back(mesh->NewEdge());
+  for (size_t i = 0; i < n; ++i) r->cap_edges.push_back(mesh->NewEdge());
+  for (size_t i = 0; i < n; ++i) r->side_faces.push_back(mesh->NewFace());
+}
 
+// Links the new elements: the face moves to the cap ring, each base edge now bounds side face i.
+void LinkExtrusion(PolyMesh* mesh, const std::vector<HalfedgeId>& loop, FaceId face, const MeshFace& face_before,
+                   const ExtrudeResult& r) {
+  const size_t n = loop.size();
   size_t first_corner = 0;
   for (size_t i = 0; i < n; ++i) {
     if (loop[i] == face_before.halfedge) first_corner = i;
@@ -210,6 +208,43 @@ ExtrudeResult ExtrudeFace(PolyMesh* mesh, const PrimitiveShape& shape, FaceId fa
     fs.material = face_before.material;
   }
   mesh->face(face).halfedge = PolyMesh::EdgeHalfedge(r.cap_edges[first_corner], 0);
+}
+
+}  // namespace
+
+ExtrudeResult ExtrudeFace(PolyMesh* mesh, const PrimitiveShape& shape, FaceId face, double distance) {
+  ExtrudeResult r;
+  const std::string name = FaceName(face);
+  if (!mesh->IsFace(face)) {
+    r.message = name + " does not exist";
+    return r;
+  }
+  if (mesh->face(face).primitive != shape.id) {
+    r.message = name + " belongs to primitive " + std::to_string(mesh->face(face).primitive) + ", not " +
+                std::to_string(shape.id);
+    return r;
+  }
+  if (!std::isfinite(distance) || distance == 0.0) {
+    r.message = "extrude: the distance must be non-zero and finite (got " + std::to_string(distance) + ")";
+    return r;
+  }
+  const std::vector<HalfedgeId> loop = FaceHalfedges(*mesh, face);
+  const size_t n = loop.size();
+  FacePlane plane;
+  if (!MeasurePlanarFace(*mesh, shape, loop, name, &plane, &r.message)) return r;
+  const std::vector<Eigen::Vector3d>& local = plane.local;
+  const Eigen::Vector3d& normal = plane.normal;
+
+  r.face = face;
+  r.distance = distance;
+  r.direction_in_primitive = normal;
+  MeshUndo& undo = r.undo;
+  const MeshFace face_before = mesh->face(face);
+  undo.faces.emplace_back(face, face_before);
+  for (HalfedgeId h : loop) undo.halfedges.emplace_back(h, mesh->halfedge(h));
+
+  CreateExtrudedElements(mesh, shape, loop, normal, distance, &r);
+  LinkExtrusion(mesh, loop, face, face_before, r);
   for (size_t i = 0; i < n; ++i) SetSideUvs(mesh, r, i, (local[(i + 1) % n] - local[i]).norm());
 
   undo.created_vertices = r.new_vertices;

@@ -158,6 +158,119 @@ void GeometrySolve(const Project& project, const SceneSolveOptions& options, Sce
   }
 }
 
+// Calibrates each image with line segments from its vanishing points (and its distortion from
+// plumb lines when asked), reusing the cached results of images whose input did not change.
+void CalibrateFromLines(Project* calibrated, ModelUpdateCache* cache, ModelUpdateSummary* summary) {
+  const auto calibration_start = std::chrono::steady_clock::now();
+  std::map<Id, ImageCalibrationCacheEntry> next_cache;
+  for (Image& image : calibrated->images) {
+    ImageCalibrationCacheEntry entry;
+    for (const Segment& s : calibrated->segments)
+      if (s.image_id == image.id) entry.segments.push_back(s);
+    if (entry.segments.empty()) continue;
+    entry.image = CalibrationKey(image);
+    ImageCalibrationCacheEntry* cached = nullptr;
+    if (cache != nullptr) {
+      const auto it = cache->images.find(image.id);
+      if (it != cache->images.end() && it->second.image == entry.image && it->second.segments == entry.segments)
+        cached = &it->second;
+    }
+
+    entry.estimated_distortion = image.estimate_distortion;
+    const PlumbLineSummary* plumb = nullptr;
+    if (image.estimate_distortion) {
+      if (cached != nullptr && cached->estimated_distortion) {
+        entry.distortion = cached->distortion;
+      } else {
+        entry.distortion = EstimateDistortion(image, entry.segments);
+        ++summary->distortion_estimates_run;
+      }
+      summary->distortion[image.id] = entry.distortion;
+      if (!entry.distortion.IsUsable()) {
+        summary->messages.push_back("Image '" + image.path +
+                                    "': distortion not estimated: " + entry.distortion.message);
+      }
+      plumb = &entry.distortion;
+    }
+    Camera camera = image.camera;
+    // An estimate within kDistortionSignificanceSigmas of zero is noise (a lens without
+    // visible distortion, or too few lines): the camera stays a pinhole rather than take it.
+    if (plumb != nullptr && plumb->IsUsable() &&
+        !(std::abs(plumb->distortion.k1) > kDistortionSignificanceSigmas * plumb->k1_std)) {
+      char text[200];
+      std::snprintf(text, sizeof(text), "Image '%s': distortion k1 = %.4f +- %.4f is not significant; kept at 0",
+                    image.path.c_str(), plumb->distortion.k1, plumb->k1_std);
+      summary->messages.push_back(text);
+      plumb = nullptr;
+      camera.k1 = camera.k2 = 0.0;
+    }
+    // CalibrateImage reads the camera's intrinsics only to undistort the segments by its own k.
+    entry.camera_read = !(plumb != nullptr && plumb->IsUsable()) && camera.HasDistortion();
+    if (entry.camera_read) entry.camera = IntrinsicsOf(camera);
+    if (cached != nullptr && cached->camera_read == entry.camera_read && cached->camera == entry.camera) {
+      entry.calibration = std::move(cached->calibration);
+      entry.k1 = cached->k1;
+      entry.k2 = cached->k2;
+      ++summary->images_reused;
+    } else {
+      entry.calibration = CalibrateImage(image, entry.segments, CalibrationOptionsFor(image), plumb, &camera);
+      entry.k1 = camera.k1;
+      entry.k2 = camera.k2;
+      ++summary->images_calibrated;
+    }
+    const VpCalibrationSummary& vp = entry.calibration;
+    if (vp.IsUsable()) {
+      // Calibration fixes intrinsics and rotation; the camera keeps its centre, which the
+      // geometry solve then moves.
+      const Eigen::Vector3d center = image.camera.CenterInWorld();
+      image.camera.width_px = image.width_px;
+      image.camera.height_px = image.height_px;
+      image.camera.focal_px = vp.focal_px;
+      image.camera.principal_point_px = vp.principal_point_px;
+      image.camera.k1 = entry.k1;
+      image.camera.k2 = entry.k2;
+      image.camera.SetPose(vp.cam_from_world_rotation, center);
+      image.camera_calibrated = true;
+    } else {
+      summary->messages.push_back("Image '" + image.path + "': " + vp.message);
+    }
+    summary->calibration[image.id] = vp;
+    if (cache != nullptr) next_cache[image.id] = std::move(entry);
+  }
+  if (cache != nullptr) cache->images = std::move(next_cache);
+  summary->calibration_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - calibration_start).count();
+}
+
+// Cameras of images without line families, from their pins (core/solve/multiview_init.h). After
+// the geometry solve: resection reads the solved model's vertex positions; then the geometry
+// solve runs again with the new cameras taking part.
+void InitializeFromPinsAndResolve(const MultiViewInitOptions& multiview_options, const SceneSolveOptions& solve_options,
+                                  Project* updated, ModelUpdateSummary* summary) {
+  Project initialised;
+  summary->multiview = CalibrateImagesFromPins(*updated, multiview_options, &initialised);
+  for (const std::string& m : summary->multiview.messages) summary->messages.push_back(m);
+  // A guessed focal length (two views without a known lens) is only a start: the joint
+  // solve refines it, which a user can lock again once it settles.
+  for (const MultiViewImageReport& report : summary->multiview.images) {
+    if (!report.initialized || !report.focal_guessed) continue;
+    if (Image* image = initialised.FindImage(report.image_id)) image->focal_locked = false;
+  }
+  if (summary->multiview.num_initialized > 0) {
+    SceneSolveSummary again;
+    Project resolved;
+    GeometrySolve(initialised, solve_options, &again, &resolved);
+    if (again.IsUsable()) {
+      summary->solve = std::move(again);
+      *updated = std::move(resolved);
+    } else {
+      *updated = std::move(initialised);
+      if (again.termination != SolverTermination::kNothingToSolve)
+        summary->messages.push_back("Solve with the cameras from pins: " + again.message);
+    }
+  }
+}
+
 }  // namespace
 
 bool ModelUpdateOptions::Check(std::string* error) const {
@@ -198,87 +311,7 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
   ModelUpdateSummary summary;
   Project calibrated = edited;
 
-  if (options.calibrate) {
-    const auto calibration_start = std::chrono::steady_clock::now();
-    std::map<Id, ImageCalibrationCacheEntry> next_cache;
-    for (Image& image : calibrated.images) {
-      ImageCalibrationCacheEntry entry;
-      for (const Segment& s : calibrated.segments)
-        if (s.image_id == image.id) entry.segments.push_back(s);
-      if (entry.segments.empty()) continue;
-      entry.image = CalibrationKey(image);
-      ImageCalibrationCacheEntry* cached = nullptr;
-      if (cache != nullptr) {
-        const auto it = cache->images.find(image.id);
-        if (it != cache->images.end() && it->second.image == entry.image && it->second.segments == entry.segments)
-          cached = &it->second;
-      }
-
-      entry.estimated_distortion = image.estimate_distortion;
-      const PlumbLineSummary* plumb = nullptr;
-      if (image.estimate_distortion) {
-        if (cached != nullptr && cached->estimated_distortion) {
-          entry.distortion = cached->distortion;
-        } else {
-          entry.distortion = EstimateDistortion(image, entry.segments);
-          ++summary.distortion_estimates_run;
-        }
-        summary.distortion[image.id] = entry.distortion;
-        if (!entry.distortion.IsUsable()) {
-          summary.messages.push_back("Image '" + image.path +
-                                     "': distortion not estimated: " + entry.distortion.message);
-        }
-        plumb = &entry.distortion;
-      }
-      Camera camera = image.camera;
-      // An estimate within kDistortionSignificanceSigmas of zero is noise (a lens without
-      // visible distortion, or too few lines): the camera stays a pinhole rather than take it.
-      if (plumb != nullptr && plumb->IsUsable() &&
-          !(std::abs(plumb->distortion.k1) > kDistortionSignificanceSigmas * plumb->k1_std)) {
-        char text[200];
-        std::snprintf(text, sizeof(text), "Image '%s': distortion k1 = %.4f +- %.4f is not significant; kept at 0",
-                      image.path.c_str(), plumb->distortion.k1, plumb->k1_std);
-        summary.messages.push_back(text);
-        plumb = nullptr;
-        camera.k1 = camera.k2 = 0.0;
-      }
-      // CalibrateImage reads the camera's intrinsics only to undistort the segments by its own k.
-      entry.camera_read = !(plumb != nullptr && plumb->IsUsable()) && camera.HasDistortion();
-      if (entry.camera_read) entry.camera = IntrinsicsOf(camera);
-      if (cached != nullptr && cached->camera_read == entry.camera_read && cached->camera == entry.camera) {
-        entry.calibration = std::move(cached->calibration);
-        entry.k1 = cached->k1;
-        entry.k2 = cached->k2;
-        ++summary.images_reused;
-      } else {
-        entry.calibration = CalibrateImage(image, entry.segments, CalibrationOptionsFor(image), plumb, &camera);
-        entry.k1 = camera.k1;
-        entry.k2 = camera.k2;
-        ++summary.images_calibrated;
-      }
-      const VpCalibrationSummary& vp = entry.calibration;
-      if (vp.IsUsable()) {
-        // Calibration fixes intrinsics and rotation; the camera keeps its centre, which the
-        // geometry solve then moves.
-        const Eigen::Vector3d center = image.camera.CenterInWorld();
-        image.camera.width_px = image.width_px;
-        image.camera.height_px = image.height_px;
-        image.camera.focal_px = vp.focal_px;
-        image.camera.principal_point_px = vp.principal_point_px;
-        image.camera.k1 = entry.k1;
-        image.camera.k2 = entry.k2;
-        image.camera.SetPose(vp.cam_from_world_rotation, center);
-        image.camera_calibrated = true;
-      } else {
-        summary.messages.push_back("Image '" + image.path + "': " + vp.message);
-      }
-      summary.calibration[image.id] = vp;
-      if (cache != nullptr) next_cache[image.id] = std::move(entry);
-    }
-    if (cache != nullptr) cache->images = std::move(next_cache);
-    summary.calibration_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - calibration_start).count();
-  }
+  if (options.calibrate) CalibrateFromLines(&calibrated, cache, &summary);
 
   // The per-frame path: the joint solve alone, warm; the geometry solve below only when that
   // does not hold up.
@@ -311,33 +344,8 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
     }
   }
 
-  // Cameras of images without line families, from their pins (core/solve/multiview_init.h). After
-  // the geometry solve: resection reads the solved model's vertex positions; then the geometry
-  // solve runs again with the new cameras taking part.
-  if (options.initialize_from_pins && summary.ok) {
-    Project initialised;
-    summary.multiview = CalibrateImagesFromPins(*updated, options.multiview, &initialised);
-    for (const std::string& m : summary.multiview.messages) summary.messages.push_back(m);
-    // A guessed focal length (two views without a known lens) is only a start: the joint
-    // solve refines it, which a user can lock again once it settles.
-    for (const MultiViewImageReport& report : summary.multiview.images) {
-      if (!report.initialized || !report.focal_guessed) continue;
-      if (Image* image = initialised.FindImage(report.image_id)) image->focal_locked = false;
-    }
-    if (summary.multiview.num_initialized > 0) {
-      SceneSolveSummary again;
-      Project resolved;
-      GeometrySolve(initialised, solve_options, &again, &resolved);
-      if (again.IsUsable()) {
-        summary.solve = std::move(again);
-        *updated = std::move(resolved);
-      } else {
-        *updated = std::move(initialised);
-        if (again.termination != SolverTermination::kNothingToSolve)
-          summary.messages.push_back("Solve with the cameras from pins: " + again.message);
-      }
-    }
-  }
+  if (options.initialize_from_pins && summary.ok)
+    InitializeFromPinsAndResolve(options.multiview, solve_options, updated, &summary);
 
   if (options.joint_solve && summary.ok) {
     JointSolveOptions joint_options = options.joint;

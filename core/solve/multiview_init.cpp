@@ -282,6 +282,132 @@ double ModelMisfit(const Camera& recon_a, const Camera& recon_b, const std::vect
   return std::sqrt(sum / recon.size()) / spread;
 }
 
+// The vertices pinned in both images, in the same order on both sides.
+struct PinMatches {
+  std::vector<const Pin*> pins_a, pins_b;
+  std::vector<Eigen::Vector2d> uv_a, uv_b;  // pinhole pixels
+  std::vector<Eigen::Vector3d> model;       // the matched vertices in the world
+};
+
+PinMatches MatchPins(const Project& project, const Image& image_a, const std::vector<const Pin*>& pins_a,
+                     const Image& image_b, const std::vector<const Pin*>& pins_b) {
+  PinMatches matches;
+  std::map<VertexKey, const Pin*> in_b;
+  for (const Pin* pin : pins_b) in_b[KeyOf(pin->vertex)] = pin;
+  for (const Pin* pin : pins_a) {
+    const auto it = in_b.find(KeyOf(pin->vertex));
+    if (it == in_b.end()) continue;
+    matches.pins_a.push_back(pin);
+    matches.pins_b.push_back(it->second);
+    matches.uv_a.push_back(PinholePixel(image_a, pin->uv_px));
+    matches.uv_b.push_back(PinholePixel(image_b, it->second->uv_px));
+  }
+  for (const Pin* pin : matches.pins_a) matches.model.push_back(VertexInWorld(project, pin->vertex));
+  return matches;
+}
+
+// The two images with their intrinsics, as the relative-pose estimators see them.
+struct ViewPair {
+  const Image& image_a;
+  const Image& image_b;
+  const Camera& intrinsics_a;
+  const Camera& intrinsics_b;
+};
+
+// The relative pose (b from a, unit baseline) and the clicks it keeps.
+struct RelativePoseEstimate {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  std::vector<bool> inliers;
+  std::string method;
+  Eigen::Matrix3d estimated_f = Eigen::Matrix3d::Zero();  // F's path: the estimated F, for display
+};
+
+// By the fundamental matrix; false (result->message says why) when it fails.
+bool PoseFromFundamental(const ViewPair& views, const PinMatches& matches, const MultiViewInitOptions& options,
+                         TwoViewResult* result, RelativePoseEstimate* estimate) {
+  const Image& image_a = views.image_a;
+  const Image& image_b = views.image_b;
+  FundamentalOptions f_options = options.fundamental;
+  f_options.inlier_threshold_px = options.wrong_click_threshold_px;
+  const FundamentalSummary f = EstimateFundamentalMatrix(matches.uv_a, matches.uv_b, f_options);
+  if (!f.IsUsable()) {
+    result->message = "fundamental matrix of " + Quoted(image_a) + " and " + Quoted(image_b) + ": " + f.message;
+    return false;
+  }
+  for (const auto& w : f.warnings) result->warnings.push_back("F: " + w);
+  const RelativePoseSummary pose = EstimateRelativePose(f.F, views.intrinsics_a.K(), views.intrinsics_b.K(),
+                                                        matches.uv_a, matches.uv_b, f.inliers, options.relative_pose);
+  if (!pose.IsUsable()) {
+    result->message = "relative pose of " + Quoted(image_b) + " to " + Quoted(image_a) + ": " + pose.message;
+    return false;
+  }
+  for (const auto& w : pose.warnings) result->warnings.push_back("pose: " + w);
+  estimate->rotation = pose.cam2_from_cam1_rotation;
+  estimate->translation = pose.cam2_from_cam1_translation;
+  estimate->inliers = f.inliers;
+  estimate->estimated_f = f.F;
+  estimate->method = std::to_string(f.num_inliers) + " of " + std::to_string(matches.uv_a.size()) + " correspondences";
+  return true;
+}
+
+// By the homography of one plane; false (result->message says why) when it fails.
+bool PoseFromPlane(const ViewPair& views, const PinMatches& matches, const MultiViewInitOptions& options,
+                   TwoViewResult* result, RelativePoseEstimate* estimate) {
+  const Image& image_a = views.image_a;
+  const Image& image_b = views.image_b;
+  HomographyPoseOptions h_options;
+  h_options.homography = options.homography;
+  h_options.homography.inlier_threshold_px = options.wrong_click_threshold_px;
+  const HomographyPoseSummary pose =
+      EstimatePlanePose(matches.uv_a, matches.uv_b, views.intrinsics_a.K(), views.intrinsics_b.K(), h_options);
+  if (!pose.IsUsable()) {
+    result->message = "two views of one plane (" + Quoted(image_a) + " and " + Quoted(image_b) + "): " + pose.message;
+    return false;
+  }
+  if (pose.pure_rotation) {
+    result->message = "two views of one plane (" + Quoted(image_a) + " and " + Quoted(image_b) +
+                      "): the cameras share their centre (a pure rotation): no baseline to place them";
+    return false;
+  }
+  for (const auto& w : pose.warnings)
+    if (!pose.ambiguous || w.find("ambiguous") == std::string::npos) result->warnings.push_back("plane: " + w);
+  estimate->inliers = pose.homography.inliers;
+  // Several decompositions reproduce H: the model, which knows the plane, picks the one whose
+  // triangulated vertices it fits best (a similarity, relative to the vertices' spread).
+  const PlanePose* chosen = &pose.candidates[0];
+  if (pose.ambiguous) {
+    std::vector<double> misfit;
+    for (const PlanePose& candidate : pose.candidates) {
+      Camera recon_a = views.intrinsics_a, recon_b = views.intrinsics_b;
+      recon_a.cam_from_world_rotation.setIdentity();
+      recon_a.cam_from_world_translation.setZero();
+      recon_b.cam_from_world_rotation = candidate.cam2_from_cam1_rotation;
+      recon_b.cam_from_world_translation = candidate.cam2_from_cam1_translation;
+      misfit.push_back(ModelMisfit(recon_a, recon_b, matches.uv_a, matches.uv_b, matches.model, estimate->inliers));
+    }
+    const size_t best = std::min_element(misfit.begin(), misfit.end()) - misfit.begin();
+    chosen = &pose.candidates[best];
+    std::vector<double> others = misfit;
+    others.erase(others.begin() + best);
+    const double second = *std::min_element(others.begin(), others.end());
+    result->warnings.push_back("plane: " + std::to_string(pose.candidates.size()) +
+                               " poses explain the clicks; the model's vertices chose one (misfit " +
+                               Format("%.3g", misfit[best]) + " against " + Format("%.3g", second) +
+                               " of their spread)");
+    if (!(second > 2.0 * misfit[best] + 1e-3))
+      result->warnings.push_back(
+          "plane: the model hardly tells the poses apart: the camera may be the mirror "
+          "pose; pin a vertex off the face");
+  }
+  estimate->rotation = chosen->cam2_from_cam1_rotation;
+  estimate->translation = chosen->cam2_from_cam1_translation;
+  result->plane = true;
+  estimate->method = "one plane (homography), " + std::to_string(pose.homography.num_inliers) + " of " +
+                     std::to_string(matches.uv_a.size()) + " correspondences";
+  return true;
+}
+
 // a is the calibrated image when one of them is.
 TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::vector<const Pin*>& pins_a,
                        const Image& image_b, const std::vector<const Pin*>& pins_b,
@@ -289,22 +415,11 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
   TwoViewResult result;
   result.pair.image_a = image_a.id;
   result.pair.image_b = image_b.id;
-  std::map<VertexKey, const Pin*> in_b;
-  for (const Pin* pin : pins_b) in_b[KeyOf(pin->vertex)] = pin;
-  std::vector<const Pin*> match_a, match_b;
-  std::vector<Eigen::Vector2d> uv_a, uv_b;
-  for (const Pin* pin : pins_a) {
-    const auto it = in_b.find(KeyOf(pin->vertex));
-    if (it == in_b.end()) continue;
-    match_a.push_back(pin);
-    match_b.push_back(it->second);
-    uv_a.push_back(PinholePixel(image_a, pin->uv_px));
-    uv_b.push_back(PinholePixel(image_b, it->second->uv_px));
-  }
+  const PinMatches matches = MatchPins(project, image_a, pins_a, image_b, pins_b);
+  const std::vector<Eigen::Vector2d>& uv_a = matches.uv_a;
+  const std::vector<Eigen::Vector2d>& uv_b = matches.uv_b;
   result.pair.num_correspondences = static_cast<int>(uv_a.size());
-  std::vector<Eigen::Vector3d> model_all;
-  for (const Pin* pin : match_a) model_all.push_back(VertexInWorld(project, pin->vertex));
-  const bool on_one_plane = uv_a.size() >= 4 && OnOnePlane(model_all, options.coplanar_thickness_ratio);
+  const bool on_one_plane = uv_a.size() >= 4 && OnOnePlane(matches.model, options.coplanar_thickness_ratio);
   if (uv_a.size() < 4 || (uv_a.size() < 7 && !on_one_plane)) {
     result.message = std::to_string(uv_a.size()) + " vertices pinned in both " + Quoted(image_a) + " and " +
                      Quoted(image_b) + "; two views need 7 (8 to flag wrong clicks), or 4 on one face";
@@ -319,90 +434,20 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
   const Camera intrinsics_b = IntrinsicsFor(image_b, options, &result.guessed_b);
 
   // The relative pose (b from a, unit baseline) and its inliers, by F or by the plane.
-  Eigen::Matrix3d relative_rotation = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d relative_translation = Eigen::Vector3d::Zero();
-  std::vector<bool> inliers;
-  std::string method;
-  Eigen::Matrix3d estimated_f = Eigen::Matrix3d::Zero();  // F's path: the estimated F, for display
-  if (!on_one_plane) {
-    FundamentalOptions f_options = options.fundamental;
-    f_options.inlier_threshold_px = options.wrong_click_threshold_px;
-    const FundamentalSummary f = EstimateFundamentalMatrix(uv_a, uv_b, f_options);
-    if (!f.IsUsable()) {
-      result.message = "fundamental matrix of " + Quoted(image_a) + " and " + Quoted(image_b) + ": " + f.message;
-      return result;
-    }
-    for (const auto& w : f.warnings) result.warnings.push_back("F: " + w);
-    const RelativePoseSummary pose =
-        EstimateRelativePose(f.F, intrinsics_a.K(), intrinsics_b.K(), uv_a, uv_b, f.inliers, options.relative_pose);
-    if (!pose.IsUsable()) {
-      result.message = "relative pose of " + Quoted(image_b) + " to " + Quoted(image_a) + ": " + pose.message;
-      return result;
-    }
-    for (const auto& w : pose.warnings) result.warnings.push_back("pose: " + w);
-    relative_rotation = pose.cam2_from_cam1_rotation;
-    relative_translation = pose.cam2_from_cam1_translation;
-    inliers = f.inliers;
-    estimated_f = f.F;
-    method = std::to_string(f.num_inliers) + " of " + std::to_string(uv_a.size()) + " correspondences";
-  } else {
-    HomographyPoseOptions h_options;
-    h_options.homography = options.homography;
-    h_options.homography.inlier_threshold_px = options.wrong_click_threshold_px;
-    const HomographyPoseSummary pose = EstimatePlanePose(uv_a, uv_b, intrinsics_a.K(), intrinsics_b.K(), h_options);
-    if (!pose.IsUsable()) {
-      result.message = "two views of one plane (" + Quoted(image_a) + " and " + Quoted(image_b) + "): " + pose.message;
-      return result;
-    }
-    if (pose.pure_rotation) {
-      result.message = "two views of one plane (" + Quoted(image_a) + " and " + Quoted(image_b) +
-                       "): the cameras share their centre (a pure rotation): no baseline to place them";
-      return result;
-    }
-    for (const auto& w : pose.warnings)
-      if (!pose.ambiguous || w.find("ambiguous") == std::string::npos) result.warnings.push_back("plane: " + w);
-    inliers = pose.homography.inliers;
-    // Several decompositions reproduce H: the model, which knows the plane, picks the one whose
-    // triangulated vertices it fits best (a similarity, relative to the vertices' spread).
-    const PlanePose* chosen = &pose.candidates[0];
-    if (pose.ambiguous) {
-      std::vector<double> misfit;
-      for (const PlanePose& candidate : pose.candidates) {
-        Camera recon_a = intrinsics_a, recon_b = intrinsics_b;
-        recon_a.cam_from_world_rotation.setIdentity();
-        recon_a.cam_from_world_translation.setZero();
-        recon_b.cam_from_world_rotation = candidate.cam2_from_cam1_rotation;
-        recon_b.cam_from_world_translation = candidate.cam2_from_cam1_translation;
-        misfit.push_back(ModelMisfit(recon_a, recon_b, uv_a, uv_b, model_all, inliers));
-      }
-      const size_t best = std::min_element(misfit.begin(), misfit.end()) - misfit.begin();
-      chosen = &pose.candidates[best];
-      std::vector<double> others = misfit;
-      others.erase(others.begin() + best);
-      const double second = *std::min_element(others.begin(), others.end());
-      result.warnings.push_back("plane: " + std::to_string(pose.candidates.size()) +
-                                " poses explain the clicks; the model's vertices chose one (misfit " +
-                                Format("%.3g", misfit[best]) + " against " + Format("%.3g", second) +
-                                " of their spread)");
-      if (!(second > 2.0 * misfit[best] + 1e-3))
-        result.warnings.push_back(
-            "plane: the model hardly tells the poses apart: the camera may be the mirror "
-            "pose; pin a vertex off the face");
-    }
-    relative_rotation = chosen->cam2_from_cam1_rotation;
-    relative_translation = chosen->cam2_from_cam1_translation;
-    result.plane = true;
-    method = "one plane (homography), " + std::to_string(pose.homography.num_inliers) + " of " +
-             std::to_string(uv_a.size()) + " correspondences";
-  }
+  const ViewPair views{image_a, image_b, intrinsics_a, intrinsics_b};
+  RelativePoseEstimate estimate;
+  const bool estimated = on_one_plane ? PoseFromPlane(views, matches, options, &result, &estimate)
+                                      : PoseFromFundamental(views, matches, options, &result, &estimate);
+  if (!estimated) return result;
+  const std::vector<bool>& inliers = estimate.inliers;
   int num_inliers = 0;
   for (size_t i = 0; i < uv_a.size(); ++i) {
     if (inliers[i]) {
       ++num_inliers;
       continue;
     }
-    result.flagged_a.push_back(match_a[i]->id);
-    result.flagged_b.push_back(match_b[i]->id);
+    result.flagged_a.push_back(matches.pins_a[i]->id);
+    result.flagged_b.push_back(matches.pins_b[i]->id);
   }
   result.pair.num_inliers = num_inliers;
 
@@ -410,10 +455,10 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
   Camera recon_a = intrinsics_a, recon_b = intrinsics_b;
   recon_a.cam_from_world_rotation.setIdentity();
   recon_a.cam_from_world_translation.setZero();
-  recon_b.cam_from_world_rotation = relative_rotation;
-  recon_b.cam_from_world_translation = relative_translation;
+  recon_b.cam_from_world_rotation = estimate.rotation;
+  recon_b.cam_from_world_translation = estimate.translation;
   const Eigen::Matrix3d pose_f = NormalizeFundamental(FundamentalFromCameras(recon_a, recon_b));
-  result.pair.F = result.plane ? pose_f : estimated_f;
+  result.pair.F = result.plane ? pose_f : estimate.estimated_f;
   const double epipolar_rms_px = SymmetricEpipolarRms(pose_f, uv_a, uv_b, inliers);
   std::vector<Eigen::Vector3d> recon_points, model_points;
   for (size_t i = 0; i < uv_a.size(); ++i) {
@@ -422,7 +467,7 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
     const Eigen::Vector3d x = TriangulateEuclidean(recon_a, recon_b, uv_a[i], uv_b[i], &ok);
     if (!ok) continue;
     recon_points.push_back(x);
-    model_points.push_back(model_all[i]);
+    model_points.push_back(matches.model[i]);
   }
 
   std::string gauge;
@@ -441,8 +486,8 @@ TwoViewResult TwoViews(const Project& project, const Image& image_a, const std::
   }
   result.rms_px = epipolar_rms_px;
   result.ok = true;
-  result.message = "two views with " + Quoted(image_a) + " and " + Quoted(image_b) + ": " + method + ", epipolar RMS " +
-                   Format("%.3f px", epipolar_rms_px) + "; " + gauge;
+  result.message = "two views with " + Quoted(image_a) + " and " + Quoted(image_b) + ": " + estimate.method +
+                   ", epipolar RMS " + Format("%.3f px", epipolar_rms_px) + "; " + gauge;
   return result;
 }
 
@@ -547,6 +592,186 @@ SelfCalibrationResult SelfCalibrateImages(const Project& project, const std::vec
   return result;
 }
 
+// What the initialisation paths share: the input, its usable pins, and what they write.
+struct PinInitContext {
+  const Project& project;
+  const MultiViewInitOptions& options;
+  const std::vector<std::vector<const Pin*>>& pins;  // usable pins, per project image
+  Project* out;
+  MultiViewInitSummary* summary;
+  // Why resection did not apply, per image, to prefix a later failure; each later path that
+  // does not apply appends its reason.
+  std::vector<std::string>* notes;
+};
+
+void AppendFailure(const PinInitContext& ctx, int i, const std::string& reason) { (*ctx.notes)[i] += "; " + reason; }
+
+// Resects each uncalibrated image with enough pins on `known` vertices and reports every
+// image; returns the uncalibrated images with pins that resection did not initialise.
+std::vector<int> InitializeByResection(const PinInitContext& ctx, const std::set<VertexKey>& known) {
+  const Project& project = ctx.project;
+  std::vector<int> left;
+  for (size_t i = 0; i < project.images.size(); ++i) {
+    const Image& image = project.images[i];
+    const std::vector<const Pin*>& pins = ctx.pins[i];
+    std::string& note = (*ctx.notes)[i];
+    MultiViewImageReport report;
+    report.image_id = image.id;
+    report.image_path = image.path;
+    report.num_pins = static_cast<int>(pins.size());
+    std::vector<const Pin*> known_pins;
+    for (const Pin* pin : pins)
+      if (known.count(KeyOf(pin->vertex))) known_pins.push_back(pin);
+    report.num_known_pins = static_cast<int>(known_pins.size());
+    if (image.camera_calibrated) {
+      report.path = MultiViewInitPath::kAlreadyCalibrated;
+      report.message = "already calibrated";
+    } else if (pins.empty()) {
+      report.message = "no pins";
+    } else if (known_pins.size() >= 4) {
+      ResectionResult r = Resect(project, image, known_pins, ctx.options);
+      if (r.ok) {
+        SetCamera(&ctx.out->images[i], r.camera);
+        report.path = MultiViewInitPath::kResection;
+        report.initialized = true;
+        report.residual_px = r.rms_px;
+        report.focal_px = r.camera.focal_px;
+        report.focal_std_px = r.focal_std_px;
+        report.flagged_pins = r.flagged;
+        report.warnings = r.warnings;
+        report.message = r.message;
+      } else if (known_pins.size() < 6) {
+        // The DLT found them off one plane: the count is what the user must change.
+        note = std::to_string(known_pins.size()) + " pins on known vertices; resection needs 6, or 4 on one face";
+        left.push_back(static_cast<int>(i));
+      } else {
+        note = std::to_string(known_pins.size()) + " pins on known vertices, resection failed (" + r.message + ")";
+        left.push_back(static_cast<int>(i));
+      }
+    } else if (known_pins.empty()) {
+      note = "none of its " + std::to_string(pins.size()) +
+             " pins is on a vertex pinned in a calibrated image (resection needs 6, or 4 on one face)";
+      left.push_back(static_cast<int>(i));
+    } else {
+      note = std::to_string(known_pins.size()) + " pins on known vertices; resection needs 6, or 4 on one face";
+      left.push_back(static_cast<int>(i));
+    }
+    ctx.summary->images.push_back(std::move(report));
+  }
+  return left;
+}
+
+// Initialises whichever of images ia and ib is uncalibrated from the two views.
+void ApplyTwoViews(const PinInitContext& ctx, int ia, int ib) {
+  Project* out = ctx.out;
+  // Image a is the calibrated one when there is one (it keeps its pose).
+  if (out->images[ib].camera_calibrated) std::swap(ia, ib);
+  const Image& image_a = out->images[ia];
+  const Image& image_b = out->images[ib];
+  TwoViewResult r = TwoViews(ctx.project, image_a, ctx.pins[ia], image_b, ctx.pins[ib], ctx.options);
+  std::vector<int> targets;
+  for (int i : {ia, ib})
+    if (!out->images[i].camera_calibrated) targets.push_back(i);
+  if (!r.ok) {
+    for (int i : targets) AppendFailure(ctx, i, r.message);
+    return;
+  }
+  ctx.summary->pairs.push_back(r.pair);
+  for (int i : targets) {
+    const bool is_a = i == ia;
+    const Camera& camera = is_a ? r.camera_a : r.camera_b;
+    SetCamera(&out->images[i], camera);
+    MultiViewImageReport& report = ctx.summary->images[i];
+    report.path = MultiViewInitPath::kTwoView;
+    report.initialized = true;
+    report.partner_image_id = out->images[is_a ? ib : ia].id;
+    report.residual_px = r.rms_px;
+    report.focal_px = camera.focal_px;
+    report.focal_guessed = is_a ? r.guessed_a : r.guessed_b;
+    report.flagged_pins = is_a ? r.flagged_a : r.flagged_b;
+    report.two_view_plane = r.plane;
+    report.warnings = r.warnings;
+    report.message = r.message;
+  }
+}
+
+int SharedVertices(const std::vector<const Pin*>& pins_a, const std::vector<const Pin*>& pins_b) {
+  std::set<VertexKey> in_a;
+  for (const Pin* pin : pins_a) in_a.insert(KeyOf(pin->vertex));
+  int shared = 0;
+  for (const Pin* pin : pins_b) shared += static_cast<int>(in_a.count(KeyOf(pin->vertex)));
+  return shared;
+}
+
+// Self-calibrates the images resection left (three or more) together.
+void ApplySelfCalibration(const PinInitContext& ctx, const std::vector<int>& left) {
+  std::vector<const Image*> images;
+  std::vector<std::vector<const Pin*>> image_pins;
+  for (int i : left) {
+    images.push_back(&ctx.project.images[i]);
+    image_pins.push_back(ctx.pins[i]);
+  }
+  SelfCalibrationResult r = SelfCalibrateImages(ctx.project, images, image_pins, ctx.options);
+  for (size_t v = 0; v < left.size(); ++v) {
+    const int i = left[v];
+    if (!r.ok || !r.registered[v]) {
+      AppendFailure(
+          ctx, i, r.ok ? "not registered by the self-calibration of the others (too few shared vertices)" : r.message);
+      continue;
+    }
+    SetCamera(&ctx.out->images[i], r.cameras[v]);
+    MultiViewImageReport& report = ctx.summary->images[i];
+    report.path = MultiViewInitPath::kSelfCalibration;
+    report.initialized = true;
+    report.residual_px = r.rms_px[v];
+    report.focal_px = r.cameras[v].focal_px;
+    report.focal_std_px = r.focal_std_px[v];
+    report.focal_guessed = r.guessed[v];
+    report.flagged_pins = r.flagged[v];
+    report.warnings = r.warnings;
+    report.message = r.message;
+  }
+}
+
+// Two views for what self-calibration did not initialise.
+void ApplyTwoViewsToTheRest(const PinInitContext& ctx, const std::vector<int>& left) {
+  const Project* out = ctx.out;
+  // Self-calibration failed for all: the pair sharing the most vertices may still do.
+  const bool none_initialised =
+      std::none_of(left.begin(), left.end(), [&](int i) { return out->images[i].camera_calibrated; });
+  if (left.size() >= 3 && none_initialised) {
+    int best_a = -1, best_b = -1, best_shared = 0;
+    for (size_t a = 0; a < left.size(); ++a)
+      for (size_t b = a + 1; b < left.size(); ++b) {
+        const int shared = SharedVertices(ctx.pins[left[a]], ctx.pins[left[b]]);
+        if (shared > best_shared) {
+          best_a = left[a];
+          best_b = left[b];
+          best_shared = shared;
+        }
+      }
+    if (best_a >= 0) ApplyTwoViews(ctx, best_a, best_b);
+  }
+  // Whatever is still uncalibrated pairs with the calibrated image (at input, or initialised
+  // above) it shares the most pinned vertices with.
+  for (const int i : left) {
+    if (out->images[i].camera_calibrated) continue;
+    int best = -1, best_shared = 0;
+    for (int j = 0; j < static_cast<int>(ctx.project.images.size()); ++j) {
+      if (j == i || !out->images[j].camera_calibrated) continue;
+      const int shared = SharedVertices(ctx.pins[i], ctx.pins[j]);
+      if (shared > best_shared) {
+        best = j;
+        best_shared = shared;
+      }
+    }
+    if (best >= 0)
+      ApplyTwoViews(ctx, i, best);
+    else if (left.size() == 1)
+      AppendFailure(ctx, i, "no calibrated image shares a pinned vertex with it");
+  }
+}
+
 }  // namespace
 
 bool MultiViewInitOptions::Check(std::string* error) const {
@@ -616,162 +841,15 @@ MultiViewInitSummary CalibrateImagesFromPins(const Project& project, const Multi
       for (const Pin* pin : pins[i]) known.insert(KeyOf(pin->vertex));
   }
 
-  // Why resection did not apply, per image, to prefix a later failure.
   std::vector<std::string> resection_notes(project.images.size());
-  std::vector<int> left;  // uncalibrated images with pins that resection did not initialise
-  for (size_t i = 0; i < project.images.size(); ++i) {
-    const Image& image = project.images[i];
-    MultiViewImageReport report;
-    report.image_id = image.id;
-    report.image_path = image.path;
-    report.num_pins = static_cast<int>(pins[i].size());
-    std::vector<const Pin*> known_pins;
-    for (const Pin* pin : pins[i])
-      if (known.count(KeyOf(pin->vertex))) known_pins.push_back(pin);
-    report.num_known_pins = static_cast<int>(known_pins.size());
-    if (image.camera_calibrated) {
-      report.path = MultiViewInitPath::kAlreadyCalibrated;
-      report.message = "already calibrated";
-    } else if (pins[i].empty()) {
-      report.message = "no pins";
-    } else if (known_pins.size() >= 4) {
-      ResectionResult r = Resect(project, image, known_pins, options);
-      if (r.ok) {
-        SetCamera(&out->images[i], r.camera);
-        report.path = MultiViewInitPath::kResection;
-        report.initialized = true;
-        report.residual_px = r.rms_px;
-        report.focal_px = r.camera.focal_px;
-        report.focal_std_px = r.focal_std_px;
-        report.flagged_pins = r.flagged;
-        report.warnings = r.warnings;
-        report.message = r.message;
-      } else if (known_pins.size() < 6) {
-        // The DLT found them off one plane: the count is what the user must change.
-        resection_notes[i] =
-            std::to_string(known_pins.size()) + " pins on known vertices; resection needs 6, or 4 on one face";
-        left.push_back(static_cast<int>(i));
-      } else {
-        resection_notes[i] =
-            std::to_string(known_pins.size()) + " pins on known vertices, resection failed (" + r.message + ")";
-        left.push_back(static_cast<int>(i));
-      }
-    } else if (known_pins.empty()) {
-      resection_notes[i] = "none of its " + std::to_string(pins[i].size()) +
-                           " pins is on a vertex pinned in a calibrated image (resection needs 6, or 4 on one face)";
-      left.push_back(static_cast<int>(i));
-    } else {
-      resection_notes[i] =
-          std::to_string(known_pins.size()) + " pins on known vertices; resection needs 6, or 4 on one face";
-      left.push_back(static_cast<int>(i));
-    }
-    summary.images.push_back(std::move(report));
-  }
-
-  // Why each later path did not apply, appended to the resection note.
-  auto fail = [&](int i, const std::string& reason) { resection_notes[i] += "; " + reason; };
-  auto apply_two_views = [&](int ia, int ib) {
-    // Image a is the calibrated one when there is one (it keeps its pose).
-    if (out->images[ib].camera_calibrated) std::swap(ia, ib);
-    const Image& image_a = out->images[ia];
-    const Image& image_b = out->images[ib];
-    TwoViewResult r = TwoViews(project, image_a, pins[ia], image_b, pins[ib], options);
-    std::vector<int> targets;
-    for (int i : {ia, ib})
-      if (!out->images[i].camera_calibrated) targets.push_back(i);
-    if (!r.ok) {
-      for (int i : targets) fail(i, r.message);
-      return;
-    }
-    summary.pairs.push_back(r.pair);
-    for (int i : targets) {
-      const bool is_a = i == ia;
-      const Camera& camera = is_a ? r.camera_a : r.camera_b;
-      SetCamera(&out->images[i], camera);
-      MultiViewImageReport& report = summary.images[i];
-      report.path = MultiViewInitPath::kTwoView;
-      report.initialized = true;
-      report.partner_image_id = out->images[is_a ? ib : ia].id;
-      report.residual_px = r.rms_px;
-      report.focal_px = camera.focal_px;
-      report.focal_guessed = is_a ? r.guessed_a : r.guessed_b;
-      report.flagged_pins = is_a ? r.flagged_a : r.flagged_b;
-      report.two_view_plane = r.plane;
-      report.warnings = r.warnings;
-      report.message = r.message;
-    }
-  };
-  auto shared_vertices = [&](int a, int b) {
-    std::set<VertexKey> in_a;
-    for (const Pin* pin : pins[a]) in_a.insert(KeyOf(pin->vertex));
-    int shared = 0;
-    for (const Pin* pin : pins[b]) shared += static_cast<int>(in_a.count(KeyOf(pin->vertex)));
-    return shared;
-  };
-
-  if (left.size() >= 3) {
-    std::vector<const Image*> images;
-    std::vector<std::vector<const Pin*>> image_pins;
-    for (int i : left) {
-      images.push_back(&project.images[i]);
-      image_pins.push_back(pins[i]);
-    }
-    SelfCalibrationResult r = SelfCalibrateImages(project, images, image_pins, options);
-    for (size_t v = 0; v < left.size(); ++v) {
-      const int i = left[v];
-      if (!r.ok || !r.registered[v]) {
-        fail(i, r.ok ? "not registered by the self-calibration of the others (too few shared vertices)" : r.message);
-        continue;
-      }
-      SetCamera(&out->images[i], r.cameras[v]);
-      MultiViewImageReport& report = summary.images[i];
-      report.path = MultiViewInitPath::kSelfCalibration;
-      report.initialized = true;
-      report.residual_px = r.rms_px[v];
-      report.focal_px = r.cameras[v].focal_px;
-      report.focal_std_px = r.focal_std_px[v];
-      report.focal_guessed = r.guessed[v];
-      report.flagged_pins = r.flagged[v];
-      report.warnings = r.warnings;
-      report.message = r.message;
-    }
-  } else if (left.size() == 2) {
-    apply_two_views(left[0], left[1]);
-  }
-  // Self-calibration failed for all: the pair sharing the most vertices may still do.
-  const bool none_initialised =
-      std::none_of(left.begin(), left.end(), [&](int i) { return out->images[i].camera_calibrated; });
-  if (left.size() >= 3 && none_initialised) {
-    int best_a = -1, best_b = -1, best_shared = 0;
-    for (size_t a = 0; a < left.size(); ++a)
-      for (size_t b = a + 1; b < left.size(); ++b) {
-        const int shared = shared_vertices(left[a], left[b]);
-        if (shared > best_shared) {
-          best_a = left[a];
-          best_b = left[b];
-          best_shared = shared;
-        }
-      }
-    if (best_a >= 0) apply_two_views(best_a, best_b);
-  }
-  // Whatever is still uncalibrated pairs with the calibrated image (at input, or initialised
-  // above) it shares the most pinned vertices with.
-  for (const int i : left) {
-    if (out->images[i].camera_calibrated) continue;
-    int best = -1, best_shared = 0;
-    for (int j = 0; j < static_cast<int>(project.images.size()); ++j) {
-      if (j == i || !out->images[j].camera_calibrated) continue;
-      const int shared = shared_vertices(i, j);
-      if (shared > best_shared) {
-        best = j;
-        best_shared = shared;
-      }
-    }
-    if (best >= 0)
-      apply_two_views(i, best);
-    else if (left.size() == 1)
-      fail(i, "no calibrated image shares a pinned vertex with it");
-  }
+  const PinInitContext ctx{project, options, pins, out, &summary, &resection_notes};
+  // Uncalibrated images with pins that resection did not initialise.
+  const std::vector<int> left = InitializeByResection(ctx, known);
+  if (left.size() >= 3)
+    ApplySelfCalibration(ctx, left);
+  else if (left.size() == 2)
+    ApplyTwoViews(ctx, left[0], left[1]);
+  ApplyTwoViewsToTheRest(ctx, left);
   for (const int i : left) {
     if (out->images[i].camera_calibrated) continue;
     summary.images[i].message = resection_notes[i];

@@ -379,20 +379,28 @@ bool SolveLinearInitDense(const SceneProblem& problem, const SceneState& state, 
   return true;
 }
 
-// The same least-squares problem through its normal equations, column-scaled: each primitive's
-// small block U_b (sizes + translation) is eliminated, leaving the reduced camera system
-// S = V - sum_b W_b^T U_b^-1 W_b (3 per free camera). A block or S with an eigenvalue below
-// kSchurRankTolerance (relative, on the unit-diagonal scaled normal matrix) is rank deficient.
-// With no known length the system is homogeneous and its null vector is S's, back-substituted.
-bool SolveLinearInitSchur(const SceneProblem& problem, const SceneState& state, const SizeColumns& size_col,
-                          const std::vector<int>& translation_col, const std::vector<int>& camera_col, int n,
-                          const Eigen::VectorXd& current, Eigen::VectorXd* solution_out, std::string* why) {
-  constexpr double kSchurRankTolerance = 1e-12;
+// Relative to the largest eigenvalue of the unit-diagonal scaled normal matrix (or of S).
+constexpr double kSchurRankTolerance = 1e-12;
+
+// Each observation's linear rows, with the column scaling that gives the normal matrix a
+// unit diagonal.
+struct ScaledLinearRows {
+  std::vector<LinearRows> rows;           // per observation
+  std::vector<std::vector<int>> cols_of;  // per primitive: its columns
+  Eigen::VectorXd inv_scale;              // per column: 1 / its norm
+  bool homogeneous = true;                // no known length: every rhs is zero
+};
+
+// False (why says so) when a free parameter appears in no pin.
+bool CollectScaledRows(const SceneProblem& problem, const SceneState& state, const SizeColumns& size_col,
+                       const std::vector<int>& translation_col, const std::vector<int>& camera_col, int n,
+                       ScaledLinearRows* out, std::string* why) {
   const size_t num_primitives = problem.primitives.size();
-  std::vector<LinearRows> all_rows;
+  std::vector<LinearRows>& all_rows = out->rows;
   all_rows.reserve(problem.observations.size());
   Eigen::VectorXd col_sq = Eigen::VectorXd::Zero(n);
-  std::vector<std::vector<int>> cols_of(num_primitives);
+  std::vector<std::vector<int>>& cols_of = out->cols_of;
+  cols_of.resize(num_primitives);
   for (size_t b = 0; b < num_primitives; ++b) cols_of[b] = PrimitiveColumns(size_col, translation_col, b);
   bool homogeneous = true;
   for (const Observation& obs : problem.observations) {
@@ -405,34 +413,60 @@ bool SolveLinearInitSchur(const SceneProblem& problem, const SceneState& state, 
     }
     homogeneous = homogeneous && rows.rhs.squaredNorm() == 0.0;
   }
+  out->homogeneous = homogeneous;
   for (int j = 0; j < n; ++j) {
     if (col_sq(j) == 0.0) {
       *why = "the linear system is rank deficient (a free parameter appears in no pin)";
       return false;
     }
   }
-  const Eigen::VectorXd inv_scale = col_sq.cwiseSqrt().cwiseInverse();
+  out->inv_scale = col_sq.cwiseSqrt().cwiseInverse();
+  return true;
+}
 
+struct PrimitiveSystem {
+  Eigen::MatrixXd u;                               // U_b
+  Eigen::VectorXd b;                               // primitive part of A^T rhs
+  std::vector<std::pair<int, Eigen::MatrixXd>> w;  // (reduced offset, W_bc)
+};
+
+// The scaled normal equations by blocks: per primitive, and the cameras' S and g (the reduced
+// camera system once the primitives are eliminated).
+struct SchurSystem {
+  std::vector<PrimitiveSystem> prim;
+  std::vector<int> reduced_of_camera;  // per camera: its offset in S, -1 when fixed
+  int r = 0;                           // S's size
+  Eigen::MatrixXd s;
+  Eigen::VectorXd g;
+};
+
+SchurSystem AssembleSchurSystem(const SceneProblem& problem, const std::vector<int>& camera_col,
+                                const ScaledLinearRows& scaled_rows) {
+  const size_t num_primitives = problem.primitives.size();
+  const std::vector<LinearRows>& all_rows = scaled_rows.rows;
+  const std::vector<std::vector<int>>& cols_of = scaled_rows.cols_of;
+  const Eigen::VectorXd& inv_scale = scaled_rows.inv_scale;
+  SchurSystem system;
   // Free cameras get consecutive 3-blocks of the reduced system.
-  std::vector<int> reduced_of_camera(problem.cameras.size(), -1);
+  std::vector<int>& reduced_of_camera = system.reduced_of_camera;
+  reduced_of_camera.assign(problem.cameras.size(), -1);
   int num_reduced = 0;
   for (size_t c = 0; c < problem.cameras.size(); ++c)
     if (camera_col[c] >= 0) reduced_of_camera[c] = 3 * (num_reduced++);
   const int r = 3 * num_reduced;
+  system.r = r;
 
-  struct PrimitiveSystem {
-    Eigen::MatrixXd u;                               // U_b
-    Eigen::VectorXd b;                               // primitive part of A^T rhs
-    std::vector<std::pair<int, Eigen::MatrixXd>> w;  // (reduced offset, W_bc)
-  };
-  std::vector<PrimitiveSystem> prim(num_primitives);
+  std::vector<PrimitiveSystem>& prim = system.prim;
+  prim.resize(num_primitives);
   for (size_t b = 0; b < num_primitives; ++b) {
     const int nb = static_cast<int>(cols_of[b].size());
     prim[b].u = Eigen::MatrixXd::Zero(nb, nb);
     prim[b].b = Eigen::VectorXd::Zero(nb);
   }
-  Eigen::MatrixXd s = Eigen::MatrixXd::Zero(r, r);
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(r);
+  Eigen::MatrixXd& s = system.s;
+  Eigen::VectorXd& g = system.g;
+  s = Eigen::MatrixXd::Zero(r, r);
+  g = Eigen::VectorXd::Zero(r);
   for (size_t o = 0; o < problem.observations.size(); ++o) {
     const Observation& obs = problem.observations[o];
     const std::vector<int>& cols = cols_of[obs.primitive];
@@ -454,11 +488,19 @@ bool SolveLinearInitSchur(const SceneProblem& problem, const SceneState& state, 
     }
     it->second.noalias() += ap.transpose() * ac;
   }
+  return system;
+}
 
-  // Eliminate each primitive block: S -= W^T U^-1 W, g -= W^T U^-1 b.
-  std::vector<Eigen::LDLT<Eigen::MatrixXd>> u_factor(num_primitives);
+// Eliminates each primitive block: S -= W^T U^-1 W, g -= W^T U^-1 b; u_factor receives each
+// U_b's factorisation for the back-substitution. False (why says so) when a U_b is singular.
+bool EliminatePrimitives(const SceneProblem& problem, SchurSystem* system,
+                         std::vector<Eigen::LDLT<Eigen::MatrixXd>>* u_factor, std::string* why) {
+  const size_t num_primitives = problem.primitives.size();
+  Eigen::MatrixXd& s = system->s;
+  Eigen::VectorXd& g = system->g;
+  u_factor->resize(num_primitives);
   for (size_t b = 0; b < num_primitives; ++b) {
-    const PrimitiveSystem& ps = prim[b];
+    const PrimitiveSystem& ps = system->prim[b];
     if (ps.u.rows() == 0) continue;
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(ps.u, Eigen::EigenvaluesOnly);
     if (!(eig.eigenvalues()(0) > kSchurRankTolerance * eig.eigenvalues().maxCoeff())) {
@@ -466,18 +508,25 @@ bool SolveLinearInitSchur(const SceneProblem& problem, const SceneState& state, 
              std::to_string(problem.primitives[b].primitive_index + 1) + " on their own)";
       return false;
     }
-    u_factor[b].compute(ps.u);
-    const Eigen::VectorXd u_inv_b = u_factor[b].solve(ps.b);
+    (*u_factor)[b].compute(ps.u);
+    const Eigen::VectorXd u_inv_b = (*u_factor)[b].solve(ps.b);
     for (const auto& [ri, wi] : ps.w) {
-      const Eigen::MatrixXd u_inv_wi = u_factor[b].solve(wi);
+      const Eigen::MatrixXd u_inv_wi = (*u_factor)[b].solve(wi);
       g.segment<3>(ri).noalias() -= wi.transpose() * u_inv_b;
       for (const auto& [rj, wj] : ps.w) s.block<3, 3>(rj, ri).noalias() -= wj.transpose() * u_inv_wi;
     }
   }
+  return true;
+}
 
-  Eigen::VectorXd cameras = Eigen::VectorXd::Zero(r);
+// The free cameras' (scaled) unknowns from the reduced system S x = g, or S's null vector when
+// homogeneous. False (why says so) when the rank does not allow it.
+bool SolveReducedCameras(const SchurSystem& system, bool homogeneous, Eigen::VectorXd* cameras_out, std::string* why) {
+  const int r = system.r;
+  Eigen::VectorXd& cameras = *cameras_out;
+  cameras = Eigen::VectorXd::Zero(r);
   if (r > 0) {
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(s);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(system.s);
     const Eigen::VectorXd& ev = eig.eigenvalues();
     const double threshold = kSchurRankTolerance * std::max(1.0, ev.maxCoeff());
     int rank = 0;
@@ -488,7 +537,7 @@ bool SolveLinearInitSchur(const SceneProblem& problem, const SceneState& state, 
                std::to_string(r) + ")";
         return false;
       }
-      cameras = eig.eigenvectors() * (eig.eigenvectors().transpose() * g).cwiseQuotient(ev);
+      cameras = eig.eigenvectors() * (eig.eigenvectors().transpose() * system.g).cwiseQuotient(ev);
     } else {
       if (rank != r - 1) {
         *why = "the homogeneous linear system has a null space of dimension " + std::to_string(r - rank);
@@ -500,10 +549,31 @@ bool SolveLinearInitSchur(const SceneProblem& problem, const SceneState& state, 
     *why = "no known length and no free camera: the linear system has no scale";
     return false;
   }
+  return true;
+}
+
+// The same least-squares problem through its normal equations, column-scaled: each primitive's
+// small block U_b (sizes + translation) is eliminated, leaving the reduced camera system
+// S = V - sum_b W_b^T U_b^-1 W_b (3 per free camera). A block or S with an eigenvalue below
+// kSchurRankTolerance (relative, on the unit-diagonal scaled normal matrix) is rank deficient.
+// With no known length the system is homogeneous and its null vector is S's, back-substituted.
+bool SolveLinearInitSchur(const SceneProblem& problem, const SceneState& state, const SizeColumns& size_col,
+                          const std::vector<int>& translation_col, const std::vector<int>& camera_col, int n,
+                          const Eigen::VectorXd& current, Eigen::VectorXd* solution_out, std::string* why) {
+  const size_t num_primitives = problem.primitives.size();
+  ScaledLinearRows scaled_rows;
+  if (!CollectScaledRows(problem, state, size_col, translation_col, camera_col, n, &scaled_rows, why)) return false;
+  const bool homogeneous = scaled_rows.homogeneous;
+  const std::vector<std::vector<int>>& cols_of = scaled_rows.cols_of;
+  SchurSystem system = AssembleSchurSystem(problem, camera_col, scaled_rows);
+  std::vector<Eigen::LDLT<Eigen::MatrixXd>> u_factor;
+  if (!EliminatePrimitives(problem, &system, &u_factor, why)) return false;
+  Eigen::VectorXd cameras;
+  if (!SolveReducedCameras(system, homogeneous, &cameras, why)) return false;
 
   Eigen::VectorXd scaled(n);
   for (size_t b = 0; b < num_primitives; ++b) {
-    const PrimitiveSystem& ps = prim[b];
+    const PrimitiveSystem& ps = system.prim[b];
     if (ps.u.rows() == 0) continue;
     Eigen::VectorXd rhs_b = homogeneous ? Eigen::VectorXd::Zero(ps.b.size()) : ps.b;
     for (const auto& [ri, wi] : ps.w) rhs_b.noalias() -= wi * cameras.segment<3>(ri);
@@ -511,8 +581,8 @@ bool SolveLinearInitSchur(const SceneProblem& problem, const SceneState& state, 
     for (size_t j = 0; j < cols_of[b].size(); ++j) scaled(cols_of[b][j]) = x_b(static_cast<int>(j));
   }
   for (size_t c = 0; c < problem.cameras.size(); ++c)
-    if (camera_col[c] >= 0) scaled.segment<3>(camera_col[c]) = cameras.segment<3>(reduced_of_camera[c]);
-  Eigen::VectorXd solution = inv_scale.cwiseProduct(scaled);
+    if (camera_col[c] >= 0) scaled.segment<3>(camera_col[c]) = cameras.segment<3>(system.reduced_of_camera[c]);
+  Eigen::VectorXd solution = scaled_rows.inv_scale.cwiseProduct(scaled);
   if (homogeneous) {
     const double alpha = solution.dot(current) / solution.squaredNorm();
     if (!(std::abs(alpha) > 0.0)) {
@@ -615,6 +685,120 @@ bool LinearInitialization(const SceneProblem& problem, SceneState* state, std::s
   return true;
 }
 
+namespace {
+
+// The direction in parameter space (column-scaled) of a whole-scene scale (axis < 0) or
+// shift along an axis.
+Eigen::VectorXd GaugeDirection(const SceneProblem& problem, const SceneState& state, const Eigen::VectorXd& col_norm,
+                               int axis) {
+  const int n = problem.num_parameters;
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+  for (int j = 0; j < n; ++j) {
+    const ParameterInfo& info = problem.parameters[j];
+    double value = 0.0;
+    switch (info.kind) {
+      case ParameterKind::kCameraCenter:
+        value = axis < 0 ? state.camera_centers[info.block](info.component) : (info.component == axis ? 1.0 : 0.0);
+        break;
+      case ParameterKind::kPrimitiveTranslation:
+        value =
+            axis < 0 ? state.primitive_translations[info.block](info.component) : (info.component == axis ? 1.0 : 0.0);
+        break;
+      case ParameterKind::kPrimitiveParam:
+        value = axis < 0 ? state.primitive_params[info.block](info.component) : 0.0;
+        break;
+      case ParameterKind::kPrimitiveRotation: break;
+    }
+    g(j) = value * col_norm(j);
+  }
+  return g;
+}
+
+// Whole-scene ambiguities (scale, position) are named once rather than per parameter.
+// The directions named are removed from null_space, whose remaining columns are re-orthonormalised.
+void WarnAboutGauges(const SceneProblem& problem, const SceneState& state, const Eigen::VectorXd& col_norm,
+                     Eigen::MatrixXd* null_space_io, std::vector<std::string>* warnings) {
+  Eigen::MatrixXd& null_space = *null_space_io;
+  constexpr double kGaugeCosine = 0.99;
+  std::vector<Eigen::VectorXd> gauges;
+  bool scale_free = false, position_free = false;
+  for (int axis = -1; axis < 3; ++axis) {
+    Eigen::VectorXd g = GaugeDirection(problem, state, col_norm, axis);
+    for (const auto& h : gauges) g -= h.dot(g) * h;
+    if (g.norm() == 0.0) continue;
+    g.normalize();
+    if ((null_space.transpose() * g).norm() > kGaugeCosine) {
+      gauges.push_back(g);
+      (axis < 0 ? scale_free : position_free) = true;
+    }
+  }
+  if (scale_free) {
+    warnings->push_back("the scale of the scene is not fixed by the pins: lock a dimension whose length you know");
+  }
+  if (position_free) {
+    warnings->push_back(
+        "the position of the scene is not fixed by the pins: lock the translation of a primitive or the pose of a "
+        "camera");
+  }
+  for (const auto& g : gauges) null_space -= g * (g.transpose() * null_space);
+  if (!gauges.empty() && null_space.cols() > 0) {
+    Eigen::JacobiSVD<Eigen::MatrixXd> basis(null_space, Eigen::ComputeThinU);
+    int keep = 0;
+    for (int i = 0; i < basis.singularValues().size(); ++i) keep += basis.singularValues()(i) > 0.5 ? 1 : 0;
+    null_space = basis.matrixU().leftCols(keep);
+  }
+}
+
+// A parameter is named when the unconstrained directions move it noticeably.
+void WarnAboutParameters(const Project& project, const SceneProblem& problem, const Eigen::MatrixXd& null_space,
+                         std::vector<std::string>* warnings) {
+  const int n = problem.num_parameters;
+  constexpr double kNameThreshold = 0.1;
+  const Eigen::VectorXd weight = null_space.rowwise().norm();
+  std::map<std::pair<int, int>, std::vector<int>> free_components;  // (kind, block) -> components
+  for (int j = 0; j < n; ++j) {
+    if (weight(j) <= kNameThreshold) continue;
+    const ParameterInfo& info = problem.parameters[j];
+    free_components[{static_cast<int>(info.kind), info.block}].push_back(info.component);
+  }
+  static const char* kBoxFaceNames[3] = {"+x side", "back", "top"};
+  for (const auto& [key, components] : free_components) {
+    const auto kind = static_cast<ParameterKind>(key.first);
+    const int block = key.second;
+    if (kind == ParameterKind::kCameraCenter) {
+      const Image& image = project.images[problem.cameras[block].image_index];
+      warnings->push_back("the " + JoinComponents(components) + " coordinate" + (components.size() > 1 ? "s" : "") +
+                          " of the camera centre of image " + ImageLabel(image) +
+                          (components.size() > 1 ? " are" : " is") +
+                          " not determined by the pins: pin more vertices in this image or lock its pose");
+      continue;
+    }
+    const Primitive& primitive = project.primitives[problem.primitives[block].primitive_index];
+    const PrimitiveKind shape_kind = primitive.shape.kind;
+    switch (kind) {
+      case ParameterKind::kPrimitiveParam:
+        for (int k : components) {
+          const bool boxy = shape_kind != PrimitiveKind::kPrism && shape_kind != PrimitiveKind::kCylinder && k < 3;
+          warnings->push_back("the " + ParamName(shape_kind, k) + " of " + PrimitiveLabel(primitive) +
+                              " is not determined by the pins: pin a vertex on the " +
+                              (boxy ? std::string(kBoxFaceNames[k]) + " face" : "far side") + " or add a second image");
+        }
+        break;
+      case ParameterKind::kPrimitiveRotation:
+        warnings->push_back("the rotation of " + PrimitiveLabel(primitive) +
+                            " is not determined by the pins: pin more of its vertices or lock its rotation");
+        break;
+      case ParameterKind::kPrimitiveTranslation:
+        warnings->push_back("the " + JoinComponents(components) + " position of " + PrimitiveLabel(primitive) +
+                            " is not determined by the pins: pin more of its vertices or lock its translation");
+        break;
+      case ParameterKind::kCameraCenter: break;
+    }
+  }
+}
+
+}  // namespace
+
 std::vector<std::string> UndeterminedParameterWarnings(const Project& project, const SceneProblem& problem,
                                                        const SceneState& state) {
   std::vector<std::string> warnings;
@@ -641,102 +825,10 @@ std::vector<std::string> UndeterminedParameterWarnings(const Project& project, c
   if (rank == n) return warnings;
   Eigen::MatrixXd null_space = svd.matrixV().rightCols(n - rank);
 
-  // Whole-scene ambiguities (scale, position) are named once rather than per parameter.
-  auto gauge_direction = [&](int axis) {  // axis < 0: scale; else a shift along that axis
-    Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
-    for (int j = 0; j < n; ++j) {
-      const ParameterInfo& info = problem.parameters[j];
-      double value = 0.0;
-      switch (info.kind) {
-        case ParameterKind::kCameraCenter:
-          value = axis < 0 ? state.camera_centers[info.block](info.component) : (info.component == axis ? 1.0 : 0.0);
-          break;
-        case ParameterKind::kPrimitiveTranslation:
-          value = axis < 0 ? state.primitive_translations[info.block](info.component)
-                           : (info.component == axis ? 1.0 : 0.0);
-          break;
-        case ParameterKind::kPrimitiveParam:
-          value = axis < 0 ? state.primitive_params[info.block](info.component) : 0.0;
-          break;
-        case ParameterKind::kPrimitiveRotation: break;
-      }
-      g(j) = value * col_norm(j);
-    }
-    return g;
-  };
-  constexpr double kGaugeCosine = 0.99;
-  std::vector<Eigen::VectorXd> gauges;
-  bool scale_free = false, position_free = false;
-  for (int axis = -1; axis < 3; ++axis) {
-    Eigen::VectorXd g = gauge_direction(axis);
-    for (const auto& h : gauges) g -= h.dot(g) * h;
-    if (g.norm() == 0.0) continue;
-    g.normalize();
-    if ((null_space.transpose() * g).norm() > kGaugeCosine) {
-      gauges.push_back(g);
-      (axis < 0 ? scale_free : position_free) = true;
-    }
-  }
-  if (scale_free) {
-    warnings.push_back("the scale of the scene is not fixed by the pins: lock a dimension whose length you know");
-  }
-  if (position_free) {
-    warnings.push_back(
-        "the position of the scene is not fixed by the pins: lock the translation of a primitive or the pose of a "
-        "camera");
-  }
-  for (const auto& g : gauges) null_space -= g * (g.transpose() * null_space);
-  if (!gauges.empty() && null_space.cols() > 0) {
-    Eigen::JacobiSVD<Eigen::MatrixXd> basis(null_space, Eigen::ComputeThinU);
-    int keep = 0;
-    for (int i = 0; i < basis.singularValues().size(); ++i) keep += basis.singularValues()(i) > 0.5 ? 1 : 0;
-    null_space = basis.matrixU().leftCols(keep);
-  }
+  WarnAboutGauges(problem, state, col_norm, &null_space, &warnings);
   if (null_space.cols() == 0) return warnings;
 
-  // A parameter is named when the unconstrained directions move it noticeably.
-  constexpr double kNameThreshold = 0.1;
-  const Eigen::VectorXd weight = null_space.rowwise().norm();
-  std::map<std::pair<int, int>, std::vector<int>> free_components;  // (kind, block) -> components
-  for (int j = 0; j < n; ++j) {
-    if (weight(j) <= kNameThreshold) continue;
-    const ParameterInfo& info = problem.parameters[j];
-    free_components[{static_cast<int>(info.kind), info.block}].push_back(info.component);
-  }
-  static const char* kBoxFaceNames[3] = {"+x side", "back", "top"};
-  for (const auto& [key, components] : free_components) {
-    const auto kind = static_cast<ParameterKind>(key.first);
-    const int block = key.second;
-    if (kind == ParameterKind::kCameraCenter) {
-      const Image& image = project.images[problem.cameras[block].image_index];
-      warnings.push_back("the " + JoinComponents(components) + " coordinate" + (components.size() > 1 ? "s" : "") +
-                         " of the camera centre of image " + ImageLabel(image) +
-                         (components.size() > 1 ? " are" : " is") +
-                         " not determined by the pins: pin more vertices in this image or lock its pose");
-      continue;
-    }
-    const Primitive& primitive = project.primitives[problem.primitives[block].primitive_index];
-    const PrimitiveKind shape_kind = primitive.shape.kind;
-    switch (kind) {
-      case ParameterKind::kPrimitiveParam:
-        for (int k : components) {
-          const bool boxy = shape_kind != PrimitiveKind::kPrism && shape_kind != PrimitiveKind::kCylinder && k < 3;
-          warnings.push_back("the " + ParamName(shape_kind, k) + " of " + PrimitiveLabel(primitive) +
-                             " is not determined by the pins: pin a vertex on the " +
-                             (boxy ? std::string(kBoxFaceNames[k]) + " face" : "far side") + " or add a second image");
-        }
-        break;
-      case ParameterKind::kPrimitiveRotation:
-        warnings.push_back("the rotation of " + PrimitiveLabel(primitive) +
-                           " is not determined by the pins: pin more of its vertices or lock its rotation");
-        break;
-      case ParameterKind::kPrimitiveTranslation:
-        warnings.push_back("the " + JoinComponents(components) + " position of " + PrimitiveLabel(primitive) +
-                           " is not determined by the pins: pin more of its vertices or lock its translation");
-        break;
-      case ParameterKind::kCameraCenter: break;
-    }
-  }
+  WarnAboutParameters(project, problem, null_space, &warnings);
   return warnings;
 }
 

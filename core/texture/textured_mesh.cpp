@@ -473,6 +473,86 @@ TexturedMesh BuildMesh(const Project& project, std::vector<FaceGeometry>* geomet
   return mesh;
 }
 
+// The calibrated images with loaded pixels, with the scale from the camera's pixels to the photo's.
+std::vector<PhotoView> UsableViews(const Project& project, const std::vector<const ImageRgba8*>& photos) {
+  std::vector<PhotoView> views;
+  for (size_t i = 0; i < project.images.size(); ++i) {
+    const Image& image = project.images[i];
+    if (photos[i] == nullptr) continue;
+    const ImageRgba8& photo = *photos[i];
+    if (!image.camera_calibrated || photo.empty() ||
+        photo.pixels.size() != static_cast<size_t>(photo.width) * photo.height * 4) {
+      continue;
+    }
+    PhotoView view;
+    view.image_index = i;
+    view.camera = &image.camera;
+    view.photo = &photo;
+    const int ref_width = image.camera.width_px > 0 ? image.camera.width_px : image.width_px;
+    const int ref_height = image.camera.height_px > 0 ? image.camera.height_px : image.height_px;
+    if (ref_width > 0 && ref_height > 0) {
+      view.scale_x = static_cast<double>(photo.width) / ref_width;
+      view.scale_y = static_cast<double>(photo.height) / ref_height;
+    }
+    views.push_back(view);
+  }
+  return views;
+}
+
+// Each face's best-scoring view and its texel size; returns the faces some view sees.
+std::vector<int> ChooseFaceViews(const std::vector<FaceGeometry>& geometry, const std::vector<PhotoView>& views,
+                                 const std::vector<Occluder>& occluders, const TextureBakeOptions& options,
+                                 std::vector<FaceTexture>* faces_out) {
+  std::vector<FaceTexture>& faces = *faces_out;
+  std::vector<int> textured;
+  for (size_t f = 0; f < geometry.size(); ++f) {
+    if (!geometry[f].valid) continue;
+    double best_u = 0.0, best_v = 0.0;
+    for (size_t v = 0; v < views.size(); ++v) {
+      double length_u = 0.0, length_v = 0.0;
+      const double score = ScoreView(geometry[f], views[v], occluders, &length_u, &length_v);
+      if (score > faces[f].score) {
+        faces[f].score = score;
+        faces[f].view = static_cast<int>(v);
+        best_u = length_u;
+        best_v = length_v;
+      }
+    }
+    if (faces[f].view < 0) continue;
+    auto texels = [&](double length_px) {
+      const double n = std::ceil(length_px * options.texels_per_image_px) + 1.0;
+      return static_cast<int>(
+          std::clamp(n, static_cast<double>(kMinFaceTexels), static_cast<double>(options.max_face_texels)));
+    };
+    faces[f].width = texels(best_u);
+    faces[f].height = texels(best_v);
+    textured.push_back(static_cast<int>(f));
+  }
+  return textured;
+}
+
+// Rasterises each textured face into its packed rectangle and points its corners' UVs there.
+void WriteAtlas(const std::vector<FaceGeometry>& geometry, const std::vector<PhotoView>& views,
+                const std::vector<int>& textured, const std::vector<FaceTexture>& faces,
+                const TextureBakeOptions& options, int atlas_width, int atlas_height, TexturedMesh* mesh) {
+  ImageRgba8& atlas = mesh->atlas;
+  atlas.width = atlas_width;
+  atlas.height = atlas_height;
+  atlas.pixels.assign(static_cast<size_t>(atlas_width) * atlas_height * 4, 0);
+  for (int f : textured) {
+    const FaceTexture& t = faces[f];
+    const FaceGeometry& g = geometry[f];
+    RasterizeFace(g, views[t.view], t, options.padding_texels, &atlas);
+    const Eigen::Matrix3d texel_from_face = FaceFromTexel(g, t.packed_width, t.packed_height).inverse();
+    for (size_t k = 0; k < g.corners_st.size(); ++k) {
+      const Eigen::Vector3d texel = texel_from_face * g.corners_st[k].homogeneous();
+      mesh->uvs[g.first_vertex + k] = Eigen::Vector2f(static_cast<float>((t.x + texel.x() + 0.5) / atlas_width),
+                                                      static_cast<float>((t.y + texel.y() + 0.5) / atlas_height));
+    }
+    for (size_t tri = 0; tri < g.triangle_count; ++tri) mesh->triangle_textured[g.first_triangle + tri] = 1;
+  }
+}
+
 }  // namespace
 
 TexturedMesh BuildUntexturedMesh(const Project& project) { return BuildMesh(project, nullptr, nullptr); }
@@ -516,53 +596,10 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
                 " images");
   }
 
-  std::vector<PhotoView> views;
-  for (size_t i = 0; i < project.images.size(); ++i) {
-    const Image& image = project.images[i];
-    if (photos[i] == nullptr) continue;
-    const ImageRgba8& photo = *photos[i];
-    if (!image.camera_calibrated || photo.empty() ||
-        photo.pixels.size() != static_cast<size_t>(photo.width) * photo.height * 4) {
-      continue;
-    }
-    PhotoView view;
-    view.image_index = i;
-    view.camera = &image.camera;
-    view.photo = &photo;
-    const int ref_width = image.camera.width_px > 0 ? image.camera.width_px : image.width_px;
-    const int ref_height = image.camera.height_px > 0 ? image.camera.height_px : image.height_px;
-    if (ref_width > 0 && ref_height > 0) {
-      view.scale_x = static_cast<double>(photo.width) / ref_width;
-      view.scale_y = static_cast<double>(photo.height) / ref_height;
-    }
-    views.push_back(view);
-  }
+  const std::vector<PhotoView> views = UsableViews(project, photos);
 
   std::vector<FaceTexture> faces(geometry.size());
-  std::vector<int> textured;
-  for (size_t f = 0; f < geometry.size(); ++f) {
-    if (!geometry[f].valid) continue;
-    double best_u = 0.0, best_v = 0.0;
-    for (size_t v = 0; v < views.size(); ++v) {
-      double length_u = 0.0, length_v = 0.0;
-      const double score = ScoreView(geometry[f], views[v], occluders, &length_u, &length_v);
-      if (score > faces[f].score) {
-        faces[f].score = score;
-        faces[f].view = static_cast<int>(v);
-        best_u = length_u;
-        best_v = length_v;
-      }
-    }
-    if (faces[f].view < 0) continue;
-    auto texels = [&](double length_px) {
-      const double n = std::ceil(length_px * options.texels_per_image_px) + 1.0;
-      return static_cast<int>(
-          std::clamp(n, static_cast<double>(kMinFaceTexels), static_cast<double>(options.max_face_texels)));
-    };
-    faces[f].width = texels(best_u);
-    faces[f].height = texels(best_v);
-    textured.push_back(static_cast<int>(f));
-  }
+  const std::vector<int> textured = ChooseFaceViews(geometry, views, occluders, options, &faces);
   if (textured.empty()) {
     summary.success = true;
     summary.message = geometry.empty() ? "the project has no primitives"
@@ -591,22 +628,7 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
     shrink *= 0.85;
   }
 
-  ImageRgba8& atlas = mesh->atlas;
-  atlas.width = atlas_width;
-  atlas.height = atlas_height;
-  atlas.pixels.assign(static_cast<size_t>(atlas_width) * atlas_height * 4, 0);
-  for (int f : textured) {
-    const FaceTexture& t = faces[f];
-    const FaceGeometry& g = geometry[f];
-    RasterizeFace(g, views[t.view], t, options.padding_texels, &atlas);
-    const Eigen::Matrix3d texel_from_face = FaceFromTexel(g, t.packed_width, t.packed_height).inverse();
-    for (size_t k = 0; k < g.corners_st.size(); ++k) {
-      const Eigen::Vector3d texel = texel_from_face * g.corners_st[k].homogeneous();
-      mesh->uvs[g.first_vertex + k] = Eigen::Vector2f(static_cast<float>((t.x + texel.x() + 0.5) / atlas_width),
-                                                      static_cast<float>((t.y + texel.y() + 0.5) / atlas_height));
-    }
-    for (size_t tri = 0; tri < g.triangle_count; ++tri) mesh->triangle_textured[g.first_triangle + tri] = 1;
-  }
+  WriteAtlas(geometry, views, textured, faces, options, atlas_width, atlas_height, mesh);
 
   summary.success = true;
   summary.faces_textured = static_cast<int>(textured.size());
