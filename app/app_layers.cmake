@@ -1,5 +1,5 @@
 # The layers of app/, bottom first. A layer's files may include their own layer, the layers
-# listed before it and core/, never a layer after it: app/check_layers.cmake enforces it on
+# listed before it and core/, never a layer after it: cmake/check_layers.cmake (-DTREE=app) enforces it on
 # every build.
 #   platform  the GL side without app state: the EGL context and offscreen target, GL
 #             helpers, the shaders, tiled photo textures, and gl_camera.h (the one place
