@@ -410,7 +410,7 @@ TEST_CASE("distortion: a face baked from a distorted photo shows its checker und
   auto compare = [&](const Project& project, double* mismatch_fraction) {
     TexturedMesh mesh;
     const TextureBakeSummary summary = BakeTexturedMesh(project, {photo}, {}, &mesh);
-    REQUIRE_MESSAGE(summary.success, summary.message);
+    REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
     int checked = 0, mismatched = 0;
     for (size_t tri = 0; tri < mesh.triangle_face.size(); ++tri) {
       if (!mesh.triangle_textured[tri]) continue;

@@ -68,7 +68,7 @@ Fixture BakedScene() {
   f.scene = facet::testing::MakeBoxScene();
   const auto summary = facet::BakeTexturedMesh(
       f.scene.project, {RampPhoto(f.scene.true_camera.width_px, f.scene.true_camera.height_px)}, {}, &f.mesh);
-  REQUIRE_MESSAGE(summary.success, summary.message);
+  REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
   REQUIRE(summary.faces_textured == 3);
   return f;
 }
@@ -417,7 +417,7 @@ TEST_CASE("GLB and OBJ round trip: vertex and triangle counts of a split box and
   CHECK(expected_triangles == 12 + 2 + 2 + 8);
   const auto bake = facet::BakeTexturedMesh(
       project, {RampPhoto(f.scene.true_camera.width_px, f.scene.true_camera.height_px)}, {}, &f.mesh);
-  REQUIRE_MESSAGE(bake.success, bake.message);
+  REQUIRE_MESSAGE(bake.IsUsable(), bake.message);
   REQUIRE(f.mesh.positions.size() == expected_vertices);
   REQUIRE(f.mesh.indices.size() == 3 * expected_triangles);
   size_t textured_triangles = 0;

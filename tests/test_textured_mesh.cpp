@@ -325,7 +325,7 @@ void CheckSolidBake(const Project& project, const Camera& cam) {
   }
   TexturedMesh mesh;
   const auto summary = facet::BakeTexturedMesh(project, {RenderPhoto(faces, cam, Paint::kSolid)}, {}, &mesh);
-  REQUIRE_MESSAGE(summary.success, summary.message);
+  REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
   MESSAGE(summary.message);
   int facing = 0;
   for (const TestFace& face : faces) {
@@ -434,7 +434,7 @@ TEST_CASE("untextured mesh: per face, its corners, n - 2 counter-clockwise trian
 TEST_CASE("bake: exactly the faces facing the camera are textured, each with its checker, upright") {
   const Baked b = BakeBox({});
   const Camera& cam = b.scene.true_camera;
-  REQUIRE_MESSAGE(b.summary.success, b.summary.message);
+  REQUIRE_MESSAGE(b.summary.IsUsable(), b.summary.message);
   MESSAGE("bake of the 1024x768 synthetic box: " << b.summary.time_ms << " ms, atlas " << b.summary.atlas_width << "x"
                                                  << b.summary.atlas_height << "; " << b.summary.message);
   REQUIRE(b.faces.size() == 6);
@@ -669,7 +669,7 @@ TEST_CASE("bake: a non-planar face (a free vertex moved off its edge) is baked t
   TexturedMesh baked;
   const auto summary =
       facet::BakeTexturedMesh(scene.project, {RenderPhoto(faces, scene.true_camera, Paint::kSolid)}, {}, &baked);
-  REQUIRE_MESSAGE(summary.success, summary.message);
+  REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
   CHECK(summary.faces_textured == 3);
   const FaceInAtlas fa = FindFace(baked, *bent);
   REQUIRE(fa.textured);
@@ -690,7 +690,7 @@ TEST_CASE("bake: face texels that fall outside the photo are opaque neutral grey
   facet::testing::SyntheticSceneOptions o;
   o.camera_center = {5.0, -1.5, 2.0};  // close enough that the box overflows the frame
   const Baked b = BakeBox(o);
-  REQUIRE_MESSAGE(b.summary.success, b.summary.message);
+  REQUIRE_MESSAGE(b.summary.IsUsable(), b.summary.message);
   const Camera& cam = b.scene.true_camera;
   int outside_texels = 0, grey = 0;
   for (const TestFace& face : b.faces) {
@@ -735,7 +735,7 @@ TEST_CASE("bake: the nearer of two views textures the faces; an unloaded photo i
 
   TexturedMesh mesh;
   auto summary = facet::BakeTexturedMesh(scene.project, {far_photo, near_photo}, {}, &mesh);
-  REQUIRE_MESSAGE(summary.success, summary.message);
+  REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
   CHECK(summary.faces_textured == 3);
   for (const TestFace& face : faces) {
     if (!face.Faces(scene.true_camera)) continue;
@@ -748,7 +748,7 @@ TEST_CASE("bake: the nearer of two views textures the faces; an unloaded photo i
   }
 
   summary = facet::BakeTexturedMesh(scene.project, {far_photo, ImageRgba8()}, {}, &mesh);
-  REQUIRE_MESSAGE(summary.success, summary.message);
+  REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
   CHECK(summary.faces_textured == 3);
   for (const TestFace& face : faces) {
     if (!face.Faces(far_cam)) continue;
@@ -786,8 +786,8 @@ TEST_CASE("bake from photo pointers: bit-identical to the owning overload; nullp
   TexturedMesh from_owned, from_pointers;
   const auto owned_summary = facet::BakeTexturedMesh(scene.project, owned, {}, &from_owned);
   const auto pointer_summary = facet::BakeTexturedMesh(scene.project, pointers, {}, &from_pointers);
-  REQUIRE_MESSAGE(owned_summary.success, owned_summary.message);
-  REQUIRE_MESSAGE(pointer_summary.success, pointer_summary.message);
+  REQUIRE_MESSAGE(owned_summary.IsUsable(), owned_summary.message);
+  REQUIRE_MESSAGE(pointer_summary.IsUsable(), pointer_summary.message);
   REQUIRE(from_pointers.atlas.pixels.size() > 1000);
   CHECK(same_mesh(from_owned, from_pointers));
 
@@ -796,8 +796,8 @@ TEST_CASE("bake from photo pointers: bit-identical to the owning overload; nullp
   TexturedMesh with_null, with_empty;
   const auto null_summary = facet::BakeTexturedMesh(scene.project, {&owned[0], nullptr}, {}, &with_null);
   const auto empty_summary = facet::BakeTexturedMesh(scene.project, {owned[0], ImageRgba8()}, {}, &with_empty);
-  REQUIRE_MESSAGE(null_summary.success, null_summary.message);
-  REQUIRE_MESSAGE(empty_summary.success, empty_summary.message);
+  REQUIRE_MESSAGE(null_summary.IsUsable(), null_summary.message);
+  REQUIRE_MESSAGE(empty_summary.IsUsable(), empty_summary.message);
   CHECK(null_summary.faces_textured == 3);
   CHECK(same_mesh(with_null, with_empty));
   CHECK_FALSE(same_mesh(with_null, from_pointers));
@@ -805,11 +805,11 @@ TEST_CASE("bake from photo pointers: bit-identical to the owning overload; nullp
   // Every photo missing: untextured, not a failure; a wrong count is a failure.
   TexturedMesh none;
   const auto none_summary = facet::BakeTexturedMesh(scene.project, {nullptr, nullptr}, {}, &none);
-  CHECK(none_summary.success);
+  CHECK(none_summary.IsUsable());
   CHECK(none_summary.faces_textured == 0);
   CHECK(none.atlas.empty());
   const auto short_summary = facet::BakeTexturedMesh(scene.project, {&owned[0]}, {}, &none);
-  CHECK_FALSE(short_summary.success);
+  CHECK_FALSE(short_summary.IsUsable());
   CHECK(short_summary.message.find("photos") != std::string::npos);
 }
 
@@ -858,7 +858,7 @@ TEST_CASE("bake: a primitive in front of a face makes an unobstructed view win")
 
   TexturedMesh mesh;
   const auto summary = facet::BakeTexturedMesh(scene.project, {photo1, photo2}, {}, &mesh);
-  REQUIRE_MESSAGE(summary.success, summary.message);
+  REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
   const FaceInAtlas fa = FindFace(mesh, *front);
   REQUIRE(fa.textured);
   // The face shows view 2's inverted checker wherever view 2 sees it (the blocker still
@@ -876,7 +876,7 @@ TEST_CASE("bake: a primitive in front of a face makes an unobstructed view win")
   // left untextured rather than painted with the blocker; the blocker's own front is textured.
   TexturedMesh only_one;
   const auto single = facet::BakeTexturedMesh(scene.project, {photo1, ImageRgba8()}, {}, &only_one);
-  REQUIRE_MESSAGE(single.success, single.message);
+  REQUIRE_MESSAGE(single.IsUsable(), single.message);
   CHECK_FALSE(FindFace(only_one, *front).textured);
   for (const TestFace& f : faces) {
     if (f.primitive_id != scene.box_id && (f.normal + Eigen::Vector3d::UnitY()).norm() < 1e-9) {
@@ -889,7 +889,7 @@ TEST_CASE("bake: a small atlas limit shrinks the faces instead of failing") {
   facet::TextureBakeOptions options;
   options.max_atlas_size = 128;
   const Baked b = BakeBox({}, options);
-  REQUIRE_MESSAGE(b.summary.success, b.summary.message);
+  REQUIRE_MESSAGE(b.summary.IsUsable(), b.summary.message);
   CHECK(b.summary.faces_textured == 3);
   CHECK(b.mesh.atlas.width <= 128);
   CHECK(b.mesh.atlas.height <= 128);
@@ -925,7 +925,7 @@ TEST_CASE("bake time: 1024x768 and a 12 MP photo (median of 3 runs)") {
     facet::TextureBakeSummary summary;
     for (int run = 0; run < 3; ++run) {
       summary = facet::BakeTexturedMesh(scene.project, {*photo}, {}, &mesh);
-      REQUIRE_MESSAGE(summary.success, summary.message);
+      REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
       times.push_back(summary.time_ms);
     }
     CHECK(summary.faces_textured == 3);
@@ -947,7 +947,7 @@ TEST_CASE("bake: bad options and mismatched photos fail with a message; no photo
   CHECK_FALSE(bad.Check(&error));
   CHECK_FALSE(error.empty());
   auto summary = facet::BakeTexturedMesh(scene.project, {ImageRgba8()}, bad, &mesh);
-  CHECK_FALSE(summary.success);
+  CHECK_FALSE(summary.IsUsable());
   CHECK(summary.message.find("texels_per_image_px") != std::string::npos);
   CHECK(mesh.indices.size() == 36);  // still the untextured geometry
 
@@ -961,11 +961,11 @@ TEST_CASE("bake: bad options and mismatched photos fail with a message; no photo
   CHECK(facet::TextureBakeOptions().Check(&error));
 
   summary = facet::BakeTexturedMesh(scene.project, std::vector<ImageRgba8>{}, {}, &mesh);
-  CHECK_FALSE(summary.success);
+  CHECK_FALSE(summary.IsUsable());
   CHECK_FALSE(summary.message.empty());
 
   summary = facet::BakeTexturedMesh(scene.project, {ImageRgba8()}, {}, &mesh);
-  CHECK(summary.success);
+  CHECK(summary.IsUsable());
   CHECK(summary.faces_textured == 0);
   CHECK(summary.faces_untextured == 6);
   CHECK(mesh.atlas.empty());
@@ -975,12 +975,12 @@ TEST_CASE("bake: bad options and mismatched photos fail with a message; no photo
   const ImageRgba8 photo = RenderPhoto(SceneFaces(scene.project), scene.true_camera, Paint::kChecker);
   scene.project.images[0].camera_calibrated = false;
   summary = facet::BakeTexturedMesh(scene.project, {photo}, {}, &mesh);
-  CHECK(summary.success);
+  CHECK(summary.IsUsable());
   CHECK(summary.faces_textured == 0);
 
   // An empty project: success, nothing to texture.
   Project empty;
   summary = facet::BakeTexturedMesh(empty, std::vector<const ImageRgba8*>{}, {}, &mesh);
-  CHECK(summary.success);
+  CHECK(summary.IsUsable());
   CHECK(mesh.indices.empty());
 }

@@ -152,7 +152,7 @@ VertexMoveSummary CheckReachableMove(Single* s, VertexId v, const Eigen::Vector3
   Project moved;
   const VertexMoveSummary summary = MoveVertex(s->project, {s->id, v}, target, {}, &moved);
   INFO("message: " << summary.message);
-  REQUIRE(summary.ok);
+  REQUIRE(summary.IsUsable());
   const Primitive& after = *moved.FindPrimitive(s->id);
   const double miss = (after.mesh.vertex(v).position - target).norm();
   CAPTURE(miss);
@@ -232,7 +232,7 @@ TEST_CASE("vertex move: wedge ridge, pyramid apex, cylinder rim") {
     const Eigen::Vector3d target = s.primitive().mesh.vertex(rim).position + r * (0.3 * tangent);
     const VertexMoveSummary refused = MoveVertex(s.project, {s.id, rim}, target, {}, &moved);
     INFO("message: " << refused.message);
-    CHECK_FALSE(refused.ok);
+    CHECK_FALSE(refused.IsUsable());
     CHECK(moved == s.project);
     REQUIRE(!refused.limited_by.empty());
     CHECK(refused.limited_by.front().find("translation is locked") != std::string::npos);
@@ -250,7 +250,7 @@ TEST_CASE("vertex move: a split vertex changes the primitive; a free vertex only
   REQUIRE(h != kNoElement);
   const double t = (h % 2 == 0) ? 0.25 : 0.75;
   const ESplitResult split = ESplit(&mesh, PolyMesh::EdgeOf(h), t);
-  REQUIRE(split.ok);
+  REQUIRE(split.IsUsable());
   RefreshAllPrimitives(&s.project);
   const VertexId v = split.vertex;
 
@@ -266,7 +266,7 @@ TEST_CASE("vertex move: a split vertex changes the primitive; a free vertex only
     Project moved;
     const VertexMoveSummary summary = MoveVertex(before, {s.id, v}, target, {}, &moved);
     INFO("message: " << summary.message);
-    REQUIRE(summary.ok);
+    REQUIRE(summary.IsUsable());
     CHECK(summary.moved_offset);
     const Primitive& after = *moved.FindPrimitive(s.id);
     const double miss = (after.mesh.vertex(v).position - target).norm();
@@ -287,7 +287,7 @@ TEST_CASE("vertex move: locks are respected and named when they limit the move")
   Project moved;
   const VertexMoveSummary summary = MoveVertex(s.project, {s.id, 7}, target, {}, &moved);
   INFO("message: " << summary.message);
-  REQUIRE(summary.ok);
+  REQUIRE(summary.IsUsable());
   CHECK_FALSE(summary.reached);
   const Primitive& after = *moved.FindPrimitive(s.id);
   // The closest reachable point: the x part of the step, not the z part.
@@ -311,7 +311,7 @@ TEST_CASE("vertex move: locks are respected and named when they limit the move")
   const VertexMoveSummary corner0 =
       MoveVertex(s.project, {s.id, 0}, before.mesh.vertex(0).position + Eigen::Vector3d(0.1, 0, 0), {}, &moved);
   INFO("corner 0: " << corner0.message);
-  CHECK_FALSE(corner0.ok);
+  CHECK_FALSE(corner0.IsUsable());
   CHECK(moved == s.project);
 
   // With the height unlocked the same target is reached and the translation still holds.
@@ -329,21 +329,21 @@ TEST_CASE("vertex move: refusals leave the project unchanged") {
   const Eigen::Vector3d through = s.primitive().mesh.vertex(7).position + r * Eigen::Vector3d(-5.0, 0.0, 0.0);
   VertexMoveSummary summary = MoveVertex(s.project, {s.id, 7}, through, {}, &moved);
   INFO("message: " << summary.message);
-  CHECK_FALSE(summary.ok);
+  CHECK_FALSE(summary.IsUsable());
   CHECK(summary.message.find("opposite face") != std::string::npos);
   CHECK(moved == s.project);
 
   summary = MoveVertex(s.project, {s.id, 99}, Eigen::Vector3d::Zero(), {}, &moved);
-  CHECK_FALSE(summary.ok);
+  CHECK_FALSE(summary.IsUsable());
   summary = MoveVertex(s.project, {s.id + 100, 0}, Eigen::Vector3d::Zero(), {}, &moved);
-  CHECK_FALSE(summary.ok);
+  CHECK_FALSE(summary.IsUsable());
   summary = MoveVertex(s.project, {s.id, 7}, Eigen::Vector3d(NAN, 0, 0), {}, &moved);
-  CHECK_FALSE(summary.ok);
+  CHECK_FALSE(summary.IsUsable());
   CHECK(moved == s.project);
 
   s.primitive().param_locked = {true, true, true, false};
   summary = MoveVertex(s.project, {s.id, 7}, Eigen::Vector3d::Zero(), {}, &moved);
-  CHECK_FALSE(summary.ok);
+  CHECK_FALSE(summary.IsUsable());
   CHECK(summary.message.find("locked") != std::string::npos);
 }
 
@@ -364,7 +364,7 @@ TEST_CASE("vertex move: a roof on a box changes its own height; the base carries
   VertexMoveSummary summary =
       MoveVertex(project, {roof_id, ridge}, roof.mesh.vertex(ridge).position + Eigen::Vector3d(0, 0, 0.5), {}, &moved);
   INFO("roof up: " << summary.message);
-  REQUIRE(summary.ok);
+  REQUIRE(summary.IsUsable());
   CHECK(summary.reached);
   CHECK(std::abs(moved.FindPrimitive(roof_id)->shape.params[2] - 1.7) < kReachTolerance);
   CHECK(moved.FindPrimitive(box_id)->shape == project.FindPrimitive(box_id)->shape);
@@ -374,7 +374,7 @@ TEST_CASE("vertex move: a roof on a box changes its own height; the base carries
   summary =
       MoveVertex(project, {roof_id, ridge}, roof.mesh.vertex(ridge).position + Eigen::Vector3d(0.4, 0, 0), {}, &moved);
   INFO("roof sideways: " << summary.message);
-  CHECK_FALSE(summary.ok);
+  CHECK_FALSE(summary.IsUsable());
   REQUIRE(!summary.limited_by.empty());
   CHECK(summary.limited_by.front().find("follow") != std::string::npos);
 
@@ -382,7 +382,7 @@ TEST_CASE("vertex move: a roof on a box changes its own height; the base carries
   const Primitive box = *project.FindPrimitive(box_id);
   summary = MoveVertex(project, {box_id, 7}, box.mesh.vertex(7).position + Eigen::Vector3d(0, 0, 0.5), {}, &moved);
   INFO("base up: " << summary.message);
-  REQUIRE(summary.ok);
+  REQUIRE(summary.IsUsable());
   CHECK(summary.reached);
   const Primitive& roof_after = *moved.FindPrimitive(roof_id);
   for (VertexId v = 0; v < roof.mesh.VertexIdEnd(); ++v) {
@@ -409,19 +409,19 @@ TEST_CASE("primitive move: translation by a delta, locks and attachment refuse")
 
   PrimitiveMoveSummary summary = MovePrimitive(project, box_id, delta, &moved);
   INFO("locked: " << summary.message);
-  CHECK_FALSE(summary.ok);
+  CHECK_FALSE(summary.IsUsable());
   CHECK(summary.message.find("locked") != std::string::npos);
   CHECK(moved == project);
 
   summary = MovePrimitive(project, roof_id, delta, &moved);
   INFO("attached: " << summary.message);
-  CHECK_FALSE(summary.ok);
+  CHECK_FALSE(summary.IsUsable());
   CHECK(moved == project);
 
   project.FindPrimitive(box_id)->translation_locked = false;
   summary = MovePrimitive(project, box_id, delta, &moved);
   INFO("free: " << summary.message);
-  REQUIRE(summary.ok);
+  REQUIRE(summary.IsUsable());
   for (Id id : {box_id, roof_id}) {
     const Primitive& a = *project.FindPrimitive(id);
     const Primitive& b = *moved.FindPrimitive(id);
@@ -457,7 +457,7 @@ TEST_CASE("vertex move then model update: the solve starts from the moved state"
   const VertexMoveSummary move =
       MoveVertex(project, {scene.box_id, 2}, box.mesh.vertex(2).position + Eigen::Vector3d(0, 1.0, 0), {}, &moved);
   INFO("move: " << move.message);
-  REQUIRE(move.ok);
+  REQUIRE(move.IsUsable());
   REQUIRE(move.reached);
   REQUIRE(std::abs(moved.FindPrimitive(scene.box_id)->shape.params[1] - dragged_depth) < kReachTolerance);
 
@@ -465,7 +465,7 @@ TEST_CASE("vertex move then model update: the solve starts from the moved state"
   Project updated;
   const ModelUpdateSummary summary = UpdateModel(moved, warm, &updated);
   INFO("solve: " << summary.solve.message << ", joint: " << summary.joint.message);
-  REQUIRE(summary.ok);
+  REQUIRE(summary.IsUsable());
   CHECK(summary.solve.initial_cost > 1.0);  // the start is not the answer
   CHECK(summary.solve.reprojection_rms_px < 1e-6);
   const double depth = updated.FindPrimitive(scene.box_id)->shape.params[1];
@@ -483,6 +483,6 @@ TEST_CASE("vertex move then model update: the solve starts from the moved state"
   const double cold_depth = cold_updated.FindPrimitive(scene.box_id)->shape.params[1];
   MESSAGE("undetermined depth after the update: warm " << depth << ", cold " << cold_depth << " (dragged "
                                                        << dragged_depth << ", before the drag " << true_depth << ")");
-  CHECK(cold_summary.ok);
+  CHECK(cold_summary.IsUsable());
   CHECK_FALSE(cold_summary.solve.linear_initialization_used);
 }

@@ -131,7 +131,7 @@ int RunExportCommand(const std::string& project_path, const std::string& output_
   }
   TexturedMesh mesh;
   const TextureBakeSummary bake = BakeTexturedMesh(project, photo_pointers, TextureBakeOptions{}, &mesh);
-  if (!bake.success) {
+  if (!bake.IsUsable()) {
     std::cerr << "facet export: texture: " << bake.message << "\n";
     mesh = BuildUntexturedMesh(project);
   }

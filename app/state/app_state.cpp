@@ -361,7 +361,7 @@ void CollectBake(AppState* state, bool wait) {
   try {
     result = future.get();
   } catch (const std::exception& e) {
-    result.summary.success = false;
+    result.summary.termination = SolverTermination::kFailed;
     result.summary.message = std::string("the bake failed: ") + e.what();
     result.mesh = BuildUntexturedMesh(state->document.project());
   }
@@ -373,7 +373,7 @@ void CollectBake(AppState* state, bool wait) {
   }
   ++state->bake_stats.collected;
   state->last_bake = std::move(result.summary);
-  if (!state->last_bake.success) state->Log(LogLevel::kWarning, "Texture: " + state->last_bake.message);
+  if (!state->last_bake.IsUsable()) state->Log(LogLevel::kWarning, "Texture: " + state->last_bake.message);
   state->mesh = std::move(result.mesh);  // the untextured mesh when the bake failed
   state->baked_input_revision = input_revision;
   ++state->mesh_revision;

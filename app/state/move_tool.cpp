@@ -128,11 +128,11 @@ void MoveToolFrame(AppState* state, MoveDrag* drag_state, const MoveToolInput& i
       std::string message;
       if (drag.vertex) {
         const VertexMoveSummary summary = MoveVertex(start, drag.ref, point, VertexMoveOptions{}, &moved);
-        ok = summary.ok;
+        ok = summary.IsUsable();
         message = summary.message;
       } else {
         const PrimitiveMoveSummary summary = MovePrimitive(start, drag.primitive_id, point - drag.anchor, &moved);
-        ok = summary.ok;
+        ok = summary.IsUsable();
         message = summary.message;
       }
       drag.hint = message;
@@ -180,7 +180,7 @@ bool RunMoveCommand(AppState* state, const std::string& arg, std::string* error)
     }
     const VertexMoveSummary summary = MoveVertex(project, {selection.element.primitive_id, selection.element.element},
                                                  value, VertexMoveOptions{}, &moved);
-    if (!summary.ok) {
+    if (!summary.IsUsable()) {
       *error = "move-selection vertex: " + summary.message;
       return false;
     }
@@ -194,7 +194,7 @@ bool RunMoveCommand(AppState* state, const std::string& arg, std::string* error)
     return false;
   }
   const PrimitiveMoveSummary summary = MovePrimitive(project, id, value, &moved);
-  if (!summary.ok) {
+  if (!summary.IsUsable()) {
     *error = "move-selection primitive: " + summary.message;
     return false;
   }

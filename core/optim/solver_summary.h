@@ -41,11 +41,7 @@ namespace internal {
 template <typename Summary>
 Summary FailedSummary(Summary summary, std::string message, std::chrono::steady_clock::time_point start,
                       SolverTermination termination = SolverTermination::kFailed) {
-  if constexpr (requires { summary.success; }) {
-    summary.success = false;  // a summary not yet on SolverSummary
-  } else {
-    summary.termination = termination;
-  }
+  summary.termination = termination;
   summary.message = std::move(message);
   summary.time_ms = MsSince(start);
   return summary;

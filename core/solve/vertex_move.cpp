@@ -200,20 +200,20 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
                              const VertexMoveOptions& options, Project* moved) {
   VertexMoveSummary summary;
   *moved = project;
-  auto refuse = [&](std::string message) {
-    summary.ok = false;
+  auto refuse = [&](std::string message, SolverTermination termination = SolverTermination::kFailed) {
+    summary.termination = termination;
     summary.message = std::move(message);
     *moved = project;
     return summary;
   };
   std::string error;
-  if (!options.Check(&error)) return refuse("invalid options: " + error);
+  if (!options.Check(&error)) return refuse("invalid options: " + error, SolverTermination::kInvalidInput);
   const Primitive* source = project.FindPrimitive(vertex.primitive_id);
-  if (source == nullptr) return refuse("the primitive #" + std::to_string(vertex.primitive_id) + " does not exist");
+  if (source == nullptr) return refuse("the primitive #" + std::to_string(vertex.primitive_id) + " does not exist", SolverTermination::kInvalidInput);
   if (!source->mesh.IsVertex(vertex.vertex)) {
-    return refuse(Describe(*source) + " has no vertex " + std::to_string(vertex.vertex));
+    return refuse(Describe(*source) + " has no vertex " + std::to_string(vertex.vertex), SolverTermination::kInvalidInput);
   }
-  if (!target_in_world.allFinite()) return refuse("the target position is not finite");
+  if (!target_in_world.allFinite()) return refuse("the target position is not finite", SolverTermination::kInvalidInput);
 
   Primitive& primitive = *moved->FindPrimitive(vertex.primitive_id);
   const PrimitiveShape& shape = source->shape;
@@ -229,7 +229,7 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
     // The offset is in primitive-local units; the rotation maps the world step into them.
     primitive.mesh.vertex(vertex.vertex).local.offset += world_from_primitive.transpose() * wanted;
     RefreshPrimitive(moved, &primitive);
-    summary.ok = true;
+    summary.termination = SolverTermination::kConverged;
     summary.moved_offset = true;
     RecordPosition(*source, *moved, vertex, target_in_world, options.reach_tolerance * size, &summary);
     summary.message = Describe(*source) + ": free vertex " + std::to_string(vertex.vertex) + " moved";
@@ -289,7 +289,7 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
     return refuse(text);  // keeps limited_by
   }
 
-  summary.ok = true;
+  summary.termination = SolverTermination::kConverged;
   summary.message = DescribeMove(*source, out, summary);
   return summary;
 }
@@ -301,7 +301,7 @@ PrimitiveMoveSummary MovePrimitive(const Project& project, Id primitive_id, cons
   const Primitive* source = project.FindPrimitive(primitive_id);
   if (source == nullptr) {
     summary.message = "the primitive #" + std::to_string(primitive_id) + " does not exist";
-    return summary;
+    return summary;  // kInvalidInput, as default-constructed
   }
   if (!delta_in_world.allFinite()) {
     summary.message = "the move is not finite";
@@ -318,7 +318,7 @@ PrimitiveMoveSummary MovePrimitive(const Project& project, Id primitive_id, cons
   }
   moved->FindPrimitive(primitive_id)->shape.translation += delta_in_world;
   RefreshAllPrimitives(moved);
-  summary.ok = true;
+  summary.termination = SolverTermination::kConverged;
   summary.message = Describe(*source) + " moved by " + internal::FormatNumber(delta_in_world.norm(), kMessageDigits);
   return summary;
 }

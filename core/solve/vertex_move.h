@@ -35,6 +35,7 @@
 
 #include <Eigen/Core>
 
+#include "core/optim/solver_summary.h"
 #include "core/scene/project.h"
 
 namespace facet {
@@ -53,10 +54,11 @@ struct VertexMoveOptions {
 // Not a solver summary (core/optim/solver_summary.h): the move is one direct constrained
 // least-squares step, with no iterations and no cost to report; `ok` and `message` say whether
 // it was applied and why not, the rest what it did.
-struct VertexMoveSummary {
-  bool ok = false;
-  // User-facing: what changed ("box 'house': size y 3 -> 4"), or why the move was refused.
-  std::string message;
+// SolverSummary: termination kConverged when the primitive moved (towards the target as far
+// as its locks allow: see reached), kInvalidInput when the request was bad (no such vertex, a
+// target not finite, bad options), kFailed when no free parameter moves the vertex that way;
+// message: what changed ("box 'house': size y 3 -> 4"), or why the move was refused.
+struct VertexMoveSummary : SolverSummary {
   bool reached = false;                                // the vertex is at the target (within reach_tolerance)
   bool moved_offset = false;                           // a free vertex: only its offset changed
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // the vertex's world position after the move
@@ -81,10 +83,8 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
                              const VertexMoveOptions& options, Project* moved);
 
 // Not a solver summary either: a translation, applied or refused.
-struct PrimitiveMoveSummary {
-  bool ok = false;
-  std::string message;  // user-facing
-};
+// SolverSummary: kConverged when it moved, kInvalidInput when refused (message says why).
+struct PrimitiveMoveSummary : SolverSummary {};
 
 // Translates the primitive by `delta_in_world` (its attached primitives follow). Refused when
 // the primitive is missing, the delta is not finite, its translation is locked or it is

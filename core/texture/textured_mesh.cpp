@@ -583,17 +583,18 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
   *mesh = BuildMesh(project, &geometry, &occluders);
   const int face_count = static_cast<int>(geometry.size());
   summary.faces_untextured = face_count;
-  auto fail = [&](const std::string& message) {
-    summary.success = false;
+  auto fail = [&](const std::string& message, SolverTermination termination = SolverTermination::kFailed) {
+    summary.termination = termination;
     summary.message = message;
     summary.time_ms = ElapsedMs(start);
     return summary;
   };
   std::string error;
-  if (!options.Check(&error)) return fail("invalid texture options: " + error);
+  if (!options.Check(&error)) return fail("invalid texture options: " + error, SolverTermination::kInvalidInput);
   if (photos.size() != project.images.size()) {
     return fail("got " + std::to_string(photos.size()) + " photos for " + std::to_string(project.images.size()) +
-                " images");
+                " images",
+                SolverTermination::kInvalidInput);
   }
 
   const std::vector<PhotoView> views = UsableViews(project, photos);
@@ -601,7 +602,7 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
   std::vector<FaceTexture> faces(geometry.size());
   const std::vector<int> textured = ChooseFaceViews(geometry, views, occluders, options, &faces);
   if (textured.empty()) {
-    summary.success = true;
+    summary.termination = SolverTermination::kConverged;
     summary.message = geometry.empty() ? "the project has no primitives"
                       : views.empty()  ? "no calibrated image with loaded pixels; the mesh is untextured"
                                        : "no face is seen by a calibrated image; the mesh is untextured";
@@ -630,7 +631,7 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
 
   WriteAtlas(geometry, views, textured, faces, options, atlas_width, atlas_height, mesh);
 
-  summary.success = true;
+  summary.termination = SolverTermination::kConverged;
   summary.faces_textured = static_cast<int>(textured.size());
   summary.faces_untextured = face_count - summary.faces_textured;
   summary.atlas_width = atlas_width;

@@ -12,6 +12,7 @@
 
 #include "core/image/image_io.h"
 #include "core/mesh/mesh.h"
+#include "core/optim/solver_summary.h"
 #include "core/scene/project.h"
 
 namespace facet {
@@ -48,16 +49,15 @@ struct TextureBakeOptions {
   bool Check(std::string* error) const;
 };
 
-// Not a solver summary (core/optim/solver_summary.h): a bake has no cost to minimise and no
-// iterations, so it keeps its own shape: success, the message, what was textured, the time.
-struct TextureBakeSummary {
-  bool success = false;
-  std::string message;
+// The shape every step's summary shares (core/optim/solver_summary.h), so the app reports a
+// bake like a solve; a bake has no cost or iterations, those stay 0. termination kConverged when the bake ran (also when nothing could be
+// textured: the message says why), kInvalidInput for bad options or photos, kFailed when the
+// atlas overflows; iterations and costs are unused.
+struct TextureBakeSummary : SolverSummary {
   int faces_textured = 0;
   int faces_untextured = 0;
   int atlas_width = 0;
   int atlas_height = 0;
-  double time_ms = 0.0;
 };
 
 // Bakes a textured mesh. `photos[i]` points to the pixels of project.images[i] (nullptr or an

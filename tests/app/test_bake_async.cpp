@@ -55,7 +55,7 @@ void CheckMatchesSynchronousBake(const std::string& project_path, const std::str
   facet::TexturedMesh mesh;
   const facet::TextureBakeSummary summary =
       facet::BakeTexturedMesh(loaded.project, {&photo.image}, facet::TextureBakeOptions{}, &mesh);
-  REQUIRE_MESSAGE(summary.success, summary.message);
+  REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
   REQUIRE(summary.faces_textured > 0);
   INFO("status: " << status.dump());
   CHECK(status.at("triangles").get<size_t>() == mesh.indices.size() / 3);
