@@ -15,6 +15,7 @@
 
 #include "app/panels/calibration_overlay.h"
 #include "app/panels/image_overlay.h"
+#include "app/panels/image_snapping.h"
 #include "app/panels/image_view.h"
 #include "app/platform/image_tiles.h"
 #include "app/state/model_edits.h"
@@ -92,6 +93,8 @@ struct ImagePanelState::Impl {
   Eigen::Vector2d fine_anchor_uv = Eigen::Vector2d::Zero();
   ImVec2 last_mouse_screen{0, 0};
   Eigen::Vector2d last_pointer_uv = Eigen::Vector2d::Zero();
+  PhotoCorners corners;
+  SnapResult snap;  // this frame's, drawn before the click; kNone when nothing snapped
 };
 
 ImagePanelState::ImagePanelState() = default;
@@ -151,6 +154,7 @@ void CollectGarbage(PanelState* panel, const AppState& state) {
   for (auto it = panel->views.begin(); it != panel->views.end();) {
     it = project.FindImage(it->first) ? std::next(it) : panel->views.erase(it);
   }
+  panel->corners.CollectGarbage(state);
 }
 
 const VpCalibrationSummary* CalibrationFor(const AppState& state, Id image_id) {
@@ -718,7 +722,7 @@ struct ViewFrame {
   bool fine = false;                                   // fine pointing (Shift during a press)
   double pointer_scale = 1.0;                          // screen px per image px of the pointer's motion
   Eigen::Vector2d mouse_uv = Eigen::Vector2d::Zero();  // the pointer, image px
-  ImVec2 pointer_screen{0, 0};
+  ImVec2 pointer_screen{0, 0};  // the pointer before snapping: what hit tests use
   OverlayHover hover;
 };
 
@@ -797,6 +801,77 @@ void UpdatePointer(PanelState* panel, const ImageViewState& view, const ViewTran
   frame->pointer_screen = transform.ToScreen(frame->mouse_uv.x(), frame->mouse_uv.y());
   panel->last_pointer_uv = frame->mouse_uv;
   panel->last_mouse_screen = io.MousePos;
+}
+
+// What the current tool or drag places, so that it may snap (SnapRequest).
+SnapRequest SnapRequestFor(const AppState& state, const PanelState& panel) {
+  const Interaction& drag = panel.interaction;
+  const Project& project = state.document.project();
+  SnapRequest request;
+  switch (drag.kind) {
+    case DragKind::kNone:
+      request.active = IsLineTool(state.tool) || state.tool == Tool::kPin || state.tool == Tool::kLinePin;
+      if (state.tool == Tool::kPin || state.tool == Tool::kLinePin) {
+        request.exclude_primitive = state.selection.element.primitive_id;
+      }
+      break;
+    case DragKind::kNewSegment:
+      request.active = true;
+      request.vanishing_direction = true;
+      request.axis = drag.axis;
+      request.anchor_px = drag.press_uv;
+      break;
+    case DragKind::kMoveEndpoint:
+      if (const Segment* s = project.FindSegment(drag.target_id)) {
+        request.active = true;
+        request.exclude_segment = s->id;
+        request.vanishing_direction = true;
+        request.axis = s->axis;
+        request.anchor_px = drag.endpoint == 0 ? s->b_px : s->a_px;
+      }
+      break;
+    case DragKind::kMovePin:
+      if (const Pin* pin = project.FindPin(drag.target_id)) {
+        request.active = true;
+        request.exclude_primitive = pin->vertex.primitive_id;
+      }
+      break;
+    case DragKind::kPlacePin:
+      request.active = true;
+      request.exclude_primitive = drag.vertex.primitive_id;
+      break;
+    case DragKind::kLinePin:
+      request.active = true;
+      request.exclude_primitive = state.selection.element.primitive_id;
+      break;
+    case DragKind::kMoveLinePinEnd:
+      if (const Constraint* c = project.FindConstraint(drag.target_id)) {
+        request.active = true;
+        if (!c->vertices.empty()) request.exclude_primitive = c->vertices[0].primitive_id;
+      }
+      break;
+    default: break;
+  }
+  return request;
+}
+
+// Step 3b: snapping (Alt turns it off). The point placed is the pointer plus the drag's grab
+// offset, so that is what snaps; frame->mouse_uv moves by the same amount.
+void ApplySnapping(const AppState& state, PanelState* panel, const Image& image,
+                   const std::vector<ProjectedPrimitive>& model, ViewFrame* frame) {
+  panel->snap = SnapResult();
+  const SnapRequest request = SnapRequestFor(state, *panel);
+  if (!request.active || ImGui::GetIO().KeyAlt || !(frame->hovered || panel->interaction.kind != DragKind::kNone)) {
+    return;
+  }
+  const SnapFeatures features =
+      CollectSnapFeatures(state, image, model, panel->corners.Get(state, image.id), request);
+  const Eigen::Vector2d offset = IsEditDrag(panel->interaction.kind) ? panel->interaction.grab_offset
+                                                                     : Eigen::Vector2d::Zero();
+  const SnapResult snap = SnapToFeatures(frame->mouse_uv + offset, features, kSnapRadiusScreenPx / frame->pointer_scale);
+  if (snap.kind == SnapKind::kNone) return;
+  panel->snap = snap;
+  frame->mouse_uv = snap.position_px - offset;
 }
 
 // Step 4: what is under the pointer, shared with the 3D panel through AppState::hover.
@@ -953,6 +1028,10 @@ void DrawViewContents(const AppState& state, const PanelState& panel, const Imag
       (mouse_uv - drag.press_uv).norm() * frame.pointer_scale >= kMinSegmentLengthPx) {
     DrawLinePinPreview(draw_list, overlay, transform, drag.press_uv, mouse_uv, rect_min, rect_max);
   }
+  if (panel.snap.kind != SnapKind::kNone) {
+    DrawSnapMarker(draw_list, transform.ToScreen(panel.snap.position_px.x(), panel.snap.position_px.y()),
+                   panel.snap.kind, true);
+  }
   if (auto error = state.photo_errors.find(image.id); error != state.photo_errors.end()) {
     const std::string text = "Cannot show this photo: " + error->second;
     draw_list->AddText(ImGui::GetFont(), ImGui::GetFontSize(), ImVec2(rect_min.x + 10, rect_min.y + 10),
@@ -964,7 +1043,7 @@ void DrawViewContents(const AppState& state, const PanelState& panel, const Imag
     std::optional<LoupePreview> preview;
     if (drag.kind == DragKind::kNewSegment) preview = LoupePreview{drag.press_uv, drag.axis};
     DrawLoupe(draw_list, frame.texture, overlay, panel.overlay, view, panel.loupe_magnification, mouse_uv, preview,
-              rect_min, rect_max, frame.width_px, frame.height_px);
+              rect_min, rect_max, frame.width_px, frame.height_px, &panel.snap);
     if (frame.fine) {  // where the slowed-down pointer is in the main view
       const ImVec2 p = transform.ToScreen(mouse_uv.x(), mouse_uv.y());
       draw_list->AddCircle(p, 5.0f, IM_COL32(0, 0, 0, 200), 0, 3.0f);
@@ -982,7 +1061,10 @@ void DrawViewStatus(const AppState& state, const PanelState& panel, const ImageV
     const std::string hover_text = DescribeHover(state, frame.hover);
     if (!hover_text.empty()) ImGui::SetTooltip("%s", hover_text.c_str());
   }
-  const std::string hover_text = DescribeHover(state, frame.hover);
+  std::string hover_text = DescribeHover(state, frame.hover);
+  if (panel.snap.kind != SnapKind::kNone) {
+    hover_text += std::string(hover_text.empty() ? "" : "   ") + "snap: " + SnapKindName(panel.snap.kind) + " (Alt: off)";
+  }
   const std::string hint = ToolHint(state);
   if (frame.hovered) {
     ImGui::Text("(%.1f, %.1f) px   %.1f%%   %s%s%s", frame.mouse_uv.x(), frame.mouse_uv.y(), view.zoom * 100.0f,
@@ -1005,6 +1087,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   const std::vector<ProjectedPrimitive> model = ProjectModel(state->document.project(), image);
   const ViewTransform transform = TransformOf(view);
   UpdatePointer(panel, view, transform, &frame);
+  ApplySnapping(*state, panel, image, model, &frame);
   UpdateHover(state, *panel, image, model, transform, &frame);
   StartInteraction(state, panel, image, model, transform, frame);
   ContinueInteraction(state, panel, &view, frame);

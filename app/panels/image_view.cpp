@@ -1,5 +1,7 @@
 #include "app/panels/image_view.h"
 
+#include "app/panels/image_snapping.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -36,7 +38,7 @@ void ZoomImageViewAbout(ImageViewState* view, float new_zoom, ImVec2 anchor) {
 void DrawLoupe(ImDrawList* draw_list, const TiledTexture* texture, const OverlayInput& overlay,
                const OverlayOptions& overlay_options, const ImageViewState& view, float magnification,
                const Eigen::Vector2d& uv, const std::optional<LoupePreview>& preview, ImVec2 rect_min, ImVec2 rect_max,
-               int width_px, int height_px) {
+               int width_px, int height_px, const SnapResult* snap) {
   const ImVec2 pointer = TransformOf(view).ToScreen(uv.x(), uv.y());
   const float size = std::min({kLoupeSizePx, rect_max.x - rect_min.x - 4.0f, rect_max.y - rect_min.y - 4.0f});
   if (size < 40.0f) return;
@@ -70,6 +72,9 @@ void DrawLoupe(ImDrawList* draw_list, const TiledTexture* texture, const Overlay
   if (preview) {
     DrawImageLine(draw_list, loupe, preview->a_px, uv, p_min, p_max, IM_COL32(0, 0, 0, 200), 4.0f);
     DrawImageLine(draw_list, loupe, preview->a_px, uv, p_min, p_max, AxisColor(preview->axis), 2.0f);
+  }
+  if (snap != nullptr && snap->kind != SnapKind::kNone) {
+    DrawSnapMarker(draw_list, loupe.ToScreen(snap->position_px.x(), snap->position_px.y()), snap->kind, true);
   }
   // Crosshair with a gap, so the pixel under the cursor stays visible.
   const float gap = 4.0f;

@@ -11,6 +11,7 @@
 
 #include "app/panels/image_overlay.h"
 #include "app/platform/image_tiles.h"
+#include "core/geometry/image_snap.h"
 
 namespace facet::app {
 
@@ -46,10 +47,11 @@ struct LoupePreview {
 
 // Draws the loupe near the screen position of `uv_px` (inside the view rectangle), showing
 // the photo (or a placeholder of width_px x height_px when `texture` is null) and the
-// overlays at `magnification` times the view's zoom, centred on uv_px.
+// overlays at `magnification` times the view's zoom, centred on uv_px, with the snap target
+// (when `snap` is given and snapped) marked.
 void DrawLoupe(ImDrawList* draw_list, const TiledTexture* texture, const OverlayInput& overlay,
                const OverlayOptions& overlay_options, const ImageViewState& view, float magnification,
                const Eigen::Vector2d& uv_px, const std::optional<LoupePreview>& preview, ImVec2 rect_min,
-               ImVec2 rect_max, int width_px, int height_px);
+               ImVec2 rect_max, int width_px, int height_px, const SnapResult* snap = nullptr);
 
 }  // namespace facet::app
