@@ -1,0 +1,326 @@
+// Lines found for the user (core/estimators/line_detection.h): the detector's pixel convention,
+// the grouping on exact synthetic segments with outliers, detection and calibration on a
+// rendered Manhattan scene with a known camera, and degenerate photos.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/imgproc.hpp>
+
+#include "core/estimators/line_detection.h"
+#include "core/estimators/vanishing_point.h"
+
+namespace facet {
+namespace {
+
+// Supersampling factor of the renderer: polygons are filled on a grid this much finer and
+// averaged down by area, so each pixel holds its coverage to within 1 / kSuper^2.
+constexpr int kSuper = 8;
+
+struct TestCamera {
+  double focal_px = 0.0;
+  Eigen::Vector2d pp_px = Eigen::Vector2d::Zero();
+  Eigen::Matrix3d cam_from_world = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+
+  Eigen::Vector3d ToCamera(const Eigen::Vector3d& x) const { return cam_from_world * (x - center); }
+  Eigen::Vector2d Project(const Eigen::Vector3d& x) const {
+    const Eigen::Vector3d p = ToCamera(x);
+    return focal_px * p.head<2>() / p.z() + pp_px;
+  }
+};
+
+// A camera at `center` looking at `target`, world z up (core/geometry/conventions.h: camera
+// x right, y down, z forward).
+TestCamera LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& target, double focal_px, int w, int h) {
+  TestCamera camera;
+  camera.focal_px = focal_px;
+  camera.pp_px = Eigen::Vector2d(0.5 * (w - 1), 0.5 * (h - 1));
+  camera.center = center;
+  const Eigen::Vector3d forward = (target - center).normalized();
+  const Eigen::Vector3d right = forward.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const Eigen::Vector3d down = forward.cross(right);
+  camera.cam_from_world.row(0) = right;
+  camera.cam_from_world.row(1) = down;
+  camera.cam_from_world.row(2) = forward;
+  return camera;
+}
+
+// Renders filled polygons (pixel coordinates, pixel centres at integers) with their grey
+// levels into an RGBA image of w x h, by area coverage.
+class Renderer {
+ public:
+  Renderer(int w, int h, int background)
+      : w_(w), h_(h), fine_(h * kSuper, w * kSuper, CV_8UC1, cv::Scalar(background)) {}
+
+  void Fill(const std::vector<Eigen::Vector2d>& polygon_px, int grey) {
+    // Pixel x covers [x - 0.5, x + 0.5]; on the fine grid that is cells kSuper * x .. + kSuper - 1
+    // with centres at fine + 0.5, so fine = kSuper * (x + 0.5) - 0.5. fillPoly takes 8 bits of
+    // sub-pixel shift.
+    std::vector<cv::Point> points;
+    for (const Eigen::Vector2d& p : polygon_px) {
+      const Eigen::Vector2d fine = kSuper * (p.array() + 0.5) - 0.5;
+      points.emplace_back(static_cast<int>(std::lround(fine.x() * 256)), static_cast<int>(std::lround(fine.y() * 256)));
+    }
+    cv::fillPoly(fine_, std::vector<std::vector<cv::Point>>{points}, cv::Scalar(grey), cv::LINE_8, 8);
+  }
+
+  ImageRgba8 Image() const {
+    cv::Mat grey, rgba;
+    cv::resize(fine_, grey, cv::Size(w_, h_), 0, 0, cv::INTER_AREA);
+    cv::cvtColor(grey, rgba, cv::COLOR_GRAY2RGBA);
+    ImageRgba8 image;
+    image.width = w_;
+    image.height = h_;
+    image.pixels.assign(rgba.data, rgba.data + rgba.total() * 4);
+    return image;
+  }
+
+ private:
+  int w_, h_;
+  cv::Mat fine_;
+};
+
+// The inside corner of a room: checkerboards of 0.5 x 0.5 squares on the walls x = 0 and
+// y = 0 and on the floor z = 0, each plane in its own pair of grey levels.
+ImageRgba8 RenderRoomCorner(const TestCamera& camera, int w, int h) {
+  Renderer renderer(w, h, 128);
+  const double size = 0.5;
+  const int n = 8;
+  for (int plane = 0; plane < 3; ++plane) {
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        std::vector<Eigen::Vector2d> quad;
+        for (const auto& [di, dj] : {std::pair{0, 0}, {1, 0}, {1, 1}, {0, 1}}) {
+          const double u = (i + di) * size, v = (j + dj) * size;
+          const Eigen::Vector3d x = plane == 0 ? Eigen::Vector3d(0, u, v)
+                                               : plane == 1 ? Eigen::Vector3d(u, 0, v) : Eigen::Vector3d(u, v, 0);
+          quad.push_back(camera.Project(x));
+        }
+        const int grey = ((i + j) % 2 == 0 ? 60 : 190) + 20 * plane;
+        renderer.Fill(quad, grey);
+      }
+    }
+  }
+  return renderer.Image();
+}
+
+TEST_CASE("the detector's endpoints are sub-pixel, pixel centres at integers") {
+  // A dark quadrilateral with sides at known sub-pixel positions; every long detected segment
+  // must lie on one of its four sides.
+  const int w = 320, h = 240;
+  Renderer renderer(w, h, 200);
+  const std::vector<Eigen::Vector2d> quad = {{60.3, 50.7}, {250.6, 62.2}, {240.1, 190.4}, {70.8, 180.9}};
+  renderer.Fill(quad, 40);
+  const std::vector<Eigen::Vector4d> segments = DetectLineSegments(renderer.Image(), LineDetectionOptions{});
+  REQUIRE(segments.size() >= 4);
+  int on_sides = 0;
+  double worst = 0.0;
+  for (const Eigen::Vector4d& s : segments) {
+    double best = 1e9;
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector3d line = quad[k].homogeneous().cross(quad[(k + 1) % 4].homogeneous());
+      const double n = line.head<2>().norm();
+      best = std::min(best, std::max(std::abs(line.dot(s.head<2>().homogeneous())) / n,
+                                     std::abs(line.dot(s.tail<2>().homogeneous())) / n));
+    }
+    worst = std::max(worst, best);
+    if (best < 0.25) ++on_sides;
+  }
+  MESSAGE("segments: " << segments.size() << ", worst endpoint distance to a side: " << worst << " px");
+  // LSD on a clean edge is accurate to about a tenth of a pixel; an offset of half a pixel
+  // (a corner-based convention) would fail this.
+  CHECK(on_sides == static_cast<int>(segments.size()));
+  CHECK(worst < 0.25);
+}
+
+// Exact segments of the three axis directions (inside a box seen by `camera`), plus outliers
+// that pass no true vanishing point within twice the inlier distance.
+struct SyntheticSegments {
+  std::vector<Eigen::Vector4d> segments_px;
+  std::vector<int> true_family;  // 0, 1, 2 for world x, y, z; -1 for an outlier
+  std::array<Eigen::Vector3d, 3> vps;
+};
+
+// The inlier distance the grouping uses by default on a w x h image.
+double DefaultInlierDistancePx(int w, int h) {
+  return std::max(1.0, ManhattanLinesOptions{}.inlier_distance_rel_diagonal * std::hypot(w, h));
+}
+
+// The family the grouping must give a segment when the camera is recovered exactly: its own,
+// or none when it also passes within the inlier distance of another vanishing point
+// (ambiguous); outliers none.
+int ExpectedFamily(const SyntheticSegments& data, size_t i, double inlier_px) {
+  const int truth = data.true_family[i];
+  if (truth < 0) return -1;
+  for (int a = 0; a < 3; ++a)
+    if (a != truth && SegmentVanishingPointResidualPx(data.segments_px[i], data.vps[a]) < inlier_px) return -1;
+  return truth;
+}
+
+SyntheticSegments MakeSegments(const TestCamera& camera, int w, int h, int per_family, int outliers,
+                               std::uint32_t seed) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  SyntheticSegments out;
+  std::array<Eigen::Vector3d, 3>& vps = out.vps;
+  for (int a = 0; a < 3; ++a) {
+    Eigen::Matrix3d k = Eigen::Matrix3d::Identity();
+    k(0, 0) = k(1, 1) = camera.focal_px;
+    k.block<2, 1>(0, 2) = camera.pp_px;
+    vps[a] = k * camera.cam_from_world.col(a);
+  }
+  auto inside = [&](const Eigen::Vector2d& p) { return p.x() >= 0 && p.y() >= 0 && p.x() <= w - 1 && p.y() <= h - 1; };
+  for (int a = 0; a < 3; ++a) {
+    int made = 0;
+    while (made < per_family) {
+      const Eigen::Vector3d start(4.0 * unit(random), 4.0 * unit(random), 3.0 * unit(random));
+      Eigen::Vector3d end = start;
+      end[a] += 0.3 + 1.2 * unit(random);
+      if (camera.ToCamera(start).z() < 0.5 || camera.ToCamera(end).z() < 0.5) continue;
+      const Eigen::Vector2d p = camera.Project(start), q = camera.Project(end);
+      if (!inside(p) || !inside(q) || (q - p).norm() < 30.0) continue;
+      out.segments_px.push_back(Eigen::Vector4d(p.x(), p.y(), q.x(), q.y()));
+      out.true_family.push_back(a);
+      ++made;
+    }
+  }
+  int made = 0;
+  while (made < outliers) {
+    const Eigen::Vector2d p(unit(random) * (w - 1), unit(random) * (h - 1));
+    const double angle = unit(random) * M_PI, length = 30.0 + 120.0 * unit(random);
+    const Eigen::Vector2d q = p + length * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    if (!inside(q)) continue;
+    const Eigen::Vector4d s(p.x(), p.y(), q.x(), q.y());
+    bool near_vp = false;
+    for (const Eigen::Vector3d& v : vps) near_vp |= SegmentVanishingPointResidualPx(s, v) < 2.0 * DefaultInlierDistancePx(w, h);
+    if (near_vp) continue;
+    out.segments_px.push_back(s);
+    out.true_family.push_back(-1);
+    ++made;
+  }
+  return out;
+}
+
+TEST_CASE("grouping exact segments with 30 % outliers recovers the families and the camera to 1e-9") {
+  const int w = 1024, h = 768;
+  const TestCamera camera = LookAt({7.0, 5.5, 1.7}, {1.0, 1.5, 1.0}, 850.0, w, h);
+  const SyntheticSegments data = MakeSegments(camera, w, h, 40, 51, 7);
+  ManhattanLinesOptions options;
+  options.calibration.width_px = w;
+  options.calibration.height_px = h;
+  const ManhattanLinesSummary s = GroupManhattanLines(data.segments_px, options);
+  REQUIRE_MESSAGE(s.IsUsable(), s.message);
+  MESSAGE(s.message);
+
+  // The naming rule: z the most vertical direction, here world z. The detected labels must
+  // map the true families one to one, and each segment get exactly its expected family.
+  const double inlier_px = DefaultInlierDistancePx(w, h);
+  std::array<int, 3> label_of_family = {-2, -2, -2};
+  int mismatches = 0, ambiguous = 0;
+  for (size_t i = 0; i < data.segments_px.size(); ++i) {
+    const int expected = ExpectedFamily(data, i, inlier_px), got = s.segment_family[i];
+    if (data.true_family[i] >= 0 && expected < 0) ++ambiguous;
+    if (expected >= 0 && got >= 0 && label_of_family[expected] == -2) label_of_family[expected] = got;
+    if ((expected < 0) != (got < 0) || (expected >= 0 && label_of_family[expected] != got)) ++mismatches;
+  }
+  MESSAGE(ambiguous << " of 120 true inliers are ambiguous at " << inlier_px << " px");
+  CHECK(mismatches == 0);
+  CHECK(label_of_family[2] == 2);
+  CHECK(label_of_family[0] != label_of_family[1]);
+  CHECK(label_of_family[0] >= 0);
+  CHECK(label_of_family[1] >= 0);
+  // Noise-free data: the fit is exact up to rounding.
+  CHECK(std::abs(s.calibration.focal_px - camera.focal_px) / camera.focal_px < 1e-9);
+  CHECK((s.calibration.principal_point_px - camera.pp_px).norm() < 1e-6);
+}
+
+TEST_CASE("grouping with the focal length fixed or under a prior finds the same families") {
+  const int w = 1024, h = 768;
+  const TestCamera camera = LookAt({6.0, 7.5, 2.2}, {1.5, 1.0, 0.8}, 700.0, w, h);
+  const SyntheticSegments data = MakeSegments(camera, w, h, 30, 30, 11);
+  for (int mode = 0; mode < 2; ++mode) {
+    ManhattanLinesOptions options;
+    options.calibration.width_px = w;
+    options.calibration.height_px = h;
+    if (mode == 0) {
+      options.calibration.fixed_focal_px = 700.0;
+    } else {
+      options.calibration.focal_prior_px = 730.0;  // 4 % off, std 3 %: the segments decide
+      options.calibration.focal_prior_std_px = 21.0;
+    }
+    const ManhattanLinesSummary s = GroupManhattanLines(data.segments_px, options);
+    REQUIRE_MESSAGE(s.IsUsable(), s.message);
+    int wrong = 0;
+    for (size_t i = 0; i < data.segments_px.size(); ++i)
+      if ((ExpectedFamily(data, i, DefaultInlierDistancePx(w, h)) < 0) != (s.segment_family[i] < 0)) ++wrong;
+    CHECK(wrong == 0);
+    // Exact segments: with the prior the fit is pulled off the truth by prior / data weight,
+    // which the exact data make vanishing; the robust noise floor of calibrate_vp keeps it
+    // finite, so 1e-6 relative.
+    CHECK(std::abs(s.calibration.focal_px - 700.0) / 700.0 < (mode == 0 ? 1e-12 : 1e-6));
+  }
+}
+
+TEST_CASE("detection and calibration on a rendered room corner recover the known camera") {
+  const int w = 1200, h = 900;
+  const TestCamera camera = LookAt({5.0, 4.2, 1.6}, {0.0, 0.0, 1.1}, 1000.0, w, h);
+  const ImageRgba8 image = RenderRoomCorner(camera, w, h);
+  ManhattanLinesOptions options;
+  const ManhattanLinesSummary s = DetectManhattanLines(image, options);
+  REQUIRE_MESSAGE(s.IsUsable(), s.message);
+  const double focal_error = std::abs(s.calibration.focal_px - camera.focal_px) / camera.focal_px;
+  const double pp_error = (s.calibration.principal_point_px - camera.pp_px).norm();
+  MESSAGE(s.message << "; focal error " << 100.0 * focal_error << " %, principal point error " << pp_error
+                    << " px, residual sigma " << s.calibration.residual_sigma_px << " px");
+  for (int a = 0; a < 3; ++a) CHECK(s.segments_per_family[a] >= 10);
+  // LSD's endpoints on these area-sampled edges are good to ~0.1 px (first test case); over
+  // segments hundreds of px long spread across the image, that fixes each vanishing
+  // direction to a few hundredths of a degree, and f to a few tenths of a percent. 1 % and
+  // 1 % of the image diagonal (15 px) leave room for the detector's bias at corners.
+  CHECK(focal_error < 0.01);
+  CHECK(pp_error < 15.0);
+}
+
+TEST_CASE("degenerate photos give a clear failure, never a crash") {
+  SUBCASE("an empty image") {
+    const ManhattanLinesSummary s = DetectManhattanLines(ImageRgba8{}, ManhattanLinesOptions{});
+    CHECK_FALSE(s.IsUsable());
+    CHECK(s.termination == SolverTermination::kInvalidInput);
+    CHECK(s.message == "the image is empty");
+  }
+  SUBCASE("a blank image") {
+    Renderer renderer(640, 480, 128);
+    const ManhattanLinesSummary s = DetectManhattanLines(renderer.Image(), ManhattanLinesOptions{});
+    CHECK_FALSE(s.IsUsable());
+    CHECK(s.segments_px.empty());
+    CHECK(s.message.find("too few line segments") == 0);
+  }
+  SUBCASE("one set of parallel lines: only one direction") {
+    Renderer renderer(640, 480, 200);
+    for (int i = 0; i < 12; ++i) {
+      const double x = 30.0 + 50.0 * i;
+      renderer.Fill({{x, -10.0}, {x + 20.0, -10.0}, {x + 20.0, 490.0}, {x, 490.0}}, 50);  // no end edges
+    }
+    const ManhattanLinesSummary s = DetectManhattanLines(renderer.Image(), ManhattanLinesOptions{});
+    CHECK_FALSE(s.IsUsable());
+    CHECK(s.message.find("only one vanishing direction") == 0);
+    CHECK(s.labelled_segments.empty());
+  }
+  SUBCASE("a non-finite segment is rejected") {
+    ManhattanLinesOptions options;
+    options.calibration.width_px = 640;
+    options.calibration.height_px = 480;
+    std::vector<Eigen::Vector4d> segments(6, Eigen::Vector4d(0, 0, 100, 100));
+    segments[3].x() = std::nan("");
+    const ManhattanLinesSummary s = GroupManhattanLines(segments, options);
+    CHECK(s.termination == SolverTermination::kInvalidInput);
+  }
+}
+
+}  // namespace
+}  // namespace facet
