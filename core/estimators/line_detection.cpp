@@ -7,6 +7,7 @@
 #include <random>
 
 #include <Eigen/Geometry>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/estimators/vanishing_point.h"
@@ -262,19 +263,97 @@ std::vector<Segment> LabelledSegments(const std::vector<Eigen::Vector4d>& segmen
 
 }  // namespace
 
+namespace {
+
+// Photos of this many pixels or more are detected in horizontal bands, in parallel; the
+// band count is fixed (not the machine's thread count) so that every machine finds the same
+// segments.
+constexpr double kBandedMinPixels = 2.0e6;
+constexpr int kBands = 4;
+// Pieces of one line cut by a band boundary: LSD leaves a pixel or two at an image border,
+// so each piece ends within this many rows of the boundary, and the two pieces lie on one
+// line within LSD's accuracy.
+constexpr double kBoundaryReachPx = 4.0;
+constexpr double kPieceLineDistancePx = 1.5;
+constexpr double kPieceMaxAngleRad = 2.0 * M_PI / 180.0;
+
+// The segment with endpoints ordered by image row (top first).
+Eigen::Vector4d TopFirst(const Eigen::Vector4d& s) {
+  return s[1] <= s[3] ? s : Eigen::Vector4d(s[2], s[3], s[0], s[1]);
+}
+
+double DistanceToLine(const Eigen::Vector4d& s, const Eigen::Vector2d& p) {
+  const Eigen::Vector2d d = (s.tail<2>() - s.head<2>()).normalized();
+  const Eigen::Vector2d r = p - s.head<2>();
+  return std::abs(d.x() * r.y() - d.y() * r.x());
+}
+
+// Joins the pieces of lines that cross row `boundary`: `above` ends there, `below` starts
+// there. A joined line replaces its piece in `below` (so it can be joined again at the next
+// boundary); its piece in `above` is removed.
+void JoinAcrossBoundary(double boundary, std::vector<Eigen::Vector4d>* above, std::vector<Eigen::Vector4d>* below) {
+  std::vector<bool> above_used(above->size(), false), below_used(below->size(), false);
+  for (size_t i = 0; i < above->size(); ++i) {
+    const Eigen::Vector4d a = TopFirst((*above)[i]);
+    if (a[3] < boundary - kBoundaryReachPx) continue;
+    const Eigen::Vector2d da = (a.tail<2>() - a.head<2>()).normalized();
+    int best = -1;
+    double best_distance = kPieceLineDistancePx;
+    for (size_t j = 0; j < below->size(); ++j) {
+      if (below_used[j]) continue;
+      const Eigen::Vector4d b = TopFirst((*below)[j]);
+      if (b[1] > boundary + kBoundaryReachPx) continue;
+      const Eigen::Vector2d db = (b.tail<2>() - b.head<2>()).normalized();
+      if (std::abs(da.x() * db.y() - da.y() * db.x()) > std::sin(kPieceMaxAngleRad) || da.dot(db) < 0.0) continue;
+      const double distance = std::max(DistanceToLine(a, b.head<2>()), DistanceToLine(b, a.tail<2>()));
+      if (distance < best_distance) {
+        best_distance = distance;
+        best = static_cast<int>(j);
+      }
+    }
+    if (best < 0) continue;
+    const Eigen::Vector4d b = TopFirst((*below)[best]);
+    (*below)[best] = Eigen::Vector4d(a[0], a[1], b[2], b[3]);
+    below_used[best] = true;
+    above_used[i] = true;
+  }
+  std::vector<Eigen::Vector4d> kept;
+  for (size_t i = 0; i < above->size(); ++i)
+    if (!above_used[i]) kept.push_back((*above)[i]);
+  *above = std::move(kept);
+}
+
+}  // namespace
+
 std::vector<Eigen::Vector4d> DetectLineSegments(const ImageRgba8& image, const LineDetectionOptions& options) {
   std::vector<Eigen::Vector4d> segments;
   if (image.empty() || image.pixels.size() < static_cast<size_t>(image.width) * image.height * 4) return segments;
   const cv::Mat rgba(image.height, image.width, CV_8UC4, const_cast<std::uint8_t*>(image.pixels.data()));
   cv::Mat grey;
   cv::cvtColor(rgba, grey, cv::COLOR_RGBA2GRAY);
-  std::vector<cv::Vec4f> found;
-  cv::createLineSegmentDetector(cv::LSD_REFINE_STD)->detect(grey, found);
+
+  // LSD is local (regions grown from pixel gradients), so bands of a large photo can be
+  // detected on their own, in parallel; lines cut by a band boundary are joined again.
+  const int bands = static_cast<double>(image.width) * image.height >= kBandedMinPixels ? kBands : 1;
+  std::vector<int> band_start(bands + 1);
+  for (int b = 0; b <= bands; ++b) band_start[b] = static_cast<int>(static_cast<long>(image.height) * b / bands);
+  std::vector<std::vector<Eigen::Vector4d>> found(bands);
+  cv::parallel_for_(cv::Range(0, bands), [&](const cv::Range& range) {
+    for (int b = range.start; b < range.end; ++b) {
+      const cv::Mat band = grey.rowRange(band_start[b], band_start[b + 1]).clone();
+      std::vector<cv::Vec4f> lines;
+      cv::createLineSegmentDetector(cv::LSD_REFINE_STD)->detect(band, lines);
+      for (const cv::Vec4f& l : lines)
+        found[b].emplace_back(l[0], l[1] + band_start[b], l[2], l[3] + band_start[b]);
+    }
+  });
+  // A boundary at row r lies between pixel rows r - 1 and r: at r - 0.5 in pixel-centre units.
+  for (int b = 0; b + 1 < bands; ++b) JoinAcrossBoundary(band_start[b + 1] - 0.5, &found[b], &found[b + 1]);
+
   const double min_length = options.min_length_rel_diagonal * std::hypot(image.width, image.height);
-  for (const cv::Vec4f& l : found) {
-    const Eigen::Vector4d s(l[0], l[1], l[2], l[3]);
-    if ((s.tail<2>() - s.head<2>()).norm() >= min_length) segments.push_back(s);
-  }
+  for (const auto& band : found)
+    for (const Eigen::Vector4d& s : band)
+      if ((s.tail<2>() - s.head<2>()).norm() >= min_length) segments.push_back(s);
   return segments;
 }
 
