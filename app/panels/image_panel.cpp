@@ -16,6 +16,7 @@
 #include "app/panels/calibration_overlay.h"
 #include "app/panels/image_overlay.h"
 #include "app/panels/image_view.h"
+#include "app/panels/line_proposals_view.h"
 #include "app/platform/image_tiles.h"
 #include "app/state/model_edits.h"
 #include "app/state/model_pick.h"
@@ -945,6 +946,7 @@ void DrawViewContents(const AppState& state, const PanelState& panel, const Imag
                      IM_COL32(0, 0, 0, 255));
   DrawImageOverlays(draw_list, overlay, transform, rect_min, rect_max, panel.overlay);
   DrawCalibrationOverlay(draw_list, state, image, transform, rect_min, rect_max, frame.hovered ? &mouse_uv : nullptr);
+  DrawLineProposals(draw_list, state, image.id, transform, rect_min, rect_max);
   if (drag.kind == DragKind::kNewSegment) {
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, IM_COL32(0, 0, 0, 200), 4.0f);
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, AxisColor(drag.axis), 2.0f);
@@ -996,6 +998,7 @@ void DrawViewStatus(const AppState& state, const PanelState& panel, const ImageV
 void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ImageViewState& view = panel->views[image.id];
   bool fit_now = false, one_to_one = false;
+  DrawLineProposalsBar(state, image.id);
   ViewFrame frame = LayOutView(panel, &view, &fit_now, &one_to_one);
   frame.texture = TextureFor(panel, *state, image.id);
   frame.width_px = frame.texture ? frame.texture->width : std::max(1, image.width_px);
@@ -1006,7 +1009,8 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   const ViewTransform transform = TransformOf(view);
   UpdatePointer(panel, view, transform, &frame);
   UpdateHover(state, *panel, image, model, transform, &frame);
-  StartInteraction(state, panel, image, model, transform, frame);
+  // A click on a detected line's proposal selects it rather than starting a tool's action.
+  if (!ClickLineProposal(state, image.id, transform, frame.hovered)) StartInteraction(state, panel, image, model, transform, frame);
   ContinueInteraction(state, panel, &view, frame);
   DrawSegmentContextMenu(state, panel);
 
