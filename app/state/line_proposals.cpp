@@ -5,6 +5,7 @@
 
 #include "app/state/app_state.h"
 #include "core/estimators/line_detection.h"
+#include "core/io/project_io.h"
 
 namespace facet::app {
 namespace {
@@ -36,9 +37,20 @@ bool DetectLineProposals(AppState* state, Id image_id) {
     state->Log(LogLevel::kError, "Detect lines: no such image");
     return false;
   }
-  const auto photo = state->photos.find(image_id);
-  if (photo == state->photos.end() || photo->second.empty()) {
-    state->Log(LogLevel::kError, "Detect lines: the photo is not loaded");
+  auto photo = state->photos.find(image_id);
+  if (photo == state->photos.end()) {
+    // Just added (the frame loads new photos after the edit): load it now, as that would.
+    const std::string path =
+        state->project_path.empty() ? image->path : ResolveImagePath(state->project_path, image->path);
+    ImageReadResult read = ReadImage(path);
+    if (!read.ok()) {
+      state->Log(LogLevel::kError, "Detect lines: " + read.error);
+      return false;
+    }
+    photo = state->photos.emplace(image_id, std::move(read.image)).first;
+  }
+  if (photo->second.empty()) {
+    state->Log(LogLevel::kError, "Detect lines: the photo is empty");
     return false;
   }
   state->line_proposals.reset();

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/estimators/calibrate_vp.h"
+#include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 
 using namespace facet::testing;
@@ -17,6 +18,13 @@ namespace {
 
 const std::string kLeuvenPhoto = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuvenA.jpg";
 const std::string kSampleProject = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuven.facet";
+
+// An empty project to add photos to.
+std::string WriteEmptyProject(const TempDir& dir) {
+  const std::string path = dir / "empty.facet";
+  REQUIRE(facet::SaveProject(facet::Project(), path) == "");
+  return path;
+}
 
 // "Detect lines: N proposed (x a, y b, z c)" from the report's log.
 int ProposedCount(const nlohmann::json& report) {
@@ -41,7 +49,6 @@ TEST_CASE("Detect lines on an added photo: proposals, remove and re-assign one, 
   TempDir dir("detect_lines_ui");
   const std::string script =
       "frames 2\n"
-      "command new\n"
       "command lines on-add on\n"
       "command add-photo " + kLeuvenPhoto + "\n"
       "frames 2\n"
@@ -60,7 +67,7 @@ TEST_CASE("Detect lines on an added photo: proposals, remove and re-assign one, 
       "command redo\n"
       "frames 2\n"
       "command save " + (dir / "redone.facet") + "\n";
-  const nlohmann::json report = RenderScript(dir, kSampleProject, "detect", script);
+  const nlohmann::json report = RenderScript(dir, WriteEmptyProject(dir), "detect", script);
   INFO(ReportLog(report));
   const int proposed = ProposedCount(report);
   REQUIRE(proposed >= 30);
@@ -118,8 +125,8 @@ TEST_CASE("Detect lines: refusals are clear and leave the project alone") {
   CHECK(err.find("no proposed line 100000") != std::string::npos);
   // A blank photo has no lines: the detection says so.
   REQUIRE(cv::imwrite(dir / "blank.png", cv::Mat(480, 640, CV_8UC3, cv::Scalar(128, 128, 128))));
-  err = RenderScriptRefused(dir, kSampleProject, "blank",
-                            "frames 2\ncommand new\ncommand add-photo " + (dir / "blank.png") +
+  err = RenderScriptRefused(dir, WriteEmptyProject(dir), "blank",
+                            "frames 2\ncommand add-photo " + (dir / "blank.png") +
                                 "\nframes 2\ncommand lines detect\n");
   CHECK(err.find("too few line segments") != std::string::npos);
 }
