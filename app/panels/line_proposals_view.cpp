@@ -70,14 +70,13 @@ void DrawLineProposalsBar(AppState* state, Id image_id) {
     DiscardLineProposals(state);
     return;
   }
+  // The selected proposal's own row: the panel is too narrow for both on one.
   const int selected = proposals->selected;
   if (selected < 0) {
-    ImGui::SameLine();
-    ImGui::TextDisabled("click one to re-assign or remove it");
+    ImGui::TextDisabled("Dashed: proposed lines. Click one to re-assign or remove it.");
     return;
   }
-  ImGui::SameLine();
-  ImGui::TextDisabled("| line %d:", selected);
+  ImGui::TextDisabled("Line %d:", selected);
   for (int a = 0; a < 3; ++a) {
     const Axis axis = static_cast<Axis>(a);
     ImGui::SameLine();
