@@ -15,7 +15,8 @@
 namespace facet::testing {
 
 // Supersampling factor of the renderer: polygons are filled on a grid this much finer and
-// averaged down by area, so each pixel holds its coverage to within 1 / kSuper^2.
+// averaged down by area, so each pixel holds its coverage to within 1 / factor^2. Large
+// images take a smaller factor to keep the fine grid in memory.
 constexpr int kSuper = 8;
 
 struct TestCamera {
@@ -51,16 +52,16 @@ inline TestCamera LookAt(const Eigen::Vector3d& center, const Eigen::Vector3d& t
 // levels into an RGBA image of w x h, by area coverage.
 class Renderer {
  public:
-  Renderer(int w, int h, int background)
-      : w_(w), h_(h), fine_(h * kSuper, w * kSuper, CV_8UC1, cv::Scalar(background)) {}
+  Renderer(int w, int h, int background, int super = kSuper)
+      : w_(w), h_(h), super_(super), fine_(h * super, w * super, CV_8UC1, cv::Scalar(background)) {}
 
   void Fill(const std::vector<Eigen::Vector2d>& polygon_px, int grey) {
-    // Pixel x covers [x - 0.5, x + 0.5]; on the fine grid that is cells kSuper * x .. + kSuper - 1
-    // with centres at fine + 0.5, so fine = kSuper * (x + 0.5) - 0.5. fillPoly takes 8 bits of
+    // Pixel x covers [x - 0.5, x + 0.5]; on the fine grid that is cells super * x .. + super - 1
+    // with centres at fine + 0.5, so fine = super * (x + 0.5) - 0.5. fillPoly takes 8 bits of
     // sub-pixel shift.
     std::vector<cv::Point> points;
     for (const Eigen::Vector2d& p : polygon_px) {
-      const Eigen::Vector2d fine = kSuper * (p.array() + 0.5) - 0.5;
+      const Eigen::Vector2d fine = super_ * (p.array() + 0.5) - 0.5;
       points.emplace_back(static_cast<int>(std::lround(fine.x() * 256)), static_cast<int>(std::lround(fine.y() * 256)));
     }
     cv::fillPoly(fine_, std::vector<std::vector<cv::Point>>{points}, cv::Scalar(grey), cv::LINE_8, 8);
@@ -78,14 +79,14 @@ class Renderer {
   }
 
  private:
-  int w_, h_;
+  int w_, h_, super_;
   cv::Mat fine_;
 };
 
 // The inside corner of a room: checkerboards of 0.5 x 0.5 squares on the walls x = 0 and
 // y = 0 and on the floor z = 0, each plane in its own pair of grey levels.
-inline ImageRgba8 RenderRoomCorner(const TestCamera& camera, int w, int h) {
-  Renderer renderer(w, h, 128);
+inline ImageRgba8 RenderRoomCorner(const TestCamera& camera, int w, int h, int super = kSuper) {
+  Renderer renderer(w, h, 128, super);
   const double size = 0.5;
   const int n = 8;
   for (int plane = 0; plane < 3; ++plane) {

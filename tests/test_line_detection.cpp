@@ -198,6 +198,46 @@ TEST_CASE("detection and calibration on a rendered room corner recover the known
   CHECK(pp_error < 15.0);
 }
 
+TEST_CASE("a large photo is detected in bands: lines crossing the band boundaries come out whole") {
+  // 2400 x 1500 = 3.6 MP, above the 2 MP of the banded path (four bands of 375 rows). A dark
+  // slanted stripe from the top to the bottom: its two long edges cross all three boundaries.
+  const int w = 2400, h = 1500;
+  Renderer renderer(w, h, 190, 2);
+  const std::vector<Eigen::Vector2d> stripe = {{1000.3, -20.0}, {1080.3, -20.0}, {1380.7, 1520.0}, {1300.7, 1520.0}};
+  renderer.Fill(stripe, 40);
+  const std::vector<Eigen::Vector4d> segments = DetectLineSegments(renderer.Image(), LineDetectionOptions{});
+  // Each edge is one segment reaching (within LSD's few border pixels) from the top row to
+  // the bottom one, and lies on its true line: its midpoint (far from any border) within
+  // 0.5 px (cv::fillPoly fills every fine cell an edge touches, which moves the edge out by
+  // up to half a fine cell, 0.25 px at factor 2, plus LSD's ~0.2 px), its ends, which LSD
+  // places less well at the image border, within 1 px.
+  REQUIRE(segments.size() == 2);
+  const Eigen::Vector3d left = stripe[0].homogeneous().cross(stripe[3].homogeneous());
+  const Eigen::Vector3d right = stripe[1].homogeneous().cross(stripe[2].homogeneous());
+  for (const Eigen::Vector4d& s : segments) {
+    CHECK(std::min(s[1], s[3]) < 4.0);
+    CHECK(std::max(s[1], s[3]) > h - 5.0);
+    const Eigen::Vector2d mid = 0.5 * (s.head<2>() + s.tail<2>());
+    const Eigen::Vector3d line =
+        std::abs(left.dot(mid.homogeneous())) < std::abs(right.dot(mid.homogeneous())) ? left : right;
+    const double n = line.head<2>().norm();
+    CHECK(std::abs(line.dot(mid.homogeneous())) / n < 0.5);
+    CHECK(std::abs(line.dot(s.head<2>().homogeneous())) / n < 1.0);
+    CHECK(std::abs(line.dot(s.tail<2>().homogeneous())) / n < 1.0);
+  }
+  CHECK((segments[0] - segments[1]).norm() > 100.0);  // the two edges, not one twice
+}
+
+TEST_CASE("detection and calibration on a 4.3 MP room corner (banded) recover the known camera") {
+  const int w = 2400, h = 1800;
+  const TestCamera camera = LookAt({5.0, 4.2, 1.6}, {0.0, 0.0, 1.1}, 2000.0, w, h);
+  const ManhattanLinesSummary s = DetectManhattanLines(RenderRoomCorner(camera, w, h, 2), ManhattanLinesOptions{});
+  REQUIRE_MESSAGE(s.IsUsable(), s.message);
+  const double focal_error = std::abs(s.calibration.focal_px - camera.focal_px) / camera.focal_px;
+  MESSAGE(s.message << "; focal error " << 100.0 * focal_error << " %");
+  CHECK(focal_error < 0.01);  // as at 1200 x 900 (the scene is the same, twice the pixels)
+}
+
 TEST_CASE("degenerate photos give a clear failure, never a crash") {
   SUBCASE("an empty image") {
     const ManhattanLinesSummary s = DetectManhattanLines(ImageRgba8{}, ManhattanLinesOptions{});
