@@ -50,7 +50,9 @@ int main(int argc, char** argv) {
   cli.add_option("project", gui_project, "Project file (*.facet) to open in the GUI");
 
   auto* calibrate = cli.add_subcommand(
-      "calibrate", "Calibrate one camera from line families or from known 3D points; prints the camera as JSON");
+      "calibrate",
+      "Calibrate one camera from line families, from the lines detected on a photo, or from known 3D points; prints "
+      "the camera as JSON");
   std::string lines_path, points_path;
   auto* lines_option =
       calibrate

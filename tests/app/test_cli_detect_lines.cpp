@@ -55,6 +55,14 @@ std::string WriteRoomCorner(const TempDir& dir) {
   return path;
 }
 
+TEST_CASE("calibrate --help names --image and its options") {
+  TempDir dir("facet_cli_image_help");
+  const CliResult help = RunFacet(dir, "calibrate --help");
+  CHECK(help.exit_code == 0);
+  for (const char* option : {"--image", "--principal-point", "--focal-prior", "--focal"})
+    CHECK(help.out.find(option) != std::string::npos);
+}
+
 TEST_CASE("calibrate --image finds the room corner's camera, and its families re-read as LINES.json give the same") {
   TempDir dir("facet_cli_image");
   const std::string photo = WriteRoomCorner(dir);
