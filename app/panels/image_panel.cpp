@@ -18,6 +18,7 @@
 #include "app/panels/image_view.h"
 #include "app/panels/line_proposals_view.h"
 #include "app/platform/image_tiles.h"
+#include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
 #include "app/state/model_pick.h"
 
@@ -870,10 +871,15 @@ void ContinueEditDrag(AppState* state, PanelState* panel, const ViewFrame& frame
 
 // Step 6b: the keys of an idle view: Delete removes the selection, Escape steps back.
 void HandleIdleKeys(AppState* state, PanelState* panel) {
-  if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete), false) ||
-      ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Backspace), false)) {
-    DeleteSelection(state, panel);
+  const bool delete_pressed = ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete), false) ||
+                              ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Backspace), false);
+  // A selected line proposal takes Delete and Escape before the model's selection.
+  if (state->line_proposals && state->line_proposals->selected >= 0) {
+    if (delete_pressed) RemoveLineProposal(state, state->line_proposals->selected);
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) state->line_proposals->selected = -1;
+    if (delete_pressed || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) return;
   }
+  if (delete_pressed) DeleteSelection(state, panel);
   if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
     state->selection.connect_from = {};                            // forget V_connect's first vertex
     if (state->tool == Tool::kPin) state->selection.element = {};  // and the vertex to pin

@@ -73,7 +73,7 @@ void DrawLineProposalsBar(AppState* state, Id image_id) {
   // The selected proposal's own row: the panel is too narrow for both on one.
   const int selected = proposals->selected;
   if (selected < 0) {
-    ImGui::TextDisabled("Dashed: proposed lines. Click one to re-assign or remove it.");
+    ImGui::TextDisabled("Dashed: proposed lines. Click one to re-assign or remove it (Delete).");
     return;
   }
   ImGui::TextDisabled("Line %d:", selected);

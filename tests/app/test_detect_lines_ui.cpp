@@ -9,6 +9,8 @@
 #include <string>
 
 #include "core/estimators/calibrate_vp.h"
+#include "core/estimators/line_detection.h"
+#include "core/image/image_io.h"
 #include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 
@@ -112,6 +114,72 @@ TEST_CASE("Detect lines on an added photo: proposals, remove and re-assign one, 
   const facet::Project redone = LoadProjectFile(dir / "redone.facet");
   CHECK(redone.segments == accepted.segments);
   CHECK(redone.images[0].camera.focal_px == accepted.images[0].camera.focal_px);
+}
+
+TEST_CASE("Detect lines with the mouse: click a proposal, Delete removes it, Accept all adds the rest") {
+  TempDir dir("detect_lines_mouse");
+  const std::string project = WriteEmptyProject(dir);
+  const std::string add = "frames 2\ncommand lines on-add on\ncommand add-photo " + kLeuvenPhoto + "\nframes 3\n";
+  // First session: where the view and the bar's buttons are with the proposals shown.
+  const nlohmann::json probe = RenderScript(dir, project, "probe", add + "command save " + (dir / "probe.facet") + "\n");
+  const View view = ViewFromReport(probe);
+  const nlohmann::json& items = probe.at("items");
+  REQUIRE(items.contains("image.accept_lines"));
+
+  // The same detection in the core (the image's settings: principal point solved, the EXIF
+  // prior), to know where each proposal is.
+  const facet::Image image = LoadProjectFile(dir / "probe.facet").images.at(0);
+  const facet::ImageReadResult photo = facet::ReadImage(kLeuvenPhoto);
+  REQUIRE(photo.ok());
+  facet::ManhattanLinesOptions options;
+  options.calibration.focal_prior_px = image.focal_prior_px;
+  options.calibration.focal_prior_std_px = image.focal_prior_std_px;
+  const facet::ManhattanLinesSummary found = facet::DetectManhattanLines(photo.image, options);
+  REQUIRE(found.IsUsable());
+  const std::vector<facet::Segment>& proposed = found.labelled_segments;
+  // The proposal to click: the one whose midpoint is farthest (on screen) from every other
+  // proposal, so that the click picks it and no other.
+  int target = -1;
+  double target_clearance = 0.0;
+  for (size_t i = 0; i < proposed.size(); ++i) {
+    const Eigen::Vector2d mid = view.ToScreen(0.5 * (proposed[i].a_px + proposed[i].b_px));
+    if (!view.Inside(mid, 10.0)) continue;
+    double clearance = 1e9;
+    for (size_t j = 0; j < proposed.size(); ++j) {
+      if (j == i) continue;
+      const Eigen::Vector2d a = view.ToScreen(proposed[j].a_px), b = view.ToScreen(proposed[j].b_px);
+      const double t = std::clamp((mid - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+      clearance = std::min(clearance, (a + t * (b - a) - mid).norm());
+    }
+    if (clearance > target_clearance) {
+      target_clearance = clearance;
+      target = static_cast<int>(i);
+    }
+  }
+  REQUIRE(target >= 0);
+  REQUIRE(target_clearance > 8.0);  // beyond the 6 px pick radius
+  const Eigen::Vector2d click = view.ToScreen(0.5 * (proposed[target].a_px + proposed[target].b_px));
+
+  const std::string script = add + "click left " + FormatXY(click, 10) + "\nframes 2\nkey delete\nframes 2\n" +
+                             "click left " + ItemCenter(items, "image.accept_lines") + "\nframes 3\ncommand save " +
+                             (dir / "accepted.facet") + "\n";
+  const nlohmann::json report = RenderScript(dir, project, "mouse", script);
+  INFO(ReportLog(report));
+  const facet::Project accepted = LoadProjectFile(dir / "accepted.facet");
+  REQUIRE(accepted.segments.size() == proposed.size() - 1);
+  // Exactly the clicked one is missing, the others are there in order with their families.
+  size_t k = 0;
+  for (size_t i = 0; i < proposed.size(); ++i) {
+    if (static_cast<int>(i) == target) continue;
+    CHECK(accepted.segments[k].a_px == proposed[i].a_px);
+    CHECK(accepted.segments[k].b_px == proposed[i].b_px);
+    CHECK(accepted.segments[k].axis == proposed[i].axis);
+    ++k;
+  }
+  // Delete took the proposal, not the model's selection: no other edit than the accept.
+  CHECK(report["undo_stack"].back().get<std::string>() ==
+        "Accept " + std::to_string(proposed.size() - 1) + " detected lines");
+  CHECK(accepted.images[0].camera_calibrated);
 }
 
 TEST_CASE("Detect lines: refusals are clear and leave the project alone") {
