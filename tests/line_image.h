@@ -95,8 +95,9 @@ inline ImageRgba8 RenderRoomCorner(const TestCamera& camera, int w, int h, int s
         std::vector<Eigen::Vector2d> quad;
         for (const auto& [di, dj] : {std::pair{0, 0}, {1, 0}, {1, 1}, {0, 1}}) {
           const double u = (i + di) * size, v = (j + dj) * size;
-          const Eigen::Vector3d x = plane == 0 ? Eigen::Vector3d(0, u, v)
-                                               : plane == 1 ? Eigen::Vector3d(u, 0, v) : Eigen::Vector3d(u, v, 0);
+          const Eigen::Vector3d x = plane == 0   ? Eigen::Vector3d(0, u, v)
+                                    : plane == 1 ? Eigen::Vector3d(u, 0, v)
+                                                 : Eigen::Vector3d(u, v, 0);
           quad.push_back(camera.Project(x));
         }
         const int grey = ((i + j) % 2 == 0 ? 60 : 190) + 20 * plane;

@@ -109,7 +109,8 @@ SyntheticSegments MakeSegments(const TestCamera& camera, int w, int h, int per_f
     if (!inside(q)) continue;
     const Eigen::Vector4d s(p.x(), p.y(), q.x(), q.y());
     bool near_vp = false;
-    for (const Eigen::Vector3d& v : vps) near_vp |= SegmentVanishingPointResidualPx(s, v) < 2.0 * DefaultInlierDistancePx(w, h);
+    for (const Eigen::Vector3d& v : vps)
+      near_vp |= SegmentVanishingPointResidualPx(s, v) < 2.0 * DefaultInlierDistancePx(w, h);
     if (near_vp) continue;
     out.segments_px.push_back(s);
     out.true_family.push_back(-1);

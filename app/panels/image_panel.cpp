@@ -1016,7 +1016,8 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   UpdatePointer(panel, view, transform, &frame);
   UpdateHover(state, *panel, image, model, transform, &frame);
   // A click on a detected line's proposal selects it rather than starting a tool's action.
-  if (!ClickLineProposal(state, image.id, transform, frame.hovered)) StartInteraction(state, panel, image, model, transform, frame);
+  if (!ClickLineProposal(state, image.id, transform, frame.hovered))
+    StartInteraction(state, panel, image, model, transform, frame);
   ContinueInteraction(state, panel, &view, frame);
   DrawSegmentContextMenu(state, panel);
 

@@ -57,7 +57,8 @@ void DrawLineProposalsBar(AppState* state, Id image_id) {
   ImGui::Text("%d proposed:", static_cast<int>(proposals->segments.size()));
   for (int a = 0; a < 3; ++a) {
     ImGui::SameLine();
-    ImGui::TextColored(ImGui::ColorConvertU32ToFloat4(AxisColor(static_cast<Axis>(a), 255)), "%s %d", AxisName(static_cast<Axis>(a)), counts[a]);
+    ImGui::TextColored(ImGui::ColorConvertU32ToFloat4(AxisColor(static_cast<Axis>(a), 255)), "%s %d",
+                       AxisName(static_cast<Axis>(a)), counts[a]);
   }
   ImGui::SameLine();
   if (ImGui::SmallButton("Accept all")) {

@@ -72,8 +72,7 @@ int RunCalibrateImageCommand(const std::string& photo_path, const std::string& p
     options.principal_point_mode = PrincipalPointMode::kFixed;
     options.fixed_principal_point_px = {cx, cy};
   } else {
-    std::cerr << "facet calibrate: --principal-point must be solve, center or CX,CY, got '" << principal_point
-              << "'\n";
+    std::cerr << "facet calibrate: --principal-point must be solve, center or CX,CY, got '" << principal_point << "'\n";
     return 1;
   }
   if (focal_px != 0.0 && !(focal_px > 0.0 && std::isfinite(focal_px))) {
@@ -101,8 +100,8 @@ int RunCalibrateImageCommand(const std::string& photo_path, const std::string& p
     options.focal_prior_std_px = std_px;
     options.focal_prior_source = "given on the command line";
   } else {
-    std::cerr << "facet calibrate: --focal-prior must be exif, none or F,STD (px, both positive), got '"
-              << focal_prior << "'\n";
+    std::cerr << "facet calibrate: --focal-prior must be exif, none or F,STD (px, both positive), got '" << focal_prior
+              << "'\n";
     return 1;
   }
   const CalibrateIoResult result = CalibrateImageFile(photo_path, options);

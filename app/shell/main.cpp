@@ -75,10 +75,9 @@ int main(int argc, char** argv) {
                        "PHOTO.jpg: detect the line families on the photo and calibrate them; prints the --lines "
                        "camera JSON plus the families found (\"lines\", a LINES.json)")
           ->check(CLI::ExistingFile);
-  auto* pp_option = calibrate
-                        ->add_option("--principal-point", principal_point,
-                                     "With --image: solve | center | CX,CY (px)")
-                        ->capture_default_str();
+  auto* pp_option =
+      calibrate->add_option("--principal-point", principal_point, "With --image: solve | center | CX,CY (px)")
+          ->capture_default_str();
   auto* prior_option =
       calibrate
           ->add_option("--focal-prior", focal_prior,

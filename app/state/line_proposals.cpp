@@ -188,8 +188,10 @@ bool RunLinesCommand(AppState* state, const std::string& arg, std::string* error
     state->detect_lines_on_add = words[0] == "on";
     return true;
   }
-  *error = "lines: expected detect [IMAGE_INDEX], remove I, assign I x|y|z, select I, accept, discard or "
-           "on-add on|off; got '" + arg + "'";
+  *error =
+      "lines: expected detect [IMAGE_INDEX], remove I, assign I x|y|z, select I, accept, discard or "
+      "on-add on|off; got '" +
+      arg + "'";
   return false;
 }
 

@@ -344,8 +344,7 @@ std::vector<Eigen::Vector4d> DetectLineSegments(const ImageRgba8& image, const L
       const cv::Mat band = grey.rowRange(band_start[b], band_start[b + 1]).clone();
       std::vector<cv::Vec4f> lines;
       cv::createLineSegmentDetector(cv::LSD_REFINE_STD)->detect(band, lines);
-      for (const cv::Vec4f& l : lines)
-        found[b].emplace_back(l[0], l[1] + band_start[b], l[2], l[3] + band_start[b]);
+      for (const cv::Vec4f& l : lines) found[b].emplace_back(l[0], l[1] + band_start[b], l[2], l[3] + band_start[b]);
     }
   });
   // A boundary at row r lies between pixel rows r - 1 and r: at r - 0.5 in pixel-centre units.

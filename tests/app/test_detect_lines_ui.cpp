@@ -52,23 +52,34 @@ TEST_CASE("Detect lines on an added photo: proposals, remove and re-assign one, 
   const std::string script =
       "frames 2\n"
       "command lines on-add on\n"
-      "command add-photo " + kLeuvenPhoto + "\n"
+      "command add-photo " +
+      kLeuvenPhoto +
+      "\n"
       "frames 2\n"
-      "command save " + (dir / "proposed.facet") + "\n"
+      "command save " +
+      (dir / "proposed.facet") +
+      "\n"
       "command lines select 0\n"
       "frames 2\n"
-      "screenshot " + (dir / "proposals.png") + "\n"
+      "screenshot " +
+      (dir / "proposals.png") +
+      "\n"
       "command lines remove 0\n"
       "command lines assign 0 x\n"
       "command lines accept\n"
       "frames 2\n"
-      "command save " + (dir / "accepted.facet") + "\n"
+      "command save " +
+      (dir / "accepted.facet") +
+      "\n"
       "command undo\n"
       "frames 1\n"
-      "command save " + (dir / "undone.facet") + "\n"
+      "command save " +
+      (dir / "undone.facet") +
+      "\n"
       "command redo\n"
       "frames 2\n"
-      "command save " + (dir / "redone.facet") + "\n";
+      "command save " +
+      (dir / "redone.facet") + "\n";
   const nlohmann::json report = RenderScript(dir, WriteEmptyProject(dir), "detect", script);
   INFO(ReportLog(report));
   const int proposed = ProposedCount(report);
@@ -87,8 +98,7 @@ TEST_CASE("Detect lines on an added photo: proposals, remove and re-assign one, 
   CHECK(accepted.segments.front().axis == facet::Axis::kX);
   for (const auto& s : accepted.segments) CHECK(s.image_id == accepted.images[0].id);
   REQUIRE(report["undo_stack"].size() >= 2);
-  CHECK(report["undo_stack"].back().get<std::string>() ==
-        "Accept " + std::to_string(proposed - 1) + " detected lines");
+  CHECK(report["undo_stack"].back().get<std::string>() == "Accept " + std::to_string(proposed - 1) + " detected lines");
   CHECK(SegmentsOf(accepted, facet::Axis::kZ) >= 20);  // the street's verticals
 
   // The existing calibration ran on them: the camera is what CalibrateFromVanishingLines gives
@@ -121,7 +131,8 @@ TEST_CASE("Detect lines with the mouse: click a proposal, Delete removes it, Acc
   const std::string project = WriteEmptyProject(dir);
   const std::string add = "frames 2\ncommand lines on-add on\ncommand add-photo " + kLeuvenPhoto + "\nframes 3\n";
   // First session: where the view and the bar's buttons are with the proposals shown.
-  const nlohmann::json probe = RenderScript(dir, project, "probe", add + "command save " + (dir / "probe.facet") + "\n");
+  const nlohmann::json probe =
+      RenderScript(dir, project, "probe", add + "command save " + (dir / "probe.facet") + "\n");
   const View view = ViewFromReport(probe);
   const nlohmann::json& items = probe.at("items");
   REQUIRE(items.contains("image.accept_lines"));
@@ -193,8 +204,8 @@ TEST_CASE("Detect lines: refusals are clear and leave the project alone") {
   CHECK(err.find("no proposed line 100000") != std::string::npos);
   // A blank photo has no lines: the detection says so.
   REQUIRE(cv::imwrite(dir / "blank.png", cv::Mat(480, 640, CV_8UC3, cv::Scalar(128, 128, 128))));
-  err = RenderScriptRefused(dir, WriteEmptyProject(dir), "blank",
-                            "frames 2\ncommand add-photo " + (dir / "blank.png") +
-                                "\nframes 2\ncommand lines detect\n");
+  err =
+      RenderScriptRefused(dir, WriteEmptyProject(dir), "blank",
+                          "frames 2\ncommand add-photo " + (dir / "blank.png") + "\nframes 2\ncommand lines detect\n");
   CHECK(err.find("too few line segments") != std::string::npos);
 }

@@ -117,10 +117,11 @@ TEST_CASE("York Urban train split: focal length from detected lines, without and
     REQUIRE(!figures->focal_errors_percent.empty());
     const double median = Percentile(figures->focal_errors_percent, 0.5);
     const double p90 = Percentile(figures->focal_errors_percent, 0.9);
-    std::printf("%s: focal error median %.2f %%, p90 %.2f %%, max %.2f %%, %d photos without a camera, "
-                "median time %.1f ms\n",
-                name, median, p90, Percentile(figures->focal_errors_percent, 1.0),
-                static_cast<int>(figures->failures.size()), Percentile(figures->times_ms, 0.5));
+    std::printf(
+        "%s: focal error median %.2f %%, p90 %.2f %%, max %.2f %%, %d photos without a camera, "
+        "median time %.1f ms\n",
+        name, median, p90, Percentile(figures->focal_errors_percent, 1.0), static_cast<int>(figures->failures.size()),
+        Percentile(figures->times_ms, 0.5));
     for (const std::string& f : figures->failures) std::printf("  %s\n", f.c_str());
     if (figures == &with_exif) {
       CHECK(median <= kMaxMedianFocalErrorPercent);
