@@ -262,10 +262,6 @@ std::vector<Segment> LabelledSegments(const std::vector<Eigen::Vector4d>& segmen
   return labelled;
 }
 
-}  // namespace
-
-namespace {
-
 // Photos of this many pixels or more are detected in horizontal bands, in parallel; the
 // band count is fixed (not the machine's thread count) so that every machine finds the same
 // segments.
