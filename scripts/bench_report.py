@@ -21,6 +21,8 @@ COMPARISONS = [
     ("calibration from 40 3D points vs calibrateCamera", "BM_CalibrateFromPoints", "BM_OpenCvCalibrateCameraOneView"),
     ("fundamental matrix, RANSAC + LM vs findFundamentalMat RANSAC", "BM_FundamentalRansacAndRefine",
      "BM_OpenCvFindFundamentalMatRansac"),
+    ("lines found for the user (detect, group, calibrate) vs OpenCV's LSD alone", "BM_DetectManhattanLines",
+     "BM_OpenCvLineSegmentDetector"),
 ]
 SETTING_ARGS = ("solver", "rebuild", "diagnostics")
 

@@ -17,7 +17,9 @@
 #include "app/panels/image_overlay.h"
 #include "app/panels/image_snapping.h"
 #include "app/panels/image_view.h"
+#include "app/panels/line_proposals_view.h"
 #include "app/platform/image_tiles.h"
+#include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
 #include "app/state/model_pick.h"
 
@@ -944,10 +946,15 @@ void ContinueEditDrag(AppState* state, PanelState* panel, const ViewFrame& frame
 
 // Step 6b: the keys of an idle view: Delete removes the selection, Escape steps back.
 void HandleIdleKeys(AppState* state, PanelState* panel) {
-  if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete), false) ||
-      ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Backspace), false)) {
-    DeleteSelection(state, panel);
+  const bool delete_pressed = ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Delete), false) ||
+                              ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Backspace), false);
+  // A selected line proposal takes Delete and Escape before the model's selection.
+  if (state->line_proposals && state->line_proposals->selected >= 0) {
+    if (delete_pressed) RemoveLineProposal(state, state->line_proposals->selected);
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) state->line_proposals->selected = -1;
+    if (delete_pressed || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) return;
   }
+  if (delete_pressed) DeleteSelection(state, panel);
   if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
     state->selection.connect_from = {};                            // forget V_connect's first vertex
     if (state->tool == Tool::kPin) state->selection.element = {};  // and the vertex to pin
@@ -1020,6 +1027,7 @@ void DrawViewContents(const AppState& state, const PanelState& panel, const Imag
                      IM_COL32(0, 0, 0, 255));
   DrawImageOverlays(draw_list, overlay, transform, rect_min, rect_max, panel.overlay);
   DrawCalibrationOverlay(draw_list, state, image, transform, rect_min, rect_max, frame.hovered ? &mouse_uv : nullptr);
+  DrawLineProposals(draw_list, state, image.id, transform, rect_min, rect_max);
   if (drag.kind == DragKind::kNewSegment) {
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, IM_COL32(0, 0, 0, 200), 4.0f);
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, AxisColor(drag.axis), 2.0f);
@@ -1078,6 +1086,7 @@ void DrawViewStatus(const AppState& state, const PanelState& panel, const ImageV
 void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ImageViewState& view = panel->views[image.id];
   bool fit_now = false, one_to_one = false;
+  DrawLineProposalsBar(state, image.id);
   ViewFrame frame = LayOutView(panel, &view, &fit_now, &one_to_one);
   frame.texture = TextureFor(panel, *state, image.id);
   frame.width_px = frame.texture ? frame.texture->width : std::max(1, image.width_px);
@@ -1089,7 +1098,9 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   UpdatePointer(panel, view, transform, &frame);
   ApplySnapping(*state, panel, image, model, &frame);
   UpdateHover(state, *panel, image, model, transform, &frame);
-  StartInteraction(state, panel, image, model, transform, frame);
+  // A click on a detected line's proposal selects it rather than starting a tool's action.
+  if (!ClickLineProposal(state, image.id, transform, frame.hovered))
+    StartInteraction(state, panel, image, model, transform, frame);
   ContinueInteraction(state, panel, &view, frame);
   DrawSegmentContextMenu(state, panel);
 

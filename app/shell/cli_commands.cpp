@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "app/state/calgui_exif_prior.h"
+#include "core/image/image_io.h"
 #include "core/io/calibrate_io.h"
 #include "core/io/calibrate_points_io.h"
 #include "core/io/export.h"
@@ -29,6 +31,20 @@ bool LoadForCli(const std::string& path, Project* project) {
   return true;
 }
 
+// "A,B": two finite numbers.
+bool ParsePair(const std::string& text, double* a, double* b) {
+  const size_t comma = text.find(',');
+  if (comma == std::string::npos) return false;
+  try {
+    size_t used_a = 0, used_b = 0;
+    *a = std::stod(text.substr(0, comma), &used_a);
+    *b = std::stod(text.substr(comma + 1), &used_b);
+    return used_a == comma && used_b == text.size() - comma - 1 && std::isfinite(*a) && std::isfinite(*b);
+  } catch (...) {
+    return false;
+  }
+}
+
 // JSON has no NaN: pins that took no part in the solve are written as null.
 nlohmann::json NumberOrNull(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(); }
 
@@ -37,6 +53,58 @@ nlohmann::json NumberOrNull(double value) { return std::isfinite(value) ? nlohma
 int RunCalibrateCommand(const std::string& lines_path, const std::string& points_path) {
   const CalibrateIoResult result =
       lines_path.empty() ? CalibratePointsFile(points_path) : CalibrateLinesFile(lines_path);
+  if (!result.ok()) {
+    std::cerr << "facet calibrate: " << result.error << "\n";
+    return 1;
+  }
+  std::cout << result.json << "\n";
+  return 0;
+}
+
+int RunCalibrateImageCommand(const std::string& photo_path, const std::string& principal_point,
+                             const std::string& focal_prior, double focal_px) {
+  CalibrateImageOptions options;
+  if (principal_point == "solve") {
+    options.principal_point_mode = PrincipalPointMode::kSolve;
+  } else if (principal_point == "center") {
+    options.principal_point_mode = PrincipalPointMode::kImageCenter;
+  } else if (double cx, cy; ParsePair(principal_point, &cx, &cy)) {
+    options.principal_point_mode = PrincipalPointMode::kFixed;
+    options.fixed_principal_point_px = {cx, cy};
+  } else {
+    std::cerr << "facet calibrate: --principal-point must be solve, center or CX,CY, got '" << principal_point << "'\n";
+    return 1;
+  }
+  if (focal_px != 0.0 && !(focal_px > 0.0 && std::isfinite(focal_px))) {
+    std::cerr << "facet calibrate: --focal must be a positive number of px\n";
+    return 1;
+  }
+  options.focal_px = focal_px;
+  if (focal_px > 0.0 || focal_prior == "none") {
+    // no prior
+  } else if (focal_prior == "exif") {
+    int width = 0, height = 0;
+    std::string error;
+    if (!ReadImageSize(photo_path, &width, &height, &error)) {
+      std::cerr << "facet calibrate: " << error << "\n";
+      return 1;
+    }
+    const ExifFocalPrior prior = ExifFocalPriorFrom(ReadExifFocalFromFile(photo_path, width, height));
+    if (prior.found) {
+      options.focal_prior_px = prior.focal_px;
+      options.focal_prior_std_px = prior.std_px;
+    }
+    options.focal_prior_source = prior.message;  // says "No EXIF focal length: ..." when there is none
+  } else if (double f, std_px; ParsePair(focal_prior, &f, &std_px) && f > 0.0 && std_px > 0.0) {
+    options.focal_prior_px = f;
+    options.focal_prior_std_px = std_px;
+    options.focal_prior_source = "given on the command line";
+  } else {
+    std::cerr << "facet calibrate: --focal-prior must be exif, none or F,STD (px, both positive), got '" << focal_prior
+              << "'\n";
+    return 1;
+  }
+  const CalibrateIoResult result = CalibrateImageFile(photo_path, options);
   if (!result.ok()) {
     std::cerr << "facet calibrate: " << result.error << "\n";
     return 1;

@@ -9,6 +9,11 @@ namespace facet::app {
 
 // Exactly one of the two inputs is set: line families (vanishing points) or known 3D points (DLT).
 int RunCalibrateCommand(const std::string& lines_path, const std::string& points_path);
+// Lines detected on the photo (core/io/calibrate_io.h, CalibrateImageFile). principal_point:
+// "solve", "center" or "CX,CY"; focal_prior: "exif" (the photo's, if it has one), "none" or
+// "F,STD"; focal_px > 0: a known focal length (then focal_prior is ignored).
+int RunCalibrateImageCommand(const std::string& photo_path, const std::string& principal_point,
+                             const std::string& focal_prior, double focal_px);
 int RunRelateCommand(const std::string& matches_path);
 int RunSolveCommand(const std::string& project_path, const std::string& output_path);
 int RunExportCommand(const std::string& project_path, const std::string& output_path);

@@ -22,6 +22,7 @@
 #include "app/panels/viewport_panel.h"
 #include "app/shell/menu_bar.h"
 #include "app/state/add_photo.h"
+#include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
 #include "app/state/move_tool.h"
 #include "core/io/export.h"
@@ -381,8 +382,10 @@ void DrawPathDialog(AppState* state, ShellState* shell) {
                      : d == Dialog::kAddPhoto ? "Add"
                                               : "Export";
   const std::string extension = d == Dialog::kExport || d == Dialog::kAddPhoto ? "" : ".facet";
-  if (d == Dialog::kAddPhoto)
+  if (d == Dialog::kAddPhoto) {
     ImGui::TextColored(kDimText, "A JPEG or PNG photo; its EXIF focal length becomes a prior");
+    ImGui::Checkbox("Detect lines (proposals to accept in the image panel)", &state->detect_lines_on_add);
+  }
   if (d == Dialog::kExport) ImGui::TextColored(kDimText, "The extension chooses the format: .glb (glTF) or .obj");
   if (ImGui::IsWindowAppearing()) ImGui::SetKeyboardFocusHere();
   ImGui::SetNextItemWidth(560);
@@ -659,8 +662,11 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
       *error = LastLoggedError(*state);
       return false;
     }
+    // The photo is in; a detection that finds no lines only logs why.
+    if (state->detect_lines_on_add) DetectLineProposals(state, state->active_image_id);
     return true;
   }
+  if (name == "lines") return RunLinesCommand(state, arg, error);
   if (name == "constrain") return RunConstrainCommand(state, arg, error);
   if (name == "select-add") return RunSelectAddCommand(state, arg, error);
   if (name == "line-pin") return RunLinePinCommand(state, arg, error);

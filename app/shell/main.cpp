@@ -50,7 +50,9 @@ int main(int argc, char** argv) {
   cli.add_option("project", gui_project, "Project file (*.facet) to open in the GUI");
 
   auto* calibrate = cli.add_subcommand(
-      "calibrate", "Calibrate one camera from line families or from known 3D points; prints the camera as JSON");
+      "calibrate",
+      "Calibrate one camera from line families, from the lines detected on a photo, or from known 3D points; prints "
+      "the camera as JSON");
   std::string lines_path, points_path;
   auto* lines_option =
       calibrate
@@ -65,8 +67,29 @@ int main(int argc, char** argv) {
                        "...], \"distortion\": 0 | 1 | 2, \"focal_px\": F (optional: a known focal length, pose only)} "
                        "(6+ points, or 4+ on one plane)")
           ->check(CLI::ExistingFile);
+  std::string image_path, principal_point = "solve", focal_prior = "exif";
+  double known_focal_px = 0.0;
+  auto* image_option =
+      calibrate
+          ->add_option("--image", image_path,
+                       "PHOTO.jpg: detect the line families on the photo and calibrate them; prints the --lines "
+                       "camera JSON plus the families found (\"lines\", a LINES.json)")
+          ->check(CLI::ExistingFile);
+  auto* pp_option =
+      calibrate->add_option("--principal-point", principal_point, "With --image: solve | center | CX,CY (px)")
+          ->capture_default_str();
+  auto* prior_option =
+      calibrate
+          ->add_option("--focal-prior", focal_prior,
+                       "With --image: exif (the photo's EXIF focal length, +- ~3 %) | none | F,STD (px)")
+          ->capture_default_str();
+  auto* focal_option =
+      calibrate->add_option("--focal", known_focal_px, "With --image: a known focal length in px (not solved)");
   lines_option->excludes(points_option);
-  calibrate->require_option(1);
+  image_option->excludes(lines_option)->excludes(points_option);
+  for (auto* option : {pp_option, prior_option, focal_option}) option->needs(image_option);
+  focal_option->excludes(prior_option);
+  calibrate->require_option(1, 4);
 
   auto* relate = cli.add_subcommand(
       "relate", "Two-view geometry from matches: fundamental matrix, and relative pose when K is known; prints JSON");
@@ -106,6 +129,8 @@ int main(int argc, char** argv) {
 
   CLI11_PARSE(cli, argc, argv);
 
+  if (*calibrate && !image_path.empty())
+    return facet::app::RunCalibrateImageCommand(image_path, principal_point, focal_prior, known_focal_px);
   if (*calibrate) return facet::app::RunCalibrateCommand(lines_path, points_path);
   if (*relate) return facet::app::RunRelateCommand(matches_path);
   if (*solve) return facet::app::RunSolveCommand(solve_project, solve_out);

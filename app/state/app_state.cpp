@@ -143,6 +143,7 @@ namespace {
 // Everything that belongs to one document: its history, selection, photos and derived mesh.
 void ResetDocument(AppState* state, Project project, const std::string& path) {
   state->document.Reset(std::move(project));
+  state->line_proposals.reset();  // image ids start again in another project
   state->project_path = path;
   state->selection = {};
   state->active_image_id = kNoId;
@@ -417,6 +418,7 @@ void RefreshDerived(AppState* state) {
   }
 
   ValidateSelection(state);
+  ValidateLineProposals(state);
 
   // The mesh depends on the primitives, the cameras and the loaded photos only.
   const bool inputs_unchanged = state->mesh_inputs_known && state->mesh_primitives == project.primitives &&

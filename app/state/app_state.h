@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "app/state/line_proposals.h"
 #include "app/state/rect.h"
 #include "core/estimators/calibrate_vp.h"
 #include "core/image/image_io.h"
@@ -179,6 +180,11 @@ struct AppState {
   std::uint64_t baked_input_revision = 0;
   BakeMode bake_mode = BakeMode::kBackground;
   BakeStats bake_stats;
+
+  // Lines detected on a photo, awaiting the user's accept (app/state/line_proposals.h), and
+  // the Add photo option that detects them on every added photo.
+  std::optional<LineProposals> line_proposals;
+  bool detect_lines_on_add = false;
 
   std::vector<LogEntry> log;
   double time_s = 0.0;

@@ -53,6 +53,11 @@
 //                                   move-selection ARGS  V_op on the selected vertex or
 //                                                      primitive (RunMoveCommand,
 //                                                      app/state/move_tool.h)
+//                                   lines ARGS         detected line proposals: detect
+//                                                      [IMAGE_INDEX], remove I, assign I
+//                                                      x|y|z, select I, accept, discard,
+//                                                      on-add on|off (RunLinesCommand,
+//                                                      app/state/line_proposals.h)
 //                                   wait-bake          block until the texture bake of the
 //                                                      current project is swapped in
 //                                   bake-status PATH   the background bake's state as JSON

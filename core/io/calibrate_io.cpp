@@ -9,7 +9,9 @@
 #include "core/io/json_io_internal.h"
 
 #include "core/estimators/calibrate_vp.h"
+#include "core/estimators/line_detection.h"
 #include "core/estimators/plumb_line.h"
+#include "core/image/image_io.h"
 
 namespace facet {
 namespace {
@@ -274,6 +276,74 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
 
 CalibrateIoResult CalibrateLinesFile(const std::string& path) {
   return json_io::FromFile<CalibrateIoResult>(path, CalibrateLinesJson);
+}
+
+CalibrateIoResult CalibrateImageFile(const std::string& photo_path, const CalibrateImageOptions& options) {
+  try {
+    if ((options.focal_px > 0.0) && (options.focal_prior_px > 0.0))
+      return Error("a known focal length and a focal prior cannot be given together");
+    const ImageReadResult read = ReadImage(photo_path);
+    if (!read.ok()) return Error(read.error);
+    ManhattanLinesOptions detect;
+    detect.calibration.principal_point_mode = options.principal_point_mode;
+    detect.calibration.fixed_principal_point_px = options.fixed_principal_point_px;
+    detect.calibration.fixed_focal_px = options.focal_px;
+    if (options.focal_prior_px > 0.0 && options.focal_prior_std_px > 0.0) {
+      detect.calibration.focal_prior_px = options.focal_prior_px;
+      detect.calibration.focal_prior_std_px = options.focal_prior_std_px;
+    }
+    const ManhattanLinesSummary found = DetectManhattanLines(read.image, detect);
+    if (!found.IsUsable()) return Error(photo_path + ": no camera from the detected lines: " + found.message);
+
+    // The LINES.json the detection makes; calibrating it is the output, so that re-reading
+    // it gives the same camera.
+    json lines = json::object();
+    lines["image_size"] = {read.image.width, read.image.height};
+    json families = json::array();
+    for (int a = 0; a < 3; ++a) {
+      json segments = json::array();
+      for (const Segment& s : found.labelled_segments)
+        if (static_cast<int>(s.axis) == a) segments.push_back({s.a_px.x(), s.a_px.y(), s.b_px.x(), s.b_px.y()});
+      if (!segments.empty()) families.push_back({{"axis", AxisName(static_cast<Axis>(a))}, {"segments", segments}});
+    }
+    lines["families"] = families;
+    switch (options.principal_point_mode) {
+      case PrincipalPointMode::kSolve: lines["principal_point"] = "solve"; break;
+      case PrincipalPointMode::kImageCenter: lines["principal_point"] = "center"; break;
+      case PrincipalPointMode::kFixed:
+        lines["principal_point"] = {options.fixed_principal_point_px.x(), options.fixed_principal_point_px.y()};
+        break;
+    }
+    if (options.focal_px > 0.0) lines["focal_px"] = options.focal_px;
+    if (detect.calibration.focal_prior_px > 0.0) {
+      lines["focal_prior_px"] = detect.calibration.focal_prior_px;
+      lines["focal_prior_std_px"] = detect.calibration.focal_prior_std_px;
+    }
+    CalibrateIoResult calibrated = CalibrateLinesJson(lines.dump());
+    if (!calibrated.ok()) return Error(photo_path + ": " + calibrated.error);
+
+    json out = json::parse(calibrated.json);
+    json outliers = json::array();
+    for (size_t i = 0; i < found.segments_px.size(); ++i) {
+      if (found.segment_family[i] >= 0) continue;
+      const Eigen::Vector4d& s = found.segments_px[i];
+      outliers.push_back({s[0], s[1], s[2], s[3]});
+    }
+    out["lines"] = lines;
+    out["detection"] = {{"segments", found.segments_px.size()},
+                        {"outlier_segments", outliers},
+                        {"min_length_px", found.min_length_px},
+                        {"inlier_distance_px", found.inlier_distance_px},
+                        {"search_focal_px", found.search_focal_px},
+                        {"detection_ms", found.detection_ms},
+                        {"search_ms", found.search_ms}};
+    if (!options.focal_prior_source.empty()) out["focal_prior_source"] = options.focal_prior_source;
+    CalibrateIoResult result;
+    result.json = out.dump(2) + "\n";
+    return result;
+  } catch (const std::exception& e) {
+    return Error(std::string("cannot calibrate from the photo: ") + e.what());
+  }
 }
 
 }  // namespace facet

@@ -44,6 +44,10 @@
 
 #include <string>
 
+#include <Eigen/Core>
+
+#include "core/geometry/intrinsics_modes.h"
+
 namespace facet {
 
 struct CalibrateIoResult {
@@ -56,5 +60,28 @@ struct CalibrateIoResult {
 CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text);
 // Reads the file at path and calls CalibrateLinesJson; an unreadable file is an error.
 CalibrateIoResult CalibrateLinesFile(const std::string& path);
+
+// `facet calibrate --image PHOTO`: the options a LINES.json carries besides its segments.
+struct CalibrateImageOptions {
+  PrincipalPointMode principal_point_mode = PrincipalPointMode::kSolve;
+  Eigen::Vector2d fixed_principal_point_px = Eigen::Vector2d::Zero();  // kFixed
+  double focal_px = 0.0;                                               // > 0: known, not solved
+  double focal_prior_px = 0.0;  // with focal_prior_std_px > 0: a Gaussian prior
+  double focal_prior_std_px = 0.0;
+  std::string focal_prior_source;  // e.g. the EXIF message; written out when not empty
+};
+
+// Detects the line families of the photo (core/estimators/line_detection.h) and calibrates
+// them exactly as CalibrateLinesJson calibrates the LINES.json they make. Output: that
+// document, plus
+//   "lines": the LINES.json (image_size, families x, y, z as found, principal_point and the
+//       focal options), to re-use or edit,
+//   "detection": {"segments": n (kept by the length threshold), "outlier_segments": [[x1, y1,
+//       x2, y2], ...] (in no family), "min_length_px", "inlier_distance_px", "search_focal_px",
+//       "detection_ms", "search_ms"},
+//   "focal_prior_source" (when given).
+// An unreadable or corrupt photo, and photos whose lines give no camera (blank, one
+// direction), are errors with the detector's message.
+CalibrateIoResult CalibrateImageFile(const std::string& photo_path, const CalibrateImageOptions& options);
 
 }  // namespace facet

@@ -1,0 +1,198 @@
+#include "app/state/line_proposals.h"
+
+#include <cstdio>
+#include <sstream>
+
+#include "app/state/app_state.h"
+#include "core/estimators/line_detection.h"
+#include "core/io/project_io.h"
+
+namespace facet::app {
+namespace {
+
+bool ValidIndex(const AppState& state, int index) {
+  return state.line_proposals && index >= 0 && index < static_cast<int>(state.line_proposals->segments.size());
+}
+
+// The detection's options from the image's calibration settings, so that the proposals'
+// families are those the calibration will see after accepting.
+ManhattanLinesOptions OptionsFor(const Image& image) {
+  ManhattanLinesOptions options;
+  VpCalibrationOptions& cal = options.calibration;
+  cal.principal_point_mode = image.principal_point_mode;
+  cal.fixed_principal_point_px = image.fixed_principal_point_px;
+  if (image.focal_mode == FocalMode::kFixed) cal.fixed_focal_px = image.fixed_focal_px;
+  if (image.focal_mode == FocalMode::kPrior) {
+    cal.focal_prior_px = image.focal_prior_px;
+    cal.focal_prior_std_px = image.focal_prior_std_px;
+  }
+  return options;
+}
+
+}  // namespace
+
+bool DetectLineProposals(AppState* state, Id image_id) {
+  const Image* image = state->document.project().FindImage(image_id);
+  if (image == nullptr) {
+    state->Log(LogLevel::kError, "Detect lines: no such image");
+    return false;
+  }
+  auto photo = state->photos.find(image_id);
+  if (photo == state->photos.end()) {
+    // Just added (the frame loads new photos after the edit): load it now, as that would.
+    const std::string path =
+        state->project_path.empty() ? image->path : ResolveImagePath(state->project_path, image->path);
+    ImageReadResult read = ReadImage(path);
+    if (!read.ok()) {
+      state->Log(LogLevel::kError, "Detect lines: " + read.error);
+      return false;
+    }
+    photo = state->photos.emplace(image_id, std::move(read.image)).first;
+  }
+  if (photo->second.empty()) {
+    state->Log(LogLevel::kError, "Detect lines: the photo is empty");
+    return false;
+  }
+  state->line_proposals.reset();
+  const ManhattanLinesSummary found = DetectManhattanLines(photo->second, OptionsFor(*image));
+  if (!found.IsUsable()) {
+    state->Log(LogLevel::kError, "Detect lines: " + found.message);
+    return false;
+  }
+  LineProposals proposals;
+  proposals.image_id = image_id;
+  proposals.segments = found.labelled_segments;
+  for (Segment& s : proposals.segments) s.image_id = image_id;
+  for (size_t i = 0; i < found.segments_px.size(); ++i)
+    if (found.segment_family[i] < 0) proposals.outliers.push_back(found.segments_px[i]);
+  proposals.focal_px = found.calibration.focal_px;
+  proposals.message = found.message;
+  state->line_proposals = std::move(proposals);
+  char text[200];
+  std::snprintf(text, sizeof(text),
+                "Detect lines: %d proposed (x %d, y %d, z %d), %d left out, f ~ %.0f px in %.0f ms; "
+                "accept to calibrate",
+                static_cast<int>(found.labelled_segments.size()), found.segments_per_family[0],
+                found.segments_per_family[1], found.segments_per_family[2], found.num_outliers,
+                found.calibration.focal_px, found.time_ms);
+  state->Log(LogLevel::kInfo, text);
+  return true;
+}
+
+bool RemoveLineProposal(AppState* state, int index) {
+  if (!ValidIndex(*state, index)) return false;
+  LineProposals& p = *state->line_proposals;
+  p.segments.erase(p.segments.begin() + index);
+  if (p.selected == index) p.selected = -1;
+  if (p.selected > index) --p.selected;
+  return true;
+}
+
+bool AssignLineProposal(AppState* state, int index, Axis axis) {
+  if (!ValidIndex(*state, index)) return false;
+  state->line_proposals->segments[index].axis = axis;
+  return true;
+}
+
+bool AcceptLineProposals(AppState* state) {
+  if (!state->line_proposals || state->line_proposals->segments.empty()) {
+    state->Log(LogLevel::kError, "Accept lines: there are no proposed lines");
+    return false;
+  }
+  const LineProposals proposals = *state->line_proposals;
+  if (state->document.project().FindImage(proposals.image_id) == nullptr) {
+    state->line_proposals.reset();
+    state->Log(LogLevel::kError, "Accept lines: the image is gone");
+    return false;
+  }
+  Project edited = state->document.project();
+  for (Segment s : proposals.segments) {
+    s.id = edited.NewId();
+    s.image_id = proposals.image_id;
+    edited.segments.push_back(s);
+  }
+  state->line_proposals.reset();
+  CommitEdit(state, "Accept " + std::to_string(proposals.segments.size()) + " detected lines", std::move(edited));
+  return true;
+}
+
+void DiscardLineProposals(AppState* state) { state->line_proposals.reset(); }
+
+void ValidateLineProposals(AppState* state) {
+  if (state->line_proposals && state->document.project().FindImage(state->line_proposals->image_id) == nullptr)
+    state->line_proposals.reset();
+}
+
+bool RunLinesCommand(AppState* state, const std::string& arg, std::string* error) {
+  std::istringstream in(arg);
+  std::string verb;
+  in >> verb;
+  std::vector<std::string> words;
+  for (std::string w; in >> w;) words.push_back(w);
+  auto index_arg = [&](size_t i, int* out) {
+    if (i >= words.size()) return false;
+    char* end = nullptr;
+    const long v = std::strtol(words[i].c_str(), &end, 10);
+    if (*end != '\0') return false;
+    *out = static_cast<int>(v);
+    return true;
+  };
+  if (verb == "detect" && words.size() <= 1) {
+    Id image_id = state->active_image_id;
+    if (words.size() == 1) {
+      int index = -1;
+      const auto& images = state->document.project().images;
+      if (!index_arg(0, &index) || index < 0 || index >= static_cast<int>(images.size())) {
+        *error = "lines detect: no image " + words[0];
+        return false;
+      }
+      image_id = images[index].id;
+    }
+    if (!DetectLineProposals(state, image_id)) {
+      *error = state->log.empty() ? "lines detect failed" : state->log.back().text;
+      return false;
+    }
+    return true;
+  }
+  if ((verb == "remove" || verb == "select") && words.size() == 1) {
+    int index = -1;
+    if (!index_arg(0, &index) || !ValidIndex(*state, index)) {
+      *error = "lines " + verb + ": no proposed line " + words[0];
+      return false;
+    }
+    if (verb == "remove") return RemoveLineProposal(state, index);
+    state->line_proposals->selected = index;
+    return true;
+  }
+  if (verb == "assign" && words.size() == 2) {
+    int index = -1;
+    const std::optional<Axis> axis = AxisFromName(words[1]);
+    if (!index_arg(0, &index) || !ValidIndex(*state, index) || !axis) {
+      *error = "lines assign: expected a proposed line's index and x, y or z";
+      return false;
+    }
+    return AssignLineProposal(state, index, *axis);
+  }
+  if (verb == "accept" && words.empty()) {
+    if (!AcceptLineProposals(state)) {
+      *error = state->log.empty() ? "lines accept failed" : state->log.back().text;
+      return false;
+    }
+    return true;
+  }
+  if (verb == "discard" && words.empty()) {
+    DiscardLineProposals(state);
+    return true;
+  }
+  if (verb == "on-add" && words.size() == 1 && (words[0] == "on" || words[0] == "off")) {
+    state->detect_lines_on_add = words[0] == "on";
+    return true;
+  }
+  *error =
+      "lines: expected detect [IMAGE_INDEX], remove I, assign I x|y|z, select I, accept, discard or "
+      "on-add on|off; got '" +
+      arg + "'";
+  return false;
+}
+
+}  // namespace facet::app
