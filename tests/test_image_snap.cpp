@@ -41,6 +41,18 @@ TEST_CASE("the nearest of several points, whatever its kind") {
   CHECK((r.position_px - Eigen::Vector2d(11, 11)).norm() < kTol);
 }
 
+TEST_CASE("a detected segment's end only when no corner, drawn end or vertex is near") {
+  SnapFeatures f;
+  f.detected_segment_ends = {{10.5, 10}};
+  f.corners = {{12, 12}};
+  SnapResult r = SnapToFeatures({10, 10}, f, 5.0);
+  CHECK(r.kind == SnapKind::kCorner);
+  f.corners.clear();
+  r = SnapToFeatures({10, 10}, f, 5.0);
+  CHECK(r.kind == SnapKind::kSegmentEnd);
+  CHECK((r.position_px - Eigen::Vector2d(10.5, 10)).norm() < kTol);
+}
+
 TEST_CASE("onto a segment, only within its extent") {
   SnapFeatures f;
   f.segments = {{0, 0, 40, 40}};

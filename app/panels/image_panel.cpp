@@ -95,7 +95,7 @@ struct ImagePanelState::Impl {
   Eigen::Vector2d fine_anchor_uv = Eigen::Vector2d::Zero();
   ImVec2 last_mouse_screen{0, 0};
   Eigen::Vector2d last_pointer_uv = Eigen::Vector2d::Zero();
-  PhotoCorners corners;
+  PhotoFeatures photo_features;
   SnapResult snap;  // this frame's, drawn before the click; kNone when nothing snapped
 };
 
@@ -156,7 +156,7 @@ void CollectGarbage(PanelState* panel, const AppState& state) {
   for (auto it = panel->views.begin(); it != panel->views.end();) {
     it = project.FindImage(it->first) ? std::next(it) : panel->views.erase(it);
   }
-  panel->corners.CollectGarbage(state);
+  panel->photo_features.CollectGarbage(state);
 }
 
 const VpCalibrationSummary* CalibrationFor(const AppState& state, Id image_id) {
@@ -867,7 +867,7 @@ void ApplySnapping(const AppState& state, PanelState* panel, const Image& image,
     return;
   }
   const SnapFeatures features =
-      CollectSnapFeatures(state, image, model, panel->corners.Get(state, image.id), request);
+      CollectSnapFeatures(state, image, model, panel->photo_features.Get(state, image.id), request);
   const Eigen::Vector2d offset = IsEditDrag(panel->interaction.kind) ? panel->interaction.grab_offset
                                                                      : Eigen::Vector2d::Zero();
   const SnapResult snap = SnapToFeatures(frame->mouse_uv + offset, features, kSnapRadiusScreenPx / frame->pointer_scale);

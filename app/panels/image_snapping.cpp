@@ -7,7 +7,7 @@
 
 namespace facet::app {
 
-const std::vector<Eigen::Vector2d>* PhotoCorners::Get(const AppState& state, Id image_id) {
+const PhotoSnapFeatures* PhotoFeatures::Get(const AppState& state, Id image_id) {
   const auto photo = state.photos.find(image_id);
   if (photo == state.photos.end() || photo->second.empty()) return nullptr;
   Entry& entry = entries_[image_id];
@@ -15,19 +15,24 @@ const std::vector<Eigen::Vector2d>* PhotoCorners::Get(const AppState& state, Id 
     entry = Entry();
     entry.pixels = photo->second.pixels.data();
     // A copy, so the worker never reads a photo the app frees or replaces meanwhile.
-    entry.pending = std::async(std::launch::async, [copy = photo->second] { return DetectCorners(copy); });
+    entry.pending = std::async(std::launch::async, [copy = photo->second] {
+      PhotoSnapFeatures found;
+      found.corners = DetectCorners(copy).corners_px;  // a failure leaves none: snapping goes on without
+      found.segments = DetectLineSegments(copy, LineDetectionOptions{});
+      return found;
+    });
   }
   if (!entry.ready && entry.pending.valid()) {
     const bool wait = state.bake_mode == BakeMode::kFinishNextFrame;
     if (wait || entry.pending.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
-      entry.corners = entry.pending.get().corners_px;  // a failure leaves none: snapping goes on without
+      entry.features = entry.pending.get();
       entry.ready = true;
     }
   }
-  return entry.ready ? &entry.corners : nullptr;
+  return entry.ready ? &entry.features : nullptr;
 }
 
-void PhotoCorners::CollectGarbage(const AppState& state) {
+void PhotoFeatures::CollectGarbage(const AppState& state) {
   for (auto it = entries_.begin(); it != entries_.end();) {
     const auto photo = state.photos.find(it->first);
     const bool keep = state.document.project().FindImage(it->first) != nullptr && photo != state.photos.end() &&
@@ -37,9 +42,16 @@ void PhotoCorners::CollectGarbage(const AppState& state) {
 }
 
 SnapFeatures CollectSnapFeatures(const AppState& state, const Image& image, const std::vector<ProjectedPrimitive>& model,
-                                 const std::vector<Eigen::Vector2d>* corners, const SnapRequest& request) {
+                                 const PhotoSnapFeatures* photo, const SnapRequest& request) {
   SnapFeatures features;
-  if (corners != nullptr) features.corners = *corners;
+  if (photo != nullptr) {
+    features.corners = photo->corners;
+    features.segments = photo->segments;
+    for (const Eigen::Vector4d& s : photo->segments) {
+      features.detected_segment_ends.push_back(s.head<2>());
+      features.detected_segment_ends.push_back(s.tail<2>());
+    }
+  }
   const Project& project = state.document.project();
   for (const Segment& s : project.segments) {
     if (s.image_id != image.id || s.id == request.exclude_segment) continue;

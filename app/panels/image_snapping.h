@@ -1,6 +1,7 @@
 // Snapping in the image panel: what a new segment end, a pin or a line pin may snap to
-// (core/geometry/image_snap.h), the photo's corners (detected once per photo on a worker
-// thread, core/image/corner_detection.h), and the marker drawn at the target before the click.
+// (core/geometry/image_snap.h), the photo's own features (corners, core/image/corner_detection.h,
+// and line segments, core/estimators/line_detection.h, found once per photo on a worker
+// thread), and the marker drawn at the target before the click.
 #pragma once
 
 #include <future>
@@ -13,6 +14,7 @@
 #include "app/state/app_state.h"
 #include "app/state/model_pick.h"
 #include "core/geometry/image_snap.h"
+#include "core/estimators/line_detection.h"
 #include "core/image/corner_detection.h"
 
 namespace facet::app {
@@ -30,31 +32,38 @@ struct SnapRequest {
   Eigen::Vector2d anchor_px = Eigen::Vector2d::Zero();  // the segment's fixed end
 };
 
-// Corners per image, detected on a worker thread from a copy of the photo. With
+// What a photo offers to snap to by itself.
+struct PhotoSnapFeatures {
+  std::vector<Eigen::Vector2d> corners;
+  std::vector<Eigen::Vector4d> segments;  // the line segment detector's, x1, y1, x2, y2
+};
+
+// Features per image, found on a worker thread from a copy of the photo. With
 // BakeMode::kFinishNextFrame (offscreen scripts) the first request waits for them, so a
 // script snaps the same way however fast the machine is.
-class PhotoCorners {
+class PhotoFeatures {
  public:
-  // The corners of the image's loaded photo; null while they are being found or without a photo.
-  const std::vector<Eigen::Vector2d>* Get(const AppState& state, Id image_id);
+  // The features of the image's loaded photo; null while they are being found or without a photo.
+  const PhotoSnapFeatures* Get(const AppState& state, Id image_id);
   // Forgets images that left the project or whose photo changed.
   void CollectGarbage(const AppState& state);
 
  private:
   struct Entry {
     const std::uint8_t* pixels = nullptr;  // the photo the corners belong to
-    std::future<CornerDetectionResult> pending;
-    std::vector<Eigen::Vector2d> corners;
+    std::future<PhotoSnapFeatures> pending;
+    PhotoSnapFeatures features;
     bool ready = false;
   };
   std::map<Id, Entry> entries_;
 };
 
-// The features of `image` that `request` may snap to: corners, the image's segments and
-// their ends, the projected model's vertices and edges in front of the camera, and the
-// vanishing direction of the segment's family when the image is calibrated.
+// The features of `image` that `request` may snap to: the photo's corners and detected
+// segments with their ends, the image's drawn segments and their ends, the projected model's
+// vertices and edges in front of the camera, and the vanishing direction of the segment's
+// family when the image is calibrated.
 SnapFeatures CollectSnapFeatures(const AppState& state, const Image& image, const std::vector<ProjectedPrimitive>& model,
-                                 const std::vector<Eigen::Vector2d>* corners, const SnapRequest& request);
+                                 const PhotoSnapFeatures* photo, const SnapRequest& request);
 
 // A diamond at the target and its kind's name beside it.
 void DrawSnapMarker(ImDrawList* draw_list, ImVec2 screen, SnapKind kind, bool with_label);

@@ -89,6 +89,10 @@ SnapResult SnapToFeatures(const Eigen::Vector2d& pointer_px, const SnapFeatures&
     Consider(SnapKind::kModelVertex, p, pointer_px, radius_px, &point);
   }
   if (point.kind != SnapKind::kNone) return point;
+  for (const Eigen::Vector2d& p : features.detected_segment_ends) {
+    Consider(SnapKind::kSegmentEnd, p, pointer_px, radius_px, &point);
+  }
+  if (point.kind != SnapKind::kNone) return point;
 
   const std::optional<Line> vanishing = VanishingLine(features);
   if (vanishing) {

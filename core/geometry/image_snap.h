@@ -26,6 +26,9 @@ struct SnapFeatures {
   std::vector<Eigen::Vector2d> corners;
   std::vector<Eigen::Vector2d> segment_ends;
   std::vector<Eigen::Vector2d> model_vertices;
+  // Ends of automatically detected segments: where the detector stopped, less exact than a
+  // corner, so taken only when none of the points above is within the radius.
+  std::vector<Eigen::Vector2d> detected_segment_ends;
   std::vector<Eigen::Vector4d> segments;     // x1, y1, x2, y2
   std::vector<Eigen::Vector4d> model_edges;  // x1, y1, x2, y2
   // The direction constraint of a segment being drawn: its fixed end and its family's
@@ -43,7 +46,8 @@ struct SnapResult {
 
 // The snapped position of `pointer_px` within `radius_px` (image pixels: the panel converts
 // its few screen pixels with the zoom). Points win over lines: a point within the radius is
-// taken even when a line is nearer, since the user aims at corners; among points the nearest.
+// taken even when a line is nearer, since the user aims at corners; among points the nearest
+// (detected segment ends only when no other point is near).
 // Among lines (segments, edges, the vanishing direction) the nearest, except that where the
 // vanishing direction and another line cross within the radius, the crossing is taken (a
 // segment drawn towards its vanishing point that ends on an edge). A non-finite pointer
