@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "app/panels/file_dialog.h"
 #include "app/panels/image_panel.h"
 #include "app/panels/side_panels.h"
 #include "app/panels/viewport_panel.h"
@@ -31,13 +32,17 @@ struct ShellState {
   // Modal dialogs.
   Dialog dialog = Dialog::kNone;
   bool dialog_just_opened = false;
-  std::string dialog_path;  // the path field of the open/save/export dialogs
+  std::string dialog_path;  // the project waiting for the unsaved-changes answer (kConfirmOpen)
   std::string dialog_error;
-  // The dialog's folder listing, re-read when the folder changes or after a while (not
-  // every frame: the frame loop does no file-system work of its own).
-  std::string listed_dir;
-  double listed_time_s = -1.0;
-  std::vector<std::string> listed_dirs, listed_files;  // file names, sorted
+  // The file browser of kOpen, kSaveAs, kExport and kAddPhoto (app/shell/file_actions.h).
+  FileDialogState file_dialog;
+  // Recent files and folders; persisted at recent_files_path after each change unless empty
+  // (offscreen renders keep them in memory unless given --config-dir).
+  RecentFiles recent_files;
+  std::string recent_files_path;
+  // Paths dropped onto the window (GLFW) or by the script's `drop`, handled at the start of
+  // the next frame (HandleDroppedFiles).
+  std::vector<std::string> dropped_paths;
 
   // Set when the user confirmed quitting (or there was nothing to save); the platform loop
   // then exits.
@@ -74,6 +79,9 @@ std::string WindowTitle(const AppState& state);
 // *error set for unknown commands, bad arguments or a failed save/open/export.
 bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, const std::vector<std::string>& args,
                    std::string* error);
+
+// Opens a modal dialog; `path` is the project a kConfirmOpen is about.
+void OpenDialog(ShellState* shell, Dialog dialog, std::string path = {});
 
 // Asks to quit: quits at once when nothing is unsaved, else opens the confirmation dialog.
 void RequestQuit(AppState* state, ShellState* shell);
