@@ -677,6 +677,7 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   HandleDroppedFiles(state, shell);
   HandleGlobalShortcuts(state, shell);
 
+  state->item_rects.clear();
   const float menu_height = DrawMenuBar(state, shell);
   const ImGuiViewport* vp = ImGui::GetMainViewport();
   const Rect work{vp->Pos.x + kWorkAreaMarginPx, vp->Pos.y + menu_height + kWorkAreaMarginPx,
@@ -691,7 +692,6 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   }
 
   shell->panel_drawn.fill(false);
-  state->item_rects.clear();
   DrawSplitters(shell, tiled, work);
   // Docked panels first: floating ones are created later and so stay in front.
   for (int pass = 0; pass < 2; ++pass) {

@@ -27,7 +27,7 @@ nlohmann::json Run(const TempDir& dir, const std::string& project, const std::st
                    const std::string& config_dir = "") {
   WriteText(dir / (name + ".txt"), script);
   std::string args = "'" + project + "' -o '" + (dir / (name + ".png")) + "' --script '" + (dir / (name + ".txt")) +
-                     "' --report '" + (dir / (name + ".json")) + "'";
+                     "' --report '" + (dir / (name + ".json")) + "' --size 1280x800";
   if (!config_dir.empty()) args += " --config-dir '" + config_dir + "'";
   const RunResult run = RunRender(dir, args);
   INFO("stderr: " << run.stderr_text);
@@ -41,8 +41,10 @@ std::string Click(const nlohmann::json& report, const std::string& item) {
   return "click left " + ItemCenter(report.at("items"), item) + "\nframes 1\n";
 }
 
+// Two clicks within ImGui's double-click time, then a pause longer than it, so that the
+// next click is never taken for the end of another double-click.
 std::string DoubleClick(const nlohmann::json& report, const std::string& item) {
-  return Click(report, item) + Click(report, item) + "frames 2\n";
+  return Click(report, item) + Click(report, item) + "frames 20\n";
 }
 
 double ItemY(const nlohmann::json& report, const std::string& item) {
@@ -110,21 +112,21 @@ TEST_CASE("File > Add photo: folders first, the photo filter, hidden files on de
   CHECK_FALSE(items.contains("file.entry/.cache"));
   CHECK_FALSE(items.contains("file.entry/scene.facet"));
 
-  const nlohmann::json hidden = Run(dir, scene, "hidden", open_browser + Click(start, "file.hidden") + "frames 2\n");
+  // Hidden files on: .cache comes first.
+  const std::string show_hidden = open_browser + Click(start, "file.hidden") + "frames 2\n";
+  const nlohmann::json hidden = Run(dir, scene, "hidden", show_hidden);
   CHECK(hidden["items"].contains("file.entry/.cache"));
   CHECK(ItemY(hidden, "file.entry/.cache") < ItemY(hidden, "file.entry/Archive"));
 
-  // Into photos: A.jpg above b.png (case-insensitive order), the text file filtered out.
-  const std::string into_photos = open_browser + DoubleClick(start, "file.entry/photos");
+  // Into photos by a click and Enter: A.jpg above b.png (case-insensitive order), the text
+  // file filtered out.
+  const std::string into_photos = show_hidden + Click(hidden, "file.entry/photos") + "key enter\nframes 20\n";
   const nlohmann::json inside = Run(dir, scene, "inside", into_photos);
   CHECK(inside["file_dialog"]["folder"] == (dir.path / "photos").string());
   CHECK(ItemY(inside, "file.entry/A.jpg") < ItemY(inside, "file.entry/b.png"));
   CHECK_FALSE(inside["items"].contains("file.entry/notes.txt"));
 
-  // Parent goes back up; a double-click on b.png adds it as one undoable edit.
-  const nlohmann::json parent = Run(dir, scene, "parent", into_photos + Click(inside, "file.parent") + "frames 2\n");
-  CHECK(parent["file_dialog"]["folder"] == dir.path.string());
-
+  // A double-click on b.png adds it as one undoable edit.
   const nlohmann::json added =
       Run(dir, scene, "added", into_photos + DoubleClick(inside, "file.entry/b.png") + "command save\n");
   INFO(ReportLog(added));
@@ -135,7 +137,10 @@ TEST_CASE("File > Add photo: folders first, the photo filter, hidden files on de
   CHECK(saved.images[1].width_px == 400);
   REQUIRE(!added["undo_stack"].empty());
   CHECK(added["undo_stack"].back() == "Add photo b.png");
-  CHECK(added["recent_files"]["files"][0] == (dir.path / "photos/b.png").string());
+  // Recent: the project just saved, and before it the photo.
+  REQUIRE(added["recent_files"]["files"].size() == 2);
+  CHECK(added["recent_files"]["files"][0] == scene);
+  CHECK(added["recent_files"]["files"][1] == (dir.path / "photos/b.png").string());
 }
 
 TEST_CASE("Save as: a typed name gets .facet and round-trips; an existing file is replaced only after the question") {
@@ -202,7 +207,11 @@ TEST_CASE("The browser explains what it cannot do and keeps open; Escape cancels
   CHECK(broken["file_dialog"]["error"].get<std::string>().find("broken.facet") != std::string::npos);
   CHECK(broken["project"]["primitives"].size() == 1);
 
-  const nlohmann::json cancelled = Run(dir, scene, "cancelled", prefix + "key escape\nframes 2\n");
+  // Parent goes up (the refusal is cleared); Escape closes the dialog.
+  const nlohmann::json cancelled =
+      Run(dir, scene, "cancelled", prefix + Click(refused, "file.parent") + "frames 2\nkey escape\nframes 2\n");
+  CHECK(cancelled["file_dialog"]["folder"] == dir.path.parent_path().string());
+  CHECK(cancelled["file_dialog"]["error"] == "");
   CHECK(cancelled["dialog"] == "");
 }
 
@@ -210,13 +219,12 @@ TEST_CASE("Recent files persist in the config folder and File > Open recent open
   TempDir dir("browser_recent");
   const std::string scene = WriteBoxScene(dir);
   const std::string config = dir / "facet_config";
-  Run(dir, scene, "first", "frames 2\ncommand open " + kSample + "\nframes 2\n", config);
+  const nlohmann::json first = Run(dir, scene, "first", "frames 2\ncommand open " + kSample + "\nframes 2\n", config);
   REQUIRE(fs::exists(config + "/recent.json"));
 
-  const nlohmann::json bare = Run(dir, scene, "probe_menu", "frames 2\n", config);
-  REQUIRE(bare["recent_files"]["files"][0] == kSample);
-  const std::string open_file_menu = "frames 2\n" + Click(bare, "menu.file") + "frames 2\n";
+  const std::string open_file_menu = "frames 2\n" + Click(first, "menu.file") + "frames 2\n";
   const nlohmann::json menu = Run(dir, scene, "probe_recent", open_file_menu, config);
+  REQUIRE(menu["recent_files"]["files"][0] == kSample);  // read back from the config folder
   const std::string hover_recent = "move " + ItemCenter(menu["items"], "menu.open_recent") + "\nframes 4\n";
   const nlohmann::json submenu = Run(dir, scene, "probe_submenu", open_file_menu + hover_recent, config);
   const nlohmann::json opened = Run(
