@@ -52,18 +52,14 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
   if (!ImGui::BeginMainMenuBar()) return height;
   height = ImGui::GetWindowSize().y;
   shell->menu_bar_rect = {0, 0, ImGui::GetWindowSize().x, height};
-  auto open_dialog = [&](Dialog d, std::string path) {
-    shell->dialog = d;
-    shell->dialog_just_opened = true;
-    shell->dialog_path = std::move(path);
-    shell->dialog_error.clear();
-  };
-  const bool file_menu = ImGui::BeginMenu("File");
-  RecordItem(state, "menu.file");
-  if (file_menu) {
+  // Recorded before BeginMenu: once the menu is open, the last item is inside its popup.
+  const ImVec2 file_pos = ImGui::GetCursorScreenPos();
+  state->item_rects["menu.file"] = {file_pos.x, file_pos.y,
+                                    ImGui::CalcTextSize("File").x + ImGui::GetStyle().ItemSpacing.x * 2, height};
+  if (ImGui::BeginMenu("File")) {
     if (ImGui::MenuItem("New", "Ctrl+N")) {
       if (state->document.dirty()) {
-        open_dialog(Dialog::kConfirmNew, "");
+        OpenDialog(shell, Dialog::kConfirmNew);
       } else {
         std::string error;
         RunAppCommand(state, shell, "new", {}, &error);
@@ -145,7 +141,7 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
     ImGui::EndMenu();
   }
   if (ImGui::BeginMenu("Help")) {
-    if (ImGui::MenuItem("About Facet")) open_dialog(Dialog::kAbout, "");
+    if (ImGui::MenuItem("About Facet")) OpenDialog(shell, Dialog::kAbout);
     ImGui::EndMenu();
   }
   // Right-aligned status: tool and solve quality.
