@@ -1,6 +1,7 @@
 #include "app/panels/file_dialog.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 
 #include <imgui.h>

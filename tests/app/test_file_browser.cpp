@@ -188,6 +188,25 @@ TEST_CASE("Save as: a typed name gets .facet and round-trips; an existing file i
   CHECK(LoadProjectFile(copy).primitives.size() == primitives + 1);
 }
 
+TEST_CASE("File > Export glTF: a typed name gets .glb and the model is written there") {
+  TempDir dir("browser_export");
+  const nlohmann::json bare = Run(dir, kSample, "probe_menu", "frames 2\n");
+  const std::string open_file_menu = "frames 2\n" + Click(bare, "menu.file") + "frames 2\n";
+  const nlohmann::json menu = Run(dir, kSample, "probe_export", open_file_menu);
+  const nlohmann::json exported =
+      Run(dir, kSample, "export",
+          open_file_menu + Click(menu, "menu.export_gltf") + "frames 3\ntype " + (dir / "model") +
+              "\nframes 1\nkey enter\nframes 3\n");
+  INFO(ReportLog(exported));
+  CHECK(exported["dialog"] == "");
+  REQUIRE(fs::exists(dir / "model.glb"));
+  std::ifstream glb(dir / "model.glb", std::ios::binary);
+  char magic[4] = {};
+  glb.read(magic, 4);
+  CHECK(std::string(magic, 4) == "glTF");
+  CHECK(LogHas(exported, "info", "Exported " + (dir / "model.glb")));
+}
+
 TEST_CASE("The browser explains what it cannot do and keeps open; Escape cancels") {
   TempDir dir("browser_errors");
   const std::string scene = WriteBoxScene(dir);
@@ -261,8 +280,14 @@ TEST_CASE("Drop: a photo is added, an unknown file is refused in the log, a proj
   CHECK(dropped["dialog"] == "confirm-open");
   CHECK(dropped["project"]["primitives"].size() == 1);
 
-  const nlohmann::json opened = Run(dir, scene, "project", "frames 2\ndrop " + kSample + "\nframes 3\n");
-  CHECK(opened["dialog"] == "");
+  // Onto a clean project the drop opens at once; dropped onto the open browser, a file is
+  // shown in its folder and named, not opened.
+  const nlohmann::json opened = Run(dir, scene, "project",
+                                    "frames 2\ndrop " + kSample + "\nframes 3\nkey ctrl+o\nframes 3\ndrop " +
+                                        (dir / "notes.txt") + "\nframes 2\n");
   CHECK(opened["project"]["images"].size() == LoadProjectFile(kSample).images.size());
   CHECK(LogHas(opened, "info", "Opened " + kSample));
+  CHECK(opened["dialog"] == "open");
+  CHECK(opened["file_dialog"]["folder"] == dir.path.string());
+  CHECK(opened["file_dialog"]["name"] == "notes.txt");
 }
