@@ -226,10 +226,16 @@ TEST_CASE("The browser explains what it cannot do and keeps open; Escape cancels
   CHECK(broken["file_dialog"]["error"].get<std::string>().find("broken.facet") != std::string::npos);
   CHECK(broken["project"]["primitives"].size() == 1);
 
-  // Parent goes up (the refusal is cleared); Escape closes the dialog.
+  // A folder typed into the path line is entered (a click selects the whole line, so the
+  // typing replaces it), Parent goes back up and clears the refusal; Escape closes.
+  fs::create_directories(dir.path / "sub");
+  const std::string into_sub =
+      prefix + Click(refused, "file.path") + "type " + (dir / "sub") + "\nframes 1\nkey enter\nframes 2\n";
+  const nlohmann::json sub = Run(dir, scene, "sub", into_sub);
+  CHECK(sub["file_dialog"]["folder"] == (dir / "sub"));
   const nlohmann::json cancelled =
-      Run(dir, scene, "cancelled", prefix + Click(refused, "file.parent") + "frames 2\nkey escape\nframes 2\n");
-  CHECK(cancelled["file_dialog"]["folder"] == dir.path.parent_path().string());
+      Run(dir, scene, "cancelled", into_sub + Click(refused, "file.parent") + "frames 2\nkey escape\nframes 2\n");
+  CHECK(cancelled["file_dialog"]["folder"] == dir.path.string());
   CHECK(cancelled["file_dialog"]["error"] == "");
   CHECK(cancelled["dialog"] == "");
 }
