@@ -198,6 +198,21 @@ void DrawEntries(AppState* state, FileDialogState* dialog, const ImVec2& size, b
   ImGui::EndTable();
 }
 
+// Save as, Export: when the name field first takes the keyboard, only the stem is selected,
+// so that typing replaces "untitled" and keeps ".facet" (as desktop file choosers do).
+int SelectStem(ImGuiInputTextCallbackData* data) {
+  auto* dialog = static_cast<FileDialogState*>(data->UserData);
+  if (!dialog->select_stem_pending) return 0;
+  dialog->select_stem_pending = false;
+  const std::string name(data->Buf, static_cast<size_t>(data->BufTextLen));
+  const size_t dot = name.rfind('.');
+  const int stem = dot == std::string::npos || dot == 0 ? data->BufTextLen : static_cast<int>(dot);
+  data->SelectionStart = 0;
+  data->SelectionEnd = stem;
+  data->CursorPos = stem;
+  return 0;
+}
+
 // Up/Down move the highlight through the list while no text field has the keyboard.
 void MoveSelection(FileDialogState* dialog, int step) {
   const std::vector<BrowserEntry>& entries = dialog->listing.entries;
@@ -232,6 +247,7 @@ void StartFileDialog(FileDialogState* dialog, BrowsePurpose purpose, const std::
   if (start.empty() || !fs::is_directory(start, ec)) start = fs::current_path(ec).string();
   GoToFolder(dialog, start);
   dialog->name_field = name;
+  dialog->select_stem_pending = PurposeWrites(purpose) && !name.empty();
 }
 
 FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const RecentFiles& recent, double time_s) {
@@ -285,7 +301,9 @@ FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const 
     ImGui::SetKeyboardFocusHere();
   }
   if (ImGui::InputText("##name", &dialog->name_field,
-                       ImGuiInputTextFlags_EnterReturnsTrue | ImGuiInputTextFlags_AutoSelectAll)) {
+                       ImGuiInputTextFlags_EnterReturnsTrue | ImGuiInputTextFlags_AutoSelectAll |
+                           ImGuiInputTextFlags_CallbackAlways,
+                       SelectStem, dialog)) {
     accept_requested = true;
     accept_text = dialog->name_field;
     enter_used = true;

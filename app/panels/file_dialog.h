@@ -33,6 +33,7 @@ struct FileDialogState {
   std::string error;              // the last refusal, shown under the list
   std::string confirm_overwrite;  // an existing file chosen for writing, awaiting Replace
   bool focus_pending = true;      // the first frame gives the keyboard to the main field
+  bool select_stem_pending = false;  // writing: the name's stem is selected, not its extension
   bool scroll_to_selected = false;
 };
 

@@ -75,8 +75,9 @@ std::string WindowTitle(const AppState& state);
 // Named app commands shared by the menus, the shortcuts and the input script: undo, redo,
 // save [PATH], open PATH, tool NAME, select-image INDEX, fit, export PATH, add KIND [on-top],
 // select vertex|edge|face PRIMITIVE_ID ELEMENT_ID | primitive ID | none, free-vertex,
-// planar-face (app/state/input_script.h documents them). Returns false with
-// *error set for unknown commands, bad arguments or a failed save/open/export.
+// planar-face (app/state/input_script.h documents them). A successful open, save, export or
+// add-photo puts its file among the recent ones (app/shell/file_actions.h). Returns false
+// with *error set for unknown commands, bad arguments or a failed save/open/export.
 bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, const std::vector<std::string>& args,
                    std::string* error);
 

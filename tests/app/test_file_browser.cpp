@@ -173,6 +173,12 @@ TEST_CASE("Save as: a typed name gets .facet and round-trips; an existing file i
   sb << b.rdbuf();
   CHECK(sa.str() == sb.str());
 
+  // The proposed name's stem is selected: typing a new one keeps ".facet".
+  const nlohmann::json renamed =
+      Run(dir, copy, "stem", "frames 2\nkey ctrl+shift+s\nframes 3\ntype second\nframes 1\nkey enter\nframes 3\n");
+  CHECK(renamed["dialog"] == "");
+  CHECK(fs::exists(dir / "second.facet"));
+
   // Saving as copy.facet again (the proposed name) asks first; the file waits for Replace.
   const size_t primitives = reloaded.primitives.size();
   const std::string edit_and_save_as = "frames 2\ncommand add box\nframes 2\nkey ctrl+shift+s\nframes 3\nkey enter\nframes 2\n";
