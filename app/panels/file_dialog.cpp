@@ -314,13 +314,21 @@ FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const 
   dialog->focus_pending = false;
   ImGui::SameLine();
   ImGui::SetNextItemWidth(filter_w);
-  const char* filters[] = {PurposeFilterLabel(dialog->purpose), "All files (*)"};
-  int filter = dialog->all_files ? 1 : 0;
-  if (ImGui::Combo("##filter", &filter, filters, 2)) {
-    dialog->all_files = filter == 1;
-    dialog->listing_stale = true;
+  const char* kAllFilesLabel = "All files (*)";
+  const bool filter_open =
+      ImGui::BeginCombo("##filter", dialog->all_files ? kAllFilesLabel : PurposeFilterLabel(dialog->purpose));
+  if (!filter_open) RecordItem(state, "file.filter");
+  if (filter_open) {
+    for (const bool all : {false, true}) {
+      if (ImGui::Selectable(all ? kAllFilesLabel : PurposeFilterLabel(dialog->purpose), dialog->all_files == all) &&
+          dialog->all_files != all) {
+        dialog->all_files = all;
+        dialog->listing_stale = true;
+      }
+      RecordItem(state, all ? "file.filter/all" : "file.filter/purpose");
+    }
+    ImGui::EndCombo();
   }
-  RecordItem(state, "file.filter");
 
   if (!dialog->error.empty()) {
     ImGui::TextColored(kErrorText, "%s", dialog->error.c_str());

@@ -126,6 +126,15 @@ TEST_CASE("File > Add photo: folders first, the photo filter, hidden files on de
   CHECK(ItemY(inside, "file.entry/A.jpg") < ItemY(inside, "file.entry/b.png"));
   CHECK_FALSE(inside["items"].contains("file.entry/notes.txt"));
 
+  // The filter switched to all files lists the text file too.
+  const std::string open_filter = into_photos + Click(inside, "file.filter") + "frames 2\n";
+  const nlohmann::json filter = Run(dir, scene, "filter", open_filter);
+  const nlohmann::json all_files =
+      Run(dir, scene, "all_files", open_filter + Click(filter, "file.filter/all") + "frames 2\n");
+  CHECK(all_files["file_dialog"]["all_files"].get<bool>());
+  CHECK(all_files["items"].contains("file.entry/notes.txt"));
+  CHECK(ItemY(all_files, "file.entry/b.png") < ItemY(all_files, "file.entry/notes.txt"));
+
   // A double-click on b.png adds it as one undoable edit.
   const nlohmann::json added =
       Run(dir, scene, "added", into_photos + DoubleClick(inside, "file.entry/b.png") + "command save\n");
@@ -263,6 +272,14 @@ TEST_CASE("Recent files persist in the config folder and File > Open recent open
   INFO(ReportLog(opened));
   CHECK(opened["project"]["images"].size() == LoadProjectFile(kSample).images.size());
   CHECK(LogHas(opened, "info", "Opened " + kSample));
+
+  // The browser's side column offers the recent project; a double-click opens it.
+  const nlohmann::json browser = Run(dir, scene, "probe_side", "frames 2\nkey ctrl+o\nframes 3\n", config);
+  const nlohmann::json from_side = Run(
+      dir, scene, "from_side",
+      "frames 2\nkey ctrl+o\nframes 3\n" + DoubleClick(browser, "file.recent_file/" + kSample), config);
+  CHECK(from_side["dialog"] == "");
+  CHECK(from_side["project"]["images"].size() == LoadProjectFile(kSample).images.size());
 
   // A malformed recent-files file is reported, not fatal, and replaced on the next change.
   WriteText(config + "/recent.json", "{ broken");
