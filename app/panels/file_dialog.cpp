@@ -230,8 +230,8 @@ void MoveSelection(FileDialogState* dialog, int step) {
 
 }  // namespace
 
-void StartFileDialog(FileDialogState* dialog, BrowsePurpose purpose, const std::string& folder,
-                     const std::string& name, const std::string& project_folder) {
+void StartFileDialog(FileDialogState* dialog, BrowsePurpose purpose, const std::string& folder, const std::string& name,
+                     const std::string& project_folder) {
   const bool keep_toggles = dialog->purpose == purpose;
   const bool all_files = keep_toggles && dialog->all_files;
   const bool show_hidden = dialog->show_hidden;
@@ -258,11 +258,11 @@ FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const 
   const ImGuiStyle& style = ImGui::GetStyle();
   FileDialogResult result;
   bool enter_used = false;
-  std::string go_to;                // a folder to list after this frame's widgets
-  std::string choose_file;          // a recent file clicked
-  bool accept_choice = false;       // ... double-clicked
-  bool activate_selected = false;   // an entry double-clicked, or Enter on the list
-  std::string accept_text;          // a path to Accept after the widgets
+  std::string go_to;               // a folder to list after this frame's widgets
+  std::string choose_file;         // a recent file clicked
+  bool accept_choice = false;      // ... double-clicked
+  bool activate_selected = false;  // an entry double-clicked, or Enter on the list
+  std::string accept_text;         // a path to Accept after the widgets
   bool accept_requested = false;
 
   // The path line: Parent, then the folder as an editable path.
@@ -282,7 +282,8 @@ FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const 
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Type a folder or a file path and press Enter (~ is your home)");
 
   // Side column and entries.
-  const float footer_h = ImGui::GetFrameHeightWithSpacing() * 2 + ImGui::GetTextLineHeightWithSpacing() + style.ItemSpacing.y;
+  const float footer_h =
+      ImGui::GetFrameHeightWithSpacing() * 2 + ImGui::GetTextLineHeightWithSpacing() + style.ItemSpacing.y;
   const float body_h = std::max(120.0f, ImGui::GetContentRegionAvail().y - footer_h);
   ImGui::BeginChild("##side", ImVec2(kSideColumnWidthPx, body_h), true);
   DrawSideColumn(state, dialog, recent, &go_to, &choose_file, &accept_choice);
@@ -300,10 +301,10 @@ FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const 
   if (dialog->focus_pending && writes) {
     ImGui::SetKeyboardFocusHere();
   }
-  if (ImGui::InputText("##name", &dialog->name_field,
-                       ImGuiInputTextFlags_EnterReturnsTrue | ImGuiInputTextFlags_AutoSelectAll |
-                           ImGuiInputTextFlags_CallbackAlways,
-                       SelectStem, dialog)) {
+  if (ImGui::InputText(
+          "##name", &dialog->name_field,
+          ImGuiInputTextFlags_EnterReturnsTrue | ImGuiInputTextFlags_AutoSelectAll | ImGuiInputTextFlags_CallbackAlways,
+          SelectStem, dialog)) {
     accept_requested = true;
     accept_text = dialog->name_field;
     enter_used = true;
@@ -343,8 +344,8 @@ FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const 
   const float button_w = ImGui::GetFontSize() * 6.5f;
   ImGui::SameLine(ImGui::GetWindowContentRegionMax().x - 2 * button_w - style.ItemSpacing.x);
   const bool escape = ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false);
-  const bool enter = !enter_used && (ImGui::IsKeyPressed(GLFW_KEY_ENTER, false) ||
-                                     ImGui::IsKeyPressed(GLFW_KEY_KP_ENTER, false));
+  const bool enter =
+      !enter_used && (ImGui::IsKeyPressed(GLFW_KEY_ENTER, false) || ImGui::IsKeyPressed(GLFW_KEY_KP_ENTER, false));
   if (!dialog->confirm_overwrite.empty()) {
     if (ImGui::Button("Replace", ImVec2(button_w, 0)) || enter) {
       result = {FileDialogOutcome::kChosen, dialog->confirm_overwrite};

@@ -30,17 +30,17 @@ struct FileDialogState {
   FolderListing listing;
   bool listing_stale = true;
   double listed_time_s = 0.0;
-  std::string error;              // the last refusal, shown under the list
-  std::string confirm_overwrite;  // an existing file chosen for writing, awaiting Replace
-  bool focus_pending = true;      // the first frame gives the keyboard to the main field
+  std::string error;                 // the last refusal, shown under the list
+  std::string confirm_overwrite;     // an existing file chosen for writing, awaiting Replace
+  bool focus_pending = true;         // the first frame gives the keyboard to the main field
   bool select_stem_pending = false;  // writing: the name's stem is selected, not its extension
   bool scroll_to_selected = false;
 };
 
 // Starts a browse in `folder` (empty: the working directory) with `name` proposed in the
 // name field (for Save as and Export).
-void StartFileDialog(FileDialogState* dialog, BrowsePurpose purpose, const std::string& folder,
-                     const std::string& name, const std::string& project_folder);
+void StartFileDialog(FileDialogState* dialog, BrowsePurpose purpose, const std::string& folder, const std::string& name,
+                     const std::string& project_folder);
 
 enum class FileDialogOutcome { kBrowsing, kChosen, kCancelled };
 struct FileDialogResult {

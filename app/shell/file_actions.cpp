@@ -173,8 +173,8 @@ void HandleDroppedFiles(AppState* state, ShellState* shell) {
     } else if (!fs::exists(path, ec)) {
       state->Log(LogLevel::kError, "Dropped " + path + " does not exist");
     } else {
-      state->Log(LogLevel::kError, "Dropped " + name + " is neither a Facet project (.facet) nor a photo (" +
-                                       PhotoExtensionList() + ")");
+      state->Log(LogLevel::kError,
+                 "Dropped " + name + " is neither a Facet project (.facet) nor a photo (" + PhotoExtensionList() + ")");
     }
   }
   if (!dropped.projects.empty()) {

@@ -354,8 +354,8 @@ void DrawDialogs(AppState* state, ShellState* shell) {
                             ImVec2(0.5f, 0.5f));
   } else {
     flags |= ImGuiWindowFlags_AlwaysAutoResize;
-    ImGui::SetNextWindowPos(ImVec2(vp->Pos.x + vp->Size.x * 0.5f, vp->Pos.y + vp->Size.y * 0.4f),
-                            ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+    ImGui::SetNextWindowPos(ImVec2(vp->Pos.x + vp->Size.x * 0.5f, vp->Pos.y + vp->Size.y * 0.4f), ImGuiCond_Appearing,
+                            ImVec2(0.5f, 0.5f));
   }
   if (!ImGui::BeginPopupModal(title, nullptr, flags)) {
     shell->dialog = Dialog::kNone;
@@ -502,7 +502,6 @@ void OpenDialog(ShellState* shell, Dialog dialog, std::string path) {
   shell->dialog = dialog;
   shell->dialog_just_opened = true;
   shell->dialog_path = std::move(path);
-  shell->dialog_error.clear();
 }
 
 std::string WindowTitle(const AppState& state) {

@@ -33,7 +33,6 @@ struct ShellState {
   Dialog dialog = Dialog::kNone;
   bool dialog_just_opened = false;
   std::string dialog_path;  // the project waiting for the unsaved-changes answer (kConfirmOpen)
-  std::string dialog_error;
   // The file browser of kOpen, kSaveAs, kExport and kAddPhoto (app/shell/file_actions.h).
   FileDialogState file_dialog;
   // Recent files and folders; persisted at recent_files_path after each change unless empty

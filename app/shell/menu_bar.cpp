@@ -71,7 +71,8 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
     if (ImGui::MenuItem("Add photo...")) OpenFileBrowser(state, shell, Dialog::kAddPhoto);
     RecordItem(state, "menu.add_photo");
     if (ImGui::IsItemHovered())
-      ImGui::SetTooltip("A new image: draw line families on it, or pin model vertices in it (or drop photos onto the window)");
+      ImGui::SetTooltip(
+          "A new image: draw line families on it, or pin model vertices in it (or drop photos onto the window)");
     ImGui::Separator();
     if (ImGui::MenuItem("Save", "Ctrl+S")) {
       if (state->project_path.empty()) {

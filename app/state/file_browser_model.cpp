@@ -119,11 +119,11 @@ std::string WithPurposeExtension(const std::string& path, BrowsePurpose purpose)
 }
 
 bool CaseInsensitiveLess(const std::string& a, const std::string& b) {
-  const bool folded_less = std::lexicographical_compare(
-      a.begin(), a.end(), b.begin(), b.end(), [](char x, char y) { return FoldCase(x) < FoldCase(y); });
+  const bool folded_less = std::lexicographical_compare(a.begin(), a.end(), b.begin(), b.end(),
+                                                        [](char x, char y) { return FoldCase(x) < FoldCase(y); });
   if (folded_less) return true;
-  const bool folded_greater = std::lexicographical_compare(
-      b.begin(), b.end(), a.begin(), a.end(), [](char x, char y) { return FoldCase(x) < FoldCase(y); });
+  const bool folded_greater = std::lexicographical_compare(b.begin(), b.end(), a.begin(), a.end(),
+                                                           [](char x, char y) { return FoldCase(x) < FoldCase(y); });
   return !folded_greater && a < b;
 }
 

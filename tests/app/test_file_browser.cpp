@@ -156,9 +156,9 @@ TEST_CASE("Save as: a typed name gets .facet and round-trips; an existing file i
   TempDir dir("browser_save_as");
   const std::string copy = dir / "copy.facet";
   // The sample's folder is where Save as starts; the name typed is a path into the temp folder.
-  const nlohmann::json saved = Run(dir, kSample, "save_as",
-                                   "frames 2\nkey ctrl+shift+s\nframes 3\ntype " + (dir / "copy") +
-                                       "\nframes 1\nkey enter\nframes 3\n");
+  const nlohmann::json saved =
+      Run(dir, kSample, "save_as",
+          "frames 2\nkey ctrl+shift+s\nframes 3\ntype " + (dir / "copy") + "\nframes 1\nkey enter\nframes 3\n");
   INFO(ReportLog(saved));
   CHECK(saved["dialog"] == "");
   REQUIRE(fs::exists(copy));
@@ -190,7 +190,8 @@ TEST_CASE("Save as: a typed name gets .facet and round-trips; an existing file i
 
   // Saving as copy.facet again (the proposed name) asks first; the file waits for Replace.
   const size_t primitives = reloaded.primitives.size();
-  const std::string edit_and_save_as = "frames 2\ncommand add box\nframes 2\nkey ctrl+shift+s\nframes 3\nkey enter\nframes 2\n";
+  const std::string edit_and_save_as =
+      "frames 2\ncommand add box\nframes 2\nkey ctrl+shift+s\nframes 3\nkey enter\nframes 2\n";
   const nlohmann::json asked = Run(dir, copy, "asked", edit_and_save_as);
   CHECK(asked["dialog"] == "save-as");
   CHECK(asked["file_dialog"]["confirm_overwrite"] == fs::path(copy).string());
@@ -208,10 +209,9 @@ TEST_CASE("File > Export glTF: a typed name gets .glb and the model is written t
   const nlohmann::json bare = Run(dir, kSample, "probe_menu", "frames 2\n");
   const std::string open_file_menu = "frames 2\n" + Click(bare, "menu.file") + "frames 2\n";
   const nlohmann::json menu = Run(dir, kSample, "probe_export", open_file_menu);
-  const nlohmann::json exported =
-      Run(dir, kSample, "export",
-          open_file_menu + Click(menu, "menu.export_gltf") + "frames 3\ntype " + (dir / "model") +
-              "\nframes 1\nkey enter\nframes 3\n");
+  const nlohmann::json exported = Run(dir, kSample, "export",
+                                      open_file_menu + Click(menu, "menu.export_gltf") + "frames 3\ntype " +
+                                          (dir / "model") + "\nframes 1\nkey enter\nframes 3\n");
   INFO(ReportLog(exported));
   CHECK(exported["dialog"] == "");
   REQUIRE(fs::exists(dir / "model.glb"));
@@ -234,9 +234,9 @@ TEST_CASE("The browser explains what it cannot do and keeps open; Escape cancels
 
   // A file that is not a project: the open fails with the reason in the dialog.
   WriteText(dir / "broken.facet", "{ not json");
-  const nlohmann::json broken = Run(dir, scene, "broken",
-                                    "frames 2\nkey ctrl+o\nframes 3\ntype " + (dir / "broken.facet") +
-                                        "\nframes 1\nkey enter\nframes 2\n");
+  const nlohmann::json broken =
+      Run(dir, scene, "broken",
+          "frames 2\nkey ctrl+o\nframes 3\ntype " + (dir / "broken.facet") + "\nframes 1\nkey enter\nframes 2\n");
   CHECK(broken["dialog"] == "open");
   CHECK(broken["file_dialog"]["error"].get<std::string>().find("broken.facet") != std::string::npos);
   CHECK(broken["project"]["primitives"].size() == 1);
@@ -267,17 +267,17 @@ TEST_CASE("Recent files persist in the config folder and File > Open recent open
   REQUIRE(menu["recent_files"]["files"][0] == kSample);  // read back from the config folder
   const std::string hover_recent = "move " + ItemCenter(menu["items"], "menu.open_recent") + "\nframes 4\n";
   const nlohmann::json submenu = Run(dir, scene, "probe_submenu", open_file_menu + hover_recent, config);
-  const nlohmann::json opened = Run(
-      dir, scene, "opened", open_file_menu + hover_recent + Click(submenu, "menu.recent/" + kSample), config);
+  const nlohmann::json opened =
+      Run(dir, scene, "opened", open_file_menu + hover_recent + Click(submenu, "menu.recent/" + kSample), config);
   INFO(ReportLog(opened));
   CHECK(opened["project"]["images"].size() == LoadProjectFile(kSample).images.size());
   CHECK(LogHas(opened, "info", "Opened " + kSample));
 
   // The browser's side column offers the recent project; a double-click opens it.
   const nlohmann::json browser = Run(dir, scene, "probe_side", "frames 2\nkey ctrl+o\nframes 3\n", config);
-  const nlohmann::json from_side = Run(
-      dir, scene, "from_side",
-      "frames 2\nkey ctrl+o\nframes 3\n" + DoubleClick(browser, "file.recent_file/" + kSample), config);
+  const nlohmann::json from_side =
+      Run(dir, scene, "from_side",
+          "frames 2\nkey ctrl+o\nframes 3\n" + DoubleClick(browser, "file.recent_file/" + kSample), config);
   CHECK(from_side["dialog"] == "");
   CHECK(from_side["project"]["images"].size() == LoadProjectFile(kSample).images.size());
 
@@ -297,9 +297,9 @@ TEST_CASE("Drop: a photo is added, an unknown file is refused in the log, a proj
   REQUIRE(cv::imwrite(dir / "dropped photo.png", cv::Mat(240, 320, CV_8UC3, cv::Scalar(20, 120, 200))));
   WriteText(dir / "notes.txt", "not a photo");
 
-  const nlohmann::json dropped =
-      Run(dir, scene, "photo", "frames 2\ndrop \"" + (dir / "dropped photo.png") + "\" " + (dir / "notes.txt") +
-                                   "\nframes 3\ndrop " + kSample + "\nframes 3\n");
+  const nlohmann::json dropped = Run(dir, scene, "photo",
+                                     "frames 2\ndrop \"" + (dir / "dropped photo.png") + "\" " + (dir / "notes.txt") +
+                                         "\nframes 3\ndrop " + kSample + "\nframes 3\n");
   INFO(ReportLog(dropped));
   REQUIRE(dropped["project"]["images"].size() == 2);
   CHECK(dropped["project"]["images"][1]["path"] == "dropped photo.png");
@@ -311,9 +311,9 @@ TEST_CASE("Drop: a photo is added, an unknown file is refused in the log, a proj
 
   // Onto a clean project the drop opens at once; dropped onto the open browser, a file is
   // shown in its folder and named, not opened.
-  const nlohmann::json opened = Run(dir, scene, "project",
-                                    "frames 2\ndrop " + kSample + "\nframes 3\nkey ctrl+o\nframes 3\ndrop " +
-                                        (dir / "notes.txt") + "\nframes 2\n");
+  const nlohmann::json opened = Run(
+      dir, scene, "project",
+      "frames 2\ndrop " + kSample + "\nframes 3\nkey ctrl+o\nframes 3\ndrop " + (dir / "notes.txt") + "\nframes 2\n");
   CHECK(opened["project"]["images"].size() == LoadProjectFile(kSample).images.size());
   CHECK(LogHas(opened, "info", "Opened " + kSample));
   CHECK(opened["dialog"] == "open");

@@ -108,8 +108,8 @@ TEST_CASE("Listing: folders first, then the purpose's files, each sorted case-in
   everything.all_files = true;
   everything.show_hidden = true;
   CHECK(Names(ListFolder(t.root.string(), everything)) ==
-        std::vector<std::string>{".git/", "Alpha/", "beta/", ".hidden.facet", "Apple.FACET", "mango.facet",
-                                 "notes.txt", "photo.JPG", "zebra.facet"});
+        std::vector<std::string>{".git/", "Alpha/", "beta/", ".hidden.facet", "Apple.FACET", "mango.facet", "notes.txt",
+                                 "photo.JPG", "zebra.facet"});
 
   ListOptions capped = everything;
   capped.max_entries = 4;
@@ -203,8 +203,8 @@ TEST_CASE("Drops are sorted into projects, photos and the rest") {
   t.File("c.png");
   t.File("d.txt");
   t.Folder("e.png");  // a folder named like a photo is not one
-  const DroppedFiles dropped = ClassifyDroppedPaths({t / "d.txt", t / "b.JPEG", t / "a.facet", t / "e.png",
-                                                     t / "c.png", t / "missing.png"});
+  const DroppedFiles dropped =
+      ClassifyDroppedPaths({t / "d.txt", t / "b.JPEG", t / "a.facet", t / "e.png", t / "c.png", t / "missing.png"});
   CHECK(dropped.projects == std::vector<std::string>{t / "a.facet"});
   CHECK(dropped.photos == std::vector<std::string>{t / "b.JPEG", t / "c.png"});
   CHECK(dropped.unknown == std::vector<std::string>{t / "d.txt", t / "e.png", t / "missing.png"});
