@@ -169,8 +169,12 @@ FolderListing ListFolder(const std::string& folder, const ListOptions& options) 
   listing.folder = NormalizePath("", folder);
   std::error_code ec;
   const fs::file_status status = fs::status(listing.folder, ec);
-  if (ec || !fs::exists(status)) {
+  if (!fs::exists(status) && (!ec || ec == std::errc::no_such_file_or_directory || ec == std::errc::not_a_directory)) {
     listing.error = "The folder " + listing.folder + " does not exist (any more).";
+    return listing;
+  }
+  if (ec) {
+    listing.error = "Cannot reach the folder " + listing.folder + ": " + ErrorText(ec) + ".";
     return listing;
   }
   if (!fs::is_directory(status)) {

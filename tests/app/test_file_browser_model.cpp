@@ -194,6 +194,13 @@ TEST_CASE("A vanished folder, a file taken for a folder and an unreadable folder
     return locked.entries.empty() ? locked.error : std::string("listed ") + locked.entries[0].name;
   });
   CHECK(message == "Cannot read the folder " + locked_folder + ": permission denied.");
+  // Below an unreadable folder nothing can even be looked at: said so, not "does not exist".
+  const std::string inside = locked_folder + "/deeper";
+  fs::permissions(locked_folder, fs::perms::owner_all, fs::perm_options::replace);
+  fs::create_directories(inside);
+  if (::geteuid() != 0) fs::permissions(locked_folder, fs::perms::none, fs::perm_options::replace);
+  const std::string below = RunWithoutPrivileges([&] { return ListFolder(inside, ListOptions()).error; });
+  CHECK(below == "Cannot reach the folder " + inside + ": permission denied.");
 }
 
 TEST_CASE("Drops are sorted into projects, photos and the rest") {
