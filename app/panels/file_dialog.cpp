@@ -271,12 +271,14 @@ FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const 
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("The folder above (Backspace in the list)");
   ImGui::SameLine();
   ImGui::SetNextItemWidth(-1.0f);
-  if (dialog->focus_pending && !writes) ImGui::SetKeyboardFocusHere();
+  if ((dialog->focus_pending && !writes) || dialog->refocus_path) ImGui::SetKeyboardFocusHere();
+  dialog->refocus_path = false;
+  bool enter_in_path = false, enter_in_name = false;
   if (ImGui::InputText("##path", &dialog->path_field,
                        ImGuiInputTextFlags_EnterReturnsTrue | ImGuiInputTextFlags_AutoSelectAll)) {
     accept_requested = true;
     accept_text = dialog->path_field;
-    enter_used = true;
+    enter_used = enter_in_path = true;
   }
   RecordItem(state, "file.path");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Type a folder or a file path and press Enter (~ is your home)");
@@ -298,16 +300,15 @@ FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const 
   ImGui::SameLine(label_w + style.WindowPadding.x);
   const float filter_w = ImGui::CalcTextSize(PurposeFilterLabel(dialog->purpose)).x + ImGui::GetFrameHeight() * 2;
   ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x - filter_w - style.ItemSpacing.x);
-  if (dialog->focus_pending && writes) {
-    ImGui::SetKeyboardFocusHere();
-  }
+  if ((dialog->focus_pending && writes) || dialog->refocus_name) ImGui::SetKeyboardFocusHere();
+  dialog->refocus_name = false;
   if (ImGui::InputText(
           "##name", &dialog->name_field,
           ImGuiInputTextFlags_EnterReturnsTrue | ImGuiInputTextFlags_AutoSelectAll | ImGuiInputTextFlags_CallbackAlways,
           SelectStem, dialog)) {
     accept_requested = true;
     accept_text = dialog->name_field;
-    enter_used = true;
+    enter_used = enter_in_name = true;
   }
   RecordItem(state, "file.name");
   if (ImGui::IsItemHovered())
@@ -401,7 +402,13 @@ FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const 
     if (accept_text.empty() && it != dialog->listing.entries.end()) accept_text = it->name;
     accept_requested = true;
   }
-  if (accept_requested) return Accept(dialog, accept_text);
+  if (accept_requested) {
+    const std::string folder_before = dialog->folder;
+    result = Accept(dialog, accept_text);
+    const bool entered_folder = dialog->folder != folder_before;
+    dialog->refocus_path = entered_folder && enter_in_path;
+    dialog->refocus_name = entered_folder && enter_in_name;
+  }
   return result;
 }
 

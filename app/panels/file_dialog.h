@@ -34,6 +34,9 @@ struct FileDialogState {
   std::string confirm_overwrite;     // an existing file chosen for writing, awaiting Replace
   bool focus_pending = true;         // the first frame gives the keyboard to the main field
   bool select_stem_pending = false;  // writing: the name's stem is selected, not its extension
+  // After Enter in a field took the browser into a folder, that field keeps the keyboard, so
+  // that the next name or path can be typed at once.
+  bool refocus_path = false, refocus_name = false;
   bool scroll_to_selected = false;
 };
 

@@ -69,6 +69,19 @@ std::string Canonical(const std::string& path) { return fs::weakly_canonical(pat
 
 }  // namespace
 
+TEST_CASE("File > Open by keyboard alone: a folder, Enter, a name without its extension, Enter") {
+  TempDir dir("browser_keyboard");
+  const std::string scene = WriteBoxScene(dir);
+  const std::string sample_folder = fs::path(kSample).parent_path().string();
+  const nlohmann::json report =
+      Run(dir, scene, "keyboard",
+          "frames 2\nkey ctrl+o\nframes 3\ntype " + sample_folder +
+              "\nframes 1\nkey enter\nframes 2\ntype leuven\nframes 1\nkey enter\nframes 3\n");
+  INFO(ReportLog(report));
+  CHECK(report["dialog"] == "");
+  CHECK(LogHas(report, "info", "Opened " + kSample));
+}
+
 TEST_CASE("File > Open: typing the sample's path and Enter opens it, and it becomes a recent file") {
   TempDir dir("browser_open");
   const std::string scene = WriteBoxScene(dir);
