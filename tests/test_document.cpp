@@ -657,3 +657,37 @@ TEST_CASE("a K-op on a primitive's mesh with a pin on the new vertex is one entr
       0.5 * (facet::VertexInWorld(after, {box.id, 4}) + facet::VertexInWorld(after, {box.id, 5}));
   CHECK((v->position - expected).norm() < 1e-12 * expected.norm());
 }
+
+TEST_CASE("RewriteImagePaths reaches the project and every image in history; undo and redo keep the new paths") {
+  Project start;
+  Image first;
+  first.id = start.NewId();
+  first.path = "photos/a.jpg";
+  start.images.push_back(first);
+  Document document(start);
+  Project with_second = document.project();
+  Image second;
+  second.id = with_second.NewId();
+  second.path = "photos/b.jpg";
+  with_second.images.push_back(second);
+  REQUIRE(document.Commit("Add photo b.jpg", with_second));
+  Project moved_first = document.project();
+  moved_first.images[0].camera.focal_px = 1234.0;
+  REQUIRE(document.Commit("Focal", moved_first));
+  REQUIRE(document.Undo());  // one edit on each stack
+  document.MarkClean();
+
+  document.RewriteImagePaths([](const std::string& path) { return "../" + path; });
+  CHECK(document.project().images[0].path == "../photos/a.jpg");
+  CHECK(document.project().images[1].path == "../photos/b.jpg");
+  CHECK_FALSE(document.dirty());
+  REQUIRE(document.Redo());
+  CHECK(document.project().images[0].path == "../photos/a.jpg");
+  CHECK(document.project().images[0].camera.focal_px == 1234.0);
+  REQUIRE(document.Undo());
+  REQUIRE(document.Undo());
+  REQUIRE(document.project().images.size() == 1);
+  CHECK(document.project().images[0].path == "../photos/a.jpg");
+  REQUIRE(document.Redo());
+  CHECK(document.project().images[1].path == "../photos/b.jpg");
+}

@@ -17,6 +17,7 @@
 #include "app/panels/side_panels.h"
 #include "app/panels/viewport_panel.h"
 #include "app/platform/egl_context.h"
+#include "app/shell/file_actions.h"
 #include "app/shell/frame.h"
 #include "app/shell/glfw_window.h"
 #include "app/shell/layout.h"
@@ -101,6 +102,22 @@ struct ScriptedInput {
   }
 };
 
+// The report's name of the open modal dialog.
+const char* DialogName(Dialog dialog) {
+  switch (dialog) {
+    case Dialog::kNone: return "";
+    case Dialog::kOpen: return "open";
+    case Dialog::kSaveAs: return "save-as";
+    case Dialog::kExport: return "export";
+    case Dialog::kAddPhoto: return "add-photo";
+    case Dialog::kAbout: return "about";
+    case Dialog::kConfirmQuit: return "confirm-quit";
+    case Dialog::kConfirmNew: return "confirm-new";
+    case Dialog::kConfirmOpen: return "confirm-open";
+  }
+  return "";
+}
+
 nlohmann::json RectJson(const Rect& r) { return {{"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}}; }
 
 std::string BuildReport(const AppState& state, const ShellState& shell, const RenderOptions& options,
@@ -173,6 +190,15 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
     log.push_back({{"level", level}, {"text", e.text}});
   }
   report["log"] = log;
+  report["dialog"] = DialogName(shell.dialog);
+  const FileDialogState& browser = shell.file_dialog;
+  report["file_dialog"] = {{"folder", browser.folder},
+                           {"name", browser.name_field},
+                           {"selected", browser.selected},
+                           {"error", browser.error},
+                           {"confirm_overwrite", browser.confirm_overwrite},
+                           {"all_files", browser.all_files}};
+  report["recent_files"] = {{"files", shell.recent_files.files}, {"folders", shell.recent_files.folders}};
   report["project"] = nlohmann::json::parse(ProjectToJson(state.document.project()), nullptr, false);
   return report.dump(2);
 }
@@ -199,6 +225,7 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
   // One frame: input, app command, UI, render into the target, optional screenshot.
   auto run_frame = [&](const ScriptStep* step) -> bool {
     input.Apply(step, io);
+    if (step && !step->dropped_paths.empty()) shell->dropped_paths = step->dropped_paths;
     if (step && !step->command.empty()) {
       std::string command_error;
       if (!RunAppCommand(state, shell, step->command, step->command_args, &command_error)) {
@@ -263,7 +290,10 @@ int RunGui(const GuiOptions& options) {
       }
     }
   }
-  if (!options.project_path.empty()) OpenProject(&state, options.project_path);
+  UseRecentFilesIn(&state, &shell, ConfigDirectory());
+  if (!options.project_path.empty() && OpenProject(&state, options.project_path)) {
+    NoteRecentFile(&state, &shell, options.project_path);
+  }
 
   const int code = RunGlfwWindow(&state, &shell, imgui_ini);
   if (code == 0 && !layout_path.empty()) {
@@ -286,6 +316,7 @@ int RunOffscreen(const RenderOptions& options) {
   AppState state;
   ShellState shell;
   shell.offscreen = true;  // the default layout, never the user's
+  if (!options.config_dir.empty()) UseRecentFilesIn(&state, &shell, options.config_dir);
   if (!options.project_path.empty() && !OpenProject(&state, options.project_path)) {
     return Fail("cannot open project " + options.project_path);
   }

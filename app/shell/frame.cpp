@@ -20,6 +20,7 @@
 #include "app/panels/image_panel.h"
 #include "app/panels/side_panels.h"
 #include "app/panels/viewport_panel.h"
+#include "app/shell/file_actions.h"
 #include "app/shell/menu_bar.h"
 #include "app/state/add_photo.h"
 #include "app/state/line_proposals.h"
@@ -34,13 +35,6 @@ constexpr float kWorkAreaMarginPx = 4.0f;
 constexpr float kTearOffDistancePx = 14.0f;
 const ImVec4 kDimText(0.55f, 0.57f, 0.62f, 1.0f);
 const ImVec4 kErrorText(1.00f, 0.42f, 0.40f, 1.0f);
-
-void OpenDialog(ShellState* shell, Dialog dialog, std::string path = {}) {
-  shell->dialog = dialog;
-  shell->dialog_just_opened = true;
-  shell->dialog_path = std::move(path);
-  shell->dialog_error.clear();
-}
 
 // FNV-1a (64 bit) of raw bytes: the `bake-status` fingerprints that let a test compare the
 // app's bake with its own, bit for bit, without shipping the atlas.
@@ -109,12 +103,12 @@ void HandleGlobalShortcuts(AppState* state, ShellState* shell) {
   if (ImGui::IsKeyPressed(GLFW_KEY_Y, true)) Redo(state);
   if (ImGui::IsKeyPressed(GLFW_KEY_S, false)) {
     if (io.KeyShift || state->project_path.empty()) {
-      OpenDialog(shell, Dialog::kSaveAs, state->project_path.empty() ? "untitled.facet" : state->project_path);
+      OpenFileBrowser(state, shell, Dialog::kSaveAs);
     } else {
       SaveProjectAs(state, "");
     }
   }
-  if (ImGui::IsKeyPressed(GLFW_KEY_O, false)) OpenDialog(shell, Dialog::kOpen, state->project_path);
+  if (ImGui::IsKeyPressed(GLFW_KEY_O, false)) OpenFileBrowser(state, shell, Dialog::kOpen);
   if (ImGui::IsKeyPressed(GLFW_KEY_N, false)) {
     if (state->document.dirty())
       OpenDialog(shell, Dialog::kConfirmNew);
@@ -310,51 +304,6 @@ void DrawPanel(AppState* state, ShellState* shell, int index, const TiledLayout&
   }
 }
 
-// The folder browser under the path field of the open/save/export dialogs.
-bool DrawFileList(ShellState* shell, const std::string& extension, double time_s) {
-  namespace fs = std::filesystem;
-  constexpr double kRelistAfterS = 2.0;
-  std::error_code ec;
-  const fs::path typed(shell->dialog_path);
-  fs::path dir = shell->dialog_path.empty() || shell->dialog_path.back() == '/' ? typed : typed.parent_path();
-  if (dir.empty()) dir = fs::current_path(ec);
-  if (dir.string() != shell->listed_dir || time_s - shell->listed_time_s > kRelistAfterS ||
-      time_s < shell->listed_time_s) {
-    shell->listed_dir = dir.string();
-    shell->listed_time_s = time_s;
-    shell->listed_dirs.clear();
-    shell->listed_files.clear();
-    constexpr size_t kMaxEntries = 2000;
-    for (const auto& e : fs::directory_iterator(dir, fs::directory_options::skip_permission_denied, ec)) {
-      const std::string name = e.path().filename().string();
-      if (name.empty() || name[0] == '.') continue;
-      if (e.is_directory(ec))
-        shell->listed_dirs.push_back(name);
-      else if (extension.empty() || e.path().extension() == extension)
-        shell->listed_files.push_back(name);
-      if (shell->listed_dirs.size() + shell->listed_files.size() > kMaxEntries) break;
-    }
-    std::sort(shell->listed_dirs.begin(), shell->listed_dirs.end());
-    std::sort(shell->listed_files.begin(), shell->listed_files.end());
-  }
-  bool accept = false;
-  ImGui::TextColored(kDimText, "%s", shell->listed_dir.c_str());
-  ImGui::BeginChild("##files", ImVec2(560, 220), true);
-  if (ImGui::Selectable("../")) shell->dialog_path = dir.parent_path().string() + "/";
-  for (const std::string& d : shell->listed_dirs) {
-    if (ImGui::Selectable((d + "/").c_str())) shell->dialog_path = (dir / d).string() + "/";
-  }
-  for (const std::string& f : shell->listed_files) {
-    const bool selected = dir / f == typed;
-    if (ImGui::Selectable(f.c_str(), selected, ImGuiSelectableFlags_AllowDoubleClick)) {
-      shell->dialog_path = (dir / f).string();
-      if (ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) accept = true;
-    }
-  }
-  ImGui::EndChild();
-  return accept;
-}
-
 const char* DialogTitle(Dialog dialog) {
   switch (dialog) {
     case Dialog::kOpen: return "Open project";
@@ -375,51 +324,16 @@ void CloseDialog(ShellState* shell) {
   ImGui::CloseCurrentPopup();
 }
 
+// Open, Save as, Export, Add photo: the file browser (app/shell/file_actions.h) under a
+// line about what the chosen file becomes.
 void DrawPathDialog(AppState* state, ShellState* shell) {
   const Dialog d = shell->dialog;
-  const char* verb = d == Dialog::kOpen       ? "Open"
-                     : d == Dialog::kSaveAs   ? "Save"
-                     : d == Dialog::kAddPhoto ? "Add"
-                                              : "Export";
-  const std::string extension = d == Dialog::kExport || d == Dialog::kAddPhoto ? "" : ".facet";
   if (d == Dialog::kAddPhoto) {
-    ImGui::TextColored(kDimText, "A JPEG or PNG photo; its EXIF focal length becomes a prior");
+    ImGui::TextColored(kDimText, "A JPEG, PNG or TIFF photo; its EXIF focal length becomes a prior");
     ImGui::Checkbox("Detect lines (proposals to accept in the image panel)", &state->detect_lines_on_add);
   }
   if (d == Dialog::kExport) ImGui::TextColored(kDimText, "The extension chooses the format: .glb (glTF) or .obj");
-  if (ImGui::IsWindowAppearing()) ImGui::SetKeyboardFocusHere();
-  ImGui::SetNextItemWidth(560);
-  bool accept = ImGui::InputText("##path", &shell->dialog_path, ImGuiInputTextFlags_EnterReturnsTrue);
-  accept |= DrawFileList(shell, extension, state->time_s);
-  if (!shell->dialog_error.empty()) ImGui::TextColored(kErrorText, "%s", shell->dialog_error.c_str());
-  accept |= ImGui::Button(verb, ImVec2(100, 0));
-  ImGui::SameLine();
-  if (ImGui::Button("Cancel", ImVec2(100, 0)) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) {
-    CloseDialog(shell);
-    return;
-  }
-  if (!accept) return;
-  const std::string path = shell->dialog_path;
-  if (path.empty() || path.back() == '/') {
-    shell->dialog_error = "Type a file name.";
-    return;
-  }
-  if (d == Dialog::kOpen && state->document.dirty()) {
-    ImGui::CloseCurrentPopup();
-    OpenDialog(shell, Dialog::kConfirmOpen, path);
-    return;
-  }
-  std::string error;
-  const char* command = d == Dialog::kOpen       ? "open"
-                        : d == Dialog::kSaveAs   ? "save"
-                        : d == Dialog::kAddPhoto ? "add-photo"
-                                                 : "export";
-  if (RunAppCommand(state, shell, command, {path}, &error)) {
-    CloseDialog(shell);
-    if (d == Dialog::kSaveAs && shell->quit_after_save) shell->quit_now = true;
-  } else {
-    shell->dialog_error = error;
-  }
+  DrawFileBrowser(state, shell);
 }
 
 void DrawDialogs(AppState* state, ShellState* shell) {
@@ -430,9 +344,23 @@ void DrawDialogs(AppState* state, ShellState* shell) {
     shell->dialog_just_opened = false;
   }
   const ImGuiViewport* vp = ImGui::GetMainViewport();
-  ImGui::SetNextWindowPos(ImVec2(vp->Pos.x + vp->Size.x * 0.5f, vp->Pos.y + vp->Size.y * 0.4f), ImGuiCond_Appearing,
-                          ImVec2(0.5f, 0.5f));
-  if (!ImGui::BeginPopupModal(title, nullptr, ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoSavedSettings)) {
+  const bool browser = shell->dialog == Dialog::kOpen || shell->dialog == Dialog::kSaveAs ||
+                       shell->dialog == Dialog::kExport || shell->dialog == Dialog::kAddPhoto;
+  ImGuiWindowFlags flags = ImGuiWindowFlags_NoSavedSettings;
+  if (browser) {
+    // The browser is as large as the window allows, up to a comfortable reading size.
+    constexpr float kBrowserMaxW = 980.0f, kBrowserMaxH = 620.0f, kBrowserMarginPx = 40.0f;
+    ImGui::SetNextWindowSize(ImVec2(std::min(kBrowserMaxW, vp->Size.x - kBrowserMarginPx),
+                                    std::min(kBrowserMaxH, vp->Size.y - kBrowserMarginPx)),
+                             ImGuiCond_Appearing);
+    ImGui::SetNextWindowPos(ImVec2(vp->Pos.x + vp->Size.x * 0.5f, vp->Pos.y + vp->Size.y * 0.5f), ImGuiCond_Appearing,
+                            ImVec2(0.5f, 0.5f));
+  } else {
+    flags |= ImGuiWindowFlags_AlwaysAutoResize;
+    ImGui::SetNextWindowPos(ImVec2(vp->Pos.x + vp->Size.x * 0.5f, vp->Pos.y + vp->Size.y * 0.4f), ImGuiCond_Appearing,
+                            ImVec2(0.5f, 0.5f));
+  }
+  if (!ImGui::BeginPopupModal(title, nullptr, flags)) {
     shell->dialog = Dialog::kNone;
     return;
   }
@@ -473,7 +401,7 @@ void DrawDialogs(AppState* state, ShellState* shell) {
         if (state->project_path.empty()) {
           CloseDialog(shell);
           shell->quit_after_save = d == Dialog::kConfirmQuit;
-          OpenDialog(shell, Dialog::kSaveAs, "untitled.facet");
+          OpenFileBrowser(state, shell, Dialog::kSaveAs);
           break;
         }
         if (SaveProjectAs(state, "")) proceed();
@@ -573,6 +501,12 @@ bool RunSelectCommand(AppState* state, const std::string& arg, std::string* erro
 
 }  // namespace
 
+void OpenDialog(ShellState* shell, Dialog dialog, std::string path) {
+  shell->dialog = dialog;
+  shell->dialog_just_opened = true;
+  shell->dialog_path = std::move(path);
+}
+
 std::string WindowTitle(const AppState& state) {
   const std::string name = state.project_path.empty() ? std::string("untitled")
                                                       : std::filesystem::path(state.project_path).filename().string();
@@ -607,6 +541,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
       *error = LastLoggedError(*state);
       return false;
     }
+    NoteRecentFile(state, shell, state->project_path);
     return true;
   }
   if (name == "open") {
@@ -614,6 +549,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
       *error = LastLoggedError(*state);
       return false;
     }
+    NoteRecentFile(state, shell, arg);
     return true;
   }
   if (name == "tool") {
@@ -662,6 +598,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
       *error = LastLoggedError(*state);
       return false;
     }
+    NoteRecentFile(state, shell, arg);
     // The photo is in; a detection that finds no lines only logs why.
     if (state->detect_lines_on_add) DetectLineProposals(state, state->active_image_id);
     return true;
@@ -727,6 +664,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
       return false;
     }
     state->Log(LogLevel::kInfo, "Exported " + arg);
+    NoteRecentFile(state, shell, arg);
     return true;
   }
   *error = "unknown command '" + name + "'";
@@ -741,8 +679,10 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
     state->request_quit = false;
     RequestQuit(state, shell);
   }
+  HandleDroppedFiles(state, shell);
   HandleGlobalShortcuts(state, shell);
 
+  state->item_rects.clear();
   const float menu_height = DrawMenuBar(state, shell);
   const ImGuiViewport* vp = ImGui::GetMainViewport();
   const Rect work{vp->Pos.x + kWorkAreaMarginPx, vp->Pos.y + menu_height + kWorkAreaMarginPx,
@@ -757,7 +697,6 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   }
 
   shell->panel_drawn.fill(false);
-  state->item_rects.clear();
   DrawSplitters(shell, tiled, work);
   // Docked panels first: floating ones are created later and so stay in front.
   for (int pass = 0; pass < 2; ++pass) {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "app/panels/file_dialog.h"
 #include "app/panels/image_panel.h"
 #include "app/panels/side_panels.h"
 #include "app/panels/viewport_panel.h"
@@ -31,13 +32,16 @@ struct ShellState {
   // Modal dialogs.
   Dialog dialog = Dialog::kNone;
   bool dialog_just_opened = false;
-  std::string dialog_path;  // the path field of the open/save/export dialogs
-  std::string dialog_error;
-  // The dialog's folder listing, re-read when the folder changes or after a while (not
-  // every frame: the frame loop does no file-system work of its own).
-  std::string listed_dir;
-  double listed_time_s = -1.0;
-  std::vector<std::string> listed_dirs, listed_files;  // file names, sorted
+  std::string dialog_path;  // the project waiting for the unsaved-changes answer (kConfirmOpen)
+  // The file browser of kOpen, kSaveAs, kExport and kAddPhoto (app/shell/file_actions.h).
+  FileDialogState file_dialog;
+  // Recent files and folders; persisted at recent_files_path after each change unless empty
+  // (offscreen renders keep them in memory unless given --config-dir).
+  RecentFiles recent_files;
+  std::string recent_files_path;
+  // Paths dropped onto the window (GLFW) or by the script's `drop`, handled at the start of
+  // the next frame (HandleDroppedFiles).
+  std::vector<std::string> dropped_paths;
 
   // Set when the user confirmed quitting (or there was nothing to save); the platform loop
   // then exits.
@@ -70,10 +74,14 @@ std::string WindowTitle(const AppState& state);
 // Named app commands shared by the menus, the shortcuts and the input script: undo, redo,
 // save [PATH], open PATH, tool NAME, select-image INDEX, fit, export PATH, add KIND [on-top],
 // select vertex|edge|face PRIMITIVE_ID ELEMENT_ID | primitive ID | none, free-vertex,
-// planar-face (app/state/input_script.h documents them). Returns false with
-// *error set for unknown commands, bad arguments or a failed save/open/export.
+// planar-face (app/state/input_script.h documents them). A successful open, save, export or
+// add-photo puts its file among the recent ones (app/shell/file_actions.h). Returns false
+// with *error set for unknown commands, bad arguments or a failed save/open/export.
 bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, const std::vector<std::string>& args,
                    std::string* error);
+
+// Opens a modal dialog; `path` is the project a kConfirmOpen is about.
+void OpenDialog(ShellState* shell, Dialog dialog, std::string path = {});
 
 // Asks to quit: quits at once when nothing is unsaved, else opens the confirmation dialog.
 void RequestQuit(AppState* state, ShellState* shell);

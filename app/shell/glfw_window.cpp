@@ -27,6 +27,13 @@ void PrintGlfwError(int code, const char* description) {
   if (code != GLFW_PLATFORM_ERROR) std::fprintf(stderr, "facet: GLFW: %s\n", description);
 }
 
+// Files dropped onto the window wait in the shell state for the next frame, which handles
+// them like the script's `drop` (HandleDroppedFiles, app/shell/file_actions.h).
+void QueueDroppedFiles(GLFWwindow* window, int count, const char** paths) {
+  auto* shell = static_cast<ShellState*>(glfwGetWindowUserPointer(window));
+  for (int i = 0; i < count; ++i) shell->dropped_paths.emplace_back(paths[i]);
+}
+
 }  // namespace
 
 bool HasDisplay() {
@@ -70,6 +77,8 @@ int RunGlfwWindow(AppState* state, ShellState* shell, const std::string& imgui_i
   ConfigureImGui(/*offscreen=*/false, std::max(scale_x, scale_y) / std::max(1.0f, framebuffer_scale));
   ImGui::GetIO().IniFilename = imgui_ini_path.empty() ? nullptr : imgui_ini_path.c_str();
   ImGui_ImplGlfw_InitForOpenGL(window, /*install_callbacks=*/true);
+  glfwSetWindowUserPointer(window, shell);
+  glfwSetDropCallback(window, QueueDroppedFiles);
   ImGui_ImplOpenGL3_Init("#version 330");
 
   while (!shell->quit_now) {

@@ -8,6 +8,8 @@
 
 #include "app/panels/side_panels.h"
 #include "app/panels/widgets.h"
+#include "app/shell/file_actions.h"
+#include "app/state/file_browser_model.h"
 #include "app/state/model_edits.h"
 
 namespace facet::app {
@@ -15,7 +17,32 @@ namespace {
 
 std::string StemOf(const std::string& path) {
   if (path.empty()) return "model";
-  return std::filesystem::path(path).replace_extension().string();
+  return std::filesystem::path(path).stem().string();
+}
+
+// File > Open recent: the recent projects, newest first, with their folders; a vanished one
+// is shown but cannot be chosen.
+void DrawOpenRecentMenu(AppState* state, ShellState* shell) {
+  constexpr size_t kMaxShown = 10;
+  const std::vector<std::string> projects = RecentFilesWith(shell->recent_files, {".facet"});
+  const bool open = ImGui::BeginMenu("Open recent", !projects.empty());
+  RecordItem(state, "menu.open_recent");
+  if (!open) return;
+  for (size_t i = 0; i < projects.size() && i < kMaxShown; ++i) {
+    const std::filesystem::path path(projects[i]);
+    std::error_code ec;
+    const bool exists = std::filesystem::exists(path, ec);
+    ImGui::PushID(static_cast<int>(i));
+    if (ImGui::MenuItem(path.filename().string().c_str(), path.parent_path().string().c_str(), false, exists)) {
+      OpenProjectAsking(state, shell, projects[i]);
+    }
+    RecordItem(state, "menu.recent/" + projects[i]);
+    if (!exists && ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) ImGui::SetTooltip("No longer there");
+    ImGui::PopID();
+  }
+  ImGui::Separator();
+  if (ImGui::MenuItem("Clear recent files")) ClearRecentFiles(state, shell);
+  ImGui::EndMenu();
 }
 
 }  // namespace
@@ -25,42 +52,45 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
   if (!ImGui::BeginMainMenuBar()) return height;
   height = ImGui::GetWindowSize().y;
   shell->menu_bar_rect = {0, 0, ImGui::GetWindowSize().x, height};
-  auto open_dialog = [&](Dialog d, std::string path) {
-    shell->dialog = d;
-    shell->dialog_just_opened = true;
-    shell->dialog_path = std::move(path);
-    shell->dialog_error.clear();
-  };
+  // Recorded before BeginMenu: once the menu is open, the last item is inside its popup.
+  const ImVec2 file_pos = ImGui::GetCursorScreenPos();
+  state->item_rects["menu.file"] = {file_pos.x, file_pos.y,
+                                    ImGui::CalcTextSize("File").x + ImGui::GetStyle().ItemSpacing.x * 2, height};
   if (ImGui::BeginMenu("File")) {
     if (ImGui::MenuItem("New", "Ctrl+N")) {
       if (state->document.dirty()) {
-        open_dialog(Dialog::kConfirmNew, "");
+        OpenDialog(shell, Dialog::kConfirmNew);
       } else {
         std::string error;
         RunAppCommand(state, shell, "new", {}, &error);
       }
     }
-    if (ImGui::MenuItem("Open...", "Ctrl+O")) open_dialog(Dialog::kOpen, state->project_path);
-    if (ImGui::MenuItem("Add photo...")) open_dialog(Dialog::kAddPhoto, "");
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("A new image: draw line families on it, or pin model vertices in it");
+    if (ImGui::MenuItem("Open...", "Ctrl+O")) OpenFileBrowser(state, shell, Dialog::kOpen);
+    RecordItem(state, "menu.open");
+    DrawOpenRecentMenu(state, shell);
+    if (ImGui::MenuItem("Add photo...")) OpenFileBrowser(state, shell, Dialog::kAddPhoto);
+    RecordItem(state, "menu.add_photo");
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip(
+          "A new image: draw line families on it, or pin model vertices in it (or drop photos onto the window)");
     ImGui::Separator();
     if (ImGui::MenuItem("Save", "Ctrl+S")) {
       if (state->project_path.empty()) {
-        open_dialog(Dialog::kSaveAs, "untitled.facet");
+        OpenFileBrowser(state, shell, Dialog::kSaveAs);
       } else {
         SaveProjectAs(state, "");
       }
     }
-    if (ImGui::MenuItem("Save As...", "Ctrl+Shift+S")) {
-      open_dialog(Dialog::kSaveAs, state->project_path.empty() ? "untitled.facet" : state->project_path);
-    }
+    if (ImGui::MenuItem("Save As...", "Ctrl+Shift+S")) OpenFileBrowser(state, shell, Dialog::kSaveAs);
+    RecordItem(state, "menu.save_as");
     ImGui::Separator();
     const bool has_mesh = !state->mesh.indices.empty();
     if (ImGui::MenuItem("Export glTF...", nullptr, false, has_mesh)) {
-      open_dialog(Dialog::kExport, StemOf(state->project_path) + ".glb");
+      OpenFileBrowser(state, shell, Dialog::kExport, StemOf(state->project_path) + ".glb");
     }
+    RecordItem(state, "menu.export_gltf");
     if (ImGui::MenuItem("Export OBJ...", nullptr, false, has_mesh)) {
-      open_dialog(Dialog::kExport, StemOf(state->project_path) + ".obj");
+      OpenFileBrowser(state, shell, Dialog::kExport, StemOf(state->project_path) + ".obj");
     }
     ImGui::Separator();
     if (ImGui::MenuItem("Quit", "Ctrl+Q")) RequestQuit(state, shell);
@@ -112,7 +142,7 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
     ImGui::EndMenu();
   }
   if (ImGui::BeginMenu("Help")) {
-    if (ImGui::MenuItem("About Facet")) open_dialog(Dialog::kAbout, "");
+    if (ImGui::MenuItem("About Facet")) OpenDialog(shell, Dialog::kAbout);
     ImGui::EndMenu();
   }
   // Right-aligned status: tool and solve quality.

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <system_error>
 
 #include "core/io/project_io.h"
@@ -193,10 +194,24 @@ bool SaveProjectAs(AppState* state, const std::string& path) {
     state->Log(LogLevel::kError, "Save: the project has no file name yet");
     return false;
   }
-  const std::string error = SaveProject(state->document.project(), target);
+  // Into another folder, the photos' relative paths must start from the new file's folder,
+  // in the file and, once it is written, in the document (history included).
+  const std::string old_path = state->project_path;
+  std::error_code ec;
+  const bool moves = !old_path.empty() && std::filesystem::absolute(old_path, ec).parent_path().lexically_normal() !=
+                                              std::filesystem::absolute(target, ec).parent_path().lexically_normal();
+  Project saved = state->document.project();
+  if (moves) RebaseImagePaths(old_path, target, &saved);
+  const std::string error = SaveProject(saved, target);
   if (!error.empty()) {
     state->Log(LogLevel::kError, "Cannot save " + target + ": " + error);
     return false;
+  }
+  if (moves) {
+    state->document.RewriteImagePaths([&](const std::string& path) {
+      if (path.empty()) return path;
+      return RelativeImagePath(target, std::filesystem::absolute(ResolveImagePath(old_path, path), ec).string());
+    });
   }
   state->project_path = target;
   state->document.MarkClean();

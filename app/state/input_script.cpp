@@ -281,6 +281,29 @@ std::string ParseAppCommand(const std::string& line, const std::vector<std::stri
   return "";
 }
 
+// drop PATH [PATH...]: words, or "double-quoted paths" with spaces.
+std::string ParseDrop(const std::string& line, ScriptStep step, Steps* steps) {
+  const std::string rest = Rest(line, 1);
+  for (size_t i = 0; i < rest.size();) {
+    if (std::isspace(static_cast<unsigned char>(rest[i]))) {
+      ++i;
+    } else if (rest[i] == '"') {
+      const size_t end = rest.find('"', i + 1);
+      if (end == std::string::npos) return "'drop': a quoted path is not closed";
+      step.dropped_paths.push_back(rest.substr(i + 1, end - i - 1));
+      i = end + 1;
+    } else {
+      size_t end = i;
+      while (end < rest.size() && !std::isspace(static_cast<unsigned char>(rest[end]))) ++end;
+      step.dropped_paths.push_back(rest.substr(i, end - i));
+      i = end;
+    }
+  }
+  if (step.dropped_paths.empty()) return "'drop PATH [PATH...]' needs at least one path";
+  steps->push_back(step);
+  return "";
+}
+
 // One non-empty line (comment stripped).
 std::string ParseLine(const std::string& line, int line_no, Steps* steps) {
   const std::vector<std::string> t = Split(line);
@@ -300,6 +323,7 @@ std::string ParseLine(const std::string& line, int line_no, Steps* steps) {
   }
   if (cmd == "hold" || cmd == "release") return ParseModifier(cmd, t, step, steps);
   if (cmd == "command") return ParseAppCommand(line, t, step, steps);
+  if (cmd == "drop") return ParseDrop(line, step, steps);
   if (cmd == "screenshot") {
     step.screenshot_path = Rest(line, 1);
     if (step.screenshot_path.empty()) return "'screenshot PATH' needs a path";

@@ -66,6 +66,9 @@
 //                                 Tool names: select, line-x, line-y, line-z, pin,
 //                                 add-primitive (adds at once), split-edge, delete-vertex,
 //                                 connect-vertices, delete-edge, push-pull, move, line-pin
+//   drop PATH [PATH...]           files dropped onto the window, as from the desktop (the
+//                                 same handler: app/shell/file_actions.h); a path with
+//                                 spaces goes in double quotes
 //   screenshot PATH               write a PNG of the frame just rendered; that frame first
 //                                 waits for the texture bake (wait-bake), so the picture never
 //                                 depends on how fast the worker thread was
@@ -96,7 +99,8 @@ struct ScriptStep {
   std::optional<bool> hold_shift, hold_ctrl, hold_alt;
   std::string command;  // app command name; empty for none
   std::vector<std::string> command_args;
-  std::string screenshot_path;  // written after this step's frame is rendered
+  std::vector<std::string> dropped_paths;  // `drop`: handed to the frame as a window drop
+  std::string screenshot_path;             // written after this step's frame is rendered
 };
 
 struct Script {

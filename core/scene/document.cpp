@@ -156,6 +156,18 @@ void Document::MarkClean() {
   clean_is_unreachable_ = false;
 }
 
+void Document::RewriteImagePaths(const std::function<std::string(const std::string&)>& rewrite) {
+  for (Image& image : project_.images) image.path = rewrite(image.path);
+  for (std::vector<Edit>* stack : {&undo_, &redo_}) {
+    for (Edit& edit : *stack) {
+      for (Change<Image>& change : edit.images) {
+        if (change.before) change.before->path = rewrite(change.before->path);
+        if (change.after) change.after->path = rewrite(change.after->path);
+      }
+    }
+  }
+}
+
 void Document::Reset(Project project) {
   project_ = std::move(project);
   undo_.clear();

@@ -3,6 +3,7 @@
 // the object before and after, so that applying and reverting are exact. "Do" is "redo".
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -68,6 +69,10 @@ class Document {
   void MarkClean();
   // Replaces the whole document (File > Open, New); clears history.
   void Reset(Project project);
+  // Rewrites every image's stored path, in the project and in every image held by the
+  // history, so that undo and redo keep finding the photos after the project file moved
+  // (Save as into another folder). Not an edit: history and dirty flag stay as they are.
+  void RewriteImagePaths(const std::function<std::string(const std::string&)>& rewrite);
 
  private:
   Project project_;

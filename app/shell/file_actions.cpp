@@ -1,0 +1,198 @@
+#include "app/shell/file_actions.h"
+
+#include <filesystem>
+
+#include <imgui.h>
+
+#include "app/state/file_browser_model.h"
+
+namespace facet::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+BrowsePurpose PurposeOf(Dialog dialog) {
+  switch (dialog) {
+    case Dialog::kSaveAs: return BrowsePurpose::kSaveProject;
+    case Dialog::kExport: return BrowsePurpose::kExport;
+    case Dialog::kAddPhoto: return BrowsePurpose::kAddPhoto;
+    default: return BrowsePurpose::kOpenProject;
+  }
+}
+
+const char* CommandOf(BrowsePurpose purpose) {
+  switch (purpose) {
+    case BrowsePurpose::kOpenProject: return "open";
+    case BrowsePurpose::kSaveProject: return "save";
+    case BrowsePurpose::kExport: return "export";
+    case BrowsePurpose::kAddPhoto: return "add-photo";
+  }
+  return "";
+}
+
+std::string ProjectFolder(const AppState& state) {
+  return state.project_path.empty() ? std::string() : ParentFolder(NormalizePath("", state.project_path));
+}
+
+std::string StartFolder(const AppState& state, const ShellState& shell, BrowsePurpose purpose) {
+  std::error_code ec;
+  auto usable = [&](const std::string& folder) { return !folder.empty() && fs::is_directory(folder, ec); };
+  // Saving and exporting go next to the project; opening and adding photos where the last
+  // file of that kind came from.
+  std::vector<std::string> candidates;
+  const std::vector<std::string> same_kind = RecentFilesWith(shell.recent_files, PurposeExtensions(purpose));
+  if (purpose == BrowsePurpose::kSaveProject || purpose == BrowsePurpose::kExport) {
+    candidates.push_back(ProjectFolder(state));
+    if (!same_kind.empty()) candidates.push_back(ParentFolder(same_kind.front()));
+  } else {
+    if (!same_kind.empty()) candidates.push_back(ParentFolder(same_kind.front()));
+    candidates.push_back(ProjectFolder(state));
+  }
+  if (!shell.recent_files.folders.empty()) candidates.push_back(shell.recent_files.folders.front());
+  for (const std::string& folder : candidates) {
+    if (usable(folder)) return folder;
+  }
+  return fs::current_path(ec).string();
+}
+
+void CloseBrowser(ShellState* shell) {
+  shell->dialog = Dialog::kNone;
+  ImGui::CloseCurrentPopup();
+}
+
+void SaveRecent(AppState* state, const ShellState& shell) {
+  if (shell.recent_files_path.empty()) return;
+  std::string error;
+  if (!SaveRecentFiles(shell.recent_files_path, shell.recent_files, &error)) {
+    state->Log(LogLevel::kWarning, "Recent files not kept: " + error);
+  }
+}
+
+std::string PhotoExtensionList() {
+  std::string list;
+  for (const std::string& e : PurposeExtensions(BrowsePurpose::kAddPhoto)) list += (list.empty() ? "" : ", ") + e;
+  return list;
+}
+
+}  // namespace
+
+void OpenFileBrowser(AppState* state, ShellState* shell, Dialog dialog, const std::string& name) {
+  const BrowsePurpose purpose = PurposeOf(dialog);
+  std::string proposed = name;
+  if (proposed.empty() && purpose == BrowsePurpose::kSaveProject) {
+    proposed = state->project_path.empty() ? "untitled.facet" : fs::path(state->project_path).filename().string();
+  }
+  StartFileDialog(&shell->file_dialog, purpose, StartFolder(*state, *shell, purpose), proposed, ProjectFolder(*state));
+  OpenDialog(shell, dialog);
+}
+
+void DrawFileBrowser(AppState* state, ShellState* shell) {
+  const FileDialogResult result = DrawFileDialog(state, &shell->file_dialog, shell->recent_files, state->time_s);
+  if (result.outcome == FileDialogOutcome::kCancelled) {
+    CloseBrowser(shell);
+    return;
+  }
+  if (result.outcome != FileDialogOutcome::kChosen) return;
+  const BrowsePurpose purpose = shell->file_dialog.purpose;
+  if (purpose == BrowsePurpose::kOpenProject && state->document.dirty()) {
+    ImGui::CloseCurrentPopup();
+    OpenDialog(shell, Dialog::kConfirmOpen, result.path);
+    return;
+  }
+  std::string error;
+  if (RunAppCommand(state, shell, CommandOf(purpose), {result.path}, &error)) {
+    CloseBrowser(shell);
+    if (purpose == BrowsePurpose::kSaveProject && shell->quit_after_save) shell->quit_now = true;
+  } else {
+    shell->file_dialog.error = error;
+  }
+}
+
+void OpenProjectAsking(AppState* state, ShellState* shell, const std::string& path) {
+  if (state->document.dirty()) {
+    OpenDialog(shell, Dialog::kConfirmOpen, path);
+    return;
+  }
+  std::string error;
+  RunAppCommand(state, shell, "open", {path}, &error);  // a failure is in the log
+}
+
+void NoteRecentFile(AppState* state, ShellState* shell, const std::string& path) {
+  AddRecentFile(&shell->recent_files, path);
+  SaveRecent(state, *shell);
+}
+
+void ClearRecentFiles(AppState* state, ShellState* shell) {
+  shell->recent_files = RecentFiles();
+  SaveRecent(state, *shell);
+}
+
+void UseRecentFilesIn(AppState* state, ShellState* shell, const std::string& config_dir) {
+  shell->recent_files_path = RecentFilesPath(config_dir);
+  if (shell->recent_files_path.empty()) return;
+  std::error_code ec;
+  if (!fs::exists(shell->recent_files_path, ec)) return;
+  std::string error;
+  if (!LoadRecentFiles(shell->recent_files_path, &shell->recent_files, &error)) {
+    state->Log(LogLevel::kWarning, "Recent files not restored (" + error + ")");
+  }
+}
+
+void HandleDroppedFiles(AppState* state, ShellState* shell) {
+  if (shell->dropped_paths.empty()) return;
+  const std::vector<std::string> paths = std::move(shell->dropped_paths);
+  shell->dropped_paths.clear();
+  const bool browsing = shell->dialog == Dialog::kOpen || shell->dialog == Dialog::kSaveAs ||
+                        shell->dialog == Dialog::kExport || shell->dialog == Dialog::kAddPhoto;
+  if (browsing) {
+    // Into the open browser: a folder is listed, a file is listed in its folder and named.
+    FileDialogState& dialog = shell->file_dialog;
+    const std::string path = NormalizePath("", paths.front());
+    std::error_code ec;
+    const bool folder = fs::is_directory(path, ec);
+    dialog.folder = folder ? path : ParentFolder(path);
+    dialog.path_field = dialog.folder;
+    dialog.selected = folder ? std::string() : fs::path(path).filename().string();
+    if (!folder) dialog.name_field = dialog.selected;
+    dialog.error.clear();
+    dialog.confirm_overwrite.clear();
+    dialog.listing_stale = true;
+    dialog.scroll_to_selected = true;
+    return;
+  }
+  if (shell->dialog != Dialog::kNone) {
+    state->Log(LogLevel::kWarning, "Dropped files ignored: answer the open dialog first");
+    return;
+  }
+  const DroppedFiles dropped = ClassifyDroppedPaths(paths);
+  for (const std::string& path : dropped.unknown) {
+    std::error_code ec;
+    const std::string name = fs::path(path).filename().string();
+    if (fs::is_directory(path, ec)) {
+      state->Log(LogLevel::kError, "Dropped " + name + " is a folder: drop a project (.facet) or photos");
+    } else if (!fs::exists(path, ec)) {
+      state->Log(LogLevel::kError, "Dropped " + path + " does not exist");
+    } else {
+      state->Log(LogLevel::kError,
+                 "Dropped " + name + " is neither a Facet project (.facet) nor a photo (" + PhotoExtensionList() + ")");
+    }
+  }
+  if (!dropped.projects.empty()) {
+    if (dropped.projects.size() > 1 || !dropped.photos.empty()) {
+      state->Log(LogLevel::kWarning, "Dropped " + std::to_string(dropped.projects.size() + dropped.photos.size()) +
+                                         " files with a project: only " +
+                                         fs::path(dropped.projects.front()).filename().string() +
+                                         " is opened; drop photos onto it once it is open");
+    }
+    OpenProjectAsking(state, shell, dropped.projects.front());
+    return;
+  }
+  // One undoable edit per photo, the same as File > Add photo; a bad one is logged and the
+  // others still come in.
+  for (const std::string& photo : dropped.photos) {
+    std::string error;
+    RunAppCommand(state, shell, "add-photo", {photo}, &error);
+  }
+}
+
+}  // namespace facet::app

@@ -1,0 +1,335 @@
+// The file browser and drag and drop in the real application offscreen: the Leuven sample
+// opened by typing its path into File > Open, a photo added through File > Add photo by
+// clicking a folder and the photo, Save as by typing a name (the extension added, the file
+// round-tripping, an existing file replaced only after the question), refusals shown in the
+// dialog, recent files kept in the config folder and offered by File > Open recent, and the
+// script's `drop` of a photo, an unknown file and a project (over unsaved work: the question
+// first). Widgets are found through the report's item rectangles (app/panels/file_dialog.h).
+#include <doctest/doctest.h>
+
+#include <string>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/io/project_io.h"
+#include "tests/app/app_test_util.h"
+#include "tests/synthetic_scene.h"
+
+using namespace facet::testing;
+
+namespace {
+
+const std::string kSample = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuven.facet";
+const std::string kSamplePhoto = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuvenA.jpg";
+
+// Runs the app with `script` and an optional config folder; requires success.
+nlohmann::json Run(const TempDir& dir, const std::string& project, const std::string& name, const std::string& script,
+                   const std::string& config_dir = "") {
+  WriteText(dir / (name + ".txt"), script);
+  std::string args = "'" + project + "' -o '" + (dir / (name + ".png")) + "' --script '" + (dir / (name + ".txt")) +
+                     "' --report '" + (dir / (name + ".json")) + "' --size 1280x800";
+  if (!config_dir.empty()) args += " --config-dir '" + config_dir + "'";
+  const RunResult run = RunRender(dir, args);
+  INFO("stderr: " << run.stderr_text);
+  REQUIRE(run.exit_code == 0);
+  return ReadJson(dir / (name + ".json"));
+}
+
+std::string Click(const nlohmann::json& report, const std::string& item) {
+  INFO("items of the report: " << report.at("items").dump());
+  REQUIRE(report.at("items").contains(item));
+  return "click left " + ItemCenter(report.at("items"), item) + "\nframes 1\n";
+}
+
+// Two clicks within ImGui's double-click time, then a pause longer than it, so that the
+// next click is never taken for the end of another double-click.
+std::string DoubleClick(const nlohmann::json& report, const std::string& item) {
+  return Click(report, item) + Click(report, item) + "frames 20\n";
+}
+
+double ItemY(const nlohmann::json& report, const std::string& item) {
+  REQUIRE(report.at("items").contains(item));
+  return report.at("items").at(item).at("y").get<double>();
+}
+
+bool LogHas(const nlohmann::json& report, const std::string& level, const std::string& text) {
+  for (const auto& e : report.at("log")) {
+    if (e.at("level") == level && e.at("text").get<std::string>().find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+std::string WriteBoxScene(const TempDir& dir) {
+  const std::string path = dir / "scene.facet";
+  REQUIRE(facet::SaveProject(MakeBoxScene().project, path) == "");
+  return path;
+}
+
+std::string Canonical(const std::string& path) { return fs::weakly_canonical(path).string(); }
+
+}  // namespace
+
+TEST_CASE("File > Open by keyboard alone: a folder, Enter, a name without its extension, Enter") {
+  TempDir dir("browser_keyboard");
+  const std::string scene = WriteBoxScene(dir);
+  const std::string sample_folder = fs::path(kSample).parent_path().string();
+  const nlohmann::json report =
+      Run(dir, scene, "keyboard",
+          "frames 2\nkey ctrl+o\nframes 3\ntype " + sample_folder +
+              "\nframes 1\nkey enter\nframes 2\ntype leuven\nframes 1\nkey enter\nframes 3\n");
+  INFO(ReportLog(report));
+  CHECK(report["dialog"] == "");
+  CHECK(LogHas(report, "info", "Opened " + kSample));
+}
+
+TEST_CASE("File > Open: typing the sample's path and Enter opens it, and it becomes a recent file") {
+  TempDir dir("browser_open");
+  const std::string scene = WriteBoxScene(dir);
+  const nlohmann::json report =
+      Run(dir, scene, "open", "frames 2\nkey ctrl+o\nframes 3\ntype " + kSample + "\nframes 1\nkey enter\nframes 3\n");
+  INFO(ReportLog(report));
+  CHECK(report["dialog"] == "");
+  const facet::Project sample = LoadProjectFile(kSample);
+  CHECK(report["project"]["images"].size() == sample.images.size());
+  CHECK(report["project"]["primitives"].size() == sample.primitives.size());
+  CHECK(LogHas(report, "info", "Opened " + kSample));
+  REQUIRE(!report["recent_files"]["files"].empty());
+  CHECK(report["recent_files"]["files"][0] == kSample);
+  CHECK(report["recent_files"]["folders"][0] == fs::path(kSample).parent_path().string());
+}
+
+TEST_CASE("File > Add photo: folders first, the photo filter, hidden files on demand; double-clicks add the photo") {
+  TempDir dir("browser_add_photo");
+  const std::string scene = WriteBoxScene(dir);
+  fs::create_directories(dir.path / "photos");
+  fs::create_directories(dir.path / ".cache");
+  fs::create_directories(dir.path / "Archive");
+  REQUIRE(cv::imwrite(dir / "photos/b.png", cv::Mat(300, 400, CV_8UC3, cv::Scalar(60, 80, 100))));
+  REQUIRE(cv::imwrite(dir / "photos/A.jpg", cv::Mat(200, 300, CV_8UC3, cv::Scalar(90, 80, 70))));
+  WriteText(dir / "photos/notes.txt", "not a photo");
+
+  const nlohmann::json bare = Run(dir, scene, "probe_menu", "frames 2\n");
+  const std::string open_file_menu = Click(bare, "menu.file") + "frames 2\n";
+  const nlohmann::json menu = Run(dir, scene, "probe_add", "frames 2\n" + open_file_menu);
+  const std::string open_browser = "frames 2\n" + open_file_menu + Click(menu, "menu.add_photo") + "frames 3\n";
+
+  // The project's folder, listed for photos: the folders (Archive before photos, the hidden
+  // .cache left out), and no .facet file.
+  const nlohmann::json start = Run(dir, scene, "start", open_browser);
+  REQUIRE(start["dialog"] == "add-photo");
+  CHECK(start["file_dialog"]["folder"] == dir.path.string());
+  const nlohmann::json& items = start["items"];
+  CHECK(items.contains("file.entry/Archive"));
+  CHECK(items.contains("file.entry/photos"));
+  CHECK(ItemY(start, "file.entry/Archive") < ItemY(start, "file.entry/photos"));
+  CHECK_FALSE(items.contains("file.entry/.cache"));
+  CHECK_FALSE(items.contains("file.entry/scene.facet"));
+
+  // Hidden files on: .cache comes first.
+  const std::string show_hidden = open_browser + Click(start, "file.hidden") + "frames 2\n";
+  const nlohmann::json hidden = Run(dir, scene, "hidden", show_hidden);
+  CHECK(hidden["items"].contains("file.entry/.cache"));
+  CHECK(ItemY(hidden, "file.entry/.cache") < ItemY(hidden, "file.entry/Archive"));
+
+  // Into photos by a click and Enter: A.jpg above b.png (case-insensitive order), the text
+  // file filtered out.
+  const std::string into_photos = show_hidden + Click(hidden, "file.entry/photos") + "key enter\nframes 20\n";
+  const nlohmann::json inside = Run(dir, scene, "inside", into_photos);
+  CHECK(inside["file_dialog"]["folder"] == (dir.path / "photos").string());
+  CHECK(ItemY(inside, "file.entry/A.jpg") < ItemY(inside, "file.entry/b.png"));
+  CHECK_FALSE(inside["items"].contains("file.entry/notes.txt"));
+
+  // The filter switched to all files lists the text file too.
+  const std::string open_filter = into_photos + Click(inside, "file.filter") + "frames 2\n";
+  const nlohmann::json filter = Run(dir, scene, "filter", open_filter);
+  const nlohmann::json all_files =
+      Run(dir, scene, "all_files", open_filter + Click(filter, "file.filter/all") + "frames 2\n");
+  CHECK(all_files["file_dialog"]["all_files"].get<bool>());
+  CHECK(all_files["items"].contains("file.entry/notes.txt"));
+  CHECK(ItemY(all_files, "file.entry/b.png") < ItemY(all_files, "file.entry/notes.txt"));
+
+  // A double-click on b.png adds it as one undoable edit.
+  const nlohmann::json added =
+      Run(dir, scene, "added", into_photos + DoubleClick(inside, "file.entry/b.png") + "command save\n");
+  INFO(ReportLog(added));
+  CHECK(added["dialog"] == "");
+  const facet::Project saved = LoadProjectFile(scene);
+  REQUIRE(saved.images.size() == 2);
+  CHECK(saved.images[1].path == "photos/b.png");
+  CHECK(saved.images[1].width_px == 400);
+  REQUIRE(!added["undo_stack"].empty());
+  CHECK(added["undo_stack"].back() == "Add photo b.png");
+  // Recent: the project just saved, and before it the photo.
+  REQUIRE(added["recent_files"]["files"].size() == 2);
+  CHECK(added["recent_files"]["files"][0] == scene);
+  CHECK(added["recent_files"]["files"][1] == (dir.path / "photos/b.png").string());
+}
+
+TEST_CASE("Save as: a typed name gets .facet and round-trips; an existing file is replaced only after the question") {
+  TempDir dir("browser_save_as");
+  const std::string copy = dir / "copy.facet";
+  // The sample's folder is where Save as starts; the name typed is a path into the temp folder.
+  const nlohmann::json saved =
+      Run(dir, kSample, "save_as",
+          "frames 2\nkey ctrl+shift+s\nframes 3\ntype " + (dir / "copy") + "\nframes 1\nkey enter\nframes 3\n");
+  INFO(ReportLog(saved));
+  CHECK(saved["dialog"] == "");
+  REQUIRE(fs::exists(copy));
+  CHECK_FALSE(saved["dirty"].get<bool>());
+
+  // The copy is the sample: the same photos (paths re-expressed from the new folder) and the
+  // same everything else, and it saves back to the same bytes.
+  facet::Project original = LoadProjectFile(kSample);
+  facet::Project reloaded = LoadProjectFile(copy);
+  REQUIRE(reloaded.images.size() == original.images.size());
+  for (size_t i = 0; i < original.images.size(); ++i) {
+    CHECK(Canonical(facet::ResolveImagePath(copy, reloaded.images[i].path)) ==
+          Canonical(facet::ResolveImagePath(kSample, original.images[i].path)));
+    reloaded.images[i].path = original.images[i].path;
+  }
+  CHECK(facet::ProjectToJson(reloaded) == facet::ProjectToJson(original));
+  REQUIRE(facet::SaveProject(LoadProjectFile(copy), dir / "again.facet") == "");
+  std::ifstream a(copy), b(dir / "again.facet");
+  std::stringstream sa, sb;
+  sa << a.rdbuf();
+  sb << b.rdbuf();
+  CHECK(sa.str() == sb.str());
+
+  // The proposed name's stem is selected: typing a new one keeps ".facet".
+  const nlohmann::json renamed =
+      Run(dir, copy, "stem", "frames 2\nkey ctrl+shift+s\nframes 3\ntype second\nframes 1\nkey enter\nframes 3\n");
+  CHECK(renamed["dialog"] == "");
+  CHECK(fs::exists(dir / "second.facet"));
+
+  // Saving as copy.facet again (the proposed name) asks first; the file waits for Replace.
+  const size_t primitives = reloaded.primitives.size();
+  const std::string edit_and_save_as =
+      "frames 2\ncommand add box\nframes 2\nkey ctrl+shift+s\nframes 3\nkey enter\nframes 2\n";
+  const nlohmann::json asked = Run(dir, copy, "asked", edit_and_save_as);
+  CHECK(asked["dialog"] == "save-as");
+  CHECK(asked["file_dialog"]["confirm_overwrite"] == fs::path(copy).string());
+  CHECK(asked["items"].contains("file.replace"));
+  CHECK(LoadProjectFile(copy).primitives.size() == primitives);
+
+  const nlohmann::json replaced = Run(dir, copy, "replaced", edit_and_save_as + "key enter\nframes 2\n");
+  CHECK(replaced["dialog"] == "");
+  CHECK_FALSE(replaced["dirty"].get<bool>());
+  CHECK(LoadProjectFile(copy).primitives.size() == primitives + 1);
+}
+
+TEST_CASE("File > Export glTF: a typed name gets .glb and the model is written there") {
+  TempDir dir("browser_export");
+  const nlohmann::json bare = Run(dir, kSample, "probe_menu", "frames 2\n");
+  const std::string open_file_menu = "frames 2\n" + Click(bare, "menu.file") + "frames 2\n";
+  const nlohmann::json menu = Run(dir, kSample, "probe_export", open_file_menu);
+  const nlohmann::json exported = Run(dir, kSample, "export",
+                                      open_file_menu + Click(menu, "menu.export_gltf") + "frames 3\ntype " +
+                                          (dir / "model") + "\nframes 1\nkey enter\nframes 3\n");
+  INFO(ReportLog(exported));
+  CHECK(exported["dialog"] == "");
+  REQUIRE(fs::exists(dir / "model.glb"));
+  std::ifstream glb(dir / "model.glb", std::ios::binary);
+  char magic[4] = {};
+  glb.read(magic, 4);
+  CHECK(std::string(magic, 4) == "glTF");
+  CHECK(LogHas(exported, "info", "Exported " + (dir / "model.glb")));
+}
+
+TEST_CASE("The browser explains what it cannot do and keeps open; Escape cancels") {
+  TempDir dir("browser_errors");
+  const std::string scene = WriteBoxScene(dir);
+  const std::string missing = dir / "gone/x.facet";
+  const std::string prefix = "frames 2\nkey ctrl+o\nframes 3\ntype " + missing + "\nframes 1\nkey enter\nframes 2\n";
+  const nlohmann::json refused = Run(dir, scene, "refused", prefix);
+  CHECK(refused["dialog"] == "open");
+  CHECK(refused["file_dialog"]["error"] == "The folder " + (dir / "gone") + " does not exist.");
+  CHECK(refused["file_dialog"]["folder"] == dir.path.string());
+
+  // A file that is not a project: the open fails with the reason in the dialog.
+  WriteText(dir / "broken.facet", "{ not json");
+  const nlohmann::json broken =
+      Run(dir, scene, "broken",
+          "frames 2\nkey ctrl+o\nframes 3\ntype " + (dir / "broken.facet") + "\nframes 1\nkey enter\nframes 2\n");
+  CHECK(broken["dialog"] == "open");
+  CHECK(broken["file_dialog"]["error"].get<std::string>().find("broken.facet") != std::string::npos);
+  CHECK(broken["project"]["primitives"].size() == 1);
+
+  // A folder typed into the path line is entered (a click selects the whole line, so the
+  // typing replaces it), Parent goes back up and clears the refusal; Escape closes.
+  fs::create_directories(dir.path / "sub");
+  const std::string into_sub =
+      prefix + Click(refused, "file.path") + "type " + (dir / "sub") + "\nframes 1\nkey enter\nframes 2\n";
+  const nlohmann::json sub = Run(dir, scene, "sub", into_sub);
+  CHECK(sub["file_dialog"]["folder"] == (dir / "sub"));
+  const nlohmann::json cancelled =
+      Run(dir, scene, "cancelled", into_sub + Click(refused, "file.parent") + "frames 2\nkey escape\nframes 2\n");
+  CHECK(cancelled["file_dialog"]["folder"] == dir.path.string());
+  CHECK(cancelled["file_dialog"]["error"] == "");
+  CHECK(cancelled["dialog"] == "");
+}
+
+TEST_CASE("Recent files persist in the config folder and File > Open recent opens one") {
+  TempDir dir("browser_recent");
+  const std::string scene = WriteBoxScene(dir);
+  const std::string config = dir / "facet_config";
+  const nlohmann::json first = Run(dir, scene, "first", "frames 2\ncommand open " + kSample + "\nframes 2\n", config);
+  REQUIRE(fs::exists(config + "/recent.json"));
+
+  const std::string open_file_menu = "frames 2\n" + Click(first, "menu.file") + "frames 2\n";
+  const nlohmann::json menu = Run(dir, scene, "probe_recent", open_file_menu, config);
+  REQUIRE(menu["recent_files"]["files"][0] == kSample);  // read back from the config folder
+  const std::string hover_recent = "move " + ItemCenter(menu["items"], "menu.open_recent") + "\nframes 4\n";
+  const nlohmann::json submenu = Run(dir, scene, "probe_submenu", open_file_menu + hover_recent, config);
+  const nlohmann::json opened =
+      Run(dir, scene, "opened", open_file_menu + hover_recent + Click(submenu, "menu.recent/" + kSample), config);
+  INFO(ReportLog(opened));
+  CHECK(opened["project"]["images"].size() == LoadProjectFile(kSample).images.size());
+  CHECK(LogHas(opened, "info", "Opened " + kSample));
+
+  // The browser's side column offers the recent project; a double-click opens it.
+  const nlohmann::json browser = Run(dir, scene, "probe_side", "frames 2\nkey ctrl+o\nframes 3\n", config);
+  const nlohmann::json from_side =
+      Run(dir, scene, "from_side",
+          "frames 2\nkey ctrl+o\nframes 3\n" + DoubleClick(browser, "file.recent_file/" + kSample), config);
+  CHECK(from_side["dialog"] == "");
+  CHECK(from_side["project"]["images"].size() == LoadProjectFile(kSample).images.size());
+
+  // A malformed recent-files file is reported, not fatal, and replaced on the next change.
+  WriteText(config + "/recent.json", "{ broken");
+  const nlohmann::json malformed = Run(dir, scene, "malformed", "frames 2\ncommand save\nframes 1\n", config);
+  CHECK(LogHas(malformed, "warning", "Recent files not restored"));
+  std::ifstream in(config + "/recent.json");
+  std::stringstream text;
+  text << in.rdbuf();
+  CHECK(text.str().find(fs::path(scene).filename().string()) != std::string::npos);
+}
+
+TEST_CASE("Drop: a photo is added, an unknown file is refused in the log, a project opens (asking over unsaved work)") {
+  TempDir dir("browser_drop");
+  const std::string scene = WriteBoxScene(dir);
+  REQUIRE(cv::imwrite(dir / "dropped photo.png", cv::Mat(240, 320, CV_8UC3, cv::Scalar(20, 120, 200))));
+  WriteText(dir / "notes.txt", "not a photo");
+
+  const nlohmann::json dropped = Run(dir, scene, "photo",
+                                     "frames 2\ndrop \"" + (dir / "dropped photo.png") + "\" " + (dir / "notes.txt") +
+                                         "\nframes 3\ndrop " + kSample + "\nframes 3\n");
+  INFO(ReportLog(dropped));
+  REQUIRE(dropped["project"]["images"].size() == 2);
+  CHECK(dropped["project"]["images"][1]["path"] == "dropped photo.png");
+  CHECK(dropped["undo_stack"].back() == "Add photo dropped photo.png");
+  CHECK(LogHas(dropped, "error", "notes.txt is neither a Facet project (.facet) nor a photo"));
+  // The photo made the project dirty: the dropped project waits for the answer.
+  CHECK(dropped["dialog"] == "confirm-open");
+  CHECK(dropped["project"]["primitives"].size() == 1);
+
+  // Onto a clean project the drop opens at once; dropped onto the open browser, a file is
+  // shown in its folder and named, not opened.
+  const nlohmann::json opened = Run(
+      dir, scene, "project",
+      "frames 2\ndrop " + kSample + "\nframes 3\nkey ctrl+o\nframes 3\ndrop " + (dir / "notes.txt") + "\nframes 2\n");
+  CHECK(opened["project"]["images"].size() == LoadProjectFile(kSample).images.size());
+  CHECK(LogHas(opened, "info", "Opened " + kSample));
+  CHECK(opened["dialog"] == "open");
+  CHECK(opened["file_dialog"]["folder"] == dir.path.string());
+  CHECK(opened["file_dialog"]["name"] == "notes.txt");
+}
