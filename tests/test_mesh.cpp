@@ -185,7 +185,9 @@ TEST_CASE("a wedge's ridge along y: a valid closed manifold of the same volume, 
   REQUIRE(AttachOnTop(box, &along_x, &message));
   PrimitiveShape along_y = along_x;
   along_y.ridge_along_y = true;
-  const PolyMesh mx = MeshOf(along_x), my = MeshOf(along_y);
+  PolyMesh mx, my;
+  REQUIRE(AddPrimitive(&mx, along_x).ok);
+  REQUIRE(AddPrimitive(&my, along_y).ok);
   const auto report = Validate(my);
   CHECK_MESSAGE(report.empty(), (report.empty() ? "" : report.front()));
   CHECK(my.NumVertices() == 6);
