@@ -412,3 +412,66 @@ TEST_CASE("issue 12: a roof on a box takes its footprint, its ridge along either
   REQUIRE(r.at("redo_stack").size() == 1);
   CHECK(r.at("redo_stack")[0].get<std::string>() == "Ridge along x");
 }
+
+namespace {
+
+// Whether every vertex of the primitives shows inside the 3D panel, and the largest extent
+// of the model on it (px).
+bool ModelInPanel(const nlohmann::json& report, const facet::Project& project, double* extent_px) {
+  const Viewport3d view = ViewportFromReport(report);
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e300), hi = -lo;
+  bool inside = true;
+  for (const facet::Primitive& p : project.primitives) {
+    for (facet::VertexId v = 0; v < p.mesh.VertexIdEnd(); ++v) {
+      if (!p.mesh.IsVertex(v)) continue;
+      const Eigen::Vector2d s = view.ToScreen(p.mesh.vertex(v).position);
+      lo = lo.cwiseMin(s);
+      hi = hi.cwiseMax(s);
+      inside = inside && s.x() >= view.origin_x && s.y() >= view.origin_y && s.x() <= view.origin_x + view.width_px &&
+               s.y() <= view.origin_y + view.height_px;
+    }
+  }
+  *extent_px = (hi - lo).maxCoeff();
+  return inside;
+}
+
+}  // namespace
+
+TEST_CASE("issue 12: the 3D view reframes after large edits and never orbits below the ground") {
+  TempDir dir("reframe");
+  SyntheticScene scene;
+  const std::string path = WriteCalibratedNoModel(dir, &scene);
+  const std::string box_id = std::to_string(LoadProjectFile(path).next_id);
+  const std::string add = "frames 3\ncommand add box at " +
+                          FormatXY(Eigen::Vector2d(0.5 * scene.true_camera.width_px, 0.7 * scene.true_camera.height_px), 8) +
+                          "\nframes 3\n";
+  // The first primitive appears: the view that showed the camera alone now shows the box.
+  const nlohmann::json added = RenderScript(dir, path, "added", add);
+  double extent = 0.0;
+  CHECK(ModelInPanel(added, ProjectFromJsonReport(added), &extent));
+  CAPTURE(extent);
+  CHECK(extent > 0.2 * ViewportFromReport(added).height_px);
+  // A large edit: the box made 40 times wider by a known length. The view follows.
+  const nlohmann::json grown = RenderScript(
+      dir, path, "grown",
+      add + "command select vertex " + box_id + " 0\ncommand select-add vertex " + box_id +
+          " 1\ncommand constrain length 40\nframes 3\n");
+  const facet::Project grown_project = ProjectFromJsonReport(grown);
+  REQUIRE(grown_project.primitives.size() == 1);
+  REQUIRE(grown_project.primitives[0].shape.params[0] > 20.0);
+  CHECK(ModelInPanel(grown, grown_project, &extent));
+  CHECK(extent > 0.2 * ViewportFromReport(grown).height_px);
+
+  // Orbiting: a long drag upwards in the 3D panel tilts the eye down to the ground and stops.
+  const Viewport3d view = ViewportFromReport(added);
+  const Eigen::Vector2d centre(view.origin_x + 0.5 * view.width_px, view.origin_y + 0.5 * view.height_px);
+  const nlohmann::json orbited =
+      RenderScript(dir, path, "orbited",
+                   add + "drag left " + FormatXY(centre, 8) + " " + FormatXY(centre - Eigen::Vector2d(0, 0.45 * view.height_px), 8) +
+                       " 30\nframes 2\ndrag left " + FormatXY(centre, 8) + " " +
+                       FormatXY(centre - Eigen::Vector2d(0, 0.45 * view.height_px), 8) + " 30\nframes 2\n");
+  const Viewport3d after = ViewportFromReport(orbited);
+  CAPTURE(after.Eye().transpose());
+  CHECK(after.Eye().z() > 0.0);
+  CHECK((after.Eye() - view.Eye()).norm() > 1e-3);  // the drags did orbit
+}
