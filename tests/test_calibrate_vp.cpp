@@ -459,6 +459,37 @@ TEST_CASE("degenerate input fails with a message naming the problem") {
   }
 }
 
+TEST_CASE("an unfinished drawing is incomplete, not failed; broken input is not incomplete") {
+  const SyntheticScene scene = MakeBoxScene();
+  const VpCalibrationOptions options = OptionsFor(scene, PrincipalPointMode::kSolve);
+  auto incomplete = [&](const std::vector<Segment>& segments) {
+    const VpCalibrationSummary s = CalibrateFromVanishingLines(segments, options);
+    INFO(s.message);
+    CHECK_FALSE(s.IsUsable());
+    return s.incomplete;
+  };
+  // What the user sees while drawing: nothing yet, the first line, one finished family.
+  CHECK(incomplete({}));
+  CHECK(incomplete({SegmentsOfAxes(scene, {Axis::kY}).front()}));
+  CHECK(incomplete(SegmentsOfAxes(scene, {Axis::kY})));
+  std::vector<Segment> one_more = SegmentsOfAxes(scene, {Axis::kX, Axis::kZ});
+  one_more.push_back(SegmentsOfAxes(scene, {Axis::kY}).front());
+  CHECK(incomplete(one_more));
+  // Broken input and a geometric failure are real failures.
+  std::vector<Segment> zero = scene.project.segments;
+  zero[5].b_px = zero[5].a_px;
+  CHECK_FALSE(incomplete(zero));
+  std::vector<Segment> obtuse;
+  AddPencil(Axis::kX, {-2000, 300}, &obtuse);
+  AddPencil(Axis::kY, {3000, 300}, &obtuse);
+  AddPencil(Axis::kZ, {500, 200}, &obtuse);
+  CHECK_FALSE(incomplete(obtuse));
+  // Complete and usable: not incomplete.
+  const VpCalibrationSummary full = CalibrateFromVanishingLines(scene.project.segments, options);
+  REQUIRE(full.IsUsable());
+  CHECK_FALSE(full.incomplete);
+}
+
 // A warm start well away from the truth: focal length +12 %, principal point 25 px off, the
 // rotation turned by about 4 degrees. The fit must walk from there to the answer.
 VpCalibrationOptions WarmStartAway(VpCalibrationOptions options, const Camera& truth) {

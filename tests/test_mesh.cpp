@@ -176,6 +176,39 @@ TEST_CASE("a wedge attached on top of a box follows the box when it is resized")
   CHECK(cylinder.params == cylinder_before.params);
 }
 
+TEST_CASE("a wedge's ridge along y: a valid closed manifold of the same volume, ridge at x = sx / 2, on its box") {
+  PrimitiveShape box = MakeBox(1, {2.0, 5.0, 1.5});
+  box.rotation = Eigen::Vector3d(0.0, 0.0, 0.4);
+  box.translation = Eigen::Vector3d(1.0, -2.0, 0.5);
+  PrimitiveShape along_x = MakeWedge(2, {1.0, 1.0, 0.8});
+  std::string message;
+  REQUIRE(AttachOnTop(box, &along_x, &message));
+  PrimitiveShape along_y = along_x;
+  along_y.ridge_along_y = true;
+  PolyMesh mx, my;
+  REQUIRE(AddPrimitive(&mx, along_x).ok);
+  REQUIRE(AddPrimitive(&my, along_y).ok);
+  const auto report = Validate(my);
+  CHECK_MESSAGE(report.empty(), (report.empty() ? "" : report.front()));
+  CHECK(my.NumVertices() == 6);
+  CHECK(my.NumEdges() == 9);
+  CHECK(my.NumFaces() == 5);
+  CHECK(EulerCharacteristic(my) == 2);
+  // Outward faces: the same positive volume, sx * sy * sz / 2.
+  CHECK(std::abs(SignedVolume(my) - 0.5 * 2.0 * 5.0 * 0.8) < kGeomTol);
+  CHECK(std::abs(SignedVolume(my) - SignedVolume(mx)) < kGeomTol);
+  // The ridge (vertices 4 -> 5) runs along the box's y side (5 long) over its middle; along x
+  // it ran along the 2-long side.
+  const Eigen::Vector3d box_y = RotationFromAngleAxis(box.rotation) * Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d ridge_y = my.vertex(5).position - my.vertex(4).position;
+  CHECK((ridge_y - 5.0 * box_y).norm() < kGeomTol);
+  CHECK(std::abs((mx.vertex(5).position - mx.vertex(4).position).norm() - 2.0) < kGeomTol);
+  const Eigen::Vector3d top_middle = PrimitiveLocalToWorld(box, Eigen::Vector3d(1.0, 0.0, 1.5 + 0.8));
+  CHECK((my.vertex(4).position - top_middle).norm() < kGeomTol);
+  // The footprint is the box's top face either way.
+  for (int i = 0; i < 4; ++i) CHECK((my.vertex(i).position - mx.vertex(i).position).norm() < kGeomTol);
+}
+
 TEST_CASE("AddPrimitive refuses bad parameters and leaves the mesh unchanged") {
   PolyMesh mesh;
   REQUIRE(AddPrimitive(&mesh, MakeBox(1, {1, 1, 1})).ok);

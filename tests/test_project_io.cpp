@@ -1021,6 +1021,44 @@ TEST_CASE("a mesh written as \"from_shape\" is the primitive's unedited mesh") {
   CHECK(r.project == p);
 }
 
+TEST_CASE("a wedge's ridge along y round-trips; absent means x; a bad value names its path") {
+  Project p;
+  facet::Id box = facet::kNoId, roof = facet::kNoId;
+  REQUIRE(facet::AddPrimitiveToProject(&p, facet::MakeBox(facet::kNoId, {2.0, 5.0, 1.5}), "box", &box, nullptr));
+  facet::PrimitiveShape wedge = facet::MakeWedge(facet::kNoId, {1.0, 1.0, 0.8});
+  wedge.ridge_along_y = true;
+  REQUIRE(facet::AddPrimitiveToProject(&p, wedge, "roof", &roof, nullptr));
+  p.FindPrimitive(roof)->attached_to = box;
+  facet::RefreshAllPrimitives(&p);
+  CheckRoundTrip(p);
+  Json j = Json::parse(facet::ProjectToJson(p));
+  CHECK(j["primitives"][1]["ridge"] == "y");
+  CHECK_FALSE(j["primitives"][0].contains("ridge"));  // written for turned wedges only
+  // Built from the shape, the ridge chooses the mesh: the same vertices where they were
+  // (the texture coordinates differ: they follow the dimensions the mesh was built with).
+  Json from_shape = j;
+  from_shape["primitives"][1]["mesh"] = "from_shape";
+  const facet::ProjectLoadResult built = facet::ProjectFromJson(from_shape.dump());
+  REQUIRE(built.ok());
+  const facet::Primitive& rebuilt = *built.project.FindPrimitive(roof);
+  CHECK(rebuilt.shape == p.FindPrimitive(roof)->shape);
+  for (facet::VertexId v = 0; v < 6; ++v) {
+    CHECK((rebuilt.mesh.vertex(v).position - p.FindPrimitive(roof)->mesh.vertex(v).position).norm() < 1e-12);
+  }
+  // A file from before the ridge could turn: along x.
+  Json old = j;
+  old["primitives"][1].erase("ridge");
+  old["primitives"][1]["mesh"] = "from_shape";
+  const facet::ProjectLoadResult along_x = facet::ProjectFromJson(old.dump());
+  REQUIRE(along_x.ok());
+  CHECK_FALSE(along_x.project.FindPrimitive(roof)->shape.ridge_along_y);
+  j["primitives"][1]["ridge"] = "z";
+  CheckErrorNames(j.dump(), "primitives[1].ridge");
+  j["primitives"][1]["ridge"] = "x";
+  j["primitives"][0]["ridge"] = "y";
+  CheckErrorNames(j.dump(), "primitives[0].ridge");
+}
+
 TEST_CASE("malformed mesh content is an error naming its JSON path") {
   const Project full = MakeFullProject();
   const Json base = Json::parse(facet::ProjectToJson(full));

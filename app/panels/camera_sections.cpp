@@ -254,7 +254,10 @@ void DrawCalibrationResult(AppState* state, const Image& image) {
     return;
   }
   const VpCalibrationSummary& c = cal->second;
-  ImGui::TextColored(c.IsUsable() ? kGoodText : kErrorText, "%s", c.IsUsable() ? "Calibrated" : "Failed");
+  // An unfinished drawing is progress, not a failure: red is kept for what went wrong.
+  const ImVec4 status_color = c.IsUsable() ? kGoodText : c.incomplete ? kDimText : kErrorText;
+  ImGui::TextColored(status_color, "%s", c.IsUsable() ? "Calibrated" : c.incomplete ? "More lines needed" : "Failed");
+  RecordItem(state, "calibration.status");
   for (int a = 0; a < 3; ++a) {
     ImGui::SameLine();
     ImGui::TextColored(AxisColor(static_cast<Axis>(a)), "%s %d", AxisName(static_cast<Axis>(a)),
@@ -291,7 +294,10 @@ void DrawCalibrationResult(AppState* state, const Image& image) {
     }
     if (image.use_horizon) LabelValue("Horizon", "%.2f px off", c.horizon_residual_px);
   }
-  if (!c.message.empty()) WrappedColored(c.IsUsable() ? kDimText : kErrorText, c.message);
+  if (!c.message.empty()) {
+    WrappedColored(c.IsUsable() || c.incomplete ? kDimText : kErrorText, c.message);
+    RecordItem(state, "calibration.message");
+  }
   for (const std::string& w : c.warnings) WrappedColored(kWarningText, w);
 
   if (!c.IsUsable()) return;
@@ -345,9 +351,11 @@ std::string ImageLabel(const Project& project, Id image_id) {
 
 void DrawGeometrySolveFigures(const SceneSolveSummary& s, const char* title) {
   const bool usable = s.IsUsable();
-  const bool nothing = s.termination == SolverTermination::kNothingToSolve;
+  // Nothing to solve yet, or no solve ran (a new project: kInvalidInput without a message).
+  const bool nothing = s.termination == SolverTermination::kNothingToSolve ||
+                       (s.termination == SolverTermination::kInvalidInput && s.message.empty());
   ImGui::TextColored(usable ? kGoodText : (nothing ? kDimText : kErrorText), "%s%s", title,
-                     SolverTerminationName(s.termination));
+                     nothing && s.message.empty() ? "nothing to solve yet" : SolverTerminationName(s.termination));
   if (usable) {
     LabelValue("Iterations", "%d", s.iterations);
     LabelValue("RMS", "%.3f px", s.reprojection_rms_px);
@@ -439,6 +447,7 @@ void DrawSolveSection(AppState* state) {
   LabelValue("Update", "%.2f ms", update.time_ms);
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Calibration and solves after the last change");
   for (const std::string& m : update.messages) WrappedColored(kWarningText, m);
+  for (const std::string& m : update.progress) WrappedColored(kDimText, m);
 }
 
 namespace {

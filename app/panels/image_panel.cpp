@@ -1096,6 +1096,8 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   const std::vector<ProjectedPrimitive> model = ProjectModel(state->document.project(), image);
   const ViewTransform transform = TransformOf(view);
   UpdatePointer(panel, view, transform, &frame);
+  state->pointer_in_image_px = frame.hovered ? std::optional<Eigen::Vector2d>(frame.mouse_uv) : std::nullopt;
+  state->pointer_image_id = image.id;
   ApplySnapping(*state, panel, image, model, &frame);
   UpdateHover(state, *panel, image, model, transform, &frame);
   // A click on a detected line's proposal selects it rather than starting a tool's action.

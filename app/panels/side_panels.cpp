@@ -1,5 +1,6 @@
 #include "app/panels/side_panels.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -53,6 +54,8 @@ constexpr ToolButton kToolButtons[] = {
      "primitive over the ground; Shift: along z; Esc cancels. The solve starts from where you leave it."},
     {Tool::kLinePin, "Line pin", "L", GLFW_KEY_L,
      "Select an edge, then drag in the image along the line it lies on (edge on image line)."},
+    {Tool::kMeasure, "Measure", "N", GLFW_KEY_N,
+     "Click two vertices, type the length between them and press Enter: a known length (it sets the scale)."},
 };
 
 // Takes a copy: the edits below replace the project that a reference would point into.
@@ -75,6 +78,20 @@ void DrawPrimitiveSection(AppState* state, const Primitive primitive) {
              primitive.mesh.NumFaces());
   const Primitive* base = state->document.project().FindPrimitive(primitive.attached_to);
   if (primitive.attached_to != kNoId) LabelValue("On top of", "%s", base ? base->name.c_str() : "(missing)");
+  if (primitive.shape.kind == PrimitiveKind::kWedge) {
+    ImGui::TextColored(kDimText, "Ridge along");
+    ImGui::SameLine();
+    if (ImGui::RadioButton("x##ridge", !primitive.shape.ridge_along_y) && primitive.shape.ridge_along_y) {
+      SetWedgeRidgeEdit(state, id, false);
+    }
+    RecordItem(state, "primitive.ridge_x");
+    ImGui::SameLine();
+    if (ImGui::RadioButton("y##ridge", primitive.shape.ridge_along_y) && !primitive.shape.ridge_along_y) {
+      SetWedgeRidgeEdit(state, id, true);
+    }
+    RecordItem(state, "primitive.ridge_y");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("The roof's ridge along the primitive's x or y side");
+  }
 
   // Parameters by kind, each with its name and its lock (a kept dimension is a known length).
   const int num_params = NumShapeParams(primitive.shape.kind);
@@ -83,16 +100,24 @@ void DrawPrimitiveSection(AppState* state, const Primitive primitive) {
     ImGui::PushID(i);
     double value = primitive.shape.params[i];
     bool locked = primitive.param_locked[i];
-    if (ImGui::Checkbox("##lock", &locked)) {
+    if (ImGui::Checkbox("Keep##lock", &locked)) {
       Project edited = state->document.project();
       edited.FindPrimitive(id)->param_locked[i] = locked;
       CommitEdit(state, std::string(locked ? "Keep " : "Free ") + ShapeParamName(primitive.shape.kind, i),
                  std::move(edited));
     }
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Keep while solving: a kept dimension is a known length (the scale)");
+    RecordItem(state, "primitive.keep." + std::to_string(i));
+    if (ImGui::IsItemHovered()) {
+      ImGui::SetTooltip("Keep %s while solving: a kept dimension is a known length (the scale)",
+                        ShapeParamName(primitive.shape.kind, i));
+    }
     ImGui::SameLine();
     ImGui::BeginDisabled(i < first_free);
-    const bool resized = DragDoubles(ShapeParamName(primitive.shape.kind, i), &value, 1, 0.01f, "%.3f");
+    // The field leaves room for its name, which says which dimension the Keep box keeps.
+    const char* param_name = ShapeParamName(primitive.shape.kind, i);
+    const float name_w = ImGui::CalcTextSize(param_name).x + ImGui::GetStyle().ItemInnerSpacing.x;
+    ImGui::SetNextItemWidth(std::max(ImGui::GetFontSize() * 3.0f, ImGui::GetContentRegionAvail().x - name_w));
+    const bool resized = DragDoubles(param_name, &value, 1, 0.01f, "%.3f");
     ImGui::EndDisabled();
     RecordItem(state, "primitive.param." + std::to_string(i));
     TrackEdit(state, "Resize " + kind, resized, [&](Project* p) {
@@ -259,6 +284,46 @@ void DrawPushPullOptions(AppState* state, float width) {
   ImGui::Unindent(8.0f);
 }
 
+// Measure's length field for the two picked vertices, with their current distance. A new
+// pair gets that distance and the keyboard focus, so that typing the length and Enter adds
+// the known length.
+void DrawMeasureOptions(AppState* state, float width) {
+  ImGui::Indent(8.0f);
+  const Project& project = state->document.project();
+  ElementRef a, b;
+  if (!MeasuredPair(state->selection, &a, &b) || !ElementExists(project, a) || !ElementExists(project, b)) {
+    state->measure_pair = {};
+    ImGui::TextColored(kDimText, state->selection.element.kind == ElementKind::kVertex
+                                     ? "Click the second vertex."
+                                     : "Click the first vertex.");
+    ImGui::Unindent(8.0f);
+    return;
+  }
+  const double now = (VertexInWorld(project, {b.primitive_id, b.element}) -
+                      VertexInWorld(project, {a.primitive_id, a.element}))
+                         .norm();
+  const bool fresh = state->measure_pair != std::array<ElementRef, 2>{a, b};
+  if (fresh) {
+    state->measure_pair = {a, b};
+    state->measure_length = now;
+    ImGui::SetKeyboardFocusHere();
+  }
+  ImGui::SetNextItemWidth(width - 8.0f);
+  const bool entered = ImGui::InputDouble("##measure_length", &state->measure_length, 0.0, 0.0, "%.4g",
+                                          ImGuiInputTextFlags_EnterReturnsTrue);
+  RecordItem(state, "tool.measure_length");
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Known length between the two vertices, project units");
+  ImGui::TextColored(kDimText, "now %.4g", now);
+  const bool clicked = ImGui::Button("Set length##measure", ImVec2(width - 8.0f, 0.0f));
+  RecordItem(state, "tool.measure_set");
+  if (ImGui::IsItemHovered()) {
+    ImGui::SetTooltip("Known length between %s and %s (Enter in the field)", DescribeElement(project, a).c_str(),
+                      DescribeElement(project, b).c_str());
+  }
+  if (entered || clicked) ConstrainDistanceEdit(state, a, b, state->measure_length);
+  ImGui::Unindent(8.0f);
+}
+
 }  // namespace
 
 void HandleToolShortcuts(AppState* state) {
@@ -284,6 +349,7 @@ void HandleToolShortcuts(AppState* state) {
 void SetTool(AppState* state, Tool tool) {
   if (tool != state->tool) state->selection.connect_from = {};
   if (tool != state->tool) state->push_pull_face = {};  // the distance field gets the focus again
+  if (tool != state->tool) state->measure_pair = {};
   state->tool = tool;
 }
 
@@ -291,7 +357,13 @@ void AddPrimitiveAction(AppState* state) {
   const Primitive* base = state->add_on_top ? AttachBaseFor(*state, state->add_kind) : nullptr;
   // "On top" is for roofs: a new box always goes beside the others.
   if (base != nullptr && state->add_kind == PrimitiveKind::kBox) base = nullptr;
-  if (AddPrimitiveEdit(state, state->add_kind, base ? base->id : kNoId)) state->tool = Tool::kPin;
+  // Aimed at the pointer when it is over the active image (the B key), else at its centre.
+  const Image* image = state->ActiveImage();
+  const bool aimed = image != nullptr && state->pointer_image_id == image->id;
+  if (AddPrimitiveEdit(state, state->add_kind, base ? base->id : kNoId,
+                       aimed ? state->pointer_in_image_px : std::nullopt)) {
+    state->tool = Tool::kPin;
+  }
 }
 
 void SolveNow(AppState* state) { CommitEdit(state, "Solve", state->document.project()); }
@@ -324,6 +396,7 @@ void DrawToolsPanel(AppState* state) {
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s (%s)", b.hint, b.shortcut);
     if (b.tool == Tool::kAddPrimitive) DrawAddPrimitiveOptions(state, width);
     if (b.tool == Tool::kPushPull && active) DrawPushPullOptions(state, width);
+    if (b.tool == Tool::kMeasure && active) DrawMeasureOptions(state, width);
   }
   ImGui::Spacing();
   ImGui::Separator();
@@ -364,8 +437,9 @@ void DrawToolsPanel(AppState* state) {
 }
 
 void DrawPropertiesPanel(AppState* state, PropertiesPanelState* panel) {
-  DrawImageSection(state, &panel->exif_feedback);
-  DrawSolveSection(state);
+  // What is selected comes first, at the top, where a click lands: the image and solve
+  // sections above it would push its fields down, and move them whenever a solve's figures
+  // change length.
   const Project& project = state->document.project();
   if (const Primitive* primitive = project.FindPrimitive(state->selection.primitive_id)) {
     const Primitive copy = *primitive;
@@ -381,9 +455,11 @@ void DrawPropertiesPanel(AppState* state, PropertiesPanelState* panel) {
   if (const Pin* pin = project.FindPin(state->selection.pin_id)) DrawPinSection(state, *pin);
   if (const Segment* seg = project.FindSegment(state->selection.segment_id)) DrawSegmentSection(state, *seg);
   if (state->selection.Empty()) {
-    ImGui::Spacing();
     ImGui::TextColored(kDimText, "Select a primitive, pin or line to edit it.");
+    ImGui::Spacing();
   }
+  DrawImageSection(state, &panel->exif_feedback);
+  DrawSolveSection(state);
   DrawConstraintsSection(state);
 }
 

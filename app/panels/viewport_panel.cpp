@@ -159,6 +159,10 @@ struct ViewportPanelState::Impl {
   bool framed_once = false;
   std::string framed_project_path;
   bool had_content = false;
+  // What the view last framed (automatically or by the user's Frame), and whether the
+  // project had primitives then: a large change of the model reframes (NeedsReframe).
+  SceneBounds framed_bounds;
+  bool had_primitives = false;
   bool show_texture = true, show_mesh = true, show_wireframe = true, show_cameras = true, show_grid = true;
   bool left_pressed_here = false;
   ImVec2 left_press_pos;
@@ -781,7 +785,10 @@ std::string ImageLabel(const Project& project, const Image& image) {
 
 void DrawToolbar(AppState* state, PanelState* panel, const SceneMeasure& measure, int width_px, int height_px) {
   const Project& project = state->document.project();
-  if (ImGui::SmallButton("Frame")) OrbitFrame(&panel->orbit, measure.frame_bounds, width_px, height_px);
+  if (ImGui::SmallButton("Frame")) {
+    OrbitFrame(&panel->orbit, measure.frame_bounds, width_px, height_px);
+    panel->framed_bounds = measure.frame_bounds;
+  }
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Frame the model's primitives (F, or double-click)");
   ImGui::SameLine();
   std::string preview = "View from photo";
@@ -938,12 +945,21 @@ void FollowProject(const AppState& state, PanelState* panel, const SceneMeasure&
   const Project& project = state.document.project();
   const bool has_content =
       !project.primitives.empty() || std::any_of(project.images.begin(), project.images.end(), Drawable);
-  if (!panel->framed_once || panel->framed_project_path != state.project_path || (has_content && !panel->had_content)) {
+  const bool has_primitives = !project.primitives.empty();
+  // Large edits reframe: the first primitive, or a model that grew, shrank or moved a lot
+  // since the last framing. Not during a drag (the user is placing something), nor while
+  // looking through a photo; otherwise the user's own orbit stays.
+  const bool large_edit = !state.drag_start && ((has_primitives && !panel->had_primitives) ||
+                                                (has_primitives && NeedsReframe(panel->framed_bounds, measure.frame_bounds)));
+  if (!panel->framed_once || panel->framed_project_path != state.project_path ||
+      (has_content && !panel->had_content) || large_edit) {
     if (panel->orbit.photo_image_id == kNoId) OrbitFrame(&panel->orbit, measure.frame_bounds, width_px, height_px);
     panel->framed_once = true;
     panel->framed_project_path = state.project_path;
+    panel->framed_bounds = measure.frame_bounds;
   }
   panel->had_content = has_content;
+  if (!state.drag_start) panel->had_primitives = has_primitives;
   if (panel->orbit.photo_image_id != kNoId) {
     const Image* image = project.FindImage(panel->orbit.photo_image_id);
     if (!image || !Drawable(*image)) {
@@ -1005,6 +1021,7 @@ void HandleViewGestures(const Project& project, PanelState* panel, const SceneMe
   if ((frame.hovered && ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) ||
       ((frame.hovered || frame.active) && FramePressed(io)) || panel->frame_requested) {
     OrbitFrame(&panel->orbit, measure.frame_bounds, width_px, height_px);
+    panel->framed_bounds = measure.frame_bounds;
   }
   panel->frame_requested = false;
   if (panel->view_from_photo_requested != kNoId) {

@@ -153,12 +153,14 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
     calibration.push_back({{"image_id", image_id},
                            {"success", vp.IsUsable()},
                            {"message", vp.message},
+                           {"incomplete", vp.incomplete},
                            {"focal_px", vp.focal_px},
                            {"principal_point", {vp.principal_point_px.x(), vp.principal_point_px.y()}},
                            {"warnings", vp.warnings}});
   }
   out["calibration"] = calibration;
   out["messages"] = update.messages;
+  out["progress"] = update.progress;
 
   const bool usable = update.ok;
   if (usable) {

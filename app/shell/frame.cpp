@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -436,6 +437,7 @@ std::optional<Tool> ToolFromName(const std::string& name) {
   if (name == "delete-edge" || name == "e-delete") return Tool::kDeleteEdge;
   if (name == "push-pull" || name == "extrude") return Tool::kPushPull;
   if (name == "move") return Tool::kMove;
+  if (name == "measure") return Tool::kMeasure;
   if (name == "line-pin") return Tool::kLinePin;
   return std::nullopt;
 }
@@ -557,7 +559,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     if (!tool) {
       *error = "unknown tool '" + arg +
                "' (select, line-x, line-y, line-z, pin, add-primitive, split-edge, delete-vertex, "
-               "connect-vertices, delete-edge, push-pull, move, line-pin)";
+               "connect-vertices, delete-edge, push-pull, move, line-pin, measure)";
       return false;
     }
     if (*tool == Tool::kAddPrimitive) {
@@ -569,11 +571,23 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     return true;
   }
   if (name == "add") {
-    // add KIND [on-top]
-    const std::vector<std::string> w = Words(arg);
+    // add KIND [on-top] | add KIND at U V (aimed at image px U, V of the active image)
+    std::vector<std::string> w = Words(arg);
     const std::optional<PrimitiveKind> kind = w.empty() ? std::nullopt : KindFromName(w[0]);
+    std::optional<Eigen::Vector2d> aim;
+    if (w.size() == 4 && w[1] == "at") {
+      char* end_u = nullptr;
+      char* end_v = nullptr;
+      const double u = std::strtod(w[2].c_str(), &end_u), v = std::strtod(w[3].c_str(), &end_v);
+      if (*end_u != '\0' || *end_v != '\0' || !std::isfinite(u) || !std::isfinite(v)) {
+        *error = "add: 'at' needs two numbers (image px)";
+        return false;
+      }
+      aim = Eigen::Vector2d(u, v);
+      w.resize(1);
+    }
     if (!kind || w.size() > 2 || (w.size() == 2 && w[1] != "on-top")) {
-      *error = "add: expected 'KIND [on-top]' with KIND box, wedge, prism, pyramid, cylinder or plane";
+      *error = "add: expected 'KIND [on-top]' or 'KIND at U V' with KIND box, wedge, prism, pyramid, cylinder or plane";
       return false;
     }
     Id base = kNoId;
@@ -586,13 +600,25 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
       base = b->id;
     }
     state->add_kind = *kind;
-    if (!AddPrimitiveEdit(state, *kind, base)) {
+    if (!AddPrimitiveEdit(state, *kind, base, aim)) {
       *error = LastLoggedError(*state);
       return false;
     }
     return true;
   }
   if (name == "select") return RunSelectCommand(state, arg, error);
+  if (name == "ridge") {
+    // ridge x|y: the selected wedge's ridge direction
+    if (arg != "x" && arg != "y") {
+      *error = "ridge: expected x or y";
+      return false;
+    }
+    if (!SetWedgeRidgeEdit(state, state->selection.primitive_id, arg == "y")) {
+      *error = LastLoggedError(*state);
+      return false;
+    }
+    return true;
+  }
   if (name == "add-photo") {
     if (!AddPhotoEdit(state, arg)) {
       *error = LastLoggedError(*state);

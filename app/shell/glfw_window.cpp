@@ -15,6 +15,7 @@
 
 #include "app/panels/image_panel.h"
 #include "app/panels/viewport_panel.h"
+#include "app/shell/window_placement.h"
 
 namespace facet::app {
 namespace {
@@ -52,13 +53,31 @@ int RunGlfwWindow(AppState* state, ShellState* shell, const std::string& imgui_i
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
   glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-  glfwWindowHint(GLFW_MAXIMIZED, GLFW_TRUE);
+  // Hidden until it has its place: the work area of the screen, or the last session's
+  // window clamped into it (a fixed size left the properties panel off small screens).
+  glfwWindowHint(GLFW_VISIBLE, GLFW_FALSE);
+  WindowRect work_area{0, 0, 1600, 900};
+  if (GLFWmonitor* monitor = glfwGetPrimaryMonitor()) {
+    glfwGetMonitorWorkarea(monitor, &work_area.x, &work_area.y, &work_area.width, &work_area.height);
+    if (work_area.width <= 0 || work_area.height <= 0) work_area = WindowRect{0, 0, 1600, 900};
+  }
+  const std::string window_file = WindowRectFilePath();
+  const WindowRect outer =
+      InitialWindowRect(window_file.empty() ? std::nullopt : LoadWindowRect(window_file), work_area);
   std::string title = WindowTitle(*state);
-  GLFWwindow* window = glfwCreateWindow(1600, 900, title.c_str(), nullptr, nullptr);
+  GLFWwindow* window = glfwCreateWindow(outer.width, outer.height, title.c_str(), nullptr, nullptr);
   if (!window) {
     std::fputs("facet: cannot create a window with an OpenGL 3.3 core context\n", stderr);
     glfwTerminate();
     return 1;
+  }
+  {
+    // The rectangle is the outer frame: the decorations come off the content size.
+    int left = 0, top = 0, right = 0, bottom = 0;
+    glfwGetWindowFrameSize(window, &left, &top, &right, &bottom);
+    glfwSetWindowSize(window, std::max(1, outer.width - left - right), std::max(1, outer.height - top - bottom));
+    glfwSetWindowPos(window, outer.x + left, outer.y + top);
+    glfwShowWindow(window);
   }
   glfwMakeContextCurrent(window);
   glfwSwapInterval(1);  // vsync: the loop never spins faster than the display
@@ -112,6 +131,17 @@ int RunGlfwWindow(AppState* state, ShellState* shell, const std::string& imgui_i
       title = new_title;
       glfwSetWindowTitle(window, title.c_str());
     }
+  }
+
+  if (!window_file.empty() && !glfwGetWindowAttrib(window, GLFW_ICONIFIED)) {
+    // The outer frame, as InitialWindowRect reads it next time.
+    WindowRect last;
+    int left = 0, top = 0, right = 0, bottom = 0;
+    glfwGetWindowFrameSize(window, &left, &top, &right, &bottom);
+    glfwGetWindowPos(window, &last.x, &last.y);
+    glfwGetWindowSize(window, &last.width, &last.height);
+    last = {last.x - left, last.y - top, last.width + left + right, last.height + top + bottom};
+    if (!SaveWindowRect(window_file, last)) std::fprintf(stderr, "facet: cannot save %s\n", window_file.c_str());
   }
 
   ShutdownImagePanel(&shell->image_panel);

@@ -20,8 +20,20 @@ void RefreshDiagnostics(AppState* state) {
   state->last_update = UpdateModel(state->document.project(), CommitUpdateOptions(), &unused, &state->update_cache);
 }
 
-void LogUpdate(AppState* state, const ModelUpdateSummary& summary) {
-  for (const std::string& m : summary.messages) state->Log(LogLevel::kWarning, m);
+bool Contains(const std::vector<std::string>& list, const std::string& text) {
+  return std::find(list.begin(), list.end(), text) != list.end();
+}
+
+// Logs what changed since the previous update: a message that update already logged is still
+// shown by the properties panel and is not appended again. Failures are warnings; progress
+// (an unfinished drawing, e.g. a family with one line so far) is information.
+void LogUpdate(AppState* state, const ModelUpdateSummary& previous, const ModelUpdateSummary& summary) {
+  for (const std::string& m : summary.messages) {
+    if (!Contains(previous.messages, m)) state->Log(LogLevel::kWarning, m);
+  }
+  for (const std::string& m : summary.progress) {
+    if (!Contains(previous.progress, m)) state->Log(LogLevel::kInfo, m);
+  }
 }
 
 }  // namespace
@@ -41,6 +53,7 @@ const char* ToolName(Tool tool) {
     case Tool::kPushPull: return "Push/pull";
     case Tool::kMove: return "Move";
     case Tool::kLinePin: return "Line pin";
+    case Tool::kMeasure: return "Measure";
   }
   return "?";
 }
@@ -221,14 +234,16 @@ bool SaveProjectAs(AppState* state, const std::string& path) {
 
 void CommitEdit(AppState* state, const std::string& label, Project after) {
   Project updated;
+  const ModelUpdateSummary previous = std::move(state->last_update);
   state->last_update = UpdateModel(after, CommitUpdateOptions(), &updated, &state->update_cache);
-  LogUpdate(state, state->last_update);
+  LogUpdate(state, previous, state->last_update);
   if (state->document.Commit(label, updated)) state->Log(LogLevel::kInfo, label);
 }
 
 void BeginDrag(AppState* state, const std::string& label) {
   if (state->drag_start) return;
   state->drag_start = state->document.project();
+  state->drag_start_update = state->last_update;
   state->drag_label = label;
 }
 
@@ -242,8 +257,10 @@ void UpdateDrag(AppState* state, Project edited) {
 void EndDrag(AppState* state) {
   if (!state->drag_start) return;
   Project updated;
+  // The drag frames' updates logged nothing: compare with the state before the drag.
+  const ModelUpdateSummary previous = std::move(state->drag_start_update);
   state->last_update = UpdateModel(state->document.project(), CommitUpdateOptions(), &updated, &state->update_cache);
-  LogUpdate(state, state->last_update);
+  LogUpdate(state, previous, state->last_update);
   *state->document.MutableProjectForPreview() = std::move(updated);
   if (state->document.CommitFrom(state->drag_label, *state->drag_start)) state->Log(LogLevel::kInfo, state->drag_label);
   state->drag_start.reset();

@@ -5,6 +5,7 @@
 // by the re-solve of cameras and geometry (the paper's state machine).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <future>
 #include <map>
@@ -37,6 +38,7 @@ enum class Tool {
   kPushPull,         // push/pull: extrude the selected face by a typed distance
   kMove,             // V_op: drag a vertex or a primitive in the 3D panel (app/state/move_tool.h)
   kLinePin,          // pin the selected edge to a line drawn in the image (kEdgeOnImageLine)
+  kMeasure,          // click two vertices, type their distance: a known length (kDistance)
 };
 const char* ToolName(Tool tool);
 
@@ -140,6 +142,10 @@ struct AppState {
   // Constraint builder (properties panel): the known-length field (project units), and the
   // first edge of a two-edge kind (parallel, perpendicular, equal length) awaiting its second.
   double constraint_length = 1.0;
+  // The Measure tool's length field (project units) and the vertex pair it was defaulted for
+  // (a new pair gets their current distance and the keyboard focus).
+  double measure_length = 1.0;
+  std::array<ElementRef, 2> measure_pair;
   ElementRef constraint_first_edge;
   std::optional<ConstraintKind> constraint_first_kind;
   Id active_image_id = kNoId;
@@ -147,6 +153,10 @@ struct AppState {
   // panel set it (0 none, 1 image, 2 3D): a panel clears only its own hover.
   ElementRef hover;
   int hover_panel = 0;
+  // The pointer over the image panel, in px of the image it shows (pointer_image_id); empty
+  // elsewhere. The image panel sets it each frame; Add primitive aims there.
+  std::optional<Eigen::Vector2d> pointer_in_image_px;
+  Id pointer_image_id = kNoId;
   // Screen rectangles of the panels' main widgets in this frame by name (e.g. "tool.Pin",
   // "primitive.name"): per-frame UI introspection for the render report and tests, cleared
   // by DrawFrame, filled by RecordItem (app/panels/widgets.h).
@@ -191,6 +201,7 @@ struct AppState {
   bool request_quit = false;
   // An in-progress interactive drag: the project as it was when the drag began.
   std::optional<Project> drag_start;
+  ModelUpdateSummary drag_start_update;  // last_update when the drag began (what was logged)
   std::string drag_label;
 
   // The bake in flight, if any. Declared last so that it is destroyed first: the future of

@@ -70,7 +70,7 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"add", {1, 1}},         {"select", {1, 1}},         {"free-vertex", {0, 0}}, {"planar-face", {0, 0}},
       {"constrain", {1, 1}},   {"select-add", {1, 1}},     {"line-pin", {1, 1}},    {"line-pin-move", {1, 1}},
       {"calibration", {1, 1}}, {"move-selection", {1, 1}}, {"add-photo", {1, 1}},   {"wait-bake", {0, 0}},
-      {"bake-status", {1, 1}}, {"lines", {1, 1}},
+      {"bake-status", {1, 1}}, {"lines", {1, 1}}, {"ridge", {1, 1}},
   };
   return arity;
 }

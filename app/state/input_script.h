@@ -14,9 +14,13 @@
 //   command NAME [ARGS]           undo, redo, save PATH, open PATH, tool NAME,
 //                                 select-image INDEX, fit, export PATH, and for the model:
 //                                   add KIND [on-top]  K_create (box, wedge, prism, pyramid,
-//                                                      cylinder, plane), on the selected box
+//                                                      cylinder, plane), on the selected box;
+//                                   add KIND at U V    standing on the ground under image px
+//                                                      (U, V) of the active image
 //                                   select vertex|edge|face PRIMITIVE_ID ELEMENT_ID,
 //                                   select primitive ID, select none
+//                                   ridge x|y          the selected wedge's ridge direction
+//                                                      (SetWedgeRidgeEdit)
 //                                   free-vertex        toggle the selected vertex's freedom
 //                                   planar-face        toggle the selected face's coplanarity
 //                                   constrain KIND [VALUE]  a spatial constraint on the
@@ -65,7 +69,8 @@
 //                                                      main-thread ms, mesh fingerprints)
 //                                 Tool names: select, line-x, line-y, line-z, pin,
 //                                 add-primitive (adds at once), split-edge, delete-vertex,
-//                                 connect-vertices, delete-edge, push-pull, move, line-pin
+//                                 connect-vertices, delete-edge, push-pull, move, line-pin,
+//                                 measure (click two vertices, type the length, Enter)
 //   drop PATH [PATH...]           files dropped onto the window, as from the desktop (the
 //                                 same handler: app/shell/file_actions.h); a path with
 //                                 spaces goes in double quotes

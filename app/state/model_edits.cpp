@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include <Eigen/Geometry>
 #include <imgui.h>
 
 #include "core/mesh/extrude.h"
@@ -65,20 +66,108 @@ const Primitive* AttachBaseFor(const AppState& state, PrimitiveKind kind) {
   return base;
 }
 
-bool AddPrimitiveEdit(AppState* state, PrimitiveKind kind, Id base_id) {
+namespace {
+
+// World bounding box of a primitive's live vertices.
+Eigen::AlignedBox3d PrimitiveBounds(const Primitive& primitive) {
+  Eigen::AlignedBox3d box;
+  for (VertexId v = 0; v < primitive.mesh.VertexIdEnd(); ++v) {
+    if (primitive.mesh.IsVertex(v)) box.extend(primitive.mesh.vertex(v).position);
+  }
+  return box;
+}
+
+// The aim's ray when it points down enough to meet the ground in front; else the ray through
+// the image's centre column, three quarters down (where the ground of a photo usually is).
+Eigen::Vector3d AimRay(const Camera& camera, const Eigen::Vector2d& aim_px) {
+  constexpr double kMinDownward = 0.02;  // |sin| of the angle below the horizon
+  const Eigen::Vector3d aim = camera.RayDirectionInWorld(aim_px);
+  if (aim.z() < -kMinDownward) return aim;
+  const Eigen::Vector3d low = camera.RayDirectionInWorld(
+      Eigen::Vector2d(camera.principal_point_px.x(), 0.75 * std::max(1, camera.height_px)));
+  return low.z() < aim.z() ? low : aim;
+}
+
+}  // namespace
+
+NewPrimitivePlacement PlaceNewPrimitive(const Project& project, const PrimitiveShape& shape, const Image* view,
+                                        const std::optional<Eigen::Vector2d>& aim_px, Id scale_from) {
+  NewPrimitivePlacement out;
+  const bool first = project.primitives.empty();
+  // Scene scale: the primitive the user works on (else the last one) gives the size.
+  const Primitive* reference = project.FindPrimitive(scale_from);
+  if (reference == nullptr && !first) reference = &project.primitives.back();
+  Primitive probe;
+  probe.shape = shape;
+  AddPrimitive(&probe.mesh, shape);
+  const Eigen::AlignedBox3d own = PrimitiveBounds(probe);
+  const double own_size = own.isEmpty() ? 1.0 : std::max(own.sizes().maxCoeff(), 1e-9);
+  if (reference != nullptr) {
+    const Eigen::AlignedBox3d ref = PrimitiveBounds(*reference);
+    if (!ref.isEmpty() && ref.sizes().maxCoeff() > 0.0) out.scale = ref.sizes().maxCoeff() / own_size;
+  }
+  const double size = out.scale * own_size;
+  // The point of the primitive that stands on the ground: its footprint's centre.
+  const Eigen::Vector3d base_local(out.scale * 0.5 * (own.min().x() + own.max().x()),
+                                   out.scale * 0.5 * (own.min().y() + own.max().y()), out.scale * own.min().z());
+
+  if (view == nullptr || !view->camera_calibrated) {
+    // No camera to aim with: the first primitive at the origin, the others beside everything
+    // there is, so that a new one does not hide inside another.
+    if (first) return out;
+    double max_x = -std::numeric_limits<double>::infinity();
+    for (const Primitive& p : project.primitives) {
+      const Eigen::AlignedBox3d b = PrimitiveBounds(p);
+      if (!b.isEmpty()) max_x = std::max(max_x, b.max().x());
+    }
+    const Primitive& last = project.primitives.back();
+    out.translation = Eigen::Vector3d(max_x + 0.25 * size, last.shape.translation.y(), last.shape.translation.z());
+    return out;
+  }
+
+  const Camera& camera = view->camera;
+  const Eigen::Vector2d aim = aim_px.value_or(camera.principal_point_px);
+  const Eigen::Vector3d ray = AimRay(camera, aim);
+  const Eigen::Vector3d eye = camera.CenterInWorld();
+  // A depth at which the primitive fills about a third of the photo's height.
+  const double framing_depth = 3.0 * camera.focal_px * size / std::max(1, camera.height_px);
+  bool cameras_free = first;  // no pin or constraint names a vertex yet: the cameras' centres are the gauge
+  for (const Image& image : project.images) cameras_free = cameras_free && !image.pose_locked;
+  if (cameras_free) {
+    // The first primitive fixes the origin (it stays there); the cameras move so that it
+    // stands under the aim, a framing depth away.
+    out.camera_shift = (out.translation + base_local - framing_depth * ray) - eye;
+    return out;
+  }
+  Eigen::Vector3d ground;
+  if (eye.z() > 0.0 && ray.z() < 0.0) {
+    ground = eye - (eye.z() / ray.z()) * ray;  // the ground plane (z = 0) under the aim
+  } else {
+    // The camera is not above the ground: at the model's depth along the ray.
+    double depth = framing_depth;
+    Eigen::AlignedBox3d all;
+    for (const Primitive& p : project.primitives) all.extend(PrimitiveBounds(p));
+    if (!all.isEmpty()) depth = std::max((all.center() - eye).dot(ray), 0.5 * size);
+    ground = eye + depth * ray;
+  }
+  out.translation = ground - base_local;
+  return out;
+}
+
+bool AddPrimitiveEdit(AppState* state, PrimitiveKind kind, Id base_id, const std::optional<Eigen::Vector2d>& aim_px) {
   Project edited = state->document.project();
   PrimitiveShape shape = DefaultShape(kind);
   const bool first = edited.primitives.empty();
-  if (!first && base_id == kNoId) {
-    // Beside everything there is, so that a new primitive does not hide inside another.
-    double max_x = -std::numeric_limits<double>::infinity();
-    for (const Primitive& p : edited.primitives) {
-      for (VertexId v = 0; v < p.mesh.VertexIdEnd(); ++v) {
-        if (p.mesh.IsVertex(v)) max_x = std::max(max_x, p.mesh.vertex(v).position.x());
+  if (base_id == kNoId) {
+    const NewPrimitivePlacement placement =
+        PlaceNewPrimitive(edited, shape, state->ActiveImage(), aim_px, state->selection.primitive_id);
+    shape.params *= placement.scale;
+    shape.translation = placement.translation;
+    if (placement.camera_shift != Eigen::Vector3d::Zero()) {
+      for (Image& image : edited.images) {
+        image.camera.SetPose(image.camera.cam_from_world_rotation, image.camera.CenterInWorld() + placement.camera_shift);
       }
     }
-    const Primitive& last = edited.primitives.back();
-    shape.translation = Eigen::Vector3d(max_x + 0.25, last.shape.translation.y(), last.shape.translation.z());
   }
   int count = 1;
   for (const Primitive& p : edited.primitives) count += p.shape.kind == kind;
@@ -96,12 +185,43 @@ bool AddPrimitiveEdit(AppState* state, PrimitiveKind kind, Id base_id) {
     if (base == nullptr) return Refuse(state, label, "the base primitive is gone");
     PrimitiveShape attached = primitive->shape;
     if (!AttachOnTop(base->shape, &attached, &message)) return Refuse(state, label + " on top", message);
+    if (kind == PrimitiveKind::kWedge && base->shape.params[1] > base->shape.params[0]) {
+      // A gable roof's ridge runs along the longer side of the box it covers.
+      primitive->shape.ridge_along_y = true;
+      primitive->mesh = PolyMesh();
+      AddPrimitive(&primitive->mesh, primitive->shape);
+    }
     primitive->attached_to = base_id;
     label += " on top";
     RefreshPrimitive(&edited, primitive);
   }
   state->selection = Selection();
   state->selection.primitive_id = id;
+  CommitEdit(state, label, std::move(edited));
+  return true;
+}
+
+bool SetWedgeRidgeEdit(AppState* state, Id primitive_id, bool along_y) {
+  const std::string label = std::string("Ridge along ") + (along_y ? "y" : "x");
+  Project edited;
+  Primitive* primitive = EditablePrimitive(state, &edited, primitive_id, label);
+  if (primitive == nullptr) return false;
+  if (primitive->shape.kind != PrimitiveKind::kWedge) return Refuse(state, label, "only a wedge has a ridge");
+  if (primitive->shape.ridge_along_y == along_y) return Refuse(state, label, "the ridge runs that way already");
+  // The ridge is in the vertices' local definitions: the mesh is built again, which would
+  // lose what the K-operators or a freed vertex made of it.
+  const PolyMesh& mesh = primitive->mesh;
+  bool edited_mesh = mesh.NumVertices() != 6 || mesh.NumFaces() != 5 || mesh.VertexIdEnd() != 6;
+  for (VertexId v = 0; v < mesh.VertexIdEnd() && !edited_mesh; ++v) {
+    edited_mesh = !mesh.IsVertex(v) || mesh.vertex(v).local.on_edge || mesh.vertex(v).local.free;
+  }
+  if (edited_mesh) return Refuse(state, label, "the wedge's mesh was edited (split, connected or freed vertices)");
+  primitive->shape.ridge_along_y = along_y;
+  PolyMesh rebuilt;
+  const AddPrimitiveResult added = AddPrimitive(&rebuilt, primitive->shape);
+  if (!added.ok) return Refuse(state, label, added.message);
+  primitive->mesh = std::move(rebuilt);
+  RefreshPrimitive(&edited, primitive);
   CommitEdit(state, label, std::move(edited));
   return true;
 }
@@ -329,6 +449,32 @@ bool ConstrainAlongAxisEdit(AppState* state, const ElementRef& edge, Axis axis) 
   if (!EdgeVertices(state->document.project(), edge, &c.vertices[0], &c.vertices[1])) {
     return Refuse(state, label, "select an edge first");
   }
+  return AddConstraint(state, c, label);
+}
+
+bool MeasuredPair(const Selection& selection, ElementRef* a, ElementRef* b) {
+  if (selection.element.kind != ElementKind::kVertex || selection.extra.size() != 1 ||
+      selection.extra[0].kind != ElementKind::kVertex || selection.extra[0] == selection.element) {
+    return false;
+  }
+  *a = selection.element;
+  *b = selection.extra[0];
+  return true;
+}
+
+bool ConstrainDistanceEdit(AppState* state, const ElementRef& a, const ElementRef& b, double length) {
+  const std::string label = "Known length";
+  if (!std::isfinite(length) || length <= 0.0) return Refuse(state, label, "the length must be positive");
+  const Project& project = state->document.project();
+  if (a.kind != ElementKind::kVertex || b.kind != ElementKind::kVertex || !ElementExists(project, a) ||
+      !ElementExists(project, b)) {
+    return Refuse(state, label, "pick two vertices");
+  }
+  if (a == b) return Refuse(state, label, "pick two different vertices");
+  Constraint c;
+  c.kind = ConstraintKind::kDistance;
+  c.value = length;
+  c.vertices = {VertexRef{a.primitive_id, a.element}, VertexRef{b.primitive_id, b.element}};
   return AddConstraint(state, c, label);
 }
 
@@ -687,7 +833,9 @@ bool RunConstrainCommand(AppState* state, const std::string& arg, std::string* e
       *error = "constrain length: needs a number (project units)";
       return false;
     }
-    done = ConstrainLengthEdit(state, e, v);
+    ElementRef a, b;
+    done = MeasuredPair(state->selection, &a, &b) ? ConstrainDistanceEdit(state, a, b, v)
+                                                   : ConstrainLengthEdit(state, e, v);
   } else if (kind == "parallel" || kind == "perpendicular" || kind == "equal-length") {
     const ConstraintKind k = kind == "parallel"        ? ConstraintKind::kParallel
                              : kind == "perpendicular" ? ConstraintKind::kPerpendicular
@@ -823,6 +971,19 @@ bool ApplyToolClick(AppState* state, const ElementRef& picked, double t, bool ex
       if (picked.kind != ElementKind::kFace) return false;
       state->selection = Selection::Of(picked);
       return true;
+    case Tool::kMeasure: {
+      // The first vertex, then the second (the tools panel then asks for their distance); a
+      // third click starts a new pair.
+      if (picked.kind != ElementKind::kVertex) return false;
+      const Selection& s = state->selection;
+      const bool one_vertex = s.element.kind == ElementKind::kVertex && s.extra.empty();
+      if (one_vertex && s.element != picked) {
+        state->selection.extra = {picked};
+      } else {
+        state->selection = Selection::Of(picked);
+      }
+      return true;
+    }
     default: return false;
   }
 }

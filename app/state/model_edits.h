@@ -5,6 +5,7 @@
 // (shown in the log and the status bar) and changes nothing. Each returns whether it edited.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,9 +25,34 @@ bool CanAttachOnTop(PrimitiveKind kind);
 // The selected primitive when it is a box that a new `kind` can sit on, or null.
 const Primitive* AttachBaseFor(const AppState& state, PrimitiveKind kind);
 
-// K_create: adds a primitive of `kind`, on top of `base_id` (a box) when given, selects it.
+// Where K_create puts a primitive that sits on no base. With a calibrated `view` camera it
+// stands in front of that camera, in view, on the ground plane (z = 0) under `aim_px` (image
+// px; default the principal point; an aim above the horizon is replaced by one three
+// quarters down the image): where the aim's ray meets the ground, else (a camera not above
+// the ground) at the model's depth along the ray. The first primitive of a project stays at
+// the origin, which it fixes, and every camera moves by `camera_shift` instead so that it
+// stands under the aim a framing distance away (nothing pins a camera's centre yet). Its
+// dimensions are the default shape's times `scale`: the size of `scale_from` (else the last
+// primitive) for a scene that has one. Without a calibrated view: the first at the origin,
+// the others beside everything there is.
+struct NewPrimitivePlacement {
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();   // world_from_primitive
+  double scale = 1.0;                                      // of the default dimensions
+  Eigen::Vector3d camera_shift = Eigen::Vector3d::Zero();  // added to every camera centre
+};
+NewPrimitivePlacement PlaceNewPrimitive(const Project& project, const PrimitiveShape& shape, const Image* view,
+                                        const std::optional<Eigen::Vector2d>& aim_px, Id scale_from);
+
+// K_create: adds a primitive of `kind`, on top of `base_id` (a box) when given, else where
+// PlaceNewPrimitive puts it in the active image (aimed at `aim_px`, image px), and selects it.
 // The first primitive of a project gets its last dimension locked (a known length for scale).
-bool AddPrimitiveEdit(AppState* state, PrimitiveKind kind, Id base_id);
+bool AddPrimitiveEdit(AppState* state, PrimitiveKind kind, Id base_id,
+                      const std::optional<Eigen::Vector2d>& aim_px = std::nullopt);
+
+// Turns a wedge's ridge along its local y (along_y) or x, over the same footprint, so that a
+// roof on a box can run either way. Refused: not a wedge, the ridge already that way, a mesh
+// the K-operators or a freed vertex changed (the ridge is in the vertices' definitions).
+bool SetWedgeRidgeEdit(AppState* state, Id primitive_id, bool along_y);
 
 // Deletes a primitive with its pins and the constraints naming it; primitives attached to it
 // stay where they are, detached.
@@ -54,6 +80,11 @@ bool TogglePlanarFaceEdit(AppState* state, Id primitive_id, FaceId face);
 bool ConstrainAlongAxisEdit(AppState* state, const ElementRef& edge, Axis axis);
 // kDistance: the edge's length is `length` project units (it sets the scale).
 bool ConstrainLengthEdit(AppState* state, const ElementRef& edge, double length);
+// kDistance between two vertices (the Measure tool): `length` project units apart. Refused:
+// not two distinct live vertices, a length <= 0, the same constraint already there.
+bool ConstrainDistanceEdit(AppState* state, const ElementRef& a, const ElementRef& b, double length);
+// The Measure tool's pair: exactly two distinct vertices selected (element, then extra[0]).
+bool MeasuredPair(const Selection& selection, ElementRef* a, ElementRef* b);
 // kParallel, kPerpendicular or kEqualLength between two distinct edges.
 bool ConstrainEdgePairEdit(AppState* state, ConstraintKind kind, const ElementRef& first, const ElementRef& second);
 // kFixedPoint at the vertex's current world position.

@@ -36,6 +36,47 @@ Eigen::Vector3d FaceCentroid(const PolyMesh& mesh, FaceId f) {
   return vs.empty() ? c : Eigen::Vector3d(c / static_cast<double>(vs.size()));
 }
 
+// The faces around a vertex (those it bounds).
+std::vector<FaceId> FacesAroundVertex(const PolyMesh& mesh, VertexId v) {
+  std::vector<FaceId> faces;
+  const HalfedgeId first = mesh.vertex(v).halfedge;
+  if (!mesh.IsHalfedge(first)) return faces;
+  HalfedgeId h = first;
+  for (int guard = 0; guard < 1000; ++guard) {
+    if (!mesh.IsBoundary(h)) faces.push_back(mesh.Face(h));
+    h = mesh.Next(PolyMesh::Twin(h));
+    if (h == first) break;
+  }
+  return faces;
+}
+
+// Whether a face crosses the line of sight from `eye` to `p`, other than the faces `p` lies
+// on (`own_faces` of primitive `own_primitive`).
+bool Occluded(const Project& project, const Eigen::Vector3d& eye, const Eigen::Vector3d& p, Id own_primitive,
+              const std::vector<FaceId>& own_faces) {
+  const Eigen::Vector3d to_p = p - eye;
+  const double length = to_p.norm();
+  if (!(length > 0.0)) return false;
+  const Eigen::Vector3d direction = to_p / length;
+  // Relative: a face that meets the line within this fraction of its end touches p.
+  constexpr double kTouching = 1e-6;
+  for (const Primitive& primitive : project.primitives) {
+    const PolyMesh& mesh = primitive.mesh;
+    for (FaceId f = 0; f < mesh.FaceIdEnd(); ++f) {
+      if (!mesh.IsFace(f)) continue;
+      if (primitive.id == own_primitive && std::find(own_faces.begin(), own_faces.end(), f) != own_faces.end())
+        continue;
+      for (const CornerTriangle& tri : TriangulateFace(mesh, f)) {
+        const double t =
+            RayTriangle(eye, direction, mesh.vertex(mesh.Origin(tri[0])).position,
+                        mesh.vertex(mesh.Origin(tri[1])).position, mesh.vertex(mesh.Origin(tri[2])).position);
+        if (t < length * (1.0 - kTouching)) return true;
+      }
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 std::vector<ProjectedPrimitive> ProjectModel(const Project& project, const Image& image) {
@@ -67,7 +108,8 @@ PickFilter PickFilterOf(Tool tool) {
     case Tool::kSelect: return {true, true, true};
     case Tool::kPin:
     case Tool::kDeleteVertex:
-    case Tool::kConnectVertices: return {true, false, false};
+    case Tool::kConnectVertices:
+    case Tool::kMeasure: return {true, false, false};
     case Tool::kSplitEdge:
     case Tool::kDeleteEdge:
     case Tool::kLinePin: return {false, true, false};
@@ -193,7 +235,7 @@ bool ProjectToPanel(const PickRay& ray, const Eigen::Vector3d& p_in_world, Eigen
 }
 
 ElementPick PickByRay(const Project& project, const PickRay& ray, const PickFilter& filter, double radius_px) {
-  // The nearest surface along the ray hides what lies behind it.
+  // The face under the cursor: the nearest surface along the ray.
   double hit_t = kInfinity;
   ElementPick face_pick;
   for (const Primitive& primitive : project.primitives) {
@@ -213,11 +255,9 @@ ElementPick PickByRay(const Project& project, const PickRay& ray, const PickFilt
       }
     }
   }
-  constexpr double kOnSurface = 1e-4;  // relative: a vertex of the hit face lies on it
-  auto visible = [&](const Eigen::Vector3d& p) {
-    const double along = (p - ray.origin).dot(ray.direction);
-    return along <= hit_t * (1.0 + kOnSurface) + 1e-9;
-  };
+  // A vertex or edge near the cursor is tested on its own line of sight, not against the
+  // face under the cursor: the corner of a box lies behind the point where the cursor's ray
+  // meets the face it bounds (that face slopes away), yet nothing hides it.
   ElementPick vertex_pick, edge_pick;
   double best_vertex = radius_px, best_edge = radius_px;
   for (const Primitive& primitive : project.primitives) {
@@ -227,9 +267,9 @@ ElementPick PickByRay(const Project& project, const PickRay& ray, const PickFilt
         if (!mesh.IsVertex(v)) continue;
         Eigen::Vector2d px;
         const Eigen::Vector3d& p = mesh.vertex(v).position;
-        if (!ProjectToPanel(ray, p, &px) || !visible(p)) continue;
+        if (!ProjectToPanel(ray, p, &px)) continue;
         const double d = (px - ray.mouse_px).norm();
-        if (d < best_vertex) {
+        if (d < best_vertex && !Occluded(project, ray.origin, p, primitive.id, FacesAroundVertex(mesh, v))) {
           best_vertex = d;
           vertex_pick.element = {ElementKind::kVertex, primitive.id, v};
           vertex_pick.distance_px = d;
@@ -246,7 +286,8 @@ ElementPick PickByRay(const Project& project, const PickRay& ray, const PickFilt
         const double d = DistanceToSegment(ray.mouse_px, pa, pb);
         if (d >= best_edge) continue;
         double t = ClosestEdgeParameter(a, b, ray.origin, ray.direction);
-        if (!visible(a + t * (b - a))) continue;
+        const std::vector<FaceId> sides = {mesh.Face(2 * e), mesh.Face(2 * e + 1)};
+        if (Occluded(project, ray.origin, a + t * (b - a), primitive.id, sides)) continue;
         Eigen::Vector2d mid;
         if (ProjectToPanel(ray, 0.5 * (a + b), &mid) && (mid - ray.mouse_px).norm() <= kMidpointSnapPx) t = 0.5;
         best_edge = d;

@@ -7,7 +7,8 @@
 // faces are picked (their outward normal towards the camera), so a click on a box picks the
 // face the user sees. In an image, a vertex or edge on the back of a primitive (all faces
 // beside it turned away) is picked only where no front face covers the cursor; in the 3D
-// panel the ray's first hit hides what lies behind it.
+// panel a vertex or edge within the radius is picked unless a face hides it on its own line
+// of sight (so the corners and edges of the face under the cursor win over that face).
 #pragma once
 
 #include <vector>
@@ -79,8 +80,9 @@ struct PickRay {
 // Panel px of a world point under the ray's projection, or false when behind the eye.
 bool ProjectToPanel(const PickRay& ray, const Eigen::Vector3d& p_in_world, Eigen::Vector2d* px);
 
-// Picks along the ray: the nearest face hit (ray against the faces' triangles), vertices and
-// edges within radius_px of the mouse that are not hidden behind that face.
+// Picks along the ray: a vertex, else an edge, within radius_px of the mouse that no other
+// face hides from the ray's origin, else the nearest face hit (ray against the faces'
+// triangles) when it is seen from outside.
 ElementPick PickByRay(const Project& project, const PickRay& ray, const PickFilter& filter, double radius_px);
 
 // Edge parameter (from the origin of half-edge 2 * edge) of the point on segment a-b closest

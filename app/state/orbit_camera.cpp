@@ -58,6 +58,29 @@ void OrbitRotate(OrbitCamera* orbit, double dx_px, double dy_px, int width_px, i
   // As if grabbing the model: dragging right turns its front to the right.
   orbit->yaw_rad = std::remainder(orbit->yaw_rad - dx_px * kRotateRadPerPx, 2.0 * kPi);
   orbit->pitch_rad = std::clamp(orbit->pitch_rad + dy_px * kRotateRadPerPx, -kMaxPitchRad, kMaxPitchRad);
+  ClampAboveGround(orbit);
+}
+
+double MinPitchAboveGround(double target_z, double distance) {
+  if (!(distance > 0.0)) return -kMaxPitchRad;
+  // eye z = target_z + distance * sin(pitch) >= kGroundClearance * distance
+  const double sine = kGroundClearance - target_z / distance;
+  if (sine >= std::sin(kMaxPitchRad)) return kMaxPitchRad;
+  return std::max(-kMaxPitchRad, std::asin(std::max(-1.0, sine)));
+}
+
+void ClampAboveGround(OrbitCamera* orbit) {
+  if (orbit->photo_image_id != kNoId) return;
+  // A target so deep that even the steepest view from above is below the ground comes up.
+  const double lowest_target = orbit->distance * (kGroundClearance - std::sin(kMaxPitchRad)) * (1.0 - 1e-9);
+  orbit->target.z() = std::max(orbit->target.z(), lowest_target);
+  orbit->pitch_rad = std::max(orbit->pitch_rad, MinPitchAboveGround(orbit->target.z(), orbit->distance));
+}
+
+bool NeedsReframe(const SceneBounds& framed, const SceneBounds& now) {
+  const double ratio = now.radius / std::max(framed.radius, 1e-12);
+  if (ratio > kReframeRatio || ratio < 1.0 / kReframeRatio) return true;
+  return (now.center - framed.center).norm() > std::max(framed.radius, now.radius);
 }
 
 void OrbitPan(OrbitCamera* orbit, double dx_px, double dy_px, int width_px, int height_px) {
@@ -68,11 +91,13 @@ void OrbitPan(OrbitCamera* orbit, double dx_px, double dy_px, int width_px, int 
   const Eigen::Vector3d right = view.cam_from_world_rotation.row(0).transpose();
   const Eigen::Vector3d down = view.cam_from_world_rotation.row(1).transpose();
   orbit->target -= units_per_px * (dx_px * right + dy_px * down);
+  ClampAboveGround(orbit);
 }
 
 void OrbitZoom(OrbitCamera* orbit, double steps, int width_px, int height_px) {
   OrbitLeavePhotoView(orbit, width_px, height_px);
   orbit->distance = std::clamp(orbit->distance * std::exp(-steps * kZoomPerStep), 1e-6, 1e9);
+  ClampAboveGround(orbit);
 }
 
 void OrbitFrame(OrbitCamera* orbit, const SceneBounds& bounds, int width_px, int height_px) {
@@ -84,6 +109,7 @@ void OrbitFrame(OrbitCamera* orbit, const SceneBounds& bounds, int width_px, int
   const double radius = std::max(bounds.radius, 1e-6);
   orbit->target = bounds.center;
   orbit->distance = 1.05 * radius / std::sin(half_fov);
+  ClampAboveGround(orbit);
 }
 
 void OrbitViewFromPhoto(OrbitCamera* orbit, Id image_id, const Camera& camera, const SceneBounds& bounds) {

@@ -37,8 +37,10 @@ Camera ViewCameraOf(const OrbitCamera& orbit, int width_px, int height_px);
 Eigen::Vector3d EyeOf(const OrbitCamera& orbit);
 
 // Mouse gestures, in panel pixels. Each leaves photo view first (keeping the viewpoint as
-// nearly as a turntable can: roll and principal point offset are dropped).
-// Turntable: horizontal motion turns about world Z, vertical tilts (clamped short of the poles).
+// nearly as a turntable can: roll and principal point offset are dropped). None takes the
+// eye below the ground (ClampAboveGround).
+// Turntable: horizontal motion turns about world Z, vertical tilts (clamped short of the
+// poles and above the ground).
 void OrbitRotate(OrbitCamera* orbit, double dx_px, double dy_px, int width_px, int height_px);
 // Moves the target in the view plane so that the point under the cursor follows it.
 void OrbitPan(OrbitCamera* orbit, double dx_px, double dy_px, int width_px, int height_px);
@@ -52,5 +54,21 @@ void OrbitFrame(OrbitCamera* orbit, const SceneBounds& bounds, int width_px, int
 void OrbitViewFromPhoto(OrbitCamera* orbit, Id image_id, const Camera& camera, const SceneBounds& bounds);
 // Turns a photo view into the nearest turntable view (no-op otherwise).
 void OrbitLeavePhotoView(OrbitCamera* orbit, int width_px, int height_px);
+
+// The lowest pitch (radians) that keeps the eye of a turntable about a target at height
+// target_z, `distance` away, above the ground plane z = 0 by kGroundClearance * distance;
+// the pole's limit when no pitch does (a target deep below the ground).
+constexpr double kGroundClearance = 0.02;
+double MinPitchAboveGround(double target_z, double distance);
+// Raises the turntable's pitch to MinPitchAboveGround, and a target too deep for any pitch
+// to the depth the steepest view allows (photo views are left as they are: they are the
+// photo's camera).
+void ClampAboveGround(OrbitCamera* orbit);
+
+// Whether the model changed so much since the view last framed `framed` that the view should
+// frame `now` again (its size grew or shrank by kReframeRatio, or it moved by more than its
+// size): large edits reframe, a solve's or a drag's small changes leave the user's view.
+constexpr double kReframeRatio = 2.5;
+bool NeedsReframe(const SceneBounds& framed, const SceneBounds& now);
 
 }  // namespace facet::app

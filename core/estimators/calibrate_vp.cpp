@@ -372,10 +372,12 @@ bool GroupFamilies(const std::vector<Segment>& segments, const VpCalibrationOpti
     families->segments_px[axis].push_back(seg);
     families->input_indices[axis].push_back(i);
   }
+  for (int a = 0; a < 3; ++a) summary->segments_per_axis[a] = static_cast<int>(families->segments_px[a].size());
+  // The count checks below fail only because the drawing is not finished yet.
+  summary->incomplete = true;
   std::string present_names;
   for (int a = 0; a < 3; ++a) {
     const size_t size = families->segments_px[a].size();
-    summary->segments_per_axis[a] = static_cast<int>(size);
     if (size == 1) return fail(FamilyName(a) + " has only 1 segment; a family needs at least 2");
     families->present[a] = size >= 2;
     if (families->present[a]) {
@@ -397,6 +399,7 @@ bool GroupFamilies(const std::vector<Segment>& segments, const VpCalibrationOpti
     return fail(
         "one family with the horizon needs a known focal length (fixed or a prior): a vanishing point on the "
         "horizon is consistent with any focal length");
+  summary->incomplete = false;
   return true;
 }
 

@@ -145,6 +145,10 @@ struct VpCalibrationSummary : SolverSummary {
   double horizon_residual_px = 0.0;
   double rms_residual_px = 0.0;  // RMS of segment_residuals_px
   std::array<int, 3> segments_per_axis = {0, 0, 0};
+  // Not IsUsable() only because the drawing is not finished: a family with 1 segment, or
+  // fewer families than the mode needs (kInvalidInput). More lines will calibrate, so the app
+  // shows this as progress, not as a failure; the message says what is missing.
+  bool incomplete = false;
   // Per input segment (same order): distance in px of its endpoints to the line through its
   // midpoint and its family's vanishing point (RMS of the two).
   std::vector<double> segment_residuals_px;

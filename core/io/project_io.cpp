@@ -242,6 +242,8 @@ OrderedJson WriteProject(const Project& p, Writer* w) {
     j["kind"] = PrimitiveKindName(prim.shape.kind);
     j["params"] = w->Numbers(Join(at, "params"), prim.shape.params);
     j["segments"] = prim.shape.segments;
+    // Only when it is not the default, so that files without turned wedges stay as they were.
+    if (prim.shape.ridge_along_y) j["ridge"] = "y";
     j["rotation"] = w->Numbers(Join(at, "rotation"), prim.shape.rotation);
     j["translation"] = w->Numbers(Join(at, "translation"), prim.shape.translation);
     j["param_locked"] = prim.param_locked;
@@ -614,7 +616,7 @@ bool ReadMesh(const Json& j, const std::string& at, PrimitiveId primitive, Reade
 bool ReadPrimitive(const Json& j, const std::string& at, Reader* r, Primitive* prim) {
   std::string kind;
   if (!r->Object(j, at,
-                 {"id", "name", "kind", "params", "segments", "rotation", "translation", "param_locked",
+                 {"id", "name", "kind", "params", "segments", "ridge", "rotation", "translation", "param_locked",
                   "rotation_locked", "translation_locked", "attached_to", "mesh"}) ||
       !r->IdField(j, at, "id", &prim->id) || !r->String(j, at, "name", &prim->name) || !r->String(j, at, "kind", &kind))
     return false;
@@ -632,6 +634,14 @@ bool ReadPrimitive(const Json& j, const std::string& at, Reader* r, Primitive* p
     return false;
   for (int k = 0; k < kMaxPrimitiveParams; ++k)
     if (shape.params(k) < 0) return r->Fail(Index(Join(at, "params"), k), "a dimension cannot be negative");
+  // A wedge's ridge: "x" (absent: files before it could turn) or "y".
+  if (j.contains("ridge")) {
+    std::string ridge;
+    if (!r->String(j, at, "ridge", &ridge)) return false;
+    if (ridge != "x" && ridge != "y") return r->Fail(Join(at, "ridge"), "expected \"x\" or \"y\", found \"" + ridge + "\"");
+    if (shape.kind != PrimitiveKind::kWedge && ridge == "y") return r->Fail(Join(at, "ridge"), "only a wedge has a ridge");
+    shape.ridge_along_y = ridge == "y";
+  }
   const Json* locked = r->Field(j, at, "param_locked");
   if (!locked) return false;
   const std::string locked_at = Join(at, "param_locked");

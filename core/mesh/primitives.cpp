@@ -40,10 +40,19 @@ Template BoxTemplate() {
   return t;
 }
 
-Template WedgeTemplate() {
+// Bottom, the two slopes, the two gables (in that order, materials 0..4); the ridge is
+// vertices 4 -> 5.
+Template WedgeTemplate(bool ridge_along_y) {
   Template t;
-  t.coefficients = {Coeff(0, 0, 0), Coeff(1, 0, 0), Coeff(1, 1, 0), Coeff(0, 1, 0), Coeff(0, 0.5, 1), Coeff(1, 0.5, 1)};
-  t.polygons = {{0, 3, 2, 1}, {0, 1, 5, 4}, {2, 3, 4, 5}, {0, 4, 3}, {1, 2, 5}};
+  if (ridge_along_y) {
+    t.coefficients = {Coeff(0, 0, 0),   Coeff(1, 0, 0),   Coeff(1, 1, 0),
+                      Coeff(0, 1, 0),   Coeff(0.5, 0, 1), Coeff(0.5, 1, 1)};
+    t.polygons = {{0, 3, 2, 1}, {0, 4, 5, 3}, {1, 2, 5, 4}, {0, 1, 4}, {2, 3, 5}};
+  } else {
+    t.coefficients = {Coeff(0, 0, 0),   Coeff(1, 0, 0),   Coeff(1, 1, 0),
+                      Coeff(0, 1, 0),   Coeff(0, 0.5, 1), Coeff(1, 0.5, 1)};
+    t.polygons = {{0, 3, 2, 1}, {0, 1, 5, 4}, {2, 3, 4, 5}, {0, 4, 3}, {1, 2, 5}};
+  }
   t.materials = {0, 1, 2, 3, 4};
   return t;
 }
@@ -105,7 +114,7 @@ int NumParams(PrimitiveKind kind) {
 Template TemplateOf(const PrimitiveShape& p) {
   switch (p.kind) {
     case PrimitiveKind::kBox: return BoxTemplate();
-    case PrimitiveKind::kWedge: return WedgeTemplate();
+    case PrimitiveKind::kWedge: return WedgeTemplate(p.ridge_along_y);
     case PrimitiveKind::kPyramid: return PyramidTemplate();
     case PrimitiveKind::kPlane: return PlaneTemplate();
     case PrimitiveKind::kPrism: return PrismTemplate(p.segments, false);

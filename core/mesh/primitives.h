@@ -27,7 +27,8 @@ const char* PrimitiveKindName(PrimitiveKind kind);
 
 // Parameters, in world units, by kind (unused entries stay 0):
 //   kBox      (sx, sy, sz)
-//   kWedge    (sx, sy, sz): triangular prism, ridge along x at y = sy / 2, height sz (gable roof)
+//   kWedge    (sx, sy, sz): triangular prism, ridge along x at y = sy / 2, height sz (gable roof);
+//             with ridge_along_y, the ridge runs along y at x = sx / 2 (the same footprint)
 //   kPrism    (radius, height), `segments` sides (>= 3), circumscribed radius
 //   kCylinder (radius, height), `segments` sides (>= 3); side faces share material 1
 //   kPyramid  (sx, sy, height): rectangular base, apex above the base centre
@@ -37,6 +38,9 @@ struct PrimitiveShape {
   PrimitiveKind kind = PrimitiveKind::kBox;
   PrimitiveParams params = PrimitiveParams::Zero();
   int segments = 0;
+  // kWedge only: the ridge along local y (the gables face -y, +y) instead of x. It chooses the
+  // vertices' local definitions, so changing it means building the mesh again.
+  bool ridge_along_y = false;
   Eigen::Vector3d rotation = Eigen::Vector3d::Zero();     // world_from_primitive, angle-axis
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();  // world_from_primitive
 };

@@ -130,7 +130,7 @@ bool operator==(const Image& a, const Image& b) {
 }
 bool operator==(const PrimitiveShape& a, const PrimitiveShape& b) {
   return a.id == b.id && a.kind == b.kind && a.params == b.params && a.segments == b.segments &&
-         a.rotation == b.rotation && a.translation == b.translation;
+         a.ridge_along_y == b.ridge_along_y && a.rotation == b.rotation && a.translation == b.translation;
 }
 bool operator==(const Primitive& a, const Primitive& b) {
   return a.id == b.id && a.name == b.name && a.shape == b.shape && a.mesh == b.mesh &&

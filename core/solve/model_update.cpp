@@ -232,7 +232,7 @@ void CalibrateFromLines(Project* calibrated, ModelUpdateCache* cache, ModelUpdat
       image.camera.SetPose(vp.cam_from_world_rotation, center);
       image.camera_calibrated = true;
     } else {
-      summary->messages.push_back("Image '" + image.path + "': " + vp.message);
+      (vp.incomplete ? summary->progress : summary->messages).push_back("Image '" + image.path + "': " + vp.message);
     }
     summary->calibration[image.id] = vp;
     if (cache != nullptr) next_cache[image.id] = std::move(entry);

@@ -90,6 +90,9 @@ struct ModelUpdateSummary {
   MultiViewInitSummary multiview;     // cameras initialised from pins (num_initialized 0: none)
   JointSolveSummary joint;            // termination kInvalidInput when it did not run
   std::vector<std::string> messages;  // user-facing: what failed and why
+  // User-facing: what an unfinished drawing still needs (an image whose line families are not
+  // complete yet, VpCalibrationSummary::incomplete). Progress, not failures.
+  std::vector<std::string> progress;
   // The calibration step per image with segments: run, or taken from the cache (the plumb-line
   // estimate counts apart: it is reused whenever the image and its segments are unchanged,
   // even when the vanishing-point calibration runs again for a camera whose k changed).
