@@ -346,6 +346,9 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
 
   if (options.initialize_from_pins && summary.ok)
     InitializeFromPinsAndResolve(options.multiview, solve_options, updated, &summary);
+  // A dimension held because no pin sees it is the likely surprise in the result (a box as
+  // deep as it was made): the user reads why and what would fix it.
+  for (const std::string& held : summary.solve.held_parameters) summary.messages.push_back("Solve: " + held);
 
   if (options.joint_solve && summary.ok) {
     JointSolveOptions joint_options = options.joint;

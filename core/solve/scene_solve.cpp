@@ -266,6 +266,7 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
   SceneState state;
   const SceneProblem problem = scene_solve_internal::BuildSceneProblem(project, &state);
   summary.warnings = problem.warnings;
+  summary.held_parameters = problem.held_parameters;
   summary.num_skipped_pins = problem.num_skipped_pins;
   summary.num_residuals = 2 * static_cast<int>(problem.observations.size());
   summary.num_parameters = problem.num_parameters;
