@@ -21,6 +21,7 @@ void RefreshDiagnostics(AppState* state) {
 
 void LogUpdate(AppState* state, const ModelUpdateSummary& summary) {
   for (const std::string& m : summary.messages) state->Log(LogLevel::kWarning, m);
+  for (const std::string& n : summary.notes) state->Log(LogLevel::kInfo, n);
 }
 
 }  // namespace
