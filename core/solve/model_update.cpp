@@ -156,6 +156,9 @@ void GeometrySolve(const Project& project, const SceneSolveOptions& options, Sce
   if (cold_summary.IsUsable() && (!summary->IsUsable() || cold_summary.final_cost < summary->final_cost)) {
     *summary = std::move(cold_summary);
     *solved = std::move(cold_solved);
+  } else if (!summary->IsUsable() && !cold_summary.IsUsable()) {
+    // Both failed: the cold one's reason names why the pins give no start, which the user can act on.
+    *summary = std::move(cold_summary);
   }
 }
 

@@ -6,6 +6,7 @@
 // lies in the plane of its camera".
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -89,6 +90,13 @@ TEST_CASE("a new box pinned by its front face's four corners solves, its depth h
   const facet::Project solved = LoadProjectFile(saved);
   REQUIRE(solved.primitives.size() == 1);
   REQUIRE(solved.pins.size() == 4);
+  for (const FrontCorner& c : kFront) {
+    CAPTURE(c.vertex);
+    const auto pin = std::find_if(solved.pins.begin(), solved.pins.end(),
+                                  [&](const facet::Pin& q) { return q.vertex.vertex == c.vertex; });
+    REQUIRE(pin != solved.pins.end());
+    CHECK((pin->uv_px - c.uv).norm() < 1.0 / view.zoom);  // on the clicked whole screen pixel
+  }
   const facet::Primitive& box = solved.primitives[0];
   const facet::Image& photo = solved.images.at(0);
   REQUIRE(photo.camera_calibrated);
@@ -114,6 +122,8 @@ TEST_CASE("a new box pinned by its front face's four corners solves, its depth h
   CHECK(log.find("depth (y size) of box") != std::string::npos);
   CHECK(log.find("is seen by no pin") != std::string::npos);
   CHECK(log.find("back face") != std::string::npos);
+  // The first pin alone cannot place anything: the log says so as the cause a user acts on.
+  CHECK(log.find("no start yet") != std::string::npos);
   const size_t last_pin = log.rfind("Pin vertex");
   REQUIRE(last_pin != std::string::npos);
   CHECK(log.find("plane of its camera", last_pin) == std::string::npos);
