@@ -474,8 +474,8 @@ TEST_CASE("vertex move then model update: the solve starts from the moved state"
   const double width = updated.FindPrimitive(scene.box_id)->shape.params[0];
   CHECK(std::abs(width - scene.true_box.shape.params[0]) < 1e-6);
 
-  // A cold start would keep it too: the linear initialisation refuses a system in which a free
-  // size appears in no pin and starts from the current values.
+  // A cold start keeps it too: a free size that appears in no pin is held at its value (not
+  // a parameter), so the linear initialisation runs on the rest.
   ModelUpdateOptions cold = warm;
   cold.solve.warm_start = false;
   Project cold_updated;
@@ -484,5 +484,8 @@ TEST_CASE("vertex move then model update: the solve starts from the moved state"
   MESSAGE("undetermined depth after the update: warm " << depth << ", cold " << cold_depth << " (dragged "
                                                        << dragged_depth << ", before the drag " << true_depth << ")");
   CHECK(cold_summary.ok);
-  CHECK_FALSE(cold_summary.solve.linear_initialization_used);
+  CHECK(cold_summary.solve.linear_initialization_used);
+  CHECK(cold_depth == moved.FindPrimitive(scene.box_id)->shape.params[1]);
+  REQUIRE(cold_summary.solve.held_parameters.size() == 1);
+  CHECK(cold_summary.solve.held_parameters[0].find("depth") != std::string::npos);
 }
