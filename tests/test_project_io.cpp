@@ -175,6 +175,7 @@ Project MakeFullProject() {
     im.horizon_px = {0.5, 480.25 + i, 3999.0, 470.125};
     im.estimate_distortion = i == 1;
     im.distortion_locked = i != 1;
+    im.axis_quarter_turns = i - 1;  // unchosen, 0, 1
     p.images.push_back(im);
   }
   for (int i = 0; i < 3; ++i) {
@@ -376,6 +377,7 @@ TEST_CASE("each single field is written and read back") {
       {"image.horizon_px", [](Project& p) { p.images[0].horizon_px.w() = 1.0; }},
       {"image.estimate_distortion", [](Project& p) { p.images[0].estimate_distortion = true; }},
       {"image.distortion_locked", [](Project& p) { p.images[0].distortion_locked = false; }},
+      {"image.axis_quarter_turns", [](Project& p) { p.images[0].axis_quarter_turns = 3; }},
       {"segment.id", [](Project& p) { p.segments[1].id = p.NewId(); }},
       {"segment.image_id", [](Project& p) { p.segments[0].image_id = p.images[2].id; }},
       {"segment.axis", [](Project& p) { p.segments[0].axis = Axis::kY; }},
@@ -682,7 +684,7 @@ TEST_CASE("a version-2 file written before distortion and the focal modes loads 
   Json old = SmallJson();
   for (Json& image : old["images"]) {
     for (const char* key : {"focal_mode", "fixed_focal_px", "focal_prior_px", "focal_prior_std_px", "use_horizon",
-                            "horizon_px", "estimate_distortion", "distortion_locked"})
+                            "horizon_px", "estimate_distortion", "distortion_locked", "axis_quarter_turns"})
       image.erase(key);
     image["camera"].erase("k1");
     image["camera"].erase("k2");
@@ -702,7 +704,14 @@ TEST_CASE("a version-2 file written before distortion and the focal modes loads 
     CHECK(im.horizon_px == defaults.horizon_px);
     CHECK(im.estimate_distortion == defaults.estimate_distortion);
     CHECK(im.distortion_locked == defaults.distortion_locked);
+    CHECK(im.axis_quarter_turns == facet::Image::kAxisTurnsUnchosen);
   }
+}
+
+TEST_CASE("a world-frame turn outside -1..3 is an error naming the field") {
+  Json bad = SmallJson();
+  bad["images"][0]["axis_quarter_turns"] = 4;
+  CheckErrorNames(bad.dump(), "images[0].axis_quarter_turns: expected an integer from -1 to 3");
 }
 
 TEST_CASE("a fixed focal or a focal prior without a positive value is an error naming the field") {
@@ -738,7 +747,7 @@ TEST_CASE("every missing field and every wrong type is an error naming its path"
     // files written before them load with the defaults (tested below).
     static const std::regex optional_field(
         R"(images\[\d+\]\.(camera\.k1|camera\.k2|focal_mode|fixed_focal_px|focal_prior_px|focal_prior_std_px|)"
-        R"(use_horizon|horizon_px|estimate_distortion|distortion_locked))");
+        R"(use_horizon|horizon_px|estimate_distortion|distortion_locked|axis_quarter_turns))");
     if (in_object && !std::regex_match(name_in_tree, optional_field)) {
       Json removed = good;
       removed.at(ptr.parent_pointer()).erase(ptr.back());

@@ -250,7 +250,7 @@ TEST_CASE("vertex move: a split vertex changes the primitive; a free vertex only
   REQUIRE(h != kNoElement);
   const double t = (h % 2 == 0) ? 0.25 : 0.75;
   const ESplitResult split = ESplit(&mesh, PolyMesh::EdgeOf(h), t);
-  REQUIRE(split.IsUsable());
+  REQUIRE(split.ok);
   RefreshAllPrimitives(&s.project);
   const VertexId v = split.vertex;
 
@@ -465,7 +465,7 @@ TEST_CASE("vertex move then model update: the solve starts from the moved state"
   Project updated;
   const ModelUpdateSummary summary = UpdateModel(moved, warm, &updated);
   INFO("solve: " << summary.solve.message << ", joint: " << summary.joint.message);
-  REQUIRE(summary.IsUsable());
+  REQUIRE(summary.ok);
   CHECK(summary.solve.initial_cost > 1.0);  // the start is not the answer
   CHECK(summary.solve.reprojection_rms_px < 1e-6);
   const double depth = updated.FindPrimitive(scene.box_id)->shape.params[1];
@@ -474,8 +474,8 @@ TEST_CASE("vertex move then model update: the solve starts from the moved state"
   const double width = updated.FindPrimitive(scene.box_id)->shape.params[0];
   CHECK(std::abs(width - scene.true_box.shape.params[0]) < 1e-6);
 
-  // A cold start would keep it too: the linear initialisation refuses a system in which a free
-  // size appears in no pin and starts from the current values.
+  // A cold start keeps it too: a free size that appears in no pin is held at its value (not
+  // a parameter), so the linear initialisation runs on the rest.
   ModelUpdateOptions cold = warm;
   cold.solve.warm_start = false;
   Project cold_updated;
@@ -483,6 +483,9 @@ TEST_CASE("vertex move then model update: the solve starts from the moved state"
   const double cold_depth = cold_updated.FindPrimitive(scene.box_id)->shape.params[1];
   MESSAGE("undetermined depth after the update: warm " << depth << ", cold " << cold_depth << " (dragged "
                                                        << dragged_depth << ", before the drag " << true_depth << ")");
-  CHECK(cold_summary.IsUsable());
-  CHECK_FALSE(cold_summary.solve.linear_initialization_used);
+  CHECK(cold_summary.ok);
+  CHECK(cold_summary.solve.linear_initialization_used);
+  CHECK(cold_depth == moved.FindPrimitive(scene.box_id)->shape.params[1]);
+  REQUIRE(cold_summary.solve.held_parameters.size() == 1);
+  CHECK(cold_summary.solve.held_parameters[0].find("depth") != std::string::npos);
 }

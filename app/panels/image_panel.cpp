@@ -570,20 +570,15 @@ void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& 
         ToggleSelected(&state->selection, drag.toggle_on_click);
       }
     } else if (drag.began && drag.kind == DragKind::kMoveLinePinEnd) {
-      // The release is the edit `line-pin-move` makes: the new end on the project as it was
-      // before the drag, with the full solve from there. The joint solve warm-started from the
-      // drag's previews can stop short of the hard constraint (it refuses a step that raises
-      // the cost and keeps the preview), so the mouse and the script give the same model.
+      // Released where it was pressed: nothing to record. Otherwise the release is like any
+      // other drag's (the commit update from the last preview reaches the cold commit's model:
+      // tests/test_drag_release.cpp).
       const Constraint* c = state->document.project().FindConstraint(drag.target_id);
       const Constraint* old = state->drag_start ? state->drag_start->FindConstraint(drag.target_id) : nullptr;
-      const std::optional<Eigen::Vector2d> end =
-          c ? std::optional<Eigen::Vector2d>(drag.endpoint == 0 ? c->line_a_px : c->line_b_px) : std::nullopt;
-      const bool moved = end && old && *end != (drag.endpoint == 0 ? old->line_a_px : old->line_b_px);
+      const bool moved = c && old &&
+                         (drag.endpoint == 0 ? c->line_a_px != old->line_a_px : c->line_b_px != old->line_b_px);
       if (moved) {
-        // CancelDrag without its diagnostics refresh (a full solve): the edit solves anyway.
-        state->document.CancelPreview(*state->drag_start);
-        state->drag_start.reset();
-        MoveLinePinEndEdit(state, drag.target_id, drag.endpoint, *end);
+        EndDrag(state);
       } else {
         CancelDrag(state);
       }

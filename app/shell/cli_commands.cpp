@@ -148,6 +148,7 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
   for (double r : s.pin_residuals_px) pins.push_back(NumberOrNull(r));
   out["pin_residuals_px"] = pins;
   out["warnings"] = s.warnings;
+  out["held_parameters"] = s.held_parameters;
   nlohmann::json calibration = nlohmann::json::array();
   for (const auto& [image_id, vp] : update.calibration) {
     calibration.push_back({{"image_id", image_id},

@@ -26,7 +26,8 @@ bool Contains(const std::vector<std::string>& list, const std::string& text) {
 
 // Logs what changed since the previous update: a message that update already logged is still
 // shown by the properties panel and is not appended again. Failures are warnings; progress
-// (an unfinished drawing, e.g. a family with one line so far) is information.
+// (an unfinished drawing, e.g. a family with one line so far) and notes (what the update
+// decided, e.g. a photo's world axes turned) are information.
 void LogUpdate(AppState* state, const ModelUpdateSummary& previous, const ModelUpdateSummary& summary) {
   for (const std::string& m : summary.messages) {
     if (!Contains(previous.messages, m)) state->Log(LogLevel::kWarning, m);
@@ -34,6 +35,7 @@ void LogUpdate(AppState* state, const ModelUpdateSummary& previous, const ModelU
   for (const std::string& m : summary.progress) {
     if (!Contains(previous.progress, m)) state->Log(LogLevel::kInfo, m);
   }
+  for (const std::string& n : summary.notes) state->Log(LogLevel::kInfo, n);
 }
 
 }  // namespace

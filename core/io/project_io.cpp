@@ -214,6 +214,7 @@ OrderedJson WriteProject(const Project& p, Writer* w) {
     j["horizon_px"] = w->Numbers(Join(at, "horizon_px"), im.horizon_px);
     j["estimate_distortion"] = im.estimate_distortion;
     j["distortion_locked"] = im.distortion_locked;
+    j["axis_quarter_turns"] = im.axis_quarter_turns;
     images.push_back(std::move(j));
   }
   root["images"] = std::move(images);
@@ -429,7 +430,7 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
                  {"id", "path", "width_px", "height_px", "camera", "camera_calibrated", "principal_point_mode",
                   "fixed_principal_point_px", "pose_locked", "focal_locked", "principal_point_locked", "focal_mode",
                   "fixed_focal_px", "focal_prior_px", "focal_prior_std_px", "use_horizon", "horizon_px",
-                  "estimate_distortion", "distortion_locked"}))
+                  "estimate_distortion", "distortion_locked", "axis_quarter_turns"}))
     return false;
   constexpr int kMaxSize = std::numeric_limits<int>::max();
   if (!r->IdField(j, at, "id", &im->id) || !r->String(j, at, "path", &im->path) ||
@@ -495,6 +496,11 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
       (j.contains("horizon_px") && !r->Vector<4>(j, at, "horizon_px", &im->horizon_px)) ||
       !optional_bool("estimate_distortion", &im->estimate_distortion) ||
       !optional_bool("distortion_locked", &im->distortion_locked))
+    return false;
+  // Absent in files written before the world frames were reconciled: unchosen, so the next
+  // update chooses it from the pins (the model's frame, when the file was solved).
+  if (j.contains("axis_quarter_turns") &&
+      !r->Int(j, at, "axis_quarter_turns", Image::kAxisTurnsUnchosen, 3, &im->axis_quarter_turns))
     return false;
   if (im->focal_mode == FocalMode::kFixed && !(im->fixed_focal_px > 0))
     return r->Fail(Join(at, "fixed_focal_px"), "must be positive when focal_mode is \"fixed\"");

@@ -126,7 +126,7 @@ bool operator==(const Image& a, const Image& b) {
          a.fixed_focal_px == b.fixed_focal_px && a.focal_prior_px == b.focal_prior_px &&
          a.focal_prior_std_px == b.focal_prior_std_px && a.use_horizon == b.use_horizon &&
          a.horizon_px == b.horizon_px && a.estimate_distortion == b.estimate_distortion &&
-         a.distortion_locked == b.distortion_locked;
+         a.distortion_locked == b.distortion_locked && a.axis_quarter_turns == b.axis_quarter_turns;
 }
 bool operator==(const PrimitiveShape& a, const PrimitiveShape& b) {
   return a.id == b.id && a.kind == b.kind && a.params == b.params && a.segments == b.segments &&

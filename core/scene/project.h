@@ -49,6 +49,14 @@ struct Image {
   bool focal_locked = true;
   bool principal_point_locked = true;
   bool distortion_locked = true;  // the joint solve keeps camera.k1, k2
+  // How the world axes of this image's line families sit in the model's world frame: the
+  // camera's rotation is the vanishing-point rotation times a turn about the vertical by
+  // axis_quarter_turns x 90 deg (core/solve/model_update.h). Lines alone leave that turn open
+  // (which side of the building the photo shows; which horizontal family is x), so it is
+  // chosen once, from pins shared with the model, and kept so that re-solves and undo agree.
+  // kAxisTurnsUnchosen until then (and in files written before it existed).
+  static constexpr int kAxisTurnsUnchosen = -1;
+  int axis_quarter_turns = kAxisTurnsUnchosen;
 };
 
 // K_create: a primitive with its own mesh. The shape (kind, parameters, pose) is the

@@ -612,18 +612,59 @@ RoundsOutcome RunOuterRounds(const JointSolveOptions& options, JointProblem* pro
   return outcome;
 }
 
+// The constraints' values at the start (raw, per constraint block in block order), so that
+// the result can be compared with the start on the same exact-penalty merit.
+std::vector<Eigen::VectorXd> ConstraintValues(const JointProblem& problem) {
+  std::vector<Eigen::VectorXd> values;
+  for (const ResidualBlock& b : problem.blocks)
+    if (b.kind == BlockKind::kConstraint) values.push_back(b.raw);
+  return values;
+}
+
+// Where the solve started, on the merit the result is judged by.
+struct StartPoint {
+  double observation_cost = 0.0;
+  std::vector<Eigen::VectorXd> constraint_values;  // ConstraintValues at the start
+};
+
+// The exact (L1) penalty merit obs + sum_i w_i |c_i| at the result and at the start, with
+// w_i = 2 |lambda_i|, lambda_i = multiplier + mu c the final multiplier estimate (first order).
+// With weights above the multipliers a constrained minimum is a local minimum of this merit
+// (Han 1977), so a result that solved the problem is never above the start on it, while the
+// observation cost alone can rise: a start that breaks a constraint (a drag preview, a
+// geometry solve that ignores the constraints) buys pixels with the violation. Without
+// constraints it is the observation cost.
+void ExactPenaltyMerits(const JointProblem& problem, const StartPoint& start, double final_cost, double* at_start,
+                        double* at_result) {
+  const double mu = problem.constraint_weight * problem.constraint_weight;
+  *at_start = start.observation_cost;
+  *at_result = final_cost;
+  size_t k = 0;
+  for (const ResidualBlock& b : problem.blocks) {
+    if (b.kind != BlockKind::kConstraint) continue;
+    const Eigen::VectorXd weight = 2.0 * (problem.constraints[b.source].multiplier + mu * b.raw).cwiseAbs();
+    if (k < start.constraint_values.size() && start.constraint_values[k].size() == weight.size())
+      *at_start += weight.dot(start.constraint_values[k].cwiseAbs());
+    *at_result += weight.dot(b.raw.cwiseAbs());
+    ++k;
+  }
+}
+
 // Why the solve's result must not be used, or "" when it may: non-finite values, a pinned
-// vertex behind its camera (`evaluated` false), or an observation cost above the merit the
-// solve started from.
-std::string WhyResultUnusable(const JointState& state, bool evaluated, double final_cost, double initial_merit) {
+// vertex behind its camera (`evaluated` false), or a result above the start on the exact
+// penalty merit (ExactPenaltyMerits).
+std::string WhyResultUnusable(const JointProblem& problem, const JointState& state, bool evaluated,
+                              double final_cost, const StartPoint& start) {
   if (!StateIsFinite(state) || !std::isfinite(final_cost)) {
     return "the solve diverged (non-finite values); the model is unchanged";
   }
   if (!evaluated) return "after the solve a pinned vertex lies behind its camera; the model is unchanged";
-  if (final_cost > initial_merit * (1.0 + 1e-9) + 1e-18) {
+  double merit_start = 0.0, merit_result = 0.0;
+  ExactPenaltyMerits(problem, start, final_cost, &merit_start, &merit_result);
+  if (!(merit_result <= merit_start * (1.0 + 1e-9) + 1e-18)) {
     std::ostringstream text;
-    text << "the solve increased the cost from " << initial_merit << " to " << final_cost
-         << " px^2; the model is unchanged";
+    text << "the solve increased the cost from " << merit_start << " to " << merit_result
+         << " px^2 (pins and lines, with the constraints' violation at their multipliers); the model is unchanged";
     return text.str();
   }
   return "";
@@ -892,7 +933,7 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
                   "at the start a pinned vertex lies on or behind its camera; the model is unchanged");
   }
   summary.initial_cost = ObservationCost(problem);
-  const double initial_merit = TotalCost(problem);
+  const StartPoint start_point{summary.initial_cost, ConstraintValues(problem)};
 
   // The Schur complement on primitive groups, unless a constraint makes a group too large.
   SchurEquations schur;
@@ -928,7 +969,7 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
 
   const bool evaluated = EvaluateBlocks(&problem, state, true);
   summary.final_cost = ObservationCost(problem);
-  const std::string unusable = WhyResultUnusable(state, evaluated, summary.final_cost, initial_merit);
+  const std::string unusable = WhyResultUnusable(problem, state, evaluated, summary.final_cost, start_point);
   if (!unusable.empty()) {
     *solved = project;
     return finish(SolverTermination::kFailed, unusable);

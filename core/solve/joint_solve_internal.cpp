@@ -10,6 +10,7 @@
 #include "core/geometry/camera.h"
 #include "core/geometry/cross_product_matrix.h"
 #include "core/mesh/primitives.h"
+#include "core/solve/world_frames.h"
 
 namespace facet::joint_solve_internal {
 
@@ -871,7 +872,8 @@ void AddSegmentBlocks(const Project& project, const ProjectIndex& index, const s
     block.source = i;
     block.camera = camera_of_image[index.FindImage(seg.image_id)];
     block.num_rows = 2;
-    block.axis = static_cast<int>(seg.axis);
+    // The family's world axis: x and y swap on an image turned by an odd quarter turn.
+    block.axis = WorldAxisOfFamily(static_cast<int>(seg.axis), project.images[index.FindImage(seg.image_id)].axis_quarter_turns);
     const Eigen::Vector2d mid = 0.5 * (seg.a_px + seg.b_px);
     block.segment_g = Eigen::Vector3d(seg.a_px.x(), seg.a_px.y(), 1.0).cross(Eigen::Vector3d(mid.x(), mid.y(), 1.0));
     block.segment_m << 0.0, -1.0, mid.y(), 1.0, 0.0, -mid.x();

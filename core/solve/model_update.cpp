@@ -119,6 +119,7 @@ VpCalibrationSummary CalibrateImage(const Image& image, const std::vector<Segmen
 Image CalibrationKey(const Image& image) {
   Image key = image;
   key.camera = Camera();
+  key.axis_quarter_turns = Image::kAxisTurnsUnchosen;  // applied after the calibration
   return key;
 }
 
@@ -155,12 +156,17 @@ void GeometrySolve(const Project& project, const SceneSolveOptions& options, Sce
   if (cold_summary.IsUsable() && (!summary->IsUsable() || cold_summary.final_cost < summary->final_cost)) {
     *summary = std::move(cold_summary);
     *solved = std::move(cold_solved);
+  } else if (!summary->IsUsable() && !cold_summary.IsUsable()) {
+    // Both failed: the cold one's reason names why the pins give no start, which the user can act on.
+    *summary = std::move(cold_summary);
   }
 }
 
 // Calibrates each image with line segments from its vanishing points (and its distortion from
 // plumb lines when asked), reusing the cached results of images whose input did not change.
-void CalibrateFromLines(Project* calibrated, ModelUpdateCache* cache, ModelUpdateSummary* summary) {
+// *unchosen receives the images calibrated here whose world-frame turn is not chosen yet.
+void CalibrateFromLines(Project* calibrated, ModelUpdateCache* cache, ModelUpdateSummary* summary,
+                        std::vector<Id>* unchosen) {
   const auto calibration_start = std::chrono::steady_clock::now();
   std::map<Id, ImageCalibrationCacheEntry> next_cache;
   for (Image& image : calibrated->images) {
@@ -229,7 +235,10 @@ void CalibrateFromLines(Project* calibrated, ModelUpdateCache* cache, ModelUpdat
       image.camera.principal_point_px = vp.principal_point_px;
       image.camera.k1 = entry.k1;
       image.camera.k2 = entry.k2;
-      image.camera.SetPose(vp.cam_from_world_rotation, center);
+      // The recorded turn about the vertical puts the lines' axes in the model's world frame
+      // (core/solve/world_frames.h); an image without one is chosen after this loop.
+      if (image.axis_quarter_turns == Image::kAxisTurnsUnchosen) unchosen->push_back(image.id);
+      image.camera.SetPose(vp.cam_from_world_rotation * AxisTurn(std::max(image.axis_quarter_turns, 0)), center);
       image.camera_calibrated = true;
     } else {
       (vp.incomplete ? summary->progress : summary->messages).push_back("Image '" + image.path + "': " + vp.message);
@@ -311,7 +320,15 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
   ModelUpdateSummary summary;
   Project calibrated = edited;
 
-  if (options.calibrate) CalibrateFromLines(&calibrated, cache, &summary);
+  if (options.calibrate) {
+    std::vector<Id> unchosen;
+    CalibrateFromLines(&calibrated, cache, &summary, &unchosen);
+    if (!unchosen.empty()) {
+      summary.world_frames = ReconcileWorldFrames(unchosen, &calibrated);
+      for (const WorldFrameChoice& choice : summary.world_frames)
+        if (!choice.note.empty()) summary.notes.push_back(choice.note);
+    }
+  }
 
   // The per-frame path: the joint solve alone, warm; the geometry solve below only when that
   // does not hold up.
@@ -346,6 +363,9 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
 
   if (options.initialize_from_pins && summary.ok)
     InitializeFromPinsAndResolve(options.multiview, solve_options, updated, &summary);
+  // A dimension held because no pin sees it is the likely surprise in the result (a box as
+  // deep as it was made): the user reads why and what would fix it.
+  for (const std::string& held : summary.solve.held_parameters) summary.messages.push_back("Solve: " + held);
 
   if (options.joint_solve && summary.ok) {
     JointSolveOptions joint_options = options.joint;

@@ -1,5 +1,7 @@
 // What runs after every edit (the paper: "after each operation the system re-solves cameras
-// and geometry"): each image with line families is calibrated from its vanishing points (after
+// and geometry"): each image with line families is calibrated from its vanishing points (its
+// rotation turned about the vertical into the model's world frame, core/solve/world_frames.h;
+// after
 // a plumb-line estimate of its radial distortion when Image::estimate_distortion is set; the
 // segments are undistorted with the camera's k1, k2 whenever those are non-zero), the
 // geometry solve (linear start + LM over camera centres and primitive parameters) fits the
@@ -18,6 +20,7 @@
 #include "core/solve/joint_solve.h"
 #include "core/solve/multiview_init.h"
 #include "core/solve/scene_solve.h"
+#include "core/solve/world_frames.h"
 
 namespace facet {
 
@@ -93,6 +96,11 @@ struct ModelUpdateSummary {
   // User-facing: what an unfinished drawing still needs (an image whose line families are not
   // complete yet, VpCalibrationSummary::incomplete). Progress, not failures.
   std::vector<std::string> progress;
+  // Images whose world-frame turn this update chose (core/solve/world_frames.h), in order.
+  std::vector<WorldFrameChoice> world_frames;
+  // User-facing, informational: what the update decided for the user (e.g. a photo's world
+  // axes turned to agree with the model), for the log.
+  std::vector<std::string> notes;
   // The calibration step per image with segments: run, or taken from the cache (the plumb-line
   // estimate counts apart: it is reused whenever the image and its segments are unchanged,
   // even when the vanishing-point calibration runs again for a camera whose k changed).

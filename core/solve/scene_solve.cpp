@@ -266,6 +266,7 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
   SceneState state;
   const SceneProblem problem = scene_solve_internal::BuildSceneProblem(project, &state);
   summary.warnings = problem.warnings;
+  summary.held_parameters = problem.held_parameters;
   summary.num_skipped_pins = problem.num_skipped_pins;
   summary.num_residuals = 2 * static_cast<int>(problem.observations.size());
   summary.num_parameters = problem.num_parameters;
@@ -294,10 +295,16 @@ SceneSolveSummary SolveScene(const Project& project, const SceneSolveOptions& op
     }
   }
   if (!std::isfinite(summary.initial_cost) && !std::isfinite(record_residuals(state))) {
-    return finish(
-        SolverTermination::kFailed,
-        std::string("the reprojection is not finite at the start: a pinned vertex lies in the plane of its camera") +
-            (why.empty() ? "" : ", and the linear initialisation found no start (" + why + ")"));
+    // Said as the cause a user can act on: with a linear start this could not happen, so the
+    // pins are too few to give one (a new photo's camera still sits on the model's corner).
+    if (!why.empty()) {
+      return finish(SolverTermination::kFailed,
+                    "no start yet: the pins do not fix the cameras and the model (" + why +
+                        "), and the current camera sits in the plane of a pinned vertex; pin more vertices "
+                        "(the four corners of one face place a new box)");
+    }
+    return finish(SolverTermination::kFailed,
+                  "the reprojection is not finite at the start: a pinned vertex lies in the plane of its camera");
   }
 
   // This LM and the rank analysis below are dense (n^2 work per residual): above

@@ -47,6 +47,10 @@ struct SceneSolveSummary : SolverSummary {
   int num_parameters = 0;
   int num_skipped_pins = 0;                 // pins in uncalibrated images or naming missing objects
   bool linear_initialization_used = false;  // false for a warm start or when it fell back
+  // Unlocked dimensions that no pin sees (a box's depth with only its front face pinned):
+  // held at their current values rather than left without a start, one sentence each
+  // naming the dimension, the value kept and the fix.
+  std::vector<std::string> held_parameters;
   // Per pin, in project.pins order: reprojection error in px after the solve (NaN for pins
   // that did not take part).
   std::vector<double> pin_residuals_px;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 
 #include <Eigen/Dense>
@@ -49,6 +50,20 @@ std::string JoinComponents(const std::vector<int>& components) {
     out += kNames[components[i]];
   }
   return out;
+}
+
+// What the user reads when a dimension is held because no pin sees it, with the fix.
+std::string HeldParameterNote(const Primitive& primitive, int k) {
+  const PrimitiveKind kind = primitive.shape.kind;
+  const bool boxy = kind != PrimitiveKind::kPrism && kind != PrimitiveKind::kCylinder && k < 3;
+  static const char* kBoxFaceNames[3] = {"+x side", "back", "top"};
+  char value[64];
+  std::snprintf(value, sizeof(value), "%.4g", primitive.shape.params[k]);
+  return "the " + ParamName(kind, k) + " of " + PrimitiveLabel(primitive) + " is seen by no pin, so it keeps " +
+         value + " until one does: pin a vertex on its " +
+         (boxy ? std::string(kBoxFaceNames[k]) + " face" : std::string("far side")) +
+         " (in a second photo if this one does not show it), or lock the " + ParamName(kind, k) +
+         " at its known length";
 }
 
 }  // namespace
@@ -99,6 +114,15 @@ SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
                                ImageLabel(project.images[ii]) + " skipped: the image is not calibrated");
   }
 
+  // Per primitive, the shape parameters some used pin's vertex depends on.
+  std::vector<std::array<bool, kMaxPrimitiveParams>> seen_params(num_primitives, {false, false, false, false});
+  for (size_t p = 0; p < project.pins.size(); ++p) {
+    const int bi = pin_targets[p].second;
+    if (bi < 0) continue;
+    const ParamCoefficients c = project.primitives[bi].mesh.vertex(project.pins[p].vertex.vertex).local.Collapsed();
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) seen_params[bi][k] = seen_params[bi][k] || !c.col(k).isZero();
+  }
+
   // Blocks in project order, so that the parameter numbering does not depend on pin order.
   std::vector<int> camera_of_image(num_images, -1), block_of_primitive(num_primitives, -1);
   int offset = 0;
@@ -138,9 +162,16 @@ SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
       for (VertexId v = 0; v < mesh.VertexIdEnd() && !used; ++v) {
         used = mesh.IsVertex(v) && !mesh.vertex(v).local.Collapsed().col(k).isZero();
       }
-      if (used && !primitive.param_locked[k]) {
-        block.param_offset[k] = add_parameters(ParameterKind::kPrimitiveParam, b, 1, k);
+      if (!used || primitive.param_locked[k]) continue;
+      // A dimension no pinned vertex depends on (a box's depth when only its front face is
+      // pinned) has nothing to fit: as a parameter it would leave the linear start rank
+      // deficient and the problem without a start. It keeps its current value until a pin
+      // sees it, and the summary says so with the fix.
+      if (!seen_params[i][k]) {
+        problem.held_parameters.push_back(HeldParameterNote(primitive, k));
+        continue;
       }
+      block.param_offset[k] = add_parameters(ParameterKind::kPrimitiveParam, b, 1, k);
     }
     if (!primitive.rotation_locked) block.rotation_offset = add_parameters(ParameterKind::kPrimitiveRotation, b, 3, 0);
     if (!primitive.translation_locked) {

@@ -71,6 +71,9 @@ struct SceneProblem {
   int num_parameters = 0;
   int num_skipped_pins = 0;
   std::vector<std::string> warnings;  // about skipped pins
+  // Unlocked shape parameters that no used pin's vertex depends on: held at their current
+  // values (not parameters), one sentence each naming the cause and the fix.
+  std::vector<std::string> held_parameters;
 };
 
 // Collects the usable pins of `project` and numbers the free parameters; fills *state with
