@@ -653,7 +653,7 @@ void DrawTabs(AppState* state, PanelState* panel) {
   panel->shown_tab = shown;
 }
 
-void DrawToolbar(PanelState* panel, ImageViewState* view, bool* fit_now, bool* one_to_one) {
+void DrawToolbar(AppState* state, PanelState* panel, ImageViewState* view, bool* fit_now, bool* one_to_one) {
   ImGui::AlignTextToFramePadding();
   ImGui::Text("%6.1f%%", view->zoom * 100.0f);
   ImGui::SameLine();
@@ -669,6 +669,11 @@ void DrawToolbar(PanelState* panel, ImageViewState* view, bool* fit_now, bool* o
   ImGui::Checkbox("VPs", &panel->overlay.show_vanishing_points);
   ImGui::SameLine();
   ImGui::Checkbox("VP lines", &panel->overlay.show_vp_lines);
+  ImGui::SameLine();
+  ImGui::Checkbox("Snap", &state->snapping);
+  if (ImGui::IsItemHovered()) {
+    ImGui::SetTooltip("Points placed in the photo snap to corners, segments and the model nearby (hold Alt to place freely)");
+  }
   ImGui::SameLine();
   ImGui::TextDisabled("| loupe %gx (Shift)", panel->loupe_magnification);
 }
@@ -725,10 +730,10 @@ struct ViewFrame {
 
 // Step 1: the toolbar, the view's rectangle (an invisible button taking the mouse and the
 // wheel) and whether keys are ours. Sets *fit_now / *one_to_one from the toolbar.
-ViewFrame LayOutView(PanelState* panel, ImageViewState* view, bool* fit_now, bool* one_to_one) {
+ViewFrame LayOutView(AppState* state, PanelState* panel, ImageViewState* view, bool* fit_now, bool* one_to_one) {
   ImGuiIO& io = ImGui::GetIO();
   ViewFrame frame;
-  DrawToolbar(panel, view, fit_now, one_to_one);
+  DrawToolbar(state, panel, view, fit_now, one_to_one);
   const float status_h = ImGui::GetTextLineHeightWithSpacing();
   const ImVec2 avail = ImGui::GetContentRegionAvail();
   frame.rect_size = ImVec2(std::max(avail.x, 32.0f), std::max(avail.y - status_h, 32.0f));
@@ -858,7 +863,8 @@ void ApplySnapping(const AppState& state, PanelState* panel, const Image& image,
                    const std::vector<ProjectedPrimitive>& model, ViewFrame* frame) {
   panel->snap = SnapResult();
   const SnapRequest request = SnapRequestFor(state, *panel);
-  if (!request.active || ImGui::GetIO().KeyAlt || !(frame->hovered || panel->interaction.kind != DragKind::kNone)) {
+  if (!state.snapping || !request.active || ImGui::GetIO().KeyAlt ||
+      !(frame->hovered || panel->interaction.kind != DragKind::kNone)) {
     return;
   }
   const SnapFeatures features =
@@ -1082,7 +1088,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ImageViewState& view = panel->views[image.id];
   bool fit_now = false, one_to_one = false;
   DrawLineProposalsBar(state, image.id);
-  ViewFrame frame = LayOutView(panel, &view, &fit_now, &one_to_one);
+  ViewFrame frame = LayOutView(state, panel, &view, &fit_now, &one_to_one);
   frame.texture = TextureFor(panel, *state, image.id);
   frame.width_px = frame.texture ? frame.texture->width : std::max(1, image.width_px);
   frame.height_px = frame.texture ? frame.texture->height : std::max(1, image.height_px);

@@ -316,6 +316,7 @@ int RunOffscreen(const RenderOptions& options) {
   AppState state;
   ShellState shell;
   shell.offscreen = true;  // the default layout, never the user's
+  state.snapping = options.snapping;
   if (!options.config_dir.empty()) UseRecentFilesIn(&state, &shell, options.config_dir);
   if (!options.project_path.empty() && !OpenProject(&state, options.project_path)) {
     return Fail("cannot open project " + options.project_path);

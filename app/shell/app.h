@@ -26,6 +26,7 @@ struct RenderOptions {
   std::string report_path;  // optional JSON report of the final frame (panel rectangles,
                             // image view transform, undo stack, project)
   std::string config_dir;   // where recent files are read and kept; empty: in memory only
+  bool snapping = true;     // the image panel's Snap option (AppState::snapping)
 };
 
 // Renders the default layout (never the user's saved layout) offscreen at a fixed 60 Hz

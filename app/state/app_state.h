@@ -195,6 +195,9 @@ struct AppState {
   // the Add photo option that detects them on every added photo.
   std::optional<LineProposals> line_proposals;
   bool detect_lines_on_add = false;
+  // The image panel's Snap option (app/panels/image_snapping.h): points placed in a photo snap
+  // to corners, segments and the model nearby; Alt turns it off for one placement.
+  bool snapping = true;
 
   std::vector<LogEntry> log;
   double time_s = 0.0;

@@ -56,9 +56,18 @@ struct RunResult {
   std::string stderr_text;
 };
 
+// Snapping (app/panels/image_snapping.h) moves a point placed in a photo onto a corner or
+// edge nearby. A suite that checks that points land exactly where its mouse went sets this
+// once (`render --no-snap`, the Snap option off); tests/app/test_snapping.cpp covers snapping.
+inline bool& RenderWithoutSnapping() {
+  static bool without = false;
+  return without;
+}
+
 // Runs `facet render` without a display and with a private config folder. A render that
 // hangs is killed (exit code 124) rather than hanging the suite.
-inline RunResult RunRender(const TempDir& dir, const std::string& args) {
+inline RunResult RunRender(const TempDir& dir, const std::string& args_in) {
+  const std::string args = (RenderWithoutSnapping() ? "--no-snap " : "") + args_in;
   constexpr int kRenderTimeoutS = 300;
   const std::string err = dir / "stderr.txt";
   const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY XDG_CONFIG_HOME='" + (dir / "config") + "' timeout " +

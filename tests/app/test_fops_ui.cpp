@@ -26,6 +26,11 @@
 
 using namespace facet::testing;
 
+
+// These cases check that points land exactly where the mouse went: the Snap option off
+// (render --no-snap); tests/app/test_snapping.cpp covers snapping.
+const bool kRenderWithoutSnapping = (RenderWithoutSnapping() = true);
+
 namespace {
 
 // The joint solve polishes hard constraints on commit: what a noise-free constraint must

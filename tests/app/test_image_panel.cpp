@@ -86,11 +86,13 @@ struct RunResult {
   int exit_code = -1;
   std::string stderr_text;
 };
+// These cases place points exactly where the mouse goes: the Snap option off (render --no-snap);
+// tests/app/test_snapping.cpp covers snapping.
 
 RunResult RunRender(const TempDir& dir, const std::string& args, const std::string& env = "") {
   const std::string err = dir / "stderr.txt";
   const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY XDG_CONFIG_HOME='" + (dir / "config") + "' " + env + " '" +
-                          std::string(FACET_APP_EXE) + "' render " + args + " 2> '" + err + "'";
+                          std::string(FACET_APP_EXE) + "' render --no-snap " + args + " 2> '" + err + "'";
   const int status = std::system(cmd.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

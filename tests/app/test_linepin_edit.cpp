@@ -20,6 +20,11 @@
 
 using namespace facet::testing;
 
+
+// These cases check that points land exactly where the mouse went: the Snap option off
+// (render --no-snap); tests/app/test_snapping.cpp covers snapping.
+const bool kRenderWithoutSnapping = (RenderWithoutSnapping() = true);
+
 namespace {
 
 constexpr double kShiftPx = 3.0;              // the line pin's line, off the true edge (image px)

@@ -20,6 +20,11 @@
 
 using namespace facet::testing;
 
+
+// These cases check that points land exactly where the mouse went: the Snap option off
+// (render --no-snap); tests/app/test_snapping.cpp covers snapping.
+const bool kRenderWithoutSnapping = (RenderWithoutSnapping() = true);
+
 namespace {
 
 const std::string kSampleDir = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven";

@@ -26,6 +26,11 @@
 
 using namespace facet::testing;
 
+
+// These cases check that points land exactly where the mouse went: the Snap option off
+// (render --no-snap); tests/app/test_snapping.cpp covers snapping.
+const bool kRenderWithoutSnapping = (RenderWithoutSnapping() = true);
+
 namespace {
 
 // The pavilion: a box of this size at the origin (its height is 1, the length a new box's

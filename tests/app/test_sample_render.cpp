@@ -14,6 +14,11 @@
 
 using namespace facet::testing;  // app_test_util.h
 
+
+// These cases check that points land exactly where the mouse went: the Snap option off
+// (render --no-snap); tests/app/test_snapping.cpp covers snapping.
+const bool kRenderWithoutSnapping = (RenderWithoutSnapping() = true);
+
 namespace {
 
 const std::string kSample = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuven.facet";
