@@ -83,6 +83,33 @@ inline RunResult RunRender(const TempDir& dir, const std::string& args_in) {
   return r;
 }
 
+struct CliResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+inline std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A command-line run of facet (not `render`): exit code, stdout, stderr.
+// Runs facet with `args` (already shell-quoted where needed), without a display.
+inline CliResult RunFacet(const TempDir& dir, const std::string& args) {
+  const std::string out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string command = "env -u DISPLAY -u WAYLAND_DISPLAY '" + std::string(FACET_APP_EXE) + "' " + args +
+                              " > '" + out + "' 2> '" + err + "'";
+  const int status = std::system(command.c_str());
+  CliResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = ReadText(out);
+  r.err = ReadText(err);
+  return r;
+}
+
 inline nlohmann::json ReadJson(const std::string& path) {
   std::ifstream in(path);
   REQUIRE_MESSAGE(in.good(), "missing report " << path);

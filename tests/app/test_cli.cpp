@@ -22,35 +22,12 @@
 
 namespace fs = std::filesystem;
 using facet::testing::MakeBoxScene;
+using facet::testing::CliResult;
+using facet::testing::ReadText;
+using facet::testing::RunFacet;
 using facet::testing::TempDir;
 
 namespace {
-
-struct CliResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// Runs facet with `args` (already shell-quoted where needed), without a display.
-CliResult RunFacet(const TempDir& dir, const std::string& args) {
-  const std::string out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string command = "env -u DISPLAY -u WAYLAND_DISPLAY '" + std::string(FACET_APP_EXE) + "' " + args +
-                              " > '" + out + "' 2> '" + err + "'";
-  const int status = std::system(command.c_str());
-  CliResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = ReadText(out);
-  r.err = ReadText(err);
-  return r;
-}
 
 nlohmann::json LinesJsonFor(const facet::Project& project, const facet::Image& image, const char* principal_point) {
   nlohmann::json families = nlohmann::json::array();

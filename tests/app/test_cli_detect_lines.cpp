@@ -17,32 +17,11 @@
 namespace {
 
 namespace fs = std::filesystem;
+using facet::testing::CliResult;
+using facet::testing::ReadText;
+using facet::testing::RunFacet;
 using facet::testing::TempDir;
 
-struct CliResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-CliResult RunFacet(const TempDir& dir, const std::string& args) {
-  const std::string out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string command = "env -u DISPLAY -u WAYLAND_DISPLAY '" + std::string(FACET_APP_EXE) + "' " + args +
-                              " > '" + out + "' 2> '" + err + "'";
-  const int status = std::system(command.c_str());
-  CliResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = ReadText(out);
-  r.err = ReadText(err);
-  return r;
-}
 
 constexpr int kWidth = 1200, kHeight = 900;
 constexpr double kTrueFocalPx = 1000.0;
