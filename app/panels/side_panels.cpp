@@ -231,6 +231,7 @@ void DrawAddPrimitiveOptions(AppState* state, float width) {
   if (ImGui::BeginCombo("##add_kind", PrimitiveKindName(state->add_kind))) {
     for (PrimitiveKind kind : kPrimitiveKinds) {
       if (ImGui::Selectable(PrimitiveKindName(kind), kind == state->add_kind)) state->add_kind = kind;
+      RecordItem(state, std::string("tool.add_kind/") + PrimitiveKindName(kind));
     }
     ImGui::EndCombo();
   }

@@ -102,6 +102,51 @@ struct ScriptedInput {
   }
 };
 
+// Where a script point is on the screen: image and vertex points through the image panel's
+// view of the frame before, item points at the centre of the widget drawn then (what the user
+// saw when they moved there).
+bool ResolveScriptPoint(const AppState& state, const ShellState& shell, const ScriptStep& step,
+                        std::array<float, 2>* screen, std::string* error) {
+  const std::array<float, 2> xy = *step.mouse_pos;
+  if (step.mouse_space == PointSpace::kScreen) {
+    *screen = xy;
+    return true;
+  }
+  if (step.mouse_space == PointSpace::kItem) {
+    const auto it = state.item_rects.find(step.mouse_item);
+    if (it == state.item_rects.end()) {
+      *error = "no widget named '" + step.mouse_item + "' was drawn in the frame before";
+      return false;
+    }
+    *screen = {it->second.x + 0.5f * it->second.w, it->second.y + 0.5f * it->second.h};
+    return true;
+  }
+  const ImageViewReport view = LastImageViewReport(shell.image_panel);
+  const Image* image = state.document.project().FindImage(view.image_id);
+  if (image == nullptr || view.zoom <= 0.0f) {
+    *error = "an image or vertex point, but the image panel shows no photo";
+    return false;
+  }
+  Eigen::Vector2d uv(xy[0], xy[1]);
+  if (step.mouse_space == PointSpace::kVertex) {
+    const Project& project = state.document.project();
+    const auto [index, vertex] = step.mouse_vertex;
+    if (index >= static_cast<int>(project.primitives.size()) ||
+        !project.primitives[index].mesh.IsVertex(static_cast<VertexId>(vertex))) {
+      *error = "no vertex " + std::to_string(vertex) + " on primitive " + std::to_string(index) + " (of " +
+               std::to_string(project.primitives.size()) + ")";
+      return false;
+    }
+    if (!image->camera_calibrated) {
+      *error = "a vertex point, but the photo shown has no camera yet";
+      return false;
+    }
+    uv = image->camera.Project(VertexInWorld(project, {project.primitives[index].id, static_cast<VertexId>(vertex)}));
+  }
+  *screen = {view.origin_x + view.zoom * static_cast<float>(uv.x()), view.origin_y + view.zoom * static_cast<float>(uv.y())};
+  return true;
+}
+
 // The report's name of the open modal dialog.
 const char* DialogName(Dialog dialog) {
   switch (dialog) {
@@ -121,8 +166,9 @@ const char* DialogName(Dialog dialog) {
 nlohmann::json RectJson(const Rect& r) { return {{"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}}; }
 
 std::string BuildReport(const AppState& state, const ShellState& shell, const RenderOptions& options,
-                        const std::string& renderer, int frames) {
+                        const std::string& renderer, int frames, const Script& script) {
   nlohmann::json report;
+  report["script_ui_events"] = script.ui_events;
   report["size"] = {options.width, options.height};
   report["renderer"] = renderer;
   report["frames"] = frames;
@@ -221,9 +267,28 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
   SetGlfwKeyMap(io);
 
   ScriptedInput input;
+  std::array<float, 2> drag_anchor{0.0f, 0.0f};  // screen position where the current drag began
   int frame = 0;
   // One frame: input, app command, UI, render into the target, optional screenshot.
   auto run_frame = [&](const ScriptStep* step) -> bool {
+    ScriptStep resolved;
+    if (step && step->mouse_pos) {
+      resolved = *step;
+      std::array<float, 2> screen;
+      std::string point_error;
+      if (!ResolveScriptPoint(*state, *shell, *step, &screen, &point_error)) {
+        error = "script line " + std::to_string(step->line) + ": " + point_error;
+        return false;
+      }
+      if (step->drag_anchor) drag_anchor = screen;
+      if (step->drag_fraction) {
+        const float f = *step->drag_fraction;
+        screen = {drag_anchor[0] + f * (screen[0] - drag_anchor[0]), drag_anchor[1] + f * (screen[1] - drag_anchor[1])};
+      }
+      resolved.mouse_pos = screen;
+      resolved.mouse_space = PointSpace::kScreen;
+      step = &resolved;
+    }
     input.Apply(step, io);
     if (step && !step->dropped_paths.empty()) shell->dropped_paths = step->dropped_paths;
     if (step && !step->command.empty()) {
@@ -261,7 +326,7 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
   const std::string write_error = WritePng(options.output_png, target.Read());
   if (!write_error.empty()) return Fail("cannot write " + options.output_png + ": " + write_error);
   if (!options.report_path.empty()) {
-    const std::string report = BuildReport(*state, *shell, options, renderer, frame);
+    const std::string report = BuildReport(*state, *shell, options, renderer, frame, script);
     const std::string report_error = WriteFileAtomically(options.report_path, report);
     if (!report_error.empty()) return Fail("cannot write " + options.report_path + ": " + report_error);
   }

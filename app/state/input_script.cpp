@@ -123,15 +123,62 @@ std::string ParseFrames(const std::vector<std::string>& t, const ScriptStep& ste
   return "";
 }
 
+// A mouse position in a script: screen px, a photo pixel, a model vertex or a widget.
+struct Point {
+  PointSpace space = PointSpace::kScreen;
+  std::array<float, 2> xy{0.0f, 0.0f};
+  std::string item;
+  std::array<int, 2> vertex{0, 0};
+};
+
+// Reads one POINT from t starting at *i: `X Y`, `image U V`, `vertex P V` or `item NAME`;
+// advances *i. Without a prefix the point keeps p->space (screen, or a drag's first space).
+bool ParsePoint(const std::vector<std::string>& t, size_t* i, Point* p) {
+  const std::string prefix = *i < t.size() ? Lower(t[*i]) : std::string();
+  if (prefix == "item") {
+    if (*i + 1 >= t.size()) return false;
+    p->space = PointSpace::kItem;
+    p->item = t[*i + 1];
+    *i += 2;
+    return true;
+  }
+  if (prefix == "vertex") {
+    if (*i + 2 >= t.size() || !ParseInt(t[*i + 1], &p->vertex[0]) || !ParseInt(t[*i + 2], &p->vertex[1]) ||
+        p->vertex[0] < 0 || p->vertex[1] < 0) {
+      return false;
+    }
+    p->space = PointSpace::kVertex;
+    *i += 3;
+    return true;
+  }
+  if (prefix == "image") {
+    p->space = PointSpace::kImage;
+    ++*i;
+  }
+  if (p->space != PointSpace::kScreen && p->space != PointSpace::kImage) return false;
+  if (*i + 1 >= t.size() || !ParseFloat(t[*i], &p->xy[0]) || !ParseFloat(t[*i + 1], &p->xy[1])) return false;
+  *i += 2;
+  return true;
+}
+
+void SetPoint(const Point& p, ScriptStep* step) {
+  step->mouse_pos = p.xy;
+  step->mouse_space = p.space;
+  step->mouse_item = p.item;
+  step->mouse_vertex = p.vertex;
+}
+
+constexpr const char* kPointHelp = "a point is X Y, image U V, vertex P V or item NAME";
+
 // Hover first, so the press lands on the item under the cursor; then press and release.
 std::string ParseClick(const std::vector<std::string>& t, ScriptStep step, Steps* steps) {
-  const int n = static_cast<int>(t.size()) - 1;
-  float x, y;
-  const int b = n == 3 ? ButtonIndex(Lower(t[1])) : -1;
-  if (b < 0 || !ParseFloat(t[2], &x) || !ParseFloat(t[3], &y)) {
-    return "'click BUTTON X Y' needs left|right|middle and two numbers";
+  const int b = t.size() >= 2 ? ButtonIndex(Lower(t[1])) : -1;
+  size_t i = 2;
+  Point p;
+  if (b < 0 || !ParsePoint(t, &i, &p) || i != t.size()) {
+    return std::string("'click BUTTON POINT' needs left|right|middle and a point; ") + kPointHelp;
   }
-  step.mouse_pos = std::array<float, 2>{x, y};
+  SetPoint(p, &step);
   steps->push_back(step);
   ScriptStep press;
   press.line = step.line;
@@ -145,25 +192,30 @@ std::string ParseClick(const std::vector<std::string>& t, ScriptStep step, Steps
 }
 
 std::string ParseDrag(const std::vector<std::string>& t, ScriptStep step, Steps* steps) {
-  const int n = static_cast<int>(t.size()) - 1;
-  float x1, y1, x2, y2;
+  const int b = t.size() >= 2 ? ButtonIndex(Lower(t[1])) : -1;
+  size_t i = 2;
+  Point from, to;
   int count = 0;
-  const int b = n == 6 ? ButtonIndex(Lower(t[1])) : -1;
-  if (b < 0 || !ParseFloat(t[2], &x1) || !ParseFloat(t[3], &y1) || !ParseFloat(t[4], &x2) || !ParseFloat(t[5], &y2) ||
-      !ParseInt(t[6], &count) || count < 1 || count > 10000) {
-    return "'drag BUTTON X1 Y1 X2 Y2 STEPS' needs a button, four numbers and 1..10000 steps";
+  const bool from_ok = b >= 0 && ParsePoint(t, &i, &from);
+  // Without a prefix the second point is in the first one's space (a vertex start: image).
+  to.space = from.space == PointSpace::kVertex ? PointSpace::kImage : from.space;
+  if (!from_ok || !ParsePoint(t, &i, &to) || i + 1 != t.size() || !ParseInt(t[i], &count) || count < 1 ||
+      count > 10000) {
+    return std::string("'drag BUTTON POINT1 POINT2 STEPS' needs a button, two points and 1..10000 steps; ") +
+           kPointHelp;
   }
-  step.mouse_pos = std::array<float, 2>{x1, y1};
+  SetPoint(from, &step);
+  step.drag_anchor = true;
   steps->push_back(step);
   ScriptStep press;
   press.line = step.line;
   press.mouse_down[b] = true;
   steps->push_back(press);
-  for (int i = 1; i <= count; ++i) {
-    const float f = static_cast<float>(i) / count;
+  for (int k = 1; k <= count; ++k) {
     ScriptStep m;
     m.line = step.line;
-    m.mouse_pos = std::array<float, 2>{x1 + f * (x2 - x1), y1 + f * (y2 - y1)};
+    SetPoint(to, &m);
+    m.drag_fraction = static_cast<float>(k) / count;
     steps->push_back(m);
   }
   ScriptStep release;
@@ -177,9 +229,10 @@ std::string ParseDrag(const std::vector<std::string>& t, ScriptStep step, Steps*
 std::string ParseMouse(const std::string& cmd, const std::vector<std::string>& t, ScriptStep step, Steps* steps) {
   const int n = static_cast<int>(t.size()) - 1;
   if (cmd == "move") {
-    float x, y;
-    if (n != 2 || !ParseFloat(t[1], &x) || !ParseFloat(t[2], &y)) return "'move X Y' needs two numbers";
-    step.mouse_pos = std::array<float, 2>{x, y};
+    size_t i = 1;
+    Point p;
+    if (!ParsePoint(t, &i, &p) || i != t.size()) return std::string("'move POINT' needs a point; ") + kPointHelp;
+    SetPoint(p, &step);
     steps->push_back(step);
   } else if (cmd == "down" || cmd == "up") {
     const int b = n == 1 ? ButtonIndex(Lower(t[1])) : -1;
@@ -191,13 +244,15 @@ std::string ParseMouse(const std::string& cmd, const std::vector<std::string>& t
   } else if (cmd == "drag") {
     return ParseDrag(t, step, steps);
   } else {  // wheel
-    float dy, x, y;
-    if ((n != 1 && n != 3) || !ParseFloat(t[1], &dy)) return "'wheel DY [X Y]' needs a number";
-    if (n == 3) {
-      if (!ParseFloat(t[2], &x) || !ParseFloat(t[3], &y)) return "'wheel DY X Y': X and Y must be numbers";
+    float dy;
+    if (n < 1 || !ParseFloat(t[1], &dy)) return "'wheel DY [POINT]' needs a number";
+    if (n > 1) {
+      size_t i = 2;
+      Point p;
+      if (!ParsePoint(t, &i, &p) || i != t.size()) return std::string("'wheel DY POINT': ") + kPointHelp;
       ScriptStep m;
       m.line = step.line;
-      m.mouse_pos = std::array<float, 2>{x, y};
+      SetPoint(p, &m);
       steps->push_back(m);
     }
     step.wheel = dy;
@@ -304,6 +359,15 @@ std::string ParseDrop(const std::string& line, ScriptStep step, Steps* steps) {
   return "";
 }
 
+// Whether a script line of this kind is something a user does by hand (Script::ui_events).
+// The test-only commands (wait-bake, bake-status) are not.
+bool IsUiEvent(const std::vector<std::string>& t) {
+  const std::string cmd = Lower(t[0]);
+  if (cmd == "command") return t.size() < 2 || (Lower(t[1]) != "wait-bake" && Lower(t[1]) != "bake-status");
+  return cmd == "click" || cmd == "drag" || cmd == "key" || cmd == "type" || cmd == "wheel" || cmd == "drop" ||
+         cmd == "down" || cmd == "hold";
+}
+
 // One non-empty line (comment stripped).
 std::string ParseLine(const std::string& line, int line_no, Steps* steps) {
   const std::vector<std::string> t = Split(line);
@@ -350,6 +414,7 @@ bool ParseScript(const std::string& text, Script* script, std::string* error) {
       *error = "line " + std::to_string(line_no) + ": " + line_error;
       return false;
     }
+    if (IsUiEvent(Split(line))) ++out.ui_events;
   }
   *script = std::move(out);
   return true;

@@ -3,11 +3,22 @@
 // is applied at the start of one frame, so ImGui sees every press and release.
 //
 //   frames N                      N frames with no new input
-//   move X Y                      mouse position (screen px)
+//   move POINT                    mouse position
 //   down|up left|right|middle     press / release a button
-//   click BUTTON X Y              move and press (1 frame), release (1 frame)
-//   drag BUTTON X1 Y1 X2 Y2 STEPS press at 1, move in STEPS frames to 2, release
-//   wheel DY [X Y]                vertical wheel (positive: away from the user), optional move
+//   click BUTTON POINT            move and press (1 frame), release (1 frame)
+//   drag BUTTON POINT1 POINT2 STEPS  press at 1, move in STEPS frames to 2, release
+//   wheel DY [POINT]              vertical wheel (positive: away from the user), optional move
+//                                 A POINT is `X Y` (screen px), `image U V` (pixel (U, V) of
+//                                 the photo shown in the image panel), `vertex P V` (where
+//                                 vertex V of the P-th primitive, 0 the first added, is drawn
+//                                 over that photo: a corner the user grabs) or `item NAME`
+//                                 (the centre of the widget the UI recorded as NAME, e.g.
+//                                 image.accept_lines: the report's "items"). Image, vertex and
+//                                 item points are mapped through what the frame before showed,
+//                                 so a script stays valid when the layout or the model moves.
+//                                 A drag's second point takes the first one's space unless it
+//                                 names its own (drag left image U1 V1 U2 V2 8; drag left
+//                                 vertex 0 4 image U V 8); its start is fixed when it begins.
 //   key [ctrl+][shift+][alt+]KEY  press (1 frame), release (1 frame); e.g. key ctrl+z
 //   type TEXT                     text characters for the active text field (1 frame)
 //   hold|release shift|ctrl|alt   keep a modifier down / let it go
@@ -94,9 +105,20 @@ struct ScriptKey {
   unsigned character = 0;  // text input sent along with the key (0: none)
 };
 
+// What a step's mouse position is measured in (see POINT above).
+enum class PointSpace { kScreen, kImage, kVertex, kItem };
+
 struct ScriptStep {
   int line = 0;  // source line, for error messages
   std::optional<std::array<float, 2>> mouse_pos;
+  PointSpace mouse_space = PointSpace::kScreen;
+  std::string mouse_item;                  // PointSpace::kItem: the widget's recorded name
+  std::array<int, 2> mouse_vertex{0, 0};   // PointSpace::kVertex: primitive index, vertex id
+  // A drag: its first step is the anchor (its screen position is kept); each later step moves
+  // to anchor + fraction * (mouse_pos - anchor), so a model that moves under the drag does not
+  // move its start.
+  bool drag_anchor = false;
+  std::optional<float> drag_fraction;
   std::array<std::optional<bool>, 3> mouse_down;  // left, right, middle: press / release
   float wheel = 0.0f;
   std::optional<ScriptKey> key_press;  // held during this step only
@@ -110,6 +132,10 @@ struct ScriptStep {
 
 struct Script {
   std::vector<ScriptStep> steps;
+  // What a user does by hand to perform the script: clicks, drags, key presses, typed texts,
+  // wheel turns, drops, button presses (down) and app commands (each a menu entry or a
+  // field); hovering (move), waiting (frames), releases and screenshots do not count.
+  int ui_events = 0;
 };
 
 // Returns false with "line N: what is wrong" in *error for unknown commands or bad arguments.

@@ -66,11 +66,13 @@ inline bool& RenderWithoutSnapping() {
 
 // Runs `facet render` without a display and with a private config folder. A render that
 // hangs is killed (exit code 124) rather than hanging the suite.
-inline RunResult RunRender(const TempDir& dir, const std::string& args_in) {
+// With `working_dir`, the app runs there (a script's relative paths are relative to it).
+inline RunResult RunRender(const TempDir& dir, const std::string& args_in, const std::string& working_dir = "") {
   const std::string args = (RenderWithoutSnapping() ? "--no-snap " : "") + args_in;
   constexpr int kRenderTimeoutS = 300;
   const std::string err = dir / "stderr.txt";
-  const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY XDG_CONFIG_HOME='" + (dir / "config") + "' timeout " +
+  const std::string cd = working_dir.empty() ? std::string() : "cd '" + working_dir + "' && ";
+  const std::string cmd = cd + "env -u DISPLAY -u WAYLAND_DISPLAY XDG_CONFIG_HOME='" + (dir / "config") + "' timeout " +
                           std::to_string(kRenderTimeoutS) + " '" + std::string(FACET_APP_EXE) + "' render " + args +
                           " 2> '" + err + "'";
   const int status = std::system(cmd.c_str());

@@ -1,5 +1,6 @@
-// The input script's `drop` command (app/state/input_script.h): words or double-quoted paths
-// become one step's dropped files; an empty or unclosed drop is refused with its line.
+// The input script's parser (app/state/input_script.h): `drop` (words or double-quoted paths
+// become one step's dropped files), the forms of a mouse point (screen, image, vertex, item),
+// drags anchored at their start, and the count of UI events a script stands for.
 #include <doctest/doctest.h>
 
 #include <string>
@@ -8,7 +9,9 @@
 #include "app/state/input_script.h"
 
 using facet::app::ParseScript;
+using facet::app::PointSpace;
 using facet::app::Script;
+using facet::app::ScriptStep;
 
 TEST_CASE("drop: plain and quoted paths in one step, in order") {
   Script script;
@@ -28,4 +31,75 @@ TEST_CASE("drop: nothing to drop or an unclosed quote is refused with the line")
   CHECK(error == "line 2: 'drop PATH [PATH...]' needs at least one path");
   CHECK_FALSE(ParseScript("drop \"/a b.png\n", &script, &error));
   CHECK(error == "line 1: 'drop': a quoted path is not closed");
+}
+
+TEST_CASE("points: screen, image, vertex and item points; a drag's end takes its start's space") {
+  Script script;
+  std::string error;
+  REQUIRE_MESSAGE(ParseScript("click left image 10.5 20\n"
+                              "click right item image.accept_lines\n"
+                              "drag left vertex 1 4 image 318 258 4\n"
+                              "drag left 10 20 30 40 2\n"
+                              "move vertex 0 7\n",
+                              &script, &error),
+                  error);
+  // click: hover, press, release; drag: anchor, press, one step per fraction, release.
+  REQUIRE(script.steps.size() == 3 + 3 + (2 + 4 + 1) + (2 + 2 + 1) + 1);
+  const ScriptStep& image_click = script.steps[0];
+  CHECK(image_click.mouse_space == PointSpace::kImage);
+  CHECK((*image_click.mouse_pos)[0] == 10.5f);
+  CHECK((*image_click.mouse_pos)[1] == 20.0f);
+  CHECK(script.steps[3].mouse_space == PointSpace::kItem);
+  CHECK(script.steps[3].mouse_item == "image.accept_lines");
+
+  const ScriptStep& anchor = script.steps[6];
+  CHECK(anchor.drag_anchor);
+  CHECK(anchor.mouse_space == PointSpace::kVertex);
+  CHECK(anchor.mouse_vertex == std::array<int, 2>{1, 4});
+  CHECK(script.steps[7].mouse_down[0] == std::optional<bool>(true));
+  for (int k = 1; k <= 4; ++k) {
+    const ScriptStep& m = script.steps[7 + k];
+    CHECK(m.mouse_space == PointSpace::kImage);  // the end point named its own space
+    CHECK((*m.mouse_pos)[0] == 318.0f);
+    REQUIRE(m.drag_fraction.has_value());
+    CHECK(*m.drag_fraction == doctest::Approx(k / 4.0));
+  }
+  CHECK(script.steps[12].mouse_down[0] == std::optional<bool>(false));
+
+  const ScriptStep& screen_anchor = script.steps[13];
+  CHECK(screen_anchor.mouse_space == PointSpace::kScreen);
+  CHECK(script.steps[15].mouse_space == PointSpace::kScreen);  // no prefix: the start's space
+  CHECK((*script.steps[16].mouse_pos)[1] == 40.0f);
+  CHECK(script.steps.back().mouse_space == PointSpace::kVertex);
+}
+
+TEST_CASE("points: a malformed point is refused with the line and the forms a point takes") {
+  Script script;
+  std::string error;
+  CHECK_FALSE(ParseScript("click left image 10\n", &script, &error));
+  CHECK(error.find("line 1: 'click BUTTON POINT'") == 0);
+  CHECK(error.find("image U V, vertex P V or item NAME") != std::string::npos);
+  CHECK_FALSE(ParseScript("frames 1\ndrag left vertex 0 -1 image 1 2 3\n", &script, &error));
+  CHECK(error.find("line 2: 'drag BUTTON POINT1 POINT2 STEPS'") == 0);
+  CHECK_FALSE(ParseScript("move item\n", &script, &error));
+  CHECK(error.find("line 1: 'move POINT'") == 0);
+}
+
+TEST_CASE("ui_events counts what a user does by hand, not waiting, hovering or test hooks") {
+  Script script;
+  std::string error;
+  REQUIRE_MESSAGE(ParseScript("frames 5\n"
+                              "move image 1 2\n"                   // hover: not an event
+                              "click left item image.detect_lines\n"  // 1
+                              "drag left image 1 2 3 4 5\n"        // 2
+                              "key b\n"                            // 3
+                              "type 12.5\n"                        // 4
+                              "command add-photo /x.jpg\n"         // 5: a menu entry
+                              "command wait-bake\n"                // test hook
+                              "command bake-status /tmp/s.json\n"  // test hook
+                              "screenshot /tmp/a.png\n"            // not an event
+                              "hold shift\nclick left 1 1\nrelease shift\n",  // 6, 7
+                              &script, &error),
+                  error);
+  CHECK(script.ui_events == 7);
 }
