@@ -1,5 +1,5 @@
 // Snapping in image pixels (core/geometry/image_snap.h): points win over lines, the nearest
-// within the radius, the vanishing direction and its crossings.
+// within the radius, the vanishing direction and its crossings, corners where two segments meet.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -121,6 +121,37 @@ TEST_CASE("degenerate input never snaps to nonsense") {
   const SnapResult r = SnapToFeatures({21, 21}, f, 5.0);
   CHECK(r.kind == SnapKind::kSegment);
   CHECK((r.position_px - Eigen::Vector2d(20, 20)).norm() < kTol);
+}
+
+
+TEST_CASE("two segments stopping short of a corner: their lines' crossing, not their ends") {
+  // A vertical and a horizontal edge, each stopped 3 px before the corner (20, 30), as a
+  // segment detector leaves them.
+  SnapFeatures f;
+  f.segments = {{20, 80, 20, 33}, {70, 30, 23, 30}};
+  f.segment_ends = {{20, 80}, {20, 33}, {70, 30}, {23, 30}};  // e.g. accepted as drawn lines
+  SnapResult r = SnapToFeatures({22, 32}, f, 6.0);
+  CHECK(r.kind == SnapKind::kSegmentCorner);
+  CHECK((r.position_px - Eigen::Vector2d(20, 30)).norm() < kTol);
+  // Two nearly parallel segments make no corner: the nearest end stays.
+  f.segments = {{20, 80, 20, 33}, {20.5, 33, 21, 10}};
+  f.segment_ends = {{20, 33}};
+  r = SnapToFeatures({22, 32}, f, 6.0);
+  CHECK(r.kind == SnapKind::kSegmentEnd);
+  // A crossing beyond the radius of either segment's extent is no corner.
+  f.segments = {{20, 80, 20, 45}, {70, 30, 23, 30}};
+  f.segment_ends.clear();
+  r = SnapToFeatures({21, 33}, f, 6.0);
+  CHECK(r.kind != SnapKind::kSegmentCorner);
+}
+
+TEST_CASE("a detected corner near a segment corner wins: it is refined on the pixels") {
+  SnapFeatures f;
+  f.segments = {{20, 80, 20, 33}, {70, 30, 23, 30}};
+  f.corners = {{20.2, 30.1}};
+  const SnapResult r = SnapToFeatures({20.1, 30.0}, f, 6.0);  // nearer the segment corner
+  CHECK(r.kind == SnapKind::kCorner);
+  CHECK((r.position_px - Eigen::Vector2d(20.2, 30.1)).norm() < kTol);
 }
 
 }  // namespace

@@ -50,6 +50,26 @@ std::optional<Eigen::Vector2d> Crossing(const Line& line, const Eigen::Vector4d&
   return a + t * ab;
 }
 
+// Where the supporting lines of two segments cross, when they meet at kSegmentCornerMinAngleDeg
+// or more and the crossing lies within `reach` of both segments (past an end by at most that).
+std::optional<Eigen::Vector2d> SegmentCorner(const Eigen::Vector4d& s1, const Eigen::Vector4d& s2, double reach) {
+  const Eigen::Vector2d a = s1.head<2>(), d1 = s1.tail<2>() - a;
+  const Eigen::Vector2d b = s2.head<2>(), d2 = s2.tail<2>() - b;
+  const double n1 = d1.norm(), n2 = d2.norm();
+  if (!(n1 > 0.0) || !(n2 > 0.0)) return std::nullopt;
+  const double sine = (d1.x() * d2.y() - d1.y() * d2.x()) / (n1 * n2);
+  if (std::abs(sine) < std::sin(kSegmentCornerMinAngleDeg * M_PI / 180.0)) return std::nullopt;
+  // a + t d1 = b + u d2
+  const Eigen::Vector2d r = b - a;
+  const double det = d1.x() * d2.y() - d1.y() * d2.x();
+  const double t = (r.x() * d2.y() - r.y() * d2.x()) / det;
+  const Eigen::Vector2d x = a + t * d1;
+  if ((NearestOnSegment(x, s1) - x).norm() > reach || (NearestOnSegment(x, s2) - x).norm() > reach) {
+    return std::nullopt;
+  }
+  return x;
+}
+
 void Consider(SnapKind kind, const Eigen::Vector2d& candidate, const Eigen::Vector2d& pointer, double radius,
               SnapResult* best) {
   const double d = (candidate - pointer).norm();
@@ -71,6 +91,7 @@ const char* SnapKindName(SnapKind kind) {
     case SnapKind::kModelEdge: return "model edge";
     case SnapKind::kVanishingPoint: return "vanishing direction";
     case SnapKind::kLineIntersection: return "crossing";
+    case SnapKind::kSegmentCorner: return "segment corner";
   }
   return "?";
 }
@@ -80,17 +101,42 @@ SnapResult SnapToFeatures(const Eigen::Vector2d& pointer_px, const SnapFeatures&
   none.position_px = pointer_px;
   if (!pointer_px.allFinite() || !(radius_px > 0.0)) return none;
 
-  SnapResult point;
+  // Corners where two segments meet; the ends of those segments are where the detector (or
+  // the user) stopped near the same corner, so the crossing replaces them.
+  SnapResult point;  // corners, drawn segment ends, model vertices: the nearest
+  std::vector<Eigen::Vector2d> replaced_ends;
+  std::vector<const Eigen::Vector4d*> near;  // segments within the radius of the pointer
+  for (const Eigen::Vector4d& s : features.segments) {
+    if ((NearestOnSegment(pointer_px, s) - pointer_px).norm() <= radius_px) near.push_back(&s);
+  }
+  SnapResult segment_corner;
+  for (size_t i = 0; i < near.size(); ++i) {
+    for (size_t j = i + 1; j < near.size(); ++j) {
+      if (const auto c = SegmentCorner(*near[i], *near[j], radius_px)) {
+        Consider(SnapKind::kSegmentCorner, *c, pointer_px, radius_px, &segment_corner);
+        for (const Eigen::Vector4d* s : {near[i], near[j]}) {
+          replaced_ends.push_back(s->head<2>());
+          replaced_ends.push_back(s->tail<2>());
+        }
+      }
+    }
+  }
+  const auto replaced = [&](const Eigen::Vector2d& p) {
+    return std::find(replaced_ends.begin(), replaced_ends.end(), p) != replaced_ends.end();
+  };
   for (const Eigen::Vector2d& p : features.corners) Consider(SnapKind::kCorner, p, pointer_px, radius_px, &point);
   for (const Eigen::Vector2d& p : features.segment_ends) {
-    Consider(SnapKind::kSegmentEnd, p, pointer_px, radius_px, &point);
+    if (!replaced(p)) Consider(SnapKind::kSegmentEnd, p, pointer_px, radius_px, &point);
   }
   for (const Eigen::Vector2d& p : features.model_vertices) {
     Consider(SnapKind::kModelVertex, p, pointer_px, radius_px, &point);
   }
+  // A detected corner is refined on the pixels themselves: where it is near, it is the same
+  // corner more exactly, so segment corners come after the points above.
   if (point.kind != SnapKind::kNone) return point;
+  if (segment_corner.kind != SnapKind::kNone) return segment_corner;
   for (const Eigen::Vector2d& p : features.detected_segment_ends) {
-    Consider(SnapKind::kSegmentEnd, p, pointer_px, radius_px, &point);
+    if (!replaced(p)) Consider(SnapKind::kSegmentEnd, p, pointer_px, radius_px, &point);
   }
   if (point.kind != SnapKind::kNone) return point;
 

@@ -18,7 +18,8 @@ enum class SnapKind {
   kSegment,          // onto a drawn or detected segment (its supporting line, within its extent)
   kModelEdge,        // onto a projected edge of the model
   kVanishingPoint,   // rotated onto the line from the anchor through the family's vanishing point
-  kLineIntersection  // where two of the lines above cross (e.g. a vanishing direction and an edge)
+  kLineIntersection,  // where two of the lines above cross (e.g. a vanishing direction and an edge)
+  kSegmentCorner      // where two segments at an angle meet near their ends: a corner in the photo
 };
 const char* SnapKindName(SnapKind kind);  // "corner", "segment end", ...
 
@@ -47,11 +48,17 @@ struct SnapResult {
 // The snapped position of `pointer_px` within `radius_px` (image pixels: the panel converts
 // its few screen pixels with the zoom). Points win over lines: a point within the radius is
 // taken even when a line is nearer, since the user aims at corners; among points the nearest
-// (detected segment ends only when no other point is near).
+// (detected segment ends only when no other point is near). Two segments near the pointer at
+// an angle of kSegmentCornerMinAngleDeg or more make a point too: their supporting lines'
+// crossing (a segment detector stops a few pixels short of a corner, but its line is exact),
+// which replaces the ends of those two segments as candidates; it is taken when no corner,
+// drawn end or vertex is near (a detected corner is refined on the pixels), before detected
+// segment ends.
 // Among lines (segments, edges, the vanishing direction) the nearest, except that where the
 // vanishing direction and another line cross within the radius, the crossing is taken (a
 // segment drawn towards its vanishing point that ends on an edge). A non-finite pointer
 // gives kNone.
+constexpr double kSegmentCornerMinAngleDeg = 20.0;
 SnapResult SnapToFeatures(const Eigen::Vector2d& pointer_px, const SnapFeatures& features, double radius_px);
 
 }  // namespace facet
