@@ -413,10 +413,25 @@ bool AddConstraint(AppState* state, Constraint c, const std::string& label) {
   for (const Constraint& old : edited.constraints) {
     if (SameConstraint(old, c)) return Refuse(state, label, "the same constraint exists already");
   }
+  // The first known length takes over the scale from the first primitive's kept last
+  // dimension (AddPrimitiveEdit keeps it only so that a model without one has a scale); both
+  // would fix the scale, and they would disagree.
+  std::string released;
+  const bool first_length = std::none_of(edited.constraints.begin(), edited.constraints.end(),
+                                         [](const Constraint& old) { return old.kind == ConstraintKind::kDistance; });
+  if (c.kind == ConstraintKind::kDistance && first_length && !edited.primitives.empty()) {
+    Primitive& first = edited.primitives.front();
+    const int last = NumShapeParams(first.shape.kind) - 1;
+    if (last >= 0 && first.param_locked[last]) {
+      first.param_locked[last] = false;
+      released = first.name + "'s " + ShapeParamLabel(first.shape.kind, last) + " is no longer kept: the known length sets the scale";
+    }
+  }
   c.id = edited.NewId();
   edited.constraints.push_back(c);
   CommitEdit(state, label, std::move(edited));
   state->Log(LogLevel::kInfo, label + ": constraint " + std::to_string(c.id) + " added");
+  if (!released.empty()) state->Log(LogLevel::kInfo, label + ": " + released);
   return true;
 }
 
