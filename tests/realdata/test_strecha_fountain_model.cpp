@@ -409,21 +409,6 @@ Comparison CompareWithGroundTruth(const facet::Project& model) {
   return out;
 }
 
-struct PinnedModel {
-  facet::Project project;
-  std::string log;
-};
-
-// Step 3 without a known lens, run once for the two cases that read it.
-const PinnedModel& ModelWithUnknownFocal() {
-  static const PinnedModel model = [] {
-    PinnedModel m;
-    m.project = PinTheBox(LinesDrawnThroughTheApp(), "model_unknown_focal", "", &m.log);
-    return m;
-  }();
-  return model;
-}
-
 }  // namespace
 
 // The issue's run as a user without a known lens makes it: each photo's focal length comes
@@ -444,12 +429,19 @@ const PinnedModel& ModelWithUnknownFocal() {
 // slanted faces.)
 TEST_CASE("Strecha fountain through the app, focal length unknown: cameras and box solve; rotations reported") {
   const auto started = std::chrono::steady_clock::now();
-  const PinnedModel& model = ModelWithUnknownFocal();
-  const std::string& log = model.log;
+  std::string log;
+  const facet::Project model = PinTheBox(LinesDrawnThroughTheApp(), "model_unknown_focal", "", &log);
   INFO("log:\n" << log);
-  const Comparison c = CompareWithGroundTruth(model.project);
+  const Comparison c = CompareWithGroundTruth(model);
+  const double worst_deg =
+      *std::max_element(c.relative_rotation_error_deg.begin(), c.relative_rotation_error_deg.end());
+  // The issue's 1 deg is reported, not asserted: these photos do not fix the focal length
+  // (see above); the next case asserts it with the focal length known.
   MESSAGE("Strecha fountain, focal length from the lines:\n"
-          << c.figures << "time " << std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()
+          << c.figures << "worst relative rotation error " << worst_deg << " deg: the issue's "
+          << kMaxRelativeRotationErrorDeg << " deg is "
+          << std::string(worst_deg < kMaxRelativeRotationErrorDeg ? "met" : "NOT met") << "\ntime "
+          << std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()
           << " s (with the photos and lines)");
   CHECK(log.find("error:") == std::string::npos);
   // The box lands on its pins (their reading is good to a pixel or two of the halved photo).
@@ -459,15 +451,6 @@ TEST_CASE("Strecha fountain through the app, focal length unknown: cameras and b
   // focal length of the right order.
   constexpr double kMaxFocalFactor = 2.0;
   for (const double error : c.focal_error) CHECK(std::abs(std::log1p(error)) < std::log(kMaxFocalFactor));
-}
-
-// The issue's bound, not met without the focal length (see above). doctest::should_fail: this
-// case passes while at least one relative rotation is off by more than 1 deg, and fails (to be
-// turned into a plain case) once the focal length from lines or pins gets good enough.
-TEST_CASE("Strecha fountain through the app, focal length unknown: every relative rotation within 1 deg" *
-          doctest::should_fail()) {
-  const Comparison c = CompareWithGroundTruth(ModelWithUnknownFocal().project);
-  for (const double error_deg : c.relative_rotation_error_deg) CHECK(error_deg < kMaxRelativeRotationErrorDeg);
 }
 
 // The same run by a user who knows the lens (Properties > Focal > Fixed, the script's
