@@ -24,6 +24,7 @@
 #include <Eigen/Geometry>
 
 #include "core/estimators/two_view.h"
+#include "tests/realdata/strecha_cameras.h"
 
 namespace facet {
 namespace {
@@ -31,7 +32,7 @@ namespace {
 namespace fs = std::filesystem;
 using Points = std::vector<Eigen::Vector2d>;
 
-const fs::path kDataDir = fs::path(FACET_SHARED_DATA) / "strecha-fountain-p11-subset";
+const fs::path kDataDir = testing::StrechaFountainDir();
 // The bounds.
 constexpr double kMaxRotationErrorDeg = 0.5;
 constexpr double kMaxTranslationErrorDeg = 2.0;
@@ -42,32 +43,6 @@ constexpr double kRatioTest = 0.75;
 constexpr int kGridColumns = 6;
 constexpr int kGridRows = 5;
 constexpr double kRadToDeg = 180.0 / M_PI;
-
-struct GroundTruthCamera {
-  Eigen::Matrix3d K;
-  Eigen::Matrix3d cam_from_world_rotation;
-  Eigen::Vector3d cam_from_world_translation;
-};
-
-GroundTruthCamera ReadCamera(const std::string& name) {
-  const fs::path path = kDataDir / "gt_dense_cameras" / (name + ".jpg.camera");
-  std::ifstream in(path);
-  REQUIRE_MESSAGE(in.good(), "cannot open " << path);
-  double v[3 * 3 + 3 + 3 * 3 + 3];
-  for (double& x : v) REQUIRE_MESSAGE(static_cast<bool>(in >> x), "short camera file " << path);
-  GroundTruthCamera cam;
-  Eigen::Matrix3d world_from_cam;
-  Eigen::Vector3d center;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) {
-      cam.K(r, c) = v[3 * r + c];
-      world_from_cam(r, c) = v[12 + 3 * r + c];
-    }
-  center << v[21], v[22], v[23];
-  cam.cam_from_world_rotation = world_from_cam.transpose();
-  cam.cam_from_world_translation = -world_from_cam.transpose() * center;
-  return cam;
-}
 
 struct Features {
   std::vector<cv::KeyPoint> keypoints;  // in downscaled pixels
@@ -144,10 +119,10 @@ TEST_CASE("Strecha fountain: relative pose and F from 30 SIFT matches per pair")
   const auto t_detect = std::chrono::steady_clock::now();
   const std::vector<std::string> names = {"0004", "0005", "0006", "0007"};
   std::map<std::string, Features> features;
-  std::map<std::string, GroundTruthCamera> cameras;
+  std::map<std::string, testing::GroundTruthCamera> cameras;
   for (const auto& name : names) {
     features[name] = Detect(name);
-    cameras[name] = ReadCamera(name);
+    cameras[name] = testing::ReadStrechaCamera(name);
   }
   const double detect_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_detect).count();
@@ -158,8 +133,8 @@ TEST_CASE("Strecha fountain: relative pose and F from 30 SIFT matches per pair")
   for (const auto& [name1, name2] : pairs) {
     CAPTURE(name1);
     CAPTURE(name2);
-    const GroundTruthCamera& c1 = cameras[name1];
-    const GroundTruthCamera& c2 = cameras[name2];
+    const testing::GroundTruthCamera& c1 = cameras[name1];
+    const testing::GroundTruthCamera& c2 = cameras[name2];
     Points uv1, uv2;
     SelectMatches(features[name1], features[name2], 3072, 2048, &uv1, &uv2);
     REQUIRE(static_cast<int>(uv1.size()) == kMatchesPerPair);
