@@ -1,5 +1,7 @@
 #include "app/shell/layout.h"
 
+#include "core/util/file_read.h"
+
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
@@ -87,12 +89,8 @@ void Tile(const Layout& layout, int node, const Rect& r, TiledLayout* out) {
 }
 
 bool ReadFile(const std::string& path, std::string* text) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  *text = ss.str();
-  return true;
+  std::string error;
+  return ReadRegularFile(path, kMaxTextFileBytes, text, &error);
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "app/shell/window_placement.h"
 
+#include "core/util/file_read.h"
+
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -9,9 +11,9 @@
 namespace facet::app {
 
 std::optional<WindowRect> LoadWindowRect(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return std::nullopt;
-  const nlohmann::json j = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  std::string text, error;
+  if (!ReadRegularFile(path, kMaxTextFileBytes, &text, &error)) return std::nullopt;
+  const nlohmann::json j = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
   if (!j.is_object()) return std::nullopt;
   WindowRect r;
   for (const auto& [key, field] : {std::pair{"x", &r.x}, {"y", &r.y}, {"width", &r.width}, {"height", &r.height}}) {

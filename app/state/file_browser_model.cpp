@@ -1,5 +1,7 @@
 #include "app/state/file_browser_model.h"
 
+#include "core/util/file_read.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -43,12 +45,8 @@ std::string ErrorText(const std::error_code& ec) {
 }
 
 bool ReadTextFile(const std::string& path, std::string* text) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  *text = ss.str();
-  return true;
+  std::string error;
+  return ReadRegularFile(path, kMaxTextFileBytes, text, &error);
 }
 
 // Moves `item` to the front of `list` (inserting it when absent), keeping at most `capacity`.

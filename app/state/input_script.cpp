@@ -1,5 +1,7 @@
 #include "app/state/input_script.h"
 
+#include "core/util/file_read.h"
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -421,14 +423,12 @@ bool ParseScript(const std::string& text, Script* script, std::string* error) {
 }
 
 bool LoadScript(const std::string& path, Script* script, std::string* error) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    *error = "cannot read script " + path;
+  std::string text, read_error;
+  if (!ReadRegularFile(path, kMaxTextFileBytes, &text, &read_error)) {
+    *error = "cannot read script " + read_error;
     return false;
   }
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (!ParseScript(ss.str(), script, error)) {
+  if (!ParseScript(text, script, error)) {
     *error = path + ": " + *error;
     return false;
   }

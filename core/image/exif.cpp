@@ -1,4 +1,6 @@
 #include "core/image/exif.h"
+
+#include "core/util/file_read.h"
 #include "core/util/format.h"
 
 #include <algorithm>
@@ -91,10 +93,9 @@ ExifFocal ReadExifFocalFromBuffer(const unsigned char* bytes, std::size_t size, 
 }
 
 ExifFocal ReadExifFocalFromFile(const std::string& path, int width_px, int height_px) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return NotFound("cannot open " + path);
-  const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) return NotFound("cannot read " + path);
+  std::vector<std::uint8_t> bytes;
+  std::string error;
+  if (!ReadRegularFile(path, kMaxImageFileBytes, &bytes, &error)) return NotFound(error);
   ExifFocal result = ReadExifFocalFromBuffer(bytes.data(), bytes.size(), width_px, height_px);
   if (!result.found) result.message = path + ": " + result.message;
   return result;

@@ -5,7 +5,12 @@
 // marker before decoding.
 #include "core/image/image_io.h"
 
+#include "core/util/file_read.h"
+
+#include <algorithm>
 #include <cerrno>
+#include <climits>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -18,23 +23,31 @@
 namespace facet {
 namespace {
 
-bool ReadFileBytes(const std::string& path, std::vector<std::uint8_t>* bytes, std::string* error) {
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) {
-    *error = path + ": cannot open (" + std::strerror(errno) + ")";
-    return false;
+// The size a photo's header declares: stb's header parser, and for a PNG the IHDR chunk itself
+// (stb refuses to parse a PNG header over 1 GB decoded, the very photos to refuse by size).
+bool HeaderSize(const std::vector<std::uint8_t>& b, int* w, int* h) {
+  int channels = 0;
+  if (stbi_info_from_memory(b.data(), static_cast<int>(std::min<size_t>(b.size(), INT32_MAX)), w, h, &channels) != 0) {
+    return true;
   }
-  bytes->clear();
-  std::uint8_t buffer[1 << 16];
-  size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), file)) > 0) bytes->insert(bytes->end(), buffer, buffer + n);
-  const bool failed = std::ferror(file) != 0;
-  std::fclose(file);
-  if (failed) {
-    *error = path + ": read error";
-    return false;
-  }
+  static const std::uint8_t kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  if (b.size() < 24 || !std::equal(kPng, kPng + 8, b.begin()) || std::memcmp(&b[12], "IHDR", 4) != 0) return false;
+  const auto be32 = [&](size_t i) {
+    return (std::uint32_t{b[i]} << 24) | (std::uint32_t{b[i + 1]} << 16) | (std::uint32_t{b[i + 2]} << 8) | b[i + 3];
+  };
+  const std::uint32_t pw = be32(16), ph = be32(20);
+  if (pw == 0 || ph == 0 || pw > INT32_MAX || ph > INT32_MAX) return false;
+  *w = static_cast<int>(pw);
+  *h = static_cast<int>(ph);
   return true;
+}
+
+// "" when a w x h photo is within kMaxImagePixels, else the refusal naming the limit.
+std::string PixelLimitRefusal(const std::string& path, int w, int h) {
+  const auto pixels = static_cast<std::uint64_t>(std::max(w, 0)) * static_cast<std::uint64_t>(std::max(h, 0));
+  if (pixels <= kMaxImagePixels) return "";
+  return path + ": " + std::to_string(w) + " x " + std::to_string(h) + " px (" + std::to_string(pixels / 1000000) +
+         " MP) is more than the limit of " + std::to_string(kMaxImagePixels / 1000000) + " MP";
 }
 
 bool IsJpeg(const std::vector<std::uint8_t>& b) {
@@ -115,10 +128,19 @@ bool ValidImage(const ImageRgba8& image) {
 ImageReadResult ReadImage(const std::string& path) {
   ImageReadResult result;
   std::vector<std::uint8_t> bytes;
-  if (!ReadFileBytes(path, &bytes, &result.error)) return result;
+  if (!ReadRegularFile(path, kMaxImageFileBytes, &bytes, &result.error)) return result;
   if (bytes.empty()) {
     result.error = path + ": file is empty";
     return result;
+  }
+  // The header's size, before a decoder allocates it (a 20000 x 20000 photo is 1.6 GB RGBA).
+  int header_w = 0, header_h = 0;
+  if (HeaderSize(bytes, &header_w, &header_h)) {
+    const std::string refusal = PixelLimitRefusal(path, header_w, header_h);
+    if (!refusal.empty()) {
+      result.error = refusal;
+      return result;
+    }
   }
   if (IsJpeg(bytes) && !JpegIsComplete(bytes)) {
     result.error = path + ": JPEG is truncated or corrupt (no end-of-image marker)";
@@ -144,21 +166,25 @@ ImageReadResult ReadImage(const std::string& path) {
     return result;
   }
   if (result.image.empty()) result.error = path + ": image has zero size";
+  if (result.error.empty()) {
+    const std::string refusal = PixelLimitRefusal(path, result.image.width, result.image.height);
+    if (!refusal.empty()) {
+      result.image = ImageRgba8();
+      result.error = refusal;
+    }
+  }
   return result;
 }
 
 bool ReadImageSize(const std::string& path, int* width, int* height, std::string* error) {
   std::string local_error;
   std::string* err = error != nullptr ? error : &local_error;
-  std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr) {
-    *err = path + ": cannot open (" + std::strerror(errno) + ")";
-    return false;
-  }
-  int w = 0, h = 0, channels = 0;
-  const int ok = stbi_info_from_file(file, &w, &h, &channels);
-  std::fclose(file);
-  if (ok == 0) {
+  // A JPEG's or PNG's size is in its first bytes (after EXIF, itself at most 64 KB).
+  constexpr std::uint64_t kHeaderBytes = 256u << 10;
+  std::vector<std::uint8_t> bytes;
+  if (!ReadRegularFileHead(path, kHeaderBytes, &bytes, err)) return false;
+  int w = 0, h = 0;
+  if (bytes.empty() || !HeaderSize(bytes, &w, &h)) {
     // A format stb does not parse (TIFF, WebP, ...): decode it fully.
     ImageReadResult full = ReadImage(path);
     if (!full.ok()) {

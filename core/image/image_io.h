@@ -24,8 +24,15 @@ struct ImageReadResult {
   bool ok() const { return error.empty(); }
 };
 
+// The largest photo read, in pixels: 150 MP, above any camera of 2026 (a 100 MP medium
+// format one included). Decoded as RGBA it is 600 MB; past it a photo is refused, with the
+// limit in the message, before it is decoded.
+constexpr std::uint64_t kMaxImagePixels = 150'000'000;
+
 // Reads a JPEG or PNG (any format OpenCV's imgcodecs reads). A missing, unreadable or
-// corrupt file gives an error, never a crash.
+// corrupt file gives an error, never a crash; so do a path that is not a regular file (a
+// FIFO, a device), a file over kMaxImageFileBytes (core/util/file_read.h) and a photo over
+// kMaxImagePixels.
 ImageReadResult ReadImage(const std::string& path);
 // Reads only the size of an image (fast). Returns false with *error set on failure.
 bool ReadImageSize(const std::string& path, int* width, int* height, std::string* error);

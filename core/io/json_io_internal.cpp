@@ -1,5 +1,7 @@
 #include "core/io/json_io_internal.h"
 
+#include "core/util/file_read.h"
+
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -55,19 +57,7 @@ bool ReadPrincipalPoint(const nlohmann::json& doc, PrincipalPointMode* mode, Eig
 }
 
 bool ReadTextFile(const std::string& path, std::string* text, std::string* error) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    *error = "cannot open " + path;
-    return false;
-  }
-  std::ostringstream s;
-  s << in.rdbuf();
-  if (in.bad()) {
-    *error = "cannot read " + path;
-    return false;
-  }
-  *text = s.str();
-  return true;
+  return ReadRegularFile(path, kMaxTextFileBytes, text, error);
 }
 
 }  // namespace facet::json_io

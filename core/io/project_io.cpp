@@ -1,5 +1,7 @@
 #include "core/io/project_io.h"
 
+#include "core/util/file_read.h"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -953,28 +955,7 @@ std::string ParseErrorText(const nlohmann::json::parse_error& e) {
 }
 
 bool ReadWholeFile(const std::string& path, std::string* bytes, std::string* error) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    *error = "cannot open " + path + ": it is a folder";
-    return false;
-  }
-  FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) {
-    *error = "cannot open " + path + ": " + ErrnoText(errno);
-    return false;
-  }
-  bytes->clear();
-  char buffer[1 << 16];
-  size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) bytes->append(buffer, n);
-  const bool failed = std::ferror(f);
-  const int err = errno;
-  std::fclose(f);
-  if (failed) {
-    *error = "cannot read " + path + ": " + ErrnoText(err);
-    return false;
-  }
-  return true;
+  return ReadRegularFile(path, kMaxTextFileBytes, bytes, error);
 }
 
 }  // namespace
