@@ -124,6 +124,10 @@ int RunRelateCommand(const std::string& matches_path) {
 }
 
 int RunSolveCommand(const std::string& project_path, const std::string& output_path) {
+  if (output_path.empty()) {
+    std::cerr << "facet solve: the output path (-o) is empty\n";
+    return 1;
+  }
   Project project;
   if (!LoadForCli(project_path, &project)) return 1;
   ModelUpdateOptions options;
@@ -165,12 +169,9 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
 
   const bool usable = update.ok;
   if (usable) {
-    // Image paths are relative to the project file: keep them valid for the output's folder.
-    const std::filesystem::path to = std::filesystem::absolute(output_path).parent_path();
-    for (Image& image : updated.images) {
-      const std::filesystem::path resolved = ResolveImagePath(project_path, image.path);
-      image.path = std::filesystem::relative(resolved, to).generic_string();
-    }
+    // Image paths are relative to the project file: keep them valid for the output's folder
+    // (with error codes: a path the OS refuses is reported by the save, not thrown).
+    RebaseImagePaths(project_path, output_path, &updated);
     const std::string error = SaveProject(updated, output_path);
     if (!error.empty()) {
       std::cerr << "facet solve: cannot write " << output_path << ": " << error << "\n";

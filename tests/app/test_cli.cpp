@@ -138,6 +138,17 @@ TEST_CASE("solve re-solves a perturbed project, writes it and prints its summary
   CHECK(bad.exit_code == 1);
   CHECK(bad.err.find("line") != std::string::npos);
   CHECK_FALSE(fs::exists(dir / "y.facet"));
+
+  // Output paths the OS refuses are answered, not aborted on (they threw
+  // std::filesystem::filesystem_error: SIGABRT, issue 14).
+  const CliResult empty_output = RunFacet(dir, "solve '" + (dir / "in.facet") + "' -o ''");
+  CHECK(empty_output.exit_code == 1);
+  CHECK(empty_output.err.find("the output path (-o) is empty") != std::string::npos);
+  const std::string long_name = dir / (std::string(300, 'n') + ".facet");  // over NAME_MAX
+  const CliResult long_output = RunFacet(dir, "solve '" + (dir / "in.facet") + "' -o '" + long_name + "'");
+  CHECK(long_output.exit_code == 1);
+  CHECK(long_output.err.find("cannot write") != std::string::npos);
+  CHECK(long_output.err.find("terminate") == std::string::npos);
 }
 
 TEST_CASE("export writes a GLB and an OBJ with its material and texture") {
