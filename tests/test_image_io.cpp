@@ -226,3 +226,24 @@ TEST_CASE("grey, 16-bit and TIFF images read as 8-bit RGBA; TIFF size falls back
   CHECK(w == 34);
   CHECK(h == 21);
 }
+
+TEST_CASE("WritePng is atomic: a failed write leaves the old PNG whole; a symlink stays a link") {
+  const fs::path dir = TempDir("atomic_png");
+  const std::string shot = (dir / "shot.png").string();
+  REQUIRE(facet::WritePng(shot, MakePattern(8, 6)).empty());
+  const auto old_size = fs::file_size(shot);
+  // An invalid image is refused before anything is written: the old file is untouched.
+  CHECK_FALSE(facet::WritePng(shot, facet::ImageRgba8()).empty());
+  CHECK(fs::file_size(shot) == old_size);
+  // A folder that does not exist: an error naming the path, no stray temporary file.
+  const std::string error = facet::WritePng((dir / "missing" / "x.png").string(), MakePattern(8, 6));
+  CHECK(error.find("missing") != std::string::npos);
+  // Through a dangling symlink the picture lands where the link points; the link stays.
+  fs::create_symlink(dir / "target.png", dir / "link.png");
+  REQUIRE(facet::WritePng((dir / "link.png").string(), MakePattern(8, 6)).empty());
+  CHECK(fs::is_symlink(dir / "link.png"));
+  CHECK(fs::is_regular_file(dir / "target.png"));
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(dir)) files += e.path().filename().string().find(".tmp-") == std::string::npos;
+  CHECK(files == 3);  // shot.png, link.png, target.png: no temporary left behind
+}

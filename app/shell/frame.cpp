@@ -28,6 +28,7 @@
 #include "app/state/model_edits.h"
 #include "app/state/move_tool.h"
 #include "core/io/export.h"
+#include "core/util/file_write.h"
 
 namespace facet::app {
 namespace {
@@ -75,10 +76,9 @@ bool WriteBakeStatus(const AppState& state, const std::string& path, std::string
       {"uvs_fnv", FingerprintHex(mesh.uvs)},
       {"positions_fnv", FingerprintHex(mesh.positions)},
   };
-  std::ofstream out(path);
-  out << status.dump(2) << "\n";
-  if (!out) {
-    *error = "bake-status: cannot write " + path;
+  const std::string write_error = WriteFileAtomically(path, status.dump(2) + "\n");
+  if (!write_error.empty()) {
+    *error = "bake-status: " + write_error;
     return false;
   }
   return true;

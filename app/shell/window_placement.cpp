@@ -1,6 +1,7 @@
 #include "app/shell/window_placement.h"
 
 #include "core/util/file_read.h"
+#include "core/util/file_write.h"
 
 #include <fstream>
 
@@ -25,9 +26,10 @@ std::optional<WindowRect> LoadWindowRect(const std::string& path) {
 }
 
 bool SaveWindowRect(const std::string& path, const WindowRect& rect) {
-  std::ofstream out(path);
-  out << nlohmann::json{{"x", rect.x}, {"y", rect.y}, {"width", rect.width}, {"height", rect.height}}.dump() << "\n";
-  return static_cast<bool>(out);
+  return WriteFileAtomically(
+             path, nlohmann::json{{"x", rect.x}, {"y", rect.y}, {"width", rect.width}, {"height", rect.height}}.dump() +
+                       "\n")
+      .empty();
 }
 
 std::string WindowRectFilePath() {

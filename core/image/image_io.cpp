@@ -6,6 +6,7 @@
 #include "core/image/image_io.h"
 
 #include "core/util/file_read.h"
+#include "core/util/file_write.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -221,12 +222,7 @@ std::string WritePng(const std::string& path, const ImageRgba8& image) {
   if (!ValidImage(image)) return path + ": cannot write an empty or malformed image";
   const std::vector<std::uint8_t> png = EncodePng(image);
   if (png.empty()) return path + ": PNG encoding failed";
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return path + ": cannot open for writing (" + std::strerror(errno) + ")";
-  out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-  out.close();
-  if (!out) return path + ": write failed";
-  return "";
+  return WriteFileAtomically(path, std::string(png.begin(), png.end()));
 }
 
 }  // namespace facet

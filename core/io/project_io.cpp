@@ -28,8 +28,6 @@ using OrderedJson = nlohmann::ordered_json;
 
 constexpr const char* kFormatName = "facet-project";
 
-std::string ErrnoText(int err) { return std::strerror(err); }
-
 std::string Join(const std::string& base, const std::string& key) { return base.empty() ? key : base + "." + key; }
 std::string Index(const std::string& base, size_t i) { return base + "[" + std::to_string(i) + "]"; }
 
@@ -1062,58 +1060,6 @@ void RebaseImagePaths(const std::string& old_project_path, const std::string& ne
     const std::string absolute = std::filesystem::absolute(ResolveImagePath(old_project_path, image.path), ec).string();
     if (!ec) image.path = RelativeImagePath(new_project_path, absolute);
   }
-}
-
-std::string WriteFileAtomically(const std::string& requested_path, const std::string& bytes) {
-  namespace fs = std::filesystem;
-  // Renaming over a symlink would replace the link by a file; write where it points instead.
-  std::error_code link_ec;
-  std::string path = requested_path;
-  if (fs::is_symlink(requested_path, link_ec)) {
-    const fs::path target = fs::weakly_canonical(requested_path, link_ec);
-    if (!link_ec) path = target.string();
-  }
-  std::string temp = path + ".tmp-XXXXXX";
-  const int fd = ::mkstemp(temp.data());
-  if (fd < 0) return "cannot create a temporary file beside " + path + ": " + ErrnoText(errno);
-  auto fail = [&](const std::string& what, int err) {
-    ::close(fd);
-    ::unlink(temp.c_str());
-    return "cannot save " + path + ": " + what + ": " + ErrnoText(err);
-  };
-  // mkstemp makes the file private (0600); keep the replaced file's mode, else the usual 0644.
-  struct stat existing {};
-  const mode_t mode =
-      ::stat(path.c_str(), &existing) == 0 && S_ISREG(existing.st_mode) ? (existing.st_mode & 07777) : 0644;
-  if (::fchmod(fd, mode) != 0) return fail("setting permissions", errno);
-  size_t written = 0;
-  while (written < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return fail("writing", errno);
-    }
-    written += static_cast<size_t>(n);
-  }
-  if (::fsync(fd) != 0) return fail("flushing to disk", errno);
-  if (::close(fd) != 0) {
-    const int err = errno;
-    ::unlink(temp.c_str());
-    return "cannot save " + path + ": closing: " + ErrnoText(err);
-  }
-  if (::rename(temp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    ::unlink(temp.c_str());
-    return "cannot save " + path + ": replacing the file: " + ErrnoText(err);
-  }
-  // Make the rename itself durable; failure here does not undo a completed save.
-  const fs::path folder = fs::path(path).parent_path();
-  const int dir_fd = ::open(folder.empty() ? "." : folder.c_str(), O_RDONLY | O_DIRECTORY);
-  if (dir_fd >= 0) {
-    ::fsync(dir_fd);
-    ::close(dir_fd);
-  }
-  return "";
 }
 
 }  // namespace facet

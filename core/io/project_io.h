@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/scene/project.h"
+#include "core/util/file_write.h"  // WriteFileAtomically, used by every writer of project files and exports
 
 namespace facet {
 
@@ -48,7 +49,5 @@ std::string ResolveImagePath(const std::string& project_path, const std::string&
 std::string RelativeImagePath(const std::string& project_path, const std::string& image_file_path);
 // For "Save as" into another folder: re-expresses every image path relative to the new file.
 void RebaseImagePaths(const std::string& old_project_path, const std::string& new_project_path, Project* project);
-// Writes bytes atomically: a temporary file in the same folder, fsync, then rename.
-std::string WriteFileAtomically(const std::string& path, const std::string& bytes);
 
 }  // namespace facet
