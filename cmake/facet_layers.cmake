@@ -1,6 +1,6 @@
 # The layers of core/, bottom first. A layer's files may include their own layer and the layers
 # listed before it, never one after it: cmake/check_layers.cmake enforces it on every build.
-#   util        formatting and timing helpers, no dependencies
+#   util        formatting and timing helpers, the Eigen decompositions compiled once (Eigen only)
 #   geometry    conventions, the camera model, small value types (ids, axes, segments)
 #   optim       the Levenberg-Marquardt driver, the damped Schur step, the shape of solver summaries
 #   mesh        the half-edge mesh, K-operators, primitives, extrusion, triangulation

@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 
 #include "core/optim/levenberg_marquardt.h"
+#include "core/util/eigen_decompositions.h"
 
 namespace facet {
 namespace {

@@ -13,6 +13,7 @@
 
 #include "core/estimators/two_view.h"
 #include "core/io/relate_io.h"
+#include "core/util/eigen_decompositions.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {

@@ -11,6 +11,7 @@
 
 #include "core/optim/damped_normal_step.h"
 #include "core/optim/levenberg_marquardt.h"
+#include "core/util/eigen_decompositions.h"
 #include "core/util/timer.h"
 
 namespace facet {

@@ -14,6 +14,7 @@
 #include "core/optim/damped_normal_step.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/optim/solver_summary.h"
+#include "core/util/eigen_decompositions.h"
 #include "core/util/format.h"
 #include "core/util/timer.h"
 

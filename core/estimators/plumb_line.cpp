@@ -13,6 +13,7 @@
 #include "core/geometry/tangent_basis.h"
 #include "core/optim/damped_normal_step.h"
 #include "core/optim/levenberg_marquardt.h"
+#include "core/util/eigen_decompositions.h"
 #include "core/util/timer.h"
 
 namespace facet {

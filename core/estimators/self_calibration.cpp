@@ -17,6 +17,7 @@
 #include "core/optim/levenberg_marquardt.h"
 #include "core/optim/schur_step.h"
 #include "core/optim/solver_summary.h"
+#include "core/util/eigen_decompositions.h"
 #include "core/util/format.h"
 #include "core/util/timer.h"
 

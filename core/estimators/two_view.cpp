@@ -16,6 +16,7 @@
 #include "core/geometry/hartley_normalization.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/optim/solver_summary.h"
+#include "core/util/eigen_decompositions.h"
 #include "core/util/format.h"
 #include "core/util/timer.h"
 

@@ -5,21 +5,19 @@
 // not move (a zero column) solvable; each caller states its floor where it forms `damping`.
 // The step is not finite when the damped system has no solution at this lambda: callers test
 // allFinite() (core/optim/levenberg_marquardt.h, LmStepStatus::kSolveFailed).
+// Compiled once in damped_normal_step.cpp, for the two shapes the callers use: the LDLT
+// it instantiates is seconds of compile time per file.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 namespace facet {
 
 // normal: J^T J (n x n, symmetric positive semi-definite); gradient: J^T r (n);
 // damping: n entries > 0.
-template <typename NormalMatrix, typename Gradient, typename Damping>
-typename Gradient::PlainObject DampedNormalStep(const NormalMatrix& normal, const Gradient& gradient, double lambda,
-                                                const Damping& damping) {
-  typename NormalMatrix::PlainObject damped = normal;
-  damped.diagonal() += lambda * damping;
-  return damped.ldlt().solve(-gradient);
-}
+Eigen::VectorXd DampedNormalStep(const Eigen::MatrixXd& normal, const Eigen::VectorXd& gradient, double lambda,
+                                 const Eigen::VectorXd& damping);
+Eigen::Vector2d DampedNormalStep(const Eigen::Matrix2d& normal, const Eigen::Vector2d& gradient, double lambda,
+                                 const Eigen::Vector2d& damping);
 
 }  // namespace facet

@@ -4,6 +4,8 @@
 
 #include <Eigen/Dense>
 
+#include "core/util/eigen_decompositions.h"
+
 namespace facet {
 
 void SchurNormalEquations::Reset(int num_camera_parameters, std::vector<std::vector<int>> rows,

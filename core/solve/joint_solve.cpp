@@ -15,6 +15,7 @@
 #include "core/solve/constraint_polish.h"
 #include "core/solve/joint_solve_internal.h"
 #include "core/solve/scene_solve.h"
+#include "core/util/eigen_decompositions.h"
 
 namespace facet {
 

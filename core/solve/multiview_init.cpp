@@ -13,6 +13,7 @@
 #include "core/estimators/calibrate_dlt.h"
 #include "core/estimators/homography_pose.h"
 #include "core/estimators/projective_upgrade.h"
+#include "core/util/eigen_decompositions.h"
 
 namespace facet {
 namespace {

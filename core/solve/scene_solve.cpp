@@ -13,6 +13,7 @@
 #include "core/geometry/camera.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/solve/scene_solve_internal.h"
+#include "core/util/eigen_decompositions.h"
 
 namespace facet {
 

@@ -10,6 +10,7 @@
 
 #include "core/geometry/camera.h"
 #include "core/geometry/cross_product_matrix.h"
+#include "core/util/eigen_decompositions.h"
 
 namespace facet::scene_solve_internal {
 namespace {

@@ -5,6 +5,7 @@
 
 #include <Eigen/SVD>
 
+#include "core/util/eigen_decompositions.h"
 #include "core/util/format.h"
 
 namespace facet {

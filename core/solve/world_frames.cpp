@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include "core/solve/scene_solve.h"
+#include "core/util/eigen_decompositions.h"
 
 namespace facet {
 

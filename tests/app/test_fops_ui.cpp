@@ -21,6 +21,7 @@
 #include "core/io/project_io.h"
 #include "core/mesh/operators.h"
 #include "core/mesh/primitives.h"
+#include "core/util/eigen_decompositions.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
 
