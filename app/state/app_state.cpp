@@ -160,6 +160,7 @@ namespace {
 void ResetDocument(AppState* state, Project project, const std::string& path) {
   state->document.Reset(std::move(project));
   state->line_proposals.reset();  // image ids start again in another project
+  DropLineDetection(state);
   state->project_path = path;
   state->selection = {};
   state->active_image_id = kNoId;
