@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <sstream>
 #include <system_error>
 #include <utility>
@@ -64,18 +65,29 @@ bool StartLineDetection(AppState* state, Id image_id) {
   job.photo_name = std::filesystem::path(path).filename().string();
   job.started_s = state->time_s;
   const ManhattanLinesOptions options = OptionsFor(*image);
-  // A copy of the photo: the worker must not read one the app frees (photo removed, project
-  // replaced) while it runs.
+  // The worker detects on its own copy of the photo, made first thing (the app may free the
+  // original once photo_copied is ready: photo removed, project replaced).
+  auto copied = std::make_shared<std::promise<void>>();
+  job.photo_copied = copied->get_future().share();
+  std::shared_future<void> held;
+  if (state->line_detection.hold) held = state->line_detection.hold_released;
   try {
-    std::shared_future<void> held;
-    if (state->line_detection.hold) held = state->line_detection.hold_released;
-    job.result = std::async(std::launch::async, [copy = photo->second, options, held] {
+    job.result = std::async(std::launch::async, [source = &photo->second, copied, options, held] {
+      ImageRgba8 copy;
+      try {
+        copy = *source;
+      } catch (...) {
+        copied->set_value();
+        throw;
+      }
+      copied->set_value();
       if (held.valid()) held.wait();
       return DetectManhattanLines(copy, options);
     });
   } catch (const std::system_error& e) {
     // No thread to be had: detect here rather than not at all.
     state->Log(LogLevel::kWarning, std::string("Detect lines: running on the main thread (") + e.what() + ")");
+    copied->set_value();
     std::promise<ManhattanLinesSummary> done;
     done.set_value(DetectManhattanLines(photo->second, options));
     job.result = done.get_future();
@@ -156,9 +168,14 @@ void HoldLineDetection(AppState* state, bool hold) {
   }
 }
 
+void WaitForLineDetectionPhotoCopy(const AppState& state) {
+  if (state.line_detection.job) state.line_detection.job->photo_copied.wait();
+}
+
 void DropLineDetection(AppState* state) {
   LineDetectionWork& work = state->line_detection;
   if (!work.job) return;
+  work.job->photo_copied.wait();  // an abandoned worker never reads the app's photos again
   work.abandoned.push_back(std::move(work.job->result));
   work.job.reset();
   ++work.stats.dropped;

@@ -31,10 +31,12 @@ struct LineProposals {
   std::string message;                    // the detection's summary
 };
 
-// A detection on a worker thread, which reads its own copy of the photo (so the photo may
-// leave the project meanwhile).
+// A detection on a worker thread. The worker first copies the photo from AppState::photos
+// (12 MP: 48 MB, too slow for the frame that starts it), then detects on its copy; until
+// photo_copied is ready, the app frees no loaded photo (WaitForLineDetectionPhotoCopy).
 struct LineDetectionJob {
   Id image_id = kNoId;
+  std::shared_future<void> photo_copied;
   std::string photo_name;    // the photo's file name, for the toolbar
   double started_s = 0.0;    // AppState::time_s when it started
   int frames_in_flight = 0;  // frames drawn while the worker ran
@@ -47,8 +49,8 @@ struct LineDetectionStats {
   int dropped = 0;    // photo removed, project closed or replaced, or a newer detection started
   Id last_image_id = kNoId;        // of the latest collected result
   int last_frames_in_flight = 0;   // of the latest collected result
-  // Main-thread time of the latest start (photo copy and thread start; the photo's loading
-  // when it was just added is not counted).
+  // Main-thread time of the latest start (thread start; the photo's loading when it was
+  // just added is not counted).
   double last_start_ms = 0.0;
 };
 
@@ -83,6 +85,9 @@ bool CollectLineDetection(AppState* state, bool wait);
 void DropLineDetection(AppState* state);
 // `lines hold on|off` (above).
 void HoldLineDetection(AppState* state, bool hold);
+// Called before the app frees or replaces a loaded photo: waits until the detection in
+// flight has its own copy (at once, unless it started a moment ago).
+void WaitForLineDetectionPhotoCopy(const AppState& state);
 // StartLineDetection, then waits for it: the script command `lines detect`. False (logged)
 // when either fails.
 bool DetectLineProposals(AppState* state, Id image_id);
