@@ -170,9 +170,8 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
                               {"last_image_id", lines.last_image_id},
                               {"last_frames_in_flight", lines.last_frames_in_flight},
                               {"last_start_ms", lines.last_start_ms}};
-  report["line_proposals"] = {
-      {"image_id", state.line_proposals ? state.line_proposals->image_id : kNoId},
-      {"count", state.line_proposals ? state.line_proposals->segments.size() : 0}};
+  report["line_proposals"] = {{"image_id", state.line_proposals ? state.line_proposals->image_id : kNoId},
+                              {"count", state.line_proposals ? state.line_proposals->segments.size() : 0}};
   report["selection"] = {{"segment_id", state.selection.segment_id},
                          {"segment_endpoint", state.selection.segment_endpoint},
                          {"pin_id", state.selection.pin_id},

@@ -45,10 +45,10 @@ struct LineDetectionJob {
 
 struct LineDetectionStats {
   int started = 0;
-  int collected = 0;  // results that arrived for a photo still in the project
-  int dropped = 0;    // photo removed, project closed or replaced, or a newer detection started
-  Id last_image_id = kNoId;        // of the latest collected result
-  int last_frames_in_flight = 0;   // of the latest collected result
+  int collected = 0;              // results that arrived for a photo still in the project
+  int dropped = 0;                // photo removed, project closed or replaced, or a newer detection started
+  Id last_image_id = kNoId;       // of the latest collected result
+  int last_frames_in_flight = 0;  // of the latest collected result
   // Main-thread time of the latest start (thread start; the photo's loading when it was
   // just added is not counted).
   double last_start_ms = 0.0;
