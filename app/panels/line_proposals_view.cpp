@@ -1,6 +1,8 @@
 #include "app/panels/line_proposals_view.h"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include "app/panels/image_overlay.h"
@@ -45,10 +47,28 @@ void DrawDashed(ImDrawList* draw_list, const ViewTransform& view, const Eigen::V
 }  // namespace
 
 void DrawLineProposalsBar(AppState* state, Id image_id) {
-  if (ImGui::SmallButton("Detect lines")) DetectLineProposals(state, image_id);
+  const std::optional<LineDetectionJob>& running = state->line_detection.job;
+  ImGui::BeginDisabled(running.has_value());
+  if (ImGui::SmallButton("Detect lines")) StartLineDetection(state, image_id);
+  ImGui::EndDisabled();
   RecordItem(state, "image.detect_lines");
-  if (ImGui::IsItemHovered())
+  if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
     ImGui::SetTooltip("Find the photo's straight lines and group them into three directions, as proposals");
+  if (running) {
+    // The worker gives no progress of its own: a turning bar and the seconds so far say it
+    // is alive. Frame time, not the wall clock, so that an offscreen picture is repeatable.
+    const double elapsed_s = std::max(0.0, state->time_s - running->started_s);
+    const char spinner = "|/-\\"[static_cast<int>(elapsed_s * 8.0) % 4];
+    ImGui::SameLine();
+    if (running->image_id == image_id) {
+      ImGui::TextColored(kDimText, "Detecting lines... %c %.1f s", spinner, elapsed_s);
+    } else {
+      ImGui::TextColored(kDimText, "Detecting lines on %s... %c %.1f s", running->photo_name.c_str(), spinner,
+                         elapsed_s);
+    }
+    RecordItem(state, "image.detecting_lines");
+    return;
+  }
   const LineProposals* proposals = ProposalsOf(*state, image_id);
   if (proposals == nullptr) return;
   int counts[3] = {0, 0, 0};

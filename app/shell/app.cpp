@@ -5,6 +5,7 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>  // key codes only: the offscreen key map matches the GLFW backend's
 
+#include <algorithm>
 #include <cfloat>
 #include <cstdio>
 #include <filesystem>
@@ -23,6 +24,7 @@
 #include "app/shell/layout.h"
 #include "app/state/app_state.h"
 #include "app/state/input_script.h"
+#include "app/state/line_proposals.h"
 #include "core/io/project_io.h"
 
 namespace facet::app {
@@ -206,6 +208,16 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
   report["dirty"] = state.document.dirty();
   report["tool"] = ToolName(state.tool);
   report["active_image_id"] = state.active_image_id;
+  const LineDetectionStats& lines = state.line_detection.stats;
+  report["line_detection"] = {{"in_flight", LineDetectionInFlight(state)},
+                              {"started", lines.started},
+                              {"collected", lines.collected},
+                              {"dropped", lines.dropped},
+                              {"last_image_id", lines.last_image_id},
+                              {"last_frames_in_flight", lines.last_frames_in_flight},
+                              {"last_start_ms", lines.last_start_ms}};
+  report["line_proposals"] = {{"image_id", state.line_proposals ? state.line_proposals->image_id : kNoId},
+                              {"count", state.line_proposals ? state.line_proposals->segments.size() : 0}};
   report["selection"] = {{"segment_id", state.selection.segment_id},
                          {"segment_endpoint", state.selection.segment_endpoint},
                          {"pin_id", state.selection.pin_id},
@@ -249,6 +261,13 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
   return report.dump(2);
 }
 
+bool StepNeedsLineDetection(const ScriptStep& step) {
+  const bool presses = std::any_of(step.mouse_down.begin(), step.mouse_down.end(),
+                                   [](const std::optional<bool>& down) { return down.value_or(false); });
+  return presses || step.key_press || !step.text.empty() || !step.dropped_paths.empty() ||
+         !step.screenshot_path.empty();
+}
+
 int Fail(const std::string& message) {
   std::fprintf(stderr, "facet render: %s\n", message.c_str());
   return 1;
@@ -271,6 +290,11 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
   int frame = 0;
   // One frame: input, app command, UI, render into the target, optional screenshot.
   auto run_frame = [&](const ScriptStep* step) -> bool {
+    // A line detection on its worker is waited for before a step whose outcome may depend on
+    // the proposals (a click or key on them, a picture of them), so a script acts the same
+    // however fast the worker is; between such steps the frames go on while it runs, as in
+    // the GUI. `lines` commands wait by themselves (app/state/line_proposals.h).
+    if (step && StepNeedsLineDetection(*step)) CollectLineDetection(state, /*wait=*/true);
     ScriptStep resolved;
     if (step && step->mouse_pos) {
       resolved = *step;
@@ -320,6 +344,7 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
   bool ok = true;
   for (int i = 0; ok && i < kWarmUpFrames; ++i) ok = run_frame(nullptr);
   for (size_t i = 0; ok && i < script.steps.size(); ++i) ok = run_frame(&script.steps[i]);
+  if (ok) CollectLineDetection(state, /*wait=*/true);  // the final picture and report show its proposals
   for (int i = 0; ok && i < kSettleFrames; ++i) ok = run_frame(nullptr);
   if (!ok) return Fail(error);
 

@@ -625,8 +625,9 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
       return false;
     }
     NoteRecentFile(state, shell, arg);
-    // The photo is in; a detection that finds no lines only logs why.
-    if (state->detect_lines_on_add) DetectLineProposals(state, state->active_image_id);
+    // The photo is in; the lines arrive as proposals when its worker finishes (a detection
+    // that finds none only logs why).
+    if (state->detect_lines_on_add) StartLineDetection(state, state->active_image_id);
     return true;
   }
   if (name == "lines") return RunLinesCommand(state, arg, error);
@@ -701,6 +702,7 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   state->time_s = time_s;
   state->bake_mode = shell->offscreen ? BakeMode::kFinishNextFrame : BakeMode::kBackground;
   RefreshDerived(state);
+  CollectLineDetection(state, /*wait=*/false);
   if (state->request_quit) {
     state->request_quit = false;
     RequestQuit(state, shell);

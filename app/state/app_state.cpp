@@ -160,6 +160,7 @@ namespace {
 void ResetDocument(AppState* state, Project project, const std::string& path) {
   state->document.Reset(std::move(project));
   state->line_proposals.reset();  // image ids start again in another project
+  DropLineDetection(state);
   state->project_path = path;
   state->selection = {};
   state->active_image_id = kNoId;
@@ -401,7 +402,8 @@ void CollectBake(AppState* state, bool wait) {
     result.mesh = BuildUntexturedMesh(state->document.project());
   }
   state->bake_job.reset();
-  state->retired_photos.clear();  // the worker is done with them
+  WaitForLineDetectionPhotoCopy(*state);  // a photo retired meanwhile may be the one it copies
+  state->retired_photos.clear();          // the bake's worker is done with them
   if (input_revision != state->bake_input_revision) {
     ++state->bake_stats.dropped;
     return;
@@ -426,8 +428,9 @@ void RefreshDerived(AppState* state) {
   const Project& project = state->document.project();
 
   // Photos: load the new ones once, forget the ones that left the project (after the bake in
-  // flight, which may read them).
+  // flight, which may read them, and the line detection's copy).
   for (auto it = state->photos.begin(); it != state->photos.end();) {
+    if (!project.FindImage(it->first)) WaitForLineDetectionPhotoCopy(*state);
     if (project.FindImage(it->first)) {
       ++it;
     } else if (state->bake_job) {

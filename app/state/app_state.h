@@ -191,9 +191,11 @@ struct AppState {
   BakeMode bake_mode = BakeMode::kBackground;
   BakeStats bake_stats;
 
-  // Lines detected on a photo, awaiting the user's accept (app/state/line_proposals.h), and
-  // the Add photo option that detects them on every added photo.
+  // Lines detected on a photo, awaiting the user's accept (app/state/line_proposals.h), the
+  // detection on its worker thread, and the Add photo option that detects them on every added
+  // photo.
   std::optional<LineProposals> line_proposals;
+  LineDetectionWork line_detection;
   bool detect_lines_on_add = false;
   // The image panel's Snap option (app/panels/image_snapping.h): points placed in a photo snap
   // to corners, segments and the model nearby; Alt turns it off for one placement.

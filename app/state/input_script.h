@@ -69,9 +69,10 @@
 //                                                      primitive (RunMoveCommand,
 //                                                      app/state/move_tool.h)
 //                                   lines ARGS         detected line proposals: detect
-//                                                      [IMAGE_INDEX], remove I, assign I
-//                                                      x|y|z, select I, accept, discard,
-//                                                      on-add on|off (RunLinesCommand,
+//                                                      [IMAGE_INDEX], wait, remove I,
+//                                                      assign I x|y|z, select I, accept,
+//                                                      discard, on-add on|off, hold on|off
+//                                                      (RunLinesCommand,
 //                                                      app/state/line_proposals.h)
 //                                   wait-bake          block until the texture bake of the
 //                                                      current project is swapped in
@@ -88,6 +89,9 @@
 //   screenshot PATH               write a PNG of the frame just rendered; that frame first
 //                                 waits for the texture bake (wait-bake), so the picture never
 //                                 depends on how fast the worker thread was
+// A line detection in flight (the Detect lines button, the Add photo option) is waited for
+// before every step that presses a button or key, types, drops or takes a screenshot, and at
+// the end of the script; the `frames` and `move` steps between go on while it runs.
 #pragma once
 
 #include <array>

@@ -1,10 +1,14 @@
 #include "app/state/line_proposals.h"
 
+#include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <memory>
 #include <sstream>
+#include <system_error>
+#include <utility>
 
 #include "app/state/app_state.h"
-#include "core/estimators/line_detection.h"
 #include "core/io/project_io.h"
 
 namespace facet::app {
@@ -31,17 +35,17 @@ ManhattanLinesOptions OptionsFor(const Image& image) {
 
 }  // namespace
 
-bool DetectLineProposals(AppState* state, Id image_id) {
+bool StartLineDetection(AppState* state, Id image_id) {
   const Image* image = state->document.project().FindImage(image_id);
   if (image == nullptr) {
     state->Log(LogLevel::kError, "Detect lines: no such image");
     return false;
   }
+  const std::string path =
+      state->project_path.empty() ? image->path : ResolveImagePath(state->project_path, image->path);
   auto photo = state->photos.find(image_id);
   if (photo == state->photos.end()) {
     // Just added (the frame loads new photos after the edit): load it now, as that would.
-    const std::string path =
-        state->project_path.empty() ? image->path : ResolveImagePath(state->project_path, image->path);
     ImageReadResult read = ReadImage(path);
     if (!read.ok()) {
       state->Log(LogLevel::kError, "Detect lines: " + read.error);
@@ -53,8 +57,82 @@ bool DetectLineProposals(AppState* state, Id image_id) {
     state->Log(LogLevel::kError, "Detect lines: the photo is empty");
     return false;
   }
+  const auto start = std::chrono::steady_clock::now();
+  DropLineDetection(state);
   state->line_proposals.reset();
-  const ManhattanLinesSummary found = DetectManhattanLines(photo->second, OptionsFor(*image));
+  LineDetectionJob job;
+  job.image_id = image_id;
+  job.photo_name = std::filesystem::path(path).filename().string();
+  job.started_s = state->time_s;
+  const ManhattanLinesOptions options = OptionsFor(*image);
+  // The worker detects on its own copy of the photo, made first thing (the app may free the
+  // original once photo_copied is ready: photo removed, project replaced).
+  auto copied = std::make_shared<std::promise<void>>();
+  job.photo_copied = copied->get_future().share();
+  std::shared_future<void> held;
+  if (state->line_detection.hold) held = state->line_detection.hold_released;
+  try {
+    job.result = std::async(std::launch::async, [source = &photo->second, copied, options, held] {
+      ImageRgba8 copy;
+      try {
+        copy = *source;
+      } catch (...) {
+        copied->set_value();
+        throw;
+      }
+      copied->set_value();
+      if (held.valid()) held.wait();
+      return DetectManhattanLines(copy, options);
+    });
+  } catch (const std::system_error& e) {
+    // No thread to be had: detect here rather than not at all.
+    state->Log(LogLevel::kWarning, std::string("Detect lines: running on the main thread (") + e.what() + ")");
+    copied->set_value();
+    std::promise<ManhattanLinesSummary> done;
+    done.set_value(DetectManhattanLines(photo->second, options));
+    job.result = done.get_future();
+  }
+  state->line_detection.job = std::move(job);
+  ++state->line_detection.stats.started;
+  state->line_detection.stats.last_start_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return true;
+}
+
+bool LineDetectionInFlight(const AppState& state) { return state.line_detection.job.has_value(); }
+
+bool CollectLineDetection(AppState* state, bool wait) {
+  LineDetectionWork& work = state->line_detection;
+  std::erase_if(work.abandoned, [](const std::future<ManhattanLinesSummary>& f) {
+    return f.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
+  });
+  if (!work.job) return false;
+  LineDetectionJob& job = *work.job;
+  if (wait) {
+    HoldLineDetection(state, false);
+    job.result.wait();
+  } else if (job.result.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+    ++job.frames_in_flight;
+    return false;
+  }
+  const Id image_id = job.image_id;
+  const int frames_in_flight = job.frames_in_flight;
+  ManhattanLinesSummary found;
+  try {
+    found = job.result.get();
+  } catch (const std::exception& e) {
+    found.termination = SolverTermination::kFailed;
+    found.message = std::string("the detection failed: ") + e.what();
+  }
+  work.job.reset();
+  if (state->document.project().FindImage(image_id) == nullptr) {
+    ++work.stats.dropped;
+    state->Log(LogLevel::kInfo, "Detect lines: the photo left the project before its lines were found");
+    return false;
+  }
+  ++work.stats.collected;
+  work.stats.last_image_id = image_id;
+  work.stats.last_frames_in_flight = frames_in_flight;
   if (!found.IsUsable()) {
     state->Log(LogLevel::kError, "Detect lines: " + found.message);
     return false;
@@ -77,6 +155,34 @@ bool DetectLineProposals(AppState* state, Id image_id) {
                 found.calibration.focal_px, found.time_ms);
   state->Log(LogLevel::kInfo, text);
   return true;
+}
+
+void HoldLineDetection(AppState* state, bool hold) {
+  LineDetectionWork& work = state->line_detection;
+  if (hold && !work.hold) {
+    work.hold.emplace();
+    work.hold_released = work.hold->get_future().share();
+  } else if (!hold && work.hold) {
+    work.hold->set_value();
+    work.hold.reset();
+  }
+}
+
+void WaitForLineDetectionPhotoCopy(const AppState& state) {
+  if (state.line_detection.job) state.line_detection.job->photo_copied.wait();
+}
+
+void DropLineDetection(AppState* state) {
+  LineDetectionWork& work = state->line_detection;
+  if (!work.job) return;
+  work.job->photo_copied.wait();  // an abandoned worker never reads the app's photos again
+  work.abandoned.push_back(std::move(work.job->result));
+  work.job.reset();
+  ++work.stats.dropped;
+}
+
+bool DetectLineProposals(AppState* state, Id image_id) {
+  return StartLineDetection(state, image_id) && CollectLineDetection(state, /*wait=*/true);
 }
 
 bool RemoveLineProposal(AppState* state, int index) {
@@ -154,6 +260,16 @@ bool RunLinesCommand(AppState* state, const std::string& arg, std::string* error
     }
     return true;
   }
+  if (verb == "wait" && words.empty()) {
+    CollectLineDetection(state, /*wait=*/true);  // a failed detection only logs, as in the app
+    return true;
+  }
+  if (verb == "hold" && words.size() == 1 && (words[0] == "on" || words[0] == "off")) {
+    HoldLineDetection(state, words[0] == "on");
+    return true;
+  }
+  // The commands below act on the proposals: a detection in flight makes them first.
+  if (verb != "on-add") CollectLineDetection(state, /*wait=*/true);
   if ((verb == "remove" || verb == "select") && words.size() == 1) {
     int index = -1;
     if (!index_arg(0, &index) || !ValidIndex(*state, index)) {
@@ -189,8 +305,8 @@ bool RunLinesCommand(AppState* state, const std::string& arg, std::string* error
     return true;
   }
   *error =
-      "lines: expected detect [IMAGE_INDEX], remove I, assign I x|y|z, select I, accept, discard or "
-      "on-add on|off; got '" +
+      "lines: expected detect [IMAGE_INDEX], wait, remove I, assign I x|y|z, select I, accept, discard, "
+      "on-add on|off or hold on|off; got '" +
       arg + "'";
   return false;
 }

@@ -6,8 +6,9 @@
 // full-resolution grey image; its endpoints are sub-pixel, pixel centres at integers (Facet's
 // convention). Segments shorter than a fraction of the image diagonal are dropped: short
 // segments fix a direction poorly and are mostly texture. Photos of 2 MP or more are detected
-// in four horizontal bands in parallel (cv::parallel_for_; LSD is local), and the pieces of a
-// line cut by a band boundary are joined again.
+// in four horizontal bands in parallel (LSD is local; one thread per core, at most four), and
+// the pieces of a line cut by a band boundary are joined again. The band count is fixed, so
+// every machine finds the same segments.
 //
 // Grouping: a RANSAC search over minimal sets that each give a whole orthogonal frame
 // (rotation and focal length), principal point at the image centre (or the fixed one):

@@ -209,3 +209,79 @@ TEST_CASE("Detect lines: refusals are clear and leave the project alone") {
                           "frames 2\ncommand add-photo " + (dir / "blank.png") + "\nframes 2\ncommand lines detect\n");
   CHECK(err.find("too few line segments") != std::string::npos);
 }
+
+namespace {
+
+// The Leuven photo at 640 x 480: a second photo whose lines differ from the first's.
+std::string WriteSmallPhoto(const TempDir& dir) {
+  const cv::Mat photo = cv::imread(kLeuvenPhoto);
+  REQUIRE(!photo.empty());
+  cv::Mat small;
+  cv::resize(photo, small, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
+  const std::string path = dir / "small.jpg";
+  REQUIRE(cv::imwrite(path, small));
+  return path;
+}
+
+facet::Id ImageIdAt(const nlohmann::json& report, size_t index) {
+  return report.at("project").at("images").at(index).at("id").get<facet::Id>();
+}
+
+}  // namespace
+
+TEST_CASE("Detect lines runs on a worker: frames go on meanwhile, and the proposals land on the photo it started on") {
+  TempDir dir("detect_lines_worker");
+  const std::string project = WriteEmptyProject(dir);
+  const std::string small = WriteSmallPhoto(dir);
+  const std::string add =
+      "frames 2\ncommand add-photo " + kLeuvenPhoto + "\ncommand add-photo " + small + "\nframes 2\n";
+  const nlohmann::json probe = RenderScript(dir, project, "probe", add);
+  REQUIRE(probe.at("items").contains("image.detect_lines"));
+  CHECK(probe.at("line_detection").at("started") == 0);
+
+  // The button on the second photo (the active one), then straight to the first photo; 20
+  // frames with no input, which never wait for the worker. The hold keeps the worker from
+  // starting until `lines wait` lets it go and waits: had any frame waited for it, the render
+  // would never end.
+  const std::string script = add + "command lines hold on\nclick left " +
+                             ItemCenter(probe.at("items"), "image.detect_lines") +
+                             "\ncommand select-image 0\nframes 20\ncommand lines wait\n";
+  const nlohmann::json report = RenderScript(dir, project, "worker", script);
+  INFO(ReportLog(report));
+  const nlohmann::json& lines = report.at("line_detection");
+  CHECK(lines.at("started") == 1);
+  CHECK(lines.at("collected") == 1);
+  CHECK(lines.at("dropped") == 0);
+  CHECK_FALSE(lines.at("in_flight").get<bool>());
+  // In flight from the click's release to `lines wait`: the select-image frame and the 20.
+  CHECK(lines.at("last_frames_in_flight") == 21);
+  // On the second photo, though the first is shown: exactly the core's proposals for it.
+  CHECK(report.at("active_image_id") == ImageIdAt(report, 0));
+  CHECK(lines.at("last_image_id") == ImageIdAt(report, 1));
+  CHECK(report.at("line_proposals").at("image_id") == ImageIdAt(report, 1));
+  const facet::ImageReadResult photo = facet::ReadImage(small);
+  REQUIRE(photo.ok());
+  const facet::ManhattanLinesSummary found = facet::DetectManhattanLines(photo.image, facet::ManhattanLinesOptions{});
+  REQUIRE(found.IsUsable());
+  CHECK(report.at("line_proposals").at("count").get<size_t>() == found.labelled_segments.size());
+  CHECK(ProposedCount(report) == static_cast<int>(found.labelled_segments.size()));
+}
+
+TEST_CASE("Detect lines in flight: dropped when its photo is removed or another project is opened") {
+  TempDir dir("detect_lines_dropped");
+  // The Add photo option starts a detection; undo removes the photo at once; the second
+  // detection (held, so surely unfinished) is in flight when the sample project replaces this
+  // one.
+  const std::string script = "frames 2\ncommand lines on-add on\ncommand add-photo " + kLeuvenPhoto +
+                             "\ncommand undo\nframes 3\ncommand lines hold on\ncommand add-photo " + kLeuvenPhoto +
+                             "\ncommand open " + kSampleProject + "\nframes 3\n";
+  const nlohmann::json report = RenderScript(dir, WriteEmptyProject(dir), "dropped", script);
+  INFO(ReportLog(report));
+  const nlohmann::json& lines = report.at("line_detection");
+  CHECK(lines.at("started") == 2);
+  CHECK(lines.at("collected") == 0);
+  CHECK(lines.at("dropped") == 2);
+  CHECK(report.at("line_proposals").at("count") == 0);
+  CHECK(ProposedCount(report) == -1);  // no "Detect lines: N proposed" ever
+  CHECK(LoadProjectFile(kSampleProject).images.size() == report.at("project").at("images").size());
+}
