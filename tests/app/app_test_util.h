@@ -190,6 +190,19 @@ struct View {
   }
 };
 
+// RMS (px) of every pin's distance to its vertex projected by its image's camera; every pinned
+// vertex must be in front of its camera.
+inline double PinRmsPx(const facet::Project& project) {
+  double sum_sq = 0.0;
+  for (const facet::Pin& pin : project.pins) {
+    const facet::Camera& camera = project.FindImage(pin.image_id)->camera;
+    const Eigen::Vector3d x = facet::VertexInWorld(project, pin.vertex);
+    REQUIRE(camera.CamFromWorld(x).z() > 0.0);
+    sum_sq += (camera.Project(x) - pin.uv_px).squaredNorm();
+  }
+  return std::sqrt(sum_sq / static_cast<double>(project.pins.size()));
+}
+
 inline View ViewFromReport(const nlohmann::json& report) {
   const auto& v = report.at("image_view");
   const auto& r = v.at("rect");

@@ -39,17 +39,6 @@ struct FrontCorner {
 const FrontCorner kFront[4] = {
     {0, {318.5, 395.5}}, {1, {416.0, 395.5}}, {4, {318.0, 258.3}}, {5, {416.0, 260.0}}};
 
-// RMS (px) of every pin's distance to its vertex projected by its image's camera.
-double PinRms(const facet::Project& project) {
-  double sum_sq = 0.0;
-  for (const facet::Pin& pin : project.pins) {
-    const facet::Camera& camera = project.FindImage(pin.image_id)->camera;
-    const Eigen::Vector3d x = facet::VertexInWorld(project, pin.vertex);
-    REQUIRE(camera.CamFromWorld(x).z() > 0.0);
-    sum_sq += (camera.Project(x) - pin.uv_px).squaredNorm();
-  }
-  return std::sqrt(sum_sq / static_cast<double>(project.pins.size()));
-}
 
 }  // namespace
 
@@ -109,8 +98,8 @@ TEST_CASE("a new box pinned by its front face's four corners solves, its depth h
   // The pins' RMS with the saved camera and box. The rotation is the lines', so the four
   // clicks on the timber cannot all be met; the shipped sample's box on the same four pixels
   // (its depth and height locked) is the reference a sensible fit must not exceed.
-  const double rms_px = PinRms(solved);
-  const double sample_rms_px = PinRms(sample.project);
+  const double rms_px = PinRmsPx(solved);
+  const double sample_rms_px = PinRmsPx(sample.project);
   const double width = box.shape.params[0], depth = box.shape.params[1], height = box.shape.params[2];
   const double camera_distance = (photo.camera.CenterInWorld() - box.mesh.vertex(0).position).norm();
   MESSAGE("front pins: RMS " << rms_px << " px (the sample's box " << sample_rms_px << " px); box " << width << " x " << depth << " x " << height

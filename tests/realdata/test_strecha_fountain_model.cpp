@@ -376,14 +376,7 @@ Comparison CompareWithGroundTruth(const facet::Project& model) {
             << 100.0 * out.focal_error.back() << " %; principal point " << image.camera.principal_point_px.transpose()
             << " (true " << k(0, 2) << " " << k(1, 2) << ")\n";
   }
-  double sum_sq = 0.0;
-  for (const facet::Pin& pin : model.pins) {
-    const facet::Camera& camera = model.FindImage(pin.image_id)->camera;
-    const Eigen::Vector3d x = facet::VertexInWorld(model, pin.vertex);
-    REQUIRE(camera.CamFromWorld(x).z() > 0.0);
-    sum_sq += (camera.Project(x) - pin.uv_px).squaredNorm();
-  }
-  out.pin_rms_px = std::sqrt(sum_sq / static_cast<double>(model.pins.size()));
+  out.pin_rms_px = PinRmsPx(model);
   figures << "pin RMS " << out.pin_rms_px << " px\n";
   const Eigen::Matrix3d world_rotation = BestWorldRotation(recovered, truth);
   for (size_t i = 0; i < recovered.size(); ++i) {
