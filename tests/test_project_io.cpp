@@ -800,6 +800,28 @@ TEST_CASE("out-of-range values and bad references name their location") {
                   "primitives[1].attached_to: refers to a missing primitive");
   CheckErrorNames(with([](Json& j) { j["primitives"][1]["attached_to"] = j["primitives"][1]["id"]; }),
                   "primitives[1].attached_to");
+  // Attachment cycles (issue 14: loaded, then the solve walked them): 2, 3 and all primitives.
+  CheckErrorNames(with([](Json& j) {
+                    j["primitives"][1]["attached_to"] = j["primitives"][2]["id"];
+                    j["primitives"][2]["attached_to"] = j["primitives"][1]["id"];
+                  }),
+                  "primitives[1].attached_to: the chain of bases of primitive");
+  CheckErrorNames(with([](Json& j) {
+                    j["primitives"][1]["attached_to"] = j["primitives"][2]["id"];
+                    j["primitives"][2]["attached_to"] = j["primitives"][3]["id"];
+                    j["primitives"][3]["attached_to"] = j["primitives"][1]["id"];
+                  }),
+                  "loops (attachments must form trees)");
+  CheckErrorNames(with([](Json& j) {
+                    Json& prims = j["primitives"];
+                    const size_t n = prims.size();
+                    REQUIRE(n >= 4);
+                    for (size_t i = 0; i < n; ++i) prims[i]["attached_to"] = prims[(i + 1) % n]["id"];
+                  }),
+                  "primitives[0].attached_to: the chain of bases");
+  // A photo without pixels (issue 14: a solve then exited 0 and wrote the file).
+  CheckErrorNames(with([](Json& j) { j["images"][0]["width_px"] = 0; }), "images[0].width_px");
+  CheckErrorNames(with([](Json& j) { j["images"][1]["height_px"] = 0; }), "images[1].height_px");
   CheckErrorNames(with([](Json& j) { j["constraints"][0]["kind"] = "tangent"; }),
                   "constraints[0].kind: unknown constraint kind");
   CheckErrorNames(with([](Json& j) { j["constraints"][8]["image_id"] = 9999; }),
