@@ -25,12 +25,19 @@ std::string StoredPath(const std::string& project_path, const std::string& photo
 }  // namespace
 
 bool AddPhotoEdit(AppState* state, const std::string& path) {
-  int width_px = 0, height_px = 0;
-  std::string error;
-  if (path.empty() || !ReadImageSize(path, &width_px, &height_px, &error)) {
-    state->Log(LogLevel::kError, "Add photo: " + (path.empty() ? std::string("no file name") : error));
+  if (path.empty()) {
+    state->Log(LogLevel::kError, "Add photo: no file name");
     return false;
   }
+  // Decoded before it is accepted, so that a truncated or corrupt photo is refused here and
+  // not after it joined the project; the decoded pixels are the ones the app then shows.
+  ImageReadResult read = ReadImage(path);
+  if (!read.ok()) {
+    state->Log(LogLevel::kError, "Add photo: " + read.error);
+    return false;
+  }
+  const int width_px = read.image.width;
+  const int height_px = read.image.height;
   Project edited = state->document.project();
   Image image;
   image.id = edited.NewId();
@@ -53,6 +60,7 @@ bool AddPhotoEdit(AppState* state, const std::string& path) {
   edited.images.push_back(std::move(image));
   CommitEdit(state, "Add photo " + name, std::move(edited));
   if (state->document.project().FindImage(id) == nullptr) return false;
+  state->photos.insert_or_assign(id, std::move(read.image));
   state->active_image_id = id;
   state->Log(LogLevel::kInfo,
              name + ": " + std::to_string(width_px) + " x " + std::to_string(height_px) + " px; " +

@@ -71,4 +71,16 @@ TEST_CASE("Add photo: a new uncalibrated image with its size and a relative path
       Render(dir, dir / "undone.facet", "frames 2\ncommand add-photo " + (dir / "broken.jpg") + "\n", "broken");
   CHECK(broken.exit_code != 0);
   CHECK(broken.stderr_text.find("broken.jpg") != std::string::npos);
+
+  // A JPEG cut short keeps a valid header, so its size reads; Add photo decodes it first and
+  // refuses it (issue 14: it was added and failed only when shown).
+  std::vector<unsigned char> jpeg;
+  REQUIRE(cv::imencode(".jpg", cv::Mat(600, 800, CV_8UC3, cv::Scalar(60, 80, 100)), jpeg));
+  WriteText(dir / "cut.jpg", std::string(jpeg.begin(), jpeg.begin() + static_cast<long>(jpeg.size() / 2)));
+  const RunResult cut = Render(dir, dir / "undone.facet",
+                               "frames 2\ncommand add-photo " + (dir / "cut.jpg") + "\ncommand save " +
+                                   (dir / "after_cut.facet") + "\n",
+                               "cut");
+  CHECK(cut.exit_code != 0);
+  CHECK(cut.stderr_text.find("cut.jpg: JPEG is truncated") != std::string::npos);
 }
