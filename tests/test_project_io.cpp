@@ -921,6 +921,24 @@ TEST_CASE("LoadProject: missing files are errors, missing images are warnings") 
   REQUIRE(r.warnings.size() == 1);
   CHECK(r.warnings[0].find("images[1]") != std::string::npos);
   CHECK(r.warnings[0].find("missing.jpg") != std::string::npos);
+
+  // The project moved without its photos folder, the photo copied beside it: found by name,
+  // its stored path replaced, and said so; everything else as saved.
+  fs::create_directories(dir.path / "moved");
+  const std::string moved = (dir.path / "moved" / "p.facet").string();
+  REQUIRE(facet::SaveProject(p, moved) == "");
+  WriteFile((dir.path / "moved" / "present.jpg").string(), "not really a jpeg");
+  const facet::ProjectLoadResult found = facet::LoadProject(moved);
+  INFO(found.error);
+  REQUIRE(found.ok());
+  Project expected = p;
+  expected.images[0].path = "present.jpg";
+  CHECK(found.project == expected);
+  REQUIRE(found.warnings.size() == 2);
+  CHECK(found.warnings[0].find("images[0]: photo not found at") != std::string::npos);
+  CHECK(found.warnings[0].find("beside the project (save to keep the new path)") != std::string::npos);
+  CHECK(found.warnings[1].find("images[1]: image file not found") != std::string::npos);
+  CHECK(found.warnings[1].find("nor missing.jpg beside the project") != std::string::npos);
 }
 
 TEST_CASE("atomic save: missing folder, replacing a file, failures leave no trace") {

@@ -60,11 +60,42 @@ bool AddPhotoEdit(AppState* state, const std::string& path) {
   edited.images.push_back(std::move(image));
   CommitEdit(state, "Add photo " + name, std::move(edited));
   if (state->document.project().FindImage(id) == nullptr) return false;
-  state->photos.insert_or_assign(id, std::move(read.image));
+  AdoptDecodedPhoto(state, id, std::move(read.image));
   state->active_image_id = id;
   state->Log(LogLevel::kInfo,
              name + ": " + std::to_string(width_px) + " x " + std::to_string(height_px) + " px; " +
                  (prior.found ? prior.message : "no EXIF focal length (calibrate from lines or pins)"));
+  return true;
+}
+
+bool RelinkPhotoEdit(AppState* state, Id image_id, const std::string& path) {
+  const Image* current = state->document.project().FindImage(image_id);
+  if (current == nullptr) {
+    state->Log(LogLevel::kError, "Relink photo: choose the image to relink first");
+    return false;
+  }
+  if (path.empty()) {
+    state->Log(LogLevel::kError, "Relink photo: no file name");
+    return false;
+  }
+  ImageReadResult read = ReadImage(path);
+  if (!read.ok()) {
+    state->Log(LogLevel::kError, "Relink photo: " + read.error);
+    return false;
+  }
+  if (read.image.width != current->width_px || read.image.height != current->height_px) {
+    state->Log(LogLevel::kError, "Relink photo: " + path + " is " + std::to_string(read.image.width) + " x " +
+                                     std::to_string(read.image.height) + " px, the image it replaces " +
+                                     std::to_string(current->width_px) + " x " + std::to_string(current->height_px) +
+                                     " px: not the same photo");
+    return false;
+  }
+  Project edited = state->document.project();
+  edited.FindImage(image_id)->path = StoredPath(state->project_path, path);
+  const std::string name = std::filesystem::path(path).filename().string();
+  CommitEdit(state, "Relink photo " + name, std::move(edited));
+  AdoptDecodedPhoto(state, image_id, std::move(read.image));
+  state->Log(LogLevel::kInfo, "Relinked the photo to " + path);
   return true;
 }
 

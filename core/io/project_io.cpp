@@ -1037,12 +1037,26 @@ ProjectLoadResult LoadProject(const std::string& path) {
     result.error = path + ": " + result.error;
     return result;
   }
+  // A project moved without its folder structure: a photo missing at its stored path is
+  // looked up by its file name beside the project. One still missing keeps its camera, pins
+  // and lines (the app marks it until File > Relink photo).
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
   for (size_t i = 0; i < result.project.images.size(); ++i) {
-    const Image& image = result.project.images[i];
+    Image& image = result.project.images[i];
     const std::string resolved = ResolveImagePath(path, image.path);
     std::error_code ec;
-    if (!std::filesystem::is_regular_file(resolved, ec))
-      result.warnings.push_back("images[" + std::to_string(i) + "]: image file not found: " + resolved);
+    if (std::filesystem::is_regular_file(resolved, ec)) continue;
+    const std::string name = std::filesystem::path(image.path).filename().string();
+    const std::filesystem::path beside = folder / name;
+    const std::string at = "images[" + std::to_string(i) + "]: ";
+    if (!name.empty() && name != image.path && std::filesystem::is_regular_file(beside, ec)) {
+      result.warnings.push_back(at + "photo not found at " + resolved + "; using " + beside.string() +
+                                " beside the project (save to keep the new path)");
+      image.path = name;
+    } else {
+      result.warnings.push_back(at + "image file not found: " + resolved +
+                                (name.empty() ? "" : " (nor " + name + " beside the project)"));
+    }
   }
   return result;
 }
