@@ -9,6 +9,7 @@
 
 #include "app/state/calgui_exif_prior.h"
 #include "core/image/image_io.h"
+#include "core/io/blender_script.h"
 #include "core/io/calibrate_io.h"
 #include "core/io/calibrate_points_io.h"
 #include "core/io/export.h"
@@ -211,7 +212,8 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
   return 0;
 }
 
-int RunExportCommand(const std::string& project_path, const std::string& output_path) {
+int RunExportCommand(const std::string& project_path, const std::string& output_path,
+                     const std::string& blender_script_path) {
   Project project;
   if (!LoadForCli(project_path, &project)) return 1;
   // Each photo is read once and baked in place (the bake takes pointers, copies no pixels).
@@ -247,6 +249,17 @@ int RunExportCommand(const std::string& project_path, const std::string& output_
     return 1;
   }
   for (const std::string& f : exported.files_written) std::cout << f << "\n";
+  if (!blender_script_path.empty()) {
+    std::error_code ec;
+    const std::string model = std::filesystem::absolute(output_path, ec).lexically_normal().string();
+    const std::string error = WriteFileAtomically(
+        blender_script_path, BlenderSetupScript(project, project_path, ec ? output_path : model));
+    if (!error.empty()) {
+      std::cerr << "facet export: " << error << "\n";
+      return 1;
+    }
+    std::cout << blender_script_path << "\n";
+  }
   return 0;
 }
 
