@@ -245,7 +245,18 @@ TEST_CASE("principal point choices and a vanishing point at infinity") {
   const json out = json::parse(result.json);
   CHECK(std::abs(out.at("focal_px").get<double>() - scene.true_camera.focal_px) <
         kNoiseFreeRelative * scene.true_camera.focal_px);
-  CHECK(out.at("vanishing_points").at(2).is_null());
+  // At infinity: said so, with the direction of the (parallel, here vertical) segments.
+  const json& infinite = out.at("vanishing_points").at(2);
+  REQUIRE(infinite.is_object());
+  CHECK(infinite.at("at_infinity") == true);
+  const Eigen::Vector2d direction(infinite.at("direction").at(0).get<double>(),
+                                  infinite.at("direction").at(1).get<double>());
+  CHECK(std::abs(direction.norm() - 1.0) < 1e-12);
+  for (const Segment& z : scene.project.segments) {
+    if (z.axis != Axis::kZ) continue;
+    const Eigen::Vector2d d = (z.b_px - z.a_px).normalized();
+    CHECK(std::abs(d.x() * direction.y() - d.y() * direction.x()) < 1e-9);
+  }
   CHECK(out.at("vanishing_points").at(0).is_array());
   CHECK(std::abs(out.at("vanishing_points_homogeneous").at(2).at(2).get<double>()) < 1e-9);
 
