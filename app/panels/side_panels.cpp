@@ -147,8 +147,10 @@ void DrawPrimitiveSection(AppState* state, const Primitive primitive) {
   ImGui::TextColored(kDimText, "Keep while solving");
   Primitive locks = primitive;
   bool lock_changed = ImGui::Checkbox("Rotation", &locks.rotation_locked);
+  RecordItem(state, "primitive.keep_rotation");
   ImGui::SameLine();
   lock_changed |= ImGui::Checkbox("Position", &locks.translation_locked);
+  RecordItem(state, "primitive.keep_position");
   if (lock_changed) {
     Project edited = state->document.project();
     *edited.FindPrimitive(id) = locks;

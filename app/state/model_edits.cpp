@@ -88,6 +88,34 @@ Eigen::Vector3d AimRay(const Camera& camera, const Eigen::Vector2d& aim_px) {
   return low.z() < aim.z() ? low : aim;
 }
 
+// Keeps the added box on the ground: its base corners and the first box's in one coplanar
+// constraint. The first box is the origin (its position kept), so its base is the ground the
+// photo's camera stands over. Returns the log note, or "" when there is no such base (the
+// first primitive is not a box standing at z = 0 with its pose kept, or a base corner is gone).
+std::string KeepOnGround(Project* project, Id added_id) {
+  if (project->primitives.size() < 2) return {};
+  const Primitive& base = project->primitives.front();
+  const Primitive* added = project->FindPrimitive(added_id);
+  if (added == nullptr || added->id == base.id || base.shape.kind != PrimitiveKind::kBox ||
+      added->shape.kind != PrimitiveKind::kBox || !base.translation_locked || !base.rotation_locked ||
+      base.attached_to != kNoId) {
+    return {};
+  }
+  Constraint c;
+  c.kind = ConstraintKind::kCoplanar;
+  constexpr VertexId kBaseCorners[] = {0, 1, 2, 3};  // core/mesh/box.h: bit 2 (z) clear
+  for (const Primitive* p : {&base, added}) {
+    for (VertexId v : kBaseCorners) {
+      if (!p->mesh.IsVertex(v) || std::abs(p->mesh.vertex(v).position.z()) > 1e-9) return {};
+      c.vertices.push_back({p->id, v});
+    }
+  }
+  c.id = project->NewId();
+  project->constraints.push_back(c);
+  return "it stands on the ground: its base is kept coplanar with " + base.name + "'s (constraint " +
+         std::to_string(c.id) + "; remove it to lift the box)";
+}
+
 }  // namespace
 
 NewPrimitivePlacement PlaceNewPrimitive(const Project& project, const PrimitiveShape& shape, const Image* view,
@@ -142,6 +170,7 @@ NewPrimitivePlacement PlaceNewPrimitive(const Project& project, const PrimitiveS
   Eigen::Vector3d ground;
   if (eye.z() > 0.0 && ray.z() < 0.0) {
     ground = eye - (eye.z() / ray.z()) * ray;  // the ground plane (z = 0) under the aim
+    out.on_ground = true;
   } else {
     // The camera is not above the ground: at the model's depth along the ray.
     double depth = framing_depth;
@@ -158,9 +187,11 @@ bool AddPrimitiveEdit(AppState* state, PrimitiveKind kind, Id base_id, const std
   Project edited = state->document.project();
   PrimitiveShape shape = DefaultShape(kind);
   const bool first = edited.primitives.empty();
+  bool on_ground = false;
   if (base_id == kNoId) {
     const NewPrimitivePlacement placement =
         PlaceNewPrimitive(edited, shape, state->ActiveImage(), aim_px, state->selection.primitive_id);
+    on_ground = placement.on_ground;
     shape.params *= placement.scale;
     shape.translation = placement.translation;
     if (placement.camera_shift != Eigen::Vector3d::Zero()) {
@@ -194,6 +225,9 @@ bool AddPrimitiveEdit(AppState* state, PrimitiveKind kind, Id base_id, const std
     primitive->attached_to = base_id;
     label += " on top";
     RefreshPrimitive(&edited, primitive);
+  }
+  if (on_ground && kind == PrimitiveKind::kBox) {
+    if (const std::string note = KeepOnGround(&edited, id); !note.empty()) state->Log(LogLevel::kInfo, label + ": " + note);
   }
   state->selection = Selection();
   state->selection.primitive_id = id;

@@ -39,6 +39,7 @@ struct NewPrimitivePlacement {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();   // world_from_primitive
   double scale = 1.0;                                      // of the default dimensions
   Eigen::Vector3d camera_shift = Eigen::Vector3d::Zero();  // added to every camera centre
+  bool on_ground = false;  // stands on the ground plane (z = 0) under the aim
 };
 NewPrimitivePlacement PlaceNewPrimitive(const Project& project, const PrimitiveShape& shape, const Image* view,
                                         const std::optional<Eigen::Vector2d>& aim_px, Id scale_from);
@@ -46,6 +47,10 @@ NewPrimitivePlacement PlaceNewPrimitive(const Project& project, const PrimitiveS
 // K_create: adds a primitive of `kind`, on top of `base_id` (a box) when given, else where
 // PlaceNewPrimitive puts it in the active image (aimed at `aim_px`, image px), and selects it.
 // The first primitive of a project gets its last dimension locked (a known length for scale).
+// A later box placed on the ground is kept there: its base and the first box's (the origin,
+// on the ground) are one coplanar constraint, since from one photo a box whose foot no pin
+// sees (or whose depth along the view ray nothing fixes) could otherwise float or sink; the
+// log says so, and removing the constraint lifts it.
 bool AddPrimitiveEdit(AppState* state, PrimitiveKind kind, Id base_id,
                       const std::optional<Eigen::Vector2d>& aim_px = std::nullopt);
 

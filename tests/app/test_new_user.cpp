@@ -271,6 +271,13 @@ TEST_CASE("issue 12: a new primitive stands on the ground under the aim, in fron
   double lowest = 1e300;
   for (facet::VertexId v = 0; v < box2.mesh.VertexIdEnd(); ++v) lowest = std::min(lowest, box2.mesh.vertex(v).position.z());
   CHECK(std::abs(lowest) < 1e-9);  // on the ground plane
+  // And kept there: its base and the first box's are one coplanar constraint (from one photo
+  // nothing else would stop a box whose foot no pin sees from floating or sinking).
+  CHECK(first.constraints.empty());
+  REQUIRE(second.constraints.size() == 1);
+  CHECK(second.constraints[0].kind == facet::ConstraintKind::kCoplanar);
+  CHECK(second.constraints[0].vertices.size() == 8);
+  CHECK(ReportLog(r).find("it stands on the ground") != std::string::npos);
   // The scene's scale: the same size as the box beside it.
   CHECK((box2.shape.params - second.primitives[0].shape.params).norm() < 1e-9);
 

@@ -1,18 +1,24 @@
-// The Leuven tutorial (assets/samples/leuven/tutorial.txt): the half-timbered house, a box
-// with a gable roof, modelled from an empty project by the script of UI events a user makes,
-// replayed through the real application with snapping on. Checks what the tutorial promises:
-// the house lands on the photo, at the typed scale and depth, textured wherever the photo
-// sees it, in at most 40 UI events (issue 12's target for this house; a new user took 101).
-// Writes the step screenshots the README shows (FACET_BINARY_DIR/tutorial/; assets/samples/leuven/tutorial/
-// holds the copies shown).
+// The Leuven tutorial (assets/samples/leuven/tutorial.txt): the three houses of the photo's
+// street, each a box with a gable roof, modelled from an empty project by the script of UI
+// events a user makes, replayed through the real application with snapping on. Checks what
+// the tutorial promises: the houses land on the photo (pin reprojection per house), stand on
+// the ground at the scale of the one measured length, are textured wherever the photo sees
+// them, take at most 40 UI events each (issue 12's target for a house; a new user took 101
+// for the first one), and the saved result is the sample the app opens
+// (assets/samples/leuven/street.facet). Writes the step screenshots the README shows
+// (FACET_BINARY_DIR/tutorial/; assets/samples/leuven/tutorial/ holds the copies shown).
 #include <doctest/doctest.h>
 
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "app/state/input_script.h"
 #include "core/image/image_io.h"
 #include "core/io/project_io.h"
 #include "core/scene/project.h"
@@ -25,13 +31,17 @@ namespace {
 
 const std::string kSampleDir = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven";
 const char* const kSteps[] = {"tutorial-1-detected-lines", "tutorial-2-box-pinned", "tutorial-3-roof",
-                              "tutorial-4-house"};
-constexpr int kMaxUiEvents = 40;
-// The reprojection RMS of the five pins. The rotation is the detected lines' (kept by the
-// solve), the corners are where snapping put them; the timber frame is not an exact rectangle
-// in that frame, so the pins cannot all be met: 2.35 px measured, the bound leaves room for
-// float noise in the line detection only.
-constexpr double kMaxPinRmsPx = 2.6;
+                              "tutorial-4-house",          "tutorial-5-left-house", "tutorial-6-street"};
+constexpr int kMaxUiEventsPerHouse = 40;
+// Pin reprojection RMS per house, in px. The half-timbered house: the rotation is the
+// detected lines' (kept by the solve) and its corners are where snapping put them; the timber
+// frame is not an exact rectangle in that frame, so its five pins cannot all be met: 2.36 px
+// measured, the bound leaves room for float noise in the line detection only. The two other
+// houses have as many free dimensions as their pins see (the rest typed and kept, the foot on
+// the ground), so their pins are met but for what the ground and the shared camera ask:
+// 0.85 px (left) and 0.00 px (right) measured; 1.5 px fails a solve that leaves them.
+constexpr double kMaxFirstHouseRmsPx = 2.6;
+constexpr double kMaxOtherHouseRmsPx = 1.5;
 
 // Whether the face faces the camera and its centroid projects inside the photo.
 bool SeenBy(const facet::Camera& camera, const facet::PolyMesh& mesh, facet::FaceId face) {
@@ -49,16 +59,43 @@ bool SeenBy(const facet::Camera& camera, const facet::PolyMesh& mesh, facet::Fac
          uv.y() < camera.height_px;
 }
 
+// The UI events of each "# house:" section of the script (what a user does by hand).
+std::vector<int> UiEventsPerHouse(const std::string& script_text) {
+  std::vector<std::string> sections;
+  std::istringstream in(script_text);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("# house:", 0) == 0) sections.emplace_back();
+    if (!sections.empty()) sections.back() += line + "\n";
+  }
+  std::vector<int> counts;
+  for (const std::string& section : sections) {
+    facet::app::Script script;
+    std::string error;
+    REQUIRE_MESSAGE(facet::app::ParseScript(section, &script, &error), error);
+    counts.push_back(script.ui_events);
+  }
+  return counts;
+}
+
+// The house a primitive belongs to: its box (a roof's base).
+facet::Id HouseOf(const facet::Project& project, facet::Id primitive_id) {
+  const facet::Primitive* p = project.FindPrimitive(primitive_id);
+  REQUIRE(p != nullptr);
+  return p->attached_to != facet::kNoId ? p->attached_to : p->id;
+}
+
 }  // namespace
 
-TEST_CASE("the tutorial builds the house from an empty project in at most 40 UI events") {
+TEST_CASE("the tutorial builds the street's three houses from an empty project, at most 40 UI events each") {
   TempDir dir("tutorial");
   fs::copy_file(kSampleDir + "/leuvenA.jpg", dir / "leuvenA.jpg");
   facet::Project empty;
   const std::string empty_path = dir / "empty.facet";
   REQUIRE(facet::SaveProject(empty, empty_path) == "");
-  const std::string saved = dir / "house.facet";
-  WriteText(dir / "run.txt", ReadText(kSampleDir + "/tutorial.txt") + "frames 2\ncommand save " + saved + "\n");
+  const std::string saved = dir / "street.facet";
+  const std::string tutorial = ReadText(kSampleDir + "/tutorial.txt");
+  WriteText(dir / "run.txt", tutorial + "frames 2\ncommand save " + saved + "\n");
 
   const std::string report_path = dir / "report.json";
   const RunResult run = RunRender(dir, "'" + empty_path + "' -o '" + (dir / "final.png") + "' --script run.txt --report '" +
@@ -71,58 +108,142 @@ TEST_CASE("the tutorial builds the house from an empty project in at most 40 UI 
 
   // The script counts one event for the save it was given here; the tutorial itself has one less.
   const int ui_events = report.at("script_ui_events").get<int>() - 1;
-  MESSAGE("tutorial: " << ui_events << " UI events");
-  CHECK(ui_events <= kMaxUiEvents);
+  const std::vector<int> per_house = UiEventsPerHouse(tutorial);
+  REQUIRE(per_house.size() == 3);
+  MESSAGE("tutorial: " << ui_events << " UI events; per house " << per_house[0] << ", " << per_house[1] << ", "
+                       << per_house[2]);
+  CHECK(per_house[0] + per_house[1] + per_house[2] == ui_events);
+  for (int count : per_house) CHECK(count <= kMaxUiEventsPerHouse);
 
-  const facet::Project house = LoadProjectFile(saved);
-  REQUIRE(house.images.size() == 1);
-  REQUIRE(house.images[0].camera_calibrated);
-  REQUIRE(house.primitives.size() == 2);
-  CHECK(house.pins.size() == 5);
-  const facet::Primitive& box = house.primitives[0];
-  const facet::Primitive& roof = house.primitives[1];
-  CHECK(box.shape.kind == facet::PrimitiveKind::kBox);
-  CHECK(roof.shape.kind == facet::PrimitiveKind::kWedge);
-  CHECK(roof.attached_to == box.id);
-  CHECK(roof.shape.ridge_along_y);
-  // Measure: the front's left edge is 5 m (the known length takes the scale over from the
-  // first box's kept height, and says so); the typed depth, 8 m, kept.
+  const facet::Project street = LoadProjectFile(saved);
+  REQUIRE(street.images.size() == 1);
+  REQUIRE(street.images[0].camera_calibrated);
+  const facet::Camera& camera = street.images[0].camera;
+  REQUIRE(street.primitives.size() == 6);
+  for (size_t h = 0; h < 3; ++h) {
+    const facet::Primitive& box = street.primitives[2 * h];
+    const facet::Primitive& roof = street.primitives[2 * h + 1];
+    CAPTURE(h);
+    CHECK(box.shape.kind == facet::PrimitiveKind::kBox);
+    CHECK(box.attached_to == facet::kNoId);
+    CHECK(roof.shape.kind == facet::PrimitiveKind::kWedge);
+    CHECK(roof.attached_to == box.id);
+    // Every house stands on the ground the first one defines (z = 0): the later ones by the
+    // constraint B adds, which the solve meets.
+    CHECK(std::abs(box.shape.translation.z()) < 1e-6);
+  }
+  // The scale (Measure's distance) and the two ground constraints, nothing else.
+  REQUIRE(street.constraints.size() == 3);
+  CHECK(street.constraints[0].kind == facet::ConstraintKind::kDistance);
+  CHECK(street.constraints[1].kind == facet::ConstraintKind::kCoplanar);
+  CHECK(street.constraints[2].kind == facet::ConstraintKind::kCoplanar);
+  const facet::Primitive& house = street.primitives[0];
+  const facet::Primitive& house_roof = street.primitives[1];
+  const facet::Primitive& left = street.primitives[2];
+  const facet::Primitive& left_roof = street.primitives[3];
+  const facet::Primitive& right = street.primitives[4];
+  const facet::Primitive& right_roof = street.primitives[5];
+  CHECK(house_roof.shape.ridge_along_y);
+  CHECK_FALSE(left_roof.shape.ridge_along_y);
+  CHECK_FALSE(right_roof.shape.ridge_along_y);
+
+  // The one known length: the half-timbered front's left edge is 5 m (Measure; it takes the
+  // scale over from the first box's kept height, and says so); its typed depth, 8 m, kept.
   CHECK(ReportLog(report).find("box 1's Size z is no longer kept: the known length sets the scale") !=
         std::string::npos);
-  CHECK_FALSE(box.param_locked[2]);
-  CHECK(std::abs(box.shape.params[2] - 5.0) < 1e-6);
-  CHECK(box.shape.params[1] == 8.0);
-  CHECK(box.param_locked[1]);
-  // A house, not a sliver: the front about as wide as the photo says (3.6 m for the sample's
-  // hand-placed pins), the roof a real gable.
-  CHECK(box.shape.params[0] > 3.0);
-  CHECK(box.shape.params[0] < 4.0);
-  CHECK(roof.shape.params[2] > 2.0);
+  CHECK_FALSE(house.param_locked[2]);
+  CHECK(std::abs(house.shape.params[2] - 5.0) < 1e-6);
+  CHECK(house.shape.params[1] == 8.0);
+  CHECK(house.param_locked[1]);
+  // The typed dimensions no pin sees are kept as typed.
+  CHECK(left.shape.params[0] == 6.0);
+  CHECK(left.shape.params[1] == 12.0);
+  CHECK(left_roof.shape.params[2] == 4.0);
+  CHECK(right.shape.params[0] == 16.0);
+  CHECK(right.shape.params[1] == 10.0);
+  // What the pins give, at the scale of the 5 m edge: houses, not slivers. The half-timbered
+  // front about as wide as the photo says (3.6 m for the hand-placed pins of leuven.facet), its
+  // gable a real one; the left house's eaves above the first house's (the photo shows them
+  // higher, nearer the camera) but below three storeys; the right house's eaves at one or two
+  // storeys under a tall roof (the photo shows its roof about as tall as its wall).
+  MESSAGE("dimensions (m): half-timbered " << house.shape.params.head<3>().transpose() << " roof "
+                                           << house_roof.shape.params[2] << "; left " << left.shape.params.head<3>().transpose()
+                                           << " roof " << left_roof.shape.params[2] << "; right "
+                                           << right.shape.params.head<3>().transpose() << " roof "
+                                           << right_roof.shape.params[2]);
+  CHECK(house.shape.params[0] > 3.0);
+  CHECK(house.shape.params[0] < 4.0);
+  CHECK(house_roof.shape.params[2] > 2.0);
+  CHECK(left.shape.params[2] > 5.0);
+  CHECK(left.shape.params[2] < 9.0);
+  CHECK(right.shape.params[2] > 4.0);
+  CHECK(right.shape.params[2] < 8.0);
+  CHECK(right_roof.shape.params[2] > 4.0);
+  CHECK(right_roof.shape.params[2] < 9.0);
+  // Each house on its side of the street: the left one left of the first, the right one right.
+  CHECK(left.shape.translation.x() + left.shape.params[0] < house.shape.translation.x());
+  CHECK(right.shape.translation.x() > house.shape.translation.x() + house.shape.params[0]);
 
-  const double rms_px = report.at("joint_solve").at("rms_px").get<double>();
-  MESSAGE("tutorial: pin RMS " << rms_px << " px");
-  CHECK(rms_px < kMaxPinRmsPx);
+  // Pin reprojection RMS, per house.
+  std::map<facet::Id, std::pair<double, int>> sum_sq;  // house -> (sum of squares, pins)
+  for (const facet::Pin& pin : street.pins) {
+    const Eigen::Vector3d x = facet::VertexInWorld(street, pin.vertex);
+    REQUIRE(camera.CamFromWorld(x).z() > 0.0);
+    auto& [sq, n] = sum_sq[HouseOf(street, pin.vertex.primitive_id)];
+    sq += (camera.Project(x) - pin.uv_px).squaredNorm();
+    ++n;
+  }
+  const int expected_pins[3] = {5, 2, 2};
+  for (size_t h = 0; h < 3; ++h) {
+    const auto [sq, n] = sum_sq[street.primitives[2 * h].id];
+    CAPTURE(h);
+    REQUIRE(n == expected_pins[h]);
+    const double rms_px = std::sqrt(sq / n);
+    MESSAGE("house " << h + 1 << ": " << n << " pins, RMS " << rms_px << " px");
+    CHECK(rms_px < (h == 0 ? kMaxFirstHouseRmsPx : kMaxOtherHouseRmsPx));
+  }
 
-  // Textured wherever the photo sees the house.
+  // Textured wherever the photo sees the houses.
   const facet::ImageReadResult photo = facet::ReadImage(dir / "leuvenA.jpg");
   REQUIRE(photo.ok());
   facet::TexturedMesh mesh;
   const std::vector<const facet::ImageRgba8*> photos = {&photo.image};
-  const facet::TextureBakeSummary bake = facet::BakeTexturedMesh(house, photos, facet::TextureBakeOptions{}, &mesh);
+  const facet::TextureBakeSummary bake = facet::BakeTexturedMesh(street, photos, facet::TextureBakeOptions{}, &mesh);
   REQUIRE(bake.IsUsable());
-  int seen = 0;
+  std::map<facet::Id, int> seen;
   for (size_t t = 0; t < mesh.triangle_face.size(); ++t) {
-    const facet::Primitive* p = house.FindPrimitive(mesh.triangle_primitive[t]);
+    const facet::Primitive* p = street.FindPrimitive(mesh.triangle_primitive[t]);
     REQUIRE(p != nullptr);
-    if (!SeenBy(house.images[0].camera, p->mesh, mesh.triangle_face[t])) continue;
+    if (!SeenBy(camera, p->mesh, mesh.triangle_face[t])) continue;
     // A roof's base lies on its box's top: inside the house, hidden from every view.
     if (p->attached_to != facet::kNoId && facet::FaceNormal(p->mesh, mesh.triangle_face[t]).z() < -0.99) continue;
-    ++seen;
+    ++seen[HouseOf(street, p->id)];
     CAPTURE(p->name);
     CAPTURE(mesh.triangle_face[t]);
     CHECK(mesh.triangle_textured[t]);
   }
-  CHECK(seen >= 3);  // the front's two triangles and the gable's
+  // Each house has faces the photo sees (a face counts when its centroid is in the photo: 3
+  // triangles for the half-timbered front and gable, 2 for the left house's street face, 3 for
+  // the right house's gable side and roof).
+  for (size_t h = 0; h < 3; ++h) CHECK(seen[street.primitives[2 * h].id] >= 2);
+
+  // The shipped sample is this result: same model, to what float noise in the line detection
+  // moves (0.5 % of a dimension, 0.5 px of a pin).
+  const facet::Project shipped = LoadProjectFile(kSampleDir + "/street.facet");
+  REQUIRE(shipped.primitives.size() == street.primitives.size());
+  REQUIRE(shipped.pins.size() == street.pins.size());
+  REQUIRE(shipped.constraints.size() == street.constraints.size());
+  for (size_t i = 0; i < street.primitives.size(); ++i) {
+    const facet::Primitive& a = shipped.primitives[i];
+    const facet::Primitive& b = street.primitives[i];
+    CAPTURE(b.name);
+    CHECK(a.shape.kind == b.shape.kind);
+    CHECK(a.param_locked == b.param_locked);
+    for (int k = 0; k < 3; ++k) CHECK(std::abs(a.shape.params[k] - b.shape.params[k]) <= 0.005 * std::abs(b.shape.params[k]) + 1e-9);
+    CHECK((a.shape.translation - b.shape.translation).norm() <= 0.005 * (b.shape.translation.norm() + 1.0));
+  }
+  for (size_t i = 0; i < street.pins.size(); ++i) CHECK((shipped.pins[i].uv_px - street.pins[i].uv_px).norm() < 0.5);
+  CHECK(shipped.images[0].path == street.images[0].path);
 
   // The README's step pictures.
   const fs::path shots = fs::path(FACET_BINARY_DIR) / "tutorial";
@@ -132,6 +253,6 @@ TEST_CASE("the tutorial builds the house from an empty project in at most 40 UI 
     REQUIRE_MESSAGE(!shot.empty(), step);
     cv::Mat small;
     cv::resize(shot, small, cv::Size(), 0.75, 0.75, cv::INTER_AREA);
-    CHECK(cv::imwrite((shots / (std::string(step) + ".jpg")).string(), small, {cv::IMWRITE_JPEG_QUALITY, 85}));
+    CHECK(cv::imwrite((shots / (std::string(step) + ".jpg")).string(), small, {cv::IMWRITE_JPEG_QUALITY, 80}));
   }
 }
