@@ -13,14 +13,13 @@
 
 namespace {
 
-// The bundled sample, the tutorial's street (assets/samples/leuven/tutorial.txt builds it):
-// next to the executable in an install, else in the source tree.
+// The bundled sample: next to the executable in an install, else in the source tree.
 std::string SampleProjectPath() {
   std::error_code ec;
   const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
   const std::filesystem::path candidates[] = {
-      exe.parent_path() / "../share/facet/samples/leuven/street.facet",
-      std::filesystem::path(FACET_SOURCE_DIR) / "assets/samples/leuven/street.facet",
+      exe.parent_path() / "../share/facet/samples/leuven/leuven.facet",
+      std::filesystem::path(FACET_SOURCE_DIR) / "assets/samples/leuven/leuven.facet",
   };
   for (const auto& c : candidates)
     if (std::filesystem::exists(c, ec)) return std::filesystem::weakly_canonical(c, ec).string();
