@@ -957,13 +957,18 @@ void HandleIdleKeys(AppState* state, PanelState* panel) {
   }
   if (delete_pressed) DeleteSelection(state, panel);
   if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
-    state->selection.connect_from = {};                            // forget V_connect's first vertex
-    if (state->tool == Tool::kPin) state->selection.element = {};  // and the vertex to pin
-    // The multi-selection goes back to its main element; the builder's pending first edge
-    // is forgotten.
+    // Escape steps back: first whatever is half done (V_connect's first vertex, the
+    // multi-selection beyond its main element, the constraint builder's first edge, the vertex
+    // to pin); with nothing half done, the selection itself, as the constraints hint says.
+    const bool half_done = !state->selection.connect_from.Empty() || !state->selection.extra.empty() ||
+                           state->constraint_first_kind.has_value() ||
+                           (state->tool == Tool::kPin && !state->selection.element.Empty());
+    state->selection.connect_from = {};
+    if (state->tool == Tool::kPin) state->selection.element = {};
     state->selection.extra.clear();
     state->constraint_first_kind.reset();
     state->constraint_first_edge = {};
+    if (!half_done) state->selection = Selection{};
   }
 }
 

@@ -402,6 +402,12 @@ TEST_CASE("Shift+click in the image panel: a multi-selection, highlighted, toggl
       dir, f.path, "escape",
       selected + "move " + FormatXY(over_image) + "\nframes 1\nkey escape\nframes 1\ncommand constrain collinear\n");
   CHECK(err.find("needs 3 or more different vertices (1 selected") != std::string::npos);
+  // A second Escape, with nothing half done, clears the selection itself (as the hint says).
+  const nlohmann::json cleared = RenderScript(
+      dir, f.path, "escape_twice",
+      selected + "move " + FormatXY(over_image) + "\nframes 1\nkey escape\nframes 1\nkey escape\nframes 1\n");
+  CHECK(cleared["selection"]["primitive_id"] == 0);
+  CHECK(cleared["selection"]["extra"].empty());
   INFO("log: " << ReportLog(report));
   const facet::Project after = LoadProjectFile(dir / "after.facet");
   REQUIRE(after.constraints.size() == 1);
