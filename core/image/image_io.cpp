@@ -43,12 +43,14 @@ bool HeaderSize(const std::vector<std::uint8_t>& b, int* w, int* h) {
   return true;
 }
 
-// "" when a w x h photo is within kMaxImagePixels, else the refusal naming the limit.
-std::string PixelLimitRefusal(const std::string& path, int w, int h) {
+// "" when a w x h photo is within max_pixels, else the refusal naming the limit.
+std::string PixelLimitRefusal(const std::string& path, int w, int h, std::uint64_t max_pixels) {
   const auto pixels = static_cast<std::uint64_t>(std::max(w, 0)) * static_cast<std::uint64_t>(std::max(h, 0));
-  if (pixels <= kMaxImagePixels) return "";
+  if (pixels <= max_pixels) return "";
+  const std::string limit =
+      max_pixels >= 1000000 ? std::to_string(max_pixels / 1000000) + " MP" : std::to_string(max_pixels) + " px";
   return path + ": " + std::to_string(w) + " x " + std::to_string(h) + " px (" + std::to_string(pixels / 1000000) +
-         " MP) is more than the limit of " + std::to_string(kMaxImagePixels / 1000000) + " MP";
+         " MP) is more than the limit of " + limit;
 }
 
 bool IsJpeg(const std::vector<std::uint8_t>& b) {
@@ -130,14 +132,24 @@ ImageReadResult ReadImage(const std::string& path) {
   ImageReadResult result;
   std::vector<std::uint8_t> bytes;
   if (!ReadRegularFile(path, kMaxImageFileBytes, &bytes, &result.error)) return result;
+  return DecodeImage(bytes, path);
+}
+
+ImageReadResult DecodeImage(const std::vector<std::uint8_t>& bytes, const std::string& path, std::uint64_t max_pixels) {
+  ImageReadResult result;
   if (bytes.empty()) {
     result.error = path + ": file is empty";
+    return result;
+  }
+  if (bytes.size() > kMaxImageFileBytes) {  // ReadImage's file limit, for bytes from elsewhere
+    result.error = path + ": " + std::to_string(bytes.size() >> 20) + " MB, larger than the limit of " +
+                   std::to_string(kMaxImageFileBytes >> 20) + " MB for a photo";
     return result;
   }
   // The header's size, before a decoder allocates it (a 20000 x 20000 photo is 1.6 GB RGBA).
   int header_w = 0, header_h = 0;
   if (HeaderSize(bytes, &header_w, &header_h)) {
-    const std::string refusal = PixelLimitRefusal(path, header_w, header_h);
+    const std::string refusal = PixelLimitRefusal(path, header_w, header_h, max_pixels);
     if (!refusal.empty()) {
       result.error = refusal;
       return result;
@@ -151,7 +163,8 @@ ImageReadResult ReadImage(const std::string& path) {
   try {
     // UNCHANGED keeps alpha and ignores the EXIF orientation, so pixel coordinates match
     // the stored raster, ReadImageSize and the ground truth of research datasets.
-    decoded = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, bytes.data()), cv::IMREAD_UNCHANGED);
+    decoded = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<std::uint8_t*>(bytes.data())),
+                           cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception& e) {
     result.error = path + ": cannot decode (" + e.what() + ")";
     return result;
@@ -168,7 +181,7 @@ ImageReadResult ReadImage(const std::string& path) {
   }
   if (result.image.empty()) result.error = path + ": image has zero size";
   if (result.error.empty()) {
-    const std::string refusal = PixelLimitRefusal(path, result.image.width, result.image.height);
+    const std::string refusal = PixelLimitRefusal(path, result.image.width, result.image.height, max_pixels);
     if (!refusal.empty()) {
       result.image = ImageRgba8();
       result.error = refusal;

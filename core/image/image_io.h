@@ -34,6 +34,11 @@ constexpr std::uint64_t kMaxImagePixels = 150'000'000;
 // FIFO, a device), a file over kMaxImageFileBytes (core/util/file_read.h) and a photo over
 // kMaxImagePixels.
 ImageReadResult ReadImage(const std::string& path);
+// The same decoding and checks for a file's bytes held in memory; `name` (a path, or what the
+// bytes are) starts every error. max_pixels lowers the refusal limit (the fuzz targets use a
+// few MP so that one input cannot take seconds).
+ImageReadResult DecodeImage(const std::vector<std::uint8_t>& bytes, const std::string& name,
+                            std::uint64_t max_pixels = kMaxImagePixels);
 // Reads only the size of an image (fast). Returns false with *error set on failure.
 bool ReadImageSize(const std::string& path, int* width, int* height, std::string* error);
 // Encodes as PNG in memory.
