@@ -53,6 +53,22 @@ std::string PixelLimitRefusal(const std::string& path, int w, int h, std::uint64
          " MP) is more than the limit of " + limit;
 }
 
+bool StartsWith(const std::vector<std::uint8_t>& b, const char* prefix, size_t n, size_t at = 0) {
+  return b.size() >= at + n && std::memcmp(b.data() + at, prefix, n) == 0;
+}
+
+// The formats a photo may be in (app/state/file_browser_model.h offers the same): JPEG, PNG,
+// TIFF, BMP and WebP, told by their signatures. OpenCV's imdecode tries every codec it was
+// built with, and Debian's includes DICOM (GDCM), whose reader asserts, aborting the whole
+// app, on a 134-byte file with "DICM" at byte 128 (found by tests/fuzz/fuzz_image); no other
+// codec is handed the bytes. Each allowed signature is claimed by its own codec, which OpenCV
+// tries before DICOM.
+bool IsPhotoFormat(const std::vector<std::uint8_t>& b) {
+  return StartsWith(b, "\xFF\xD8\xFF", 3) || StartsWith(b, "\x89PNG\r\n\x1A\n", 8) || StartsWith(b, "II*\0", 4) ||
+         StartsWith(b, "MM\0*", 4) || StartsWith(b, "BM", 2) ||
+         (StartsWith(b, "RIFF", 4) && StartsWith(b, "WEBP", 4, 8));
+}
+
 bool IsJpeg(const std::vector<std::uint8_t>& b) {
   return b.size() >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF;
 }
@@ -154,6 +170,10 @@ ImageReadResult DecodeImage(const std::vector<std::uint8_t>& bytes, const std::s
       result.error = refusal;
       return result;
     }
+  }
+  if (!IsPhotoFormat(bytes)) {
+    result.error = path + ": not a JPEG, PNG, TIFF, BMP or WebP file";
+    return result;
   }
   if (IsJpeg(bytes) && !JpegIsComplete(bytes)) {
     result.error = path + ": JPEG is truncated or corrupt (no end-of-image marker)";

@@ -29,7 +29,8 @@ struct ImageReadResult {
 // limit in the message, before it is decoded.
 constexpr std::uint64_t kMaxImagePixels = 150'000'000;
 
-// Reads a JPEG or PNG (any format OpenCV's imgcodecs reads). A missing, unreadable or
+// Reads a JPEG, PNG, TIFF, BMP or WebP photo (told by its signature, whatever its name;
+// other formats are refused, see IsPhotoFormat in image_io.cpp). A missing, unreadable or
 // corrupt file gives an error, never a crash; so do a path that is not a regular file (a
 // FIFO, a device), a file over kMaxImageFileBytes (core/util/file_read.h) and a photo over
 // kMaxImagePixels.
