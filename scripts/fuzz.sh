@@ -109,7 +109,7 @@ for t in "${targets[@]}"; do
   printf '%-24s %12s %9s %16s %10s %s\n' "$t" "${execs:-?}" "${rate:-?}" "${cov_start:-?} -> ${cov_end:-?}" \
     "${added:-?}" "$result"
   if [ "$result" != ok ]; then
-    grep -E 'ERROR: (AddressSanitizer|LeakSanitizer|libFuzzer)|runtime error:|property failed|SUMMARY:' "$log" | head -5 |
+    grep -E 'ERROR: (AddressSanitizer|LeakSanitizer|libFuzzer)|runtime error:|Assertion .* failed|property failed|SUMMARY:' "$log" | head -5 |
       sed 's/^/    /'
     for a in $artifacts; do
       echo "    reproducer: $a"
