@@ -255,6 +255,23 @@ TEST_CASE("regression: a DICOM-looking file is refused with a message, not decod
   CHECK(read.error == path.string() + ": not a JPEG, PNG, TIFF, BMP or WebP file");
 }
 
+// Fuzzing (tests/fuzz/fuzz_image): a 50-byte BMP that stb's header parser refuses declared
+// 16400 x 63771 px (1,046 MP) and OpenCV allocated 3.1 GB to decode it. Its size is now read
+// from the BMP header and refused against the pixel limit before any decoding.
+TEST_CASE("regression: a BMP declaring 1,046 MP in 50 bytes is refused from its header (fuzz_image)") {
+  const std::string hex =
+      "424d7602000000000000000028000036000810400000"
+      "1bf90000010018000000000025b4632db45a3ca0000996a0a54d4d00";
+  std::vector<std::uint8_t> bmp;
+  for (size_t i = 0; i + 1 < hex.size(); i += 2)
+    bmp.push_back(static_cast<std::uint8_t>(std::stoi(hex.substr(i, 2), nullptr, 16)));
+  REQUIRE(bmp.size() == 50);
+  const facet::ImageReadResult decoded = facet::DecodeImage(bmp, "tiny.bmp");
+  CHECK_FALSE(decoded.ok());
+  CHECK(decoded.error == "tiny.bmp: 16400 x 63771 px (1045 MP) is more than the limit of 150 MP");
+  CHECK(decoded.image.pixels.empty());
+}
+
 TEST_CASE("DecodeImage reads a photo held in memory as ReadImage reads its file, and applies its pixel limit") {
   const fs::path dir = TempDir("decode_memory");
   const fs::path png_path = dir / "p.png";

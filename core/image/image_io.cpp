@@ -31,6 +31,25 @@ bool HeaderSize(const std::vector<std::uint8_t>& b, int* w, int* h) {
   if (stbi_info_from_memory(b.data(), static_cast<int>(std::min<size_t>(b.size(), INT32_MAX)), w, h, &channels) != 0) {
     return true;
   }
+  // A BMP whose header stb refuses but OpenCV decodes: a 50-byte one declared 16400 x 63771
+  // px and OpenCV allocated 3.1 GB for it (found by tests/fuzz/fuzz_image). Width and height
+  // are at bytes 18 and 22 (32-bit little-endian, the height negative for top-down rows), or
+  // 16-bit ones in the 12-byte OS/2 header, as OpenCV reads them.
+  if (b.size() >= 26 && b[0] == 'B' && b[1] == 'M') {
+    const auto le = [&](size_t i, int bytes) {
+      std::uint32_t v = 0;
+      for (int k = bytes - 1; k >= 0; --k) v = (v << 8) | b[i + k];
+      return v;
+    };
+    const bool os2 = le(14, 4) == 12;
+    const std::int64_t bw = os2 ? le(18, 2) : static_cast<std::int32_t>(le(18, 4));
+    const std::int64_t bh = os2 ? le(20, 2) : static_cast<std::int32_t>(le(22, 4));
+    const std::int64_t aw = bw < 0 ? -bw : bw, ah = bh < 0 ? -bh : bh;
+    if (aw == 0 || ah == 0) return false;
+    *w = static_cast<int>(std::min<std::int64_t>(aw, INT32_MAX));
+    *h = static_cast<int>(std::min<std::int64_t>(ah, INT32_MAX));
+    return true;
+  }
   static const std::uint8_t kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
   if (b.size() < 24 || !std::equal(kPng, kPng + 8, b.begin()) || std::memcmp(&b[12], "IHDR", 4) != 0) return false;
   const auto be32 = [&](size_t i) {
