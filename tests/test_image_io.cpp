@@ -227,6 +227,68 @@ TEST_CASE("grey, 16-bit and TIFF images read as 8-bit RGBA; TIFF size falls back
   CHECK(h == 21);
 }
 
+// Fuzzing (tests/fuzz/fuzz_image): OpenCV handed these 132 bytes, "DICM" at byte 128, to its
+// DICOM reader (GDCM), whose assert aborted the process. Only photo formats reach a decoder.
+TEST_CASE("regression: a DICOM-looking file is refused with a message, not decoded (fuzz_image)") {
+  std::vector<std::uint8_t> dicom(132, 0);
+  for (const auto& [at, byte] : std::vector<std::pair<int, std::uint8_t>>{{45, 0xFF},
+                                                                          {46, 0x4F},
+                                                                          {47, 0xFF},
+                                                                          {48, 0x51},
+                                                                          {126, 0xFF},
+                                                                          {127, 0x51},
+                                                                          {128, 'D'},
+                                                                          {129, 'I'},
+                                                                          {130, 'C'},
+                                                                          {131, 'M'}}) {
+    dicom[at] = byte;
+  }
+  const facet::ImageReadResult decoded = facet::DecodeImage(dicom, "scan.dcm");
+  CHECK_FALSE(decoded.ok());
+  CHECK(decoded.error == "scan.dcm: not a JPEG, PNG, TIFF, BMP or WebP file");
+  CHECK(decoded.image.pixels.empty());
+
+  // The file path gives the same refusal, named by the file.
+  const fs::path path = TempDir("dicom") / "scan.jpg";
+  WriteBytes(path, dicom);
+  const facet::ImageReadResult read = facet::ReadImage(path.string());
+  CHECK(read.error == path.string() + ": not a JPEG, PNG, TIFF, BMP or WebP file");
+}
+
+// Fuzzing (tests/fuzz/fuzz_image): a 50-byte BMP that stb's header parser refuses declared
+// 16400 x 63771 px (1,046 MP) and OpenCV allocated 3.1 GB to decode it. Its size is now read
+// from the BMP header and refused against the pixel limit before any decoding.
+TEST_CASE("regression: a BMP declaring 1,046 MP in 50 bytes is refused from its header (fuzz_image)") {
+  const std::string hex =
+      "424d7602000000000000000028000036000810400000"
+      "1bf90000010018000000000025b4632db45a3ca0000996a0a54d4d00";
+  std::vector<std::uint8_t> bmp;
+  for (size_t i = 0; i + 1 < hex.size(); i += 2)
+    bmp.push_back(static_cast<std::uint8_t>(std::stoi(hex.substr(i, 2), nullptr, 16)));
+  REQUIRE(bmp.size() == 50);
+  const facet::ImageReadResult decoded = facet::DecodeImage(bmp, "tiny.bmp");
+  CHECK_FALSE(decoded.ok());
+  CHECK(decoded.error == "tiny.bmp: 16400 x 63771 px (1045 MP) is more than the limit of 150 MP");
+  CHECK(decoded.image.pixels.empty());
+}
+
+TEST_CASE("DecodeImage reads a photo held in memory as ReadImage reads its file, and applies its pixel limit") {
+  const fs::path dir = TempDir("decode_memory");
+  const fs::path png_path = dir / "p.png";
+  REQUIRE(facet::WritePng(png_path.string(), MakePattern(40, 30)).empty());
+  const std::vector<std::uint8_t> bytes = ReadBytes(png_path);
+  const facet::ImageReadResult from_file = facet::ReadImage(png_path.string());
+  const facet::ImageReadResult from_memory = facet::DecodeImage(bytes, "p.png");
+  REQUIRE_MESSAGE(from_memory.ok(), from_memory.error);
+  CHECK(from_memory.image.width == 40);
+  CHECK(from_memory.image.height == 30);
+  CHECK(from_memory.image.pixels == from_file.image.pixels);
+  // 1,200 px over a 1,000 px limit: refused from the header, the limit in the message.
+  const facet::ImageReadResult limited = facet::DecodeImage(bytes, "p.png", 1000);
+  CHECK_FALSE(limited.ok());
+  CHECK(limited.error == "p.png: 40 x 30 px (0 MP) is more than the limit of 1000 px");
+}
+
 TEST_CASE("WritePng is atomic: a failed write leaves the old PNG whole; a symlink stays a link") {
   const fs::path dir = TempDir("atomic_png");
   const std::string shot = (dir / "shot.png").string();

@@ -1070,6 +1070,52 @@ TEST_CASE("a mesh written as \"from_shape\" is the primitive's unedited mesh") {
   CHECK(r.project == p);
 }
 
+// Fuzzing (tests/fuzz/fuzz_project): an id end is a number in the file, and the loader
+// allocated that many records (holes are allowed) before reading any: the sample project with
+// "vertex_id_end": 2^29, 8.5 KB, asked for 154 GB. The project's mesh ids are now bounded.
+TEST_CASE("regression: a mesh's id ends are bounded over the whole project before allocation (fuzz_project)") {
+  Json sample = Json::parse(ReadFile(std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuven.facet"));
+  REQUIRE(facet::ProjectFromJson(sample.dump()).ok());
+  Json j = sample;
+  j["primitives"][0]["mesh"]["vertex_id_end"] = 1 << 29;
+  facet::ProjectLoadResult r = facet::ProjectFromJson(j.dump());
+  CHECK_FALSE(r.ok());
+  CHECK(r.error ==
+        "primitives[0].mesh: the meshes' ids go past the limit of 1048576 (vertex, edge and face id ends, over all "
+        "primitives)");
+  CHECK(r.project == Project());
+
+  // Holes within the bound still load and round-trip: 1,000 vertex ids for the box's 8.
+  j = sample;
+  j["primitives"][0]["mesh"]["vertex_id_end"] = 1000;
+  r = facet::ProjectFromJson(j.dump());
+  REQUIRE_MESSAGE(r.ok(), r.error);
+  CHECK(r.project.primitives[0].mesh.VertexIdEnd() == 1000);
+  CHECK(facet::ProjectFromJson(facet::ProjectToJson(r.project)).project == r.project);
+
+  // The bound is over all primitives: each unedited 100,000-segment cylinder ("from_shape")
+  // takes 600,002 ids; one fits, a second does not.
+  j = sample;
+  Json cylinder = j["primitives"][0];
+  cylinder["kind"] = "cylinder";
+  cylinder["segments"] = 100000;
+  cylinder["mesh"] = "from_shape";
+  j["pins"] = Json::array();
+  j["primitives"] = Json::array({cylinder});
+  r = facet::ProjectFromJson(j.dump());
+  REQUIRE_MESSAGE(r.ok(), r.error);
+  const auto& mesh = r.project.primitives[0].mesh;
+  const std::uint64_t ids = std::uint64_t{mesh.VertexIdEnd()} + mesh.EdgeIdEnd() + mesh.FaceIdEnd();
+  CHECK(ids > facet::kMaxProjectMeshIds / 2);
+  CHECK(ids <= facet::kMaxProjectMeshIds);
+  cylinder["id"] = j["next_id"];
+  j["next_id"] = j["next_id"].get<int>() + 1;
+  j["primitives"].push_back(cylinder);
+  r = facet::ProjectFromJson(j.dump());
+  CHECK_FALSE(r.ok());
+  CHECK(r.error.rfind("primitives[1].mesh: the meshes' ids go past the limit", 0) == 0);
+}
+
 TEST_CASE("a wedge's ridge along y round-trips; absent means x; a bad value names its path") {
   Project p;
   facet::Id box = facet::kNoId, roof = facet::kNoId;

@@ -414,6 +414,11 @@ bool ParseScript(const std::string& text, Script* script, std::string* error) {
       *error = "line " + std::to_string(line_no) + ": " + line_error;
       return false;
     }
+    if (out.steps.size() > kMaxScriptSteps) {
+      *error = "line " + std::to_string(line_no) + ": the script is longer than " + std::to_string(kMaxScriptSteps) +
+               " frame steps";
+      return false;
+    }
     if (IsUiEvent(Split(line))) ++out.ui_events;
   }
   *script = std::move(out);

@@ -143,7 +143,13 @@ struct Script {
   int ui_events = 0;
 };
 
-// Returns false with "line N: what is wrong" in *error for unknown commands or bad arguments.
+// The most frame steps a script may expand to: 100,000 frames is half an hour of the offscreen
+// loop. Each line is bounded (frames 100000, drag 10000 steps); without a bound on the whole,
+// an 8 KB script of `frames 100000` lines asked for gigabytes (found by tests/fuzz).
+constexpr size_t kMaxScriptSteps = 100000;
+
+// Returns false with "line N: what is wrong" in *error for unknown commands or bad arguments,
+// and for a script longer than kMaxScriptSteps.
 bool ParseScript(const std::string& text, Script* script, std::string* error);
 bool LoadScript(const std::string& path, Script* script, std::string* error);
 

@@ -31,6 +31,25 @@ bool HeaderSize(const std::vector<std::uint8_t>& b, int* w, int* h) {
   if (stbi_info_from_memory(b.data(), static_cast<int>(std::min<size_t>(b.size(), INT32_MAX)), w, h, &channels) != 0) {
     return true;
   }
+  // A BMP whose header stb refuses but OpenCV decodes: a 50-byte one declared 16400 x 63771
+  // px and OpenCV allocated 3.1 GB for it (found by tests/fuzz/fuzz_image). Width and height
+  // are at bytes 18 and 22 (32-bit little-endian, the height negative for top-down rows), or
+  // 16-bit ones in the 12-byte OS/2 header, as OpenCV reads them.
+  if (b.size() >= 26 && b[0] == 'B' && b[1] == 'M') {
+    const auto le = [&](size_t i, int bytes) {
+      std::uint32_t v = 0;
+      for (int k = bytes - 1; k >= 0; --k) v = (v << 8) | b[i + k];
+      return v;
+    };
+    const bool os2 = le(14, 4) == 12;
+    const std::int64_t bw = os2 ? le(18, 2) : static_cast<std::int32_t>(le(18, 4));
+    const std::int64_t bh = os2 ? le(20, 2) : static_cast<std::int32_t>(le(22, 4));
+    const std::int64_t aw = bw < 0 ? -bw : bw, ah = bh < 0 ? -bh : bh;
+    if (aw == 0 || ah == 0) return false;
+    *w = static_cast<int>(std::min<std::int64_t>(aw, INT32_MAX));
+    *h = static_cast<int>(std::min<std::int64_t>(ah, INT32_MAX));
+    return true;
+  }
   static const std::uint8_t kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
   if (b.size() < 24 || !std::equal(kPng, kPng + 8, b.begin()) || std::memcmp(&b[12], "IHDR", 4) != 0) return false;
   const auto be32 = [&](size_t i) {
@@ -43,12 +62,30 @@ bool HeaderSize(const std::vector<std::uint8_t>& b, int* w, int* h) {
   return true;
 }
 
-// "" when a w x h photo is within kMaxImagePixels, else the refusal naming the limit.
-std::string PixelLimitRefusal(const std::string& path, int w, int h) {
+// "" when a w x h photo is within max_pixels, else the refusal naming the limit.
+std::string PixelLimitRefusal(const std::string& path, int w, int h, std::uint64_t max_pixels) {
   const auto pixels = static_cast<std::uint64_t>(std::max(w, 0)) * static_cast<std::uint64_t>(std::max(h, 0));
-  if (pixels <= kMaxImagePixels) return "";
+  if (pixels <= max_pixels) return "";
+  const std::string limit =
+      max_pixels >= 1000000 ? std::to_string(max_pixels / 1000000) + " MP" : std::to_string(max_pixels) + " px";
   return path + ": " + std::to_string(w) + " x " + std::to_string(h) + " px (" + std::to_string(pixels / 1000000) +
-         " MP) is more than the limit of " + std::to_string(kMaxImagePixels / 1000000) + " MP";
+         " MP) is more than the limit of " + limit;
+}
+
+bool StartsWith(const std::vector<std::uint8_t>& b, const char* prefix, size_t n, size_t at = 0) {
+  return b.size() >= at + n && std::memcmp(b.data() + at, prefix, n) == 0;
+}
+
+// The formats a photo may be in (app/state/file_browser_model.h offers the same): JPEG, PNG,
+// TIFF, BMP and WebP, told by their signatures. OpenCV's imdecode tries every codec it was
+// built with, and Debian's includes DICOM (GDCM), whose reader asserts, aborting the whole
+// app, on a 134-byte file with "DICM" at byte 128 (found by tests/fuzz/fuzz_image); no other
+// codec is handed the bytes. Each allowed signature is claimed by its own codec, which OpenCV
+// tries before DICOM.
+bool IsPhotoFormat(const std::vector<std::uint8_t>& b) {
+  return StartsWith(b, "\xFF\xD8\xFF", 3) || StartsWith(b, "\x89PNG\r\n\x1A\n", 8) || StartsWith(b, "II*\0", 4) ||
+         StartsWith(b, "MM\0*", 4) || StartsWith(b, "BM", 2) ||
+         (StartsWith(b, "RIFF", 4) && StartsWith(b, "WEBP", 4, 8));
 }
 
 bool IsJpeg(const std::vector<std::uint8_t>& b) {
@@ -130,18 +167,32 @@ ImageReadResult ReadImage(const std::string& path) {
   ImageReadResult result;
   std::vector<std::uint8_t> bytes;
   if (!ReadRegularFile(path, kMaxImageFileBytes, &bytes, &result.error)) return result;
+  return DecodeImage(bytes, path);
+}
+
+ImageReadResult DecodeImage(const std::vector<std::uint8_t>& bytes, const std::string& path, std::uint64_t max_pixels) {
+  ImageReadResult result;
   if (bytes.empty()) {
     result.error = path + ": file is empty";
+    return result;
+  }
+  if (bytes.size() > kMaxImageFileBytes) {  // ReadImage's file limit, for bytes from elsewhere
+    result.error = path + ": " + std::to_string(bytes.size() >> 20) + " MB, larger than the limit of " +
+                   std::to_string(kMaxImageFileBytes >> 20) + " MB for a photo";
     return result;
   }
   // The header's size, before a decoder allocates it (a 20000 x 20000 photo is 1.6 GB RGBA).
   int header_w = 0, header_h = 0;
   if (HeaderSize(bytes, &header_w, &header_h)) {
-    const std::string refusal = PixelLimitRefusal(path, header_w, header_h);
+    const std::string refusal = PixelLimitRefusal(path, header_w, header_h, max_pixels);
     if (!refusal.empty()) {
       result.error = refusal;
       return result;
     }
+  }
+  if (!IsPhotoFormat(bytes)) {
+    result.error = path + ": not a JPEG, PNG, TIFF, BMP or WebP file";
+    return result;
   }
   if (IsJpeg(bytes) && !JpegIsComplete(bytes)) {
     result.error = path + ": JPEG is truncated or corrupt (no end-of-image marker)";
@@ -151,7 +202,8 @@ ImageReadResult ReadImage(const std::string& path) {
   try {
     // UNCHANGED keeps alpha and ignores the EXIF orientation, so pixel coordinates match
     // the stored raster, ReadImageSize and the ground truth of research datasets.
-    decoded = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, bytes.data()), cv::IMREAD_UNCHANGED);
+    decoded = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<std::uint8_t*>(bytes.data())),
+                           cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception& e) {
     result.error = path + ": cannot decode (" + e.what() + ")";
     return result;
@@ -168,7 +220,7 @@ ImageReadResult ReadImage(const std::string& path) {
   }
   if (result.image.empty()) result.error = path + ": image has zero size";
   if (result.error.empty()) {
-    const std::string refusal = PixelLimitRefusal(path, result.image.width, result.image.height);
+    const std::string refusal = PixelLimitRefusal(path, result.image.width, result.image.height, max_pixels);
     if (!refusal.empty()) {
       result.image = ImageRgba8();
       result.error = refusal;

@@ -29,11 +29,17 @@ struct ImageReadResult {
 // limit in the message, before it is decoded.
 constexpr std::uint64_t kMaxImagePixels = 150'000'000;
 
-// Reads a JPEG or PNG (any format OpenCV's imgcodecs reads). A missing, unreadable or
+// Reads a JPEG, PNG, TIFF, BMP or WebP photo (told by its signature, whatever its name;
+// other formats are refused, see IsPhotoFormat in image_io.cpp). A missing, unreadable or
 // corrupt file gives an error, never a crash; so do a path that is not a regular file (a
 // FIFO, a device), a file over kMaxImageFileBytes (core/util/file_read.h) and a photo over
 // kMaxImagePixels.
 ImageReadResult ReadImage(const std::string& path);
+// The same decoding and checks for a file's bytes held in memory; `name` (a path, or what the
+// bytes are) starts every error. max_pixels lowers the refusal limit (the fuzz targets use a
+// few MP so that one input cannot take seconds).
+ImageReadResult DecodeImage(const std::vector<std::uint8_t>& bytes, const std::string& name,
+                            std::uint64_t max_pixels = kMaxImagePixels);
 // Reads only the size of an image (fast). Returns false with *error set on failure.
 bool ReadImageSize(const std::string& path, int* width, int* height, std::string* error);
 // Encodes as PNG in memory.

@@ -304,6 +304,16 @@ class Reader {
     return false;
   }
 
+  // Counts a mesh's id space (vertex, edge and face id ends) against the whole project's
+  // kMaxProjectMeshIds, before it is allocated: ids may have holes, so a few bytes of file
+  // could otherwise ask for any amount of memory.
+  bool CountMeshIds(const std::string& path, std::uint64_t ids) {
+    mesh_ids_ += ids;
+    if (mesh_ids_ <= kMaxProjectMeshIds) return true;
+    return Fail(path, "the meshes' ids go past the limit of " + std::to_string(kMaxProjectMeshIds) +
+                          " (vertex, edge and face id ends, over all primitives)");
+  }
+
   // The value of a required field, or null after recording "missing field".
   const Json* Field(const Json& obj, const std::string& obj_path, const char* key) {
     auto it = obj.find(key);
@@ -423,6 +433,7 @@ class Reader {
 
  private:
   std::string error_;
+  std::uint64_t mesh_ids_ = 0;
   std::vector<std::string>* warnings_;
 };
 
@@ -552,6 +563,7 @@ bool ReadMesh(const Json& j, const std::string& at, PrimitiveId primitive, Reade
       !r->Int(j, at, "vertex_id_end", 0, kMaxIds, &vertex_end) ||
       !r->Int(j, at, "edge_id_end", 0, kMaxIds, &edge_end) || !r->Int(j, at, "face_id_end", 0, kMaxIds, &face_end))
     return false;
+  if (!r->CountMeshIds(at, static_cast<std::uint64_t>(vertex_end) + edge_end + face_end)) return false;
   *mesh = PolyMesh();
   mesh->GrowIdSpace(vertex_end, edge_end, face_end);
   const std::uint32_t halfedge_end = 2u * static_cast<std::uint32_t>(edge_end);
@@ -671,7 +683,8 @@ bool ReadPrimitive(const Json& j, const std::string& at, Reader* r, Primitive* p
     prim->mesh = PolyMesh();
     const AddPrimitiveResult added = AddPrimitive(&prim->mesh, shape);
     if (!added.ok) return r->Fail(Join(at, "params"), added.message);
-    return true;
+    return r->CountMeshIds(Join(at, "mesh"), static_cast<std::uint64_t>(prim->mesh.VertexIdEnd()) +
+                                                 prim->mesh.EdgeIdEnd() + prim->mesh.FaceIdEnd());
   }
   return ReadMesh(*mesh, Join(at, "mesh"), prim->id, r, &prim->mesh);
 }

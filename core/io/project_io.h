@@ -13,6 +13,7 @@
 // (project_io.cpp, kMigrationSteps); tests/fixtures/project_v1.facet is one.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,12 @@
 #include "core/util/file_write.h"  // WriteFileAtomically, used by every writer of project files and exports
 
 namespace facet {
+
+// The most mesh ids a project file may declare, summed over its primitives' vertex, edge and
+// face id ends. Ids keep their holes, so an id end sets memory, not the file's size: without
+// a bound a 9 KB file asked for 154 GB (tests/fuzz/fuzz_project reproduces it). 2^20 is 25 times
+// the largest scene of the benchmarks (40,000 ids).
+constexpr std::uint64_t kMaxProjectMeshIds = std::uint64_t{1} << 20;
 
 struct ProjectLoadResult {
   Project project;
@@ -35,6 +42,7 @@ std::string ProjectToJson(const Project& project);
 // field by JSON path, e.g. "primitives[0].params[1]: NaN cannot be saved ...".
 std::string CheckProjectSavable(const Project& project);
 // Parses and validates; the error names a line/column (syntax) or a JSON path (content).
+// Meshes past kMaxProjectMeshIds are refused before they are allocated.
 ProjectLoadResult ProjectFromJson(const std::string& text);
 // Returns an empty string on success, else the error. Refuses a project that would not load
 // back equal (non-finite numbers, dangling references, duplicate ids). Nothing is left

@@ -103,3 +103,22 @@ TEST_CASE("ui_events counts what a user does by hand, not waiting, hovering or t
                   error);
   CHECK(script.ui_events == 7);
 }
+
+// Fuzzing (tests/fuzz/fuzz_input_script): 580 lines of `frames 100000`, 8 KB, expanded to 58
+// million steps and asked for gigabytes. The whole script is now bounded, not only each line.
+TEST_CASE("regression: a short script cannot expand past kMaxScriptSteps (fuzz_input_script)") {
+  std::string text;
+  for (int i = 0; i < 580; ++i) text += "frames 100000\n";
+  Script script;
+  std::string error;
+  CHECK_FALSE(ParseScript(text, &script, &error));
+  CHECK(error == "line 2: the script is longer than 100000 frame steps");
+  CHECK(script.steps.empty());
+
+  // At the bound a script still parses: one line of 100000 frames.
+  REQUIRE_MESSAGE(ParseScript("frames 100000\n", &script, &error), error);
+  CHECK(script.steps.size() == facet::app::kMaxScriptSteps);
+  // One step more, from a second line, does not.
+  CHECK_FALSE(ParseScript("frames 100000\nmove 1 2\n", &script, &error));
+  CHECK(error == "line 2: the script is longer than 100000 frame steps");
+}
