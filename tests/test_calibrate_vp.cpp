@@ -163,6 +163,26 @@ TEST_CASE("segment residuals are endpoint distances to the fitted camera's vanis
   }
 }
 
+// Fuzzing (tests/fuzz/fuzz_calibrate_lines): a family of exactly two segments gives a 2 x 3
+// line matrix with two singular values, which were read into a fixed 3-vector: Eigen's size
+// assert aborted `facet calibrate --lines` in a build with assertions, and without them the
+// third value was read past the buffer. Two segments, the least the fit takes, give the
+// crossing of their lines.
+TEST_CASE("regression: a family of exactly two segments gives the crossing of their lines (fuzz_calibrate_lines)") {
+  VanishingPointOptions options;
+  options.conditioning_center_px = {511.5, 383.5};
+  options.conditioning_scale_px = 512.0;
+  // Two segments on lines through (900, 300): y = 300 + 0.1 (x - 900) and y = 300 - 0.2 (x - 900).
+  const std::vector<Eigen::Vector4d> two = {{100.0, 220.0, 500.0, 260.0}, {100.0, 460.0, 500.0, 380.0}};
+  const VanishingPointSummary fit = FitVanishingPoint(two, options);
+  REQUIRE_MESSAGE(fit.IsUsable(), fit.message);
+  const Eigen::Vector2d vp = fit.vp_px.head<2>() / fit.vp_px.z();
+  const double tolerance_px = 1e-9 * 900.0;  // noise-free: exact up to rounding
+  CHECK(std::abs(vp.x() - 900.0) < tolerance_px);
+  CHECK(std::abs(vp.y() - 300.0) < tolerance_px);
+  CHECK(fit.final_rms_px < 1e-9);
+}
+
 TEST_CASE("the vanishing point of a family minimises its segments' squared endpoint distances") {
   SyntheticSceneOptions o;
   o.noise_px = 1.0;

@@ -181,7 +181,8 @@ VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segm
   }
 
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(lines, Eigen::ComputeFullV);
-  const Eigen::Vector3d singular = svd.singularValues();
+  // min(n, 3) values: two segments give two (a fixed Vector3d here read past them).
+  const Eigen::VectorXd singular = svd.singularValues();
   summary.line_spread = singular(0) > 0.0 ? singular(1) / singular(0) : 0.0;
   if (summary.line_spread < kMinLineSpread)
     return FailedSummary(summary, "all segments lie on one line, so they do not fix a vanishing point", start);
