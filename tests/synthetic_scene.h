@@ -60,8 +60,14 @@ inline SyntheticScene MakeBoxScene(const SyntheticSceneOptions& o = {}) {
   SyntheticScene s;
   std::mt19937 rng(o.seed);
   std::normal_distribution<double> noise(0.0, 1.0);
-  auto jitter = [&](const Eigen::Vector2d& uv) {
-    return o.noise_px > 0 ? Eigen::Vector2d(uv + o.noise_px * Eigen::Vector2d(noise(rng), noise(rng))) : uv;
+  // One draw per statement: the order of two draws in one call's arguments is unspecified
+  // (GCC draws y first, clang x), which made the scene depend on the compiler. GCC's order
+  // keeps the scenes every figure was measured on.
+  auto jitter = [&](const Eigen::Vector2d& uv) -> Eigen::Vector2d {
+    if (!(o.noise_px > 0)) return uv;
+    const double dy = noise(rng);
+    const double dx = noise(rng);
+    return uv + o.noise_px * Eigen::Vector2d(dx, dy);
   };
 
   s.true_camera = MakeLookAtCamera(o);

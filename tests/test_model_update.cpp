@@ -151,7 +151,8 @@ Project RunStep(const Step& step, ModelUpdateCache* cache) {
   CHECK(cached.messages == fresh.messages);
   CHECK(cached.calibration.size() == fresh.calibration.size());
   for (const auto& [id, vp] : fresh.calibration) {
-    CAPTURE(id);
+    const auto& image_id = id;  // clang 14 cannot capture a structured binding, and CAPTURE is a lambda
+    CAPTURE(image_id);
     REQUIRE(cached.calibration.count(id) == 1);
     const VpCalibrationSummary& other = cached.calibration.at(id);
     CHECK(other.IsUsable() == vp.IsUsable());

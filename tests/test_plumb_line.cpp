@@ -128,8 +128,8 @@ TEST_CASE("Distort inverts Undistort to 1e-9 px over the image and beyond") {
         worst_px = std::max(worst_px, (distortion.Undistort(distorted) - uv).norm());
       }
     }
-    CAPTURE(k1);
-    CAPTURE(k2);
+    CAPTURE(distortion.k1);  // not the bindings k1, k2: clang 14 cannot capture them (CAPTURE is a lambda)
+    CAPTURE(distortion.k2);
     CAPTURE(worst_px);
     CHECK(worst_px < kRoundTripTolerancePx);
   }

@@ -422,7 +422,8 @@ TEST_CASE("each single field is written and read back") {
       {"constraint.line_b_px", [](Project& p) { p.constraints[8].line_b_px.x() = 0.5; }},
   };
   for (const auto& [name, edit] : edits) {
-    INFO("edit: " << name);
+    const std::string& edit_name = name;  // clang 14 cannot capture a structured binding (INFO)
+    INFO("edit: " << edit_name);
     Project changed = base;
     edit(changed);
     REQUIRE_FALSE(changed == base);
@@ -741,7 +742,8 @@ TEST_CASE("every missing field and every wrong type is an error naming its path"
   for (const auto& [ptr, name_in_tree] : paths) {
     std::smatch match;
     const std::string name = std::regex_match(name_in_tree, match, inside_reference) ? match[1].str() : name_in_tree;
-    CAPTURE(name_in_tree);
+    const std::string& path_in_tree = name_in_tree;  // clang 14 cannot capture a structured binding
+    CAPTURE(path_in_tree);
     const bool in_object = good.at(ptr.parent_pointer()).is_object();
     // Fields added within version 2 (distortion, focal and horizon modes) may be absent:
     // files written before them load with the defaults (tested below).

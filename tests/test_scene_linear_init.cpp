@@ -66,7 +66,8 @@ TEST_CASE("linear initialisation: the Schur path equals the dense SVD and recove
     size.noise_px = 0.0;
     const facet::testing::JointScene scene = facet::testing::MakeJointScene(size);
     const facet::Project cold = ColdStart(scene.truth);
-    CAPTURE(primitives);
+    const int num_primitives = primitives;  // clang 14 cannot capture a structured binding (CAPTURE)
+    CAPTURE(num_primitives);
     REQUIRE(MaxRelativeDifference(cold, scene.truth) > 0.1);  // the start is far from the answer
 
     std::string dense_why, schur_why;

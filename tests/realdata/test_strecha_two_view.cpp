@@ -131,8 +131,11 @@ TEST_CASE("Strecha fountain: relative pose and F from 30 SIFT matches per pair")
   const std::vector<std::pair<std::string, std::string>> pairs = {{"0004", "0005"}, {"0005", "0006"}, {"0006", "0007"},
                                                                   {"0004", "0006"}, {"0005", "0007"}, {"0004", "0007"}};
   for (const auto& [name1, name2] : pairs) {
-    CAPTURE(name1);
-    CAPTURE(name2);
+    // Named copies: clang 14 cannot capture a structured binding, and CAPTURE is a lambda.
+    const auto& first = name1;
+    const auto& second = name2;
+    CAPTURE(first);
+    CAPTURE(second);
     const testing::GroundTruthCamera& c1 = cameras[name1];
     const testing::GroundTruthCamera& c2 = cameras[name2];
     Points uv1, uv2;

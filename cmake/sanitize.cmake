@@ -1,0 +1,24 @@
+# The checked build (FACET_SANITIZE=ON): every target of the tree, the product, the unit and
+# real-data suites, the app the offscreen suites drive and the benchmarks, built with
+# AddressSanitizer (with its leak checker) and UndefinedBehaviorSanitizer. UB aborts rather
+# than printing and going on, so a report fails the test that caused it. scripts/test.sh
+# builds it with FACET_SANITIZE=1 (in build/checked, with clang).
+#
+# -O1 keeps the sanitized suites fast enough for CI and the stack traces readable; line
+# tables alone symbolize a report at a fraction of the compile and link cost of full debug
+# info. The build type still decides NDEBUG. clang is preferred so that the same tree also
+# builds the libFuzzer targets (-DFACET_BUILD_FUZZ=ON, tests/fuzz): one checked build serves
+# the suites and the fuzzers.
+set(facet_sanitizers address,undefined)
+set(facet_sanitize_flags -fsanitize=${facet_sanitizers} -fno-sanitize-recover=undefined
+                         -fno-omit-frame-pointer -O1)
+if(CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+  list(APPEND facet_sanitize_flags -gline-tables-only)
+else()
+  list(APPEND facet_sanitize_flags -g1)
+endif()
+# Compile options come after CMAKE_CXX_FLAGS_<CONFIG> on the command line, so this -O1 wins
+# over the build type's -O2/-O3.
+add_compile_options(${facet_sanitize_flags})
+add_link_options(-fsanitize=${facet_sanitizers})
+message(STATUS "Facet: checked build (${facet_sanitizers}) with ${CMAKE_CXX_COMPILER_ID} ${CMAKE_CXX_COMPILER_VERSION}")
