@@ -18,7 +18,18 @@
 
 namespace facet::app {
 
-enum class Dialog { kNone, kOpen, kSaveAs, kExport, kAddPhoto, kAbout, kConfirmQuit, kConfirmNew, kConfirmOpen };
+enum class Dialog {
+  kNone,
+  kOpen,
+  kSaveAs,
+  kExport,
+  kAddPhoto,
+  kAbout,
+  kConfirmQuit,
+  kConfirmNew,
+  kConfirmOpen,
+  kRecover,  // a recovery file was found: Restore or Discard (app/state/autosave.h)
+};
 
 struct ShellState {
   Layout layout = DefaultLayout();

@@ -72,7 +72,8 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"add", {1, 1}},         {"select", {1, 1}},         {"free-vertex", {0, 0}}, {"planar-face", {0, 0}},
       {"constrain", {1, 1}},   {"select-add", {1, 1}},     {"line-pin", {1, 1}},    {"line-pin-move", {1, 1}},
       {"calibration", {1, 1}}, {"move-selection", {1, 1}}, {"add-photo", {1, 1}},   {"wait-bake", {0, 0}},
-      {"bake-status", {1, 1}}, {"lines", {1, 1}}, {"ridge", {1, 1}},
+      {"bake-status", {1, 1}}, {"lines", {1, 1}}, {"ridge", {1, 1}}, {"recover", {1, 1}},
+      {"wait-autosave", {0, 0}},
   };
   return arity;
 }
@@ -325,7 +326,7 @@ std::string ParseAppCommand(const std::string& line, const std::vector<std::stri
            "' (undo, redo, save, open, tool, select-image, fit, export, add, select, free-vertex, "
            "planar-face, constrain, select-add, line-pin, line-pin-move, calibration, move-selection, add-photo, "
            "wait-bake, "
-           "bake-status)";
+           "bake-status, recover, wait-autosave)";
   }
   const std::string rest = Rest(line, 2);
   if (!rest.empty()) step.command_args.push_back(rest);
@@ -362,10 +363,12 @@ std::string ParseDrop(const std::string& line, ScriptStep step, Steps* steps) {
 }
 
 // Whether a script line of this kind is something a user does by hand (Script::ui_events).
-// The test-only commands (wait-bake, bake-status) are not.
+// The test-only commands (wait-bake, bake-status, wait-autosave) are not.
 bool IsUiEvent(const std::vector<std::string>& t) {
   const std::string cmd = Lower(t[0]);
-  if (cmd == "command") return t.size() < 2 || (Lower(t[1]) != "wait-bake" && Lower(t[1]) != "bake-status");
+  if (cmd == "command")
+    return t.size() < 2 ||
+           (Lower(t[1]) != "wait-bake" && Lower(t[1]) != "bake-status" && Lower(t[1]) != "wait-autosave");
   return cmd == "click" || cmd == "drag" || cmd == "key" || cmd == "type" || cmd == "wheel" || cmd == "drop" ||
          cmd == "down" || cmd == "hold";
 }

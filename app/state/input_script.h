@@ -79,6 +79,11 @@
 //                                   bake-status PATH   the background bake's state as JSON
 //                                                      (in flight, revisions, counters,
 //                                                      main-thread ms, mesh fingerprints)
+//                                   recover restore|discard  the answer to the offered
+//                                                      recovery file (app/state/autosave.h)
+//                                   wait-autosave      block until the recovery file holds
+//                                                      the document as it is now (render
+//                                                      --autosave)
 //                                 Tool names: select, line-x, line-y, line-z, pin,
 //                                 add-primitive (adds at once), split-edge, delete-vertex,
 //                                 connect-vertices, delete-edge, push-pull, move, line-pin,
