@@ -73,7 +73,7 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"constrain", {1, 1}},   {"select-add", {1, 1}},     {"line-pin", {1, 1}},    {"line-pin-move", {1, 1}},
       {"calibration", {1, 1}}, {"move-selection", {1, 1}}, {"add-photo", {1, 1}},   {"wait-bake", {0, 0}},
       {"bake-status", {1, 1}}, {"lines", {1, 1}}, {"ridge", {1, 1}}, {"recover", {1, 1}},
-      {"wait-autosave", {0, 0}},
+      {"wait-autosave", {0, 0}}, {"new", {0, 0}},
   };
   return arity;
 }
@@ -326,7 +326,7 @@ std::string ParseAppCommand(const std::string& line, const std::vector<std::stri
            "' (undo, redo, save, open, tool, select-image, fit, export, add, select, free-vertex, "
            "planar-face, constrain, select-add, line-pin, line-pin-move, calibration, move-selection, add-photo, "
            "wait-bake, "
-           "bake-status, recover, wait-autosave)";
+           "bake-status, recover, wait-autosave, new)";
   }
   const std::string rest = Rest(line, 2);
   if (!rest.empty()) step.command_args.push_back(rest);
