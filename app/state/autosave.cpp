@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
@@ -21,6 +22,8 @@ namespace fs = std::filesystem;
 // How long a drag may go on before its unfinished state is written, and how long to wait
 // before trying again after a failed write (a full disk, a read-only folder).
 constexpr double kIntervalS = 30.0;
+// A write starts at most once per this many times the last write's duration (autosave.h).
+constexpr double kThrottleFactor = 10.0;
 // written_revision after writing an unfinished drag: no document revision, so the next
 // completed edit (or the drag's cancel) writes again.
 constexpr std::uint64_t kDragRevision = std::numeric_limits<std::uint64_t>::max();
@@ -42,6 +45,7 @@ void StartWrite(AppState* state, Document snapshot, const std::string& path, std
   autosave.stats.last_snapshot_ms = MsSince(snapshot_start);
   AutosaveJob job;
   job.path = path;
+  job.started_s = state->time_s;
   job.revision = revision;
   // The worker owns its copy: the document goes on changing on the main thread meanwhile.
   job.result = std::async(std::launch::async, [path, document = std::move(snapshot)]() {
@@ -63,8 +67,9 @@ void CollectWrite(AppState* state, bool wait) {
   if (!autosave.job) return;
   if (!wait && autosave.job->result.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
   const AutosaveWrite write = autosave.job->result.get();
-  const AutosaveJob job = {autosave.job->path, autosave.job->revision, {}};
+  const AutosaveJob job = {autosave.job->path, autosave.job->started_s, autosave.job->revision, {}};
   autosave.job.reset();
+  autosave.next_write_s = job.started_s + std::min(kIntervalS, kThrottleFactor * write.ms / 1000.0);
   if (!write.error.empty()) {
     ++autosave.stats.failures;
     autosave.retry_after_s = state->time_s + kIntervalS;
@@ -162,7 +167,7 @@ void AutosaveTick(AppState* state) {
     return;
   }
   if (document.revision() == autosave.written_revision && target == autosave.owned_path) return;
-  if (state->time_s < autosave.retry_after_s) return;
+  if (state->time_s < autosave.retry_after_s || state->time_s < autosave.next_write_s) return;
   StartWrite(state, document, target, document.revision(), std::chrono::steady_clock::now());
 }
 
@@ -172,7 +177,8 @@ bool WaitForAutosave(AppState* state, std::string* error) {
     return false;
   }
   CollectWrite(state, /*wait=*/true);
-  state->autosave.retry_after_s = 0.0;  // try now, even after a failure
+  state->autosave.retry_after_s = 0.0;  // now, even after a failure or within the throttle
+  state->autosave.next_write_s = 0.0;
   AutosaveTick(state);
   CollectWrite(state, /*wait=*/true);
   if (!state->autosave.last_error.empty()) {
