@@ -245,7 +245,18 @@ TEST_CASE("principal point choices and a vanishing point at infinity") {
   const json out = json::parse(result.json);
   CHECK(std::abs(out.at("focal_px").get<double>() - scene.true_camera.focal_px) <
         kNoiseFreeRelative * scene.true_camera.focal_px);
-  CHECK(out.at("vanishing_points").at(2).is_null());
+  // At infinity: said so, with the direction of the (parallel, here vertical) segments.
+  const json& infinite = out.at("vanishing_points").at(2);
+  REQUIRE(infinite.is_object());
+  CHECK(infinite.at("at_infinity") == true);
+  const Eigen::Vector2d direction(infinite.at("direction").at(0).get<double>(),
+                                  infinite.at("direction").at(1).get<double>());
+  CHECK(std::abs(direction.norm() - 1.0) < 1e-12);
+  for (const Segment& z : scene.project.segments) {
+    if (z.axis != Axis::kZ) continue;
+    const Eigen::Vector2d d = (z.b_px - z.a_px).normalized();
+    CHECK(std::abs(d.x() * direction.y() - d.y() * direction.x()) < 1e-9);
+  }
   CHECK(out.at("vanishing_points").at(0).is_array());
   CHECK(std::abs(out.at("vanishing_points_homogeneous").at(2).at(2).get<double>()) < 1e-9);
 
@@ -320,6 +331,36 @@ TEST_CASE("bad LINES.json gives a message, never an exception") {
              R"({"axis": "x", "segments": [[10, 10, 10, 10], [10, 50, 100, 50]]},)"
              R"({"axis": "z", "segments": [[10, 10, 10, 100], [50, 10, 50, 100]]}]})",
              "zero length");
+}
+
+// Issue 14: these inputs printed a focal length as an answer (f = 66,000 +- 1.6e7 px for an
+// exactly parallel family with the principal point centred, f = 170 px for one family given
+// twice); each is now an error that says why.
+TEST_CASE("degenerate families give no camera, never a number") {
+  const testing::SyntheticScene scene = testing::MakeBoxScene();
+  const json valid = json::parse(LinesJson(scene, {Axis::kX, Axis::kY, Axis::kZ}, ""));
+  REQUIRE(CalibrateLinesJson(valid.dump()).ok());
+  auto with = [&](int family, const json& segments, const json& principal_point) {
+    json doc = valid;
+    if (family >= 0) doc["families"][family]["segments"] = segments;
+    doc["principal_point"] = principal_point;
+    return doc.dump();
+  };
+  const json parallel = json::array({{100, 100, 300, 100}, {100, 150, 300, 150}, {100, 200, 300, 200}});
+  const json x_segments = valid["families"][0]["segments"];
+  for (const json& pp : {json("center"), json("solve")}) {
+    INFO("principal point: " << pp.dump());
+    // An exactly parallel family: with the centre, f rests on nothing (it came out as 6.6e4 +- 1.6e7 px).
+    CheckError(with(0, parallel, pp), pp == "center" ? "not determined" : "parallel");
+    // The x family given again as y, then as z: one direction, not two.
+    CheckError(with(1, x_segments, pp), "family x and family y meet at one vanishing point");
+    CheckError(with(2, x_segments, pp), "family x and family z meet at one vanishing point");
+  }
+  // A fixed principal point far outside any photo is no camera, whatever the fit says.
+  const CalibrateIoResult far = CalibrateLinesJson(with(-1, json(), json::array({1e12, -1e12})));
+  CHECK_FALSE(far.ok());
+  INFO("error: " << far.error);
+  CHECK(far.error.find("calibration failed") != std::string::npos);
 }
 
 TEST_CASE("LINES.json from a file") {

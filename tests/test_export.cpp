@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/io/blender_script.h"
 #include "core/io/export.h"
 #include "core/mesh/operators.h"
 #include "core/mesh/primitives.h"
@@ -124,6 +125,62 @@ std::vector<T> AccessorData(const Glb& glb, int accessor_index, int components) 
 }
 
 Eigen::Vector3d YUp(const Eigen::Vector3d& p) { return {p.x(), p.z(), -p.y()}; }
+
+// Blender's camera model (source: BKE_camera_params_compute_viewplane): the camera looks down
+// its local -Z with +Y up; with the sensor fitted to the larger side S, a focal length of lens
+// mm on a sensor of sensor mm is lens / sensor * S px, and the view plane moves by shift * S
+// px, so the optical axis meets the image at (w / 2 - shift_x S, h / 2 + shift_y S) from the
+// top-left edge; OpenCV's pixel centres are half a pixel further.
+Eigen::Vector2d BlenderPixel(const json& c, const Eigen::Vector3d& p_world) {
+  Eigen::Matrix4d world_from_cam;
+  for (int r = 0; r < 4; ++r)
+    for (int k = 0; k < 4; ++k) world_from_cam(r, k) = c["matrix_world"][r][k].get<double>();
+  const Eigen::Vector3d p = (world_from_cam.inverse() * p_world.homogeneous()).head<3>();
+  const double w = c["width_px"].get<double>(), h = c["height_px"].get<double>();
+  const double side = std::max(w, h);
+  const double f = c["lens_mm"].get<double>() / c["sensor_mm"].get<double>() * side;
+  return {w / 2 - c["shift_x"].get<double>() * side + f * p.x() / -p.z() - 0.5,
+          h / 2 + c["shift_y"].get<double>() * side - f * p.y() / -p.z() - 0.5};
+}
+
+TEST_CASE("Blender script: each camera, in Blender's camera model, projects the model where Facet's does") {
+  facet::testing::SyntheticScene scene = facet::testing::MakeBoxScene();  // principal point off centre
+  facet::Image extra = scene.project.images[0];
+  extra.id = scene.project.NewId();
+  extra.path = "photos/it's uncalibrated.jpg";  // a quote in a name must not break the script
+  extra.camera_calibrated = false;
+  scene.project.images.push_back(extra);
+  scene.project.images[0].path = "photos/o'clock.jpg";
+  const std::string script = facet::BlenderSetupScript(scene.project, "/work/proj/p.facet", "/work/proj/model.glb");
+  const size_t begin = script.find("# facet-cameras-begin\n");
+  const size_t end = script.find("# facet-cameras-end");
+  REQUIRE(begin != std::string::npos);
+  REQUIRE(end != std::string::npos);
+  std::string data = script.substr(begin + 22, end - begin - 22);
+  CHECK(data.find('\'') == std::string::npos);
+  const json cameras = json::parse(data);
+  REQUIRE(cameras.size() == 1);  // the uncalibrated image has none
+  const json& c = cameras[0];
+  CHECK(c["photo"] == "/work/proj/photos/o'clock.jpg");
+  CHECK(c["name"] == "o'clock.jpg");
+  CHECK(script.find("MODEL = \"/work/proj/model.glb\"") != std::string::npos);
+  const facet::Camera& camera = scene.project.images[0].camera;
+  REQUIRE_FALSE(camera.HasDistortion());
+  REQUIRE(camera.principal_point_px != Eigen::Vector2d((camera.width_px - 1) / 2.0, (camera.height_px - 1) / 2.0));
+  constexpr double kPixelTolerance = 1e-9;
+  int checked = 0;
+  for (const facet::Primitive& prim : scene.project.primitives) {
+    for (int v = 0; v < prim.mesh.NumVertices(); ++v) {
+      const Eigen::Vector3d p = facet::VertexInWorld(scene.project, {prim.id, v});
+      const Eigen::Vector2d facet_px = camera.Project(p);
+      const Eigen::Vector2d blender_px = BlenderPixel(c, p);
+      CAPTURE(v);
+      CHECK((facet_px - blender_px).norm() < kPixelTolerance);
+      ++checked;
+    }
+  }
+  CHECK(checked >= 8);
+}
 
 }  // namespace
 

@@ -800,6 +800,28 @@ TEST_CASE("out-of-range values and bad references name their location") {
                   "primitives[1].attached_to: refers to a missing primitive");
   CheckErrorNames(with([](Json& j) { j["primitives"][1]["attached_to"] = j["primitives"][1]["id"]; }),
                   "primitives[1].attached_to");
+  // Attachment cycles (issue 14: loaded, then the solve walked them): 2, 3 and all primitives.
+  CheckErrorNames(with([](Json& j) {
+                    j["primitives"][1]["attached_to"] = j["primitives"][2]["id"];
+                    j["primitives"][2]["attached_to"] = j["primitives"][1]["id"];
+                  }),
+                  "primitives[1].attached_to: the chain of bases of primitive");
+  CheckErrorNames(with([](Json& j) {
+                    j["primitives"][1]["attached_to"] = j["primitives"][2]["id"];
+                    j["primitives"][2]["attached_to"] = j["primitives"][3]["id"];
+                    j["primitives"][3]["attached_to"] = j["primitives"][1]["id"];
+                  }),
+                  "loops (attachments must form trees)");
+  CheckErrorNames(with([](Json& j) {
+                    Json& prims = j["primitives"];
+                    const size_t n = prims.size();
+                    REQUIRE(n >= 4);
+                    for (size_t i = 0; i < n; ++i) prims[i]["attached_to"] = prims[(i + 1) % n]["id"];
+                  }),
+                  "primitives[0].attached_to: the chain of bases");
+  // A photo without pixels (issue 14: a solve then exited 0 and wrote the file).
+  CheckErrorNames(with([](Json& j) { j["images"][0]["width_px"] = 0; }), "images[0].width_px");
+  CheckErrorNames(with([](Json& j) { j["images"][1]["height_px"] = 0; }), "images[1].height_px");
   CheckErrorNames(with([](Json& j) { j["constraints"][0]["kind"] = "tangent"; }),
                   "constraints[0].kind: unknown constraint kind");
   CheckErrorNames(with([](Json& j) { j["constraints"][8]["image_id"] = 9999; }),
@@ -899,6 +921,24 @@ TEST_CASE("LoadProject: missing files are errors, missing images are warnings") 
   REQUIRE(r.warnings.size() == 1);
   CHECK(r.warnings[0].find("images[1]") != std::string::npos);
   CHECK(r.warnings[0].find("missing.jpg") != std::string::npos);
+
+  // The project moved without its photos folder, the photo copied beside it: found by name,
+  // its stored path replaced, and said so; everything else as saved.
+  fs::create_directories(dir.path / "moved");
+  const std::string moved = (dir.path / "moved" / "p.facet").string();
+  REQUIRE(facet::SaveProject(p, moved) == "");
+  WriteFile((dir.path / "moved" / "present.jpg").string(), "not really a jpeg");
+  const facet::ProjectLoadResult found = facet::LoadProject(moved);
+  INFO(found.error);
+  REQUIRE(found.ok());
+  Project expected = p;
+  expected.images[0].path = "present.jpg";
+  CHECK(found.project == expected);
+  REQUIRE(found.warnings.size() == 2);
+  CHECK(found.warnings[0].find("images[0]: photo not found at") != std::string::npos);
+  CHECK(found.warnings[0].find("beside the project (save to keep the new path)") != std::string::npos);
+  CHECK(found.warnings[1].find("images[1]: image file not found") != std::string::npos);
+  CHECK(found.warnings[1].find("nor missing.jpg beside the project") != std::string::npos);
 }
 
 TEST_CASE("atomic save: missing folder, replacing a file, failures leave no trace") {

@@ -571,6 +571,16 @@ TEST_CASE("relate JSON adapter: round trip with and without K, and bad input") {
   bad = in;
   bad["K"] = {MatricesJson(s.cam1.K())};
   CHECK(error_of(bad.dump()).find("\"K\"") != std::string::npos);
+  // A K that is no camera (issue 14: a negative focal length was accepted).
+  Eigen::Matrix3d negative_focal = s.cam2.K();
+  negative_focal(0, 0) = -negative_focal(0, 0);
+  bad = in;
+  bad["K"] = {MatricesJson(s.cam1.K()), MatricesJson(negative_focal)};
+  CHECK(error_of(bad.dump()).find("K2 is not a camera: K's focal lengths must be positive") != std::string::npos);
+  Eigen::Matrix3d lower = s.cam1.K();
+  lower(1, 0) = 3.0;
+  bad["K"] = {MatricesJson(lower), MatricesJson(s.cam2.K())};
+  CHECK(error_of(bad.dump()).find("K1 is not a camera: K is not upper triangular") != std::string::npos);
   bad = in;
   bad["matches"] = nlohmann::json::array({{1, 2, 3, 4}, {5, 6, 7, 8}});
   CHECK(error_of(bad.dump()).find("at least 7") != std::string::npos);

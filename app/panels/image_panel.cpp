@@ -1042,7 +1042,8 @@ void DrawViewContents(const AppState& state, const PanelState& panel, const Imag
                    panel.snap.kind, true);
   }
   if (auto error = state.photo_errors.find(image.id); error != state.photo_errors.end()) {
-    const std::string text = "Cannot show this photo: " + error->second;
+    const std::string text =
+        "Cannot show this photo: " + error->second + "\nFile > Relink photo... points this image at its file.";
     draw_list->AddText(ImGui::GetFont(), ImGui::GetFontSize(), ImVec2(rect_min.x + 10, rect_min.y + 10),
                        IM_COL32(255, 110, 110, 255), text.c_str(), nullptr, frame.rect_size.x - 20.0f);
   } else if (frame.texture == nullptr) {

@@ -9,11 +9,13 @@
 
 #include "app/state/calgui_exif_prior.h"
 #include "core/image/image_io.h"
+#include "core/io/blender_script.h"
 #include "core/io/calibrate_io.h"
 #include "core/io/calibrate_points_io.h"
 #include "core/io/export.h"
 #include "core/io/project_io.h"
 #include "core/io/relate_io.h"
+#include "core/solve/joint_solve.h"
 #include "core/solve/model_update.h"
 #include "core/texture/textured_mesh.h"
 
@@ -134,25 +136,49 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
   options.solve.warm_start = false;  // a command-line solve starts from the linear initialisation
   Project updated;
   const ModelUpdateSummary update = UpdateModel(project, options, &updated);
-  const SceneSolveSummary& s = update.solve;
-
-  nlohmann::json out;
-  out["termination"] = SolverTerminationName(s.termination);
-  out["message"] = s.message;
-  out["iterations"] = s.iterations;
-  out["initial_cost"] = s.initial_cost;
-  out["final_cost"] = s.final_cost;
-  out["reprojection_rms_px"] = s.reprojection_rms_px;
-  out["reprojection_max_px"] = s.reprojection_max_px;
-  out["num_residuals"] = s.num_residuals;
-  out["num_parameters"] = s.num_parameters;
-  out["time_ms"] = s.time_ms;
+  const SceneSolveSummary& geometry = update.solve;
+  const JointSolveSummary& joint = update.joint;
+  // The joint solve, when it ran, made the saved result (cameras and geometry together, as the
+  // app's status shows); the geometry solve before it only gave it a start. The top level
+  // gives the figures of the solve whose result is saved, "solver" says which, and both
+  // solves' figures follow under their own names.
+  const bool joint_ran = joint.termination != SolverTermination::kInvalidInput || !joint.message.empty();
+  auto figures = [](const SolverSummary& summary, double rms_px, double max_px, int num_residuals,
+                    int num_parameters) {
+    return nlohmann::json{{"termination", SolverTerminationName(summary.termination)},
+                          {"message", summary.message},
+                          {"iterations", summary.iterations},
+                          {"initial_cost", summary.initial_cost},
+                          {"final_cost", summary.final_cost},
+                          {"reprojection_rms_px", rms_px},
+                          {"reprojection_max_px", max_px},
+                          {"num_residuals", num_residuals},
+                          {"num_parameters", num_parameters},
+                          {"time_ms", summary.time_ms}};
+  };
+  const nlohmann::json geometry_figures =
+      figures(geometry, geometry.reprojection_rms_px, geometry.reprojection_max_px, geometry.num_residuals,
+              geometry.num_parameters);
+  const nlohmann::json joint_figures = figures(joint, joint.reprojection_rms_px, joint.reprojection_max_px,
+                                               joint.num_residuals, joint.num_parameters);
+  nlohmann::json out = joint_ran ? joint_figures : geometry_figures;
+  out["solver"] = joint_ran ? "joint" : "geometry";
   out["update_time_ms"] = update.time_ms;
   nlohmann::json pins = nlohmann::json::array();
-  for (double r : s.pin_residuals_px) pins.push_back(NumberOrNull(r));
+  if (joint_ran) {
+    for (const PinDiagnostic& pin : joint.pins) pins.push_back(NumberOrNull(pin.error_px));
+  } else {
+    for (double r : geometry.pin_residuals_px) pins.push_back(NumberOrNull(r));
+  }
   out["pin_residuals_px"] = pins;
-  out["warnings"] = s.warnings;
-  out["held_parameters"] = s.held_parameters;
+  out["warnings"] = joint_ran ? joint.warnings : geometry.warnings;
+  out["held_parameters"] = geometry.held_parameters;
+  if (joint_ran) {
+    out["undetermined"] = joint.undetermined;
+    out["conflicts"] = joint.conflicts;
+  }
+  out["geometry_solve"] = geometry_figures;
+  if (joint_ran) out["joint_solve"] = joint_figures;
   nlohmann::json calibration = nlohmann::json::array();
   for (const auto& [image_id, vp] : update.calibration) {
     calibration.push_back({{"image_id", image_id},
@@ -186,7 +212,8 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
   return 0;
 }
 
-int RunExportCommand(const std::string& project_path, const std::string& output_path) {
+int RunExportCommand(const std::string& project_path, const std::string& output_path,
+                     const std::string& blender_script_path) {
   Project project;
   if (!LoadForCli(project_path, &project)) return 1;
   // Each photo is read once and baked in place (the bake takes pointers, copies no pixels).
@@ -222,6 +249,17 @@ int RunExportCommand(const std::string& project_path, const std::string& output_
     return 1;
   }
   for (const std::string& f : exported.files_written) std::cout << f << "\n";
+  if (!blender_script_path.empty()) {
+    std::error_code ec;
+    const std::string model = std::filesystem::absolute(output_path, ec).lexically_normal().string();
+    const std::string error = WriteFileAtomically(
+        blender_script_path, BlenderSetupScript(project, project_path, ec ? output_path : model));
+    if (!error.empty()) {
+      std::cerr << "facet export: " << error << "\n";
+      return 1;
+    }
+    std::cout << blender_script_path << "\n";
+  }
   return 0;
 }
 

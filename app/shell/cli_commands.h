@@ -16,6 +16,9 @@ int RunCalibrateImageCommand(const std::string& photo_path, const std::string& p
                              const std::string& focal_prior, double focal_px);
 int RunRelateCommand(const std::string& matches_path);
 int RunSolveCommand(const std::string& project_path, const std::string& output_path);
-int RunExportCommand(const std::string& project_path, const std::string& output_path);
+// With a non-empty blender_script_path, also writes the Blender set-up script
+// (core/io/blender_script.h) that imports output_path and adds the photos' cameras.
+int RunExportCommand(const std::string& project_path, const std::string& output_path,
+                     const std::string& blender_script_path = "");
 
 }  // namespace facet::app

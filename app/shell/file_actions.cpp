@@ -16,6 +16,7 @@ BrowsePurpose PurposeOf(Dialog dialog) {
     case Dialog::kSaveAs: return BrowsePurpose::kSaveProject;
     case Dialog::kExport: return BrowsePurpose::kExport;
     case Dialog::kAddPhoto: return BrowsePurpose::kAddPhoto;
+    case Dialog::kRelinkPhoto: return BrowsePurpose::kRelinkPhoto;
     default: return BrowsePurpose::kOpenProject;
   }
 }
@@ -26,6 +27,7 @@ const char* CommandOf(BrowsePurpose purpose) {
     case BrowsePurpose::kSaveProject: return "save";
     case BrowsePurpose::kExport: return "export";
     case BrowsePurpose::kAddPhoto: return "add-photo";
+    case BrowsePurpose::kRelinkPhoto: return "relink-photo";
   }
   return "";
 }
@@ -142,8 +144,7 @@ void HandleDroppedFiles(AppState* state, ShellState* shell) {
   if (shell->dropped_paths.empty()) return;
   const std::vector<std::string> paths = std::move(shell->dropped_paths);
   shell->dropped_paths.clear();
-  const bool browsing = shell->dialog == Dialog::kOpen || shell->dialog == Dialog::kSaveAs ||
-                        shell->dialog == Dialog::kExport || shell->dialog == Dialog::kAddPhoto;
+  const bool browsing = IsFileBrowserDialog(shell->dialog);
   if (browsing) {
     // Into the open browser: a folder is listed, a file is listed in its folder and named.
     FileDialogState& dialog = shell->file_dialog;

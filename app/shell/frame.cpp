@@ -311,6 +311,7 @@ const char* DialogTitle(Dialog dialog) {
     case Dialog::kSaveAs: return "Save project as";
     case Dialog::kExport: return "Export model";
     case Dialog::kAddPhoto: return "Add photo";
+    case Dialog::kRelinkPhoto: return "Relink photo";
     case Dialog::kAbout: return "About Facet";
     case Dialog::kConfirmQuit: return "Unsaved changes##quit";
     case Dialog::kConfirmNew: return "Unsaved changes##new";
@@ -335,6 +336,12 @@ void DrawPathDialog(AppState* state, ShellState* shell) {
     ImGui::Checkbox("Detect lines (proposals to accept in the image panel)", &state->detect_lines_on_add);
   }
   if (d == Dialog::kExport) ImGui::TextColored(kDimText, "The extension chooses the format: .glb (glTF) or .obj");
+  if (d == Dialog::kRelinkPhoto) {
+    const Image* image = state->document.project().FindImage(state->active_image_id);
+    if (image != nullptr)
+      ImGui::TextColored(kDimText, "The file for %s (%d x %d px); its camera, pins and lines stay", image->path.c_str(),
+                         image->width_px, image->height_px);
+  }
   DrawFileBrowser(state, shell);
 }
 
@@ -346,8 +353,7 @@ void DrawDialogs(AppState* state, ShellState* shell) {
     shell->dialog_just_opened = false;
   }
   const ImGuiViewport* vp = ImGui::GetMainViewport();
-  const bool browser = shell->dialog == Dialog::kOpen || shell->dialog == Dialog::kSaveAs ||
-                       shell->dialog == Dialog::kExport || shell->dialog == Dialog::kAddPhoto;
+  const bool browser = IsFileBrowserDialog(shell->dialog);
   ImGuiWindowFlags flags = ImGuiWindowFlags_NoSavedSettings;
   if (browser) {
     // The browser is as large as the window allows, up to a comfortable reading size.
@@ -372,6 +378,7 @@ void DrawDialogs(AppState* state, ShellState* shell) {
     case Dialog::kOpen:
     case Dialog::kSaveAs:
     case Dialog::kAddPhoto:
+    case Dialog::kRelinkPhoto:
     case Dialog::kExport: DrawPathDialog(state, shell); break;
     case Dialog::kAbout:
       ImGui::Text("Facet %s", "0.1");
@@ -672,6 +679,15 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     // The photo is in; the lines arrive as proposals when its worker finishes (a detection
     // that finds none only logs why).
     if (state->detect_lines_on_add) StartLineDetection(state, state->active_image_id);
+    return true;
+  }
+  if (name == "relink-photo") {
+    // relink-photo PATH: the active image's photo file (File > Relink photo)
+    if (!RelinkPhotoEdit(state, state->active_image_id, arg)) {
+      *error = LastLoggedError(*state);
+      return false;
+    }
+    NoteRecentFile(state, shell, arg);
     return true;
   }
   if (name == "lines") return RunLinesCommand(state, arg, error);

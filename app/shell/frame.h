@@ -24,12 +24,18 @@ enum class Dialog {
   kSaveAs,
   kExport,
   kAddPhoto,
+  kRelinkPhoto,
   kAbout,
   kConfirmQuit,
   kConfirmNew,
   kConfirmOpen,
   kRecover,  // a recovery file was found: Restore or Discard (app/state/autosave.h)
 };
+// The dialogs that are the file browser (app/shell/file_actions.h).
+inline bool IsFileBrowserDialog(Dialog d) {
+  return d == Dialog::kOpen || d == Dialog::kSaveAs || d == Dialog::kExport || d == Dialog::kAddPhoto ||
+         d == Dialog::kRelinkPhoto;
+}
 
 struct ShellState {
   Layout layout = DefaultLayout();
@@ -44,7 +50,7 @@ struct ShellState {
   Dialog dialog = Dialog::kNone;
   bool dialog_just_opened = false;
   std::string dialog_path;  // the project waiting for the unsaved-changes answer (kConfirmOpen)
-  // The file browser of kOpen, kSaveAs, kExport and kAddPhoto (app/shell/file_actions.h).
+  // The file browser of the dialogs IsFileBrowserDialog names (app/shell/file_actions.h).
   FileDialogState file_dialog;
   // Recent files and folders; persisted at recent_files_path after each change unless empty
   // (offscreen renders keep them in memory unless given --config-dir).

@@ -111,6 +111,10 @@ int main(int argc, char** argv) {
   std::string export_project, export_out;
   exporter->add_option("project", export_project, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
   exporter->add_option("-o,--output", export_out, "FILE.glb or FILE.obj")->required();
+  std::string blender_script;
+  exporter->add_option("--blender-script", blender_script,
+                       "Also write a Blender Python script: imports the model, adds each photo's camera "
+                       "(focal length, principal-point shift, pose) with the photo as background");
 
   auto* render = cli.add_subcommand("render", "Render the application offscreen (EGL, no display needed) to a PNG");
   facet::app::RenderOptions render_options;
@@ -142,7 +146,7 @@ int main(int argc, char** argv) {
   if (*calibrate) return facet::app::RunCalibrateCommand(lines_path, points_path);
   if (*relate) return facet::app::RunRelateCommand(matches_path);
   if (*solve) return facet::app::RunSolveCommand(solve_project, solve_out);
-  if (*exporter) return facet::app::RunExportCommand(export_project, export_out);
+  if (*exporter) return facet::app::RunExportCommand(export_project, export_out, blender_script);
   if (*render) {
     if (!ParseSize(render_size, &render_options.width, &render_options.height)) {
       std::cerr << "facet render: --size must be WxH, e.g. 1600x900 (64..16384 each)\n";

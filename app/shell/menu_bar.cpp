@@ -73,6 +73,13 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
     if (ImGui::IsItemHovered())
       ImGui::SetTooltip(
           "A new image: draw line families on it, or pin model vertices in it (or drop photos onto the window)");
+    const bool has_active_image = state->document.project().FindImage(state->active_image_id) != nullptr;
+    if (ImGui::MenuItem("Relink photo...", nullptr, false, has_active_image))
+      OpenFileBrowser(state, shell, Dialog::kRelinkPhoto);
+    RecordItem(state, "menu.relink_photo");
+    if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+      ImGui::SetTooltip("Point the active image at its photo file after the project or the photo moved; its camera, "
+                        "pins and lines stay");
     ImGui::Separator();
     if (ImGui::MenuItem("Save", "Ctrl+S")) {
       if (state->project_path.empty()) {

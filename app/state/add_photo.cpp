@@ -25,12 +25,19 @@ std::string StoredPath(const std::string& project_path, const std::string& photo
 }  // namespace
 
 bool AddPhotoEdit(AppState* state, const std::string& path) {
-  int width_px = 0, height_px = 0;
-  std::string error;
-  if (path.empty() || !ReadImageSize(path, &width_px, &height_px, &error)) {
-    state->Log(LogLevel::kError, "Add photo: " + (path.empty() ? std::string("no file name") : error));
+  if (path.empty()) {
+    state->Log(LogLevel::kError, "Add photo: no file name");
     return false;
   }
+  // Decoded before it is accepted, so that a truncated or corrupt photo is refused here and
+  // not after it joined the project; the decoded pixels are the ones the app then shows.
+  ImageReadResult read = ReadImage(path);
+  if (!read.ok()) {
+    state->Log(LogLevel::kError, "Add photo: " + read.error);
+    return false;
+  }
+  const int width_px = read.image.width;
+  const int height_px = read.image.height;
   Project edited = state->document.project();
   Image image;
   image.id = edited.NewId();
@@ -53,10 +60,42 @@ bool AddPhotoEdit(AppState* state, const std::string& path) {
   edited.images.push_back(std::move(image));
   CommitEdit(state, "Add photo " + name, std::move(edited));
   if (state->document.project().FindImage(id) == nullptr) return false;
+  AdoptDecodedPhoto(state, id, std::move(read.image));
   state->active_image_id = id;
   state->Log(LogLevel::kInfo,
              name + ": " + std::to_string(width_px) + " x " + std::to_string(height_px) + " px; " +
                  (prior.found ? prior.message : "no EXIF focal length (calibrate from lines or pins)"));
+  return true;
+}
+
+bool RelinkPhotoEdit(AppState* state, Id image_id, const std::string& path) {
+  const Image* current = state->document.project().FindImage(image_id);
+  if (current == nullptr) {
+    state->Log(LogLevel::kError, "Relink photo: choose the image to relink first");
+    return false;
+  }
+  if (path.empty()) {
+    state->Log(LogLevel::kError, "Relink photo: no file name");
+    return false;
+  }
+  ImageReadResult read = ReadImage(path);
+  if (!read.ok()) {
+    state->Log(LogLevel::kError, "Relink photo: " + read.error);
+    return false;
+  }
+  if (read.image.width != current->width_px || read.image.height != current->height_px) {
+    state->Log(LogLevel::kError, "Relink photo: " + path + " is " + std::to_string(read.image.width) + " x " +
+                                     std::to_string(read.image.height) + " px, the image it replaces " +
+                                     std::to_string(current->width_px) + " x " + std::to_string(current->height_px) +
+                                     " px: not the same photo");
+    return false;
+  }
+  Project edited = state->document.project();
+  edited.FindImage(image_id)->path = StoredPath(state->project_path, path);
+  const std::string name = std::filesystem::path(path).filename().string();
+  CommitEdit(state, "Relink photo " + name, std::move(edited));
+  AdoptDecodedPhoto(state, image_id, std::move(read.image));
+  state->Log(LogLevel::kInfo, "Relinked the photo to " + path);
   return true;
 }
 

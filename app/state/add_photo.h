@@ -17,4 +17,10 @@ namespace facet::app {
 // the log says so. A missing or unreadable photo logs an error and changes nothing.
 bool AddPhotoEdit(AppState* state, const std::string& path);
 
+// File > Relink photo: points image `image_id` at the photo file at `path`, e.g. after the
+// project or its photos moved. Camera, pins and lines stay. The photo must decode and have the
+// image's size (else it is another photo: logged as an error, nothing changes). One undoable
+// edit.
+bool RelinkPhotoEdit(AppState* state, Id image_id, const std::string& path);
+
 }  // namespace facet::app

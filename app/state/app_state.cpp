@@ -170,6 +170,7 @@ void ResetDocument(AppState* state, Project project, const std::string& path) {
   }
   state->photos.clear();
   state->photo_errors.clear();
+  state->photo_paths.clear();
   state->last_update = {};
   state->mesh_primitives.clear();
   state->hover = {};
@@ -431,15 +432,36 @@ bool BakeInFlight(const AppState& state) { return state.bake_job.has_value(); }
 
 bool TexturePending(const AppState& state) { return state.baked_input_revision != state.bake_input_revision; }
 
+std::string PhotoFilePath(const AppState& state, const Image& image) {
+  return state.project_path.empty() ? image.path : ResolveImagePath(state.project_path, image.path);
+}
+
+void AdoptDecodedPhoto(AppState* state, Id image_id, ImageRgba8 photo) {
+  const Image* image = state->document.project().FindImage(image_id);
+  if (image == nullptr || state->photos.count(image_id)) return;
+  state->photo_errors.erase(image_id);
+  state->photo_paths[image_id] = PhotoFilePath(*state, *image);
+  state->photos.emplace(image_id, std::move(photo));
+}
+
 void RefreshDerived(AppState* state) {
   const auto start = std::chrono::steady_clock::now();
   const Project& project = state->document.project();
 
   // Photos: load the new ones once, forget the ones that left the project (after the bake in
   // flight, which may read them, and the line detection's copy).
+  auto photo_path = [&](const Image& image) { return PhotoFilePath(*state, image); };
+  auto still_valid = [&](Id id) {
+    const Image* image = project.FindImage(id);
+    const auto path = state->photo_paths.find(id);
+    return image != nullptr && path != state->photo_paths.end() && path->second == photo_path(*image);
+  };
+  for (auto it = state->photo_errors.begin(); it != state->photo_errors.end();)
+    it = still_valid(it->first) ? std::next(it) : state->photo_errors.erase(it);
   for (auto it = state->photos.begin(); it != state->photos.end();) {
-    if (!project.FindImage(it->first)) WaitForLineDetectionPhotoCopy(*state);
-    if (project.FindImage(it->first)) {
+    const bool valid = still_valid(it->first);
+    if (!valid) WaitForLineDetectionPhotoCopy(*state);
+    if (valid) {
       ++it;
     } else if (state->bake_job) {
       const auto next = std::next(it);
@@ -451,8 +473,8 @@ void RefreshDerived(AppState* state) {
   }
   for (const Image& image : project.images) {
     if (state->photos.count(image.id) || state->photo_errors.count(image.id)) continue;
-    const std::string path =
-        state->project_path.empty() ? image.path : ResolveImagePath(state->project_path, image.path);
+    const std::string path = photo_path(image);
+    state->photo_paths[image.id] = path;
     ImageReadResult read = ReadImage(path);
     if (read.ok()) {
       state->photos.emplace(image.id, std::move(read.image));

@@ -170,6 +170,9 @@ struct AppState {
   std::map<Id, ImageRgba8> photos;
   std::multimap<Id, ImageRgba8> retired_photos;
   std::map<Id, std::string> photo_errors;
+  // The file each entry of photos or photo_errors was read from: when an image's path changes
+  // (Relink photo, its undo), the photo is read again.
+  std::map<Id, std::string> photo_paths;
 
   // Derived from the project after each change (RefreshDerived).
   TexturedMesh mesh;
@@ -234,6 +237,13 @@ void RestoreDocument(AppState* state, Document document, const std::string& path
 
 // The one way panels change the project: `after` is the edited copy of the current project.
 // Re-solves (calibration and geometry) and commits edit + solve as one history entry.
+// The file an image's photo is read from: its stored path resolved against the project file
+// (as stored while the project is unsaved).
+std::string PhotoFilePath(const AppState& state, const Image& image);
+// Gives the photo cache a photo decoded elsewhere (Add photo, Relink photo validate by
+// decoding), so it is not read twice; ignored when the cache already holds one for the image.
+void AdoptDecodedPhoto(AppState* state, Id image_id, ImageRgba8 photo);
+
 void CommitEdit(AppState* state, const std::string& label, Project after);
 
 // Interactive drags (a pin, a segment endpoint): BeginDrag snapshots the project; each

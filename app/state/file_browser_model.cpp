@@ -63,7 +63,8 @@ const std::vector<std::string>& PurposeExtensions(BrowsePurpose purpose) {
     case BrowsePurpose::kOpenProject:
     case BrowsePurpose::kSaveProject: return kProjectExtensions;
     case BrowsePurpose::kExport: return kExportExtensions;
-    case BrowsePurpose::kAddPhoto: return kPhotoExtensions;
+    case BrowsePurpose::kAddPhoto:
+    case BrowsePurpose::kRelinkPhoto: return kPhotoExtensions;
   }
   return kProjectExtensions;
 }
@@ -74,6 +75,7 @@ const char* PurposeTitle(BrowsePurpose purpose) {
     case BrowsePurpose::kSaveProject: return "Save project as";
     case BrowsePurpose::kExport: return "Export model";
     case BrowsePurpose::kAddPhoto: return "Add photo";
+    case BrowsePurpose::kRelinkPhoto: return "Relink photo";
   }
   return "";
 }
@@ -84,6 +86,7 @@ const char* PurposeVerb(BrowsePurpose purpose) {
     case BrowsePurpose::kSaveProject: return "Save";
     case BrowsePurpose::kExport: return "Export";
     case BrowsePurpose::kAddPhoto: return "Add";
+    case BrowsePurpose::kRelinkPhoto: return "Relink";
   }
   return "";
 }
@@ -93,7 +96,8 @@ const char* PurposeFilterLabel(BrowsePurpose purpose) {
     case BrowsePurpose::kOpenProject:
     case BrowsePurpose::kSaveProject: return "Facet projects (*.facet)";
     case BrowsePurpose::kExport: return "Models (*.glb, *.obj)";
-    case BrowsePurpose::kAddPhoto: return "Photos (*.jpg, *.png, *.tif, ...)";
+    case BrowsePurpose::kAddPhoto:
+    case BrowsePurpose::kRelinkPhoto: return "Photos (*.jpg, *.png, *.tif, ...)";
   }
   return "";
 }

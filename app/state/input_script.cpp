@@ -72,8 +72,8 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"add", {1, 1}},         {"select", {1, 1}},         {"free-vertex", {0, 0}}, {"planar-face", {0, 0}},
       {"constrain", {1, 1}},   {"select-add", {1, 1}},     {"line-pin", {1, 1}},    {"line-pin-move", {1, 1}},
       {"calibration", {1, 1}}, {"move-selection", {1, 1}}, {"add-photo", {1, 1}},   {"wait-bake", {0, 0}},
-      {"bake-status", {1, 1}}, {"lines", {1, 1}}, {"ridge", {1, 1}}, {"recover", {1, 1}},
-      {"wait-autosave", {0, 0}}, {"new", {0, 0}},
+      {"bake-status", {1, 1}}, {"lines", {1, 1}},          {"ridge", {1, 1}},       {"relink-photo", {1, 1}},
+      {"recover", {1, 1}},     {"wait-autosave", {0, 0}},  {"new", {0, 0}},
   };
   return arity;
 }
@@ -322,11 +322,9 @@ std::string ParseAppCommand(const std::string& line, const std::vector<std::stri
   const auto& arity = CommandArity();
   const auto it = arity.find(step.command);
   if (it == arity.end()) {
-    return "unknown app command '" + t[1] +
-           "' (undo, redo, save, open, tool, select-image, fit, export, add, select, free-vertex, "
-           "planar-face, constrain, select-add, line-pin, line-pin-move, calibration, move-selection, add-photo, "
-           "wait-bake, "
-           "bake-status, recover, wait-autosave, new)";
+    std::string known;  // from the table, so the message cannot fall behind it
+    for (const auto& entry : arity) known += (known.empty() ? "" : ", ") + entry.first;
+    return "unknown app command '" + t[1] + "' (" + known + ")";
   }
   const std::string rest = Rest(line, 2);
   if (!rest.empty()) step.command_args.push_back(rest);

@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 #include <Eigen/SVD>
 
+#include "core/geometry/camera_checks.h"
 #include "core/optim/damped_normal_step.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/util/eigen_decompositions.h"
@@ -657,6 +658,10 @@ DltCalibrationSummary CalibrateFromPoints(const std::vector<PointCorrespondence>
   if (!(model.focal_px > 0.0) || !model.rotation.allFinite() || !model.translation.allFinite())
     return FailedSummary(summary, "the calibration diverged (no positive focal length); check the points", start);
   ReportCamera(points, model, options, solve_principal_point, &summary);
+  std::string not_a_camera = WhyNotACamera(summary.camera.focal_px, summary.camera.principal_point_px,
+                                           options.width_px, options.height_px);
+  if (not_a_camera.empty()) not_a_camera = WhyFocalIsUndetermined(summary.camera.focal_px, summary.focal_std_px);
+  if (!not_a_camera.empty()) return FailedSummary(summary, "no camera: " + not_a_camera, start);
   summary.time_ms = internal::MsSince(start);
   return summary;
 }

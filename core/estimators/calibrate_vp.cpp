@@ -11,6 +11,7 @@
 
 #include "core/estimators/vanishing_point.h"
 #include "core/geometry/camera.h"
+#include "core/geometry/camera_checks.h"
 #include "core/optim/damped_normal_step.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/util/eigen_decompositions.h"
@@ -34,6 +35,10 @@ constexpr double kCentralVanishingPointDeg = 5.0;
 // Second / largest singular value of a family's stacked lines below which its segments are
 // nearly on one line.
 constexpr double kNearlyCollinearSpread = 1e-3;
+// Two families whose vanishing points are closer than this, in degrees between their rays
+// seen from the image centre with a focal length of half the image's larger side, are one
+// direction in space: orthogonal directions stay tens of degrees apart for any real lens.
+constexpr double kSameVanishingPointDeg = 1.0;
 
 // Standard deviation, in half image sizes, of the weak prior that keeps a solved principal
 // point near the image centre where the segments leave it loose (5 %: 16 px at 640 x 480).
@@ -444,6 +449,24 @@ bool FitFreeVanishingPoints(const Families& families, const Conditioning& condit
     std::array<Eigen::Vector2d, 3> points;
     for (int a = 0; a < 3; ++a) points[a] = summary->vanishing_points[a].head<2>() / summary->vanishing_points[a].z();
     summary->vanishing_point_triangle_max_angle_deg = TriangleMaxAngleDeg(points);
+  }
+  return true;
+}
+
+// False (with *error) when two families meet at one vanishing point: the same lines given
+// twice, or one direction split into two families; nothing then fixes the focal length.
+bool FamiliesAreDistinct(const Families& families, const FreeVanishingPoints& free, std::string* error) {
+  for (int a = 0; a < 3; ++a) {
+    for (int b = a + 1; b < 3; ++b) {
+      if (!families.present[a] || !families.present[b]) continue;
+      const double angle_deg = std::acos(std::min(1.0, std::abs(free.v[a].dot(free.v[b])))) * kRadToDeg;
+      if (angle_deg >= kSameVanishingPointDeg) continue;
+      *error = FamilyName(a) + " and " + FamilyName(b) + " meet at one vanishing point (" +
+               internal::FormatNumber(angle_deg, 3) +
+               " deg apart seen from the image centre): they are one direction in space, not two orthogonal "
+               "ones; check the family assignment of the segments";
+      return false;
+    }
   }
   return true;
 }
@@ -987,7 +1010,8 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
   const double scale_px = conditioning.scale_px;
   summary.segment_residuals_px.assign(segments.size(), 0.0);
   FreeVanishingPoints free;
-  if (!FitFreeVanishingPoints(families, conditioning, &free, &summary, &error))
+  if (!FitFreeVanishingPoints(families, conditioning, &free, &summary, &error) ||
+      !FamiliesAreDistinct(families, free, &error))
     return FailedSummary(summary, error, start);
   ClosedForm closed_form;
   if (!SolveClosedForm(options, families, free, conditioning, &closed_form, &summary, &error))
@@ -1034,6 +1058,10 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
   if (!summary.cam_from_world_rotation.allFinite() || !std::isfinite(summary.focal_px) ||
       !summary.principal_point_px.allFinite())
     return FailedSummary(summary, "the calibration is not finite (numerical failure)", start);
+  std::string not_a_camera =
+      WhyNotACamera(summary.focal_px, summary.principal_point_px, options.width_px, options.height_px);
+  if (not_a_camera.empty()) not_a_camera = WhyFocalIsUndetermined(summary.focal_px, summary.focal_std_px);
+  if (!not_a_camera.empty()) return FailedSummary(summary, "no camera: " + not_a_camera, start);
   AddQualityWarnings(options, families, free, directions, closed_form.mode, &summary);
 
   summary.message = "f = " + internal::FormatNumber(summary.focal_px, 6) + " px";

@@ -159,9 +159,11 @@ struct VpCalibrationSummary : SolverSummary {
 // point centred or fixed; one horizontal family with the horizon and a known focal length;
 // each with the focal length solved, fixed or under a prior. Degenerate input (a family
 // with fewer than 2 segments, parallel or coincident segments where a finite vanishing
-// point is needed, an obtuse vanishing-point triangle, too few families for the mode)
-// gives a summary that is not IsUsable() (kInvalidInput or kFailed) and a message that says
-// which.
+// point is needed, two families meeting at one vanishing point, an obtuse vanishing-point
+// triangle, too few families for the mode) and a result that is no camera
+// (core/geometry/camera_checks.h: a focal length outside any lens or left undetermined by the
+// lines, a principal point far off the image) give a summary that is not IsUsable()
+// (kInvalidInput or kFailed) and a message that says which.
 VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& segments,
                                                  const VpCalibrationOptions& options);
 

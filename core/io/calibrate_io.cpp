@@ -223,8 +223,10 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
       if (summary.segments_per_axis[a] == 0) continue;
       const Eigen::Vector3d& v = summary.vanishing_points[a];
       axes.push_back(AxisName(static_cast<Axis>(a)));
+      // A point at infinity is its direction in the image, said as such, not a null that a
+      // reader could take for a missing value (issue 14).
       if (summary.vanishing_point_at_infinity[a])
-        points.push_back(nullptr);
+        points.push_back({{"at_infinity", true}, {"direction", {v.x() / v.head<2>().norm(), v.y() / v.head<2>().norm()}}});
       else
         points.push_back({v.x() / v.z(), v.y() / v.z()});
       homogeneous.push_back({v.x(), v.y(), v.z()});

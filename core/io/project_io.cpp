@@ -376,7 +376,8 @@ class Reader {
     if (!j->is_number_integer()) return Fail(path, range + ", found " + TypeName(*j));
     if (j->is_number_unsigned()) {
       const auto v = j->get<std::uint64_t>();
-      if (v > static_cast<std::uint64_t>(max)) return Fail(path, range + ", found " + j->dump());
+      if (v > static_cast<std::uint64_t>(max) || static_cast<std::int64_t>(v) < min)
+        return Fail(path, range + ", found " + j->dump());
       *out = static_cast<int>(v);
     } else {
       const auto v = j->get<std::int64_t>();
@@ -430,8 +431,8 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
     return false;
   constexpr int kMaxSize = std::numeric_limits<int>::max();
   if (!r->IdField(j, at, "id", &im->id) || !r->String(j, at, "path", &im->path) ||
-      !r->Int(j, at, "width_px", 0, kMaxSize, &im->width_px) ||
-      !r->Int(j, at, "height_px", 0, kMaxSize, &im->height_px))
+      !r->Int(j, at, "width_px", 1, kMaxSize, &im->width_px) ||
+      !r->Int(j, at, "height_px", 1, kMaxSize, &im->height_px))
     return false;
   const Json* cam = r->Field(j, at, "camera");
   const std::string cam_at = Join(at, "camera");
@@ -766,6 +767,18 @@ bool CheckReferences(const Project& p, Reader* r) {
       return r->Fail(Join(Index("primitives", i), "attached_to"),
                      "refers to a missing primitive " + std::to_string(base));
   }
+  // Attachments form trees: a primitive rides on its base, which may not ride on it. Walking
+  // up from each primitive, a chain longer than the primitive count has met a cycle.
+  for (size_t i = 0; i < p.primitives.size(); ++i) {
+    Id current = p.primitives[i].attached_to;
+    for (size_t steps = 0; current != kNoId; ++steps) {
+      if (current == p.primitives[i].id || steps > p.primitives.size())
+        return r->Fail(Join(Index("primitives", i), "attached_to"),
+                       "the chain of bases of primitive " + std::to_string(p.primitives[i].id) +
+                           " loops (attachments must form trees)");
+      current = p.FindPrimitive(current)->attached_to;
+    }
+  }
   // "vertex 3 of primitive 7", checked against the mesh.
   auto check_vertex = [&](const VertexRef& ref, const std::string& at) {
     if (p.FindPrimitive(ref.primitive_id) == nullptr)
@@ -1028,12 +1041,26 @@ ProjectLoadResult LoadProject(const std::string& path) {
     result.error = path + ": " + result.error;
     return result;
   }
+  // A project moved without its folder structure: a photo missing at its stored path is
+  // looked up by its file name beside the project. One still missing keeps its camera, pins
+  // and lines (the app marks it until File > Relink photo).
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
   for (size_t i = 0; i < result.project.images.size(); ++i) {
-    const Image& image = result.project.images[i];
+    Image& image = result.project.images[i];
     const std::string resolved = ResolveImagePath(path, image.path);
     std::error_code ec;
-    if (!std::filesystem::is_regular_file(resolved, ec))
-      result.warnings.push_back("images[" + std::to_string(i) + "]: image file not found: " + resolved);
+    if (std::filesystem::is_regular_file(resolved, ec)) continue;
+    const std::string name = std::filesystem::path(image.path).filename().string();
+    const std::filesystem::path beside = folder / name;
+    const std::string at = "images[" + std::to_string(i) + "]: ";
+    if (!name.empty() && name != image.path && std::filesystem::is_regular_file(beside, ec)) {
+      result.warnings.push_back(at + "photo not found at " + resolved + "; using " + beside.string() +
+                                " beside the project (save to keep the new path)");
+      image.path = name;
+    } else {
+      result.warnings.push_back(at + "image file not found: " + resolved +
+                                (name.empty() ? "" : " (nor " + name + " beside the project)"));
+    }
   }
   return result;
 }

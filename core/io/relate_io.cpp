@@ -8,6 +8,7 @@
 #include "core/io/json_io_internal.h"
 
 #include "core/estimators/two_view.h"
+#include "core/geometry/camera_checks.h"
 
 namespace facet {
 namespace {
@@ -73,6 +74,13 @@ bool ParseInput(const json& doc, Input* in, std::string* error) {
         !ReadMatrix3((*k_it)[1], &in->k2)) {
       *error = "\"K\" must be [K1, K2], two 3x3 matrices of finite numbers given as rows, got " + k_it->dump();
       return false;
+    }
+    for (const auto& [name, k] : {std::pair<const char*, const Eigen::Matrix3d*>{"K1", &in->k1}, {"K2", &in->k2}}) {
+      const std::string why = WhyNotACalibrationMatrix(*k);
+      if (!why.empty()) {
+        *error = std::string("\"K\": ") + name + " is not a camera: " + why;
+        return false;
+      }
     }
     in->has_k = true;
   }

@@ -71,4 +71,57 @@ TEST_CASE("Add photo: a new uncalibrated image with its size and a relative path
       Render(dir, dir / "undone.facet", "frames 2\ncommand add-photo " + (dir / "broken.jpg") + "\n", "broken");
   CHECK(broken.exit_code != 0);
   CHECK(broken.stderr_text.find("broken.jpg") != std::string::npos);
+
+  // A JPEG cut short keeps a valid header, so its size reads; Add photo decodes it first and
+  // refuses it (issue 14: it was added and failed only when shown).
+  std::vector<unsigned char> jpeg;
+  REQUIRE(cv::imencode(".jpg", cv::Mat(600, 800, CV_8UC3, cv::Scalar(60, 80, 100)), jpeg));
+  WriteText(dir / "cut.jpg", std::string(jpeg.begin(), jpeg.begin() + static_cast<long>(jpeg.size() / 2)));
+  const RunResult cut = Render(dir, dir / "undone.facet",
+                               "frames 2\ncommand add-photo " + (dir / "cut.jpg") + "\ncommand save " +
+                                   (dir / "after_cut.facet") + "\n",
+                               "cut");
+  CHECK(cut.exit_code != 0);
+  CHECK(cut.stderr_text.find("cut.jpg: JPEG is truncated") != std::string::npos);
+}
+
+TEST_CASE("Relink photo: a photo that moved is pointed at again; camera, pins and lines stay; undo; another photo is refused") {
+  TempDir dir("relink_photo");
+  SyntheticScene scene = MakeBoxScene(SyntheticSceneOptions());
+  facet::Project& p = scene.project;
+  p.images[0].path = "photos/shot.png";  // not there: the photo moved elsewhere
+  const int width = p.images[0].width_px, height = p.images[0].height_px;
+  const std::string project = dir / "scene.facet";
+  REQUIRE(facet::SaveProject(p, project) == "");
+  REQUIRE(cv::imwrite(dir / "shot_moved.png", cv::Mat(height, width, CV_8UC3, cv::Scalar(60, 80, 100))));
+  REQUIRE(cv::imwrite(dir / "other.png", cv::Mat(height / 2, width, CV_8UC3, cv::Scalar(60, 80, 100))));
+
+  // Another photo (another size) is refused with both sizes; nothing changes.
+  const RunResult other =
+      Render(dir, project, "frames 2\ncommand select-image 0\ncommand relink-photo " + (dir / "other.png") + "\n",
+             "other");
+  CHECK(other.exit_code != 0);
+  CHECK(other.stderr_text.find("not the same photo") != std::string::npos);
+
+  const RunResult relinked =
+      Render(dir, project,
+             "frames 2\ncommand select-image 0\ncommand relink-photo " + (dir / "shot_moved.png") +
+                 "\nframes 2\ncommand save\ncommand undo\nframes 2\ncommand save " + (dir / "undone.facet") + "\n",
+             "relink");
+  INFO(relinked.stderr_text);
+  REQUIRE(relinked.exit_code == 0);
+  // The photo was missing when the project opened: said so, and its image kept everything.
+  const nlohmann::json report = ReadJson(dir / "relink.json");
+  REQUIRE(report["redo_stack"].size() == 1);
+  CHECK(report["redo_stack"][0].get<std::string>() == "Relink photo shot_moved.png");
+  const facet::Project saved = Load(project);
+  CHECK(saved.images[0].path == "shot_moved.png");
+  // The camera is the scene's (re-solved on open from its exact pins and lines: to 1e-9).
+  const facet::Camera& camera = saved.images[0].camera;
+  const facet::Camera& truth = p.images[0].camera;
+  CHECK(std::abs(camera.focal_px - truth.focal_px) < kExactRelative * truth.focal_px);
+  CHECK(camera.cam_from_world_rotation.isApprox(truth.cam_from_world_rotation, kExactRelative));
+  CHECK(saved.pins == p.pins);
+  CHECK(saved.segments == p.segments);
+  CHECK(Load(dir / "undone.facet").images[0].path == "photos/shot.png");
 }

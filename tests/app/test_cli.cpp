@@ -124,6 +124,12 @@ TEST_CASE("solve re-solves a perturbed project, writes it and prints its summary
     CHECK(summary.contains(key));
   }
   CHECK(summary.at("reprojection_rms_px").get<double>() < 1e-6);
+  // The figures at the top are the joint solve's, whose result is saved and which the app's
+  // status shows (issue 14: they were the intermediate geometry solve's); both follow by name.
+  CHECK(summary.at("solver") == "joint");
+  CHECK(summary.at("reprojection_rms_px") == summary.at("joint_solve").at("reprojection_rms_px"));
+  CHECK(summary.at("iterations") == summary.at("joint_solve").at("iterations"));
+  CHECK(summary.at("geometry_solve").contains("reprojection_rms_px"));
   const facet::ProjectLoadResult solved = facet::LoadProject(dir / "out.facet");
   REQUIRE(solved.ok());
   constexpr double kRelativeTolerance = 1e-9;

@@ -34,16 +34,18 @@ const fs::path kDataDir = fs::path(FACET_SHARED_DATA) / "yorkurbandb-train";
 constexpr double kMaxMedianFocalErrorPercent = 3.0;
 constexpr double kMaxP90FocalErrorPercent = 10.0;
 constexpr int kMaxPhotosWithoutCamera = 2;
-// From the lines alone the median target is met (2.29 %) but the p90 is not (22 %, one
-// photo failed): a quarter of these photos are one-point perspectives of corridors and
+// From the lines alone the median target is met (2.24 %) but the p90 is not (18.3 %, two
+// photos without a camera; before the camera checks of core/geometry/camera_checks.h one of
+// them, P1040818, printed f = 5363 +- 3172 px against a true 674 px as an answer, and the p90
+// was 22 %): a quarter of these photos are one-point perspectives of corridors and
 // facades, where the vanishing point of the receding lines lies near the principal point and
 // the other two near infinity, and the lines leave f loose (calibrate_vp's focal_std_px is
 // 50 to 120 px on them, 100 px on the 25 % misses; drawn on the photos, their families
 // are right).
 // The bounds are the figures reached with a small margin, to catch regressions.
 constexpr double kMaxMedianFocalErrorPercentLinesAlone = 2.5;
-constexpr double kMaxP90FocalErrorPercentLinesAlone = 23.0;
-constexpr int kMaxPhotosWithoutCameraLinesAlone = 1;
+constexpr double kMaxP90FocalErrorPercentLinesAlone = 19.0;
+constexpr int kMaxPhotosWithoutCameraLinesAlone = 2;
 
 double TrueFocalPx() {
   std::ifstream in(kDataDir / "K.txt");

@@ -1,0 +1,49 @@
+#include "core/geometry/camera_checks.h"
+
+#include <cmath>
+
+#include "core/util/format.h"
+
+namespace facet {
+namespace {
+
+std::string Number(double value) { return internal::FormatNumber(value, 6); }
+
+}  // namespace
+
+std::string WhyNotACamera(double focal_px, const Eigen::Vector2d& principal_point_px, int width_px, int height_px) {
+  if (!std::isfinite(focal_px) || !(focal_px > 0.0))
+    return "the focal length is not a positive number (f = " + Number(focal_px) + " px)";
+  if (!principal_point_px.allFinite()) return "the principal point is not finite";
+  if (width_px <= 0 || height_px <= 0) return "the photo has no size";
+  const double diagonal = std::hypot(static_cast<double>(width_px), static_cast<double>(height_px));
+  const double ratio = focal_px / diagonal;
+  if (ratio < kMinFocalPerDiagonal || ratio > kMaxFocalPerDiagonal)
+    return "f = " + Number(focal_px) + " px is " + Number(ratio) + " image diagonals, outside any lens (" +
+           Number(kMinFocalPerDiagonal) + " to " + Number(kMaxFocalPerDiagonal) + ")";
+  const Eigen::Vector2d center(0.5 * (width_px - 1), 0.5 * (height_px - 1));
+  const double offset = (principal_point_px - center).norm() / diagonal;
+  if (offset > kMaxPrincipalPointOffsetPerDiagonal)
+    return "the principal point (" + Number(principal_point_px.x()) + ", " + Number(principal_point_px.y()) +
+           ") px is " + Number(offset) + " image diagonals from the centre (at most " +
+           Number(kMaxPrincipalPointOffsetPerDiagonal) + ")";
+  return {};
+}
+
+std::string WhyFocalIsUndetermined(double focal_px, double focal_std_px) {
+  if (!std::isfinite(focal_std_px) || !(focal_std_px > 0.0) || !(focal_px > 0.0)) return {};
+  if (focal_std_px <= kMaxFocalRelativeStd * focal_px) return {};
+  return "the focal length is not determined by the data: f = " + Number(focal_px) + " +- " + Number(focal_std_px) +
+         " px (a standard deviation over " + Number(100.0 * kMaxFocalRelativeStd) + " % of f)";
+}
+
+std::string WhyNotACalibrationMatrix(const Eigen::Matrix3d& k) {
+  if (!k.allFinite()) return "K has a non-finite entry";
+  if (k(1, 0) != 0.0 || k(2, 0) != 0.0 || k(2, 1) != 0.0) return "K is not upper triangular";
+  if (!(k(2, 2) > 0.0)) return "K(2,2) must be positive, got " + Number(k(2, 2));
+  if (!(k(0, 0) > 0.0) || !(k(1, 1) > 0.0))
+    return "K's focal lengths must be positive, got " + Number(k(0, 0)) + " and " + Number(k(1, 1));
+  return {};
+}
+
+}  // namespace facet
