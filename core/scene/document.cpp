@@ -284,6 +284,11 @@ void Document::MarkClean() {
   ++revision_;
 }
 
+void Document::ForgetCleanState() {
+  clean_is_unreachable_ = true;
+  ++revision_;
+}
+
 void Document::RewriteImagePaths(const std::function<std::string(const std::string&)>& rewrite) {
   for (Image& image : project_.images) image.path = rewrite(image.path);
   for (std::vector<Edit>* stack : {&undo_, &redo_}) {

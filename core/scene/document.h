@@ -95,6 +95,9 @@ class Document {
   size_t clean_undo_depth() const { return clean_undo_depth_; }
   bool clean_is_unreachable() const { return clean_is_unreachable_; }
   void MarkClean();
+  // No state of the history is the saved one any more (a restored recovery whose project file
+  // is not its saved state): dirty until the next MarkClean.
+  void ForgetCleanState();
   // Increments whenever the committed document changes (an edit, undo, redo, reset, a clean
   // mark or a path rewrite; not a drag's preview), so that a watcher such as the autosave
   // notices every change, even two within one frame that leave the stack sizes as they were.
