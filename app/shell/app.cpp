@@ -162,6 +162,7 @@ const char* DialogName(Dialog dialog) {
     case Dialog::kConfirmQuit: return "confirm-quit";
     case Dialog::kConfirmNew: return "confirm-new";
     case Dialog::kConfirmOpen: return "confirm-open";
+    case Dialog::kRecover: return "recover";
   }
   return "";
 }
@@ -250,6 +251,15 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
   }
   report["log"] = log;
   report["dialog"] = DialogName(shell.dialog);
+  const AutosaveState& autosave = state.autosave;
+  report["autosave"] = {{"enabled", autosave.enabled},
+                        {"recovery_file", autosave.owned_path},
+                        {"writes", autosave.stats.writes},
+                        {"failures", autosave.stats.failures},
+                        {"last_snapshot_ms", autosave.stats.last_snapshot_ms},
+                        {"last_write_ms", autosave.stats.last_write_ms},
+                        {"last_bytes", autosave.stats.last_bytes},
+                        {"offer", autosave.offer ? autosave.offer->recovery_path : std::string()}};
   const FileDialogState& browser = shell.file_dialog;
   report["file_dialog"] = {{"folder", browser.folder},
                            {"name", browser.name_field},
@@ -382,11 +392,16 @@ int RunGui(const GuiOptions& options) {
     }
   }
   UseRecentFilesIn(&state, &shell, ConfigDirectory());
+  state.autosave.enabled = true;
   if (!options.project_path.empty() && OpenProject(&state, options.project_path)) {
     NoteRecentFile(&state, &shell, options.project_path);
   }
+  // A crashed session's work: the project's own recovery file, else an unsaved project's
+  // (whichever project opened, the default sample included). DrawFrame shows the offer.
+  FindRecovery(&state, /*also_unsaved=*/true);
 
   const int code = RunGlfwWindow(&state, &shell, imgui_ini);
+  FinishAutosave(&state);
   if (code == 0 && !layout_path.empty()) {
     std::string error;
     if (!SaveLayoutFile(layout_path, shell.layout, &error)) std::fprintf(stderr, "facet: %s\n", error.c_str());
@@ -412,6 +427,8 @@ int RunOffscreen(const RenderOptions& options) {
   if (!options.project_path.empty() && !OpenProject(&state, options.project_path)) {
     return Fail("cannot open project " + options.project_path);
   }
+  state.autosave.enabled = options.autosave;
+  FindRecovery(&state, /*also_unsaved=*/false);
 
   EglContext egl;
   if (!egl.Create(&error)) return Fail("no offscreen OpenGL context: " + error);
@@ -423,6 +440,7 @@ int RunOffscreen(const RenderOptions& options) {
     return Fail("the ImGui OpenGL3 renderer failed to start on " + egl.Renderer());
   }
   const int code = RenderWithContext(options, &state, &shell, script, egl.Renderer());
+  FinishAutosave(&state);  // the end of a script is a clean exit, failed or not
   ShutdownImagePanel(&shell.image_panel);
   ShutdownViewportPanel(&shell.viewport_panel);
   ImGui_ImplOpenGL3_Shutdown();

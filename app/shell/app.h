@@ -27,6 +27,10 @@ struct RenderOptions {
                             // image view transform, undo stack, project)
   std::string config_dir;   // where recent files are read and kept; empty: in memory only
   bool snapping = true;     // the image panel's Snap option (AppState::snapping)
+  // Autosave and the recovery offer as in the GUI (app/state/autosave.h). Off by default so
+  // that renders of shared projects (the samples, tests running side by side) never write
+  // or offer recovery files beside them.
+  bool autosave = false;
 };
 
 // Renders the default layout (never the user's saved layout) offscreen at a fixed 60 Hz

@@ -21,6 +21,7 @@
 #include "app/panels/image_panel.h"
 #include "app/panels/side_panels.h"
 #include "app/panels/viewport_panel.h"
+#include "app/panels/widgets.h"
 #include "app/shell/file_actions.h"
 #include "app/shell/menu_bar.h"
 #include "app/state/add_photo.h"
@@ -35,7 +36,6 @@ namespace {
 
 constexpr float kWorkAreaMarginPx = 4.0f;
 constexpr float kTearOffDistancePx = 14.0f;
-const ImVec4 kDimText(0.55f, 0.57f, 0.62f, 1.0f);
 const ImVec4 kErrorText(1.00f, 0.42f, 0.40f, 1.0f);
 
 // FNV-1a (64 bit) of raw bytes: the `bake-status` fingerprints that let a test compare the
@@ -316,6 +316,7 @@ const char* DialogTitle(Dialog dialog) {
     case Dialog::kConfirmQuit: return "Unsaved changes##quit";
     case Dialog::kConfirmNew: return "Unsaved changes##new";
     case Dialog::kConfirmOpen: return "Unsaved changes##open";
+    case Dialog::kRecover: return "Recover unsaved work";
     case Dialog::kNone: break;
   }
   return "";
@@ -387,6 +388,30 @@ void DrawDialogs(AppState* state, ShellState* shell) {
       ImGui::Spacing();
       if (ImGui::Button("Close", ImVec2(100, 0)) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) CloseDialog(shell);
       break;
+    case Dialog::kRecover: {
+      // Only the two answers close it: an unanswered offer keeps the file for the next start.
+      const RecoveryOffer* offer = state->autosave.offer ? &*state->autosave.offer : nullptr;
+      if (offer == nullptr) {
+        CloseDialog(shell);
+        break;
+      }
+      const std::string what = offer->project_path.empty()
+                                   ? std::string("An unsaved project")
+                                   : std::filesystem::path(offer->project_path).filename().string();
+      ImGui::Text("%s has unsaved work from a session that did not end normally.", what.c_str());
+      ImGui::TextColored(kDimText, "%zu edits to undo, %zu to redo: %s", offer->document.undo_stack().size(),
+                         offer->document.redo_stack().size(), offer->recovery_path.c_str());
+      ImGui::Spacing();
+      const bool restore = ImGui::Button("Restore", ImVec2(110, 0));
+      RecordItem(state, "recover.restore");
+      ImGui::SameLine();
+      const bool discard = ImGui::Button("Discard", ImVec2(110, 0));
+      RecordItem(state, "recover.discard");
+      if (restore) RestoreRecovery(state);
+      if (discard) DiscardRecovery(state);
+      if (restore || discard) CloseDialog(shell);
+      break;
+    }
     case Dialog::kConfirmQuit:
     case Dialog::kConfirmNew:
     case Dialog::kConfirmOpen: {
@@ -559,8 +584,27 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
       return false;
     }
     NoteRecentFile(state, shell, arg);
+    if (FindRecovery(state, /*also_unsaved=*/false)) OpenDialog(shell, Dialog::kRecover);
     return true;
   }
+  if (name == "recover") {
+    if (arg != "restore" && arg != "discard") {
+      *error = "expected 'recover restore' or 'recover discard'";
+      return false;
+    }
+    if (!state->autosave.offer) {
+      *error = "no recovery file is offered";
+      return false;
+    }
+    if (arg == "restore") {
+      RestoreRecovery(state);
+    } else {
+      DiscardRecovery(state);
+    }
+    // The dialog closes itself in the next frame, once there is no offer to show.
+    return true;
+  }
+  if (name == "wait-autosave") return WaitForAutosave(state, error);
   if (name == "tool") {
     const std::optional<Tool> tool = ToolFromName(arg);
     if (!tool) {
@@ -719,6 +763,8 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   state->bake_mode = shell->offscreen ? BakeMode::kFinishNextFrame : BakeMode::kBackground;
   RefreshDerived(state);
   CollectLineDetection(state, /*wait=*/false);
+  AutosaveTick(state);
+  if (state->autosave.offer && shell->dialog == Dialog::kNone) OpenDialog(shell, Dialog::kRecover);
   if (state->request_quit) {
     state->request_quit = false;
     RequestQuit(state, shell);

@@ -28,7 +28,8 @@ enum class Dialog {
   kAbout,
   kConfirmQuit,
   kConfirmNew,
-  kConfirmOpen
+  kConfirmOpen,
+  kRecover,  // a recovery file was found: Restore or Discard (app/state/autosave.h)
 };
 // The dialogs that are the file browser (app/shell/file_actions.h).
 inline bool IsFileBrowserDialog(Dialog d) {

@@ -130,6 +130,9 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   render->add_option("--report", render_options.report_path,
                      "Also write a JSON report: panel rectangles, image view transform, history, project");
+  render->add_flag("--autosave", render_options.autosave,
+                   "Autosave to a recovery file and offer recovery at start, as the GUI does (default: off, so "
+                   "renders never write beside a project)");
   render->add_flag("--no-snap", [&](std::int64_t) { render_options.snapping = false; },
                    "Start with the image panel's Snap option off (points land where the mouse goes)");
   render->add_option("--config-dir", render_options.config_dir,

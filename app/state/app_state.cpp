@@ -205,6 +205,14 @@ bool OpenProject(AppState* state, const std::string& path) {
   return true;
 }
 
+void RestoreDocument(AppState* state, Document document, const std::string& path) {
+  ResetDocument(state, Project{}, path);
+  state->document = std::move(document);
+  const Project& project = state->document.project();
+  state->active_image_id = project.images.empty() ? kNoId : project.images.front().id;
+  RefreshDiagnostics(state);
+}
+
 bool SaveProjectAs(AppState* state, const std::string& path) {
   const std::string target = path.empty() ? state->project_path : path;
   if (target.empty()) {

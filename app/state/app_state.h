@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "app/state/autosave.h"
 #include "app/state/line_proposals.h"
 #include "app/state/rect.h"
 #include "core/estimators/calibrate_vp.h"
@@ -204,6 +205,9 @@ struct AppState {
   // to corners, segments and the model nearby; Alt turns it off for one placement.
   bool snapping = true;
 
+  // The recovery file kept while there are unsaved changes (app/state/autosave.h).
+  AutosaveState autosave;
+
   std::vector<LogEntry> log;
   double time_s = 0.0;
   bool request_quit = false;
@@ -227,6 +231,9 @@ void NewProject(AppState* state);
 bool OpenProject(AppState* state, const std::string& path);
 // Saves atomically to `path` (or project_path when empty). Logs and returns false on failure.
 bool SaveProjectAs(AppState* state, const std::string& path);
+// Replaces the whole document, history included (a restored recovery file), as opening a
+// project does: selection, photos and derived state start again.
+void RestoreDocument(AppState* state, Document document, const std::string& path);
 
 // The one way panels change the project: `after` is the edited copy of the current project.
 // Re-solves (calibration and geometry) and commits edit + solve as one history entry.

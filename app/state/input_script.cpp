@@ -73,6 +73,7 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"constrain", {1, 1}},   {"select-add", {1, 1}},     {"line-pin", {1, 1}},    {"line-pin-move", {1, 1}},
       {"calibration", {1, 1}}, {"move-selection", {1, 1}}, {"add-photo", {1, 1}},   {"wait-bake", {0, 0}},
       {"bake-status", {1, 1}}, {"lines", {1, 1}},          {"ridge", {1, 1}},       {"relink-photo", {1, 1}},
+      {"recover", {1, 1}},     {"wait-autosave", {0, 0}},  {"new", {0, 0}},
   };
   return arity;
 }
@@ -360,10 +361,12 @@ std::string ParseDrop(const std::string& line, ScriptStep step, Steps* steps) {
 }
 
 // Whether a script line of this kind is something a user does by hand (Script::ui_events).
-// The test-only commands (wait-bake, bake-status) are not.
+// The test-only commands (wait-bake, bake-status, wait-autosave) are not.
 bool IsUiEvent(const std::vector<std::string>& t) {
   const std::string cmd = Lower(t[0]);
-  if (cmd == "command") return t.size() < 2 || (Lower(t[1]) != "wait-bake" && Lower(t[1]) != "bake-status");
+  if (cmd == "command")
+    return t.size() < 2 ||
+           (Lower(t[1]) != "wait-bake" && Lower(t[1]) != "bake-status" && Lower(t[1]) != "wait-autosave");
   return cmd == "click" || cmd == "drag" || cmd == "key" || cmd == "type" || cmd == "wheel" || cmd == "drop" ||
          cmd == "down" || cmd == "hold";
 }

@@ -22,7 +22,7 @@
 //   key [ctrl+][shift+][alt+]KEY  press (1 frame), release (1 frame); e.g. key ctrl+z
 //   type TEXT                     text characters for the active text field (1 frame)
 //   hold|release shift|ctrl|alt   keep a modifier down / let it go
-//   command NAME [ARGS]           undo, redo, save PATH, open PATH, tool NAME,
+//   command NAME [ARGS]           new, undo, redo, save PATH, open PATH, tool NAME,
 //                                 select-image INDEX, fit, export PATH, and for the model:
 //                                   add KIND [on-top]  K_create (box, wedge, prism, pyramid,
 //                                                      cylinder, plane), on the selected box;
@@ -80,6 +80,11 @@
 //                                   bake-status PATH   the background bake's state as JSON
 //                                                      (in flight, revisions, counters,
 //                                                      main-thread ms, mesh fingerprints)
+//                                   recover restore|discard  the answer to the offered
+//                                                      recovery file (app/state/autosave.h)
+//                                   wait-autosave      block until the recovery file holds
+//                                                      the document as it is now (render
+//                                                      --autosave)
 //                                 Tool names: select, line-x, line-y, line-z, pin,
 //                                 add-primitive (adds at once), split-edge, delete-vertex,
 //                                 connect-vertices, delete-edge, push-pull, move, line-pin,

@@ -1,4 +1,5 @@
 #include "core/io/project_io.h"
+#include "core/io/project_io_internal.h"
 
 #include "core/util/file_read.h"
 
@@ -173,121 +174,116 @@ OrderedJson WriteMesh(const PolyMesh& mesh, const std::string& at, Writer* w) {
   return j;
 }
 
+// One writer per object kind, shared with the recovery file (project_io_internal.h); `at` is
+// the object's JSON path, for the Writer's error.
+OrderedJson WriteImage(const Image& im, const std::string& at, Writer* w) {
+  OrderedJson j;
+  j["id"] = im.id;
+  j["path"] = w->String(Join(at, "path"), std::filesystem::path(im.path).generic_string());
+  j["width_px"] = im.width_px;
+  j["height_px"] = im.height_px;
+  const std::string cam_at = Join(at, "camera");
+  OrderedJson cam;
+  cam["width_px"] = im.camera.width_px;
+  cam["height_px"] = im.camera.height_px;
+  cam["focal_px"] = w->Number(Join(cam_at, "focal_px"), im.camera.focal_px);
+  cam["principal_point_px"] = w->Numbers(Join(cam_at, "principal_point_px"), im.camera.principal_point_px);
+  cam["rotation"] = w->Matrix(Join(cam_at, "rotation"), im.camera.cam_from_world_rotation);
+  cam["translation"] = w->Numbers(Join(cam_at, "translation"), im.camera.cam_from_world_translation);
+  cam["k1"] = w->Number(Join(cam_at, "k1"), im.camera.k1);
+  cam["k2"] = w->Number(Join(cam_at, "k2"), im.camera.k2);
+  j["camera"] = std::move(cam);
+  j["camera_calibrated"] = im.camera_calibrated;
+  j["principal_point_mode"] = PrincipalPointModeName(im.principal_point_mode);
+  j["fixed_principal_point_px"] = w->Numbers(Join(at, "fixed_principal_point_px"), im.fixed_principal_point_px);
+  j["pose_locked"] = im.pose_locked;
+  j["focal_locked"] = im.focal_locked;
+  j["principal_point_locked"] = im.principal_point_locked;
+  j["focal_mode"] = FocalModeName(im.focal_mode);
+  j["fixed_focal_px"] = w->Number(Join(at, "fixed_focal_px"), im.fixed_focal_px);
+  j["focal_prior_px"] = w->Number(Join(at, "focal_prior_px"), im.focal_prior_px);
+  j["focal_prior_std_px"] = w->Number(Join(at, "focal_prior_std_px"), im.focal_prior_std_px);
+  j["use_horizon"] = im.use_horizon;
+  j["horizon_px"] = w->Numbers(Join(at, "horizon_px"), im.horizon_px);
+  j["estimate_distortion"] = im.estimate_distortion;
+  j["distortion_locked"] = im.distortion_locked;
+  j["axis_quarter_turns"] = im.axis_quarter_turns;
+  return j;
+}
+
+OrderedJson WriteSegment(const Segment& s, const std::string& at, Writer* w) {
+  OrderedJson j;
+  j["id"] = s.id;
+  j["image_id"] = s.image_id;
+  j["axis"] = AxisName(s.axis);
+  j["a_px"] = w->Numbers(Join(at, "a_px"), s.a_px);
+  j["b_px"] = w->Numbers(Join(at, "b_px"), s.b_px);
+  return j;
+}
+
+OrderedJson WritePrimitive(const Primitive& prim, const std::string& at, Writer* w) {
+  OrderedJson j;
+  j["id"] = prim.id;
+  j["name"] = w->String(Join(at, "name"), prim.name);
+  j["kind"] = PrimitiveKindName(prim.shape.kind);
+  j["params"] = w->Numbers(Join(at, "params"), prim.shape.params);
+  j["segments"] = prim.shape.segments;
+  // Only when it is not the default, so that files without turned wedges stay as they were.
+  if (prim.shape.ridge_along_y) j["ridge"] = "y";
+  j["rotation"] = w->Numbers(Join(at, "rotation"), prim.shape.rotation);
+  j["translation"] = w->Numbers(Join(at, "translation"), prim.shape.translation);
+  j["param_locked"] = prim.param_locked;
+  j["rotation_locked"] = prim.rotation_locked;
+  j["translation_locked"] = prim.translation_locked;
+  j["attached_to"] = prim.attached_to;
+  j["mesh"] = WriteMesh(prim.mesh, Join(at, "mesh"), w);
+  return j;
+}
+
+OrderedJson WritePin(const Pin& pin, const std::string& at, Writer* w) {
+  OrderedJson j;
+  j["id"] = pin.id;
+  j["image_id"] = pin.image_id;
+  j["primitive_id"] = pin.vertex.primitive_id;
+  j["vertex"] = pin.vertex.vertex;
+  j["uv_px"] = w->Numbers(Join(at, "uv_px"), pin.uv_px);
+  return j;
+}
+
+OrderedJson WriteConstraint(const Constraint& c, const std::string& at, Writer* w) {
+  OrderedJson j;
+  j["id"] = c.id;
+  j["kind"] = ConstraintKindName(c.kind);
+  OrderedJson refs = OrderedJson::array();
+  for (const VertexRef& ref : c.vertices) refs.push_back({ref.primitive_id, ref.vertex});
+  j["vertices"] = std::move(refs);
+  j["value"] = w->Number(Join(at, "value"), c.value);
+  j["point"] = w->Numbers(Join(at, "point"), c.point);
+  j["axis"] = AxisName(c.axis);
+  j["image_id"] = c.image_id;
+  j["line_a_px"] = w->Numbers(Join(at, "line_a_px"), c.line_a_px);
+  j["line_b_px"] = w->Numbers(Join(at, "line_b_px"), c.line_b_px);
+  return j;
+}
+
+template <typename T, typename WriteFn>
+OrderedJson WriteList(const std::vector<T>& list, const char* key, WriteFn write, Writer* w) {
+  OrderedJson out = OrderedJson::array();
+  for (size_t i = 0; i < list.size(); ++i) out.push_back(write(list[i], Index(key, i), w));
+  return out;
+}
+
 OrderedJson WriteProject(const Project& p, Writer* w) {
   OrderedJson root;
   root["format"] = kFormatName;
   root["version"] = Project::kFormatVersion;
   root["units"] = w->String("units", p.units);
   root["next_id"] = p.next_id;
-
-  OrderedJson images = OrderedJson::array();
-  for (size_t i = 0; i < p.images.size(); ++i) {
-    const Image& im = p.images[i];
-    const std::string at = Index("images", i);
-    OrderedJson j;
-    j["id"] = im.id;
-    j["path"] = w->String(Join(at, "path"), std::filesystem::path(im.path).generic_string());
-    j["width_px"] = im.width_px;
-    j["height_px"] = im.height_px;
-    const std::string cam_at = Join(at, "camera");
-    OrderedJson cam;
-    cam["width_px"] = im.camera.width_px;
-    cam["height_px"] = im.camera.height_px;
-    cam["focal_px"] = w->Number(Join(cam_at, "focal_px"), im.camera.focal_px);
-    cam["principal_point_px"] = w->Numbers(Join(cam_at, "principal_point_px"), im.camera.principal_point_px);
-    cam["rotation"] = w->Matrix(Join(cam_at, "rotation"), im.camera.cam_from_world_rotation);
-    cam["translation"] = w->Numbers(Join(cam_at, "translation"), im.camera.cam_from_world_translation);
-    cam["k1"] = w->Number(Join(cam_at, "k1"), im.camera.k1);
-    cam["k2"] = w->Number(Join(cam_at, "k2"), im.camera.k2);
-    j["camera"] = std::move(cam);
-    j["camera_calibrated"] = im.camera_calibrated;
-    j["principal_point_mode"] = PrincipalPointModeName(im.principal_point_mode);
-    j["fixed_principal_point_px"] = w->Numbers(Join(at, "fixed_principal_point_px"), im.fixed_principal_point_px);
-    j["pose_locked"] = im.pose_locked;
-    j["focal_locked"] = im.focal_locked;
-    j["principal_point_locked"] = im.principal_point_locked;
-    j["focal_mode"] = FocalModeName(im.focal_mode);
-    j["fixed_focal_px"] = w->Number(Join(at, "fixed_focal_px"), im.fixed_focal_px);
-    j["focal_prior_px"] = w->Number(Join(at, "focal_prior_px"), im.focal_prior_px);
-    j["focal_prior_std_px"] = w->Number(Join(at, "focal_prior_std_px"), im.focal_prior_std_px);
-    j["use_horizon"] = im.use_horizon;
-    j["horizon_px"] = w->Numbers(Join(at, "horizon_px"), im.horizon_px);
-    j["estimate_distortion"] = im.estimate_distortion;
-    j["distortion_locked"] = im.distortion_locked;
-    j["axis_quarter_turns"] = im.axis_quarter_turns;
-    images.push_back(std::move(j));
-  }
-  root["images"] = std::move(images);
-
-  OrderedJson segments = OrderedJson::array();
-  for (size_t i = 0; i < p.segments.size(); ++i) {
-    const Segment& s = p.segments[i];
-    const std::string at = Index("segments", i);
-    OrderedJson j;
-    j["id"] = s.id;
-    j["image_id"] = s.image_id;
-    j["axis"] = AxisName(s.axis);
-    j["a_px"] = w->Numbers(Join(at, "a_px"), s.a_px);
-    j["b_px"] = w->Numbers(Join(at, "b_px"), s.b_px);
-    segments.push_back(std::move(j));
-  }
-  root["segments"] = std::move(segments);
-
-  OrderedJson primitives = OrderedJson::array();
-  for (size_t i = 0; i < p.primitives.size(); ++i) {
-    const Primitive& prim = p.primitives[i];
-    const std::string at = Index("primitives", i);
-    OrderedJson j;
-    j["id"] = prim.id;
-    j["name"] = w->String(Join(at, "name"), prim.name);
-    j["kind"] = PrimitiveKindName(prim.shape.kind);
-    j["params"] = w->Numbers(Join(at, "params"), prim.shape.params);
-    j["segments"] = prim.shape.segments;
-    // Only when it is not the default, so that files without turned wedges stay as they were.
-    if (prim.shape.ridge_along_y) j["ridge"] = "y";
-    j["rotation"] = w->Numbers(Join(at, "rotation"), prim.shape.rotation);
-    j["translation"] = w->Numbers(Join(at, "translation"), prim.shape.translation);
-    j["param_locked"] = prim.param_locked;
-    j["rotation_locked"] = prim.rotation_locked;
-    j["translation_locked"] = prim.translation_locked;
-    j["attached_to"] = prim.attached_to;
-    j["mesh"] = WriteMesh(prim.mesh, Join(at, "mesh"), w);
-    primitives.push_back(std::move(j));
-  }
-  root["primitives"] = std::move(primitives);
-
-  OrderedJson pins = OrderedJson::array();
-  for (size_t i = 0; i < p.pins.size(); ++i) {
-    const Pin& pin = p.pins[i];
-    OrderedJson j;
-    j["id"] = pin.id;
-    j["image_id"] = pin.image_id;
-    j["primitive_id"] = pin.vertex.primitive_id;
-    j["vertex"] = pin.vertex.vertex;
-    j["uv_px"] = w->Numbers(Join(Index("pins", i), "uv_px"), pin.uv_px);
-    pins.push_back(std::move(j));
-  }
-  root["pins"] = std::move(pins);
-
-  OrderedJson constraints = OrderedJson::array();
-  for (size_t i = 0; i < p.constraints.size(); ++i) {
-    const Constraint& c = p.constraints[i];
-    const std::string at = Index("constraints", i);
-    OrderedJson j;
-    j["id"] = c.id;
-    j["kind"] = ConstraintKindName(c.kind);
-    OrderedJson refs = OrderedJson::array();
-    for (const VertexRef& ref : c.vertices) refs.push_back({ref.primitive_id, ref.vertex});
-    j["vertices"] = std::move(refs);
-    j["value"] = w->Number(Join(at, "value"), c.value);
-    j["point"] = w->Numbers(Join(at, "point"), c.point);
-    j["axis"] = AxisName(c.axis);
-    j["image_id"] = c.image_id;
-    j["line_a_px"] = w->Numbers(Join(at, "line_a_px"), c.line_a_px);
-    j["line_b_px"] = w->Numbers(Join(at, "line_b_px"), c.line_b_px);
-    constraints.push_back(std::move(j));
-  }
-  root["constraints"] = std::move(constraints);
+  root["images"] = WriteList(p.images, "images", WriteImage, w);
+  root["segments"] = WriteList(p.segments, "segments", WriteSegment, w);
+  root["primitives"] = WriteList(p.primitives, "primitives", WritePrimitive, w);
+  root["pins"] = WriteList(p.pins, "pins", WritePin, w);
+  root["constraints"] = WriteList(p.constraints, "constraints", WriteConstraint, w);
   return root;
 }
 
@@ -982,6 +978,31 @@ bool ReadWholeFile(const std::string& path, std::string* bytes, std::string* err
   return ReadRegularFile(path, kMaxTextFileBytes, bytes, error);
 }
 
+// JSON text to a document; a syntax error or an out-of-range number names its line and column.
+// Shared with the recovery file (project_io_internal.h).
+bool ParseJsonText(const std::string& text, Json* root, std::string* error) {
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos) {
+    *error = "line 1, column 1: the file is empty";
+    return false;
+  }
+  try {
+    *root = Json::parse(text);
+  } catch (const nlohmann::json::out_of_range& e) {
+    // A number beyond the range of a double: nlohmann names the token but not where it is.
+    const std::string what = e.what();
+    const size_t open = what.find('\'');
+    const size_t close = what.rfind('\'');
+    const size_t at = open < close ? text.find(what.substr(open + 1, close - open - 1)) : std::string::npos;
+    *error = (at == std::string::npos ? "" : LineColumn(text, at + 1) + ": ") + "number out of range" +
+             (open < close ? " " + what.substr(open) : "");
+    return false;
+  } catch (const nlohmann::json::parse_error& e) {
+    *error = LineColumn(text, e.byte) + ": " + ParseErrorText(e);
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 std::string ProjectToJson(const Project& project) {
@@ -999,30 +1020,13 @@ std::string CheckProjectSavable(const Project& project) {
 ProjectLoadResult ProjectFromJson(const std::string& text) {
   ProjectLoadResult result;
   try {
-    if (text.find_first_not_of(" \t\r\n") == std::string::npos) {
-      result.error = "line 1, column 1: the file is empty";
-      return result;
-    }
     Json root;
-    try {
-      root = Json::parse(text);
-    } catch (const nlohmann::json::out_of_range& e) {
-      // A number beyond the range of a double: nlohmann names the token but not where it is.
-      const std::string what = e.what();
-      const size_t open = what.find('\'');
-      const size_t close = what.rfind('\'');
-      const size_t at = open < close ? text.find(what.substr(open + 1, close - open - 1)) : std::string::npos;
-      result.error = (at == std::string::npos ? "" : LineColumn(text, at + 1) + ": ") + "number out of range" +
-                     (open < close ? " " + what.substr(open) : "");
-      return result;
-    }
+    if (!ParseJsonText(text, &root, &result.error)) return result;
     Reader reader(&result.warnings);
     if (!ReadProject(root, &reader, &result.project)) {
       result.error = reader.error();
       result.project = Project();
     }
-  } catch (const nlohmann::json::parse_error& e) {
-    result.error = LineColumn(text, e.byte) + ": " + ParseErrorText(e);
   } catch (const std::exception& e) {
     result.error = std::string("cannot read the project: ") + e.what();
   }
@@ -1103,3 +1107,89 @@ void RebaseImagePaths(const std::string& old_project_path, const std::string& ne
 }
 
 }  // namespace facet
+
+// ---------------------------------------------------------------------------------------
+// The object writers and readers for the recovery file (project_io_internal.h).
+namespace facet::project_io_internal {
+namespace {
+
+template <typename T>
+OrderedJson WriteOne(OrderedJson (*write)(const T&, const std::string&, Writer*), const T& object,
+                     const std::string& at, std::string* error) {
+  Writer writer;
+  OrderedJson json = write(object, at, &writer);
+  if (error->empty()) *error = writer.error();
+  return json;
+}
+
+template <typename T>
+bool ReadOne(bool (*read)(const Json&, const std::string&, Reader*, T*), const Json& json, const std::string& at,
+             T* object, std::string* error, std::vector<std::string>* warnings) {
+  Reader reader(warnings);
+  if (read(json, at, &reader, object)) return true;
+  *error = reader.error();
+  return false;
+}
+
+}  // namespace
+
+OrderedJson ObjectToJson(const Image& image, const std::string& at, std::string* error) {
+  return WriteOne(WriteImage, image, at, error);
+}
+OrderedJson ObjectToJson(const Segment& segment, const std::string& at, std::string* error) {
+  return WriteOne(WriteSegment, segment, at, error);
+}
+OrderedJson ObjectToJson(const Primitive& primitive, const std::string& at, std::string* error) {
+  return WriteOne(WritePrimitive, primitive, at, error);
+}
+OrderedJson ObjectToJson(const Pin& pin, const std::string& at, std::string* error) {
+  return WriteOne(WritePin, pin, at, error);
+}
+OrderedJson ObjectToJson(const Constraint& constraint, const std::string& at, std::string* error) {
+  return WriteOne(WriteConstraint, constraint, at, error);
+}
+OrderedJson ProjectToJsonObject(const Project& project, std::string* error) {
+  Writer writer;
+  OrderedJson json = WriteProject(project, &writer);
+  if (error->empty()) *error = writer.error();
+  return json;
+}
+
+bool ObjectFromJson(const Json& json, const std::string& at, Image* image, std::string* error,
+                    std::vector<std::string>* warnings) {
+  return ReadOne(ReadImage, json, at, image, error, warnings);
+}
+bool ObjectFromJson(const Json& json, const std::string& at, Segment* segment, std::string* error,
+                    std::vector<std::string>* warnings) {
+  return ReadOne(ReadSegment, json, at, segment, error, warnings);
+}
+bool ObjectFromJson(const Json& json, const std::string& at, Primitive* primitive, std::string* error,
+                    std::vector<std::string>* warnings) {
+  return ReadOne(ReadPrimitive, json, at, primitive, error, warnings);
+}
+bool ObjectFromJson(const Json& json, const std::string& at, Pin* pin, std::string* error,
+                    std::vector<std::string>* warnings) {
+  return ReadOne(ReadPin, json, at, pin, error, warnings);
+}
+bool ObjectFromJson(const Json& json, const std::string& at, Constraint* constraint, std::string* error,
+                    std::vector<std::string>* warnings) {
+  return ReadOne(ReadConstraint, json, at, constraint, error, warnings);
+}
+
+bool ProjectFromJsonObject(Json& root, Project* project, std::string* error, std::vector<std::string>* warnings) {
+  Reader reader(warnings);
+  if (ReadProject(root, &reader, project)) return true;
+  *error = reader.error();
+  return false;
+}
+
+std::string CheckProjectReferences(const Project& project) {
+  std::vector<std::string> warnings;
+  Reader reader(&warnings);
+  CheckReferences(project, &reader);
+  return reader.error();
+}
+
+bool ParseJson(const std::string& text, Json* root, std::string* error) { return ParseJsonText(text, root, error); }
+
+}  // namespace facet::project_io_internal

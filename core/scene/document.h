@@ -3,6 +3,7 @@
 // the object before and after, so that applying and reverting are exact. "Do" is "redo".
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
@@ -19,6 +20,7 @@ struct Change {
   std::optional<T> after;   // nullopt: the object is removed
   size_t before_index = 0;  // position in its list before the edit (when `before` is set)
   size_t after_index = 0;   // position in its list after the edit (when `after` is set)
+  friend bool operator==(const Change&, const Change&) = default;
 };
 
 struct Edit {
@@ -32,6 +34,7 @@ struct Edit {
   Id next_id_before = kNoId, next_id_after = kNoId;
 
   bool Empty() const;
+  friend bool operator==(const Edit&, const Edit&) = default;
 };
 
 // The edit that turns `before` into `after`, matching objects by id. Applying it to
@@ -39,11 +42,32 @@ struct Edit {
 Edit DiffProjects(const std::string& label, const Project& before, const Project& after);
 void ApplyEdit(const Edit& edit, Project* project);
 void RevertEdit(const Edit& edit, Project* project);
+// ApplyEdit and RevertEdit for an edit from outside the program (a recovery file): they check,
+// instead of assuming, that the edit fits the project (every object it removes or modifies is
+// there, at its index, equal to the edit's record of it; every object it inserts is absent;
+// units and next_id are what the edit starts from). Empty on success; else what does not fit,
+// e.g. "primitives: id 7 at index 2 differs from the edit's record", and *project is
+// unspecified.
+std::string TryApplyEdit(const Edit& edit, Project* project);
+std::string TryRevertEdit(const Edit& edit, Project* project);
 
 class Document {
  public:
   Document() = default;
   explicit Document(Project project) : project_(std::move(project)) {}
+
+  // Rebuilds the exact document a recovery file describes, from its current project and
+  // history (undo oldest first, redo with the next redo last, as undo_stack() and
+  // redo_stack() give them), or fails with a message naming the faulty edit ("undo[3]: ...").
+  // The undo edits are reverted one by one from `current` down to the first project, each
+  // checked against the project it is applied to (TryRevertEdit) and every project on the
+  // way by `check_project` (e.g. the loader's reference checks: empty when it is sound);
+  // then the whole history is replayed through Commit, so that every stored edit must equal
+  // the one Commit recomputes from the projects it joins, and the redo edits are undone
+  // again. `clean_undo_depth` and `clean_is_unreachable` restore the dirty flag.
+  static std::string Rebuild(const Project& current, const std::vector<Edit>& undo, const std::vector<Edit>& redo,
+                             size_t clean_undo_depth, bool clean_is_unreachable,
+                             const std::function<std::string(const Project&)>& check_project, Document* out);
 
   const Project& project() const { return project_; }
 
@@ -66,7 +90,18 @@ class Document {
   const std::vector<Edit>& redo_stack() const { return redo_; }  // next redo last
 
   bool dirty() const { return undo_.size() != clean_undo_depth_ || clean_is_unreachable_; }
+  // The undo depth at the last MarkClean, and whether an edit since has made it unreachable
+  // (what dirty() compares; a recovery file keeps both).
+  size_t clean_undo_depth() const { return clean_undo_depth_; }
+  bool clean_is_unreachable() const { return clean_is_unreachable_; }
   void MarkClean();
+  // No state of the history is the saved one any more (a restored recovery whose project file
+  // is not its saved state): dirty until the next MarkClean.
+  void ForgetCleanState();
+  // Increments whenever the committed document changes (an edit, undo, redo, reset, a clean
+  // mark or a path rewrite; not a drag's preview), so that a watcher such as the autosave
+  // notices every change, even two within one frame that leave the stack sizes as they were.
+  std::uint64_t revision() const { return revision_; }
   // Replaces the whole document (File > Open, New); clears history.
   void Reset(Project project);
   // Rewrites every image's stored path, in the project and in every image held by the
@@ -80,6 +115,7 @@ class Document {
   std::vector<Edit> redo_;
   size_t clean_undo_depth_ = 0;
   bool clean_is_unreachable_ = false;
+  std::uint64_t revision_ = 0;
 };
 
 }  // namespace facet

@@ -4,8 +4,13 @@
 // line-pin scene (the synthetic box with its photo) that the line-pin suites share.
 #pragma once
 
+#include <fcntl.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <chrono>
+#include <thread>
 
 #include <algorithm>
 #include <array>
@@ -64,17 +69,18 @@ inline bool& RenderWithoutSnapping() {
   return without;
 }
 
-// Runs `facet render` without a display and with a private config folder. A render that
-// hangs is killed (exit code 124) rather than hanging the suite.
+// Runs `facet render` without a display and with private config and data folders (the data
+// folder holds an unsaved project's recovery file under --autosave). A render that hangs is
+// killed (exit code 124) rather than hanging the suite.
 // With `working_dir`, the app runs there (a script's relative paths are relative to it).
 inline RunResult RunRender(const TempDir& dir, const std::string& args_in, const std::string& working_dir = "") {
   const std::string args = (RenderWithoutSnapping() ? "--no-snap " : "") + args_in;
   constexpr int kRenderTimeoutS = 300;
   const std::string err = dir / "stderr.txt";
   const std::string cd = working_dir.empty() ? std::string() : "cd '" + working_dir + "' && ";
-  const std::string cmd = cd + "env -u DISPLAY -u WAYLAND_DISPLAY XDG_CONFIG_HOME='" + (dir / "config") + "' timeout " +
-                          std::to_string(kRenderTimeoutS) + " '" + std::string(FACET_APP_EXE) + "' render " + args +
-                          " 2> '" + err + "'";
+  const std::string cmd = cd + "env -u DISPLAY -u WAYLAND_DISPLAY XDG_CONFIG_HOME='" + (dir / "config") +
+                          "' XDG_DATA_HOME='" + (dir / "data") + "' timeout " + std::to_string(kRenderTimeoutS) + " '" +
+                          std::string(FACET_APP_EXE) + "' render " + args + " 2> '" + err + "'";
   const int status = std::system(cmd.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -83,6 +89,62 @@ inline RunResult RunRender(const TempDir& dir, const std::string& args_in, const
   ss << in.rdbuf();
   r.stderr_text = ss.str();
   return r;
+}
+
+// A `facet render` started in the background (fork + exec) in RunRender's environment, with
+// stderr in dir/NAME.stderr.txt, for a test that stops it from the outside (StopRender).
+struct BackgroundRender {
+  pid_t pid = -1;
+  bool reaped = false;  // it ended by itself (WaitForFile noticed)
+  int status = 0;       // waitpid's, once reaped
+};
+
+inline BackgroundRender StartRender(const TempDir& dir, const std::string& name, const std::vector<std::string>& args) {
+  // Built before fork; the suites run no other threads, so the child may set its environment.
+  const std::string exe = FACET_APP_EXE, err = dir / (name + ".stderr.txt");
+  const std::string config = dir / "config", data = dir / "data";
+  std::vector<std::string> words = {exe, "render"};
+  if (RenderWithoutSnapping()) words.push_back("--no-snap");
+  words.insert(words.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  argv.push_back(nullptr);
+  BackgroundRender render;
+  render.pid = ::fork();
+  REQUIRE(render.pid >= 0);
+  if (render.pid == 0) {
+    ::unsetenv("DISPLAY");
+    ::unsetenv("WAYLAND_DISPLAY");
+    ::setenv("XDG_CONFIG_HOME", config.c_str(), 1);
+    ::setenv("XDG_DATA_HOME", data.c_str(), 1);
+    const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) ::dup2(fd, 2);
+    ::execv(exe.c_str(), argv.data());
+    ::_exit(127);
+  }
+  return render;
+}
+
+// Waits until `path` exists; false when the render ended first or `timeout_s` passed.
+inline bool WaitForFile(const std::string& path, BackgroundRender* render, double timeout_s) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (!fs::exists(path)) {
+    if (!render->reaped && ::waitpid(render->pid, &render->status, WNOHANG) == render->pid) render->reaped = true;
+    if (render->reaped || std::chrono::steady_clock::now() > until) return fs::exists(path);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
+// Sends `signal` to a running background render and reaps it. Returns the signal that ended
+// it, or 0 when it had exited by itself.
+inline int StopRender(BackgroundRender* render, int signal) {
+  if (!render->reaped) {
+    ::kill(render->pid, signal);
+    ::waitpid(render->pid, &render->status, 0);
+    render->reaped = true;
+  }
+  return WIFSIGNALED(render->status) ? WTERMSIG(render->status) : 0;
 }
 
 struct CliResult {

@@ -1,0 +1,262 @@
+#include "app/state/autosave.h"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <system_error>
+
+#include "app/state/app_state.h"
+#include "core/io/recovery_io.h"
+
+namespace facet::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+// How long a drag may go on before its unfinished state is written, and how long to wait
+// before trying again after a failed write (a full disk, a read-only folder).
+constexpr double kIntervalS = 30.0;
+// A write starts at most once per this many times the last write's duration (autosave.h).
+constexpr double kThrottleFactor = 10.0;
+// written_revision after writing an unfinished drag: no document revision, so the next
+// completed edit (or the drag's cancel) writes again.
+constexpr std::uint64_t kDragRevision = std::numeric_limits<std::uint64_t>::max();
+constexpr const char* kUntitledPrefix = "untitled-";
+constexpr const char* kRecoverySuffix = ".facet.recovery";
+
+double MsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+void RemoveFile(const std::string& path) {
+  std::error_code ec;
+  fs::remove(path, ec);
+}
+
+void StartWrite(AppState* state, Document snapshot, const std::string& path, std::uint64_t revision,
+                std::chrono::steady_clock::time_point snapshot_start) {
+  AutosaveState& autosave = state->autosave;
+  autosave.stats.last_snapshot_ms = MsSince(snapshot_start);
+  AutosaveJob job;
+  job.path = path;
+  job.started_s = state->time_s;
+  job.revision = revision;
+  // The worker owns its copy: the document goes on changing on the main thread meanwhile.
+  job.result = std::async(std::launch::async, [path, document = std::move(snapshot)]() {
+    const auto start = std::chrono::steady_clock::now();
+    AutosaveWrite write;
+    std::error_code ec;
+    fs::create_directories(fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path(), ec);
+    write.error = SaveRecovery(document, path);
+    if (write.error.empty()) write.bytes = fs::file_size(path, ec);
+    write.ms = MsSince(start);
+    return write;
+  });
+  autosave.job = std::move(job);
+}
+
+// Swaps in a finished write (waiting for it when asked).
+void CollectWrite(AppState* state, bool wait) {
+  AutosaveState& autosave = state->autosave;
+  if (!autosave.job) return;
+  if (!wait && autosave.job->result.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+  const AutosaveWrite write = autosave.job->result.get();
+  const AutosaveJob job = {autosave.job->path, autosave.job->started_s, autosave.job->revision, {}};
+  autosave.job.reset();
+  autosave.next_write_s = job.started_s + std::min(kIntervalS, kThrottleFactor * write.ms / 1000.0);
+  if (!write.error.empty()) {
+    ++autosave.stats.failures;
+    autosave.retry_after_s = state->time_s + kIntervalS;
+    if (write.error != autosave.last_error)
+      state->Log(LogLevel::kWarning, "Autosave: " + write.error + " (trying again every 30 s)");
+    autosave.last_error = write.error;
+    return;
+  }
+  autosave.last_error.clear();
+  if (!autosave.owned_path.empty() && autosave.owned_path != job.path) RemoveFile(autosave.owned_path);
+  autosave.owned_path = job.path;
+  autosave.written_revision = job.revision;
+  ++autosave.stats.writes;
+  autosave.stats.last_write_ms = write.ms;
+  autosave.stats.last_bytes = write.bytes;
+}
+
+// Whether the document's saved state (its clean depth) is `saved`: the project file it was
+// opened from. A recovered history whose project file changed since has no saved state.
+bool CleanStateIs(const Document& document, const Project& saved) {
+  if (document.clean_is_unreachable()) return false;
+  Document probe = document;
+  while (probe.undo_stack().size() > probe.clean_undo_depth()) probe.Undo();
+  while (probe.undo_stack().size() < probe.clean_undo_depth() && probe.Redo()) {
+  }
+  return probe.undo_stack().size() == probe.clean_undo_depth() && probe.project() == saved;
+}
+
+bool ProcessAlive(pid_t pid) { return pid > 0 && (::kill(pid, 0) == 0 || errno == EPERM); }
+
+// The newest recovery file of an unsaved project whose process is gone (not this one).
+std::string FindUntitledRecovery() {
+  std::error_code ec;
+  std::string best;
+  fs::file_time_type best_time;
+  for (const fs::directory_entry& entry : fs::directory_iterator(RecoveryFolder(), ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(kUntitledPrefix, 0) != 0 || name.size() <= std::string(kRecoverySuffix).size() ||
+        name.compare(name.size() - std::string(kRecoverySuffix).size(), std::string::npos, kRecoverySuffix) != 0)
+      continue;
+    const std::string pid_text =
+        name.substr(std::string(kUntitledPrefix).size(),
+                    name.size() - std::string(kUntitledPrefix).size() - std::string(kRecoverySuffix).size());
+    char* end = nullptr;
+    const long pid = std::strtol(pid_text.c_str(), &end, 10);
+    if (end == pid_text.c_str() || *end != '\0') continue;
+    if (pid == ::getpid() || ProcessAlive(static_cast<pid_t>(pid))) continue;  // another window's live file
+    std::error_code time_ec;
+    const fs::file_time_type time = fs::last_write_time(entry.path(), time_ec);
+    if (time_ec || !entry.is_regular_file(time_ec)) continue;
+    if (best.empty() || time > best_time) best = entry.path().string(), best_time = time;
+  }
+  return best;
+}
+
+}  // namespace
+
+std::string RecoveryFolder() {
+  const char* data_home = std::getenv("XDG_DATA_HOME");
+  if (data_home && data_home[0] == '/') return std::string(data_home) + "/facet/recovery";
+  const char* home = std::getenv("HOME");
+  return std::string(home && home[0] ? home : ".") + "/.local/share/facet/recovery";
+}
+
+std::string RecoveryFileFor(const std::string& project_path) {
+  if (!project_path.empty()) return project_path + ".recovery";
+  return RecoveryFolder() + "/" + kUntitledPrefix + std::to_string(::getpid()) + kRecoverySuffix;
+}
+
+void AutosaveTick(AppState* state) {
+  AutosaveState& autosave = state->autosave;
+  if (!autosave.enabled) return;
+  CollectWrite(state, /*wait=*/false);
+  // One write at a time (the next one takes the newest document); and the offered file is
+  // the user's to restore or discard, so nothing is written until they have answered.
+  if (autosave.job || autosave.offer) return;
+  const Document& document = state->document;
+  const std::string target = RecoveryFileFor(state->project_path);
+  if (state->drag_start) {
+    // A drag is one edit when it ends; a very long one is written every 30 s as it stands.
+    if (!autosave.drag_since_s) autosave.drag_since_s = state->time_s;
+    if (state->time_s - *autosave.drag_since_s < kIntervalS || state->time_s < autosave.retry_after_s) return;
+    autosave.drag_since_s = state->time_s;
+    const auto start = std::chrono::steady_clock::now();
+    Document snapshot = document;
+    snapshot.CommitFrom(state->drag_label + " (unfinished)", *state->drag_start);
+    StartWrite(state, std::move(snapshot), target, kDragRevision, start);
+    return;
+  }
+  autosave.drag_since_s.reset();
+  if (!document.dirty()) {
+    // Saved, or undone back to the saved state: the project file holds it.
+    if (!autosave.owned_path.empty()) RemoveFile(autosave.owned_path);
+    autosave.owned_path.clear();
+    return;
+  }
+  if (document.revision() == autosave.written_revision && target == autosave.owned_path) return;
+  if (state->time_s < autosave.retry_after_s || state->time_s < autosave.next_write_s) return;
+  StartWrite(state, document, target, document.revision(), std::chrono::steady_clock::now());
+}
+
+bool WaitForAutosave(AppState* state, std::string* error) {
+  if (!state->autosave.enabled) {
+    *error = "autosave is off (facet render --autosave turns it on)";
+    return false;
+  }
+  CollectWrite(state, /*wait=*/true);
+  state->autosave.retry_after_s = 0.0;  // now, even after a failure or within the throttle
+  state->autosave.next_write_s = 0.0;
+  AutosaveTick(state);
+  CollectWrite(state, /*wait=*/true);
+  if (!state->autosave.last_error.empty()) {
+    *error = state->autosave.last_error;
+    return false;
+  }
+  return true;
+}
+
+void FinishAutosave(AppState* state) {
+  AutosaveState& autosave = state->autosave;
+  CollectWrite(state, /*wait=*/true);
+  if (!autosave.owned_path.empty()) RemoveFile(autosave.owned_path);
+  autosave.owned_path.clear();
+}
+
+bool FindRecovery(AppState* state, bool also_unsaved) {
+  AutosaveState& autosave = state->autosave;
+  if (!autosave.enabled) return false;
+  autosave.offer.reset();
+  std::string path;
+  std::error_code ec;
+  if (!state->project_path.empty()) {
+    path = RecoveryFileFor(state->project_path);
+    if (!fs::is_regular_file(path, ec)) {
+      path.clear();
+    } else {
+      // Older than the project: the project was saved after it (by another window, or a copy
+      // put back), so it holds nothing newer. It is left alone and replaced by the next write.
+      const auto recovery_time = fs::last_write_time(path, ec);
+      const auto project_time = fs::last_write_time(state->project_path, ec);
+      if (!ec && recovery_time < project_time) {
+        state->Log(LogLevel::kInfo, "Recovery file " + path + " is older than the project: not offered");
+        path.clear();
+      }
+    }
+  }
+  if (path.empty() && (state->project_path.empty() || also_unsaved)) path = FindUntitledRecovery();
+  if (path.empty()) return false;
+  RecoveryLoadResult loaded = LoadRecovery(path);
+  if (!loaded.ok()) {
+    state->Log(LogLevel::kError,
+               "Recovery file not restored: " + loaded.error +
+                   (state->project_path.empty() ? std::string() : "; " + state->project_path + " opened as saved"));
+    return false;
+  }
+  for (const std::string& warning : loaded.warnings) state->Log(LogLevel::kWarning, path + ": " + warning);
+  // An unsaved project's file restores as an unsaved project, whatever was opened.
+  const bool untitled = fs::path(path).filename().string().rfind(kUntitledPrefix, 0) == 0 &&
+                        fs::path(path).parent_path() == fs::path(RecoveryFolder());
+  autosave.offer = RecoveryOffer{path, untitled ? std::string() : state->project_path, std::move(loaded.document)};
+  return true;
+}
+
+void RestoreRecovery(AppState* state) {
+  AutosaveState& autosave = state->autosave;
+  if (!autosave.offer) return;
+  RecoveryOffer offer = std::move(*autosave.offer);
+  autosave.offer.reset();
+  // The document is dirty unless the recovered state is the saved one; if the project file is
+  // not the history's saved state at all, nothing in it counts as saved.
+  if (!CleanStateIs(offer.document, state->document.project())) offer.document.ForgetCleanState();
+  const size_t undo = offer.document.undo_stack().size(), redo = offer.document.redo_stack().size();
+  RestoreDocument(state, std::move(offer.document), offer.project_path);
+  // The file holds exactly this document: it stays until a save, and a later write replaces
+  // it (an unsaved project's moves to this process's name).
+  autosave.owned_path = offer.recovery_path;
+  autosave.written_revision = state->document.revision();
+  state->Log(LogLevel::kInfo, "Restored from " + offer.recovery_path + " (" + std::to_string(undo) +
+                                  " edits to undo, " + std::to_string(redo) + " to redo)");
+}
+
+void DiscardRecovery(AppState* state) {
+  AutosaveState& autosave = state->autosave;
+  if (!autosave.offer) return;
+  RemoveFile(autosave.offer->recovery_path);
+  state->Log(LogLevel::kInfo, "Discarded the recovery file " + autosave.offer->recovery_path);
+  autosave.offer.reset();
+}
+
+}  // namespace facet::app
