@@ -13,7 +13,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
-bash scripts/setup.sh
+if [ "${FACET_SANITIZE:-0}" = "1" ]; then bash scripts/setup.sh --checked; else bash scripts/setup.sh; fi
 jobs="${FACET_JOBS:-2}"
 shared="$(cd "$root/.." && pwd)/shared/data"
 
