@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/io/export.h"
 #include "core/io/project_io.h"
 
 namespace facet {
@@ -14,11 +15,9 @@ std::string BlenderSetupScript(const Project& project, const std::string& projec
   constexpr double kSensorMm = 36.0;
   nlohmann::json cameras = nlohmann::json::array();
   for (const Image& image : project.images) {
-    if (!image.camera_calibrated) continue;
+    int w = 0, h = 0;
+    if (!ExportedCameraSize(image, &w, &h)) continue;  // the cameras the .glb has
     const Camera& cam = image.camera;
-    const int w = cam.width_px > 0 ? cam.width_px : image.width_px;
-    const int h = cam.height_px > 0 ? cam.height_px : image.height_px;
-    if (w <= 0 || h <= 0 || !(cam.focal_px > 0.0)) continue;
     const double side = std::max(w, h);
     // Blender's camera looks down -Z with +Y up; Facet's (OpenCV's) down +Z with Y down.
     const Eigen::Matrix3d world_from_blender_cam =

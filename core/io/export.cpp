@@ -160,11 +160,9 @@ YUpVertices ToYUpVertices(const TexturedMesh& mesh) {
 // One glTF perspective camera and its node for each calibrated image with a size.
 void AddCameras(const Project& project, double znear, Json* cameras, Json* nodes) {
   for (const Image& image : project.images) {
-    if (!image.camera_calibrated) continue;
+    int w = 0, h = 0;
+    if (!ExportedCameraSize(image, &w, &h)) continue;
     const Camera& cam = image.camera;
-    const int w = cam.width_px > 0 ? cam.width_px : image.width_px;
-    const int h = cam.height_px > 0 ? cam.height_px : image.height_px;
-    if (w <= 0 || h <= 0 || !(cam.focal_px > 0.0)) continue;
     cameras->push_back({{"name", image.path},
                         {"type", "perspective"},
                         {"perspective",
@@ -197,6 +195,13 @@ std::string PackGlb(const std::string& json_text, const std::vector<std::uint8_t
 }
 
 }  // namespace
+
+bool ExportedCameraSize(const Image& image, int* width_px, int* height_px) {
+  const Camera& cam = image.camera;
+  *width_px = cam.width_px > 0 ? cam.width_px : image.width_px;
+  *height_px = cam.height_px > 0 ? cam.height_px : image.height_px;
+  return image.camera_calibrated && *width_px > 0 && *height_px > 0 && cam.focal_px > 0.0;
+}
 
 ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const std::string& path) {
   const std::string invalid = ValidateMesh(mesh);

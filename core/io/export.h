@@ -16,6 +16,10 @@ struct ExportSummary {
   std::vector<std::string> files_written;
 };
 
+// Which images an export gives a camera: calibrated, with a size and a positive focal length.
+// True with the size the camera's intrinsics refer to (the image's when the camera has none).
+bool ExportedCameraSize(const Image& image, int* width_px, int* height_px);
+
 // One .glb holding mesh, UVs, the atlas as an embedded PNG and one camera node per
 // calibrated image (perspective, yfov from the focal length, at the camera's pose).
 // Writes atomically (temporary file, then rename).
