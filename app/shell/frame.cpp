@@ -399,7 +399,8 @@ void DrawDialogs(AppState* state, ShellState* shell) {
                                    ? std::string("An unsaved project")
                                    : std::filesystem::path(offer->project_path).filename().string();
       ImGui::Text("%s has unsaved work from a session that did not end normally.", what.c_str());
-      ImGui::TextColored(kDimText, "%zu edits to undo, %zu to redo: %s", offer->document.undo_stack().size(),
+      const size_t undo = offer->document.undo_stack().size();
+      ImGui::TextColored(kDimText, "%zu %s to undo, %zu to redo: %s", undo, undo == 1 ? "edit" : "edits",
                          offer->document.redo_stack().size(), offer->recovery_path.c_str());
       ImGui::Spacing();
       const bool restore = ImGui::Button("Restore", ImVec2(110, 0));

@@ -248,7 +248,7 @@ void RestoreRecovery(AppState* state) {
   autosave.owned_path = offer.recovery_path;
   autosave.written_revision = state->document.revision();
   state->Log(LogLevel::kInfo, "Restored from " + offer.recovery_path + " (" + std::to_string(undo) +
-                                  " edits to undo, " + std::to_string(redo) + " to redo)");
+                                  (undo == 1 ? " edit" : " edits") + " to undo, " + std::to_string(redo) + " to redo)");
 }
 
 void DiscardRecovery(AppState* state) {
