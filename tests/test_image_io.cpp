@@ -200,7 +200,7 @@ TEST_CASE("writing an empty image or to a missing folder fails with a message") 
   CHECK_FALSE(facet::WritePng((dir / "no_such_dir" / "x.png").string(), MakePattern(4, 4)).empty());
 }
 
-TEST_CASE("grey, 16-bit and TIFF images read as 8-bit RGBA; TIFF size falls back to decoding") {
+TEST_CASE("grey, 16-bit and TIFF images read as 8-bit RGBA; the TIFF size is read from its header") {
   const fs::path dir = TempDir("formats");
   cv::Mat grey(10, 12, CV_8UC1, cv::Scalar(77));
   REQUIRE(cv::imwrite((dir / "grey.png").string(), grey));
@@ -308,4 +308,71 @@ TEST_CASE("WritePng is atomic: a failed write leaves the old PNG whole; a symlin
   int files = 0;
   for (const auto& e : fs::directory_iterator(dir)) files += e.path().filename().string().find(".tmp-") == std::string::npos;
   CHECK(files == 3);  // shot.png, link.png, target.png: no temporary left behind
+}
+
+// The declared size of a TIFF (its first directory) or a WebP (its VP8X, VP8L or VP8 chunk) is
+// checked against the pixel limit before OpenCV allocates it, as for JPEG, PNG and BMP.
+static std::vector<std::uint8_t> TiffDeclaring(std::uint32_t width, std::uint32_t height, bool big_endian) {
+  std::vector<std::uint8_t> b;
+  const auto put = [&](std::uint32_t v, int bytes) {
+    for (int k = 0; k < bytes; ++k) b.push_back(static_cast<std::uint8_t>(v >> (8 * (big_endian ? bytes - 1 - k : k))));
+  };
+  b.push_back(big_endian ? 'M' : 'I');
+  b.push_back(big_endian ? 'M' : 'I');
+  put(42, 2);
+  put(8, 4);  // the first directory follows the header
+  put(2, 2);  // two entries: ImageWidth (LONG), ImageLength (SHORT when it fits)
+  put(256, 2), put(4, 2), put(1, 4), put(width, 4);
+  put(257, 2), put(height < 65536 ? 3 : 4, 2), put(1, 4);
+  if (height < 65536) put(height, 2), put(0, 2); else put(height, 4);
+  put(0, 4);  // no next directory
+  return b;
+}
+
+TEST_CASE("regression: a TIFF or WebP declaring more than the pixel limit is refused from its header") {
+  for (const bool big_endian : {false, true}) {
+    const facet::ImageReadResult r = facet::DecodeImage(TiffDeclaring(100000, 20000, big_endian), "huge.tif");
+    CHECK_FALSE(r.ok());
+    CHECK(r.error == "huge.tif: 100000 x 20000 px (2000 MP) is more than the limit of 150 MP");
+    CHECK(r.image.pixels.empty());
+  }
+  // Within the limit the header passes, and the missing pixel data is then a decoding error.
+  const facet::ImageReadResult small = facet::DecodeImage(TiffDeclaring(64, 48, false), "small.tif");
+  CHECK_FALSE(small.ok());
+  CHECK(small.error.find("more than the limit") == std::string::npos);
+  // A TIFF directory without ImageWidth: no size, no decoding.
+  std::vector<std::uint8_t> sizeless = TiffDeclaring(64, 48, false);
+  sizeless[10] = 0x99;  // the first entry's tag is no longer 256
+  CHECK(facet::DecodeImage(sizeless, "t.tif").error == "t.tif: corrupt TIFF header (no image size in it)");
+
+  // WebP, extended format: a 16384 x 16384 canvas (24-bit sizes minus one).
+  std::vector<std::uint8_t> vp8x = {'R', 'I', 'F', 'F', 22, 0, 0, 0, 'W', 'E', 'B', 'P', 'V', 'P', '8', 'X',
+                                    10,  0,   0,   0,   0,  0, 0, 0, 0xFF, 0x3F, 0, 0xFF, 0x3F, 0};
+  const facet::ImageReadResult webp = facet::DecodeImage(vp8x, "huge.webp");
+  CHECK(webp.error == "huge.webp: 16384 x 16384 px (268 MP) is more than the limit of 150 MP");
+}
+
+TEST_CASE("the WebP header's size (lossy and lossless) is the decoded size, and is checked before decoding") {
+  REQUIRE(cv::haveImageWriter(".webp"));
+  const fs::path dir = TempDir("webp");
+  cv::Mat bgr(37, 53, CV_8UC3);
+  cv::randu(bgr, 0, 255);
+  for (const int quality : {80, 101}) {  // 101: lossless (VP8L)
+    const fs::path path = dir / ("q" + std::to_string(quality) + ".webp");
+    REQUIRE(cv::imwrite(path.string(), bgr, {cv::IMWRITE_WEBP_QUALITY, quality}));
+    int w = 0, h = 0;
+    std::string error;
+    REQUIRE_MESSAGE(facet::ReadImageSize(path.string(), &w, &h, &error), error);
+    CHECK(w == 53);
+    CHECK(h == 37);
+    const facet::ImageReadResult read = facet::ReadImage(path.string());
+    REQUIRE_MESSAGE(read.ok(), read.error);
+    CHECK(read.image.width == 53);
+    CHECK(read.image.height == 37);
+    // Only the header is left: a refusal by size can only have come from it.
+    std::vector<std::uint8_t> head = ReadBytes(path);
+    head.resize(32);
+    const facet::ImageReadResult limited = facet::DecodeImage(head, "h.webp", 1000);
+    CHECK(limited.error == "h.webp: 53 x 37 px (0 MP) is more than the limit of 1000 px");
+  }
 }

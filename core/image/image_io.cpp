@@ -24,6 +24,75 @@
 namespace facet {
 namespace {
 
+// TIFF: the first image file directory (IFD) holds ImageWidth (tag 256) and ImageLength (257),
+// both required, as SHORT or LONG, in the file's byte order ("II" little, "MM" big endian).
+// OpenCV decodes the first directory's image. False when the directory is not within b.
+bool TiffHeaderSize(const std::vector<std::uint8_t>& b, int* w, int* h) {
+  if (b.size() < 8) return false;
+  const bool little = b[0] == 'I' && b[1] == 'I' && b[2] == 42 && b[3] == 0;
+  const bool big = b[0] == 'M' && b[1] == 'M' && b[2] == 0 && b[3] == 42;
+  if (!little && !big) return false;
+  const auto read = [&](std::uint64_t at, int bytes) {
+    std::uint32_t v = 0;
+    for (int k = 0; k < bytes; ++k) {
+      const std::uint32_t byte = b[static_cast<size_t>(at) + (little ? bytes - 1 - k : k)];
+      v = (v << 8) | byte;
+    }
+    return v;
+  };
+  const std::uint64_t ifd = read(4, 4);
+  if (ifd + 2 > b.size()) return false;
+  const std::uint32_t entries = read(ifd, 2);
+  std::int64_t width = -1, height = -1;
+  for (std::uint32_t i = 0; i < entries; ++i) {
+    const std::uint64_t at = ifd + 2 + 12ull * i;
+    if (at + 12 > b.size()) return false;
+    const std::uint32_t tag = read(at, 2), type = read(at + 2, 2);
+    if (tag != 256 && tag != 257) continue;
+    if (type != 3 && type != 4) return false;  // SHORT or LONG, the only types the standard allows
+    const std::int64_t value = type == 3 ? read(at + 8, 2) : read(at + 8, 4);
+    (tag == 256 ? width : height) = value;
+  }
+  if (width <= 0 || height <= 0) return false;
+  *w = static_cast<int>(std::min<std::int64_t>(width, INT32_MAX));
+  *h = static_cast<int>(std::min<std::int64_t>(height, INT32_MAX));
+  return true;
+}
+
+// WebP: a RIFF container whose first chunk is VP8X (extended: the canvas size, 24-bit minus
+// one), VP8L (lossless: 14-bit sizes minus one after the 0x2F signature) or "VP8 " (lossy: the
+// key frame's 14-bit sizes after its start code 9D 01 2A).
+bool WebpHeaderSize(const std::vector<std::uint8_t>& b, int* w, int* h) {
+  if (b.size() < 30 || std::memcmp(b.data(), "RIFF", 4) != 0 || std::memcmp(b.data() + 8, "WEBP", 4) != 0) {
+    return false;
+  }
+  const auto le = [&](size_t at, int bytes) {
+    std::uint32_t v = 0;
+    for (int k = bytes - 1; k >= 0; --k) v = (v << 8) | b[at + k];
+    return v;
+  };
+  std::uint32_t width = 0, height = 0;
+  if (std::memcmp(b.data() + 12, "VP8X", 4) == 0) {
+    width = 1 + le(24, 3);
+    height = 1 + le(27, 3);
+  } else if (std::memcmp(b.data() + 12, "VP8L", 4) == 0) {
+    if (b[20] != 0x2F) return false;
+    const std::uint32_t bits = le(21, 4);
+    width = 1 + (bits & 0x3FFF);
+    height = 1 + ((bits >> 14) & 0x3FFF);
+  } else if (std::memcmp(b.data() + 12, "VP8 ", 4) == 0) {
+    if (b[23] != 0x9D || b[24] != 0x01 || b[25] != 0x2A) return false;
+    width = le(26, 2) & 0x3FFF;
+    height = le(28, 2) & 0x3FFF;
+  } else {
+    return false;
+  }
+  if (width == 0 || height == 0) return false;
+  *w = static_cast<int>(width);
+  *h = static_cast<int>(height);
+  return true;
+}
+
 // The size a photo's header declares: stb's header parser, and for a PNG the IHDR chunk itself
 // (stb refuses to parse a PNG header over 1 GB decoded, the very photos to refuse by size).
 bool HeaderSize(const std::vector<std::uint8_t>& b, int* w, int* h) {
@@ -50,6 +119,7 @@ bool HeaderSize(const std::vector<std::uint8_t>& b, int* w, int* h) {
     *h = static_cast<int>(std::min<std::int64_t>(ah, INT32_MAX));
     return true;
   }
+  if (TiffHeaderSize(b, w, h) || WebpHeaderSize(b, w, h)) return true;
   static const std::uint8_t kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
   if (b.size() < 24 || !std::equal(kPng, kPng + 8, b.begin()) || std::memcmp(&b[12], "IHDR", 4) != 0) return false;
   const auto be32 = [&](size_t i) {
@@ -192,6 +262,13 @@ ImageReadResult DecodeImage(const std::vector<std::uint8_t>& bytes, const std::s
   }
   if (!IsPhotoFormat(bytes)) {
     result.error = path + ": not a JPEG, PNG, TIFF, BMP or WebP file";
+    return result;
+  }
+  // Every other format's size was read above when its header had one; TIFF and WebP are
+  // decoded only once their declared size has passed the limit (OpenCV allocates it first).
+  if (header_w == 0 && (StartsWith(bytes, "II*\0", 4) || StartsWith(bytes, "MM\0*", 4) || StartsWith(bytes, "RIFF", 4))) {
+    result.error = path + ": corrupt " + std::string(StartsWith(bytes, "RIFF", 4) ? "WebP" : "TIFF") +
+                   " header (no image size in it)";
     return result;
   }
   if (IsJpeg(bytes) && !JpegIsComplete(bytes)) {
