@@ -3,7 +3,8 @@
 #
 #   bash scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]     (default 60 s, every target)
 #
-# Build tree: build/fuzz, or $FACET_BUILD_DIR. Each target runs on a scratch copy of its seed
+# Build tree: build/fuzz, or $FACET_BUILD_DIR; with FACET_FUZZ_REUSE_BUILD=1 that tree is used as it
+# is configured (the checked build's, which has the targets), else it is configured here. Each target runs on a scratch copy of its seed
 # corpus (tests/fuzz/corpus/<target>/), so new inputs never land in the repo; two targets run
 # at a time ($FACET_FUZZ_PARALLEL, default 2, one per core). Prints per target the executions,
 # exec/s, the coverage before and after and the inputs added; exits non-zero on any crash, leak,
@@ -17,7 +18,7 @@ bash scripts/setup.sh --checked
 
 seconds="${1:-60}"
 [ $# -gt 0 ] && shift
-all_targets=(fuzz_project fuzz_calibrate_lines fuzz_calibrate_points fuzz_relate_matches fuzz_input_script fuzz_image)
+all_targets=(fuzz_project fuzz_recovery fuzz_calibrate_lines fuzz_calibrate_points fuzz_relate_matches fuzz_input_script fuzz_image)
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${all_targets[@]}")
 build="${FACET_BUILD_DIR:-$root/build/fuzz}"
@@ -29,7 +30,7 @@ parallel="${FACET_FUZZ_PARALLEL:-2}"
 # of executions a second.
 max_len_of() {
   case "$1" in
-    fuzz_project) echo 65536 ;;
+    fuzz_project | fuzz_recovery) echo 65536 ;;
     fuzz_image) echo 65536 ;;
     fuzz_input_script) echo 8192 ;;
     *) echo 16384 ;;
@@ -47,9 +48,16 @@ command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 start=$(date +%s)
 # -O1 -gline-tables-only (as OSS-Fuzz builds): about half the compile time of -O2 -g under the
 # sanitizers, and stacks still name lines. No NDEBUG: an assert reached from input is a finding.
-cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
-  -DCMAKE_CXX_COMPILER="$cxx" \
-  "${launcher[@]}" -DFACET_BUILD_APP=OFF -DFACET_BUILD_TESTS=OFF -DFACET_BUILD_FUZZ=ON >/dev/null
+if [ "${FACET_FUZZ_REUSE_BUILD:-0}" = 1 ]; then
+  # The checked build's tree (scripts/test.sh with FACET_SANITIZE=1 configures it with
+  # FACET_BUILD_FUZZ=ON): build the targets there as it is configured.
+  grep -q '^FACET_BUILD_FUZZ:BOOL=ON' "$build/CMakeCache.txt" 2>/dev/null ||
+    { echo "fuzz: FACET_FUZZ_REUSE_BUILD=1 but $build is not configured with FACET_BUILD_FUZZ=ON" >&2; exit 1; }
+else
+  cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
+    -DCMAKE_CXX_COMPILER="$cxx" \
+    "${launcher[@]}" -DFACET_BUILD_APP=OFF -DFACET_BUILD_TESTS=OFF -DFACET_BUILD_FUZZ=ON >/dev/null
+fi
 cmake --build "$build" -j "$jobs" --target "${targets[@]}"
 echo "fuzz build: $(($(date +%s) - start)) s"
 
