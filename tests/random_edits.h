@@ -42,7 +42,7 @@ void InsertAtRandom(std::vector<T>* list, const T& item, std::mt19937& rng) {
 }
 
 PrimitiveShape RandomShape(std::mt19937& rng) {
-  const Eigen::Vector3d size(Real(rng, 0.1, 10), Real(rng, 0.1, 10), Real(rng, 0.1, 10));
+  const Eigen::Vector3d size{Real(rng, 0.1, 10), Real(rng, 0.1, 10), Real(rng, 0.1, 10)};
   PrimitiveShape shape;
   switch (Pick(rng, 6)) {
     case 0: shape = facet::MakeBox(facet::kNoId, size); break;
@@ -118,7 +118,8 @@ void RandomKOp(Project* p, std::mt19937& rng) {
   switch (Pick(rng, 4)) {
     case 0: {
       const auto edges = LiveEdges(mesh);
-      if (!facet::ESplit(&mesh, edges[Pick(rng, edges.size())], Real(rng, 0.05, 0.95)).ok) return;
+      const auto edge = edges[Pick(rng, edges.size())];
+      if (!facet::ESplit(&mesh, edge, Real(rng, 0.05, 0.95)).ok) return;
       break;
     }
     case 1: {
@@ -146,7 +147,8 @@ void RandomKOp(Project* p, std::mt19937& rng) {
     }
     default: {
       const auto faces = LiveFaces(mesh);
-      if (!facet::ExtrudeFace(&mesh, prim.shape, faces[Pick(rng, faces.size())], Real(rng, -1, 1)).ok) return;
+      const auto face = faces[Pick(rng, faces.size())];
+      if (!facet::ExtrudeFace(&mesh, prim.shape, face, Real(rng, -1, 1)).ok) return;
       break;
     }
   }

@@ -55,18 +55,20 @@ std::vector<PointCorrespondence> MakePoints(const Camera& camera, const SceneSpe
   std::vector<PointCorrespondence> points;
   while (static_cast<int>(points.size()) < spec.num_points) {
     Eigen::Vector3d xyz;
-    if (spec.planar)
-      xyz = center + spec.scale * spec.extent * (2.0 * uniform(rng) * plane_u + 1.5 * uniform(rng) * plane_v);
-    else
+    if (spec.planar) {
+      const double along_u = 2.0 * uniform(rng), along_v = 1.5 * uniform(rng);
+      xyz = center + spec.scale * spec.extent * (along_u * plane_u + along_v * plane_v);
+    } else {
       xyz = center +
-            spec.scale * spec.extent * Eigen::Vector3d(2.0 * uniform(rng), 2.0 * uniform(rng), 1.5 * uniform(rng));
+            spec.scale * spec.extent * Eigen::Vector3d{2.0 * uniform(rng), 2.0 * uniform(rng), 1.5 * uniform(rng)};
+    }
     const Eigen::Vector2d uv = ProjectDistorted(camera, spec.k1, spec.k2, xyz);
     if (camera.CamFromWorld(xyz).z() <= 0.0 || uv.x() < 0 || uv.y() < 0 || uv.x() > camera.width_px - 1 ||
         uv.y() > camera.height_px - 1)
       continue;
     PointCorrespondence c;
     c.xyz = xyz;
-    c.uv_px = uv + spec.noise_px * Eigen::Vector2d(noise(rng), noise(rng));
+    c.uv_px = uv + spec.noise_px * Eigen::Vector2d{noise(rng), noise(rng)};
     points.push_back(c);
   }
   return points;

@@ -480,8 +480,8 @@ TEST_CASE(
     Camera distorted = truth;
     distorted.k1 = kTrueK1;
     distorted.k2 = kTrueK2;
-    s.a_px = distorted.UndistortPixel(s.a_px) + Eigen::Vector2d(noise(rng), noise(rng));
-    s.b_px = distorted.UndistortPixel(s.b_px) + Eigen::Vector2d(noise(rng), noise(rng));
+    s.a_px = distorted.UndistortPixel(s.a_px) + Eigen::Vector2d{noise(rng), noise(rng)};
+    s.b_px = distorted.UndistortPixel(s.b_px) + Eigen::Vector2d{noise(rng), noise(rng)};
   }
   edited.images[0].estimate_distortion = true;
   Project updated;

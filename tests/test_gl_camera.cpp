@@ -53,7 +53,7 @@ std::vector<Eigen::Vector3d> PointsInFront(const Camera& camera, int count) {
   std::uniform_real_distribution<double> depth(2.0, 30.0);
   std::vector<Eigen::Vector3d> points;
   for (int i = 0; i < count; ++i) {
-    const Eigen::Vector2d uv(u(rng) * camera.width_px, u(rng) * camera.height_px);
+    const Eigen::Vector2d uv{u(rng) * camera.width_px, u(rng) * camera.height_px};
     points.push_back(camera.CenterInWorld() + depth(rng) * camera.RayDirectionInWorld(uv));
   }
   return points;

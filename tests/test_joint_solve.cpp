@@ -115,7 +115,7 @@ Scene MakeScene(int num_boxes, int num_images, double scale, double noise_px, un
         pin.id = p.NewId();
         pin.image_id = image.id;
         pin.vertex = {box.id, v};
-        pin.uv_px = image.camera.Project(x) + noise_px * Eigen::Vector2d(noise(rng), noise(rng));
+        pin.uv_px = image.camera.Project(x) + noise_px * Eigen::Vector2d{noise(rng), noise(rng)};
         p.pins.push_back(pin);
       }
     }
@@ -471,7 +471,7 @@ TEST_CASE("joint solve: the pavilion's ridge height is recovered within 1 % at 0
       q.id = p.NewId();
       q.image_id = p.images[i].id;
       q.vertex = {box_id, v};
-      q.uv_px = cameras[i].Project(x) + Eigen::Vector2d(noise(rng), noise(rng));
+      q.uv_px = cameras[i].Project(x) + Eigen::Vector2d{noise(rng), noise(rng)};
       p.pins.push_back(q);
     };
     for (VertexId v = 0; v < 8; ++v) pin(v, BoxCornerLocal(size, v));
@@ -521,7 +521,7 @@ Scene MakeDistortedScene(double noise_px, unsigned seed) {
   Project& p = s.truth;
   std::mt19937 rng(seed + 100);
   std::normal_distribution<double> noise(0.0, 1.0);
-  auto jitter = [&]() { return Eigen::Vector2d(noise_px * noise(rng), noise_px * noise(rng)); };
+  auto jitter = [&]() { return Eigen::Vector2d{noise_px * noise(rng), noise_px * noise(rng)}; };
   const Eigen::Vector3d scene_center(2.5 * kBoxes, 1.5, 1.0);  // MakeScene's look-at point
   for (Image& image : p.images) {
     Camera& camera = image.camera;

@@ -75,7 +75,7 @@ ProbeScene MakeProbeScene(const Eigen::Vector3d& probe_true, double noise_px = 0
     q.image_id = p.images[image].id;
     q.vertex = {s.box_id, v};
     q.uv_px = p.images[image].camera.Project(p.primitives[0].mesh.vertex(v).position) +
-              noise_px * Eigen::Vector2d(noise(rng), noise(rng));
+              noise_px * Eigen::Vector2d{noise(rng), noise(rng)};
     p.pins.push_back(q);
   };
   for (int i = 0; i < 2; ++i) {
@@ -179,7 +179,7 @@ TEST_CASE("constraints: every kind's residual derivative matches central differe
     // Points moved off any special configuration, so no derivative vanishes by symmetry.
     std::vector<Eigen::Vector3d> points;
     for (int v : term.vertices)
-      points.push_back(problem.vertices[v].position + 0.3 * Eigen::Vector3d(u(rng), u(rng), u(rng)));
+      points.push_back(problem.vertices[v].position + 0.3 * Eigen::Vector3d{u(rng), u(rng), u(rng)});
     const CameraState* camera = term.camera >= 0 ? &state.cameras[term.camera] : nullptr;
     Eigen::VectorXd r, rp, rm;
     Eigen::MatrixXd d_points, d_camera;

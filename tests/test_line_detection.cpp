@@ -90,7 +90,7 @@ SyntheticSegments MakeSegments(const TestCamera& camera, int w, int h, int per_f
   for (int a = 0; a < 3; ++a) {
     int made = 0;
     while (made < per_family) {
-      const Eigen::Vector3d start(4.0 * unit(random), 4.0 * unit(random), 3.0 * unit(random));
+      const Eigen::Vector3d start{4.0 * unit(random), 4.0 * unit(random), 3.0 * unit(random)};
       Eigen::Vector3d end = start;
       end[a] += 0.3 + 1.2 * unit(random);
       if (camera.ToCamera(start).z() < 0.5 || camera.ToCamera(end).z() < 0.5) continue;
@@ -103,7 +103,7 @@ SyntheticSegments MakeSegments(const TestCamera& camera, int w, int h, int per_f
   }
   int made = 0;
   while (made < outliers) {
-    const Eigen::Vector2d p(unit(random) * (w - 1), unit(random) * (h - 1));
+    const Eigen::Vector2d p{unit(random) * (w - 1), unit(random) * (h - 1)};
     const double angle = unit(random) * M_PI, length = 30.0 + 120.0 * unit(random);
     const Eigen::Vector2d q = p + length * Eigen::Vector2d(std::cos(angle), std::sin(angle));
     if (!inside(q)) continue;

@@ -334,13 +334,27 @@ PrimitiveShape RandomPrimitive(std::mt19937& rng) {
   switch (kind(rng)) {
     case 0: p = MakeBox(1, {size(rng), size(rng), size(rng)}); break;
     case 1: p = MakeWedge(1, {size(rng), size(rng), size(rng)}); break;
-    case 2: p = MakePrism(1, segments(rng), size(rng), size(rng)); break;
+    case 2: {  // one draw per statement: the order of a call's arguments is unspecified
+      const int n = segments(rng);
+      const double radius = size(rng), height = size(rng);
+      p = MakePrism(1, n, radius, height);
+      break;
+    }
     case 3: p = MakePyramid(1, {size(rng), size(rng), size(rng)}); break;
-    case 4: p = MakeCylinder(1, segments(rng), size(rng), size(rng)); break;
-    default: p = MakePlane(1, size(rng), size(rng)); break;
+    case 4: {
+      const int n = segments(rng);
+      const double radius = size(rng), height = size(rng);
+      p = MakeCylinder(1, n, radius, height);
+      break;
+    }
+    default: {
+      const double width = size(rng), height = size(rng);
+      p = MakePlane(1, width, height);
+      break;
+    }
   }
-  p.rotation = Eigen::Vector3d(angle(rng), angle(rng), angle(rng));
-  p.translation = 10.0 * Eigen::Vector3d(angle(rng), angle(rng), angle(rng));
+  p.rotation = Eigen::Vector3d{angle(rng), angle(rng), angle(rng)};
+  p.translation = 10.0 * Eigen::Vector3d{angle(rng), angle(rng), angle(rng)};
   return p;
 }
 
@@ -363,7 +377,8 @@ bool RandomStep(std::mt19937& rng, PolyMesh* mesh, std::vector<Step>* steps) {
     if (f != kNoFace) {
       const std::vector<VertexId> loop = FaceVertices(*mesh, f);
       std::uniform_int_distribution<std::size_t> corner(0, loop.size() - 1);
-      VConnectResult r = VConnect(mesh, f, loop[corner(rng)], loop[corner(rng)]);
+      const std::size_t a = corner(rng), b = corner(rng);
+      VConnectResult r = VConnect(mesh, f, loop[a], loop[b]);
       ok = r.ok;
       message = r.message;
       if (ok) steps->push_back({std::move(r)});

@@ -86,7 +86,7 @@ LensScene MakeLensScene(double k1, double k2, int points_per_line, double noise_
       const Eigen::Vector3d p = visible.front() + (visible.back() - visible.front()) * (i / (points_per_line - 1.0));
       Eigen::Vector2d uv_distorted;
       REQUIRE(scene.distortion.Distort(scene.camera.Project(p), &uv_distorted));
-      line.points_px.push_back(uv_distorted + noise_px * Eigen::Vector2d(normal(rng), normal(rng)));
+      line.points_px.push_back(uv_distorted + noise_px * Eigen::Vector2d{normal(rng), normal(rng)});
     }
     scene.lines.push_back(line);
   }

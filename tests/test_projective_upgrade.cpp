@@ -61,17 +61,17 @@ Scene MakeScene(const SceneOptions& o) {
   std::uniform_real_distribution<double> ux(-1.0, 5.0), uy(-1.0, 4.0), uz(0.0, 3.0);
   std::normal_distribution<double> noise(0.0, 1.0);
   while (static_cast<int>(s.points.size()) < o.num_points) {
-    const Eigen::Vector3d p = o.scale * Eigen::Vector3d(ux(rng), uy(rng), uz(rng));
+    const Eigen::Vector3d p = o.scale * Eigen::Vector3d{ux(rng), uy(rng), uz(rng)};
     if (s.cam1.CamFromWorld(p).z() <= 0 || s.cam2.CamFromWorld(p).z() <= 0) continue;
     s.points.push_back(p);
-    s.uv1.push_back(s.cam1.Project(p) + o.noise_px * Eigen::Vector2d(noise(rng), noise(rng)));
-    s.uv2.push_back(s.cam2.Project(p) + o.noise_px * Eigen::Vector2d(noise(rng), noise(rng)));
+    s.uv1.push_back(s.cam1.Project(p) + o.noise_px * Eigen::Vector2d{noise(rng), noise(rng)});
+    s.uv2.push_back(s.cam2.Project(p) + o.noise_px * Eigen::Vector2d{noise(rng), noise(rng)});
   }
   for (int axis = 0; axis < 3; ++axis) {
     std::vector<Eigen::Vector3d> per_view;
     for (const Camera* cam : {&s.cam1, &s.cam2}) {
       const Eigen::Vector3d d =
-          Eigen::Vector3d::Unit(axis) + o.vanishing_noise_rad * Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+          Eigen::Vector3d::Unit(axis) + o.vanishing_noise_rad * Eigen::Vector3d{noise(rng), noise(rng), noise(rng)};
       per_view.push_back(cam->K() * cam->cam_from_world_rotation * d);
     }
     s.vanishing.push_back(per_view);
@@ -262,7 +262,7 @@ TEST_CASE("AlignSimilarity recovers a known similarity and rejects collinear poi
   truth.rotation = Eigen::AngleAxisd(0.8, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
   truth.translation = {4, -1, 9};
   for (int i = 0; i < 10; ++i) {
-    a.emplace_back(u(rng), u(rng), u(rng));
+    a.push_back(Eigen::Vector3d{u(rng), u(rng), u(rng)});
     b.push_back(truth * a.back());
     line.push_back(Eigen::Vector3d(1, 2, 3) * u(rng));
   }

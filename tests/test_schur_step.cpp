@@ -60,7 +60,7 @@ RandomProblem MakeRandomProblem(int num_cameras, int num_shared, int num_points,
       for (int k = kCameraBlock * num_cameras; k < nc; ++k) jc.col(k) << gauss(rng), gauss(rng);
       Eigen::Matrix<double, 2, 3> jp;
       for (int k = 0; k < 3; ++k) jp.col(k) << gauss(rng), gauss(rng);
-      const Eigen::Vector2d r(gauss(rng), gauss(rng));
+      const Eigen::Vector2d r{gauss(rng), gauss(rng)};
       p.jacobian.block(row, 0, 2, nc) = jc;
       p.jacobian.block<2, 3>(row, nc + 3 * j) = jp;
       p.residuals.segment<2>(row) = r;

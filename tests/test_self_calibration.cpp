@@ -59,14 +59,14 @@ MultiViewScene MakeMultiViewScene(const MultiViewOptions& o) {
     s.views.push_back({c.width_px, c.height_px, 0.0});
   }
   while (static_cast<int>(s.points.size()) < o.num_points) {
-    const Eigen::Vector3d x(ux(rng), uy(rng), uz(rng));
+    const Eigen::Vector3d x{ux(rng), uy(rng), uz(rng)};
     Track track;
     for (int v = 0; v < o.num_views; ++v) {
       const Camera& c = s.cameras[v];
       const Eigen::Vector2d uv = c.Project(x);
       if (c.CamFromWorld(x).z() <= 0 || uv.x() < 0 || uv.y() < 0 || uv.x() > c.width_px || uv.y() > c.height_px)
         continue;
-      track.push_back({v, uv + o.noise_px * Eigen::Vector2d(noise(rng), noise(rng))});
+      track.push_back({v, uv + o.noise_px * Eigen::Vector2d{noise(rng), noise(rng)}});
     }
     if (track.size() < 2) continue;
     if (unit(rng) < o.outlier_fraction) {
@@ -250,7 +250,7 @@ TEST_CASE("the reported focal standard deviation matches the spread of the estim
       std::normal_distribution<double> noise(0.0, kNoisePx);
       std::vector<Track> tracks = s.tracks;
       for (Track& t : tracks)
-        for (auto& obs : t) obs.uv_px += Eigen::Vector2d(noise(rng), noise(rng));
+        for (auto& obs : t) obs.uv_px += Eigen::Vector2d{noise(rng), noise(rng)};
       const SelfCalibrationSummary r = SelfCalibrate(s.views, tracks, options);
       REQUIRE_MESSAGE(r.IsUsable(), r.message);
       focal.push_back(r.cameras[0].focal_px);
@@ -350,7 +350,7 @@ MultiViewScene MakeChainedRingScene(int num_views, int num_points, double noise_
     s.views.push_back({c.width_px, c.height_px, 0.0});
   }
   while (static_cast<int>(s.points.size()) < num_points) {
-    const Eigen::Vector3d x(ux(rng), uy(rng), uz(rng));
+    const Eigen::Vector3d x{ux(rng), uy(rng), uz(rng)};
     const int first = static_cast<int>(rng() % num_views);
     Track track;
     for (int k = 0; k < 3; ++k) {
@@ -359,7 +359,7 @@ MultiViewScene MakeChainedRingScene(int num_views, int num_points, double noise_
       const Eigen::Vector2d uv = c.Project(x);
       if (c.CamFromWorld(x).z() <= 0 || uv.x() < 0 || uv.y() < 0 || uv.x() > c.width_px || uv.y() > c.height_px)
         continue;
-      track.push_back({v, uv + noise_px * Eigen::Vector2d(noise(rng), noise(rng))});
+      track.push_back({v, uv + noise_px * Eigen::Vector2d{noise(rng), noise(rng)}});
     }
     if (track.size() < 2) continue;
     s.points.push_back(x);

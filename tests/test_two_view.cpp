@@ -75,11 +75,11 @@ TwoViewScene MakeScene(const SceneOptions& o) {
   std::uniform_real_distribution<double> ux(-1.0, 5.0), uy(-1.0, 4.0), uz(0.0, 3.0);
   std::normal_distribution<double> noise(0.0, 1.0);
   while (static_cast<int>(s.points.size()) < o.num_points) {
-    const Eigen::Vector3d p = o.scale * Eigen::Vector3d(ux(rng), uy(rng), o.planar ? 0.0 : uz(rng));
+    const Eigen::Vector3d p = o.scale * Eigen::Vector3d{ux(rng), uy(rng), o.planar ? 0.0 : uz(rng)};
     if (s.cam1.CamFromWorld(p).z() <= 0 || s.cam2.CamFromWorld(p).z() <= 0) continue;
     s.points.push_back(p);
-    s.uv1.push_back(s.cam1.Project(p) + o.noise_px * Eigen::Vector2d(noise(rng), noise(rng)));
-    s.uv2.push_back(s.cam2.Project(p) + o.noise_px * Eigen::Vector2d(noise(rng), noise(rng)));
+    s.uv1.push_back(s.cam1.Project(p) + o.noise_px * Eigen::Vector2d{noise(rng), noise(rng)});
+    s.uv2.push_back(s.cam2.Project(p) + o.noise_px * Eigen::Vector2d{noise(rng), noise(rng)});
   }
   s.R = s.cam2.cam_from_world_rotation * s.cam1.cam_from_world_rotation.transpose();
   s.t = (s.cam2.cam_from_world_translation - s.R * s.cam1.cam_from_world_translation).normalized();

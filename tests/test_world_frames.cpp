@@ -51,7 +51,7 @@ Ring MakeRing(double noise_px, unsigned seed, int swapped) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   auto jitter = [&](Eigen::Vector2d uv) {
-    if (noise_px > 0) uv += noise_px * Eigen::Vector2d(normal(rng), normal(rng));
+    if (noise_px > 0) uv += noise_px * Eigen::Vector2d{normal(rng), normal(rng)};
     return uv;
   };
   for (int c = 0; c < 8; ++c) ring.corners[c] = BoxCornerLocal(kBuildingSize, c);

@@ -34,9 +34,9 @@ TwoViewScene MakeTwoViewScene(int count) {
   std::normal_distribution<double> noise(0.0, 0.5);
   TwoViewScene s;
   for (int i = 0; i < count; ++i) {
-    const Eigen::Vector3d x(coord(rng), coord(rng), coord(rng) * 0.6);
-    const Eigen::Vector2d a = c1.Project(x) + Eigen::Vector2d(noise(rng), noise(rng));
-    const Eigen::Vector2d b = c2.Project(x) + Eigen::Vector2d(noise(rng), noise(rng));
+    const Eigen::Vector3d x{coord(rng), coord(rng), coord(rng) * 0.6};
+    const Eigen::Vector2d a = c1.Project(x) + Eigen::Vector2d{noise(rng), noise(rng)};
+    const Eigen::Vector2d b = c2.Project(x) + Eigen::Vector2d{noise(rng), noise(rng)};
     s.uv1.push_back(a);
     s.uv2.push_back(b);
     s.cv1.emplace_back(a.x(), a.y());
@@ -93,8 +93,8 @@ PointsScene MakePointsScene(int count) {
   std::uniform_real_distribution<double> coord(-1.0, 5.0);
   std::normal_distribution<double> noise(0.0, 0.5);
   for (int i = 0; i < count; ++i) {
-    const Eigen::Vector3d x(coord(rng), coord(rng), coord(rng) * 0.6);
-    const Eigen::Vector2d uv = s.camera.Project(x) + Eigen::Vector2d(noise(rng), noise(rng));
+    const Eigen::Vector3d x{coord(rng), coord(rng), coord(rng) * 0.6};
+    const Eigen::Vector2d uv = s.camera.Project(x) + Eigen::Vector2d{noise(rng), noise(rng)};
     s.points.push_back({x, uv});
     s.object.emplace_back(static_cast<float>(x.x()), static_cast<float>(x.y()), static_cast<float>(x.z()));
     s.image.emplace_back(static_cast<float>(uv.x()), static_cast<float>(uv.y()));

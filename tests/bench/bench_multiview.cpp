@@ -35,10 +35,10 @@ void MakeTracks(const std::vector<facet::Camera>& cameras, int num_points, std::
   std::uniform_real_distribution<double> ux(-1.0, 5.0), uy(-1.0, 4.0), uz(0.0, 3.0);
   std::normal_distribution<double> noise(0.0, 0.5);
   for (int i = 0; i < num_points; ++i) {
-    const Eigen::Vector3d x(ux(rng), uy(rng), uz(rng));
+    const Eigen::Vector3d x{ux(rng), uy(rng), uz(rng)};
     facet::Track track;
     for (int v = 0; v < static_cast<int>(cameras.size()); ++v)
-      track.push_back({v, cameras[v].Project(x) + Eigen::Vector2d(noise(rng), noise(rng))});
+      track.push_back({v, cameras[v].Project(x) + Eigen::Vector2d{noise(rng), noise(rng)}});
     tracks->push_back(track);
   }
 }

@@ -146,8 +146,8 @@ facet::Project WithSegments(const facet::Project& project, int segments_per_imag
         segment.id = out.NewId();
         segment.image_id = image.id;
         segment.axis = static_cast<facet::Axis>(axis);
-        segment.a_px = image.camera.Project(seen[k].first) + noise_px * Eigen::Vector2d(gaussian(rng), gaussian(rng));
-        segment.b_px = image.camera.Project(seen[k].second) + noise_px * Eigen::Vector2d(gaussian(rng), gaussian(rng));
+        segment.a_px = image.camera.Project(seen[k].first) + noise_px * Eigen::Vector2d{gaussian(rng), gaussian(rng)};
+        segment.b_px = image.camera.Project(seen[k].second) + noise_px * Eigen::Vector2d{gaussian(rng), gaussian(rng)};
         segments.push_back(segment);
       }
     }

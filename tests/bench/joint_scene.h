@@ -152,7 +152,7 @@ inline JointScene MakeJointScene(const JointSceneOptions& o) {
         pin.vertex = {box.id, v};
         const Eigen::Vector2d uv_px = p.images[j].camera.Project(box.mesh.vertex(v).position);
         scene.true_uv_px.push_back(uv_px);
-        pin.uv_px = uv_px + o.noise_px * Eigen::Vector2d(gaussian(rng), gaussian(rng));
+        pin.uv_px = uv_px + o.noise_px * Eigen::Vector2d{gaussian(rng), gaussian(rng)};
         p.pins.push_back(pin);
         ++placed;
         progress = true;
@@ -169,7 +169,7 @@ inline JointScene MakeJointScene(const JointSceneOptions& o) {
     }
     if (!box.translation_locked) {
       box.shape.translation +=
-          o.start_fraction * diagonal_m * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng));
+          o.start_fraction * diagonal_m * Eigen::Vector3d{uniform(rng), uniform(rng), uniform(rng)};
     }
   }
   RefreshAllPrimitives(&s);
@@ -177,9 +177,9 @@ inline JointScene MakeJointScene(const JointSceneOptions& o) {
     const Eigen::Vector3d center = image.camera.CenterInWorld();
     const double distance_m = (center - scene.look_at).norm();
     const Eigen::Vector3d moved = center + o.start_fraction * distance_m *
-                                               Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)) /
+                                               Eigen::Vector3d{uniform(rng), uniform(rng), uniform(rng)} /
                                                std::sqrt(3.0);
-    const Eigen::Vector3d axis = Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)).normalized();
+    const Eigen::Vector3d axis = Eigen::Vector3d{uniform(rng), uniform(rng), uniform(rng)}.normalized();
     const Eigen::Matrix3d turn = Eigen::AngleAxisd(o.start_rotation_deg * M_PI / 180.0, axis).toRotationMatrix();
     image.camera.SetPose(turn * image.camera.cam_from_world_rotation, moved);
   }
