@@ -58,8 +58,8 @@ bool DragDoubles(const char* label, double* values, int count, float speed, cons
   return ImGui::DragScalarN(label, ImGuiDataType_Double, values, count, speed, nullptr, nullptr, format);
 }
 
-bool DragDoublesRecorded(AppState* state, const char* label, double* values, int count, float speed,
-                         const char* format, const std::string& item_name) {
+bool DragDoublesRecorded(AppState* state, const char* label, double* values, int count, float speed, const char* format,
+                         const std::string& item_name) {
   const float spacing = ImGui::GetStyle().ItemInnerSpacing.x;
   const float full_width = ImGui::CalcItemWidth();
   bool changed = false;
@@ -70,7 +70,8 @@ bool DragDoublesRecorded(AppState* state, const char* label, double* values, int
     if (i > 0) ImGui::SameLine(0.0f, spacing);
     // As DragScalarN: equal widths, the last one taking what rounding leaves.
     const float each = std::max(1.0f, (full_width - spacing * (count - 1)) / count);
-    const float width = i + 1 < count ? std::floor(each) : std::max(1.0f, full_width - (std::floor(each) + spacing) * (count - 1));
+    const float width =
+        i + 1 < count ? std::floor(each) : std::max(1.0f, full_width - (std::floor(each) + spacing) * (count - 1));
     ImGui::SetNextItemWidth(width);
     changed |= ImGui::DragScalar("", ImGuiDataType_Double, &values[i], speed, nullptr, nullptr, format);
     RecordItem(state, item_name + "." + std::to_string(i));

@@ -38,7 +38,7 @@ bool DragDoubles(const char* label, double* values, int count, float speed, cons
 // DragDoubles laid out as ImGui's DragScalarN (one group: IsItemActivated and the undo hooks
 // see the whole row), with each component's rectangle recorded as `item_name`.0, .1, ... so
 // that an input script can click the one it types into (e.g. a rotation's z).
-bool DragDoublesRecorded(AppState* state, const char* label, double* values, int count, float speed,
-                         const char* format, const std::string& item_name);
+bool DragDoublesRecorded(AppState* state, const char* label, double* values, int count, float speed, const char* format,
+                         const std::string& item_name);
 
 }  // namespace facet::app

@@ -116,10 +116,6 @@ std::string KeepOnGround(Project* project, Id added_id) {
          std::to_string(c.id) + "; remove it to lift the box)";
 }
 
-}  // namespace
-
-namespace {
-
 // The largest "nice" length (1, 1.5, 2, 3, 4, 5, 6 or 8 times a power of ten) not above
 // `length` (> 0): a size the properties show as a round number, to type over or keep.
 double RoundDownToNiceLength(double length) {
@@ -210,7 +206,7 @@ NewPrimitivePlacement PlaceNewPrimitive(const Project& project, const PrimitiveS
   constexpr double kPhotoHeightFraction = 0.25;
   const double aim_depth = camera.CamFromWorld(ground).z();
   const double looks_size = kPhotoHeightFraction * std::max(1, camera.height_px) * aim_depth / camera.focal_px;
-  out.scale = RoundDownToNiceLength(looks_size) / own_size;
+  out.scale = looks_size > 0.0 ? RoundDownToNiceLength(looks_size) / own_size : 1.0;
   // Never straddling or behind the camera: its nearest corner at least half the aimed depth
   // away (a wide lens aimed low could otherwise reach back past the camera).
   constexpr double kMinNearestDepthFraction = 0.5;

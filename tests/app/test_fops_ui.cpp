@@ -565,7 +565,8 @@ TEST_CASE("Shift+click on corners where line segments end: each corner joins the
   REQUIRE(facet::SaveProject(p, path) == "");
   auto screen = [&](int c) { return f.view.ToScreen(cam.Project(corners[c])); };
   std::ostringstream s;
-  s << "frames 2\ncommand tool select\nframes 1\nclick left " << FormatXY(screen(4)) << "\nframes 1\nhold shift\nframes 1\n";
+  s << "frames 2\ncommand tool select\nframes 1\nclick left " << FormatXY(screen(4))
+    << "\nframes 1\nhold shift\nframes 1\n";
   for (int c : {5, 6, 7}) s << "click left " << FormatXY(screen(c)) << "\nframes 1\n";
   s << "release shift\nframes 2\n";
   const nlohmann::json report = RenderScript(dir, path, "shift_on_segment_ends", s.str());

@@ -500,13 +500,14 @@ TEST_CASE("issue 12: a new box aimed at the ground near the camera is as large a
   const int w = scene.true_camera.width_px, h = scene.true_camera.height_px;
   const Eigen::Vector2d aim_first(0.5 * w, 0.6 * h), aim_near(0.2 * w, 0.97 * h);
   // The first box, then its width typed large (8) in its properties, then B near the bottom.
-  const nlohmann::json probe = RenderScript(dir, path, "probe", "frames 2\ncommand add box at " + FormatXY(aim_first, 10) +
-                                                                     "\nframes 3\n");
+  const nlohmann::json probe =
+      RenderScript(dir, path, "probe", "frames 2\ncommand add box at " + FormatXY(aim_first, 10) + "\nframes 3\n");
   const View view = ViewFromReport(probe);
-  const std::string script = "frames 2\ncommand add box at " + FormatXY(aim_first, 10) +
-                             "\nframes 3\nclick left item primitive.param.0\nclick left item primitive.param.0\nframes 2\n"
-                             "key ctrl+a\ntype 8\nkey enter\nframes 3\nmove " +
-                             FormatXY(view.ToScreen(aim_near), 10) + "\nframes 2\nkey b\nframes 3\n";
+  const std::string script =
+      "frames 2\ncommand add box at " + FormatXY(aim_first, 10) +
+      "\nframes 3\nclick left item primitive.param.0\nclick left item primitive.param.0\nframes 2\n"
+      "key ctrl+a\ntype 8\nkey enter\nframes 3\nmove " +
+      FormatXY(view.ToScreen(aim_near), 10) + "\nframes 2\nkey b\nframes 3\n";
   const nlohmann::json r = RenderScript(dir, path, "near", script);
   INFO("log:\n" << ReportLog(r));
   const facet::Project p = ProjectFromJsonReport(r);
@@ -515,7 +516,8 @@ TEST_CASE("issue 12: a new box aimed at the ground near the camera is as large a
   const facet::Primitive& big = p.primitives[0];
   const facet::Primitive& added = p.primitives[1];
   REQUIRE(big.shape.params[0] == 8.0);
-  const Eigen::Vector3d foot = added.shape.translation + Eigen::Vector3d(0.5 * added.shape.params[0], 0.5 * added.shape.params[1], 0.0);
+  const Eigen::Vector3d foot =
+      added.shape.translation + Eigen::Vector3d(0.5 * added.shape.params[0], 0.5 * added.shape.params[1], 0.0);
   const double aim_depth = camera.CamFromWorld(foot).z();
   CAPTURE(aim_depth);
   CAPTURE(added.shape.params.transpose());
@@ -532,5 +534,6 @@ TEST_CASE("issue 12: a new box aimed at the ground near the camera is as large a
   CHECK(added.shape.params.head<3>().maxCoeff() <= looks * 1.0001);
   CHECK(added.shape.params.head<3>().maxCoeff() >= looks / 1.5);
   // Every corner in front of the camera, at least half the aim's depth away.
-  for (const Eigen::Vector3d& corner : BoxCorners(added)) CHECK(camera.CamFromWorld(corner).z() >= 0.5 * aim_depth - 1e-9);
+  for (const Eigen::Vector3d& corner : BoxCorners(added))
+    CHECK(camera.CamFromWorld(corner).z() >= 0.5 * aim_depth - 1e-9);
 }
