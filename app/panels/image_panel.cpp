@@ -209,8 +209,12 @@ bool SegmentResidual(const AppState& state, const Segment& segment, double* resi
 
 // The nearest pickable item under the cursor within the pick radius: pins, then segment
 // endpoints, then the model's vertices, edges and faces (app/state/model_pick.h), then segments.
+// `multi_select` (the select tool with Shift held: a click adds to the multi-selection of
+// model elements): a model vertex or edge under the cursor wins over segments, whose ends
+// snapping puts on the model's corners; with no model element there, segments are picked as
+// usual (Shift's loupe for a fine drag of a segment's end).
 OverlayHover HitTest(const Project& project, const Image& image, const std::vector<ProjectedPrimitive>& model,
-                     const ViewTransform& view, ImVec2 mouse, Tool tool) {
+                     const ViewTransform& view, ImVec2 mouse, Tool tool, bool multi_select) {
   OverlayHover hover;
   const Eigen::Vector2d m = ToEigen(mouse);
   auto screen = [&](const Eigen::Vector2d& uv) { return ToEigen(view.ToScreen(uv.x(), uv.y())); };
@@ -242,6 +246,14 @@ OverlayHover HitTest(const Project& project, const Image& image, const std::vect
     }
   }
   if (hover.line_pin_id != kNoId) return hover;
+  const PickFilter filter = PickFilterOf(tool);
+  const ElementPick pick = PickInImage(project, model, image.camera, view.zoom, ToEigen(view.ToScreen(0.0, 0.0)), m,
+                                       filter, kCornerPickRadiusPx);
+  if (multi_select && hover.pin_id == kNoId && !pick.element.Empty() && pick.element.kind != ElementKind::kFace) {
+    hover.element = pick.element;
+    hover.edge_t = pick.t;
+    return hover;
+  }
   if (pick_lines) {
     for (const Segment& segment : project.segments) {
       if (segment.image_id != image.id) continue;
@@ -257,9 +269,6 @@ OverlayHover HitTest(const Project& project, const Image& image, const std::vect
     }
   }
   if (hover.pin_id != kNoId || hover.segment_id != kNoId) return hover;
-  const PickFilter filter = PickFilterOf(tool);
-  const ElementPick pick = PickInImage(project, model, image.camera, view.zoom, ToEigen(view.ToScreen(0.0, 0.0)), m,
-                                       filter, kCornerPickRadiusPx);
   // A line pin's drawn line (between its two points) beats the model's edges and faces: the
   // solve puts its edge right under it. A vertex, or another edge nearer the cursor, wins.
   if (pick_line_pins && pick.element.kind != ElementKind::kVertex) {
@@ -882,7 +891,9 @@ void UpdateHover(AppState* state, const PanelState& panel, const Image& image,
                  const std::vector<ProjectedPrimitive>& model, const ViewTransform& transform, ViewFrame* frame) {
   const bool busy = panel.interaction.kind != DragKind::kNone;
   if (frame->hovered && !busy) {
-    frame->hover = HitTest(state->document.project(), image, model, transform, frame->pointer_screen, state->tool);
+    const bool multi_select = state->tool == Tool::kSelect && ImGui::GetIO().KeyShift;
+    frame->hover =
+        HitTest(state->document.project(), image, model, transform, frame->pointer_screen, state->tool, multi_select);
   }
   if (frame->hovered && !busy) {
     state->hover = frame->hover.element;
@@ -909,7 +920,7 @@ void StartInteraction(AppState* state, PanelState* panel, const Image& image,
   } else if (ImGui::IsMouseClicked(ImGuiMouseButton_Right)) {
     // The context menu works with every tool, so pick segments as the select tool does.
     const OverlayHover under =
-        HitTest(state->document.project(), image, model, transform, frame.pointer_screen, Tool::kSelect);
+        HitTest(state->document.project(), image, model, transform, frame.pointer_screen, Tool::kSelect, false);
     if (under.segment_id != kNoId) {
       panel->context_segment = under.segment_id;
       ImGui::OpenPopup("##segment_menu");

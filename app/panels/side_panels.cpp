@@ -136,7 +136,7 @@ void DrawPrimitiveSection(AppState* state, const Primitive primitive) {
   });
   const Eigen::Vector3d& rotation = primitive.shape.rotation;
   double r[3] = {rotation.x() * kRadToDeg, rotation.y() * kRadToDeg, rotation.z() * kRadToDeg};
-  const bool rotated = DragDoubles("Rotation", r, 3, 0.2f, "%.1f deg");
+  const bool rotated = DragDoublesRecorded(state, "Rotation", r, 3, 0.2f, "%.1f deg", "primitive.rotation");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Angle-axis vector in degrees (world_from_primitive)");
   TrackEdit(state, "Rotate " + kind, rotated, [&](Project* p) {
     p->FindPrimitive(id)->shape.rotation = Eigen::Vector3d(r[0], r[1], r[2]) / kRadToDeg;

@@ -1,6 +1,9 @@
 #include "app/panels/widgets.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdarg>
+#include <cstring>
 
 namespace facet::app {
 
@@ -53,6 +56,36 @@ void TrackEdit(AppState* state, const std::string& label, bool changed, const st
 
 bool DragDoubles(const char* label, double* values, int count, float speed, const char* format) {
   return ImGui::DragScalarN(label, ImGuiDataType_Double, values, count, speed, nullptr, nullptr, format);
+}
+
+bool DragDoublesRecorded(AppState* state, const char* label, double* values, int count, float speed, const char* format,
+                         const std::string& item_name) {
+  const float spacing = ImGui::GetStyle().ItemInnerSpacing.x;
+  const float full_width = ImGui::CalcItemWidth();
+  bool changed = false;
+  ImGui::BeginGroup();
+  ImGui::PushID(label);
+  for (int i = 0; i < count; ++i) {
+    ImGui::PushID(i);
+    if (i > 0) ImGui::SameLine(0.0f, spacing);
+    // As DragScalarN: equal widths, the last one taking what rounding leaves.
+    const float each = std::max(1.0f, (full_width - spacing * (count - 1)) / count);
+    const float width =
+        i + 1 < count ? std::floor(each) : std::max(1.0f, full_width - (std::floor(each) + spacing) * (count - 1));
+    ImGui::SetNextItemWidth(width);
+    changed |= ImGui::DragScalar("", ImGuiDataType_Double, &values[i], speed, nullptr, nullptr, format);
+    RecordItem(state, item_name + "." + std::to_string(i));
+    ImGui::PopID();
+  }
+  ImGui::PopID();
+  const char* hidden = std::strstr(label, "##");  // ImGui's convention: what follows is not shown
+  const char* label_end = hidden != nullptr ? hidden : label + std::strlen(label);
+  if (label != label_end) {
+    ImGui::SameLine(0.0f, spacing);
+    ImGui::TextUnformatted(label, label_end);
+  }
+  ImGui::EndGroup();
+  return changed;
 }
 
 }  // namespace facet::app

@@ -35,5 +35,10 @@ void WrappedColored(const ImVec4& color, const std::string& text);
 // history entry. `changed` is the widget's return value; `apply` edits a project copy.
 void TrackEdit(AppState* state, const std::string& label, bool changed, const std::function<void(Project*)>& apply);
 bool DragDoubles(const char* label, double* values, int count, float speed, const char* format);
+// DragDoubles laid out as ImGui's DragScalarN (one group: IsItemActivated and the undo hooks
+// see the whole row), with each component's rectangle recorded as `item_name`.0, .1, ... so
+// that an input script can click the one it types into (e.g. a rotation's z).
+bool DragDoublesRecorded(AppState* state, const char* label, double* values, int count, float speed, const char* format,
+                         const std::string& item_name);
 
 }  // namespace facet::app

@@ -13,13 +13,15 @@
 
 namespace {
 
-// The bundled sample: next to the executable in an install, else in the source tree.
+// The bundled sample, what a new user sees first: the Leuven street the tutorial builds
+// (assets/samples/leuven/tutorial.txt), next to the executable in an install, else in the
+// source tree.
 std::string SampleProjectPath() {
   std::error_code ec;
   const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
   const std::filesystem::path candidates[] = {
-      exe.parent_path() / "../share/facet/samples/leuven/leuven.facet",
-      std::filesystem::path(FACET_SOURCE_DIR) / "assets/samples/leuven/leuven.facet",
+      exe.parent_path() / "../share/facet/samples/leuven/street.facet",
+      std::filesystem::path(FACET_SOURCE_DIR) / "assets/samples/leuven/street.facet",
   };
   for (const auto& c : candidates)
     if (std::filesystem::exists(c, ec)) return std::filesystem::weakly_canonical(c, ec).string();
@@ -119,8 +121,9 @@ int main(int argc, char** argv) {
   auto* render = cli.add_subcommand("render", "Render the application offscreen (EGL, no display needed) to a PNG");
   facet::app::RenderOptions render_options;
   std::string render_size = "1600x900";
-  render->add_option("project", render_options.project_path, "Project file (*.facet)")
-      ->required()
+  render
+      ->add_option("project", render_options.project_path,
+                   "Project file (*.facet); without it, the bundled sample the GUI opens")
       ->check(CLI::ExistingFile);
   render->add_option("-o,--output", render_options.output_png, "SHOT.png")->required();
   render->add_option("--size", render_size, "Window size WxH in pixels")->capture_default_str();
@@ -148,6 +151,11 @@ int main(int argc, char** argv) {
   if (*solve) return facet::app::RunSolveCommand(solve_project, solve_out);
   if (*exporter) return facet::app::RunExportCommand(export_project, export_out, blender_script);
   if (*render) {
+    if (render_options.project_path.empty()) render_options.project_path = SampleProjectPath();
+    if (render_options.project_path.empty()) {
+      std::cerr << "facet render: no project given and the bundled sample is not installed\n";
+      return 1;
+    }
     if (!ParseSize(render_size, &render_options.width, &render_options.height)) {
       std::cerr << "facet render: --size must be WxH, e.g. 1600x900 (64..16384 each)\n";
       return 1;

@@ -116,40 +116,60 @@ std::string KeepOnGround(Project* project, Id added_id) {
          std::to_string(c.id) + "; remove it to lift the box)";
 }
 
+// The largest "nice" length (1, 1.5, 2, 3, 4, 5, 6 or 8 times a power of ten) not above
+// `length` (> 0): a size the properties show as a round number, to type over or keep.
+double RoundDownToNiceLength(double length) {
+  constexpr double kSteps[] = {8.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.5, 1.0};
+  const double decade = std::pow(10.0, std::floor(std::log10(length)));
+  for (double step : kSteps) {
+    if (step * decade <= length * (1.0 + 1e-12)) return step * decade;
+  }
+  return decade;
+}
+
+// The depth (camera z) of the nearest vertex of `probe` scaled by `scale` and moved by
+// `translation`.
+double NearestDepth(const Camera& camera, const Primitive& probe, double scale, const Eigen::Vector3d& translation) {
+  double nearest = std::numeric_limits<double>::infinity();
+  for (VertexId v = 0; v < probe.mesh.VertexIdEnd(); ++v) {
+    if (!probe.mesh.IsVertex(v)) continue;
+    nearest = std::min(nearest, camera.CamFromWorld(scale * probe.mesh.vertex(v).position + translation).z());
+  }
+  return nearest;
+}
+
 }  // namespace
 
 NewPrimitivePlacement PlaceNewPrimitive(const Project& project, const PrimitiveShape& shape, const Image* view,
                                         const std::optional<Eigen::Vector2d>& aim_px, Id scale_from) {
   NewPrimitivePlacement out;
   const bool first = project.primitives.empty();
-  // Scene scale: the primitive the user works on (else the last one) gives the size.
-  const Primitive* reference = project.FindPrimitive(scale_from);
-  if (reference == nullptr && !first) reference = &project.primitives.back();
   Primitive probe;
   probe.shape = shape;
   AddPrimitive(&probe.mesh, shape);
   const Eigen::AlignedBox3d own = PrimitiveBounds(probe);
   const double own_size = own.isEmpty() ? 1.0 : std::max(own.sizes().maxCoeff(), 1e-9);
-  if (reference != nullptr) {
-    const Eigen::AlignedBox3d ref = PrimitiveBounds(*reference);
-    if (!ref.isEmpty() && ref.sizes().maxCoeff() > 0.0) out.scale = ref.sizes().maxCoeff() / own_size;
-  }
-  const double size = out.scale * own_size;
-  // The point of the primitive that stands on the ground: its footprint's centre.
-  const Eigen::Vector3d base_local(out.scale * 0.5 * (own.min().x() + own.max().x()),
-                                   out.scale * 0.5 * (own.min().y() + own.max().y()), out.scale * own.min().z());
+  // The point of the default shape that stands on the ground: its footprint's centre.
+  const Eigen::Vector3d own_base(0.5 * (own.min().x() + own.max().x()), 0.5 * (own.min().y() + own.max().y()),
+                                 own.min().z());
 
   if (view == nullptr || !view->camera_calibrated) {
-    // No camera to aim with: the first primitive at the origin, the others beside everything
-    // there is, so that a new one does not hide inside another.
+    // No camera to aim with: the first primitive at the origin, the others as large as the one
+    // the user works on (else the last one) and beside everything there is, so that a new one
+    // does not hide inside another.
     if (first) return out;
+    const Primitive* reference = project.FindPrimitive(scale_from);
+    if (reference == nullptr) reference = &project.primitives.back();
+    const Eigen::AlignedBox3d ref = PrimitiveBounds(*reference);
+    if (!ref.isEmpty() && ref.sizes().maxCoeff() > 0.0) out.scale = ref.sizes().maxCoeff() / own_size;
     double max_x = -std::numeric_limits<double>::infinity();
     for (const Primitive& p : project.primitives) {
       const Eigen::AlignedBox3d b = PrimitiveBounds(p);
       if (!b.isEmpty()) max_x = std::max(max_x, b.max().x());
     }
     const Primitive& last = project.primitives.back();
-    out.translation = Eigen::Vector3d(max_x + 0.25 * size, last.shape.translation.y(), last.shape.translation.z());
+    out.translation =
+        Eigen::Vector3d(max_x + 0.25 * out.scale * own_size, last.shape.translation.y(), last.shape.translation.z());
     return out;
   }
 
@@ -157,14 +177,14 @@ NewPrimitivePlacement PlaceNewPrimitive(const Project& project, const PrimitiveS
   const Eigen::Vector2d aim = aim_px.value_or(camera.principal_point_px);
   const Eigen::Vector3d ray = AimRay(camera, aim);
   const Eigen::Vector3d eye = camera.CenterInWorld();
-  // A depth at which the primitive fills about a third of the photo's height.
-  const double framing_depth = 3.0 * camera.focal_px * size / std::max(1, camera.height_px);
   bool cameras_free = first;  // no pin or constraint names a vertex yet: the cameras' centres are the gauge
   for (const Image& image : project.images) cameras_free = cameras_free && !image.pose_locked;
   if (cameras_free) {
-    // The first primitive fixes the origin (it stays there); the cameras move so that it
-    // stands under the aim, a framing depth away.
-    out.camera_shift = (out.translation + base_local - framing_depth * ray) - eye;
+    // The first primitive fixes the origin and its default size the unit (it stays there);
+    // the cameras move so that it stands under the aim, filling about a third of the photo's
+    // height.
+    const double framing_depth = 3.0 * camera.focal_px * own_size / std::max(1, camera.height_px);
+    out.camera_shift = (own_base - framing_depth * ray) - eye;
     return out;
   }
   Eigen::Vector3d ground;
@@ -173,13 +193,30 @@ NewPrimitivePlacement PlaceNewPrimitive(const Project& project, const PrimitiveS
     out.on_ground = true;
   } else {
     // The camera is not above the ground: at the model's depth along the ray.
-    double depth = framing_depth;
     Eigen::AlignedBox3d all;
     for (const Primitive& p : project.primitives) all.extend(PrimitiveBounds(p));
-    if (!all.isEmpty()) depth = std::max((all.center() - eye).dot(ray), 0.5 * size);
+    double depth = all.isEmpty() ? 1.0 : (all.center() - eye).dot(ray);
+    if (!(depth > 0.0)) depth = all.isEmpty() ? 1.0 : std::max(all.sizes().maxCoeff(), 1e-6);
     ground = eye + depth * ray;
   }
-  out.translation = ground - base_local;
+  // As large as it looks where it stands, as a shape drawn there in SketchUp is: a quarter of
+  // the photo's height at the aimed point's depth, rounded down to a round length. Not the
+  // size of the last primitive: an 8 m house's size aimed at the ground just in front of the
+  // camera made a cube that straddled the camera.
+  constexpr double kPhotoHeightFraction = 0.25;
+  const double aim_depth = camera.CamFromWorld(ground).z();
+  const double looks_size = kPhotoHeightFraction * std::max(1, camera.height_px) * aim_depth / camera.focal_px;
+  out.scale = looks_size > 0.0 ? RoundDownToNiceLength(looks_size) / own_size : 1.0;
+  // Never straddling or behind the camera: its nearest corner at least half the aimed depth
+  // away (a wide lens aimed low could otherwise reach back past the camera).
+  constexpr double kMinNearestDepthFraction = 0.5;
+  for (int halvings = 0; halvings < 60; ++halvings) {
+    if (NearestDepth(camera, probe, out.scale, ground - out.scale * own_base) >= kMinNearestDepthFraction * aim_depth) {
+      break;
+    }
+    out.scale *= 0.5;
+  }
+  out.translation = ground - out.scale * own_base;
   return out;
 }
 

@@ -29,12 +29,15 @@ const Primitive* AttachBaseFor(const AppState& state, PrimitiveKind kind);
 // stands in front of that camera, in view, on the ground plane (z = 0) under `aim_px` (image
 // px; default the principal point; an aim above the horizon is replaced by one three
 // quarters down the image): where the aim's ray meets the ground, else (a camera not above
-// the ground) at the model's depth along the ray. The first primitive of a project stays at
-// the origin, which it fixes, and every camera moves by `camera_shift` instead so that it
-// stands under the aim a framing distance away (nothing pins a camera's centre yet). Its
-// dimensions are the default shape's times `scale`: the size of `scale_from` (else the last
-// primitive) for a scene that has one. Without a calibrated view: the first at the origin,
-// the others beside everything there is.
+// the ground) at the model's depth along the ray. Its size is what the view shows there: its
+// largest side a quarter of the photo's height at that depth, rounded down to a round length
+// (1, 1.5, 2, 3, 4, 5, 6, 8 x 10^k), halved until its nearest vertex is at least half that
+// depth in front of the camera (never straddling or behind it). The first primitive of a
+// project stays at the origin with its default size, which fix origin and unit, and every
+// camera moves by `camera_shift` instead so that it stands under the aim a framing distance
+// away (nothing pins a camera's centre yet). Without a calibrated view: the first at the
+// origin, the others as large as `scale_from` (else the last primitive) and beside
+// everything there is.
 struct NewPrimitivePlacement {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();   // world_from_primitive
   double scale = 1.0;                                      // of the default dimensions

@@ -540,3 +540,44 @@ TEST_CASE("parallel faces: two parallel-edge constraints in one edit; perpendicu
       add + face("select", top) + face("select-add", front) + "frames 1\ncommand constrain parallel-faces\n");
   CHECK(err.find("no two pairs of edges within 15 deg of parallel") != std::string::npos);
 }
+
+TEST_CASE("Shift+click on corners where line segments end: each corner joins the multi-selection") {
+  // What the tutorial's author hit: snapping puts a box's corners on the ends of the
+  // detected lines, and a Shift+click on such a corner took the segment's end (selecting the
+  // segment, dropping the corners chosen before).
+  TempDir dir("fops_shift_segments");
+  const LineScene f = WriteLineScene(dir);
+  facet::Project p = LoadProjectFile(f.path);
+  const facet::Camera& cam = f.scene.true_camera;
+  const auto corners = BoxCorners(f.scene.true_box);
+  // A segment ending at each top corner 5, 6 and 7, along an edge of the box, as the
+  // detected lines do.
+  for (const auto& [corner, other] : std::vector<std::pair<int, int>>{{5, 4}, {6, 2}, {7, 3}}) {
+    facet::Segment s;
+    s.id = p.NewId();
+    s.image_id = p.images.front().id;
+    s.axis = corner == 5 ? facet::Axis::kX : facet::Axis::kZ;
+    s.a_px = cam.Project(corners[corner]);
+    s.b_px = cam.Project(0.5 * (corners[corner] + corners[other]));
+    p.segments.push_back(s);
+  }
+  const std::string path = dir / "segments_at_corners.facet";
+  REQUIRE(facet::SaveProject(p, path) == "");
+  auto screen = [&](int c) { return f.view.ToScreen(cam.Project(corners[c])); };
+  std::ostringstream s;
+  s << "frames 2\ncommand tool select\nframes 1\nclick left " << FormatXY(screen(4))
+    << "\nframes 1\nhold shift\nframes 1\n";
+  for (int c : {5, 6, 7}) s << "click left " << FormatXY(screen(c)) << "\nframes 1\n";
+  s << "release shift\nframes 2\n";
+  const nlohmann::json report = RenderScript(dir, path, "shift_on_segment_ends", s.str());
+  INFO("log: " << ReportLog(report));
+  const nlohmann::json& selection = report.at("selection");
+  CHECK(selection.at("segment_id") == 0);
+  std::vector<int> ids = {selection.at("element").at("id").get<int>()};
+  for (const auto& e : selection.at("extra")) {
+    CHECK(e.at("kind") == "vertex");
+    ids.push_back(e.at("id").get<int>());
+  }
+  CHECK(selection.at("element").at("kind") == "vertex");
+  CHECK(ids == std::vector<int>{4, 5, 6, 7});
+}

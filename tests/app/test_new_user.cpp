@@ -278,8 +278,16 @@ TEST_CASE("issue 12: a new primitive stands on the ground under the aim, in fron
   CHECK(second.constraints[0].kind == facet::ConstraintKind::kCoplanar);
   CHECK(second.constraints[0].vertices.size() == 8);
   CHECK(ReportLog(r).find("it stands on the ground") != std::string::npos);
-  // The scene's scale: the same size as the box beside it.
-  CHECK((box2.shape.params - second.primitives[0].shape.params).norm() < 1e-9);
+  // As large as it looks where it stands: its largest side a quarter of the photo's height at
+  // the aim's depth, rounded down to a round length (by at most 1.5x: 1 -> 1.5 is the widest
+  // step), a cube.
+  const double depth2 = cam2.CamFromWorld(box2.shape.translation + 0.5 * box2.shape.params.head<3>()).z();
+  const double looks2 = 0.25 * h * depth2 / cam2.focal_px;
+  CAPTURE(box2.shape.params.transpose());
+  CAPTURE(looks2);
+  CHECK(box2.shape.params.head<3>().maxCoeff() <= looks2 * 1.05);
+  CHECK(box2.shape.params.head<3>().maxCoeff() >= looks2 / 1.5 / 1.05);
+  CHECK(box2.shape.params.head<3>().minCoeff() == box2.shape.params.head<3>().maxCoeff());
 
   // The B key aims at the pointer over the image.
   const View view = ViewFromReport(r);
@@ -481,4 +489,51 @@ TEST_CASE("issue 12: the 3D view reframes after large edits and never orbits bel
   CAPTURE(after.Eye().transpose());
   CHECK(after.Eye().z() > 0.0);
   CHECK((after.Eye() - view.Eye()).norm() > 1e-3);  // the drags did orbit
+}
+
+TEST_CASE("issue 12: a new box aimed at the ground near the camera is as large as it looks there, all in front") {
+  // What the tutorial's second house hit: after an 8 m house, B on the ground just in front of
+  // the camera made a cube of the last shape's largest side (8 m) that straddled the camera.
+  TempDir dir("near_box");
+  SyntheticScene scene;
+  const std::string path = WriteCalibratedNoModel(dir, &scene);
+  const int w = scene.true_camera.width_px, h = scene.true_camera.height_px;
+  const Eigen::Vector2d aim_first(0.5 * w, 0.6 * h), aim_near(0.2 * w, 0.97 * h);
+  // The first box, then its width typed large (8) in its properties, then B near the bottom.
+  const nlohmann::json probe =
+      RenderScript(dir, path, "probe", "frames 2\ncommand add box at " + FormatXY(aim_first, 10) + "\nframes 3\n");
+  const View view = ViewFromReport(probe);
+  const std::string script =
+      "frames 2\ncommand add box at " + FormatXY(aim_first, 10) +
+      "\nframes 3\nclick left item primitive.param.0\nclick left item primitive.param.0\nframes 2\n"
+      "key ctrl+a\ntype 8\nkey enter\nframes 3\nmove " +
+      FormatXY(view.ToScreen(aim_near), 10) + "\nframes 2\nkey b\nframes 3\n";
+  const nlohmann::json r = RenderScript(dir, path, "near", script);
+  INFO("log:\n" << ReportLog(r));
+  const facet::Project p = ProjectFromJsonReport(r);
+  REQUIRE(p.primitives.size() == 2);
+  const facet::Camera& camera = p.images.front().camera;
+  const facet::Primitive& big = p.primitives[0];
+  const facet::Primitive& added = p.primitives[1];
+  REQUIRE(big.shape.params[0] == 8.0);
+  const Eigen::Vector3d foot =
+      added.shape.translation + Eigen::Vector3d(0.5 * added.shape.params[0], 0.5 * added.shape.params[1], 0.0);
+  const double aim_depth = camera.CamFromWorld(foot).z();
+  CAPTURE(aim_depth);
+  CAPTURE(added.shape.params.transpose());
+  // The start is not the answer: a cube of the last shape's largest side, standing there,
+  // would reach behind the camera.
+  REQUIRE(0.5 * 8.0 > aim_depth);
+  // Under the aim, on the ground, as large as it looks there (a quarter of the photo's height,
+  // rounded down by at most 1.5x), a cube.
+  bool in_view = false;
+  const Eigen::Vector2d at = FootprintPx(camera, added, &in_view);
+  CHECK((at - aim_near).norm() < 0.5 + 1.0 / view.zoom);
+  CHECK(std::abs(added.shape.translation.z()) < 1e-9);
+  const double looks = 0.25 * h * aim_depth / camera.focal_px;
+  CHECK(added.shape.params.head<3>().maxCoeff() <= looks * 1.0001);
+  CHECK(added.shape.params.head<3>().maxCoeff() >= looks / 1.5);
+  // Every corner in front of the camera, at least half the aim's depth away.
+  for (const Eigen::Vector3d& corner : BoxCorners(added))
+    CHECK(camera.CamFromWorld(corner).z() >= 0.5 * aim_depth - 1e-9);
 }
