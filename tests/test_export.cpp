@@ -171,7 +171,7 @@ TEST_CASE("Blender script: each camera, in Blender's camera model, projects the 
   int checked = 0;
   for (const facet::Primitive& prim : scene.project.primitives) {
     for (int v = 0; v < prim.mesh.NumVertices(); ++v) {
-      const Eigen::Vector3d p = facet::VertexInWorld(scene.project, {prim.id, v});
+      const Eigen::Vector3d p = facet::VertexInWorld(scene.project, {prim.id, static_cast<facet::VertexId>(v)});
       const Eigen::Vector2d facet_px = camera.Project(p);
       const Eigen::Vector2d blender_px = BlenderPixel(c, p);
       CAPTURE(v);
