@@ -606,3 +606,22 @@ TEST_CASE("exposure gains: Brown-Lowe's fit recovers known gain ratios; the pyra
   CHECK(rgba[0] == 200.0f);
   CHECK_FALSE(pyramid.Sample(-1.0, 5.0, Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), rgba));
 }
+
+TEST_CASE("the bake's threads do not change its result: one thread and two give the same atlas") {
+  auto scene = facet::testing::MakeBoxScene(BoxOptions());
+  for (double azimuth : {90.0, 180.0}) AddView(&scene.project, CameraAround(azimuth));
+  const std::vector<PaintedFace> faces = facet::testing::PaintedFaces(scene.project);
+  std::vector<ImageRgba8> photos;
+  for (const facet::Image& image : scene.project.images) {
+    photos.push_back(facet::testing::RenderTexturedPhoto(faces, image.camera, SmoothPaint, 0.8 + 0.1 * photos.size()));
+  }
+  TextureBakeOptions one, two;
+  one.max_threads = 1;
+  two.max_threads = 2;
+  TexturedMesh a, b;
+  REQUIRE(facet::BakeTexturedMesh(scene.project, photos, one, &a).IsUsable());
+  REQUIRE(facet::BakeTexturedMesh(scene.project, photos, two, &b).IsUsable());
+  REQUIRE(a.atlas.pixels.size() > 1000);
+  CHECK(a.atlas.pixels == b.atlas.pixels);
+  CHECK(a.uvs == b.uvs);
+}

@@ -23,7 +23,7 @@ constexpr double kGainMinFeather = 0.5;
 constexpr float kClippedLevel = 250.0f;
 // A face's own texels lie this far inside its outline (texels); the band outside is dilated.
 constexpr double kOwnTexelInset = 1.0;
-// A view contributes to a blended texel when its weight is at least this share of the total.
+// A view joins a blended texel when its weight is at least this share of the largest one.
 constexpr double kContributionShare = 0.01;
 
 bool InsidePolygon(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p) {
@@ -76,13 +76,21 @@ struct ViewSample {
   float rgba[4] = {0, 0, 0, 0};
   double quality = 0.0;
   double feather = 0.0;
+  Eigen::Vector2d photo = Eigen::Vector2d::Zero();   // photo px
+  Eigen::Vector2d axis_u = Eigen::Vector2d::Zero();  // the texel's footprint axes, photo px
+  Eigen::Vector2d axis_v = Eigen::Vector2d::Zero();
 };
+
+void Fetch(const FaceView& fv, ViewSample* s) {
+  fv.context->pyramid.Sample(s->photo.x(), s->photo.y(), s->axis_u, s->axis_v, s->rgba);
+}
 
 // What view `fv` shows of texel (i, j) at world point x: seen (with the sample, its quality and
 // feather), hidden by something nearer in its z-buffer, or outside its photo (or facing away).
-// Quality and feather are computed only with options_need_weights.
+// Quality and feather are computed only with need_weights, the colour only with fetch (else
+// Fetch gets it later: a blend skips the views whose weight is negligible).
 Look LookAt(const FaceView& fv, const FaceGeometry& g, int face_index, const Eigen::Vector3d& x, double i, double j,
-            const TextureBakeOptions& options, bool options_need_weights, ViewSample* sample) {
+            const TextureBakeOptions& options, bool need_weights, bool fetch, ViewSample* sample) {
   const ViewContext& v = *fv.context;
   const Eigen::Vector3d q = fv.pinhole_from_texel * Eigen::Vector3d(i, j, 1.0);
   if (!(q.z() > 0.0)) return Look::kOutside;
@@ -97,16 +105,20 @@ Look LookAt(const FaceView& fv, const FaceGeometry& g, int face_index, const Eig
     return in_map ? Look::kHidden : Look::kOutside;
   }
   const Eigen::Vector2d photo = v.PhotoFromPinhole(uv);
-  Eigen::Vector2d axis_u = Eigen::Vector2d::Zero(), axis_v = Eigen::Vector2d::Zero();
+  if (!(photo.x() >= -0.5 && photo.y() >= -0.5 && photo.x() <= v.photo->width - 0.5 &&
+        photo.y() <= v.photo->height - 0.5)) {
+    return Look::kOutside;
+  }
+  sample->photo = photo;
   if (options.filter_footprint) {
     // The texel's axes in photo pixels: columns of the homography's Jacobian (distortion's is ~1).
-    axis_u = ((fv.pinhole_from_texel.col(0).head<2>() - uv * fv.pinhole_from_texel(2, 0)) / q.z())
-                 .cwiseProduct(v.photo_px_per_camera_px);
-    axis_v = ((fv.pinhole_from_texel.col(1).head<2>() - uv * fv.pinhole_from_texel(2, 1)) / q.z())
-                 .cwiseProduct(v.photo_px_per_camera_px);
+    sample->axis_u = ((fv.pinhole_from_texel.col(0).head<2>() - uv * fv.pinhole_from_texel(2, 0)) / q.z())
+                         .cwiseProduct(v.photo_px_per_camera_px);
+    sample->axis_v = ((fv.pinhole_from_texel.col(1).head<2>() - uv * fv.pinhole_from_texel(2, 1)) / q.z())
+                         .cwiseProduct(v.photo_px_per_camera_px);
   }
-  if (!v.pyramid.Sample(photo.x(), photo.y(), axis_u, axis_v, sample->rgba)) return Look::kOutside;
-  if (!options_need_weights) return Look::kSeen;
+  if (fetch) Fetch(fv, sample);
+  if (!need_weights) return Look::kSeen;
   const Eigen::Vector2d centre(0.5 * (v.photo->width - 1), 0.5 * (v.photo->height - 1));
   sample->quality = ViewQuality(cos_angle, v.camera->focal_px * v.photo_px_per_camera_px.x(), distance,
                                 (photo - centre).norm() / v.half_diagonal_px, options.blend_sharpness);
@@ -227,7 +239,8 @@ void FitViewGains(const std::vector<FaceGeometry>& geometry, const std::vector<F
         seen.clear();
         for (const FaceView& fv : fvs) {
           ViewSample s;
-          if (LookAt(fv, g, f, x, i, j, options, true, &s) != Look::kSeen || s.feather < kGainMinFeather) continue;
+          if (LookAt(fv, g, f, x, i, j, options, true, true, &s) != Look::kSeen || s.feather < kGainMinFeather)
+            continue;
           if (std::max({s.rgba[0], s.rgba[1], s.rgba[2]}) >= kClippedLevel) continue;
           seen.emplace_back(fv.view, s);
         }
@@ -277,47 +290,51 @@ void SampleFace(const FaceGeometry& g, int face_index, const FaceTexture& t, con
       const size_t k = static_cast<size_t>(j + pad) * outer_w + (i + pad);
       const Eigen::Vector3d x = g.InWorld((face_from_texel * Eigen::Vector3d(i, j, 1.0)).head<2>());
       bool any_hidden = false;
-      int chosen = -1;  // best view: the first that sees the texel
-      double weight_sum = 0.0, best_quality = -1.0;
+      int chosen = -1;  // the one view whose sample is the texel's
+      double max_weight = 0.0, best_quality = -1.0;
       int best_seen = -1;
-      float blend[3] = {0.0f, 0.0f, 0.0f};
       for (size_t v = 0; v < fvs.size(); ++v) {
-        looks[v] = LookAt(fvs[v], g, face_index, x, i, j, options, need_weights, &samples[v]);
+        // Best view, or a single candidate: the first view that sees the texel, fetched now.
+        looks[v] = LookAt(fvs[v], g, face_index, x, i, j, options, need_weights, !need_weights, &samples[v]);
         if (looks[v] == Look::kHidden) any_hidden = true;
         if (looks[v] != Look::kSeen) continue;
-        if (!blended) {
-          chosen = static_cast<int>(v);
-          break;
-        }
         if (!need_weights) {
           chosen = static_cast<int>(v);
           break;
         }
-        const ViewSample& s = samples[v];
-        const double weight = s.quality * s.feather;
-        const Eigen::Vector3d& gain = fvs[v].context->gain;
-        for (int c = 0; c < 3; ++c) blend[c] += static_cast<float>(weight * gain[c] * s.rgba[c]);
-        weight_sum += weight;
-        if (s.quality > best_quality) {
-          best_quality = s.quality;
+        max_weight = std::max(max_weight, samples[v].quality * samples[v].feather);
+        if (samples[v].quality > best_quality) {
+          best_quality = samples[v].quality;
           best_seen = static_cast<int>(v);
         }
       }
-      if (blended && chosen < 0 && !(weight_sum > 0.0))
-        chosen = best_seen;  // seen only on boundaries: the best of them
+      // Seen only on visibility boundaries (every weight 0): the best of those views.
+      if (need_weights && !(max_weight > 0.0)) {
+        chosen = best_seen;
+        if (chosen >= 0) Fetch(fvs[chosen], &samples[chosen]);
+      }
       float colour[3];
       if (chosen >= 0) {
         const Eigen::Vector3d& gain = fvs[chosen].context->gain;
         for (int c = 0; c < 3; ++c) colour[c] = static_cast<float>(gain[c] * samples[chosen].rgba[c]);
         counts->from_other_views += chosen > 0;
-      } else if (blended && weight_sum > 0.0) {
-        for (int c = 0; c < 3; ++c) colour[c] = static_cast<float>(blend[c] / weight_sum);
-        for (size_t v = 1; v < fvs.size(); ++v) {
-          if (looks[v] == Look::kSeen && samples[v].quality * samples[v].feather > kContributionShare * weight_sum) {
-            ++counts->from_other_views;
-            break;
-          }
+      } else if (max_weight > 0.0) {
+        // The blend of the views whose weight is not negligible, each fetched only now.
+        double weight_sum = 0.0;
+        double blend[3] = {0.0, 0.0, 0.0};
+        bool other = false;
+        for (size_t v = 0; v < fvs.size(); ++v) {
+          if (looks[v] != Look::kSeen) continue;
+          const double weight = samples[v].quality * samples[v].feather;
+          if (!(weight >= kContributionShare * max_weight)) continue;
+          Fetch(fvs[v], &samples[v]);
+          const Eigen::Vector3d& gain = fvs[v].context->gain;
+          for (int c = 0; c < 3; ++c) blend[c] += weight * gain[c] * samples[v].rgba[c];
+          weight_sum += weight;
+          other = other || v > 0;
         }
+        for (int c = 0; c < 3; ++c) colour[c] = static_cast<float>(blend[c] / weight_sum);
+        counts->from_other_views += other;
       } else if (any_hidden) {
         ++counts->hidden;  // left for the dilation
         continue;
