@@ -542,3 +542,90 @@ TEST_CASE("export errors: unwritable path, empty or malformed mesh") {
   CHECK_FALSE(s.success);
   CHECK(std::distance(fs::directory_iterator(dir), fs::directory_iterator()) == 0);
 }
+
+TEST_CASE("GLB and OBJ with a paged atlas: one image, texture and material per page, each face on its page") {
+  // The box seen from four sides (five faces textured) baked into 512 px pages: two pages.
+  facet::testing::SyntheticScene scene = facet::testing::MakeBoxScene();
+  const facet::testing::SyntheticSceneOptions o;
+  for (double azimuth : {90.0, 180.0, 270.0}) {
+    facet::testing::SyntheticSceneOptions ov = o;
+    ov.camera_center =
+        o.look_at + Eigen::AngleAxisd(azimuth * M_PI / 180.0, Eigen::Vector3d::UnitZ()) * (o.camera_center - o.look_at);
+    facet::Image image = scene.project.images[0];
+    image.id = scene.project.NewId();
+    image.camera = facet::testing::MakeLookAtCamera(ov);
+    scene.project.images.push_back(image);
+  }
+  std::vector<facet::ImageRgba8> photos(scene.project.images.size(), RampPhoto(o.width_px, o.height_px));
+  facet::TextureBakeOptions options;
+  options.max_atlas_size = 512;
+  options.max_atlas_pages = 4;
+  facet::TexturedMesh mesh;
+  const auto bake = facet::BakeTexturedMesh(scene.project, photos, options, &mesh);
+  REQUIRE_MESSAGE(bake.IsUsable(), bake.message);
+  REQUIRE(mesh.AtlasPageCount() >= 2);
+  size_t textured_triangles = 0;
+  for (auto t : mesh.triangle_textured) textured_triangles += t;
+
+  const fs::path dir = TempDir("paged");
+  const facet::ExportSummary summary = facet::ExportGlb(mesh, scene.project, (dir / "paged.glb").string());
+  REQUIRE_MESSAGE(summary.success, summary.message);
+  const Glb glb = ParseGlb(dir / "paged.glb");
+  const json& g = glb.gltf;
+  const int pages = mesh.AtlasPageCount();
+  CHECK(g["images"].size() == static_cast<size_t>(pages));
+  CHECK(g["textures"].size() == static_cast<size_t>(pages));
+  const json& primitives = g["meshes"][0]["primitives"];
+  size_t exported_textured = 0;
+  int textured_primitives = 0;
+  for (const json& primitive : primitives) {
+    const json& material = g["materials"][primitive["material"].get<int>()];
+    if (!material["pbrMetallicRoughness"].contains("baseColorTexture")) continue;
+    ++textured_primitives;
+    // The material's name says its page; its image decodes to that page, pixel for pixel.
+    const std::string name = material["name"];
+    const int page = name == "facet_textured" ? 0 : std::stoi(name.substr(std::string("facet_textured_page").size()));
+    CAPTURE(name);
+    REQUIRE(page < pages);
+    const int texture = material["pbrMetallicRoughness"]["baseColorTexture"]["index"];
+    const json& image = g["images"][g["textures"][texture]["source"].get<int>()];
+    size_t png_length = 0;
+    const std::uint8_t* png = ViewData(glb, image["bufferView"], &png_length);
+    const cv::Mat decoded = cv::imdecode(
+        cv::Mat(1, static_cast<int>(png_length), CV_8UC1, const_cast<std::uint8_t*>(png)), cv::IMREAD_UNCHANGED);
+    const facet::ImageRgba8& expected = mesh.AtlasPage(page);
+    REQUIRE(decoded.cols == expected.width);
+    REQUIRE(decoded.rows == expected.height);
+    int differing = 0;
+    for (int y = 0; y < decoded.rows; ++y) {
+      for (int x = 0; x < decoded.cols; ++x) {
+        const cv::Vec4b bgra = decoded.at<cv::Vec4b>(y, x);
+        const std::uint8_t* rgba = expected.At(x, y);
+        differing += bgra[2] != rgba[0] || bgra[1] != rgba[1] || bgra[0] != rgba[2] || bgra[3] != rgba[3];
+      }
+    }
+    CHECK(differing == 0);
+    // Exactly the triangles the bake put on that page.
+    const std::vector<std::uint32_t> idx = AccessorData<std::uint32_t>(glb, primitive["indices"], 1);
+    size_t on_page = 0;
+    for (size_t t = 0; t < mesh.triangle_page.size(); ++t)
+      on_page += mesh.triangle_textured[t] && mesh.triangle_page[t] == page;
+    CHECK(idx.size() == 3 * on_page);
+    exported_textured += idx.size() / 3;
+  }
+  CHECK(textured_primitives == pages);
+  CHECK(exported_textured == textured_triangles);
+
+  const facet::ExportSummary obj = facet::ExportObj(mesh, (dir / "paged.obj").string());
+  REQUIRE_MESSAGE(obj.success, obj.message);
+  std::ifstream mtl_in(dir / "paged.mtl");
+  const std::string mtl((std::istreambuf_iterator<char>(mtl_in)), {});
+  for (int page = 1; page < pages; ++page) {
+    const std::string png_name = "paged_page" + std::to_string(page) + ".png";
+    CHECK(fs::exists(dir / png_name));
+    CHECK(mtl.find("newmtl facet_textured_page" + std::to_string(page)) != std::string::npos);
+    CHECK(mtl.find("map_Kd " + png_name) != std::string::npos);
+    const cv::Mat png = cv::imread((dir / png_name).string(), cv::IMREAD_UNCHANGED);
+    CHECK(png.cols == mesh.AtlasPage(page).width);
+  }
+}

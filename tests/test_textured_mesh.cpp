@@ -369,6 +369,15 @@ FaceId FaceWithNormal(const PolyMesh& mesh, const Eigen::Vector3d& normal) {
   return facet::kNoFace;
 }
 
+// The paper's rule: each face from its best view, no exposure levelling. The tests of view
+// choice use it; their photos differ on purpose (inverted checkers), which blending would mix.
+facet::TextureBakeOptions BestViewOnly() {
+  facet::TextureBakeOptions options;
+  options.source = facet::TextureSource::kBestView;
+  options.compensate_exposure = false;
+  return options;
+}
+
 double MedianMs(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
@@ -734,7 +743,7 @@ TEST_CASE("bake: the nearer of two views textures the faces; an unloaded photo i
   constexpr int kTexelTolerance = 30;
 
   TexturedMesh mesh;
-  auto summary = facet::BakeTexturedMesh(scene.project, {far_photo, near_photo}, {}, &mesh);
+  auto summary = facet::BakeTexturedMesh(scene.project, {far_photo, near_photo}, BestViewOnly(), &mesh);
   REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
   CHECK(summary.faces_textured == 3);
   for (const TestFace& face : faces) {
@@ -747,7 +756,7 @@ TEST_CASE("bake: the nearer of two views textures the faces; an unloaded photo i
     CHECK(check.mean_abs < kMaxMeanDiff);
   }
 
-  summary = facet::BakeTexturedMesh(scene.project, {far_photo, ImageRgba8()}, {}, &mesh);
+  summary = facet::BakeTexturedMesh(scene.project, {far_photo, ImageRgba8()}, BestViewOnly(), &mesh);
   REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
   CHECK(summary.faces_textured == 3);
   for (const TestFace& face : faces) {
@@ -857,7 +866,7 @@ TEST_CASE("bake: a primitive in front of a face makes an unobstructed view win")
   CHECK(weighted_area(cam1) > 2.0 * weighted_area(cam2));
 
   TexturedMesh mesh;
-  const auto summary = facet::BakeTexturedMesh(scene.project, {photo1, photo2}, {}, &mesh);
+  const auto summary = facet::BakeTexturedMesh(scene.project, {photo1, photo2}, BestViewOnly(), &mesh);
   REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
   const FaceInAtlas fa = FindFace(mesh, *front);
   REQUIRE(fa.textured);
@@ -875,7 +884,7 @@ TEST_CASE("bake: a primitive in front of a face makes an unobstructed view win")
   // With view 2 unloaded: view 1 sees none of the face's occlusion samples, so the face is
   // left untextured rather than painted with the blocker; the blocker's own front is textured.
   TexturedMesh only_one;
-  const auto single = facet::BakeTexturedMesh(scene.project, {photo1, ImageRgba8()}, {}, &only_one);
+  const auto single = facet::BakeTexturedMesh(scene.project, {photo1, ImageRgba8()}, BestViewOnly(), &only_one);
   REQUIRE_MESSAGE(single.IsUsable(), single.message);
   CHECK_FALSE(FindFace(only_one, *front).textured);
   for (const TestFace& f : faces) {

@@ -229,7 +229,11 @@ int RunExportCommand(const std::string& project_path, const std::string& output_
     photo_pointers[i] = &photos[i];
   }
   TexturedMesh mesh;
-  const TextureBakeSummary bake = BakeTexturedMesh(project, photo_pointers, TextureBakeOptions{}, &mesh);
+  // The exporters write every atlas page (the 3D panel draws one page, so the app keeps one):
+  // faces that overflow an 8192 page go to more pages before any is shrunk.
+  TextureBakeOptions bake_options;
+  bake_options.max_atlas_pages = 8;
+  const TextureBakeSummary bake = BakeTexturedMesh(project, photo_pointers, bake_options, &mesh);
   if (!bake.IsUsable()) {
     std::cerr << "facet export: texture: " << bake.message << "\n";
     mesh = BuildUntexturedMesh(project);

@@ -60,9 +60,20 @@ std::string ValidateMesh(const TexturedMesh& mesh) {
       return "vertex " + std::to_string(v) + " is not finite";
     }
   }
-  if (!mesh.atlas.empty() &&
-      mesh.atlas.pixels.size() != static_cast<size_t>(mesh.atlas.width) * mesh.atlas.height * 4) {
-    return "the atlas pixel buffer does not match its size";
+  for (int page = 0; page < mesh.AtlasPageCount(); ++page) {
+    const ImageRgba8& image = mesh.AtlasPage(page);
+    if (image.empty() || image.pixels.size() != static_cast<size_t>(image.width) * image.height * 4) {
+      return "the pixel buffer of atlas page " + std::to_string(page) + " does not match its size";
+    }
+  }
+  if (!mesh.triangle_page.empty() && mesh.triangle_page.size() != triangles) {
+    return "triangle_page does not match the triangle count";
+  }
+  for (size_t t = 0; t < mesh.triangle_page.size(); ++t) {
+    if (mesh.triangle_textured.size() == triangles && mesh.triangle_textured[t] &&
+        mesh.triangle_page[t] >= std::max(1, mesh.AtlasPageCount())) {
+      return "triangle " + std::to_string(t) + " refers to a missing atlas page";
+    }
   }
   return "";
 }
@@ -73,13 +84,25 @@ bool TriangleTextured(const TexturedMesh& mesh, size_t triangle) {
   return HasAtlas(mesh) && !mesh.triangle_textured.empty() && mesh.triangle_textured[triangle] != 0;
 }
 
-// Splits the triangle list into textured and plain ones.
-void SplitIndices(const TexturedMesh& mesh, std::vector<std::uint32_t>* textured, std::vector<std::uint32_t>* plain) {
+// Splits the triangle list into textured ones per atlas page and plain ones.
+void SplitIndices(const TexturedMesh& mesh, std::vector<std::vector<std::uint32_t>>* textured_by_page,
+                  std::vector<std::uint32_t>* plain) {
+  textured_by_page->assign(std::max(1, mesh.AtlasPageCount()), {});
   for (size_t t = 0; t < mesh.indices.size() / 3; ++t) {
-    std::vector<std::uint32_t>* target = TriangleTextured(mesh, t) ? textured : plain;
+    std::vector<std::uint32_t>* target = TriangleTextured(mesh, t) ? &(*textured_by_page)[mesh.TrianglePage(t)] : plain;
     target->insert(target->end(), mesh.indices.begin() + 3 * t, mesh.indices.begin() + 3 * t + 3);
   }
 }
+
+bool AnyTextured(const std::vector<std::vector<std::uint32_t>>& textured_by_page) {
+  for (const auto& indices : textured_by_page) {
+    if (!indices.empty()) return true;
+  }
+  return false;
+}
+
+// Page 0 keeps the single-atlas names; page k > 0 adds "_pageK".
+std::string PageSuffix(size_t page) { return page == 0 ? "" : "_page" + std::to_string(page); }
 
 class BinaryBuffer {
  public:
@@ -212,8 +235,10 @@ ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const 
   const std::vector<Eigen::Vector3f>& normals = vertices.normals;
   const Eigen::Vector3f& lo = vertices.lo;
   const Eigen::Vector3f& hi = vertices.hi;
-  std::vector<std::uint32_t> textured_indices, plain_indices;
-  SplitIndices(mesh, &textured_indices, &plain_indices);
+  std::vector<std::vector<std::uint32_t>> textured_by_page;
+  std::vector<std::uint32_t> plain_indices;
+  SplitIndices(mesh, &textured_by_page, &plain_indices);
+  const bool any_textured = AnyTextured(textured_by_page);
 
   Json views = Json::array(), accessors = Json::array();
   BinaryBuffer bin;
@@ -231,25 +256,35 @@ ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const 
   const int normal_accessor = add_vertex_accessor(normals.data(), n * sizeof(Eigen::Vector3f), "VEC3");
   // UVs only when some primitive samples the atlas; validators flag unused accessors.
   const int uv_accessor =
-      textured_indices.empty() ? -1 : add_vertex_accessor(mesh.uvs.data(), n * sizeof(Eigen::Vector2f), "VEC2");
+      !any_textured ? -1 : add_vertex_accessor(mesh.uvs.data(), n * sizeof(Eigen::Vector2f), "VEC2");
   static_assert(sizeof(Eigen::Vector3f) == 12 && sizeof(Eigen::Vector2f) == 8, "tightly packed vectors");
 
   Json materials = Json::array(), primitives = Json::array();
   Json root;
   root["asset"] = {{"version", "2.0"}, {"generator", "Facet"}};
-  if (!textured_indices.empty()) {
-    const std::vector<std::uint8_t> png = EncodePng(mesh.atlas);
-    if (png.empty()) return Failure(path + ": encoding the texture atlas as PNG failed");
-    const int image_view = bin.AddView(png.data(), png.size(), 0, &views);
-    root["images"] = Json::array({{{"name", "atlas"}, {"bufferView", image_view}, {"mimeType", "image/png"}}});
+  // One image, texture and material per atlas page that some triangle uses.
+  if (any_textured) {
+    root["images"] = Json::array();
+    root["textures"] = Json::array();
     root["samplers"] = Json::array({{{"magFilter", kLinear},
                                      {"minFilter", kLinearMipmapLinear},
                                      {"wrapS", kClampToEdge},
                                      {"wrapT", kClampToEdge}}});
-    root["textures"] = Json::array({{{"sampler", 0}, {"source", 0}}});
-    materials.push_back({{"name", "facet_textured"},
+  }
+  for (size_t page = 0; page < textured_by_page.size(); ++page) {
+    const std::vector<std::uint32_t>& textured_indices = textured_by_page[page];
+    if (textured_indices.empty()) continue;
+    const std::vector<std::uint8_t> png = EncodePng(mesh.AtlasPage(static_cast<int>(page)));
+    if (png.empty()) return Failure(path + ": encoding atlas page " + std::to_string(page) + " as PNG failed");
+    const int image_view = bin.AddView(png.data(), png.size(), 0, &views);
+    root["images"].push_back(
+        {{"name", "atlas" + PageSuffix(page)}, {"bufferView", image_view}, {"mimeType", "image/png"}});
+    root["textures"].push_back({{"sampler", 0}, {"source", root["images"].size() - 1}});
+    materials.push_back({{"name", "facet_textured" + PageSuffix(page)},
                          {"pbrMetallicRoughness",
-                          {{"baseColorTexture", {{"index", 0}}}, {"metallicFactor", 0.0}, {"roughnessFactor", 1.0}}}});
+                          {{"baseColorTexture", {{"index", root["textures"].size() - 1}}},
+                           {"metallicFactor", 0.0},
+                           {"roughnessFactor", 1.0}}}});
     accessors.push_back(
         {{"bufferView", bin.AddView(textured_indices.data(), textured_indices.size() * 4, kElementArrayBuffer, &views)},
          {"componentType", kUnsignedInt},
@@ -312,8 +347,10 @@ ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const 
   summary.message =
       "wrote " + path + ": " + std::to_string(mesh.indices.size() / 3) + " triangles, " +
       std::to_string(cameras.size()) + " cameras" +
-      (HasAtlas(mesh) ? ", " + std::to_string(mesh.atlas.width) + "x" + std::to_string(mesh.atlas.height) + " texture"
-                      : "");
+      (HasAtlas(mesh)
+           ? ", " + std::to_string(mesh.atlas.width) + "x" + std::to_string(mesh.atlas.height) + " texture" +
+                 (mesh.AtlasPageCount() > 1 ? " (+" + std::to_string(mesh.AtlasPageCount() - 1) + " pages)" : "")
+           : "");
   return summary;
 }
 
@@ -328,15 +365,18 @@ ExportSummary ExportObj(const TexturedMesh& mesh, const std::string& path) {
   if (extension == ".obj") base.replace_extension();
   const std::string obj_path = base.string() + ".obj";
   const std::string mtl_path = base.string() + ".mtl";
-  const std::string png_path = base.string() + ".png";
   const std::string stem = base.filename().string();
 
-  std::vector<std::uint32_t> textured_indices, plain_indices;
-  SplitIndices(mesh, &textured_indices, &plain_indices);
+  std::vector<std::vector<std::uint32_t>> textured_by_page;
+  std::vector<std::uint32_t> plain_indices;
+  SplitIndices(mesh, &textured_by_page, &plain_indices);
 
+  // Page 0 is FILE.png, page k FILE_pageK.png, each with its material.
   std::string mtl = "# Facet materials\n";
-  if (!textured_indices.empty()) {
-    mtl += "newmtl facet_textured\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nd 1\nillum 1\nmap_Kd " + stem + ".png\n\n";
+  for (size_t page = 0; page < textured_by_page.size(); ++page) {
+    if (textured_by_page[page].empty()) continue;
+    mtl += "newmtl facet_textured" + PageSuffix(page) + "\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nd 1\nillum 1\nmap_Kd " + stem +
+           PageSuffix(page) + ".png\n\n";
   }
   if (!plain_indices.empty())
     mtl += "newmtl facet_untextured\nKa 0.7 0.7 0.7\nKd 0.7 0.7 0.7\nKs 0 0 0\nd 1\nillum 1\n";
@@ -362,9 +402,10 @@ ExportSummary ExportObj(const TexturedMesh& mesh, const std::string& path) {
       obj += "\n";
     }
   };
-  if (!textured_indices.empty()) {
-    obj += "usemtl facet_textured\n";
-    write_faces(textured_indices, true);
+  for (size_t page = 0; page < textured_by_page.size(); ++page) {
+    if (textured_by_page[page].empty()) continue;
+    obj += "usemtl facet_textured" + PageSuffix(page) + "\n";
+    write_faces(textured_by_page[page], true);
   }
   if (!plain_indices.empty()) {
     obj += "usemtl facet_untextured\n";
@@ -373,11 +414,17 @@ ExportSummary ExportObj(const TexturedMesh& mesh, const std::string& path) {
 
   ExportSummary summary;
   // The OBJ goes last, so an OBJ on disk always finds its material and texture.
-  if (!textured_indices.empty()) {
-    const std::vector<std::uint8_t> png = EncodePng(mesh.atlas);
+  for (size_t page = 0; page < textured_by_page.size(); ++page) {
+    if (textured_by_page[page].empty()) continue;
+    const std::string png_path = base.string() + PageSuffix(page) + ".png";
+    const std::vector<std::uint8_t> png = EncodePng(mesh.AtlasPage(static_cast<int>(page)));
     if (png.empty()) return Failure(png_path + ": encoding the texture atlas as PNG failed");
     const std::string error = WriteFileAtomically(png_path, std::string(png.begin(), png.end()));
-    if (!error.empty()) return Failure(error);
+    if (!error.empty()) {
+      ExportSummary failed = Failure(error);
+      failed.files_written = summary.files_written;
+      return failed;
+    }
     summary.files_written.push_back(png_path);
   }
   for (const auto& [file, text] : {std::pair{mtl_path, &mtl}, std::pair{obj_path, &obj}}) {

@@ -20,11 +20,13 @@ struct ExportSummary {
 // True with the size the camera's intrinsics refer to (the image's when the camera has none).
 bool ExportedCameraSize(const Image& image, int* width_px, int* height_px);
 
-// One .glb holding mesh, UVs, the atlas as an embedded PNG and one camera node per
-// calibrated image (perspective, yfov from the focal length, at the camera's pose).
+// One .glb holding mesh, UVs, each atlas page as an embedded PNG (one image, texture, material
+// and mesh primitive per page: "facet_textured", then "facet_textured_pageK") and one camera
+// node per calibrated image (perspective, yfov from the focal length, at the camera's pose).
 // Writes atomically (temporary file, then rename).
 ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const std::string& path);
-// FILE.obj, FILE.mtl and FILE.png (the atlas) side by side; OBJ's v runs upwards, so v is flipped.
+// FILE.obj, FILE.mtl and FILE.png (the atlas; page K > 0 of a paged atlas in FILE_pageK.png with
+// material facet_textured_pageK) side by side; OBJ's v runs upwards, so v is flipped.
 // Positions and normals use the same Y-up axes as the GLB. `path` may end in .obj or not.
 ExportSummary ExportObj(const TexturedMesh& mesh, const std::string& path);
 

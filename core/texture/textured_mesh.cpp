@@ -2,94 +2,49 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <thread>
 
 #include <stb_rect_pack.h>
 #include <Eigen/Geometry>
 
 #include "core/mesh/triangulate.h"
+#include "core/texture/bake_internal.h"
 
 namespace facet {
 namespace {
 
-// Grey for texels whose ray leaves the photo: neutral under any lighting, and opaque so the
-// face shows no hole.
-constexpr std::uint8_t kOutsideGrey = 128;
+using bake::FaceGeometry;
+using bake::FaceTexture;
+using bake::ViewContext;
+
+// Runs work(k) for k in [0, count) on up to `threads` threads (0: one per core), each taking
+// the next k in turn; work must only touch what k owns, so the result does not depend on the
+// thread count.
+template <typename Work>
+void ParallelFor(int count, int threads, Work work) {
+  int n = threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency());
+  n = std::clamp(n, 1, std::max(1, count));
+  std::atomic<int> next{0};
+  auto run = [&] {
+    for (int k = next++; k < count; k = next++) work(k);
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < n; ++t) pool.emplace_back(run);
+  run();
+  for (std::thread& t : pool) t.join();
+}
+
 // Below this many visible pixels a view carries no usable texture.
 constexpr double kMinProjectedAreaPx2 = 16.0;
 constexpr int kMinFaceTexels = 2;
 constexpr int kMinAtlasSize = 16;
-// Face samples tested for occlusion by other primitives, per side of the face's rectangle.
+constexpr int kMaxAtlasPages = 64;
+// Face samples tested for occlusion in the z-buffers, per side of the face's rectangle.
 constexpr int kOcclusionSamples = 4;
-// Ends of an occlusion ray that do not count as hits, as a fraction of its length: the ray
-// starts on the face (which may touch a neighbour, e.g. a roof on a box) and ends at the
-// camera centre.
-constexpr double kRayEndMargin = 1e-6;
-
-// A face as the bake sees it: its corners in world, its plane frame and where its vertices
-// and texture go in the TexturedMesh.
-struct FaceGeometry {
-  size_t primitive_index = 0;
-  std::vector<Eigen::Vector3d> corners;  // counter-clockwise from outside, FaceHalfedges order
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-  // Plane frame: p = origin + s * axis_u + t * axis_v for face coordinates (s, t).
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-  Eigen::Vector3d axis_u = Eigen::Vector3d::Zero();
-  Eigen::Vector3d axis_v = Eigen::Vector3d::Zero();
-  std::vector<Eigen::Vector2d> corners_st;           // corners in the face frame
-  Eigen::Vector2d st_min = Eigen::Vector2d::Zero();  // bounding rectangle in the face frame
-  Eigen::Vector2d st_max = Eigen::Vector2d::Zero();
-  std::vector<Eigen::Vector3d> occlusion_samples;  // points on the face, world
-  std::uint32_t first_vertex = 0;                  // in the TexturedMesh
-  size_t first_triangle = 0;
-  size_t triangle_count = 0;
-  bool valid = false;  // false for a degenerate face, which stays untextured
-
-  Eigen::Vector3d InWorld(const Eigen::Vector2d& st) const { return origin + st.x() * axis_u + st.y() * axis_v; }
-  // The bounding rectangle's corners: (s_min, t_min), (s_max, t_min), (s_max, t_max), (s_min, t_max).
-  std::array<Eigen::Vector3d, 4> RectangleInWorld() const {
-    return {InWorld(st_min), InWorld({st_max.x(), st_min.y()}), InWorld(st_max), InWorld({st_min.x(), st_max.y()})};
-  }
-};
-
-// World triangles of one primitive with their bounding box: the occluders of other
-// primitives' faces.
-struct Occluder {
-  std::vector<std::array<Eigen::Vector3d, 3>> triangles;
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
-};
-
-// A calibrated camera mapped to the pixels of its loaded photo (which may have been loaded
-// at another resolution than the intrinsics refer to).
-struct PhotoView {
-  size_t image_index = 0;
-  const Camera* camera = nullptr;
-  const ImageRgba8* photo = nullptr;
-  double scale_x = 1.0;
-  double scale_y = 1.0;
-
-  // Photo pixel of a camera-frame point, through the camera's distortion.
-  Eigen::Vector2d ProjectCam(const Eigen::Vector3d& p_in_cam) const {
-    Eigen::Vector2d xy(p_in_cam.x() / p_in_cam.z(), p_in_cam.y() / p_in_cam.z());
-    if (camera->HasDistortion()) xy = camera->DistortNormalized(xy);
-    return {(camera->focal_px * xy.x() + camera->principal_point_px.x()) * scale_x,
-            (camera->focal_px * xy.y() + camera->principal_point_px.y()) * scale_y};
-  }
-};
-
-struct FaceTexture {
-  int view = -1;  // index into the PhotoView list, -1 when untextured
-  double score = 0.0;
-  int width = 0;  // texels at full resolution, before any atlas shrinking
-  int height = 0;
-  int packed_width = 0;
-  int packed_height = 0;
-  int x = 0;  // top-left texel of the face inside the atlas (padding excluded)
-  int y = 0;
-};
 
 double SignedArea(const std::vector<Eigen::Vector2d>& polygon) {
   double twice_area = 0.0;
@@ -138,229 +93,6 @@ bool InsidePolygon(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vec
     }
   }
   return inside;
-}
-
-// Slab test: whether the segment a -> b meets the (slightly grown) box at all.
-bool SegmentMeetsBox(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& lo,
-                     const Eigen::Vector3d& hi) {
-  const Eigen::Vector3d d = b - a;
-  const double grow = 1e-9 * std::max(1.0, (hi - lo).norm());
-  double t_lo = 0.0, t_hi = 1.0;
-  for (int k = 0; k < 3; ++k) {
-    if (std::abs(d[k]) < 1e-300) {
-      if (a[k] < lo[k] - grow || a[k] > hi[k] + grow) return false;
-      continue;
-    }
-    double t0 = (lo[k] - grow - a[k]) / d[k];
-    double t1 = (hi[k] + grow - a[k]) / d[k];
-    if (t0 > t1) std::swap(t0, t1);
-    t_lo = std::max(t_lo, t0);
-    t_hi = std::min(t_hi, t1);
-    if (t_lo > t_hi) return false;
-  }
-  return true;
-}
-
-// Moller-Trumbore: whether the segment a -> b crosses the triangle strictly between its
-// ends (kRayEndMargin), so a ray starting on a face that touches the triangle is not hidden.
-bool SegmentHitsTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                         const std::array<Eigen::Vector3d, 3>& tri) {
-  const Eigen::Vector3d d = b - a;
-  const Eigen::Vector3d e1 = tri[1] - tri[0];
-  const Eigen::Vector3d e2 = tri[2] - tri[0];
-  const Eigen::Vector3d p = d.cross(e2);
-  const double det = e1.dot(p);
-  // A segment in the triangle's plane grazes it: not an occlusion.
-  if (std::abs(det) <= 1e-14 * d.norm() * e1.norm() * e2.norm()) return false;
-  const double inv_det = 1.0 / det;
-  const Eigen::Vector3d s = a - tri[0];
-  const double u = s.dot(p) * inv_det;
-  if (u < 0.0 || u > 1.0) return false;
-  const Eigen::Vector3d q = s.cross(e1);
-  const double v = d.dot(q) * inv_det;
-  if (v < 0.0 || u + v > 1.0) return false;
-  const double t = e2.dot(q) * inv_det;
-  return t > kRayEndMargin && t < 1.0 - kRayEndMargin;
-}
-
-double UnoccludedFraction(const FaceGeometry& face, const Eigen::Vector3d& center,
-                          const std::vector<Occluder>& occluders) {
-  if (face.occlusion_samples.empty()) return 1.0;
-  int visible = 0;
-  for (const Eigen::Vector3d& p : face.occlusion_samples) {
-    bool hidden = false;
-    for (size_t o = 0; o < occluders.size() && !hidden; ++o) {
-      // Only other primitives: a primitive's own faces facing the camera are not hidden by
-      // the rest of it as long as it is convex, which the primitives are up to free vertices.
-      if (o == face.primitive_index || occluders[o].triangles.empty() ||
-          !SegmentMeetsBox(p, center, occluders[o].lo, occluders[o].hi))
-        continue;
-      for (const auto& tri : occluders[o].triangles) {
-        if (SegmentHitsTriangle(p, center, tri)) {
-          hidden = true;
-          break;
-        }
-      }
-    }
-    visible += hidden ? 0 : 1;
-  }
-  return static_cast<double>(visible) / static_cast<double>(face.occlusion_samples.size());
-}
-
-// Scores the view of a face: visible projected area times the cosine of the view angle
-// times the unoccluded fraction; 0 when unusable. Also returns the size in photo px of the
-// face's bounding rectangle along u and v.
-double ScoreView(const FaceGeometry& face, const PhotoView& view, const std::vector<Occluder>& occluders,
-                 double* length_u_px, double* length_v_px) {
-  const Camera& cam = *view.camera;
-  std::vector<Eigen::Vector2d> uv(face.corners.size());
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (size_t k = 0; k < face.corners.size(); ++k) {
-    const Eigen::Vector3d p_in_cam = cam.CamFromWorld(face.corners[k]);
-    if (!(p_in_cam.z() > 0.0)) return 0.0;
-    uv[k] = view.ProjectCam(p_in_cam);
-    centroid += face.corners[k];
-  }
-  centroid /= static_cast<double>(face.corners.size());
-  // The rectangle is what gets rectified; its corners lie outside a non-convex or slanted
-  // polygon and, with a camera very close to the plane, may fall behind it: such a view
-  // is skipped rather than sampled through a homography that flips sign.
-  std::array<Eigen::Vector2d, 4> rect;
-  const std::array<Eigen::Vector3d, 4> rect_in_world = face.RectangleInWorld();
-  for (int k = 0; k < 4; ++k) {
-    const Eigen::Vector3d p_in_cam = cam.CamFromWorld(rect_in_world[k]);
-    if (!(p_in_cam.z() > 0.0)) return 0.0;
-    rect[k] = view.ProjectCam(p_in_cam);
-  }
-  const Eigen::Vector3d center = cam.CenterInWorld();
-  const Eigen::Vector3d to_camera = center - centroid;
-  const double distance = to_camera.norm();
-  if (!(distance > 0.0)) return 0.0;
-  const double cosine = face.normal.dot(to_camera) / distance;
-  if (!(cosine > 0.0)) return 0.0;
-  const double area = VisibleArea(uv, view.photo->width, view.photo->height);
-  if (!(area > kMinProjectedAreaPx2)) return 0.0;
-  const double unoccluded = UnoccludedFraction(face, center, occluders);
-  *length_u_px = std::max((rect[1] - rect[0]).norm(), (rect[2] - rect[3]).norm());
-  *length_v_px = std::max((rect[3] - rect[0]).norm(), (rect[2] - rect[1]).norm());
-  return area * cosine * unoccluded;
-}
-
-void SampleBilinear(const ImageRgba8& photo, double x, double y, std::uint8_t* out) {
-  // Pixel centres are at integer coordinates; the photo covers [-0.5, w - 0.5].
-  if (!(x >= -0.5 && x <= photo.width - 0.5 && y >= -0.5 && y <= photo.height - 0.5)) {
-    out[0] = out[1] = out[2] = kOutsideGrey;
-    out[3] = 255;
-    return;
-  }
-  const double fx0 = std::floor(x), fy0 = std::floor(y);
-  const double ax = x - fx0, ay = y - fy0;
-  const int x0 = std::clamp(static_cast<int>(fx0), 0, photo.width - 1);
-  const int y0 = std::clamp(static_cast<int>(fy0), 0, photo.height - 1);
-  const int x1 = std::clamp(static_cast<int>(fx0) + 1, 0, photo.width - 1);
-  const int y1 = std::clamp(static_cast<int>(fy0) + 1, 0, photo.height - 1);
-  const std::uint8_t* p00 = photo.At(x0, y0);
-  const std::uint8_t* p10 = photo.At(x1, y0);
-  const std::uint8_t* p01 = photo.At(x0, y1);
-  const std::uint8_t* p11 = photo.At(x1, y1);
-  for (int c = 0; c < 4; ++c) {
-    const double top = p00[c] + ax * (p10[c] - p00[c]);
-    const double bottom = p01[c] + ax * (p11[c] - p01[c]);
-    out[c] = static_cast<std::uint8_t>(std::clamp(top + ay * (bottom - top) + 0.5, 0.0, 255.0));
-  }
-}
-
-// Face coordinates (s, t) of texel (i, j) of a w x h face texture: texel (0, 0) is the
-// rectangle's (s_min, t_max) and texel (w - 1, h - 1) its (s_max, t_min), so the face reads
-// upright as seen from outside. Returns the 3x3 map from (i, j, 1) to (s, t, 1).
-Eigen::Matrix3d FaceFromTexel(const FaceGeometry& face, int width, int height) {
-  const Eigen::Vector2d extent = face.st_max - face.st_min;
-  Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
-  m(0, 0) = extent.x() / (width - 1);
-  m(0, 2) = face.st_min.x();
-  m(1, 1) = -extent.y() / (height - 1);
-  m(1, 2) = face.st_max.y();
-  m(2, 2) = 1.0;
-  return m;
-}
-
-// Rectifies the face's bounding rectangle into the atlas through the plane-to-photo
-// homography H = P [axis_u, axis_v, origin; 0, 0, 1], then replicates the border into the
-// padding. With lens distortion the homography gives the pinhole pixel of each texel, which
-// is then distorted (Camera::DistortPixel, a polynomial: cheap per texel) before sampling.
-void RasterizeFace(const FaceGeometry& face, const PhotoView& view, const FaceTexture& tex, int padding,
-                   ImageRgba8* atlas) {
-  const Eigen::Matrix<double, 3, 4> projection = view.camera->ProjectionMatrix();
-  Eigen::Matrix3d photo_from_face;
-  photo_from_face.col(0) = projection.leftCols<3>() * face.axis_u;
-  photo_from_face.col(1) = projection.leftCols<3>() * face.axis_v;
-  photo_from_face.col(2) = projection * face.origin.homogeneous();
-  const Eigen::Matrix3d scale = Eigen::Vector3d(view.scale_x, view.scale_y, 1.0).asDiagonal();
-  const int w = tex.packed_width, h = tex.packed_height;
-  const Eigen::Matrix3d photo_from_texel = scale * photo_from_face * FaceFromTexel(face, w, h);
-
-  if (view.camera->HasDistortion()) {
-    const Eigen::Matrix3d pinhole_from_texel = photo_from_face * FaceFromTexel(face, w, h);
-    for (int j = 0; j < h; ++j) {
-      std::uint8_t* row = atlas->At(tex.x, tex.y + j);
-      for (int i = 0; i < w; ++i) {
-        const Eigen::Vector3d q = pinhole_from_texel * Eigen::Vector3d(i, j, 1.0);
-        const Eigen::Vector2d uv = view.camera->DistortPixel(q.hnormalized());
-        SampleBilinear(*view.photo, uv.x() * view.scale_x, uv.y() * view.scale_y, row + 4 * i);
-      }
-    }
-  }
-  for (int j = 0; j < h && !view.camera->HasDistortion(); ++j) {
-    // Incremental along a row: q(i) = q(0) + i * column 0.
-    Eigen::Vector3d q = photo_from_texel * Eigen::Vector3d(0.0, j, 1.0);
-    const Eigen::Vector3d step = photo_from_texel.col(0);
-    std::uint8_t* row = atlas->At(tex.x, tex.y + j);
-    for (int i = 0; i < w; ++i, q += step) SampleBilinear(*view.photo, q.x() / q.z(), q.y() / q.z(), row + 4 * i);
-  }
-  for (int j = -padding; j < h + padding; ++j) {
-    for (int i = -padding; i < w + padding; ++i) {
-      if (i >= 0 && i < w && j >= 0 && j < h) continue;
-      const std::uint8_t* src = atlas->At(tex.x + std::clamp(i, 0, w - 1), tex.y + std::clamp(j, 0, h - 1));
-      std::copy(src, src + 4, atlas->At(tex.x + i, tex.y + j));
-    }
-  }
-}
-
-// Packs the padded rectangles into the smallest power-of-two atlas (w = h or w = 2h) up to
-// max_size; returns false if they do not fit. Sets x, y of each face on success.
-bool PackFaces(const std::vector<int>& textured, int padding, int max_size, std::vector<FaceTexture>* faces,
-               int* atlas_width, int* atlas_height) {
-  double total_area = 0.0;
-  std::vector<stbrp_rect> rects(textured.size());
-  for (size_t r = 0; r < textured.size(); ++r) {
-    const FaceTexture& f = (*faces)[textured[r]];
-    rects[r].id = static_cast<int>(r);
-    rects[r].w = f.packed_width + 2 * padding;
-    rects[r].h = f.packed_height + 2 * padding;
-    total_area += static_cast<double>(rects[r].w) * rects[r].h;
-  }
-  std::vector<std::pair<int, int>> sizes;
-  for (long s = kMinAtlasSize; s <= max_size; s *= 2) {
-    if (s / 2 >= kMinAtlasSize) sizes.emplace_back(static_cast<int>(s), static_cast<int>(s / 2));
-    sizes.emplace_back(static_cast<int>(s), static_cast<int>(s));
-  }
-  if (sizes.empty() || sizes.back().second != max_size) sizes.emplace_back(max_size, max_size);
-  for (const auto& [w, h] : sizes) {
-    if (static_cast<double>(w) * h < total_area) continue;
-    std::vector<stbrp_node> nodes(w);
-    stbrp_context context;
-    stbrp_init_target(&context, w, h, nodes.data(), w);
-    if (stbrp_pack_rects(&context, rects.data(), static_cast<int>(rects.size())) != 1) continue;
-    for (const stbrp_rect& r : rects) {
-      FaceTexture& f = (*faces)[textured[r.id]];
-      f.x = r.x + padding;
-      f.y = r.y + padding;
-    }
-    *atlas_width = w;
-    *atlas_height = h;
-    return true;
-  }
-  return false;
 }
 
 double ElapsedMs(std::chrono::steady_clock::time_point start) {
@@ -421,15 +153,15 @@ void SetFaceFrame(const std::vector<std::array<Eigen::Vector3d, 3>>& triangles, 
   }
 }
 
-// Builds the untextured mesh and, alongside, the bake's view of every face and the
-// occluders (one per primitive, in project order).
-TexturedMesh BuildMesh(const Project& project, std::vector<FaceGeometry>* geometry, std::vector<Occluder>* occluders) {
+// Builds the untextured mesh and, alongside, the bake's view of every face and the triangles
+// the z-buffers draw (each tagged with its face's index in `geometry`).
+TexturedMesh BuildMesh(const Project& project, std::vector<FaceGeometry>* geometry,
+                       std::vector<DepthTriangle>* depth_triangles) {
   TexturedMesh mesh;
   for (size_t pi = 0; pi < project.primitives.size(); ++pi) {
     const Primitive& primitive = project.primitives[pi];
     const PolyMesh& poly = primitive.mesh;
     const MeshTriangulation triangulation = TriangulateMesh(poly);
-    Occluder occluder;
     for (FaceId f = 0; f < poly.FaceIdEnd(); ++f) {
       if (!poly.IsFace(f)) continue;
       const std::vector<HalfedgeId> corners = FaceHalfedges(poly, f);
@@ -453,11 +185,11 @@ TexturedMesh BuildMesh(const Project& project, std::vector<FaceGeometry>* geomet
           const auto local = std::find(corners.begin(), corners.end(), tri[k]) - corners.begin();
           mesh.indices.push_back(g.first_vertex + static_cast<std::uint32_t>(local));
           world[k] = g.corners[local];
-          occluder.lo = occluder.lo.cwiseMin(world[k]);
-          occluder.hi = occluder.hi.cwiseMax(world[k]);
         }
         face_triangles.push_back(world);
-        occluder.triangles.push_back(world);
+        if (depth_triangles != nullptr && geometry != nullptr) {
+          depth_triangles->push_back({world, static_cast<std::int32_t>(geometry->size())});
+        }
         mesh.triangle_primitive.push_back(primitive.id);
         mesh.triangle_face.push_back(f);
         mesh.triangle_textured.push_back(0);
@@ -468,14 +200,156 @@ TexturedMesh BuildMesh(const Project& project, std::vector<FaceGeometry>* geomet
         geometry->push_back(std::move(g));
       }
     }
-    if (occluders != nullptr) occluders->push_back(std::move(occluder));
   }
   return mesh;
 }
 
-// The calibrated images with loaded pixels, with the scale from the camera's pixels to the photo's.
-std::vector<PhotoView> UsableViews(const Project& project, const std::vector<const ImageRgba8*>& photos) {
-  std::vector<PhotoView> views;
+// The fraction of the face's occlusion samples the view's z-buffer shows.
+double VisibleFraction(const FaceGeometry& face, int face_index, const ViewContext& view, double depth_tolerance) {
+  if (face.occlusion_samples.empty()) return 1.0;
+  const Camera& cam = *view.camera;
+  int visible = 0;
+  for (const Eigen::Vector3d& p : face.occlusion_samples) {
+    const Eigen::Vector3d p_in_cam = cam.CamFromWorld(p);
+    if (!(p_in_cam.z() > 0.0)) continue;
+    const Eigen::Vector2d uv(cam.focal_px * p_in_cam.x() / p_in_cam.z() + cam.principal_point_px.x(),
+                             cam.focal_px * p_in_cam.y() / p_in_cam.z() + cam.principal_point_px.y());
+    const Eigen::Vector3d to_camera = (view.center_in_world - p).normalized();
+    const double tolerance = view.DepthTolerance(p_in_cam.z(), face.normal.dot(to_camera), depth_tolerance);
+    visible += view.depth.Sees(uv, p_in_cam.z(), face_index, tolerance) ? 1 : 0;
+  }
+  return static_cast<double>(visible) / static_cast<double>(face.occlusion_samples.size());
+}
+
+// Scores the view of a face: visible projected area times the cosine of the view angle (the
+// geometric score, 0 when the view cannot see the face at all) times the fraction its z-buffer
+// shows (the score). Also returns the size in photo px of the face's bounding rectangle along
+// u and v.
+double ScoreView(const FaceGeometry& face, int face_index, const ViewContext& view, double depth_tolerance,
+                 double* geometric_score, double* length_u_px, double* length_v_px) {
+  *geometric_score = 0.0;
+  const Camera& cam = *view.camera;
+  std::vector<Eigen::Vector2d> uv(face.corners.size());
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (size_t k = 0; k < face.corners.size(); ++k) {
+    const Eigen::Vector3d p_in_cam = cam.CamFromWorld(face.corners[k]);
+    if (!(p_in_cam.z() > 0.0)) return 0.0;
+    uv[k] = view.ProjectCam(p_in_cam);
+    centroid += face.corners[k];
+  }
+  centroid /= static_cast<double>(face.corners.size());
+  // The rectangle is what gets rectified; its corners lie outside a non-convex or slanted
+  // polygon and, with a camera very close to the plane, may fall behind it: such a view
+  // is skipped rather than sampled through a homography that flips sign.
+  std::array<Eigen::Vector2d, 4> rect;
+  const std::array<Eigen::Vector3d, 4> rect_in_world = face.RectangleInWorld();
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector3d p_in_cam = cam.CamFromWorld(rect_in_world[k]);
+    if (!(p_in_cam.z() > 0.0)) return 0.0;
+    rect[k] = view.ProjectCam(p_in_cam);
+  }
+  const Eigen::Vector3d to_camera = view.center_in_world - centroid;
+  const double distance = to_camera.norm();
+  if (!(distance > 0.0)) return 0.0;
+  const double cosine = face.normal.dot(to_camera) / distance;
+  if (!(cosine > 0.0)) return 0.0;
+  const double area = VisibleArea(uv, view.photo->width, view.photo->height);
+  if (!(area > kMinProjectedAreaPx2)) return 0.0;
+  *geometric_score = area * cosine;
+  *length_u_px = std::max((rect[1] - rect[0]).norm(), (rect[2] - rect[3]).norm());
+  *length_v_px = std::max((rect[3] - rect[0]).norm(), (rect[2] - rect[1]).norm());
+  return *geometric_score * VisibleFraction(face, face_index, view, depth_tolerance);
+}
+
+// Packs the padded rectangles of `ids` into the smallest power-of-two page (w = h or w = 2h)
+// up to max_size; returns false if they do not fit. Sets x, y and page of each face on success.
+bool PackOnePage(const std::vector<int>& ids, int padding, int max_size, int page, std::vector<FaceTexture>* faces,
+                 int* page_width, int* page_height) {
+  double total_area = 0.0;
+  std::vector<stbrp_rect> rects(ids.size());
+  for (size_t r = 0; r < ids.size(); ++r) {
+    const FaceTexture& f = (*faces)[ids[r]];
+    rects[r].id = static_cast<int>(r);
+    rects[r].w = f.packed_width + 2 * padding;
+    rects[r].h = f.packed_height + 2 * padding;
+    total_area += static_cast<double>(rects[r].w) * rects[r].h;
+  }
+  std::vector<std::pair<int, int>> sizes;
+  for (long s = kMinAtlasSize; s <= max_size; s *= 2) {
+    if (s / 2 >= kMinAtlasSize) sizes.emplace_back(static_cast<int>(s), static_cast<int>(s / 2));
+    sizes.emplace_back(static_cast<int>(s), static_cast<int>(s));
+  }
+  if (sizes.empty() || sizes.back().second != max_size) sizes.emplace_back(max_size, max_size);
+  for (const auto& [w, h] : sizes) {
+    if (static_cast<double>(w) * h < total_area) continue;
+    std::vector<stbrp_node> nodes(w);
+    stbrp_context context;
+    stbrp_init_target(&context, w, h, nodes.data(), w);
+    if (stbrp_pack_rects(&context, rects.data(), static_cast<int>(rects.size())) != 1) continue;
+    for (const stbrp_rect& r : rects) {
+      FaceTexture& f = (*faces)[ids[r.id]];
+      f.x = r.x + padding;
+      f.y = r.y + padding;
+      f.page = page;
+    }
+    *page_width = w;
+    *page_height = h;
+    return true;
+  }
+  return false;
+}
+
+// Packs the faces into at most max_pages pages: one page when they fit; otherwise full
+// max_size pages filled in turn (stb_rect_pack's partial packing), the last one as small as
+// its faces allow. Returns false if they need more pages. page_sizes gets (w, h) per page.
+bool PackFaces(const std::vector<int>& textured, int padding, int max_size, int max_pages,
+               std::vector<FaceTexture>* faces, std::vector<std::pair<int, int>>* page_sizes) {
+  page_sizes->clear();
+  std::vector<int> remaining = textured;
+  while (!remaining.empty()) {
+    if (static_cast<int>(page_sizes->size()) >= max_pages) return false;
+    const int page = static_cast<int>(page_sizes->size());
+    int w = 0, h = 0;
+    if (PackOnePage(remaining, padding, max_size, page, faces, &w, &h)) {
+      page_sizes->emplace_back(w, h);
+      return true;
+    }
+    if (page + 1 >= max_pages) return false;
+    std::vector<stbrp_rect> rects(remaining.size());
+    for (size_t r = 0; r < remaining.size(); ++r) {
+      const FaceTexture& f = (*faces)[remaining[r]];
+      rects[r].id = static_cast<int>(r);
+      rects[r].w = f.packed_width + 2 * padding;
+      rects[r].h = f.packed_height + 2 * padding;
+    }
+    std::vector<stbrp_node> nodes(max_size);
+    stbrp_context context;
+    stbrp_init_target(&context, max_size, max_size, nodes.data(), max_size);
+    stbrp_pack_rects(&context, rects.data(), static_cast<int>(rects.size()));
+    std::vector<int> left;
+    for (const stbrp_rect& r : rects) {
+      FaceTexture& f = (*faces)[remaining[r.id]];
+      if (!r.was_packed) {
+        left.push_back(remaining[r.id]);
+        continue;
+      }
+      f.x = r.x + padding;
+      f.y = r.y + padding;
+      f.page = page;
+    }
+    if (left.size() == remaining.size()) return false;  // a face larger than a page
+    page_sizes->emplace_back(max_size, max_size);
+    remaining = std::move(left);
+  }
+  return true;
+}
+
+// The calibrated images with loaded pixels, with the scale from the camera's pixels to the
+// photo's, each with its z-buffer and (when filtering) its pyramid.
+std::vector<ViewContext> UsableViews(const Project& project, const std::vector<const ImageRgba8*>& photos,
+                                     const std::vector<DepthTriangle>& depth_triangles,
+                                     const TextureBakeOptions& options) {
+  std::vector<ViewContext> views;
   for (size_t i = 0; i < project.images.size(); ++i) {
     const Image& image = project.images[i];
     if (photos[i] == nullptr) continue;
@@ -484,33 +358,50 @@ std::vector<PhotoView> UsableViews(const Project& project, const std::vector<con
         photo.pixels.size() != static_cast<size_t>(photo.width) * photo.height * 4) {
       continue;
     }
-    PhotoView view;
+    ViewContext view;
     view.image_index = i;
     view.camera = &image.camera;
     view.photo = &photo;
     const int ref_width = image.camera.width_px > 0 ? image.camera.width_px : image.width_px;
     const int ref_height = image.camera.height_px > 0 ? image.camera.height_px : image.height_px;
     if (ref_width > 0 && ref_height > 0) {
-      view.scale_x = static_cast<double>(photo.width) / ref_width;
-      view.scale_y = static_cast<double>(photo.height) / ref_height;
+      view.photo_px_per_camera_px =
+          Eigen::Vector2d(static_cast<double>(photo.width) / ref_width, static_cast<double>(photo.height) / ref_height);
     }
-    views.push_back(view);
+    view.center_in_world = image.camera.CenterInWorld();
+    view.half_diagonal_px = 0.5 * std::hypot(photo.width, photo.height);
+    view.feather_px = options.feather_fraction * 2.0 * view.half_diagonal_px;
+    views.push_back(std::move(view));
   }
+  DepthMapOptions depth_options;
+  depth_options.scale = options.depth_map_scale;
+  ParallelFor(static_cast<int>(views.size()), options.max_threads, [&](int v) {
+    ViewContext& view = views[v];
+    view.depth = RenderDepthMap(depth_triangles, *view.camera, view.photo->width, view.photo->height,
+                                view.photo_px_per_camera_px, depth_options);
+    view.pyramid = PhotoPyramid(view.photo, options.filter_footprint);
+  });
   return views;
 }
 
-// Each face's best-scoring view and its texel size; returns the faces some view sees.
-std::vector<int> ChooseFaceViews(const std::vector<FaceGeometry>& geometry, const std::vector<PhotoView>& views,
-                                 const std::vector<Occluder>& occluders, const TextureBakeOptions& options,
-                                 std::vector<FaceTexture>* faces_out) {
+// Each face's candidate views (best first), best view and texel size; returns the faces some
+// view sees.
+std::vector<int> ChooseFaceViews(const std::vector<FaceGeometry>& geometry, const std::vector<ViewContext>& views,
+                                 const TextureBakeOptions& options, std::vector<FaceTexture>* faces_out) {
   std::vector<FaceTexture>& faces = *faces_out;
   std::vector<int> textured;
   for (size_t f = 0; f < geometry.size(); ++f) {
     if (!geometry[f].valid) continue;
     double best_u = 0.0, best_v = 0.0;
+    std::vector<std::pair<double, int>> ranked;  // (score, view), then (geometric score, view) for hidden views
     for (size_t v = 0; v < views.size(); ++v) {
-      double length_u = 0.0, length_v = 0.0;
-      const double score = ScoreView(geometry[f], views[v], occluders, &length_u, &length_v);
+      double geometric = 0.0, length_u = 0.0, length_v = 0.0;
+      const double score = ScoreView(geometry[f], static_cast<int>(f), views[v], options.depth_tolerance, &geometric,
+                                     &length_u, &length_v);
+      if (!(geometric > 0.0)) continue;
+      // Views that see the face rank by score; those whose samples are all hidden come last
+      // (they may still see some texels).
+      ranked.emplace_back(score > 0.0 ? score : -1.0 / geometric, static_cast<int>(v));
       if (score > faces[f].score) {
         faces[f].score = score;
         faces[f].view = static_cast<int>(v);
@@ -519,6 +410,8 @@ std::vector<int> ChooseFaceViews(const std::vector<FaceGeometry>& geometry, cons
       }
     }
     if (faces[f].view < 0) continue;
+    std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    for (const auto& [score, v] : ranked) faces[f].candidates.push_back(v);
     auto texels = [&](double length_px) {
       const double n = std::ceil(length_px * options.texels_per_image_px) + 1.0;
       return static_cast<int>(
@@ -531,26 +424,46 @@ std::vector<int> ChooseFaceViews(const std::vector<FaceGeometry>& geometry, cons
   return textured;
 }
 
-// Rasterises each textured face into its packed rectangle and points its corners' UVs there.
-void WriteAtlas(const std::vector<FaceGeometry>& geometry, const std::vector<PhotoView>& views,
+// Allocates the pages, samples each textured face into its page and points its corners' UVs
+// there.
+void WriteAtlas(const std::vector<FaceGeometry>& geometry, const std::vector<ViewContext>& views,
                 const std::vector<int>& textured, const std::vector<FaceTexture>& faces,
-                const TextureBakeOptions& options, int atlas_width, int atlas_height, TexturedMesh* mesh) {
-  ImageRgba8& atlas = mesh->atlas;
-  atlas.width = atlas_width;
-  atlas.height = atlas_height;
-  atlas.pixels.assign(static_cast<size_t>(atlas_width) * atlas_height * 4, 0);
+                const TextureBakeOptions& options, const std::vector<std::pair<int, int>>& page_sizes,
+                TexturedMesh* mesh, bake::SamplingCounts* counts) {
+  std::vector<ImageRgba8> pages(page_sizes.size());
+  for (size_t p = 0; p < pages.size(); ++p) {
+    pages[p].width = page_sizes[p].first;
+    pages[p].height = page_sizes[p].second;
+    pages[p].pixels.assign(static_cast<size_t>(pages[p].width) * pages[p].height * 4, 0);
+  }
+  mesh->triangle_page.assign(mesh->triangle_face.size(), 0);
+  // Faces write disjoint rectangles (padding included) of their pages: one face per task.
+  std::vector<bake::SamplingCounts> face_counts(textured.size());
+  ParallelFor(static_cast<int>(textured.size()), options.max_threads, [&](int k) {
+    const int f = textured[k];
+    bake::SampleFace(geometry[f], f, faces[f], views, options, &pages[faces[f].page], &face_counts[k]);
+  });
+  for (const bake::SamplingCounts& c : face_counts) {
+    counts->from_other_views += c.from_other_views;
+    counts->hidden += c.hidden;
+  }
   for (int f : textured) {
     const FaceTexture& t = faces[f];
     const FaceGeometry& g = geometry[f];
-    RasterizeFace(g, views[t.view], t, options.padding_texels, &atlas);
-    const Eigen::Matrix3d texel_from_face = FaceFromTexel(g, t.packed_width, t.packed_height).inverse();
+    const ImageRgba8& page = pages[t.page];
+    const Eigen::Matrix3d texel_from_face = bake::FaceFromTexel(g, t.packed_width, t.packed_height).inverse();
     for (size_t k = 0; k < g.corners_st.size(); ++k) {
       const Eigen::Vector3d texel = texel_from_face * g.corners_st[k].homogeneous();
-      mesh->uvs[g.first_vertex + k] = Eigen::Vector2f(static_cast<float>((t.x + texel.x() + 0.5) / atlas_width),
-                                                      static_cast<float>((t.y + texel.y() + 0.5) / atlas_height));
+      mesh->uvs[g.first_vertex + k] = Eigen::Vector2f(static_cast<float>((t.x + texel.x() + 0.5) / page.width),
+                                                      static_cast<float>((t.y + texel.y() + 0.5) / page.height));
     }
-    for (size_t tri = 0; tri < g.triangle_count; ++tri) mesh->triangle_textured[g.first_triangle + tri] = 1;
+    for (size_t tri = 0; tri < g.triangle_count; ++tri) {
+      mesh->triangle_textured[g.first_triangle + tri] = 1;
+      mesh->triangle_page[g.first_triangle + tri] = static_cast<std::uint8_t>(t.page);
+    }
   }
+  mesh->atlas = std::move(pages[0]);
+  mesh->more_atlas_pages.assign(std::make_move_iterator(pages.begin() + 1), std::make_move_iterator(pages.end()));
 }
 
 }  // namespace
@@ -569,6 +482,17 @@ bool TextureBakeOptions::Check(std::string* error) const {
   } else if (max_atlas_size < kMinAtlasSize || max_atlas_size > 16384) {
     message = "max_atlas_size must be in [" + std::to_string(kMinAtlasSize) + ", 16384], got " +
               std::to_string(max_atlas_size);
+  } else if (max_atlas_pages < 1 || max_atlas_pages > kMaxAtlasPages) {
+    message = "max_atlas_pages must be in [1, " + std::to_string(kMaxAtlasPages) + "], got " +
+              std::to_string(max_atlas_pages);
+  } else if (!(std::isfinite(depth_map_scale) && depth_map_scale >= 0.05 && depth_map_scale <= 1.0)) {
+    message = "depth_map_scale must be in [0.05, 1], got " + std::to_string(depth_map_scale);
+  } else if (!(std::isfinite(depth_tolerance) && depth_tolerance >= 0.0 && depth_tolerance <= 0.5)) {
+    message = "depth_tolerance must be in [0, 0.5], got " + std::to_string(depth_tolerance);
+  } else if (!(std::isfinite(feather_fraction) && feather_fraction >= 0.0 && feather_fraction <= 0.5)) {
+    message = "feather_fraction must be in [0, 0.5], got " + std::to_string(feather_fraction);
+  } else if (!(std::isfinite(blend_sharpness) && blend_sharpness >= 0.0 && blend_sharpness <= 16.0)) {
+    message = "blend_sharpness must be in [0, 16], got " + std::to_string(blend_sharpness);
   }
   if (error != nullptr) *error = message;
   return message.empty();
@@ -579,10 +503,11 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
   const auto start = std::chrono::steady_clock::now();
   TextureBakeSummary summary;
   std::vector<FaceGeometry> geometry;
-  std::vector<Occluder> occluders;
-  *mesh = BuildMesh(project, &geometry, &occluders);
+  std::vector<DepthTriangle> depth_triangles;
+  *mesh = BuildMesh(project, &geometry, &depth_triangles);
   const int face_count = static_cast<int>(geometry.size());
   summary.faces_untextured = face_count;
+  summary.exposure_gains.assign(project.images.size(), Eigen::Vector3d::Ones());
   auto fail = [&](const std::string& message, SolverTermination termination = SolverTermination::kFailed) {
     summary.termination = termination;
     summary.message = message;
@@ -592,15 +517,19 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
   std::string error;
   if (!options.Check(&error)) return fail("invalid texture options: " + error, SolverTermination::kInvalidInput);
   if (photos.size() != project.images.size()) {
-    return fail("got " + std::to_string(photos.size()) + " photos for " + std::to_string(project.images.size()) +
-                " images",
-                SolverTermination::kInvalidInput);
+    return fail(
+        "got " + std::to_string(photos.size()) + " photos for " + std::to_string(project.images.size()) + " images",
+        SolverTermination::kInvalidInput);
   }
 
-  const std::vector<PhotoView> views = UsableViews(project, photos);
+  auto step_start = std::chrono::steady_clock::now();
+  std::vector<ViewContext> views = UsableViews(project, photos, depth_triangles, options);
+  summary.depth_maps_ms = ElapsedMs(step_start);
 
+  step_start = std::chrono::steady_clock::now();
   std::vector<FaceTexture> faces(geometry.size());
-  const std::vector<int> textured = ChooseFaceViews(geometry, views, occluders, options, &faces);
+  const std::vector<int> textured = ChooseFaceViews(geometry, views, options, &faces);
+  summary.selection_ms = ElapsedMs(step_start);
   if (textured.empty()) {
     summary.termination = SolverTermination::kConverged;
     summary.message = geometry.empty() ? "the project has no primitives"
@@ -610,9 +539,10 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
     return summary;
   }
 
-  // Shrink every face by the same factor until the atlas fits.
+  // Shrink every face by the same factor until the pages hold them.
+  step_start = std::chrono::steady_clock::now();
   double shrink = 1.0;
-  int atlas_width = 0, atlas_height = 0;
+  std::vector<std::pair<int, int>> page_sizes;
   for (;;) {
     bool all_minimal = true;
     for (int f : textured) {
@@ -621,24 +551,42 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
       t.packed_height = std::max(kMinFaceTexels, static_cast<int>(std::lround(t.height * shrink)));
       all_minimal = all_minimal && t.packed_width == kMinFaceTexels && t.packed_height == kMinFaceTexels;
     }
-    if (PackFaces(textured, options.padding_texels, options.max_atlas_size, &faces, &atlas_width, &atlas_height)) break;
+    if (PackFaces(textured, options.padding_texels, options.max_atlas_size, options.max_atlas_pages, &faces,
+                  &page_sizes)) {
+      break;
+    }
     if (all_minimal) {
-      return fail(std::to_string(textured.size()) + " faces do not fit a " + std::to_string(options.max_atlas_size) +
-                  " atlas even at " + std::to_string(kMinFaceTexels) + " texels per side");
+      return fail(std::to_string(textured.size()) + " faces do not fit " + std::to_string(options.max_atlas_pages) +
+                  " atlas page(s) of " + std::to_string(options.max_atlas_size) + " even at " +
+                  std::to_string(kMinFaceTexels) + " texels per side");
     }
     shrink *= 0.85;
   }
+  summary.packing_ms = ElapsedMs(step_start);
 
-  WriteAtlas(geometry, views, textured, faces, options, atlas_width, atlas_height, mesh);
+  step_start = std::chrono::steady_clock::now();
+  if (options.compensate_exposure) bake::FitViewGains(geometry, faces, textured, options, &views);
+  for (const ViewContext& view : views) summary.exposure_gains[view.image_index] = view.gain;
+  summary.exposure_ms = ElapsedMs(step_start);
+
+  step_start = std::chrono::steady_clock::now();
+  bake::SamplingCounts counts;
+  WriteAtlas(geometry, views, textured, faces, options, page_sizes, mesh, &counts);
+  summary.sampling_ms = ElapsedMs(step_start);
 
   summary.termination = SolverTermination::kConverged;
   summary.faces_textured = static_cast<int>(textured.size());
   summary.faces_untextured = face_count - summary.faces_textured;
-  summary.atlas_width = atlas_width;
-  summary.atlas_height = atlas_height;
+  summary.atlas_width = page_sizes[0].first;
+  summary.atlas_height = page_sizes[0].second;
+  summary.atlas_pages = static_cast<int>(page_sizes.size());
+  summary.texels_from_other_views = counts.from_other_views;
+  summary.texels_hidden = counts.hidden;
   summary.time_ms = ElapsedMs(start);
   summary.message = "textured " + std::to_string(summary.faces_textured) + " of " + std::to_string(face_count) +
-                    " faces into a " + std::to_string(atlas_width) + "x" + std::to_string(atlas_height) + " atlas" +
+                    " faces into " +
+                    (page_sizes.size() > 1 ? std::to_string(page_sizes.size()) + " atlas pages, the first " : "a ") +
+                    std::to_string(summary.atlas_width) + "x" + std::to_string(summary.atlas_height) + " atlas" +
                     (shrink < 1.0 ? " (faces shrunk to fit)" : "");
   return summary;
 }
