@@ -682,7 +682,7 @@ std::string Advice(const std::string& name) {
 
 // Names the parameters the residuals do not determine, from the null space of the
 // column-scaled dense Jacobian at the problem's last evaluation.
-std::vector<std::string> UndeterminedParameters(const JointProblem& problem) {
+std::vector<std::string> UndeterminedParameters(const JointProblem& problem, int* null_space_dimension) {
   std::vector<std::string> out;
   const int n = problem.num_parameters;
   Eigen::MatrixXd j;
@@ -710,6 +710,7 @@ std::vector<std::string> UndeterminedParameters(const JointProblem& problem) {
     if (sigma(s) <= kRankTolerance * largest) null_columns.push_back(s);
   }
   const int null_dim = static_cast<int>(null_columns.size());
+  *null_space_dimension = null_dim;
   if (null_dim == 0) return out;
   Eigen::MatrixXd null_space(n, null_dim);
   for (int i = 0; i < null_dim; ++i) null_space.col(i) = svd.matrixV().col(null_columns[i]);
@@ -979,7 +980,7 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   FillDiagnostics(project, options, problem, !budget_used, &summary);
   if (options.compute_diagnostics) {
     if (problem.num_parameters <= kMaxDiagnosticParameters) {
-      summary.undetermined = UndeterminedParameters(problem);
+      summary.undetermined = UndeterminedParameters(problem, &summary.degrees_of_freedom_left);
     } else {
       summary.warnings.push_back("undetermined parameters not analysed: " + std::to_string(problem.num_parameters) +
                                  " parameters exceed the dense limit of " + std::to_string(kMaxDiagnosticParameters));
