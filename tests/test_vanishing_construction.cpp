@@ -208,5 +208,39 @@ TEST_CASE("a point at infinity takes no part in the triangle; p outside a pair's
   CHECK(out.focal_px == 0.0);
 }
 
+TEST_CASE("a triangle without a camera falls back to two points and the assumed principal point") {
+  std::mt19937 rng(13);
+  const TrueCamera truth = RandomCamera(&rng, 1.0);
+  VanishingConstructionInput input = TrueInput(truth);
+  input.assumed_principal_point_px = truth.p;
+  // The z point moved so that the triangle is obtuse at it: its orthocentre lies outside.
+  const Eigen::Vector2d vx = input.vanishing_points_px[0].head<2>() / input.vanishing_points_px[0].z();
+  const Eigen::Vector2d vy = input.vanishing_points_px[1].head<2>() / input.vanishing_points_px[1].z();
+  const Eigen::Vector2d between = 0.5 * (vx + vy) + 0.01 * Eigen::Vector2d(-(vy - vx).y(), (vy - vx).x());
+  input.vanishing_points_px[2] = between.homogeneous();
+  VanishingConstruction out = ConstructFromVanishingPoints(input);
+  CHECK(out.triangle_failed);
+  CHECK(out.kind == VanishingConstructionKind::kTwoPoints);
+  CHECK(out.principal_point_assumed);
+  CHECK((out.principal_point_px - truth.p).norm() == 0.0);
+  // The (x, y) pair is untouched: it still gives the true f about the true p.
+  REQUIRE(!out.focal_constructions.empty());
+  CHECK(out.focal_constructions[0].axes == std::array<int, 2>{0, 1});
+  REQUIRE(out.focal_constructions[0].valid);
+  CHECK(std::abs(out.focal_constructions[0].focal_px - truth.f) < kNoiseFreeRelative * truth.f);
+
+  // A point the caller calls at infinity leaves the triangle: two points, no failure.
+  input = TrueInput(truth);
+  input.assumed_principal_point_px = truth.p;
+  input.at_infinity[0] = true;
+  out = ConstructFromVanishingPoints(input);
+  CHECK_FALSE(out.triangle_failed);
+  CHECK(out.kind == VanishingConstructionKind::kTwoPoints);
+  CHECK_FALSE(out.finite[0]);
+  REQUIRE(out.focal_constructions.size() == 1u);
+  CHECK(out.focal_constructions[0].axes == std::array<int, 2>{1, 2});
+  CHECK(std::abs(out.focal_px - truth.f) < kNoiseFreeRelative * truth.f);
+}
+
 }  // namespace
 }  // namespace facet

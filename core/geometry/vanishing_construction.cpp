@@ -1,6 +1,7 @@
 #include "core/geometry/vanishing_construction.h"
 
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Dense>
 
@@ -80,7 +81,7 @@ VanishingConstruction ConstructFromVanishingPoints(const VanishingConstructionIn
   for (int a = 0; a < 3; ++a) {
     const Eigen::Vector3d& v = input.vanishing_points_px[a];
     out.present[a] = v.squaredNorm() > 0.0 && v.allFinite();
-    out.finite[a] = out.present[a] && IsFinitePoint(v);
+    out.finite[a] = out.present[a] && !input.at_infinity[a] && IsFinitePoint(v);
     if (out.finite[a]) {
       out.points_px[a] = v.head<2>() / v.z();
       finite_axes.push_back(a);
@@ -104,19 +105,38 @@ VanishingConstruction ConstructFromVanishingPoints(const VanishingConstructionIn
     out.kind = VanishingConstructionKind::kOnePoint;  // points at infinity only: nothing to construct
   }
 
-  for (int i = 0; i < 3; ++i) {
-    for (int j = i + 1; j < 3; ++j) {
-      if (!out.finite[i] || !out.finite[j]) continue;
-      FocalConstruction c = ConstructFocal(out.points_px[i], out.points_px[j], out.principal_point_px);
-      c.axes = {i, j};
-      out.focal_constructions.push_back(c);
+  auto construct_pairs = [&]() {
+    out.focal_constructions.clear();
+    for (int i = 0; i < 3; ++i) {
+      for (int j = i + 1; j < 3; ++j) {
+        if (!out.finite[i] || !out.finite[j]) continue;
+        FocalConstruction c = ConstructFocal(out.points_px[i], out.points_px[j], out.principal_point_px);
+        c.axes = {i, j};
+        out.focal_constructions.push_back(c);
+      }
     }
+  };
+  construct_pairs();
+  const auto any_valid = [&]() {
+    for (const FocalConstruction& c : out.focal_constructions)
+      if (c.valid) return true;
+    return false;
+  };
+  if (num_finite == 3 && (out.kind != VanishingConstructionKind::kThreePoints || !any_valid())) {
+    out.triangle_failed = true;
+    out.kind = VanishingConstructionKind::kTwoPoints;
+    out.principal_point_px = input.assumed_principal_point_px;
+    out.principal_point_assumed = true;
+    out.altitude_feet_px.fill(Eigen::Vector2d::Zero());
+    construct_pairs();
   }
+  // The smallest circle: its points are the nearest, so the best conditioned pair.
+  double smallest_radius = std::numeric_limits<double>::infinity();
   for (const FocalConstruction& c : out.focal_constructions) {
-    if (!c.valid) continue;
+    if (!c.valid || !(c.circle_radius_px < smallest_radius)) continue;
+    smallest_radius = c.circle_radius_px;
     out.focal_px = c.focal_px;
     out.focal_assumed = false;
-    break;
   }
   if (!(out.focal_px > 0.0) && input.assumed_focal_px > 0.0) {
     out.focal_px = input.assumed_focal_px;

@@ -39,6 +39,10 @@ struct VanishingConstructionInput {
   Eigen::Vector2d assumed_principal_point_px = Eigen::Vector2d::Zero();
   // The focal length when fewer than two finite points fix it (a known lens, EXIF); 0: none.
   double assumed_focal_px = 0.0;
+  // Points the caller treats as at infinity although their third coordinate is not zero
+  // (e.g. the calibration's VpCalibrationSummary::vanishing_point_at_infinity: a point 1e5
+  // image sizes out is a direction, not a vertex of a usable triangle).
+  std::array<bool, 3> at_infinity = {false, false, false};
 };
 
 // The construction of f on one pair of finite vanishing points v_i, v_j (axes i < j).
@@ -67,13 +71,18 @@ struct VanishingConstruction {
   // The orthocentre (kThreePoints) or the assumed point.
   Eigen::Vector2d principal_point_px = Eigen::Vector2d::Zero();
   bool principal_point_assumed = true;
+  // Three finite points whose triangle gives no camera (collinear points, or an orthocentre
+  // outside every pair's circle: an obtuse triangle, typically one point nearly at infinity):
+  // the construction then falls back to kTwoPoints with the assumed principal point.
+  bool triangle_failed = false;
   // kThreePoints: per vertex axis k, the foot of the altitude from v_k onto the opposite side.
   std::array<Eigen::Vector2d, 3> altitude_feet_px{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(),
                                                   Eigen::Vector2d::Zero()};
   // One per pair of finite points: (x, y), (x, z), (y, z) in that order, those present.
   std::vector<FocalConstruction> focal_constructions;
-  // The focal length the construction gives: the first valid pair's (all pairs agree for
-  // exact orthogonal points), or the assumed one; 0 when neither.
+  // The focal length the construction gives: the valid pair's with the smallest circle (with
+  // the orthocentre all pairs agree exactly; with an assumed principal point, for exact
+  // orthogonal points), or the assumed one; 0 when neither.
   double focal_px = 0.0;
   bool focal_assumed = false;
   // The horizon as a line l with l . (u, v, 1) = 0, (l0, l1) unit norm and l1 >= 0; zero
@@ -87,8 +96,8 @@ struct VanishingConstruction {
 };
 
 // The construction for the given vanishing points. Degenerate input is reported, not
-// refused: collinear finite points (no orthocentre) fall back to the assumed principal point
-// and kTwoPoints over the first pair; a pair with p outside its circle is not valid.
+// refused: three points without a camera (triangle_failed) fall back to the assumed principal
+// point and kTwoPoints; a pair with p outside its circle is not valid.
 VanishingConstruction ConstructFromVanishingPoints(const VanishingConstructionInput& input);
 
 // One finite pair's construction for a given principal point (what the above runs per pair).
