@@ -385,7 +385,9 @@ void DrawTeachViewportOverlay(ImDrawList* draw_list, const AppState& state, doub
 void DrawTeachNumbersWindow(AppState* state) {
   if (!state->teach.numbers) return;
   ImGui::SetNextWindowSize(ImVec2(430, 520), ImGuiCond_FirstUseEver);
-  ImGui::SetNextWindowPos(ImVec2(ImGui::GetMainViewport()->Pos.x + 60, ImGui::GetMainViewport()->Pos.y + 80),
+  // Over the 3D panel's side of the default layout, so that the photo stays in view.
+  const ImGuiViewport* viewport = ImGui::GetMainViewport();
+  ImGui::SetNextWindowPos(ImVec2(viewport->Pos.x + 0.52f * viewport->Size.x, viewport->Pos.y + 80),
                           ImGuiCond_FirstUseEver);
   if (!ImGui::Begin("Numbers (teach)", &state->teach.numbers)) {
     ImGui::End();
@@ -441,11 +443,15 @@ void DrawTeachHistory(AppState* state, int* target) {
   UpdateTeachHistoryCounts(state);
   const JointSolveSummary& joint = state->last_update.joint;
   if (joint.degrees_of_freedom_left >= 0) {
-    ImGui::Text("Current state: %d parameters, %d degrees of freedom left", joint.num_parameters,
-                joint.degrees_of_freedom_left);
-    if (ImGui::IsItemHovered())
-      ImGui::SetTooltip("parameters minus the rank of the joint solve's Jacobian (pins, segments, constraints)");
-    for (const std::string& u : joint.undetermined) WrappedColored(kWarningText, u);
+    ImGui::Text("Current state: %d parameters, %d degrees of freedom left%s", joint.num_parameters,
+                joint.degrees_of_freedom_left, joint.undetermined.empty() ? "" : " (hover: which)");
+    if (ImGui::IsItemHovered()) {
+      ImGui::BeginTooltip();
+      ImGui::TextUnformatted(
+          "Parameters minus the rank of the joint solve's Jacobian (pins, segments and constraints together)");
+      for (const std::string& u : joint.undetermined) ImGui::TextColored(kWarningText, "%s", u.c_str());
+      ImGui::EndTooltip();
+    }
   } else {
     ImGui::TextColored(kDimText, "Degrees of freedom: after the next full solve");
   }
