@@ -34,9 +34,7 @@ Project PerturbedStart() {
 // Largest difference over the cameras' and primitives' values, relative to their size.
 double MaxRelativeDifference(const Project& a, const Project& b) {
   double worst = 0.0;
-  auto compare = [&](double x, double y) {
-    worst = std::max(worst, std::abs(x - y) / std::max(1.0, std::abs(y)));
-  };
+  auto compare = [&](double x, double y) { worst = std::max(worst, std::abs(x - y) / std::max(1.0, std::abs(y))); };
   REQUIRE(a.images.size() == b.images.size());
   for (size_t i = 0; i < a.images.size(); ++i) {
     const Camera& x = a.images[i].camera;

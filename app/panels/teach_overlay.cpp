@@ -119,8 +119,8 @@ void Circle(ImDrawList* draw, const Screen& s, const Eigen::Vector2d& center_px,
             double from_angle = 0.0, double to_angle = 2.0 * M_PI) {
   // Enough steps that a chord stays within ~1 screen px of the circle, at most 2048.
   const double radius_screen = radius_px * s.view.zoom;
-  const int steps = std::clamp(static_cast<int>(std::abs(to_angle - from_angle) * std::sqrt(radius_screen / 2.0)), 16,
-                               2048);
+  const int steps =
+      std::clamp(static_cast<int>(std::abs(to_angle - from_angle) * std::sqrt(radius_screen / 2.0)), 16, 2048);
   Eigen::Vector2d previous = s(center_px + radius_px * Eigen::Vector2d(std::cos(from_angle), std::sin(from_angle)));
   for (int k = 1; k <= steps; ++k) {
     const double angle = from_angle + (to_angle - from_angle) * k / steps;
@@ -219,17 +219,17 @@ void DrawVanishingConstruction(ImDrawList* draw, const AppState& state, const Im
     Label(draw, s(c.points_px[a]), color, text);
   }
   Marker(draw, s(p), kPrincipalPointColor, 5.0f);
-  Label(draw, s(p), kPrincipalPointColor,
-        c.principal_point_assumed ? "p (assumed)" : "p = orthocentre");
+  Label(draw, s(p), kPrincipalPointColor, c.principal_point_assumed ? "p (assumed)" : "p = orthocentre");
 
   std::vector<std::pair<ImU32, std::string>> lines;
   const ImU32 white = IM_COL32(255, 255, 255, 240), dim = IM_COL32(200, 200, 200, 230);
   lines.push_back({white, std::string("Vanishing points: ") + VanishingConstructionKindName(c.kind) +
                               " (each family's own fit, 95 % ellipses)"});
   if (c.focal_px > 0.0)
-    lines.push_back({kConstructionColor, std::string("construction: f = ") + FormatNumber(c.focal_px, 6) + " px" +
-                                             (c.focal_assumed ? " (assumed)" : " = |p s|, s on the arc about h through C'") +
-                                             ", p = (" + FormatNumber(p.x(), 5) + ", " + FormatNumber(p.y(), 5) + ")"});
+    lines.push_back(
+        {kConstructionColor, std::string("construction: f = ") + FormatNumber(c.focal_px, 6) + " px" +
+                                 (c.focal_assumed ? " (assumed)" : " = |p s|, s on the arc about h through C'") +
+                                 ", p = (" + FormatNumber(p.x(), 5) + ", " + FormatNumber(p.y(), 5) + ")"});
   std::string fitted = "joint fit of all segments: f = " + FormatNumber(teach->fitted_focal_px, 6);
   if (std::isfinite(teach->fitted_focal_std_px) && teach->fitted_focal_std_px > 0.0)
     fitted += " +- " + FormatNumber(teach->fitted_focal_std_px, 3);
@@ -239,7 +239,6 @@ void DrawVanishingConstruction(ImDrawList* draw, const AppState& state, const Im
   for (const std::string& a : teach->assumptions) lines.push_back({kAssumptionColor, a});
   TextBox(draw, s, text_y, lines);
 }
-
 
 std::string FileName(const std::string& path) { return std::filesystem::path(path).filename().string(); }
 
@@ -275,7 +274,8 @@ void DrawEpipolar(ImDrawList* draw, const AppState& state, const Image& image, c
     const Image* from = project.FindImage(line.from_image_id);
     std::string label = "epipolar line of " + std::string(line.from_pointer ? "the pointer" : "the pin") + " in " +
                         (from ? FileName(from->path) : std::string("?"));
-    if (std::isfinite(line.pin_distance_px)) label += ": the pin here is " + FormatNumber(line.pin_distance_px, 3) + " px off";
+    if (std::isfinite(line.pin_distance_px))
+      label += ": the pin here is " + FormatNumber(line.pin_distance_px, 3) + " px off";
     DrawEpipolarLine(draw, s, line, label);
     ++here;
   }
@@ -294,7 +294,8 @@ void DrawEpipolar(ImDrawList* draw, const AppState& state, const Image& image, c
     bottom = min.y() - 24.0;
     ViewTransform inset;
     inset.zoom = static_cast<float>(w / other->width_px);
-    inset.origin = ImVec2(static_cast<float>(min.x() + 0.5 * inset.zoom), static_cast<float>(min.y() + 0.5 * inset.zoom));
+    inset.origin =
+        ImVec2(static_cast<float>(min.x() + 0.5 * inset.zoom), static_cast<float>(min.y() + 0.5 * inset.zoom));
     draw->AddRectFilled(Im(min), Im(max), IM_COL32(40, 40, 44, 255));
     if (const TiledTexture* texture = texture_of(other_id)) DrawTiledTexture(draw, *texture, inset, Im(min), Im(max));
     draw->PushClipRect(Im(min), Im(max), true);
@@ -348,8 +349,7 @@ void MatrixBlock(AppState* state, const char* name, const char* caption, const E
 }  // namespace
 
 void DrawTeachImageOverlay(ImDrawList* draw_list, const AppState& state, const Image& image, const ViewTransform& view,
-                           ImVec2 clip_min, ImVec2 clip_max,
-                           const std::function<const TiledTexture*(Id)>& texture_of) {
+                           ImVec2 clip_min, ImVec2 clip_max, const std::function<const TiledTexture*(Id)>& texture_of) {
   if (!state.teach.vanishing_points && !state.teach.epipolar) return;
   draw_list->PushClipRect(clip_min, clip_max, true);
   const Screen s{view, Eigen::Vector2d(clip_min.x, clip_min.y), Eigen::Vector2d(clip_max.x, clip_max.y)};
@@ -460,8 +460,8 @@ void DrawTeachHistory(AppState* state, int* target) {
   const std::vector<ModellingStateCounts>& counts = state->teach.history_counts;
   const int n_undo = static_cast<int>(undo.size());
   if (counts.size() != undo.size() + redo.size() + 1) return;
-  constexpr ImGuiTableFlags kFlags = ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerV |
-                                     ImGuiTableFlags_SizingFixedFit | ImGuiTableFlags_ScrollY;
+  constexpr ImGuiTableFlags kFlags =
+      ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerV | ImGuiTableFlags_SizingFixedFit | ImGuiTableFlags_ScrollY;
   if (!ImGui::BeginTable("##teach_history", 9, kFlags)) return;
   ImGui::TableSetupScrollFreeze(0, 1);
   for (const char* name : {"#", "edit", "prims", "V", "E", "F", "pins", "constr.", "segm."})
@@ -470,7 +470,7 @@ void DrawTeachHistory(AppState* state, int* target) {
   for (int position = 0; position < static_cast<int>(counts.size()); ++position) {
     const ModellingStateCounts& c = counts[position];
     const bool future = position > n_undo;
-    std::string label = position == 0 ? (state->project_path.empty() ? "New project" : "Opened")
+    std::string label = position == 0        ? (state->project_path.empty() ? "New project" : "Opened")
                         : position <= n_undo ? undo[position - 1].label
                                              : redo[redo.size() - (position - n_undo)].label;
     ImGui::TableNextRow();
@@ -480,10 +480,9 @@ void DrawTeachHistory(AppState* state, int* target) {
     std::snprintf(text, sizeof(text), "%3d##t%d", position, position);
     if (ImGui::Selectable(text, position == n_undo, ImGuiSelectableFlags_SpanAllColumns) && position != n_undo)
       *target = position;
-    for (const std::string& cell :
-         {label, std::to_string(c.primitives), std::to_string(c.vertices), std::to_string(c.edges),
-          std::to_string(c.faces), std::to_string(c.pins), std::to_string(c.spatial_constraints),
-          std::to_string(c.segments)}) {
+    for (const std::string& cell : {label, std::to_string(c.primitives), std::to_string(c.vertices),
+                                    std::to_string(c.edges), std::to_string(c.faces), std::to_string(c.pins),
+                                    std::to_string(c.spatial_constraints), std::to_string(c.segments)}) {
       ImGui::TableNextColumn();
       ImGui::TextUnformatted(cell.c_str());
     }

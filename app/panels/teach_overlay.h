@@ -18,8 +18,7 @@ namespace facet::app {
 // other overlays. `texture_of` gives another image's photo texture (or null) for the insets
 // that show the pointer's epipolar lines in the other photos.
 void DrawTeachImageOverlay(ImDrawList* draw_list, const AppState& state, const Image& image, const ViewTransform& view,
-                           ImVec2 clip_min, ImVec2 clip_max,
-                           const std::function<const TiledTexture*(Id)>& texture_of);
+                           ImVec2 clip_min, ImVec2 clip_max, const std::function<const TiledTexture*(Id)>& texture_of);
 
 // In the 3D panel: each calibrated image's vanishing directions as rays from its camera
 // centre, `length` world units long. `to_screen` maps a world point to the screen (false

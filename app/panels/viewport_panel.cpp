@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
+#include "app/panels/teach_overlay.h"
 #include "app/platform/gl_camera.h"
 #include "app/platform/viewport_shaders.h"
-#include "app/panels/teach_overlay.h"
 #include "app/state/model_edits.h"
 #include "app/state/model_pick.h"
 #include "app/state/move_tool.h"

@@ -55,8 +55,9 @@ void DrawTeachMenu(AppState* state) {
   ImGui::MenuItem("Vanishing points", nullptr, &teach.vanishing_points);
   RecordItem(state, "menu.teach.vanishing");
   if (ImGui::IsItemHovered())
-    ImGui::SetTooltip("Each family's vanishing point with its uncertainty, the vanishing triangle, the principal point "
-                      "as its orthocentre, the construction of the focal length, the horizon; rays in 3D");
+    ImGui::SetTooltip(
+        "Each family's vanishing point with its uncertainty, the vanishing triangle, the principal point "
+        "as its orthocentre, the construction of the focal length, the horizon; rays in 3D");
   ImGui::MenuItem("Epipolar geometry", nullptr, &teach.epipolar);
   RecordItem(state, "menu.teach.epipolar");
   if (ImGui::IsItemHovered())

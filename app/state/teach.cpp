@@ -12,7 +12,9 @@ namespace {
 
 using internal::FormatNumber;
 
-std::string Point(const Eigen::Vector2d& p) { return "(" + FormatNumber(p.x(), 5) + ", " + FormatNumber(p.y(), 5) + ") px"; }
+std::string Point(const Eigen::Vector2d& p) {
+  return "(" + FormatNumber(p.x(), 5) + ", " + FormatNumber(p.y(), 5) + ") px";
+}
 
 const Image* CalibratedImage(const Project& project, Id id) {
   const Image* image = project.FindImage(id);
@@ -42,7 +44,8 @@ std::optional<TeachVanishing> TeachVanishingFor(const AppState& state, Id image_
   const Project& project = state.document.project();
   const Image* image = project.FindImage(image_id);
   const auto found = state.last_update.calibration.find(image_id);
-  if (image == nullptr || found == state.last_update.calibration.end() || !found->second.IsUsable()) return std::nullopt;
+  if (image == nullptr || found == state.last_update.calibration.end() || !found->second.IsUsable())
+    return std::nullopt;
   const VpCalibrationSummary& calibration = found->second;
   TeachVanishing out;
   out.image_id = image_id;

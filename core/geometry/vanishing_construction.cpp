@@ -68,7 +68,8 @@ FocalConstruction ConstructFocal(const Eigen::Vector2d& v_i_px, const Eigen::Vec
   const Eigen::Vector2d side = (v_j_px - v_i_px) / (2.0 * c.circle_radius_px);
   Eigen::Vector2d towards_p = p - h;
   // p on the line v_i v_j: either normal serves.
-  towards_p = towards_p.norm() > 1e-12 * c.circle_radius_px ? towards_p.normalized() : Eigen::Vector2d(-side.y(), side.x());
+  towards_p =
+      towards_p.norm() > 1e-12 * c.circle_radius_px ? towards_p.normalized() : Eigen::Vector2d(-side.y(), side.x());
   c.turned_center_px = h + hq * towards_p;
   c.focal_end_px = p + c.focal_px * side;
   c.valid = true;
@@ -90,13 +91,11 @@ VanishingConstruction ConstructFromVanishingPoints(const VanishingConstructionIn
   out.principal_point_px = input.assumed_principal_point_px;
   out.principal_point_assumed = true;
   const int num_finite = static_cast<int>(finite_axes.size());
-  if (num_finite == 3 &&
-      Orthocentre(out.points_px[0], out.points_px[1], out.points_px[2], &out.principal_point_px)) {
+  if (num_finite == 3 && Orthocentre(out.points_px[0], out.points_px[1], out.points_px[2], &out.principal_point_px)) {
     out.principal_point_assumed = false;
     out.kind = VanishingConstructionKind::kThreePoints;
     for (int k = 0; k < 3; ++k)
-      out.altitude_feet_px[k] =
-          FootOnLine(out.points_px[k], out.points_px[(k + 1) % 3], out.points_px[(k + 2) % 3]);
+      out.altitude_feet_px[k] = FootOnLine(out.points_px[k], out.points_px[(k + 1) % 3], out.points_px[(k + 2) % 3]);
   } else if (num_finite >= 2) {
     out.kind = VanishingConstructionKind::kTwoPoints;
   } else if (num_finite == 1) {

@@ -85,8 +85,8 @@ TEST_CASE("vanishing overlay: the construction read back from the app is the tru
   TempDir dir("teach_vp");
   const SyntheticScene scene = MakeBoxScene();
   const std::string path = WriteScene(dir, scene, scene.project);
-  const nlohmann::json report =
-      RenderScript(dir, path, "vp", "frames 3\ncommand teach vanishing on\nframes 3\nscreenshot " + (dir / "vp_shot.png"));
+  const nlohmann::json report = RenderScript(
+      dir, path, "vp", "frames 3\ncommand teach vanishing on\nframes 3\nscreenshot " + (dir / "vp_shot.png"));
   CHECK(report.at("teach").at("view").at("vanishing").get<bool>());
   REQUIRE(report.at("teach").at("vanishing").size() == 1u);
   const nlohmann::json& v = report.at("teach").at("vanishing").at(0);
@@ -113,7 +113,8 @@ TEST_CASE("vanishing overlay: the construction read back from the app is the tru
   for (const nlohmann::json& c : v.at("focal_constructions")) {
     const int i = c.at("axes").at(0).get<int>(), j = c.at("axes").at(1).get<int>();
     REQUIRE(c.at("valid").get<bool>());
-    CHECK((Vec2(c.at("circle_center_px")) - 0.5 * (true_vp[i] + true_vp[j])).norm() < kNoiseFreeRelative * true_vp[i].norm());
+    CHECK((Vec2(c.at("circle_center_px")) - 0.5 * (true_vp[i] + true_vp[j])).norm() <
+          kNoiseFreeRelative * true_vp[i].norm());
     CHECK(std::abs(c.at("circle_radius_px").get<double>() - 0.5 * (true_vp[i] - true_vp[j]).norm()) <
           kNoiseFreeRelative * (true_vp[i] - true_vp[j]).norm());
     const Eigen::Vector2d q = Vec2(c.at("turned_center_px"));
@@ -159,7 +160,8 @@ TEST_CASE("vanishing overlay with two families: principal point assumed at the c
   CHECK((Vec2(v.at("principal_point_px")) - truth.principal_point_px).norm() < 1e-9 * truth.width_px);
   CHECK(std::abs(v.at("focal_px").get<double>() - truth.focal_px) < kNoiseFreeRelative * truth.focal_px);
   bool says_centre = false;
-  for (const auto& a : v.at("assumptions")) says_centre |= a.get<std::string>().find("image centre") != std::string::npos;
+  for (const auto& a : v.at("assumptions"))
+    says_centre |= a.get<std::string>().find("image centre") != std::string::npos;
   CHECK(says_centre);
   const Eigen::Vector3d true_horizon = truth.K().inverse().transpose() * truth.cam_from_world_rotation.col(2);
   CHECK(SignFree(Vec3(v.at("horizon")), true_horizon) < kNoiseFreeRelative * truth.width_px);
@@ -224,16 +226,16 @@ TEST_CASE("Numbers window: K, R, t of the active camera, F of two photos, copied
   WriteGreyPhoto(dir / "second.png", SecondCamera());
   const std::string path = WriteScene(dir, scene, project);
   const std::string saved = dir / "saved.facet";
-  const nlohmann::json probe = RenderScript(dir, path, "numbers_probe",
-                                            "frames 3\ncommand teach numbers on\ncommand teach second-image 1\nframes 3\n");
+  const nlohmann::json probe = RenderScript(
+      dir, path, "numbers_probe", "frames 3\ncommand teach numbers on\ncommand teach second-image 1\nframes 3\n");
   const nlohmann::json& items = probe.at("items");
   REQUIRE(items.contains("teach.copy.K"));
   REQUIRE(items.contains("teach.copy_latex.F"));
-  const nlohmann::json text_report = RenderScript(dir, path, "numbers_text",
-                                                  "frames 3\ncommand teach numbers on\ncommand teach second-image 1\n"
-                                                  "frames 3\nclick left " +
-                                                      ItemCenter(items, "teach.copy.K") + "\nframes 2\ncommand save " +
-                                                      saved + "\n");
+  const nlohmann::json text_report =
+      RenderScript(dir, path, "numbers_text",
+                   "frames 3\ncommand teach numbers on\ncommand teach second-image 1\n"
+                   "frames 3\nclick left " +
+                       ItemCenter(items, "teach.copy.K") + "\nframes 2\ncommand save " + saved + "\n");
   const nlohmann::json& numbers = text_report.at("teach").at("numbers");
   const Eigen::Matrix3d K = Mat3(numbers.at("K"));
   CHECK(text_report.at("teach").at("clipboard").get<std::string>() == MatrixToText(K, 10));
@@ -251,10 +253,10 @@ TEST_CASE("Numbers window: K, R, t of the active camera, F of two photos, copied
     const Eigen::Vector3d xa = a.Project(x).homogeneous(), xb = b.Project(x).homogeneous();
     CHECK(std::abs(xb.dot(F * xa)) <= kNoiseFreeRelative * xb.norm() * (F * xa).norm());
   }
-  const nlohmann::json latex_report =
-      RenderScript(dir, path, "numbers_latex",
-                   "frames 3\ncommand teach numbers on\ncommand teach second-image 1\nframes 3\nclick left " +
-                       ItemCenter(items, "teach.copy_latex.F") + "\nframes 2\nscreenshot " + (dir / "numbers_shot.png"));
+  const nlohmann::json latex_report = RenderScript(
+      dir, path, "numbers_latex",
+      "frames 3\ncommand teach numbers on\ncommand teach second-image 1\nframes 3\nclick left " +
+          ItemCenter(items, "teach.copy_latex.F") + "\nframes 2\nscreenshot " + (dir / "numbers_shot.png"));
   CHECK(latex_report.at("teach").at("clipboard").get<std::string>() ==
         MatrixToLatex(Mat3(latex_report.at("teach").at("numbers").at("F")), 10));
 }
@@ -263,8 +265,9 @@ TEST_CASE("modelling state: the (K, F) counts per History entry, with the teach 
   TempDir dir("teach_state");
   const SyntheticScene scene = MakeBoxScene();
   const std::string path = WriteScene(dir, scene, scene.project);
-  const nlohmann::json report = RenderScript(
-      dir, path, "state", "frames 3\ncommand teach state on\ncommand add box\nframes 2\nscreenshot " + (dir / "state.png"));
+  const nlohmann::json report =
+      RenderScript(dir, path, "state",
+                   "frames 3\ncommand teach state on\ncommand add box\nframes 2\nscreenshot " + (dir / "state.png"));
   const nlohmann::json& counts = report.at("teach").at("history_counts");
   REQUIRE(counts.size() == report.at("undo_stack").size() + 1);
   REQUIRE(counts.size() == 2u);
