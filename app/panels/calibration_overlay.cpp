@@ -128,7 +128,7 @@ void DrawCalibrationOverlay(ImDrawList* draw_list, const AppState& state, const 
   draw_list->PushClipRect(clip_min, clip_max, true);
   if (image.use_horizon) DrawGivenHorizon(draw_list, image, view, clip_min, clip_max);
   DrawOutliers(draw_list, state, image, view);
-  DrawEpipolarLines(draw_list, state, image, view);
+  if (!state.teach.epipolar) DrawEpipolarLines(draw_list, state, image, view);  // teach mode draws its own
   draw_list->PopClipRect();
 }
 

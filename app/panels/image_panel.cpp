@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -18,6 +19,7 @@
 #include "app/panels/image_snapping.h"
 #include "app/panels/image_view.h"
 #include "app/panels/line_proposals_view.h"
+#include "app/panels/teach_overlay.h"
 #include "app/platform/image_tiles.h"
 #include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
@@ -1024,7 +1026,8 @@ OverlayInput MakeOverlayInput(AppState* state, const PanelState& panel, const Im
 // Step 8: the photo (or its placeholder), the overlays, the drag previews, a load error, the
 // loupe and the fine pointer, clipped to the view.
 void DrawViewContents(const AppState& state, const PanelState& panel, const ImageViewState& view, const Image& image,
-                      const OverlayInput& overlay, const ViewFrame& frame) {
+                      const OverlayInput& overlay, const ViewFrame& frame,
+                      const std::function<const TiledTexture*(Id)>& texture_of) {
   ImGuiIO& io = ImGui::GetIO();
   const ViewTransform transform = TransformOf(view);
   const Interaction& drag = panel.interaction;
@@ -1044,6 +1047,7 @@ void DrawViewContents(const AppState& state, const PanelState& panel, const Imag
                      IM_COL32(0, 0, 0, 255));
   DrawImageOverlays(draw_list, overlay, transform, rect_min, rect_max, panel.overlay);
   DrawCalibrationOverlay(draw_list, state, image, transform, rect_min, rect_max, frame.hovered ? &mouse_uv : nullptr);
+  DrawTeachImageOverlay(draw_list, state, image, transform, rect_min, rect_max, texture_of);
   DrawLineProposals(draw_list, state, image.id, transform, rect_min, rect_max);
   if (drag.kind == DragKind::kNewSegment) {
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, IM_COL32(0, 0, 0, 200), 4.0f);
@@ -1129,7 +1133,8 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   if (current_image == nullptr) return;
   const std::vector<ProjectedPrimitive> current_model = ProjectModel(state->document.project(), *current_image);
   const OverlayInput overlay = MakeOverlayInput(state, *panel, *current_image, current_model, frame.hover);
-  DrawViewContents(*state, *panel, view, image, overlay, frame);
+  DrawViewContents(*state, *panel, view, image, overlay, frame,
+                   [&](Id id) { return TextureFor(panel, *state, id); });  // teach mode's insets
   DrawViewStatus(*state, *panel, view, frame);
 
   panel->report.image_id = image.id;

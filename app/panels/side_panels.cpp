@@ -14,6 +14,7 @@
 
 #include "app/panels/camera_sections.h"
 #include "app/panels/constraints_section.h"
+#include "app/panels/teach_overlay.h"
 #include "app/panels/widgets.h"
 #include "app/state/model_edits.h"
 #include "core/solve/scene_solve.h"
@@ -473,6 +474,12 @@ void DrawHistoryPanel(AppState* state) {
   const int n_redo = static_cast<int>(redo.size());
   // Position k: the state after the first k edits (0 = as opened).
   int target = -1;
+  if (state->teach.modelling_state) {  // View > Teach: the same list with the (K, F) counts
+    DrawTeachHistory(state, &target);
+    for (int i = target; target >= 0 && i < n_undo; ++i) Undo(state);
+    for (int i = n_undo; i < target; ++i) Redo(state);
+    return;
+  }
   auto entry = [&](int position, const std::string& label, bool future) {
     const bool current = position == n_undo;
     if (future) ImGui::PushStyleColor(ImGuiCol_Text, kDimText);

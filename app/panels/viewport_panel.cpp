@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "app/panels/teach_overlay.h"
 #include "app/platform/gl_camera.h"
 #include "app/platform/viewport_shaders.h"
 #include "app/state/model_edits.h"
@@ -1147,6 +1148,17 @@ void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
                                        ImVec2(frame.origin.x + size.x, frame.origin.y + size.y), ImVec2(0, 1),
                                        ImVec2(1, 0));
   DrawOverlay(*state, panel, view, frame.origin, size, ImVec2(scale_x, scale_y));
+  if (state->teach.vanishing_points) {  // View > Teach: the vanishing directions as rays
+    ImDrawList* draw = ImGui::GetWindowDrawList();
+    draw->PushClipRect(frame.origin, ImVec2(frame.origin.x + size.x, frame.origin.y + size.y), true);
+    DrawTeachViewportOverlay(draw, *state, 0.5 * measure.size, [&](const Eigen::Vector3d& p, ImVec2* out) {
+      ImVec2 px;
+      if (!PanelPixelOf(view, p, &px)) return false;
+      *out = ImVec2(frame.origin.x + px.x / scale_x, frame.origin.y + px.y / scale_y);
+      return true;
+    });
+    draw->PopClipRect();
+  }
 }
 
 void RequestViewportFrame(ViewportPanelState* panel) { Panel(panel).frame_requested = true; }

@@ -22,6 +22,7 @@
 #include "app/shell/frame.h"
 #include "app/shell/glfw_window.h"
 #include "app/shell/layout.h"
+#include "app/shell/teach_report.h"
 #include "app/state/app_state.h"
 #include "app/state/input_script.h"
 #include "app/state/line_proposals.h"
@@ -269,6 +270,7 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
                            {"all_files", browser.all_files}};
   report["recent_files"] = {{"files", shell.recent_files.files}, {"folders", shell.recent_files.folders}};
   report["project"] = nlohmann::json::parse(ProjectToJson(state.document.project()), nullptr, false);
+  report["teach"] = TeachReportJson(state);
   return report.dump(2);
 }
 

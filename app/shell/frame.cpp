@@ -20,6 +20,7 @@
 #include "app/panels/camera_sections.h"
 #include "app/panels/image_panel.h"
 #include "app/panels/side_panels.h"
+#include "app/panels/teach_overlay.h"
 #include "app/panels/viewport_panel.h"
 #include "app/panels/widgets.h"
 #include "app/shell/file_actions.h"
@@ -556,6 +557,31 @@ void RequestQuit(AppState* state, ShellState* shell) {
   }
 }
 
+namespace {
+
+// `teach NAME on|off` and `teach second-image INDEX` (app/state/input_script.h).
+bool RunTeachCommand(AppState* state, const std::vector<std::string>& args, std::string* error) {
+  if (args.size() == 2 && args[0] == "second-image") {
+    const Project& project = state->document.project();
+    const int index = std::atoi(args[1].c_str());
+    if (index < 0 || index >= static_cast<int>(project.images.size())) {
+      *error = "teach second-image: no image " + args[1];
+      return false;
+    }
+    state->teach.second_image_id = project.images[index].id;
+    return true;
+  }
+  bool* flag = args.size() == 2 ? TeachFlag(&state->teach, args[0]) : nullptr;
+  if (flag == nullptr || (args[1] != "on" && args[1] != "off")) {
+    *error = "teach: expected 'teach vanishing|epipolar|numbers|state on|off' or 'teach second-image INDEX'";
+    return false;
+  }
+  *flag = args[1] == "on";
+  return true;
+}
+
+}  // namespace
+
 bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, const std::vector<std::string>& args,
                    std::string* error) {
   const std::string arg = args.empty() ? std::string() : args.front();
@@ -710,6 +736,12 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     if (!done) *error = LastLoggedError(*state);
     return done;
   }
+  if (name == "teach") {  // teach NAME on|off (app/state/teach.h), or teach second-image INDEX
+    std::vector<std::string> words;
+    std::istringstream in(arg);
+    for (std::string w; in >> w;) words.push_back(w);
+    return RunTeachCommand(state, words, error);
+  }
   if (name == "select-image") {
     const auto& images = state->document.project().images;
     char* end = nullptr;
@@ -806,6 +838,7 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
                                             "baking texture...");
   }
 
+  DrawTeachNumbersWindow(state);  // View > Teach > Numbers
   DrawDialogs(state, shell);
   if (shell->dialog == Dialog::kNone) HandleToolShortcuts(state);
 }

@@ -45,6 +45,30 @@ void DrawOpenRecentMenu(AppState* state, ShellState* shell) {
   ImGui::EndMenu();
 }
 
+// View > Teach (issue 15): each overlay of app/state/teach.h on or off; view settings, not
+// part of the project.
+void DrawTeachMenu(AppState* state) {
+  const bool open = ImGui::BeginMenu("Teach");
+  RecordItem(state, "menu.teach");
+  if (!open) return;
+  TeachView& teach = state->teach;
+  ImGui::MenuItem("Vanishing points", nullptr, &teach.vanishing_points);
+  RecordItem(state, "menu.teach.vanishing");
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip(
+        "Each family's vanishing point with its uncertainty, the vanishing triangle, the principal point "
+        "as its orthocentre, the construction of the focal length, the horizon; rays in 3D");
+  ImGui::MenuItem("Epipolar geometry", nullptr, &teach.epipolar);
+  RecordItem(state, "menu.teach.epipolar");
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("The epipolar lines and epipoles of a selected pin, or of the pointer, in the other photos");
+  ImGui::MenuItem("Numbers (K, R, t, F)", nullptr, &teach.numbers);
+  RecordItem(state, "menu.teach.numbers");
+  ImGui::MenuItem("Modelling state in History", nullptr, &teach.modelling_state);
+  RecordItem(state, "menu.teach.state");
+  ImGui::EndMenu();
+}
+
 }  // namespace
 
 float DrawMenuBar(AppState* state, ShellState* shell) {
@@ -146,6 +170,8 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
       shell->layout = DefaultLayout();
       shell->layout_changed = true;
     }
+    ImGui::Separator();
+    DrawTeachMenu(state);
     ImGui::EndMenu();
   }
   if (ImGui::BeginMenu("Help")) {

@@ -16,6 +16,7 @@
 #include "app/state/autosave.h"
 #include "app/state/line_proposals.h"
 #include "app/state/rect.h"
+#include "app/state/teach.h"
 #include "core/estimators/calibrate_vp.h"
 #include "core/image/image_io.h"
 #include "core/mesh/primitives.h"
@@ -207,6 +208,8 @@ struct AppState {
 
   // The recovery file kept while there are unsaved changes (app/state/autosave.h).
   AutosaveState autosave;
+  // Teach mode's overlays (View > Teach, app/state/teach.h): view settings, not in the project.
+  TeachView teach;
 
   std::vector<LogEntry> log;
   double time_s = 0.0;

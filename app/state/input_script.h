@@ -85,6 +85,10 @@
 //                                   wait-autosave      block until the recovery file holds
 //                                                      the document as it is now (render
 //                                                      --autosave)
+//                                   teach NAME on|off  View > Teach's overlays: vanishing,
+//                                                      epipolar, numbers, state
+//                                                      (app/state/teach.h); teach
+//                                                      second-image INDEX: F's second photo
 //                                 Tool names: select, line-x, line-y, line-z, pin,
 //                                 add-primitive (adds at once), split-edge, delete-vertex,
 //                                 connect-vertices, delete-edge, push-pull, move, line-pin,

@@ -434,6 +434,8 @@ bool FitFreeVanishingPoints(const Families& families, const Conditioning& condit
     }
     free->v[a] = fit.vp_conditioned;
     summary->vanishing_points[a] = fit.vp_px;
+    summary->family_vanishing_points[a] = fit.vp_px;
+    summary->family_vanishing_point_covariance_px2[a] = fit.point_covariance_px2;
     free->at_infinity[a] = fit.distance_in_scales > kAtInfinityDistance;
     summary->vanishing_point_at_infinity[a] = free->at_infinity[a];
     summary->vanishing_point_rms_px[a] = fit.final_rms_px;

@@ -91,6 +91,16 @@ struct VpCalibrationSummary : SolverSummary {
                                                   Eigen::Vector3d::Zero()};
   // A family whose segments are parallel in the image (within ~1e-5 rad at the camera).
   std::array<bool, 3> vanishing_point_at_infinity = {false, false, false};
+  // Each family's vanishing point fitted on its own, over all its segments (outliers
+  // included), before the joint fit ties the three to one camera (FitVanishingPoint,
+  // core/estimators/vanishing_point.h): the points of the three-point construction
+  // (closed_form_*), in the same form as vanishing_points; zero when the family is absent.
+  // Their covariance in px^2 (VanishingPointSummary::point_covariance_px2): NaN for a family
+  // of 2 segments or a point at infinity.
+  std::array<Eigen::Vector3d, 3> family_vanishing_points{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                                                         Eigen::Vector3d::Zero()};
+  std::array<Eigen::Matrix2d, 3> family_vanishing_point_covariance_px2{
+      Eigen::Matrix2d::Zero(), Eigen::Matrix2d::Zero(), Eigen::Matrix2d::Zero()};
   // RMS over a family's segments of segment_residuals_px; zero when the family is absent.
   std::array<double, 3> vanishing_point_rms_px = {0.0, 0.0, 0.0};
   // Largest deviation from 90 deg between two fitted vanishing directions before the

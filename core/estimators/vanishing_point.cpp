@@ -123,6 +123,33 @@ double SumOfSquares(const std::vector<double>& values) {
   return sum;
 }
 
+// The summary's covariances at the result v (conditioned, unit norm); cost_conditioned is the
+// sum of squared residuals in conditioned units.
+void EstimateCovariance(const std::vector<ConditionedSegment>& segments, const Eigen::Vector3d& v,
+                        const VanishingPointOptions& options, double cost_conditioned, VanishingPointSummary* summary) {
+  const int n = static_cast<int>(segments.size());
+  const Eigen::Matrix<double, 3, 2> basis = internal::TangentBasis(v);
+  Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
+  for (const ConditionedSegment& s : segments) {
+    Eigen::RowVector3d gradient;
+    Residual(s, v, &gradient);
+    const Eigen::RowVector2d row = gradient * basis;
+    normal += row.transpose() * row;
+  }
+  const Eigen::FullPivLU<Eigen::Matrix2d> lu(normal);
+  if (!lu.isInvertible()) return;
+  const double sigma_squared = cost_conditioned / (n - 2);
+  const Eigen::Matrix2d tangent = sigma_squared * lu.inverse();
+  summary->vp_conditioned_covariance = basis * tangent * basis.transpose();
+  if (summary->distance_in_scales == kInfinity) return;
+  // (u, v) = scale (x / w, y / w) + centre for v = (x, y, w).
+  const double scale = options.conditioning_scale_px;
+  Eigen::Matrix<double, 2, 3> jacobian;
+  jacobian << 1.0 / v.z(), 0.0, -v.x() / (v.z() * v.z()), 0.0, 1.0 / v.z(), -v.y() / (v.z() * v.z());
+  jacobian *= scale;
+  summary->point_covariance_px2 = jacobian * summary->vp_conditioned_covariance * jacobian.transpose();
+}
+
 }  // namespace
 
 bool VanishingPointOptions::Check(std::string* error) const {
@@ -216,6 +243,7 @@ VanishingPointSummary FitVanishingPoint(const std::vector<Eigen::Vector4d>& segm
   Eigen::Vector3d vp_px(scale * v.x() + options.conditioning_center_px.x() * v.z(),
                         scale * v.y() + options.conditioning_center_px.y() * v.z(), v.z());
   summary.vp_px = vp_px.normalized();
+  if (n > 2) EstimateCovariance(segments, v, options, summary.final_cost / (scale * scale), &summary);
   summary.time_ms = internal::MsSince(start);
   return summary;
 }

@@ -7,6 +7,7 @@
 // Hartley & Zisserman, 2nd ed., section 8.6.1).
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,14 @@ struct VanishingPointSummary : SolverSummary {
   double initial_rms_px = 0.0;  // of the algebraic fit
   double final_rms_px = 0.0;
   bool refined = false;  // the refinement ran and was kept
+  // First-order uncertainty of the result: sigma^2 (J^T J)^-1 in the plane tangent to the
+  // unit sphere at vp_conditioned (J: the residuals' derivatives there), with sigma^2 = sum of
+  // squared residuals / (n - 2), the noise the segments show. As a 3 x 3 covariance of
+  // vp_conditioned (rank 2), and propagated to the image point (u, v) = vp_px's (x / w, y / w)
+  // in px^2. NaN with 2 segments (no redundancy to measure the noise); the point's is NaN at
+  // infinity too.
+  Eigen::Matrix3d vp_conditioned_covariance = Eigen::Matrix3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::Matrix2d point_covariance_px2 = Eigen::Matrix2d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
 // segments_px: one (x1, y1, x2, y2) per segment, 2 or more, none of zero length.

@@ -14,6 +14,7 @@
 #include "core/optim/levenberg_marquardt.h"
 #include "core/solve/constraint_polish.h"
 #include "core/solve/joint_solve_internal.h"
+#include "core/solve/joint_solve_steps.h"
 #include "core/solve/scene_solve.h"
 #include "core/util/eigen_decompositions.h"
 
@@ -405,6 +406,8 @@ struct LmWorkspace {
   // The damping after the last accepted step: the next outer round starts from it, not from
   // the lambda that the rejections at the end of a converged run inflated.
   double accepted_lambda = 1e-4;
+  // SolveJointTraced: every trial of every round, numbered over all rounds.
+  std::vector<LmIteration>* trace = nullptr;
 };
 
 enum class LmStop { kConverged, kBudget, kFailed };
@@ -507,6 +510,14 @@ LmStop RunLevenbergMarquardt(const JointSolveOptions& options, int budget, Joint
   lm.max_lambda_on_failed_solve = 1e32;
   lm.min_lambda = 1e-16;
   lm.min_step_squared_norm = 0.0;
+  if (workspace->trace != nullptr) {
+    lm.callback = [workspace](const LmIteration& iteration) {
+      LmIteration numbered = iteration;
+      numbered.iteration += workspace->iterations;
+      workspace->trace->push_back(numbered);
+      return true;
+    };
+  }
   const LmResult result = MinimizeLevenbergMarquardt(TotalCost(*problem), lm, lm_problem);
   workspace->iterations += result.iterations;
   workspace->accepted_lambda = result.final_lambda;
@@ -682,7 +693,7 @@ std::string Advice(const std::string& name) {
 
 // Names the parameters the residuals do not determine, from the null space of the
 // column-scaled dense Jacobian at the problem's last evaluation.
-std::vector<std::string> UndeterminedParameters(const JointProblem& problem) {
+std::vector<std::string> UndeterminedParameters(const JointProblem& problem, int* null_space_dimension) {
   std::vector<std::string> out;
   const int n = problem.num_parameters;
   Eigen::MatrixXd j;
@@ -710,6 +721,7 @@ std::vector<std::string> UndeterminedParameters(const JointProblem& problem) {
     if (sigma(s) <= kRankTolerance * largest) null_columns.push_back(s);
   }
   const int null_dim = static_cast<int>(null_columns.size());
+  *null_space_dimension = null_dim;
   if (null_dim == 0) return out;
   Eigen::MatrixXd null_space(n, null_dim);
   for (int i = 0; i < null_dim; ++i) null_space.col(i) = svd.matrixV().col(null_columns[i]);
@@ -893,6 +905,12 @@ void FillDiagnostics(const Project& project, const JointSolveOptions& options, c
 }  // namespace
 
 JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& options, Project* solved) {
+  return SolveJointTraced(project, options, solved, nullptr);
+}
+
+JointSolveSummary SolveJointTraced(const Project& project, const JointSolveOptions& options, Project* solved,
+                                   std::vector<LmIteration>* trace) {
+  if (trace != nullptr) trace->clear();
   const auto t0 = std::chrono::steady_clock::now();
   JointSolveSummary summary;
   auto finish = [&](SolverTermination termination, const std::string& message) {
@@ -951,6 +969,7 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   lm.accepted_lambda = options.initial_lambda;
   lm.trial = state;
   lm.delta.resize(problem.num_parameters);
+  lm.trace = trace;
   const RoundsOutcome rounds = RunOuterRounds(options, &problem, &state, &lm);
   if (rounds.failed) {
     *solved = project;
@@ -979,7 +998,7 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
   FillDiagnostics(project, options, problem, !budget_used, &summary);
   if (options.compute_diagnostics) {
     if (problem.num_parameters <= kMaxDiagnosticParameters) {
-      summary.undetermined = UndeterminedParameters(problem);
+      summary.undetermined = UndeterminedParameters(problem, &summary.degrees_of_freedom_left);
     } else {
       summary.warnings.push_back("undetermined parameters not analysed: " + std::to_string(problem.num_parameters) +
                                  " parameters exceed the dense limit of " + std::to_string(kMaxDiagnosticParameters));

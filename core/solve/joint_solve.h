@@ -122,6 +122,10 @@ struct JointSolveSummary : SolverSummary {
   // one sentence each: "the box 'house' depth is free: pin a vertex on its back face or add a
   // second image".
   std::vector<std::string> undetermined;
+  // The degrees of freedom the residuals leave (pins, segments and spatial constraints
+  // together): num_parameters minus the rank of that column-scaled Jacobian, gauge freedoms
+  // (e.g. the scale without a known length) included; -1 when the diagnostics did not run.
+  int degrees_of_freedom_left = -1;
   // Constraints that cannot hold together (their scale-free residuals stay above
   // conflict_tolerance after a solve that converged; not named when the iteration budget ran
   // out, e.g. per frame).

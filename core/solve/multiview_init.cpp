@@ -873,6 +873,15 @@ Eigen::Matrix3d FundamentalFromCameras(const Camera& camera_a, const Camera& cam
   return camera_b.K().inverse().transpose() * tx * rotation * camera_a.K().inverse();
 }
 
+EpipolePair EpipolesOfCameras(const Camera& camera_a, const Camera& camera_b) {
+  EpipolePair out;
+  const Eigen::Vector3d center_a = camera_a.CenterInWorld(), center_b = camera_b.CenterInWorld();
+  if (!((center_a - center_b).norm() > 0.0)) return out;
+  out.in_a = (camera_a.K() * camera_a.CamFromWorld(center_b)).normalized();
+  out.in_b = (camera_b.K() * camera_b.CamFromWorld(center_a)).normalized();
+  return out;
+}
+
 EpipolarLine EpipolarLineInImage(const Eigen::Matrix3d& F, const Eigen::Vector2d& uv_a_px, int width_b_px,
                                  int height_b_px) {
   EpipolarLine result;

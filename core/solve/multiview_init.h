@@ -191,6 +191,17 @@ struct EpipolarLine {
   std::optional<std::pair<Eigen::Vector2d, Eigen::Vector2d>> segment_px;
 };
 
+// The epipoles of two cameras (pinhole part): in image a the image of b's centre, P_a (C_b, 1),
+// in image b that of a's, homogeneous and unit norm (third coordinate 0: at infinity; negative:
+// the other centre is behind the camera). F e_a = 0 and F^T e_b = 0 for
+// F = FundamentalFromCameras(a, b): every epipolar line of image b passes through e_b.
+// Zero when the centres coincide.
+struct EpipolePair {
+  Eigen::Vector3d in_a = Eigen::Vector3d::Zero();
+  Eigen::Vector3d in_b = Eigen::Vector3d::Zero();
+};
+EpipolePair EpipolesOfCameras(const Camera& camera_a, const Camera& camera_b);
+
 // The epipolar line in image b (width_b_px x height_b_px) of pixel uv_a_px of image a.
 EpipolarLine EpipolarLineInImage(const Eigen::Matrix3d& F, const Eigen::Vector2d& uv_a_px, int width_b_px,
                                  int height_b_px);

@@ -1,0 +1,123 @@
+#include "app/shell/teach_report.h"
+
+#include <imgui.h>
+
+namespace facet::app {
+namespace {
+
+// Non-finite numbers become null (JSON has no NaN).
+nlohmann::json Number(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
+
+nlohmann::json Matrix(const Eigen::Ref<const Eigen::MatrixXd>& m) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (Eigen::Index r = 0; r < m.rows(); ++r) {
+    nlohmann::json row = nlohmann::json::array();
+    for (Eigen::Index c = 0; c < m.cols(); ++c) row.push_back(Number(m(r, c)));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+nlohmann::json Vector(const Eigen::Ref<const Eigen::VectorXd>& v) {
+  nlohmann::json out = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) out.push_back(Number(v(i)));
+  return out;
+}
+
+nlohmann::json VanishingJson(const TeachVanishing& t) {
+  const VanishingConstruction& c = t.construction;
+  nlohmann::json constructions = nlohmann::json::array();
+  for (const FocalConstruction& f : c.focal_constructions)
+    constructions.push_back({{"axes", {f.axes[0], f.axes[1]}},
+                             {"valid", f.valid},
+                             {"circle_center_px", Vector(f.circle_center_px)},
+                             {"circle_radius_px", Number(f.circle_radius_px)},
+                             {"altitude_foot_px", Vector(f.altitude_foot_px)},
+                             {"turned_center_px", Vector(f.turned_center_px)},
+                             {"focal_end_px", Vector(f.focal_end_px)},
+                             {"focal_px", Number(f.focal_px)}});
+  nlohmann::json points = nlohmann::json::array(), homogeneous = nlohmann::json::array(),
+                 covariances = nlohmann::json::array(), feet = nlohmann::json::array(),
+                 directions = nlohmann::json::array();
+  for (int a = 0; a < 3; ++a) {
+    points.push_back(c.finite[a] ? Vector(c.points_px[a]) : nlohmann::json(nullptr));
+    homogeneous.push_back(Vector(t.vanishing_points_px[a]));
+    covariances.push_back(Matrix(t.covariance_px2[a]));
+    feet.push_back(Vector(c.altitude_feet_px[a]));
+    directions.push_back(Vector(t.directions_in_world[a]));
+  }
+  return {{"image_id", t.image_id},
+          {"kind", VanishingConstructionKindName(c.kind)},
+          {"present", {c.present[0], c.present[1], c.present[2]}},
+          {"finite", {c.finite[0], c.finite[1], c.finite[2]}},
+          {"points_px", points},
+          {"vanishing_points_px", homogeneous},
+          {"covariance_px2", covariances},
+          {"principal_point_px", Vector(c.principal_point_px)},
+          {"principal_point_assumed", c.principal_point_assumed},
+          {"altitude_feet_px", feet},
+          {"focal_constructions", constructions},
+          {"focal_px", Number(c.focal_px)},
+          {"focal_assumed", c.focal_assumed},
+          {"horizon", Vector(c.horizon)},
+          {"assumptions", t.assumptions},
+          {"fitted_focal_px", Number(t.fitted_focal_px)},
+          {"camera_center_in_world", Vector(t.camera_center_in_world)},
+          {"directions_in_world", directions}};
+}
+
+}  // namespace
+
+nlohmann::json TeachReportJson(const AppState& state) {
+  const TeachView& view = state.teach;
+  nlohmann::json out;
+  out["view"] = {{"vanishing", view.vanishing_points},
+                 {"epipolar", view.epipolar},
+                 {"numbers", view.numbers},
+                 {"state", view.modelling_state},
+                 {"second_image_id", view.second_image_id}};
+  nlohmann::json vanishing = nlohmann::json::array();
+  for (const Image& image : state.document.project().images)
+    if (const std::optional<TeachVanishing> t = TeachVanishingFor(state, image.id))
+      vanishing.push_back(VanishingJson(*t));
+  out["vanishing"] = vanishing;
+  nlohmann::json lines = nlohmann::json::array();
+  for (const TeachEpipolarLine& l : TeachEpipolarLines(state))
+    lines.push_back({{"from_image_id", l.from_image_id},
+                     {"in_image_id", l.in_image_id},
+                     {"from_uv_px", Vector(l.from_uv_px)},
+                     {"from_pointer", l.from_pointer},
+                     {"pin_id", l.pin_id},
+                     {"line", Vector(l.line)},
+                     {"epipole", Vector(l.epipole)},
+                     {"pin_distance_px", Number(l.pin_distance_px)}});
+  out["epipolar"] = lines;
+  if (const std::optional<TeachNumbers> n = TeachNumbersFor(state)) {
+    out["numbers"] = {{"image_id", n->image_id},
+                      {"K", Matrix(n->K)},
+                      {"R", Matrix(n->R)},
+                      {"t", Vector(n->t)},
+                      {"center", Vector(n->center)},
+                      {"second_image_id", n->second_image_id},
+                      {"F", Matrix(n->F)},
+                      {"epipole_in_a", Vector(n->epipole_in_a)},
+                      {"epipole_in_b", Vector(n->epipole_in_b)}};
+  }
+  nlohmann::json counts = nlohmann::json::array();
+  for (const ModellingStateCounts& c : HistoryStateCounts(state.document))
+    counts.push_back({{"primitives", c.primitives},
+                      {"vertices", c.vertices},
+                      {"edges", c.edges},
+                      {"faces", c.faces},
+                      {"pins", c.pins},
+                      {"spatial_constraints", c.spatial_constraints},
+                      {"images", c.images},
+                      {"segments", c.segments}});
+  out["history_counts"] = counts;
+  out["degrees_of_freedom_left"] = state.last_update.joint.degrees_of_freedom_left;
+  const char* clipboard = ImGui::GetCurrentContext() != nullptr ? ImGui::GetClipboardText() : nullptr;
+  out["clipboard"] = clipboard != nullptr ? clipboard : "";
+  return out;
+}
+
+}  // namespace facet::app

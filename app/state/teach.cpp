@@ -1,0 +1,178 @@
+#include "app/state/teach.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "app/state/app_state.h"
+#include "core/solve/multiview_init.h"
+#include "core/util/format.h"
+
+namespace facet::app {
+namespace {
+
+using internal::FormatNumber;
+
+std::string Point(const Eigen::Vector2d& p) {
+  return "(" + FormatNumber(p.x(), 5) + ", " + FormatNumber(p.y(), 5) + ") px";
+}
+
+const Image* CalibratedImage(const Project& project, Id id) {
+  const Image* image = project.FindImage(id);
+  return image != nullptr && image->camera_calibrated ? image : nullptr;
+}
+
+// The vertices whose pins the epipolar overlay follows: the selected ones and the selected pin's.
+std::vector<VertexRef> SelectedVertices(const AppState& state) {
+  std::vector<VertexRef> vertices;
+  for (const ElementRef& e : SelectedElements(state.selection))
+    if (e.kind == ElementKind::kVertex) vertices.push_back({e.primitive_id, e.element});
+  if (const Pin* pin = state.document.project().FindPin(state.selection.pin_id)) vertices.push_back(pin->vertex);
+  return vertices;
+}
+
+}  // namespace
+
+bool* TeachFlag(TeachView* view, const std::string& name) {
+  if (name == "vanishing") return &view->vanishing_points;
+  if (name == "epipolar") return &view->epipolar;
+  if (name == "numbers") return &view->numbers;
+  if (name == "state") return &view->modelling_state;
+  return nullptr;
+}
+
+std::optional<TeachVanishing> TeachVanishingFor(const AppState& state, Id image_id) {
+  const Project& project = state.document.project();
+  const Image* image = project.FindImage(image_id);
+  const auto found = state.last_update.calibration.find(image_id);
+  if (image == nullptr || found == state.last_update.calibration.end() || !found->second.IsUsable())
+    return std::nullopt;
+  const VpCalibrationSummary& calibration = found->second;
+  TeachVanishing out;
+  out.image_id = image_id;
+  VanishingConstructionInput input;
+  input.vanishing_points_px = calibration.family_vanishing_points;
+  input.assumed_principal_point_px = calibration.principal_point_px;
+  input.assumed_focal_px = calibration.focal_px;
+  input.at_infinity = calibration.vanishing_point_at_infinity;
+  out.construction = ConstructFromVanishingPoints(input);
+  out.vanishing_points_px = input.vanishing_points_px;
+  out.covariance_px2 = calibration.family_vanishing_point_covariance_px2;
+  out.fitted_focal_px = calibration.focal_px;
+  out.fitted_focal_std_px = calibration.focal_std_px;
+  out.fitted_principal_point_px = calibration.principal_point_px;
+
+  const VanishingConstruction& c = out.construction;
+  int families = 0;
+  for (int a = 0; a < 3; ++a) families += c.present[a] ? 1 : 0;
+  out.assumptions.push_back("assumed: the line families are orthogonal in the world; square pixels, no skew");
+  if (c.triangle_failed)
+    out.assumptions.push_back("the vanishing triangle gives no camera (a point nearly at infinity): two points used");
+  for (int a = 0; a < 3; ++a)
+    if (c.present[a] && !c.finite[a])
+      out.assumptions.push_back(std::string("v") + AxisName(static_cast<Axis>(a)) +
+                                " is at infinity: its lines are parallel in the photo");
+  if (c.principal_point_assumed) {
+    if (image->principal_point_mode == PrincipalPointMode::kFixed) {
+      out.assumptions.push_back("assumed: principal point given at " + Point(c.principal_point_px));
+    } else if (image->principal_point_mode == PrincipalPointMode::kImageCenter || families < 3 ||
+               calibration.principal_point_std_px.isZero()) {
+      out.assumptions.push_back("assumed: principal point at the image centre " + Point(c.principal_point_px));
+    } else {
+      out.assumptions.push_back("principal point from the joint fit " + Point(c.principal_point_px) +
+                                " (a vanishing point at infinity leaves the triangle open)");
+    }
+  }
+  if (c.focal_assumed) {
+    if (image->focal_mode == FocalMode::kFixed) {
+      out.assumptions.push_back("assumed: focal length known, f = " + FormatNumber(c.focal_px, 5) + " px (given)");
+    } else if (image->focal_mode == FocalMode::kPrior) {
+      out.assumptions.push_back("assumed: focal length from the prior (EXIF), f = " + FormatNumber(c.focal_px, 5) +
+                                " px");
+    } else {
+      out.assumptions.push_back("focal length from the joint fit, f = " + FormatNumber(c.focal_px, 5) + " px");
+    }
+  }
+  if (image->use_horizon) out.assumptions.push_back("assumed: the horizon given (dashed orange)");
+
+  if (image->camera_calibrated) {
+    const Camera& camera = image->camera;
+    out.camera_center_in_world = camera.CenterInWorld();
+    for (int a = 0; a < 3; ++a)
+      out.directions_in_world[a] = camera.cam_from_world_rotation.transpose() * c.directions_in_cam[a];
+  }
+  return out;
+}
+
+std::vector<TeachEpipolarLine> TeachEpipolarLines(const AppState& state) {
+  std::vector<TeachEpipolarLine> out;
+  const Project& project = state.document.project();
+  auto add_lines_from = [&](const Image& from, const Eigen::Vector2d& uv_px, bool pointer, const Pin* pin) {
+    // F acts on pinhole pixels: the point is undistorted first, the line is in b's pinhole pixels.
+    const Eigen::Vector2d uv_pinhole = from.camera.UndistortPixel(uv_px);
+    for (const Image& other : project.images) {
+      if (other.id == from.id || !other.camera_calibrated) continue;
+      const Eigen::Matrix3d F = FundamentalFromCameras(from.camera, other.camera);
+      const EpipolarLine line = EpipolarLineInImage(F, uv_pinhole, other.width_px, other.height_px);
+      if (line.line.isZero()) continue;
+      TeachEpipolarLine l;
+      l.from_image_id = from.id;
+      l.in_image_id = other.id;
+      l.from_uv_px = uv_px;
+      l.from_pointer = pointer;
+      l.pin_id = pin != nullptr ? pin->id : kNoId;
+      l.line = line.line;
+      l.epipole = EpipolesOfCameras(from.camera, other.camera).in_b;
+      if (pin != nullptr) {
+        for (const Pin& there : project.pins) {
+          if (there.image_id != other.id || !(there.vertex == pin->vertex)) continue;
+          l.pin_distance_px = std::abs(l.line.dot(other.camera.UndistortPixel(there.uv_px).homogeneous()));
+        }
+      }
+      out.push_back(l);
+    }
+  };
+  const std::vector<VertexRef> vertices = SelectedVertices(state);
+  for (const Pin& pin : project.pins) {
+    if (std::find(vertices.begin(), vertices.end(), pin.vertex) == vertices.end()) continue;
+    if (const Image* from = CalibratedImage(project, pin.image_id)) add_lines_from(*from, pin.uv_px, false, &pin);
+  }
+  if (state.pointer_in_image_px) {
+    if (const Image* from = CalibratedImage(project, state.pointer_image_id))
+      add_lines_from(*from, *state.pointer_in_image_px, true, nullptr);
+  }
+  return out;
+}
+
+std::optional<TeachNumbers> TeachNumbersFor(const AppState& state) {
+  const Project& project = state.document.project();
+  const Image* image = CalibratedImage(project, state.active_image_id);
+  if (image == nullptr) return std::nullopt;
+  TeachNumbers out;
+  out.image_id = image->id;
+  out.K = image->camera.K();
+  out.R = image->camera.cam_from_world_rotation;
+  out.t = image->camera.cam_from_world_translation;
+  out.center = image->camera.CenterInWorld();
+  const Image* second = CalibratedImage(project, state.teach.second_image_id);
+  if (second == nullptr || second->id == image->id) return out;
+  Eigen::Matrix3d F = FundamentalFromCameras(image->camera, second->camera);
+  if (!(F.norm() > 0.0)) return out;
+  F /= F.norm();
+  Eigen::Index row, col;
+  F.cwiseAbs().maxCoeff(&row, &col);
+  if (F(row, col) < 0.0) F = -F;
+  out.second_image_id = second->id;
+  out.F = F;
+  const EpipolePair epipoles = EpipolesOfCameras(image->camera, second->camera);
+  out.epipole_in_a = epipoles.in_a;
+  out.epipole_in_b = epipoles.in_b;
+  return out;
+}
+
+void UpdateTeachHistoryCounts(AppState* state) {
+  if (state->teach.history_counts_revision == state->document.revision()) return;
+  state->teach.history_counts = HistoryStateCounts(state->document);
+  state->teach.history_counts_revision = state->document.revision();
+}
+
+}  // namespace facet::app

@@ -1,0 +1,321 @@
+// Teach mode through the real application (View > Teach, app/state/teach.h): the geometry the
+// overlays draw, read back from the render report, against the synthetic cameras that made the
+// scene: the vanishing construction (orthocentre = principal point, circles, f, horizon,
+// directions), the epipolar lines of a selected pin and of the pointer, the Numbers window's
+// F (x_b^T F x_a = 0) and its copy buttons, the modelling state per History entry. Then the
+// screenshots of each overlay (FACET_BINARY_DIR/teach/; README "Teaching with Facet" shows
+// copies from assets/samples/leuven/teach/).
+#include <doctest/doctest.h>
+
+#include "core/geometry/camera.h"
+#include "core/util/matrix_text.h"
+#include "tests/app/app_test_util.h"
+
+namespace facet::testing {
+namespace {
+
+// Noise-free scene: the calibration refines exact vanishing points and the solve starts at
+// the truth, so what the overlay reports is the truth up to rounding through the fits
+// (relative to the image size or f).
+constexpr double kNoiseFreeRelative = 1e-9;
+// Directions and lines pass through the solves' rotations (~1e-12 rad here).
+constexpr double kDirectionTolerance = 1e-8;
+
+Eigen::Vector2d Vec2(const nlohmann::json& j) { return {j.at(0).get<double>(), j.at(1).get<double>()}; }
+Eigen::Vector3d Vec3(const nlohmann::json& j) {
+  return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()};
+}
+Eigen::Matrix3d Mat3(const nlohmann::json& j) {
+  Eigen::Matrix3d m;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m(r, c) = j.at(r).at(c).get<double>();
+  return m;
+}
+double SignFree(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::min((a.normalized() - b.normalized()).norm(), (a.normalized() + b.normalized()).norm());
+}
+
+void WriteGreyPhoto(const std::string& path, const Camera& camera) {
+  const cv::Mat photo(camera.height_px, camera.width_px, CV_8UC3, cv::Scalar(120, 120, 120));
+  REQUIRE(cv::imwrite(path, photo));
+}
+
+// The box scene's photo and project in `dir`; `edit` may change the project first.
+std::string WriteScene(const TempDir& dir, const SyntheticScene& scene, const Project& project) {
+  WriteGreyPhoto(dir / "synthetic.png", scene.true_camera);
+  const std::string path = dir / "scene.facet";
+  REQUIRE(SaveProject(project, path) == "");
+  return path;
+}
+
+// A second camera of the box scene from the other side, for the two-view cases.
+Camera SecondCamera() {
+  SyntheticSceneOptions o;
+  o.camera_center = {-5.0, -8.0, 4.0};
+  o.roll_deg = -2.0;
+  o.focal_px = 1100.0;
+  o.principal_point_offset_px = {-20.0, 15.0};
+  return MakeLookAtCamera(o);
+}
+
+// The box scene with a second calibrated photo seeing all eight corners.
+Project TwoViewProject(const SyntheticScene& scene, Id* second_id) {
+  Project p = scene.project;
+  Image second;
+  second.id = p.NewId();
+  second.path = "second.png";
+  second.camera = SecondCamera();
+  second.width_px = second.camera.width_px;
+  second.height_px = second.camera.height_px;
+  second.camera_calibrated = true;
+  p.images.push_back(second);
+  for (int c = 0; c < 8; ++c) {
+    Pin pin;
+    pin.id = p.NewId();
+    pin.image_id = second.id;
+    pin.vertex = {scene.box_id, static_cast<VertexId>(c)};
+    pin.uv_px = second.camera.Project(scene.true_box.mesh.vertex(c).position);
+    p.pins.push_back(pin);
+  }
+  *second_id = second.id;
+  return p;
+}
+
+TEST_CASE("vanishing overlay: the construction read back from the app is the true camera's") {
+  TempDir dir("teach_vp");
+  const SyntheticScene scene = MakeBoxScene();
+  const std::string path = WriteScene(dir, scene, scene.project);
+  const nlohmann::json report = RenderScript(
+      dir, path, "vp", "frames 3\ncommand teach vanishing on\nframes 3\nscreenshot " + (dir / "vp_shot.png"));
+  CHECK(report.at("teach").at("view").at("vanishing").get<bool>());
+  REQUIRE(report.at("teach").at("vanishing").size() == 1u);
+  const nlohmann::json& v = report.at("teach").at("vanishing").at(0);
+  const Camera& truth = scene.true_camera;
+  const double size = std::hypot(double(truth.width_px), double(truth.height_px));
+  const double tol = kNoiseFreeRelative * size;
+  CHECK(v.at("kind").get<std::string>() == "three points");
+  CHECK_FALSE(v.at("principal_point_assumed").get<bool>());
+  const Eigen::Vector2d p = Vec2(v.at("principal_point_px"));
+  CAPTURE(p.transpose());
+  CHECK((p - truth.principal_point_px).norm() < tol);
+  CHECK(std::abs(v.at("focal_px").get<double>() - truth.focal_px) < kNoiseFreeRelative * truth.focal_px);
+  std::array<Eigen::Vector2d, 3> true_vp;
+  for (int a = 0; a < 3; ++a) {
+    const Eigen::Vector3d h = truth.K() * truth.cam_from_world_rotation.col(a);
+    true_vp[a] = h.head<2>() / h.z();
+    CHECK((Vec2(v.at("points_px").at(a)) - true_vp[a]).norm() < kNoiseFreeRelative * true_vp[a].norm());
+    // Noise-free segments: the ellipse has (next to) no size.
+    const nlohmann::json& cov = v.at("covariance_px2").at(a);
+    REQUIRE_FALSE(cov.at(0).at(0).is_null());
+    CHECK(cov.at(0).at(0).get<double>() + cov.at(1).at(1).get<double>() < 1e-12);
+  }
+  REQUIRE(v.at("focal_constructions").size() == 3u);
+  for (const nlohmann::json& c : v.at("focal_constructions")) {
+    const int i = c.at("axes").at(0).get<int>(), j = c.at("axes").at(1).get<int>();
+    REQUIRE(c.at("valid").get<bool>());
+    CHECK((Vec2(c.at("circle_center_px")) - 0.5 * (true_vp[i] + true_vp[j])).norm() <
+          kNoiseFreeRelative * true_vp[i].norm());
+    CHECK(std::abs(c.at("circle_radius_px").get<double>() - 0.5 * (true_vp[i] - true_vp[j]).norm()) <
+          kNoiseFreeRelative * (true_vp[i] - true_vp[j]).norm());
+    const Eigen::Vector2d q = Vec2(c.at("turned_center_px"));
+    CHECK(std::abs((true_vp[i] - q).normalized().dot((true_vp[j] - q).normalized())) < kNoiseFreeRelative);
+    CHECK(std::abs((Vec2(c.at("focal_end_px")) - truth.principal_point_px).norm() - truth.focal_px) <
+          kNoiseFreeRelative * truth.focal_px);
+  }
+  const Eigen::Vector3d true_horizon = truth.K().inverse().transpose() * truth.cam_from_world_rotation.col(2);
+  CHECK(SignFree(Vec3(v.at("horizon")), true_horizon) < kNoiseFreeRelative * size);
+  for (int a = 0; a < 3; ++a)
+    CHECK(SignFree(Vec3(v.at("directions_in_world").at(a)), Eigen::Vector3d::Unit(a)) < kDirectionTolerance);
+  CHECK((Vec3(v.at("camera_center_in_world")) - truth.CenterInWorld()).norm() < kDirectionTolerance * 20.0);
+  CHECK(v.at("assumptions").size() == 1u);  // only the orthogonality of the families
+
+  // Drawn where computed: the principal point's marker on the screenshot.
+  const View view = ViewFromReport(report);
+  const cv::Mat shot = cv::imread(dir / "vp_shot.png");
+  REQUIRE(!shot.empty());
+  const Eigen::Vector2d s = view.ToScreen(truth.principal_point_px);
+  REQUIRE(view.Inside(s, 10.0));
+  const cv::Vec3b bgr = shot.at<cv::Vec3b>(static_cast<int>(std::lround(s.y())), static_cast<int>(std::lround(s.x())));
+  CAPTURE(bgr);
+  CHECK(std::abs(bgr[2] - 255) <= 30);  // kPrincipalPointColor (255, 90, 220)
+  CHECK(std::abs(bgr[1] - 90) <= 30);
+  CHECK(std::abs(bgr[0] - 220) <= 30);
+}
+
+TEST_CASE("vanishing overlay with two families: principal point assumed at the centre, written beside it") {
+  TempDir dir("teach_vp2");
+  SyntheticSceneOptions options;
+  options.principal_point_offset_px = Eigen::Vector2d::Zero();  // the assumption holds
+  const SyntheticScene scene = MakeBoxScene(options);
+  Project p = scene.project;
+  std::erase_if(p.segments, [](const Segment& s) { return s.axis == Axis::kZ; });
+  p.images[0].principal_point_mode = PrincipalPointMode::kImageCenter;
+  const std::string path = WriteScene(dir, scene, p);
+  const nlohmann::json report = RenderScript(dir, path, "vp2", "frames 3\ncommand teach vanishing on\nframes 2\n");
+  REQUIRE(report.at("teach").at("vanishing").size() == 1u);
+  const nlohmann::json& v = report.at("teach").at("vanishing").at(0);
+  CHECK(v.at("kind").get<std::string>() == "two points");
+  CHECK(v.at("principal_point_assumed").get<bool>());
+  const Camera& truth = scene.true_camera;
+  CHECK((Vec2(v.at("principal_point_px")) - truth.principal_point_px).norm() < 1e-9 * truth.width_px);
+  CHECK(std::abs(v.at("focal_px").get<double>() - truth.focal_px) < kNoiseFreeRelative * truth.focal_px);
+  bool says_centre = false;
+  for (const auto& a : v.at("assumptions"))
+    says_centre |= a.get<std::string>().find("image centre") != std::string::npos;
+  CHECK(says_centre);
+  const Eigen::Vector3d true_horizon = truth.K().inverse().transpose() * truth.cam_from_world_rotation.col(2);
+  CHECK(SignFree(Vec3(v.at("horizon")), true_horizon) < kNoiseFreeRelative * truth.width_px);
+}
+
+TEST_CASE("epipolar overlay: a selected vertex's pins and the pointer give the true epipolar lines") {
+  TempDir dir("teach_epi");
+  const SyntheticScene scene = MakeBoxScene();
+  Id second_id = kNoId;
+  const Project project = TwoViewProject(scene, &second_id);
+  WriteGreyPhoto(dir / "second.png", SecondCamera());
+  const std::string path = WriteScene(dir, scene, project);
+  const Camera& a = scene.true_camera;
+  const Camera b = SecondCamera();
+  // The pointer over image a at a pixel that sees a known point: the box corner 6's top.
+  const Eigen::Vector3d corner = scene.true_box.mesh.vertex(6).position;
+  const Eigen::Vector2d pointer = a.Project(corner) + Eigen::Vector2d(30.0, -20.0);
+  const nlohmann::json report = RenderScript(
+      dir, path, "epi",
+      "frames 3\ncommand teach epipolar on\ncommand select vertex " + std::to_string(scene.box_id) +
+          " 2\nframes 2\nmove image " + FormatXY(pointer) + "\nframes 2\nscreenshot " + (dir / "epi_shot.png"));
+  const nlohmann::json& lines = report.at("teach").at("epipolar");
+  int pin_lines = 0, pointer_lines = 0;
+  for (const nlohmann::json& l : lines) {
+    const Eigen::Vector3d line = Vec3(l.at("line"));
+    const bool into_b = l.at("in_image_id").get<Id>() == second_id;
+    const Camera& from = into_b ? a : b;
+    const Camera& in = into_b ? b : a;
+    // The line passes through the epipole, which is the other camera's centre seen by `in`.
+    const Eigen::Vector3d e = Vec3(l.at("epipole"));
+    const Eigen::Vector3d true_e = in.K() * in.CamFromWorld(from.CenterInWorld());
+    CHECK(SignFree(e, true_e) < kDirectionTolerance);
+    CHECK(std::abs(line.dot(true_e.normalized())) < kDirectionTolerance);
+    if (l.at("from_pointer").get<bool>()) {
+      ++pointer_lines;
+      CHECK(into_b);  // the pointer is over the active image a
+      // The pointer is where the mouse went, to a screen pixel (and snapping) of the view.
+      const Eigen::Vector2d at = Vec2(l.at("from_uv_px"));
+      CHECK((at - pointer).norm() < 10.0 / ViewFromReport(report).zoom);
+      // Every point on the pointer's ray projects onto the line in b.
+      for (const double depth : {2.0, 9.0, 40.0}) {
+        const Eigen::Vector3d x = a.CenterInWorld() + depth * a.RayDirectionInWorld(at);
+        CHECK(std::abs(line.dot(b.Project(x).homogeneous())) < kNoiseFreeRelative * b.width_px);
+      }
+    } else {
+      ++pin_lines;
+      // The selected vertex's pin in the other photo lies on its line (noise-free pins).
+      const Eigen::Vector2d truth_there = in.Project(scene.true_box.mesh.vertex(2).position);
+      CHECK(std::abs(line.dot(truth_there.homogeneous())) < 1e-6);
+      CHECK(l.at("pin_distance_px").get<double>() < 1e-6);
+    }
+  }
+  CHECK(pin_lines == 2);      // vertex 2's pin in a drawn in b, and its pin in b drawn in a
+  CHECK(pointer_lines == 1);  // the pointer in a, drawn in b's inset
+}
+
+TEST_CASE("Numbers window: K, R, t of the active camera, F of two photos, copied as text and LaTeX") {
+  TempDir dir("teach_numbers");
+  const SyntheticScene scene = MakeBoxScene();
+  Id second_id = kNoId;
+  const Project project = TwoViewProject(scene, &second_id);
+  WriteGreyPhoto(dir / "second.png", SecondCamera());
+  const std::string path = WriteScene(dir, scene, project);
+  const std::string saved = dir / "saved.facet";
+  const nlohmann::json probe = RenderScript(
+      dir, path, "numbers_probe", "frames 3\ncommand teach numbers on\ncommand teach second-image 1\nframes 3\n");
+  const nlohmann::json& items = probe.at("items");
+  REQUIRE(items.contains("teach.copy.K"));
+  REQUIRE(items.contains("teach.copy_latex.F"));
+  const nlohmann::json text_report =
+      RenderScript(dir, path, "numbers_text",
+                   "frames 3\ncommand teach numbers on\ncommand teach second-image 1\n"
+                   "frames 3\nclick left " +
+                       ItemCenter(items, "teach.copy.K") + "\nframes 2\ncommand save " + saved + "\n");
+  const nlohmann::json& numbers = text_report.at("teach").at("numbers");
+  const Eigen::Matrix3d K = Mat3(numbers.at("K"));
+  CHECK(text_report.at("teach").at("clipboard").get<std::string>() == MatrixToText(K, 10));
+  const Project solved = LoadProjectFile(saved);
+  const Camera& a = solved.FindImage(numbers.at("image_id").get<Id>())->camera;
+  const Camera& b = solved.FindImage(numbers.at("second_image_id").get<Id>())->camera;
+  CHECK((K - a.K()).norm() == 0.0);
+  CHECK((Mat3(numbers.at("R")) - a.cam_from_world_rotation).norm() == 0.0);
+  CHECK((Vec3(numbers.at("t")) - a.cam_from_world_translation).norm() == 0.0);
+  // F is the two cameras' geometry: x_b^T F x_a = 0 on projected points.
+  const Eigen::Matrix3d F = Mat3(numbers.at("F"));
+  CHECK(std::abs(F.norm() - 1.0) < 1e-12);
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d x = scene.true_box.mesh.vertex(c).position + Eigen::Vector3d(0.3 * c, -0.2, 0.1 * c);
+    const Eigen::Vector3d xa = a.Project(x).homogeneous(), xb = b.Project(x).homogeneous();
+    CHECK(std::abs(xb.dot(F * xa)) <= kNoiseFreeRelative * xb.norm() * (F * xa).norm());
+  }
+  const nlohmann::json latex_report = RenderScript(
+      dir, path, "numbers_latex",
+      "frames 3\ncommand teach numbers on\ncommand teach second-image 1\nframes 3\nclick left " +
+          ItemCenter(items, "teach.copy_latex.F") + "\nframes 2\nscreenshot " + (dir / "numbers_shot.png"));
+  CHECK(latex_report.at("teach").at("clipboard").get<std::string>() ==
+        MatrixToLatex(Mat3(latex_report.at("teach").at("numbers").at("F")), 10));
+}
+
+TEST_CASE("modelling state: the (K, F) counts per History entry, with the teach option on") {
+  TempDir dir("teach_state");
+  const SyntheticScene scene = MakeBoxScene();
+  const std::string path = WriteScene(dir, scene, scene.project);
+  const nlohmann::json report =
+      RenderScript(dir, path, "state",
+                   "frames 3\ncommand teach state on\ncommand add box\nframes 2\nscreenshot " + (dir / "state.png"));
+  const nlohmann::json& counts = report.at("teach").at("history_counts");
+  REQUIRE(counts.size() == report.at("undo_stack").size() + 1);
+  REQUIRE(counts.size() == 2u);
+  CHECK(counts.at(1).at("primitives").get<int>() == counts.at(0).at("primitives").get<int>() + 1);
+  CHECK(counts.at(1).at("vertices").get<int>() == counts.at(0).at("vertices").get<int>() + 8);
+  CHECK(counts.at(1).at("faces").get<int>() == counts.at(0).at("faces").get<int>() + 6);
+  CHECK(counts.at(0).at("pins").get<int>() == 8);
+  CHECK(report.at("teach").at("degrees_of_freedom_left").get<int>() >= 0);
+}
+
+// The pictures of README's "Teaching with Facet", each overlay on the Leuven sample (the
+// epipolar one needs two photos: the synthetic two-view scene).
+TEST_CASE("screenshots of each teach overlay") {
+  TempDir dir("teach_shots");
+  const fs::path shots = fs::path(FACET_BINARY_DIR) / "teach";
+  fs::create_directories(shots);
+  const std::string leuven = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuven.facet";
+  auto shot = [&](const std::string& project, const std::string& name, const std::string& script) {
+    const std::string png = (shots / (name + ".png")).string();
+    fs::remove(png);
+    const nlohmann::json report = RenderScript(dir, project, name, script + "\nscreenshot " + png + "\n");
+    const cv::Mat picture = cv::imread(png);
+    REQUIRE_MESSAGE(!picture.empty(), name);
+    // The README's copy: a small JPEG (a few hundred KB for all four).
+    cv::Mat small;
+    cv::resize(picture, small, cv::Size(), 0.625, 0.625, cv::INTER_AREA);
+    CHECK(cv::imwrite((shots / (name + ".jpg")).string(), small, {cv::IMWRITE_JPEG_QUALITY, 75}));
+    return report;
+  };
+  // Zoomed out about the street's vanishing point so that the construction's circle shows.
+  nlohmann::json r = shot(leuven, "teach-vanishing",
+                          "frames 3\ncommand teach vanishing on\nframes 2\nwheel -8 image 343 150\nframes 2");
+  CHECK(r.at("teach").at("vanishing").at(0).at("kind").get<std::string>() == "two points");
+  r = shot(leuven, "teach-numbers", "frames 3\ncommand teach numbers on\nframes 3");
+  CHECK(r.at("teach").contains("numbers"));
+  r = shot(leuven, "teach-state", "frames 3\ncommand teach state on\ncommand add box\nframes 3");
+  CHECK(r.at("teach").at("history_counts").size() == 2u);
+  const SyntheticScene scene = MakeBoxScene();
+  Id second_id = kNoId;
+  const Project project = TwoViewProject(scene, &second_id);
+  WriteGreyPhoto(dir / "second.png", SecondCamera());
+  const std::string path = WriteScene(dir, scene, project);
+  const Eigen::Vector2d pointer = scene.true_camera.Project(scene.true_box.mesh.vertex(6).position);
+  r = shot(path, "teach-epipolar",
+           "frames 3\ncommand teach epipolar on\ncommand select vertex " + std::to_string(scene.box_id) +
+               " 2\nframes 2\nmove image " + FormatXY(pointer) + "\nframes 2");
+  CHECK(r.at("teach").at("epipolar").size() == 3u);
+}
+
+}  // namespace
+}  // namespace facet::testing
