@@ -88,6 +88,9 @@ struct FaceTexture {
   int y = 0;
 };
 
+// Even-odd rule; the polygon may be non-convex.
+bool InsidePolygon(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p);
+
 // Face coordinates (s, t) of texel (i, j) of a w x h face texture: texel (0, 0) is the
 // rectangle's (s_min, t_max) and texel (w - 1, h - 1) its (s_max, t_min), so the face reads
 // upright as seen from outside. Returns the 3x3 map from (i, j, 1) to (s, t, 1).

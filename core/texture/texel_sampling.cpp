@@ -10,6 +10,19 @@
 #include "core/texture/view_blend.h"
 
 namespace facet::bake {
+
+bool InsidePolygon(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p) {
+  bool inside = false;
+  for (size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
+    const Eigen::Vector2d& a = polygon[i];
+    const Eigen::Vector2d& b = polygon[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < a.x() + (p.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y())) {
+      inside = !inside;
+    }
+  }
+  return inside;
+}
+
 namespace {
 
 // The z-buffer tolerance counts the depth a face's own plane spans over this many z-buffer
@@ -25,18 +38,6 @@ constexpr float kClippedLevel = 250.0f;
 constexpr double kOwnTexelInset = 1.0;
 // A view joins a blended texel when its weight is at least this share of the largest one.
 constexpr double kContributionShare = 0.01;
-
-bool InsidePolygon(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p) {
-  bool inside = false;
-  for (size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
-    const Eigen::Vector2d& a = polygon[i];
-    const Eigen::Vector2d& b = polygon[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < a.x() + (p.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y())) {
-      inside = !inside;
-    }
-  }
-  return inside;
-}
 
 double DistanceToOutline(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p) {
   double best = std::numeric_limits<double>::infinity();

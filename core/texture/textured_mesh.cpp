@@ -82,19 +82,6 @@ double VisibleArea(std::vector<Eigen::Vector2d> polygon, int width, int height) 
   return polygon.size() < 3 ? 0.0 : std::abs(SignedArea(polygon));
 }
 
-// Even-odd rule; the polygon may be non-convex.
-bool InsidePolygon(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p) {
-  bool inside = false;
-  for (size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
-    const Eigen::Vector2d& a = polygon[i];
-    const Eigen::Vector2d& b = polygon[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < a.x() + (p.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y())) {
-      inside = !inside;
-    }
-  }
-  return inside;
-}
-
 double ElapsedMs(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -145,7 +132,7 @@ void SetFaceFrame(const std::vector<std::array<Eigen::Vector3d, 3>>& triangles, 
     for (int j = 0; j < kOcclusionSamples; ++j) {
       const Eigen::Vector2d st = g->st_min + Eigen::Vector2d((i + 0.5) / kOcclusionSamples * extent.x(),
                                                              (j + 0.5) / kOcclusionSamples * extent.y());
-      if (InsidePolygon(g->corners_st, st)) g->occlusion_samples.push_back(g->InWorld(st));
+      if (bake::InsidePolygon(g->corners_st, st)) g->occlusion_samples.push_back(g->InWorld(st));
     }
   }
   if (g->occlusion_samples.empty()) {
