@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "app/panels/image_overlay.h"
@@ -12,7 +13,8 @@ namespace facet::app {
 namespace {
 
 constexpr ImU32 kGivenHorizonColor = IM_COL32(255, 160, 60, 255);  // the fitted one is kHorizonColor
-constexpr ImU32 kOutlierColor = IM_COL32(255, 70, 60, 255);
+// Outliers are the fit working as meant, not a failure: a muted mark (red is kept for failures).
+constexpr ImU32 kOutlierColor = IM_COL32(190, 190, 190, 255);
 constexpr ImU32 kShadow = IM_COL32(0, 0, 0, 170);
 constexpr float kDashPx = 10.0f;
 constexpr float kGapPx = 6.0f;
@@ -66,7 +68,9 @@ void DrawGivenHorizon(ImDrawList* draw_list, const Image& image, const ViewTrans
   DrawShadowedText(draw_list, ImVec2(float(at.x()), float(at.y()) - 18.0f), kGivenHorizonColor, "horizon (given)");
 }
 
-// Segments the calibration flagged as outliers: crossed out at their midpoint.
+// Segments the calibration flagged as outliers: a small grey cross at their midpoint, named
+// only when the segment is selected or the pointer is near the cross, so that a photo with
+// many detected lines is not covered in labels.
 void DrawOutliers(ImDrawList* draw_list, const AppState& state, const Image& image, const ViewTransform& view) {
   const auto cal = state.last_update.calibration.find(image.id);
   if (cal == state.last_update.calibration.end() || cal->second.outlier_segments.empty()) return;
@@ -75,18 +79,25 @@ void DrawOutliers(ImDrawList* draw_list, const AppState& state, const Image& ima
     if (s.image_id == image.id) segments.push_back(&s);
   const std::vector<bool>& flags = cal->second.segment_is_outlier;
   if (flags.size() != segments.size()) return;  // the summary is of another edit
+  std::optional<Eigen::Vector2d> pointer;
+  if (state.pointer_image_id == image.id && state.pointer_in_image_px) {
+    pointer = Screen(view, state.pointer_in_image_px->x(), state.pointer_in_image_px->y());
+  }
   for (size_t i = 0; i < segments.size(); ++i) {
     if (!flags[i]) continue;
     const Eigen::Vector2d m = 0.5 * (segments[i]->a_px + segments[i]->b_px);
     const Eigen::Vector2d s = Screen(view, m.x(), m.y());
     const ImVec2 c(float(s.x()), float(s.y()));
-    constexpr float r = 6.0f;
+    constexpr float r = 4.0f;
     for (const ImU32 color : {kShadow, kOutlierColor}) {
-      const float w = color == kShadow ? 4.0f : 2.0f;
+      const float w = color == kShadow ? 3.0f : 1.5f;
       draw_list->AddLine(ImVec2(c.x - r, c.y - r), ImVec2(c.x + r, c.y + r), color, w);
       draw_list->AddLine(ImVec2(c.x - r, c.y + r), ImVec2(c.x + r, c.y - r), color, w);
     }
-    DrawShadowedText(draw_list, ImVec2(c.x + 8.0f, c.y + 2.0f), kOutlierColor, "outlier");
+    constexpr double kLabelReachPx = 24.0;
+    const bool named =
+        state.selection.segment_id == segments[i]->id || (pointer && (*pointer - s).norm() <= kLabelReachPx);
+    if (named) DrawShadowedText(draw_list, ImVec2(c.x + 8.0f, c.y + 2.0f), kOutlierColor, "outlier");
   }
 }
 

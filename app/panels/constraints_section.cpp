@@ -148,6 +148,7 @@ void DrawConstraintsSection(AppState* state) {
   }
   const std::vector<Constraint> constraints = project.constraints;  // the remove edit replaces them
   const std::vector<ConstraintDiagnostic>& diagnostics = state->last_update.joint.constraints;
+  Id remove_id = kNoId;
   for (size_t i = 0; i < constraints.size(); ++i) {
     const Constraint& c = constraints[i];
     ImGui::PushID(static_cast<int>(c.id));
@@ -176,7 +177,9 @@ void DrawConstraintsSection(AppState* state) {
     for (const ConstraintDiagnostic& diag : diagnostics) {
       if (diag.constraint_id == c.id) d = &diag;
     }
-    if (ImGui::SmallButton("x")) RemoveConstraintEdit(state, c.id);
+    // Removed after the loop: the edit replaces the project and the diagnostics that `c` and
+    // `d` point into.
+    if (ImGui::SmallButton("x")) remove_id = c.id;
     RecordItem(state, "constraint.remove." + std::to_string(i));
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Remove constraint");
     ImGui::SameLine();
@@ -190,6 +193,7 @@ void DrawConstraintsSection(AppState* state) {
     }
     ImGui::PopID();
   }
+  if (remove_id != kNoId) RemoveConstraintEdit(state, remove_id);
 }
 
 void DrawElementSection(AppState* state, const Primitive& primitive, const ElementRef& element) {

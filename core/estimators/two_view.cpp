@@ -352,9 +352,11 @@ std::vector<bool> Ransac(const Points& uv1, const Points& uv2, const Fundamental
         if (p_good >= 1.0 - 1e-12) {
           needed = kMinRansacIterations;
         } else if (p_good > 0) {
-          needed =
-              std::max(kMinRansacIterations,
-                       static_cast<int>(std::ceil(std::log(1 - options.ransac_confidence) / std::log(1 - p_good))));
+          // A tiny p_good asks for more iterations than an int holds: capped before the
+          // conversion (converting an out-of-range double is undefined behaviour).
+          const double wanted = std::ceil(std::log(1 - options.ransac_confidence) / std::log(1 - p_good));
+          needed = std::max(kMinRansacIterations,
+                            static_cast<int>(std::min(wanted, static_cast<double>(options.max_ransac_iterations))));
         }
       }
     }

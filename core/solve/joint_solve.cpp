@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -665,8 +666,8 @@ void ExactPenaltyMerits(const JointProblem& problem, const StartPoint& start, do
 // Why the solve's result must not be used, or "" when it may: non-finite values, a pinned
 // vertex behind its camera (`evaluated` false), or a result above the start on the exact
 // penalty merit (ExactPenaltyMerits).
-std::string WhyResultUnusable(const JointProblem& problem, const JointState& state, bool evaluated,
-                              double final_cost, const StartPoint& start) {
+std::string WhyResultUnusable(const JointProblem& problem, const JointState& state, bool evaluated, double final_cost,
+                              const StartPoint& start) {
   if (!StateIsFinite(state) || !std::isfinite(final_cost)) {
     return "the solve diverged (non-finite values); the model is unchanged";
   }
@@ -999,10 +1000,19 @@ JointSolveSummary SolveJointTraced(const Project& project, const JointSolveOptio
   if (options.compute_diagnostics) {
     if (problem.num_parameters <= kMaxDiagnosticParameters) {
       summary.undetermined = UndeterminedParameters(problem, &summary.degrees_of_freedom_left);
+      summary.degrees_of_freedom_left += static_cast<int>(problem.held_parameters.size());
     } else {
       summary.warnings.push_back("undetermined parameters not analysed: " + std::to_string(problem.num_parameters) +
                                  " parameters exceed the dense limit of " + std::to_string(kMaxDiagnosticParameters));
     }
+  }
+  // Held shape parameters are undetermined too; they are named whether or not the rank
+  // analysis ran, since no analysis is needed to see them.
+  for (const JointProblem::HeldParameter& held : problem.held_parameters) {
+    char value[32];
+    std::snprintf(value, sizeof(value), "%.4g", held.value);
+    summary.undetermined.push_back(held.name + " is free (seen by no pin, held at " + value +
+                                   "): " + Advice(held.name));
   }
   if (start != &project) *solved = *start;
   WriteState(problem, state, solved);

@@ -634,16 +634,29 @@ struct ProjectIndex {
 struct UsedInputs {
   std::vector<int> pins, constraints;
   std::vector<char> image_used, primitive_used;
+  // Per project primitive and shape parameter: whether a used pin's or constraint's vertex
+  // moves with it (with attachment, a top's footprint is its root's and its bases' heights
+  // raise it).
+  std::vector<std::array<bool, kMaxPrimitiveParams>> param_seen;
 };
 
 UsedInputs SelectUsedInputs(const Project& project, const ProjectIndex& index, JointProblem* problem) {
   UsedInputs used;
   used.image_used.assign(project.images.size(), 0);
   used.primitive_used.assign(project.primitives.size(), 0);
+  used.param_seen.assign(project.primitives.size(), {false, false, false, false});
   auto use_vertex = [&](const VertexRef& ref) {
     const int p = index.primitive_lookup.at(ref.primitive_id);
     used.primitive_used[p] = 1;
-    for (int b : BaseChain(project, p)) used.primitive_used[b] = 1;
+    const std::vector<int> chain = BaseChain(project, p);
+    for (int b : chain) {
+      used.primitive_used[b] = 1;
+      used.param_seen[b][2] = true;
+    }
+    const ParamCoefficients coefficients = project.FindVertex(ref)->local.Collapsed();
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+      if (!coefficients.col(k).isZero()) used.param_seen[!chain.empty() && k < 2 ? chain.back() : p][k] = true;
+    }
   };
   for (size_t i = 0; i < project.pins.size(); ++i) {
     const Pin& pin = project.pins[i];
@@ -758,8 +771,14 @@ std::vector<int> SelectUsedSegments(const Project& project, const BuildOptions& 
 
 // A primitive block per used primitive; numbers its free parameters from *next. Returns the
 // problem primitive of each project primitive (-1: none).
-std::vector<int> AddPrimitiveBlocks(const Project& project, const std::vector<char>& primitive_used,
-                                    JointProblem* problem, JointState* state, int* next) {
+// A shape parameter that no used vertex moves with (a box's height when only its bottom
+// corners are pinned) is held at its value, as the geometry solve holds it
+// (core/solve/scene_solve_internal.h): as a parameter its Jacobian column would be zero, and
+// the solvers would be free to move it anywhere (it drifted solve after solve, to negative
+// sizes).
+std::vector<int> AddPrimitiveBlocks(const Project& project, const UsedInputs& used, JointProblem* problem,
+                                    JointState* state, int* next) {
+  const std::vector<char>& primitive_used = used.primitive_used;
   std::vector<int> problem_primitive(project.primitives.size(), -1);
   for (size_t i = 0; i < project.primitives.size(); ++i) {
     if (!primitive_used[i]) continue;
@@ -773,7 +792,15 @@ std::vector<int> AddPrimitiveBlocks(const Project& project, const std::vector<ch
     block.root = block.bases.empty() ? problem_primitive[block.primitive_index] : block.bases.back();
     const bool attached = !block.bases.empty();
     for (int k = attached ? 2 : 0; k < NumShapeParams(p.shape.kind); ++k) {
-      if (!p.param_locked[k]) block.param_offset[k] = (*next)++;
+      if (p.param_locked[k]) continue;
+      if (!used.param_seen[block.primitive_index][k]) {
+        problem->held_parameters.push_back({PrimitiveLabel(p) + ": " +
+                                                kParamNames[KindIndex(p.shape.kind)][std::min(k, 2)] + " (parameter " +
+                                                std::to_string(k) + ")",
+                                            p.shape.params(k)});
+        continue;
+      }
+      block.param_offset[k] = (*next)++;
     }
     if (!attached && !p.rotation_locked) {
       block.rotation_offset = *next;
@@ -873,7 +900,8 @@ void AddSegmentBlocks(const Project& project, const ProjectIndex& index, const s
     block.camera = camera_of_image[index.FindImage(seg.image_id)];
     block.num_rows = 2;
     // The family's world axis: x and y swap on an image turned by an odd quarter turn.
-    block.axis = WorldAxisOfFamily(static_cast<int>(seg.axis), project.images[index.FindImage(seg.image_id)].axis_quarter_turns);
+    block.axis =
+        WorldAxisOfFamily(static_cast<int>(seg.axis), project.images[index.FindImage(seg.image_id)].axis_quarter_turns);
     const Eigen::Vector2d mid = 0.5 * (seg.a_px + seg.b_px);
     block.segment_g = Eigen::Vector3d(seg.a_px.x(), seg.a_px.y(), 1.0).cross(Eigen::Vector3d(mid.x(), mid.y(), 1.0));
     block.segment_m << 0.0, -1.0, mid.y(), 1.0, 0.0, -mid.x();
@@ -1035,7 +1063,7 @@ JointProblem BuildJointProblem(const Project& project, const BuildOptions& optio
   int next = 0;
   const std::vector<int> camera_of_image = AddCameraBlocks(project, options, used.image_used, &problem, state, &next);
   const std::vector<int> used_segments = SelectUsedSegments(project, options, index, camera_of_image, problem);
-  const std::vector<int> problem_primitive = AddPrimitiveBlocks(project, used.primitive_used, &problem, state, &next);
+  const std::vector<int> problem_primitive = AddPrimitiveBlocks(project, used, &problem, state, &next);
   const VertexLookup vertex_lookup = AddVertexTerms(project, index, used, problem_primitive, &problem, state, &next);
   problem.num_parameters = next;
   for (VertexTerm& term : problem.vertices) {

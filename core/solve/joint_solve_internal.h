@@ -184,6 +184,13 @@ struct JointProblem {
   double model_size = 1.0;                   // RMS distance of the used vertices from their centroid at the start
   double constraint_weight = 1e3;            // sqrt(mu) of the augmented Lagrangian
   std::vector<std::string> parameter_names;  // one per parameter, for diagnostics
+  // Unlocked shape parameters that no used pin's or constraint's vertex moves with: held at
+  // their values, not parameters (named as parameter_names would name them).
+  struct HeldParameter {
+    std::string name;
+    double value = 0.0;
+  };
+  std::vector<HeldParameter> held_parameters;
   std::vector<std::string> warnings;
 };
 

@@ -60,11 +60,20 @@ std::string HeldParameterNote(const Primitive& primitive, int k) {
   static const char* kBoxFaceNames[3] = {"+x side", "back", "top"};
   char value[64];
   std::snprintf(value, sizeof(value), "%.4g", primitive.shape.params[k]);
-  return "the " + ParamName(kind, k) + " of " + PrimitiveLabel(primitive) + " is seen by no pin, so it keeps " +
-         value + " until one does: pin a vertex on its " +
+  return "the " + ParamName(kind, k) + " of " + PrimitiveLabel(primitive) + " is seen by no pin, so it keeps " + value +
+         " until one does: pin a vertex on its " +
          (boxy ? std::string(kBoxFaceNames[k]) + " face" : std::string("far side")) +
          " (in a second photo if this one does not show it), or lock the " + ParamName(kind, k) +
          " at its known length";
+}
+
+// Whether the primitive's footprint (params 0, 1) follows a box it sits on (AttachOnTop's
+// rule, as the joint solve applies it).
+bool FootprintFollowsBase(const Project& project, const Primitive& primitive) {
+  if (primitive.attached_to == kNoId || primitive.attached_to == primitive.id) return false;
+  if (primitive.shape.kind == PrimitiveKind::kPrism || primitive.shape.kind == PrimitiveKind::kCylinder) return false;
+  const Primitive* base = project.FindPrimitive(primitive.attached_to);
+  return base != nullptr && base->shape.kind == PrimitiveKind::kBox;
 }
 
 }  // namespace
@@ -169,7 +178,11 @@ SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
       // deficient and the problem without a start. It keeps its current value until a pin
       // sees it, and the summary says so with the fix.
       if (!seen_params[i][k]) {
-        problem.held_parameters.push_back(HeldParameterNote(primitive, k));
+        // A top's footprint is its base box's (AttachOnTop): the joint solve fits it there,
+        // so naming it here would name the wrong primitive (and a value that changes).
+        if (!(k < 2 && FootprintFollowsBase(project, primitive))) {
+          problem.held_parameters.push_back(HeldParameterNote(primitive, k));
+        }
         continue;
       }
       block.param_offset[k] = add_parameters(ParameterKind::kPrimitiveParam, b, 1, k);

@@ -336,7 +336,7 @@ TEST_CASE("overlay: an outlier segment is crossed out, the given horizon dashed 
   // The cross at the wrong segment's midpoint (app/panels/calibration_overlay.cpp colours).
   const Eigen::Vector2d m = view.ToScreen(wrong_mid);
   REQUIRE(view.Inside(m, 10.0));
-  const int cross = count_color(int(m.x()) - 7, int(m.y()) - 7, int(m.x()) + 7, int(m.y()) + 7, {255, 70, 60});
+  const int cross = count_color(int(m.x()) - 7, int(m.y()) - 7, int(m.x()) + 7, int(m.y()) + 7, {190, 190, 190});
   CAPTURE(cross);
   CHECK(cross >= 10);
   // The horizon: dashes (10 of every 16 px) along the row across the image's width.

@@ -308,7 +308,8 @@ TEST_CASE("issue 12: Measure: click two vertices, type the length, Enter: one un
   const std::string path = WriteBoxOnly(dir, &box_id);
   const nlohmann::json start = RenderScript(dir, path, "start", "frames 3\n");
   const Viewport3d view = ViewportFromReport(start);
-  const facet::Primitive& box = *LoadProjectFile(path).FindPrimitive(box_id);
+  const facet::Project loaded = LoadProjectFile(path);
+  const facet::Primitive& box = *loaded.FindPrimitive(box_id);
   // Two corners of the top face (seen from above), 4 -> 5 along x (4 long), clicked at their
   // pixels.
   const Eigen::Vector2d a = view.ToScreen(box.mesh.vertex(4).position);
