@@ -100,12 +100,7 @@ Scene MakeScene(const SceneSpec& spec) {
         pin.id = p.NewId();
         pin.image_id = image_id;
         pin.vertex = ref;
-        // v before u: the order GCC evaluated the former Vector2d(noise(rng), noise(rng)) in,
-        // now fixed for every compiler. Drawn u first, seed 5 of the wrong-click case below
-        // flags two true matches besides the two wrong clicks (EstimateFundamentalMatrix
-        // readmits flagged matches one at a time; those two come back only together): a
-        // known weakness, see the issue 14 note of 2026-11-27.
-        const double noise_v = noise(rng), noise_u = noise(rng);
+        const double noise_u = noise(rng), noise_v = noise(rng);
         pin.uv_px = camera.Project(x) + spec.noise_px * Eigen::Vector2d(noise_u, noise_v);
         p.pins.push_back(pin);
       }

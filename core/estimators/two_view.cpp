@@ -46,6 +46,8 @@ constexpr int kMaxInlierRounds = 3;
 // Flagged matches within this many thresholds of the refined F are tried back in (see
 // EstimateFundamentalMatrix); wrong clicks lie farther and cost no refit.
 constexpr double kReadmitFactor = 2.0;
+// Pairs are tried only among this many readmission candidates (at most 66 refits).
+constexpr size_t kMaxPairReadmitCandidates = 12;
 
 using internal::FailedSummary;
 using internal::MsSince;
@@ -682,6 +684,35 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
       f_linear = trial_linear;
       f_final = trial_final;
       refine_result = trial_result;
+    }
+    // Two true matches in the same far region can each hold the other's fit: fitted without
+    // both, F misses both, and neither comes back alone. Pairs of the flagged matches within
+    // kReadmitFactor thresholds are tried the same way (the refit must hold both and change
+    // nothing else), which is as strict per match as the single test; a joint fixed point
+    // over all of them was tried and let wrong matches in on real tracks.
+    std::vector<int> candidates;
+    for (int i = 0; i < n; ++i) {
+      if (!inliers[i] &&
+          MatchSquaredError(f_final, uv1[i], uv2[i]) < std::pow(kReadmitFactor * options.inlier_threshold_px, 2))
+        candidates.push_back(i);
+    }
+    if (candidates.size() <= kMaxPairReadmitCandidates) {
+      for (size_t a = 0; a < candidates.size(); ++a) {
+        for (size_t b = a + 1; b < candidates.size(); ++b) {
+          if (inliers[candidates[a]] || inliers[candidates[b]]) continue;
+          std::vector<bool> trial = inliers;
+          trial[candidates[a]] = true;
+          trial[candidates[b]] = true;
+          Eigen::Matrix3d trial_linear, trial_final;
+          LmResult trial_result;
+          if (!fit(trial, &trial_linear, &trial_final, &trial_result)) continue;
+          if (Classify(trial_final, uv1, uv2, options.inlier_threshold_px) != trial) continue;
+          inliers = trial;
+          f_linear = trial_linear;
+          f_final = trial_final;
+          refine_result = trial_result;
+        }
+      }
     }
   }
   summary.iterations = refine_result.iterations;
