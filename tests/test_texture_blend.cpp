@@ -682,8 +682,8 @@ TEST_CASE("the user's say: per-face sources, a forced photo, per-face and global
     photo_colour[k] = (gains[k] * kPaint).array().round();
   }
   // A uniform paint leaves only rounding in the photo, the pyramid and the atlas's 8 bits.
-  constexpr double kTolerance = 2.0;  // grey levels
-  constexpr double kMarginPx = 3.0;   // clear of the face's outline in the photo
+  constexpr double kTolerance = 2.0;                 // grey levels
+  constexpr double kMarginPx = 3.0;                  // clear of the face's outline in the photo
   std::array<std::vector<Eigen::Vector3d>, 3> seen;  // front-face points each view sees clearly
   std::vector<Eigen::Vector3d> outside_3;            // ... that view 3 does not see at all
   for (const Eigen::Vector3d& x : facet::testing::FaceGrid(*front, 30, 0.1)) {
@@ -692,7 +692,8 @@ TEST_CASE("the user's say: per-face sources, a forced photo, per-face and global
     }
     const Eigen::Vector2d uv3 = cams[2].Project(x);
     const bool outside_frame_3 = uv3.x() < -kMarginPx || uv3.y() < -kMarginPx ||
-                                 uv3.x() > cams[2].width_px - 1 + kMarginPx || uv3.y() > cams[2].height_px - 1 + kMarginPx;
+                                 uv3.x() > cams[2].width_px - 1 + kMarginPx ||
+                                 uv3.y() > cams[2].height_px - 1 + kMarginPx;
     if (outside_frame_3 && ClearlySeen(faces, *front, cams[0], x, kMarginPx)) outside_3.push_back(x);
   }
   CAPTURE(seen[0].size());

@@ -357,8 +357,9 @@ FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const 
     }
     RecordItem(state, "file.texels_per_unit");
     if (ImGui::IsItemHovered())
-      ImGui::SetTooltip("Texture resolution of the exported model, capped by the 8192 atlas page; 0: from the "
-                        "photos (one texel per photo pixel of each face's best view)");
+      ImGui::SetTooltip(
+          "Texture resolution of the exported model, capped by the 8192 atlas page; 0: from the "
+          "photos (one texel per photo pixel of each face's best view)");
   }
   const float button_w = ImGui::GetFontSize() * 6.5f;
   ImGui::SameLine(ImGui::GetWindowContentRegionMax().x - 2 * button_w - style.ItemSpacing.x);

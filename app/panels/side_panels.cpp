@@ -456,7 +456,8 @@ void DrawPropertiesPanel(AppState* state, PropertiesPanelState* panel) {
         DrawElementSection(state, again, element);
         if (element.kind == ElementKind::kFace) {
           if (const Primitive* latest = state->document.project().FindPrimitive(copy.id)) {
-            if (latest->mesh.IsFace(element.element)) DrawFaceTextureSection(state, Primitive(*latest), element.element);
+            if (latest->mesh.IsFace(element.element))
+              DrawFaceTextureSection(state, Primitive(*latest), element.element);
           }
         }
       }

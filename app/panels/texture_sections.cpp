@@ -60,8 +60,9 @@ void DrawFaceTextureSection(AppState* state, const Primitive& primitive, FaceId 
       LabelValue("Texels", "%d x %d", report->width_texels, report->height_texels);
     }
     if (report->forced_unavailable) {
-      WrappedColored(kWarningText, "The chosen photo cannot texture this face (not calibrated, excluded or not "
-                                   "facing it): chosen automatically.");
+      WrappedColored(kWarningText,
+                     "The chosen photo cannot texture this face (not calibrated, excluded or not "
+                     "facing it): chosen automatically.");
     } else if (report->forced_fallback_texels > 0) {
       WrappedColored(kWarningText, std::to_string(report->forced_fallback_texels) +
                                        " texels the chosen photo does not see come from the next view.");
@@ -107,7 +108,8 @@ void DrawFaceTextureSection(AppState* state, const Primitive& primitive, FaceId 
     const std::string label = "Exclude " + PhotoLabel(project, i);
     if (ImGui::Checkbox(label.c_str(), &excluded)) SetFaceTextureExcludedEdit(state, primitive.id, face, id, excluded);
     RecordItem(state, "texture.exclude." + std::to_string(i));
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("This photo gives this face no colour (e.g. something stands in front of it there)");
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("This photo gives this face no colour (e.g. something stands in front of it there)");
     ImGui::PopID();
   }
   ImGui::PopID();

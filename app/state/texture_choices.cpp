@@ -15,14 +15,14 @@ namespace {
 
 // Hues far apart, none grey (untextured faces are grey), none the selection's orange.
 constexpr std::array<std::array<std::uint8_t, 3>, 8> kPalette = {{
-    {66, 133, 244},   // blue
-    {219, 68, 55},    // red
-    {15, 157, 88},    // green
-    {171, 71, 188},   // purple
-    {0, 172, 193},    // cyan
-    {244, 180, 0},    // yellow
-    {233, 30, 99},    // pink
-    {124, 179, 66},   // lime
+    {66, 133, 244},  // blue
+    {219, 68, 55},   // red
+    {15, 157, 88},   // green
+    {171, 71, 188},  // purple
+    {0, 172, 193},   // cyan
+    {244, 180, 0},   // yellow
+    {233, 30, 99},   // pink
+    {124, 179, 66},  // lime
 }};
 
 // Commits a texture choice: no geometry changes, so no re-solve; one history entry.
@@ -41,8 +41,8 @@ bool Refuse(AppState* state, const std::string& message) {
 Primitive* FaceOwner(AppState* state, Project* project, Id primitive_id, FaceId face, const char* what) {
   Primitive* primitive = project->FindPrimitive(primitive_id);
   if (primitive == nullptr || !primitive->mesh.IsFace(face)) {
-    Refuse(state, std::string(what) + ": no face " + std::to_string(face) + " of primitive " +
-                      std::to_string(primitive_id));
+    Refuse(state,
+           std::string(what) + ": no face " + std::to_string(face) + " of primitive " + std::to_string(primitive_id));
     return nullptr;
   }
   return primitive;
@@ -133,7 +133,8 @@ bool SetFaceTextureExcludedEdit(AppState* state, Id primitive_id, FaceId face, I
   Project edited = state->document.project();
   Primitive* primitive = FaceOwner(state, &edited, primitive_id, face, "Exclude photo");
   if (primitive == nullptr) return false;
-  if (edited.FindImage(image_id) == nullptr) return Refuse(state, "Exclude photo: no image " + std::to_string(image_id));
+  if (edited.FindImage(image_id) == nullptr)
+    return Refuse(state, "Exclude photo: no image " + std::to_string(image_id));
   const FaceTextureOverride* current = FindFaceTextureOverride(*primitive, face);
   FaceTextureOverride entry = current != nullptr ? *current : FaceTextureOverride{};
   entry.face = face;

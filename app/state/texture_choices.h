@@ -21,7 +21,7 @@ struct AppState;
 
 // View and export settings of the texture, in AppState::texture.
 struct TextureView {
-  bool show_sources = false;   // tint each face by its dominant source photo, with a legend
+  bool show_sources = false;            // tint each face by its dominant source photo, with a legend
   double export_texels_per_unit = 0.0;  // File > Export's resolution; 0: as the photos give it
 };
 

@@ -983,7 +983,7 @@ bool MigrateVersion2To3(Json* doc, std::string* /*error*/) {
 
 // kMigrationSteps[k] turns version k + 1 into k + 2.
 constexpr std::array<MigrationStep, Project::kFormatVersion - 1> kMigrationSteps = {MigrateVersion1To2,
-                                                                                   MigrateVersion2To3};
+                                                                                    MigrateVersion2To3};
 
 bool MigrateToCurrent(Json* doc, int version, std::string* error) {
   for (int v = version; v < Project::kFormatVersion; ++v) {

@@ -407,7 +407,8 @@ std::vector<int> ChooseFaceViews(const Project& project, const std::vector<FaceG
       const double score = ScoreView(geometry[f], static_cast<int>(f), views[v], options.depth_tolerance, &geometric,
                                      &length_u, &length_v);
       if (!(geometric > 0.0)) continue;
-      if (user != nullptr && user->source_image != kNoId && project.images[views[v].image_index].id == user->source_image) {
+      if (user != nullptr && user->source_image != kNoId &&
+          project.images[views[v].image_index].id == user->source_image) {
         forced = static_cast<int>(v);
         forced_u = length_u;
         forced_v = length_v;

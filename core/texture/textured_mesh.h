@@ -144,7 +144,7 @@ struct TextureBakeSummary : SolverSummary {
   // Per face of the mesh, in BuildUntexturedMesh's order (one entry per face, also when the
   // bake fails or a face stays untextured): the photos that textured it.
   std::vector<FaceTextureReport> faces;
-  int images_excluded = 0;        // calibrated images whose use_for_texture is off
+  int images_excluded = 0;          // calibrated images whose use_for_texture is off
   long texels_forced_fallback = 0;  // over all faces: texels a forced photo did not see
   int faces_forced_unavailable = 0;
   int faces_size_capped = 0;
@@ -159,13 +159,14 @@ struct TextureBakeSummary : SolverSummary {
 // Bakes a textured mesh, honouring the user's choices: an image whose use_for_texture is off,
 // and an image a face's override excludes, gives that face no colour and no weight; a face's
 // forced source photo is its only source where it sees the face (FaceTextureReport says what
-// came from elsewhere, and the summary's message names such faces). `photos[i]` points to the pixels of project.images[i] (nullptr or an
-// empty image for a photo that is not loaded); the bake only reads them, never copies them, and
-// the caller keeps them alive and unchanged until it returns (the app bakes on a worker thread
-// from photos it shares read-only). A face's best view is the calibrated image in front of
-// which it lies, facing it, with the largest projected area times cosine of the view angle
-// times the fraction of the face the z-buffer shows (a 4 x 4 grid over the face's rectangle,
-// kept inside the polygon); its texel size comes from that view. A face no view sees stays
+// came from elsewhere, and the summary's message names such faces). `photos[i]` points to the
+// pixels of project.images[i] (nullptr or an empty image for a photo that is not loaded); the
+// bake only reads them, never copies them, and the caller keeps them alive and unchanged until
+// it returns (the app bakes on a worker thread from photos it shares read-only). A face's best
+// view is the calibrated image in front of which it lies, facing it, with the largest
+// projected area times cosine of the view angle times the fraction of the face the z-buffer
+// shows (a 4 x 4 grid over the face's rectangle, kept inside the polygon); its texel size
+// comes from that view (or from the forced photo). A face no view sees stays
 // untextured. A texel no photo sees because something hides it is dilated from the face's
 // seen texels; one outside every photo's frame is opaque grey (128).
 // Face frame: u along the first edge (face.halfedge) projected into the face's plane, v the

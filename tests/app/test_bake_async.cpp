@@ -343,7 +343,8 @@ TEST_CASE("the user's texture choices in the app: source colours and legend, ove
   REQUIRE_FALSE(sources.empty());
   std::vector<double> hues;
   for (const nlohmann::json& row : texture.at("legend")) {
-    hues.push_back(HueDeg({row.at("colour")[0].get<int>(), row.at("colour")[1].get<int>(), row.at("colour")[2].get<int>()}));
+    hues.push_back(
+        HueDeg({row.at("colour")[0].get<int>(), row.at("colour")[1].get<int>(), row.at("colour")[2].get<int>()}));
   }
   hues.push_back(HueDeg({66, 133, 244}));  // photo 1's colour: the front face at the start
   const int tinted = SourceTintedPixels(sources, report.at("viewport"), hues);
@@ -376,8 +377,8 @@ TEST_CASE("the user's texture choices in the app: source colours and legend, ove
                                           << from_photos.atlas.width << " x " << from_photos.atlas.height << ")");
 
   // `facet export --texels-per-unit` makes the same atlas.
-  const CliResult cli = RunFacet(dir, "export '" + (dir / "s2.facet") + "' -o '" + (dir / "cli.obj") +
-                                          "' --texels-per-unit 50");
+  const CliResult cli =
+      RunFacet(dir, "export '" + (dir / "s2.facet") + "' -o '" + (dir / "cli.obj") + "' --texels-per-unit 50");
   INFO("stderr: " << cli.err);
   REQUIRE(cli.exit_code == 0);
   const cv::Mat cli_atlas = cv::imread(dir / "cli.png", cv::IMREAD_UNCHANGED);
