@@ -147,7 +147,7 @@ void DrawTextureSourceLegend(ImDrawList* draw, const AppState& state, ImVec2 ori
   for (const std::string& t : texts) text_w = std::max(text_w, swatch + pad + ImGui::CalcTextSize(t.c_str()).x);
   const float w = text_w + 2 * pad;
   const float h = line * (1 + static_cast<float>(texts.size())) + 2 * pad;
-  const ImVec2 top_left(origin.x + size.x - w - pad, origin.y + pad + ImGui::GetFrameHeightWithSpacing());
+  const ImVec2 top_left(origin.x + size.x - w - pad, origin.y + pad);
   draw->AddRectFilled(top_left, ImVec2(top_left.x + w, top_left.y + h), IM_COL32(20, 22, 26, 215), 4.0f);
   float y = top_left.y + pad;
   draw->AddText(ImVec2(top_left.x + pad, y), IM_COL32(235, 235, 235, 255), "Texture sources");

@@ -62,6 +62,19 @@ struct Image {
   bool use_for_texture = true;
 };
 
+// The user's say over where one face's texture comes from (issue 13): a photo forced as its
+// source (kNoId: chosen by the bake) and photos that never texture it. The bake honours a
+// forced photo where it sees the face and takes the texels it does not see from the next
+// view (core/texture/textured_mesh.h says how it reports that). An override that names a face
+// or photo no longer in the project is kept, and ignored by the bake.
+struct FaceTextureOverride {
+  FaceId face = kNoElement;
+  Id source_image = kNoId;
+  std::vector<Id> excluded_images;  // ascending, each once
+  bool IsDefault() const { return source_image == kNoId && excluded_images.empty(); }
+  friend bool operator==(const FaceTextureOverride&, const FaceTextureOverride&) = default;
+};
+
 // K_create: a primitive with its own mesh. The shape (kind, parameters, pose) is the
 // Facade-style parameterisation; the mesh is its topology as the K-ops left it, every vertex
 // defined in primitive-local coordinates as a linear function of the parameters
@@ -90,19 +103,6 @@ const FaceTextureOverride* FindFaceTextureOverride(const Primitive& primitive, F
 // Stores `entry` (its face names which one) in the primitive's list, normalised: excluded
 // images sorted and unique, a default entry removed, the list kept ascending by face.
 void SetFaceTextureOverride(Primitive* primitive, FaceTextureOverride entry);
-
-// The user's say over where one face's texture comes from (issue 13): a photo forced as its
-// source (kNoId: chosen by the bake) and photos that never texture it. The bake honours a
-// forced photo where it sees the face and takes the texels it does not see from the next
-// view (core/texture/textured_mesh.h says how it reports that). An override that names a face
-// or photo no longer in the project is kept, and ignored by the bake.
-struct FaceTextureOverride {
-  FaceId face = kNoElement;
-  Id source_image = kNoId;
-  std::vector<Id> excluded_images;  // ascending, each once
-  bool IsDefault() const { return source_image == kNoId && excluded_images.empty(); }
-  friend bool operator==(const FaceTextureOverride&, const FaceTextureOverride&) = default;
-};
 
 // A vertex of a primitive's mesh.
 struct VertexRef {
