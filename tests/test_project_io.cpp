@@ -666,7 +666,8 @@ TEST_CASE("version: newer files are refused clearly, bad versions are errors") {
   Json j = SmallJson();
   j["version"] = 7;
   const facet::ProjectLoadResult r = facet::ProjectFromJson(j.dump());
-  CHECK(r.error == "version: written by a newer Facet: version 7, this build reads up to 2");
+  CHECK(r.error == "version: written by a newer Facet: version 7, this build reads up to " +
+                   std::to_string(Project::kFormatVersion));
   j["version"] = 0;
   CheckErrorNames(j.dump(), "version: expected a positive integer");
   j["version"] = -3;
