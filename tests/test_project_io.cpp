@@ -260,6 +260,12 @@ Project MakeFullProject() {
     c.line_b_px = {-1.5, 1e3 / 7.0};
     p.constraints.push_back(c);
   }
+  // The user's texture choices (format version 3): a photo out of texturing, faces with a
+  // forced photo and exclusions, and one override whose face and photo are gone (kept).
+  p.images[1].use_for_texture = false;
+  facet::SetFaceTextureOverride(&p.primitives[32], {0, p.images[0].id, {p.images[2].id}});
+  facet::SetFaceTextureOverride(&p.primitives[32], {2, facet::kNoId, {p.images[1].id, p.images[0].id}});
+  facet::SetFaceTextureOverride(&p.primitives[3], {4000, p.next_id + 1000, {}});
   p.next_id += 17;
   return p;
 }
@@ -378,6 +384,14 @@ TEST_CASE("each single field is written and read back") {
       {"image.estimate_distortion", [](Project& p) { p.images[0].estimate_distortion = true; }},
       {"image.distortion_locked", [](Project& p) { p.images[0].distortion_locked = false; }},
       {"image.axis_quarter_turns", [](Project& p) { p.images[0].axis_quarter_turns = 3; }},
+      {"image.use_for_texture", [](Project& p) { p.images[0].use_for_texture = false; }},
+      {"primitive.face_textures.face", [](Project& p) { p.primitives[32].face_textures[1].face = 3; }},
+      {"primitive.face_textures.source_image",
+       [](Project& p) { p.primitives[32].face_textures[0].source_image = p.images[1].id; }},
+      {"primitive.face_textures.excluded_images",
+       [](Project& p) { p.primitives[32].face_textures[1].excluded_images.push_back(p.images[2].id); }},
+      {"primitive.face_textures (new entry)",
+       [](Project& p) { facet::SetFaceTextureOverride(&p.primitives[0], {1, p.images[2].id, {}}); }},
       {"segment.id", [](Project& p) { p.segments[1].id = p.NewId(); }},
       {"segment.image_id", [](Project& p) { p.segments[0].image_id = p.images[2].id; }},
       {"segment.axis", [](Project& p) { p.segments[0].axis = Axis::kY; }},
@@ -652,7 +666,8 @@ TEST_CASE("version: newer files are refused clearly, bad versions are errors") {
   Json j = SmallJson();
   j["version"] = 7;
   const facet::ProjectLoadResult r = facet::ProjectFromJson(j.dump());
-  CHECK(r.error == "version: written by a newer Facet: version 7, this build reads up to 2");
+  CHECK(r.error == "version: written by a newer Facet: version 7, this build reads up to " +
+                   std::to_string(Project::kFormatVersion));
   j["version"] = 0;
   CheckErrorNames(j.dump(), "version: expected a positive integer");
   j["version"] = -3;
@@ -1321,12 +1336,15 @@ TEST_CASE("the version-1 fixture keeps loading: boxes become box primitives, cor
   // The photos are not in the repository: the project still opens, with warnings.
   CHECK(r.warnings.size() == 2);
 
-  // Saving writes version 2, which loads back equal.
+  // Saving writes the current version, which loads back equal.
   TempDir dir;
   const std::string saved = dir / "upgraded.facet";
   REQUIRE(facet::SaveProject(p, saved) == "");
   const Json j = Json::parse(ReadFile(saved));
-  CHECK(j["version"] == 2);
+  CHECK(j["version"] == Project::kFormatVersion);
+  // Through version 2 to 3: no texture choices.
+  for (const facet::Image& image : p.images) CHECK(image.use_for_texture);
+  for (const facet::Primitive& primitive : p.primitives) CHECK(primitive.face_textures.empty());
   CHECK_FALSE(j.contains("boxes"));
   CHECK(j["primitives"].size() == 2);
   CHECK(j["pins"][2]["vertex"] == 7);
@@ -1354,4 +1372,79 @@ TEST_CASE("version-1 content errors still name their location") {
     bad["pins"][0]["box_id"] = 99;
     CheckErrorNames(bad.dump(), "pins[0].vertex: refers to a missing primitive 99");
   }
+}
+
+TEST_CASE("texture choices: version 2 files migrate to none; version 3 keeps them exactly") {
+  // The shipped Leuven sample is a version-2 file: it loads with every photo used for texture
+  // and no face override, and saves as version 3 that loads back equal.
+  const std::string sample_path = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuven.facet";
+  const Json sample = Json::parse(ReadFile(sample_path));
+  REQUIRE(sample["version"] == 2);
+  REQUIRE_FALSE(sample["images"][0].contains("use_for_texture"));
+  const facet::ProjectLoadResult old = facet::LoadProject(sample_path);
+  INFO(old.error);
+  REQUIRE(old.ok());
+  REQUIRE_FALSE(old.project.images.empty());
+  for (const facet::Image& image : old.project.images) CHECK(image.use_for_texture);
+  for (const facet::Primitive& primitive : old.project.primitives) CHECK(primitive.face_textures.empty());
+  const Json upgraded = Json::parse(facet::ProjectToJson(old.project));
+  CHECK(upgraded["version"] == 3);
+  CHECK(upgraded["images"][0]["use_for_texture"] == true);
+  CHECK(upgraded["primitives"][0]["face_textures"] == Json::array());
+  CheckRoundTrip(old.project);
+
+  // The full project written as version 2 (without the new fields) migrates to the same
+  // project without its choices; with them (version 3) it is exact, the override whose face
+  // and photo are gone included.
+  const Project full = MakeFullProject();
+  REQUIRE_FALSE(full.images[1].use_for_texture);
+  REQUIRE(full.primitives[32].face_textures.size() == 2);
+  Json v2 = Json::parse(facet::ProjectToJson(full));
+  v2["version"] = 2;
+  for (Json& image : v2["images"]) image.erase("use_for_texture");
+  for (Json& primitive : v2["primitives"]) primitive.erase("face_textures");
+  const facet::ProjectLoadResult migrated = facet::ProjectFromJson(v2.dump());
+  INFO(migrated.error);
+  REQUIRE(migrated.ok());
+  CHECK(migrated.warnings.empty());
+  Project without_choices = full;
+  for (facet::Image& image : without_choices.images) image.use_for_texture = true;
+  for (facet::Primitive& primitive : without_choices.primitives) primitive.face_textures.clear();
+  CHECK(migrated.project == without_choices);
+  CheckRoundTrip(full);
+  // Normalised on the way in: excluded images ascending, a default entry removed.
+  CHECK(full.primitives[32].face_textures[1].excluded_images ==
+        std::vector<Id>{full.images[0].id, full.images[1].id});
+  Project cleared = full;
+  facet::SetFaceTextureOverride(&cleared.primitives[32], {0, facet::kNoId, {}});
+  REQUIRE(cleared.primitives[32].face_textures.size() == 1);
+  CHECK(cleared.primitives[32].face_textures[0].face == 2);
+}
+
+TEST_CASE("texture choices: malformed overrides are errors naming their path") {
+  const Json base = Json::parse(facet::ProjectToJson(MakeFullProject()));
+  auto with = [&](const std::function<void(Json&)>& edit) {
+    Json j = base;
+    edit(j);
+    return j.dump();
+  };
+  const std::string at = "primitives[32].face_textures";
+  CheckErrorNames(with([](Json& j) { std::swap(j["primitives"][32]["face_textures"][0], j["primitives"][32]["face_textures"][1]); }),
+                  at + "[1].face: overrides must be ascending by face");
+  CheckErrorNames(with([](Json& j) {
+                    j["primitives"][32]["face_textures"][1]["excluded_images"] = {3, 2};
+                  }),
+                  at + "[1].excluded_images[1]: excluded images must be ascending");
+  CheckErrorNames(with([](Json& j) {
+                    j["primitives"][32]["face_textures"][1]["excluded_images"] = Json::array();
+                  }),
+                  at + "[1]: names neither a source image nor an excluded one");
+  CheckErrorNames(with([](Json& j) { j["primitives"][32]["face_textures"][0]["source_image"] = -2; }),
+                  at + "[0].source_image: expected an image id or 0");
+  CheckErrorNames(with([](Json& j) { j["primitives"][32]["face_textures"][0]["excluded_images"] = {0}; }),
+                  at + "[0].excluded_images[0]: expected a positive integer id");
+  CheckErrorNames(with([](Json& j) { j["primitives"][32]["face_textures"][0].erase("face"); }),
+                  at + "[0].face: missing field");
+  CheckErrorNames(with([](Json& j) { j["images"][1]["use_for_texture"] = 0; }),
+                  "images[1].use_for_texture: expected true or false");
 }

@@ -3,6 +3,7 @@
 // atlas pages. Every scene is rendered inside the test from known cameras with a known paint
 // (tests/textured_scene.h) and the baked atlas is read back through the mesh's UVs.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -624,4 +625,262 @@ TEST_CASE("the bake's threads do not change its result: one thread and two give 
   REQUIRE(a.atlas.pixels.size() > 1000);
   CHECK(a.atlas.pixels == b.atlas.pixels);
   CHECK(a.uvs == b.uvs);
+}
+
+namespace {
+
+// The report of `face` in a bake's summary (REQUIREd present).
+const facet::FaceTextureReport& ReportOf(const facet::TextureBakeSummary& summary, const PaintedFace& face) {
+  for (const facet::FaceTextureReport& r : summary.faces) {
+    if (r.primitive_id == face.primitive_id && r.face == face.face) return r;
+  }
+  FAIL("no report for face " << face.face);
+  return summary.faces.front();
+}
+
+double ShareOf(const facet::FaceTextureReport& report, facet::Id image_id) {
+  for (const facet::TextureSourceShare& s : report.sources) {
+    if (s.image_id == image_id) return s.share;
+  }
+  return 0.0;
+}
+
+}  // namespace
+
+TEST_CASE("the user's say: per-face sources, a forced photo, per-face and global exclusions") {
+  // Three photos of the box, each at its own gain and without exposure levelling, so that a
+  // texel's colour tells which photo it came from: view 1 frontal to the -Y face, view 2
+  // frontal to the +X face and grazing the -Y face, view 3 a close-up of the -Y face's left
+  // part (its frame ends near x = 2.4 m of the 4 m face).
+  auto scene = facet::testing::MakeBoxScene(BoxOptions());
+  facet::testing::SyntheticSceneOptions o1, o2, o3;
+  o1.camera_center = {2.0, -11.0, 1.6};
+  o1.look_at = {2.0, 0.0, 1.2};
+  o2.camera_center = {14.0, -3.0, 3.0};
+  o2.look_at = {4.0, 1.0, 1.2};
+  o3.camera_center = {1.0, -2.5, 1.2};
+  o3.look_at = {1.0, 0.0, 1.2};
+  const std::array<Camera, 3> cams = {facet::testing::MakeLookAtCamera(o1), facet::testing::MakeLookAtCamera(o2),
+                                      facet::testing::MakeLookAtCamera(o3)};
+  scene.project.images[0].camera = cams[0];
+  AddView(&scene.project, cams[1]);
+  AddView(&scene.project, cams[2]);
+  const std::array<facet::Id, 3> ids = {scene.project.images[0].id, scene.project.images[1].id,
+                                        scene.project.images[2].id};
+  const std::vector<PaintedFace> faces = facet::testing::PaintedFaces(scene.project);
+  const PaintedFace* front = FaceWithNormal(faces, scene.box_id, -Eigen::Vector3d::UnitY());
+  const PaintedFace* side = FaceWithNormal(faces, scene.box_id, Eigen::Vector3d::UnitX());
+  REQUIRE(front != nullptr);
+  REQUIRE(side != nullptr);
+  const Eigen::Vector3d kPaint(170, 150, 130);
+  const facet::testing::Paint paint = [&](const PaintedFace&, const Eigen::Vector3d&) { return kPaint; };
+  const std::array<double, 3> gains = {1.0, 0.6, 0.8};
+  std::vector<ImageRgba8> photos;
+  std::array<Eigen::Vector3d, 3> photo_colour;
+  for (int k = 0; k < 3; ++k) {
+    photos.push_back(facet::testing::RenderTexturedPhoto(faces, cams[k], paint, gains[k]));
+    photo_colour[k] = (gains[k] * kPaint).array().round();
+  }
+  // A uniform paint leaves only rounding in the photo, the pyramid and the atlas's 8 bits.
+  constexpr double kTolerance = 2.0;                 // grey levels
+  constexpr double kMarginPx = 3.0;                  // clear of the face's outline in the photo
+  std::array<std::vector<Eigen::Vector3d>, 3> seen;  // front-face points each view sees clearly
+  std::vector<Eigen::Vector3d> outside_3;            // ... that view 3 does not see at all
+  for (const Eigen::Vector3d& x : facet::testing::FaceGrid(*front, 30, 0.1)) {
+    for (int k = 0; k < 3; ++k) {
+      if (ClearlySeen(faces, *front, cams[k], x, kMarginPx)) seen[k].push_back(x);
+    }
+    const Eigen::Vector2d uv3 = cams[2].Project(x);
+    const bool outside_frame_3 = uv3.x() < -kMarginPx || uv3.y() < -kMarginPx ||
+                                 uv3.x() > cams[2].width_px - 1 + kMarginPx ||
+                                 uv3.y() > cams[2].height_px - 1 + kMarginPx;
+    if (outside_frame_3 && ClearlySeen(faces, *front, cams[0], x, kMarginPx)) outside_3.push_back(x);
+  }
+  CAPTURE(seen[0].size());
+  CAPTURE(seen[1].size());
+  CAPTURE(seen[2].size());
+  CAPTURE(outside_3.size());
+  REQUIRE(seen[1].size() > 400);
+  REQUIRE(seen[2].size() > 100);
+  REQUIRE(outside_3.size() > 100);
+  TextureBakeOptions options;
+  options.compensate_exposure = false;
+  options.texels_per_image_px = 0.5;  // view 3's close-up would give the front face 1441 x 901 texels
+  auto bake = [&](const facet::Project& project, TexturedMesh* mesh) {
+    const auto summary = facet::BakeTexturedMesh(project, photos, options, mesh);
+    REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
+    return summary;
+  };
+  // How many of `points` bake within the tolerance of photo k's colour.
+  auto near_photo = [&](const TexturedMesh& mesh, const std::vector<Eigen::Vector3d>& points, int k) {
+    int n = 0;
+    for (const Eigen::Vector3d& x : points) {
+      Eigen::Vector3d rgb;
+      REQUIRE(facet::testing::BakedColourAt(mesh, *front, x, &rgb));
+      n += MaxChannelDiff(rgb, photo_colour[k]) <= kTolerance;
+    }
+    return n;
+  };
+
+  // No choices: view 3, much nearer, outweighs view 1 where it sees the front face.
+  TexturedMesh free_mesh;
+  const auto free_summary = bake(scene.project, &free_mesh);
+  CHECK(free_summary.faces.size() == faces.size());
+  CHECK(ShareOf(ReportOf(free_summary, *front), ids[2]) > 0.2);
+  CHECK(near_photo(free_mesh, seen[2], 2) > 0.9 * seen[2].size());
+
+  // The report names each face's photos: with view 3 out of texturing altogether, the front
+  // face is view 1's, the side face view 2's, and view 3 has no weight anywhere: the atlas is
+  // exactly the one baked without its photo.
+  facet::Project no_3 = scene.project;
+  no_3.images[2].use_for_texture = false;
+  TexturedMesh no_3_mesh, unloaded_mesh;
+  const auto no_3_summary = bake(no_3, &no_3_mesh);
+  CHECK(no_3_summary.images_excluded == 1);
+  const facet::FaceTextureReport& front_report = ReportOf(no_3_summary, *front);
+  const facet::FaceTextureReport& side_report = ReportOf(no_3_summary, *side);
+  REQUIRE_FALSE(front_report.sources.empty());
+  REQUIRE_FALSE(side_report.sources.empty());
+  MESSAGE("front face: view 1 " << ShareOf(front_report, ids[0]) << ", view 2 " << ShareOf(front_report, ids[1])
+                                << "; side face: view 2 " << ShareOf(side_report, ids[1]));
+  CHECK(front_report.sources.front().image_id == ids[0]);
+  CHECK(front_report.sources.front().share > 0.5);
+  CHECK(side_report.sources.front().image_id == ids[1]);
+  for (const facet::FaceTextureReport& r : no_3_summary.faces) {
+    double total = 0.0;
+    for (const facet::TextureSourceShare& s : r.sources) total += s.share;
+    CHECK((r.sources.empty() || std::abs(total - 1.0) < 1e-9));
+    CHECK(ShareOf(r, ids[2]) == 0.0);
+  }
+  std::vector<ImageRgba8> without_3 = photos;
+  without_3[2] = ImageRgba8();
+  REQUIRE(facet::BakeTexturedMesh(scene.project, without_3, options, &unloaded_mesh).IsUsable());
+  CHECK(no_3_mesh.atlas.pixels == unloaded_mesh.atlas.pixels);
+
+  // Excluded for the front face only: view 3 gives it no weight and no colour, and still
+  // textures nothing else it sees as before (it sees only the front face here).
+  facet::Project excluded = scene.project;
+  facet::SetFaceTextureOverride(excluded.FindPrimitive(scene.box_id), {front->face, facet::kNoId, {ids[2]}});
+  TexturedMesh excluded_mesh;
+  const auto excluded_summary = bake(excluded, &excluded_mesh);
+  CHECK(ShareOf(ReportOf(excluded_summary, *front), ids[2]) == 0.0);
+  CHECK(near_photo(excluded_mesh, seen[2], 2) == 0);
+
+  // Forced to view 2 (grazing, which it sees whole): every texel it sees clearly is its
+  // colour, and nothing came from elsewhere.
+  facet::Project forced_2 = scene.project;
+  facet::SetFaceTextureOverride(forced_2.FindPrimitive(scene.box_id), {front->face, ids[1], {}});
+  TexturedMesh forced_2_mesh;
+  const auto forced_2_summary = bake(forced_2, &forced_2_mesh);
+  const facet::FaceTextureReport& forced_2_report = ReportOf(forced_2_summary, *front);
+  CHECK(forced_2_report.forced_image == ids[1]);
+  // At 76 degrees from frontal a texel on the outline may miss view 2's z-buffer test.
+  constexpr double kMaxFallbackShare = 0.01;
+  CHECK(forced_2_report.forced_fallback_texels <=
+        kMaxFallbackShare * forced_2_report.width_texels * forced_2_report.height_texels);
+  CHECK(ShareOf(forced_2_report, ids[1]) >= 1.0 - kMaxFallbackShare);
+  const int forced_2_near = near_photo(forced_2_mesh, seen[1], 1);
+  MESSAGE("forced view 2: " << forced_2_near << " of " << seen[1].size() << " points within " << kTolerance
+                            << " grey levels of its photo");
+  CHECK(forced_2_near == static_cast<int>(seen[1].size()));
+
+  // Forced to view 3, which sees only part of the face: its part is view 3's colour, the rest
+  // falls back to the next view (view 1 or 2, unblended), and the summary says so.
+  facet::Project forced_3 = scene.project;
+  facet::SetFaceTextureOverride(forced_3.FindPrimitive(scene.box_id), {front->face, ids[2], {}});
+  TexturedMesh forced_3_mesh;
+  const auto forced_3_summary = bake(forced_3, &forced_3_mesh);
+  const facet::FaceTextureReport& forced_3_report = ReportOf(forced_3_summary, *front);
+  CHECK(forced_3_report.forced_image == ids[2]);
+  CHECK(forced_3_report.forced_fallback_texels > 0);
+  CHECK(forced_3_summary.texels_forced_fallback == forced_3_report.forced_fallback_texels);
+  CHECK(forced_3_summary.message.find("taken from the next view") != std::string::npos);
+  MESSAGE(forced_3_summary.message);
+  CHECK(near_photo(forced_3_mesh, seen[2], 2) == static_cast<int>(seen[2].size()));
+  CHECK(near_photo(forced_3_mesh, outside_3, 0) + near_photo(forced_3_mesh, outside_3, 1) ==
+        static_cast<int>(outside_3.size()));
+
+  // A forced photo that may not texture (out of texturing altogether) is reported, not used.
+  forced_3.images[2].use_for_texture = false;
+  TexturedMesh unavailable_mesh;
+  const auto unavailable = bake(forced_3, &unavailable_mesh);
+  CHECK(ReportOf(unavailable, *front).forced_unavailable);
+  CHECK(ReportOf(unavailable, *front).forced_image == facet::kNoId);
+  CHECK(unavailable.faces_forced_unavailable == 1);
+  CHECK(unavailable.message.find("chosen automatically") != std::string::npos);
+}
+
+TEST_CASE("texels per unit: a face of known size gets the asked texel count, capped by the atlas page") {
+  auto scene = facet::testing::MakeBoxScene(BoxOptions());
+  const std::vector<PaintedFace> faces = facet::testing::PaintedFaces(scene.project);
+  const std::vector<ImageRgba8> photos = {
+      facet::testing::RenderTexturedPhoto(faces, scene.project.images[0].camera, SmoothPaint)};
+  // The box is 4 x 3 x 2.5 m: its -Y face 4 x 2.5, its +X face 3 x 2.5.
+  const PaintedFace* front = FaceWithNormal(faces, scene.box_id, -Eigen::Vector3d::UnitY());
+  const PaintedFace* side = FaceWithNormal(faces, scene.box_id, Eigen::Vector3d::UnitX());
+  REQUIRE(front != nullptr);
+  REQUIRE(side != nullptr);
+  constexpr double kTexelsPerMetre = 50.0;
+  TextureBakeOptions options;
+  options.texels_per_unit = kTexelsPerMetre;
+  TexturedMesh mesh;
+  const auto summary = facet::BakeTexturedMesh(scene.project, photos, options, &mesh);
+  REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
+  // Texel centres lie on the outline: a W m side spans W x 50 texel steps, W x 50 + 1 texels;
+  // the UVs of the corners span exactly those steps of the atlas (no rounding for these sizes).
+  auto span_in_texels = [&](const PaintedFace& face) {
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e9), hi = -lo;
+    for (size_t t = 0; t < mesh.triangle_face.size(); ++t) {
+      if (mesh.triangle_primitive[t] != face.primitive_id || mesh.triangle_face[t] != face.face) continue;
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector2d uv = mesh.uvs[mesh.indices[3 * t + k]].cast<double>();
+        lo = lo.cwiseMin(uv);
+        hi = hi.cwiseMax(uv);
+      }
+    }
+    const Eigen::Vector2d span = (hi - lo).cwiseProduct(Eigen::Vector2d(mesh.atlas.width, mesh.atlas.height));
+    return std::array<double, 2>{std::min(span.x(), span.y()), std::max(span.x(), span.y())};
+  };
+  constexpr double kUvTolerance = 1e-3;  // texels: float UVs over a <= 1024 atlas
+  struct KnownFace {
+    const PaintedFace* face;
+    double longer, shorter;  // m
+  };
+  for (const KnownFace& known : {KnownFace{front, 4.0, 2.5}, KnownFace{side, 3.0, 2.5}}) {
+    const PaintedFace* face = known.face;
+    const double longer = known.longer, shorter = known.shorter;
+    const facet::FaceTextureReport& report = ReportOf(summary, *face);
+    CAPTURE(face->face);
+    CHECK(std::max(report.width_texels, report.height_texels) == static_cast<int>(longer * kTexelsPerMetre) + 1);
+    CHECK(std::min(report.width_texels, report.height_texels) == static_cast<int>(shorter * kTexelsPerMetre) + 1);
+    CHECK_FALSE(report.size_capped);
+    const std::array<double, 2> span = span_in_texels(*face);
+    CHECK(std::abs(span[1] - longer * kTexelsPerMetre) < kUvTolerance);
+    CHECK(std::abs(span[0] - shorter * kTexelsPerMetre) < kUvTolerance);
+  }
+  CHECK(summary.faces_size_capped == 0);
+
+  // 1000 texels/m asks 4001 for a side: a 512 page with 4 texels of padding caps it at 504,
+  // and the six faces then shrink together to fit the one page.
+  options.texels_per_unit = 1000.0;
+  options.max_atlas_size = 512;
+  TexturedMesh capped;
+  const auto capped_summary = facet::BakeTexturedMesh(scene.project, photos, options, &capped);
+  REQUIRE_MESSAGE(capped_summary.IsUsable(), capped_summary.message);
+  MESSAGE(capped_summary.message);
+  CHECK(capped_summary.faces_size_capped > 0);
+  CHECK(capped_summary.message.find("capped at the atlas page") != std::string::npos);
+  CHECK(capped_summary.atlas_width <= 512);
+  CHECK(capped_summary.atlas_height <= 512);
+  for (const facet::FaceTextureReport& r : capped_summary.faces) {
+    CHECK(r.width_texels <= 512 - 2 * options.padding_texels);
+    CHECK(r.height_texels <= 512 - 2 * options.padding_texels);
+  }
+  CHECK(ReportOf(capped_summary, *front).size_capped);
+
+  // Bad values are refused by the options' check.
+  options.texels_per_unit = -1.0;
+  std::string error;
+  CHECK_FALSE(options.Check(&error));
+  CHECK(error.find("texels_per_unit") != std::string::npos);
 }

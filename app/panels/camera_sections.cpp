@@ -10,6 +10,7 @@
 
 #include <imgui.h>
 
+#include "app/panels/texture_sections.h"
 #include "app/panels/widgets.h"
 #include "app/state/calgui_exif_prior.h"
 #include "core/io/project_io.h"
@@ -380,6 +381,7 @@ void DrawImageSection(AppState* state, ExifFeedback* exif_feedback) {
   LabelValue("Path", "%s", image.path.c_str());
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", image.path.c_str());
   LabelValue("Size", "%d x %d px", image.width_px, image.height_px);
+  DrawPhotoTextureOption(state, image);
   if (auto err = state->photo_errors.find(image.id); err != state->photo_errors.end()) {
     WrappedColored(kErrorText, err->second);
   }

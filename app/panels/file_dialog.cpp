@@ -1,6 +1,7 @@
 #include "app/panels/file_dialog.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 
@@ -342,6 +343,24 @@ FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const 
 
   if (ImGui::Checkbox("Hidden files", &dialog->show_hidden)) dialog->listing_stale = true;
   RecordItem(state, "file.hidden");
+  if (dialog->purpose == BrowsePurpose::kExport) {
+    // The texture's resolution: a view setting of the export (app/state/texture_choices.h).
+    ImGui::SameLine();
+    const std::string label = "Texels per " + state->document.project().units;
+    ImGui::AlignTextToFramePadding();
+    ImGui::TextUnformatted(label.c_str());
+    ImGui::SameLine();
+    ImGui::SetNextItemWidth(ImGui::GetFontSize() * 5.0f);
+    double texels = state->texture.export_texels_per_unit;
+    if (ImGui::InputDouble("##texels_per_unit", &texels, 0.0, 0.0, "%.6g")) {
+      state->texture.export_texels_per_unit = std::isfinite(texels) ? std::max(0.0, texels) : 0.0;
+    }
+    RecordItem(state, "file.texels_per_unit");
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip(
+          "Texture resolution of the exported model, capped by the 8192 atlas page; 0: from the "
+          "photos (one texel per photo pixel of each face's best view)");
+  }
   const float button_w = ImGui::GetFontSize() * 6.5f;
   ImGui::SameLine(ImGui::GetWindowContentRegionMax().x - 2 * button_w - style.ItemSpacing.x);
   const bool escape = ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false);

@@ -15,6 +15,7 @@
 #include "app/panels/camera_sections.h"
 #include "app/panels/constraints_section.h"
 #include "app/panels/teach_overlay.h"
+#include "app/panels/texture_sections.h"
 #include "app/panels/widgets.h"
 #include "app/state/model_edits.h"
 #include "core/solve/scene_solve.h"
@@ -453,6 +454,12 @@ void DrawPropertiesPanel(AppState* state, PropertiesPanelState* panel) {
       if (const Primitive* current = state->document.project().FindPrimitive(copy.id)) {
         const Primitive again = *current;
         DrawElementSection(state, again, element);
+        if (element.kind == ElementKind::kFace) {
+          if (const Primitive* latest = state->document.project().FindPrimitive(copy.id)) {
+            if (latest->mesh.IsFace(element.element))
+              DrawFaceTextureSection(state, Primitive(*latest), element.element);
+          }
+        }
       }
     }
   }

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "app/panels/teach_overlay.h"
+#include "app/panels/texture_sections.h"
 #include "app/platform/gl_camera.h"
 #include "app/platform/viewport_shaders.h"
 #include "app/state/model_edits.h"
@@ -48,6 +49,7 @@ struct GpuMeshVertex {
   float normal[3];
   float uv[2];
   float textured;
+  float source_tint[4];  // View > Texture sources: the dominant photo's colour; alpha 0 for none
 };
 
 struct LineVertex {
@@ -112,7 +114,7 @@ struct GlResources {
   std::string error;  // non-empty: GL setup failed, the panel shows the message
 
   Program mesh_program;
-  GLint mesh_atlas = -1, mesh_use_texture = -1, mesh_eye = -1;
+  GLint mesh_atlas = -1, mesh_use_texture = -1, mesh_eye = -1, mesh_show_sources = -1;
   Program line_program;
   GLint line_lighten_dark = -1;
   GLint line_fade = -1, line_fade_center = -1, line_fade_radius = -1, line_eye = -1, line_fade_eye_distance = -1;
@@ -240,6 +242,9 @@ void SetupMeshAttributes() {
   glEnableVertexAttribArray(3);
   glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex),
                         reinterpret_cast<void*>(offsetof(GpuMeshVertex, textured)));
+  glEnableVertexAttribArray(4);
+  glVertexAttribPointer(4, 4, GL_FLOAT, GL_FALSE, sizeof(GpuMeshVertex),
+                        reinterpret_cast<void*>(offsetof(GpuMeshVertex, source_tint)));
 }
 
 bool InitGl(GlResources* gl) {
@@ -254,6 +259,7 @@ bool InitGl(GlResources* gl) {
   gl->mesh_atlas = glGetUniformLocation(gl->mesh_program.id, "u_atlas");
   gl->mesh_use_texture = glGetUniformLocation(gl->mesh_program.id, "u_use_texture");
   gl->mesh_eye = glGetUniformLocation(gl->mesh_program.id, "u_eye");
+  gl->mesh_show_sources = glGetUniformLocation(gl->mesh_program.id, "u_show_sources");
   gl->line_fade = glGetUniformLocation(gl->line_program.id, "u_fade");
   gl->line_lighten_dark = glGetUniformLocation(gl->line_program.id, "u_lighten_dark");
   gl->line_fade_center = glGetUniformLocation(gl->line_program.id, "u_fade_center");
@@ -324,7 +330,30 @@ void ReleaseGl(GlResources* gl) {
 // ---------------------------------------------------------------------------------------
 // Uploads (only when their source changed)
 
-void UploadMesh(const TexturedMesh& mesh, std::uint64_t revision, std::uint64_t atlas_revision, GlResources* gl) {
+// Per triangle of the mesh, the colour of the photo that gave most of its face's texture
+// (TextureSourceColour), alpha 0 where no photo did: what View > Texture sources draws.
+std::vector<std::array<float, 4>> SourceTints(const AppState& state) {
+  const Project& project = state.document.project();
+  std::map<std::pair<Id, FaceId>, std::array<float, 4>> by_face;
+  for (const FaceTextureReport& report : state.last_bake.faces) {
+    if (report.sources.empty()) continue;
+    for (size_t i = 0; i < project.images.size(); ++i) {
+      if (project.images[i].id != report.sources.front().image_id) continue;
+      const std::array<std::uint8_t, 3> c = TextureSourceColour(i);
+      by_face[{report.primitive_id, report.face}] = {c[0] / 255.0f, c[1] / 255.0f, c[2] / 255.0f, 1.0f};
+    }
+  }
+  const TexturedMesh& mesh = state.mesh;
+  std::vector<std::array<float, 4>> tints(mesh.triangle_face.size(), {0.0f, 0.0f, 0.0f, 0.0f});
+  for (size_t t = 0; t < tints.size() && t < mesh.triangle_primitive.size(); ++t) {
+    const auto it = by_face.find({mesh.triangle_primitive[t], mesh.triangle_face[t]});
+    if (it != by_face.end()) tints[t] = it->second;
+  }
+  return tints;
+}
+
+void UploadMesh(const TexturedMesh& mesh, const std::vector<std::array<float, 4>>& tints, std::uint64_t revision,
+                std::uint64_t atlas_revision, GlResources* gl) {
   // Triangles are expanded to their own vertices so that "textured" can be per triangle.
   std::vector<GpuMeshVertex> vertices;
   const size_t triangle_count = mesh.indices.size() / 3;
@@ -347,6 +376,7 @@ void UploadMesh(const TexturedMesh& mesh, std::uint64_t revision, std::uint64_t 
       v.normal[0] = n.x(), v.normal[1] = n.y(), v.normal[2] = n.z();
       if (has_uvs) v.uv[0] = mesh.uvs[i].x(), v.uv[1] = mesh.uvs[i].y();
       v.textured = textured ? 1.0f : 0.0f;
+      if (t < tints.size()) std::copy(tints[t].begin(), tints[t].end(), v.source_tint);
       vertices.push_back(v);
     }
   }
@@ -701,6 +731,7 @@ void RenderScene(const AppState& state, const PanelState& panel, const ViewSetup
     glUniform3f(gl.mesh_eye, eye.x(), eye.y(), eye.z());
     glUniform1i(gl.mesh_atlas, 0);
     glUniform1i(gl.mesh_use_texture, panel.show_texture && gl.atlas_texture != 0 ? 1 : 0);
+    glUniform1i(gl.mesh_show_sources, state.texture.show_sources ? 1 : 0);
     glBindTexture(GL_TEXTURE_2D, gl.atlas_texture);
     glBindVertexArray(gl.mesh_vao);
     glDrawArrays(GL_TRIANGLES, 0, gl.mesh_vertex_count);
@@ -1077,7 +1108,7 @@ bool RenderToTarget(const AppState& state, PanelState* panel, const ViewSetup& v
   GlResources& gl = panel->gl;
   const SavedGlState saved = SavedGlState::Capture();
   if (!gl.mesh_uploaded || gl.mesh_revision != state.mesh_revision)
-    UploadMesh(state.mesh, state.mesh_revision, state.atlas_revision, &gl);
+    UploadMesh(state.mesh, SourceTints(state), state.mesh_revision, state.atlas_revision, &gl);
   UpdatePhotoTextures(state, &gl);
   // The project may have changed (a tool click): read it again.
   const Project& current = state.document.project();
@@ -1148,6 +1179,12 @@ void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
                                        ImVec2(frame.origin.x + size.x, frame.origin.y + size.y), ImVec2(0, 1),
                                        ImVec2(1, 0));
   DrawOverlay(*state, panel, view, frame.origin, size, ImVec2(scale_x, scale_y));
+  if (state->texture.show_sources) {
+    ImDrawList* draw = ImGui::GetWindowDrawList();
+    draw->PushClipRect(frame.origin, ImVec2(frame.origin.x + size.x, frame.origin.y + size.y), true);
+    DrawTextureSourceLegend(draw, *state, frame.origin, size);
+    draw->PopClipRect();
+  }
   if (state->teach.vanishing_points) {  // View > Teach: the vanishing directions as rays
     ImDrawList* draw = ImGui::GetWindowDrawList();
     draw->PushClipRect(frame.origin, ImVec2(frame.origin.x + size.x, frame.origin.y + size.y), true);

@@ -168,6 +168,39 @@ const char* DialogName(Dialog dialog) {
   return "";
 }
 
+// The report's `texture` section: the view settings, the last bake's per-face sources (what
+// View > Texture sources tints) and the legend it draws.
+nlohmann::json TextureReportJson(const AppState& state) {
+  const Project& project = state.document.project();
+  nlohmann::json faces = nlohmann::json::array();
+  for (const FaceTextureReport& r : state.last_bake.faces) {
+    nlohmann::json sources = nlohmann::json::array();
+    for (const TextureSourceShare& s : r.sources) sources.push_back({{"image_id", s.image_id}, {"share", s.share}});
+    faces.push_back({{"primitive_id", r.primitive_id},
+                     {"face", r.face},
+                     {"sources", std::move(sources)},
+                     {"width_texels", r.width_texels},
+                     {"height_texels", r.height_texels},
+                     {"forced_image", r.forced_image},
+                     {"forced_fallback_texels", r.forced_fallback_texels},
+                     {"forced_unavailable", r.forced_unavailable}});
+  }
+  nlohmann::json legend = nlohmann::json::array();
+  for (const TextureLegendRow& row : TextureLegend(state)) {
+    legend.push_back({{"image_index", row.image_index},
+                      {"image_id", project.images[row.image_index].id},
+                      {"label", row.label},
+                      {"colour", {row.colour[0], row.colour[1], row.colour[2]}},
+                      {"faces", row.faces},
+                      {"used", row.used}});
+  }
+  return {{"show_sources", state.texture.show_sources},
+          {"export_texels_per_unit", state.texture.export_texels_per_unit},
+          {"bake_message", state.last_bake.message},
+          {"faces", std::move(faces)},
+          {"legend", std::move(legend)}};
+}
+
 nlohmann::json RectJson(const Rect& r) { return {{"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}}; }
 
 std::string BuildReport(const AppState& state, const ShellState& shell, const RenderOptions& options,
@@ -271,6 +304,7 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
   report["recent_files"] = {{"files", shell.recent_files.files}, {"folders", shell.recent_files.folders}};
   report["project"] = nlohmann::json::parse(ProjectToJson(state.document.project()), nullptr, false);
   report["teach"] = TeachReportJson(state);
+  report["texture"] = TextureReportJson(state);
   return report.dump(2);
 }
 

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/state/calgui_exif_prior.h"
+#include "app/state/texture_choices.h"
 #include "core/image/image_io.h"
 #include "core/io/blender_script.h"
 #include "core/io/calibrate_io.h"
@@ -213,7 +214,7 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
 }
 
 int RunExportCommand(const std::string& project_path, const std::string& output_path,
-                     const std::string& blender_script_path) {
+                     const std::string& blender_script_path, double texels_per_unit) {
   Project project;
   if (!LoadForCli(project_path, &project)) return 1;
   // Each photo is read once and baked in place (the bake takes pointers, copies no pixels).
@@ -232,11 +233,19 @@ int RunExportCommand(const std::string& project_path, const std::string& output_
   // The exporters write every atlas page (the 3D panel draws one page, so the app keeps one):
   // faces that overflow an 8192 page go to more pages before any is shrunk.
   TextureBakeOptions bake_options;
-  bake_options.max_atlas_pages = 8;
+  bake_options.max_atlas_pages = kExportAtlasPages;
+  bake_options.texels_per_unit = texels_per_unit;
+  std::string option_error;
+  if (!bake_options.Check(&option_error)) {
+    std::cerr << "facet export: --texels-per-unit: " << option_error << "\n";
+    return 1;
+  }
   const TextureBakeSummary bake = BakeTexturedMesh(project, photo_pointers, bake_options, &mesh);
   if (!bake.IsUsable()) {
     std::cerr << "facet export: texture: " << bake.message << "\n";
     mesh = BuildUntexturedMesh(project);
+  } else if (texels_per_unit > 0.0) {
+    std::cerr << "facet export: texture: " << bake.message << "\n";
   }
   const std::string ext = std::filesystem::path(output_path).extension().string();
   ExportSummary exported;

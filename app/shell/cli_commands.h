@@ -18,7 +18,9 @@ int RunRelateCommand(const std::string& matches_path);
 int RunSolveCommand(const std::string& project_path, const std::string& output_path);
 // With a non-empty blender_script_path, also writes the Blender set-up script
 // (core/io/blender_script.h) that imports output_path and adds the photos' cameras.
+// texels_per_unit > 0 sets the texture's resolution (TextureBakeOptions::texels_per_unit);
+// 0 keeps the rule from the photos.
 int RunExportCommand(const std::string& project_path, const std::string& output_path,
-                     const std::string& blender_script_path = "");
+                     const std::string& blender_script_path = "", double texels_per_unit = 0.0);
 
 }  // namespace facet::app

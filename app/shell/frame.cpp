@@ -724,6 +724,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   if (name == "line-pin-move") return RunLinePinMoveCommand(state, arg, error);
   if (name == "calibration") return RunCalibrationCommand(state, &shell->properties_panel.exif_feedback, arg, error);
   if (name == "move-selection") return RunMoveCommand(state, arg, error);
+  if (name == "texture") return RunTextureCommand(state, arg, error);
   if (name == "free-vertex" || name == "planar-face") {
     const ElementRef& e = state->selection.element;
     const bool vertex = name == "free-vertex";
@@ -763,17 +764,25 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   }
   if (name == "bake-status") return WriteBakeStatus(*state, arg, error);
   if (name == "export") {
-    FinishBake(state);  // the model as it is now, textured
+    // The model as it is now, textured (at the export dialog's resolution, when one is set).
+    TexturedMesh mesh;
+    std::string bake_message;
+    if (!MeshForExport(state, &mesh, &bake_message)) {
+      *error = "export: texture: " + bake_message;
+      state->Log(LogLevel::kError, "Export failed: " + *error);
+      return false;
+    }
     const std::string ext = std::filesystem::path(arg).extension().string();
-    if (state->mesh.indices.empty()) {
+    if (mesh.indices.empty()) {
       *error = "export: there is no model yet (add a primitive and pin it)";
       return false;
     }
+    if (state->texture.export_texels_per_unit > 0.0) state->Log(LogLevel::kInfo, "Export texture: " + bake_message);
     ExportSummary summary;
     if (ext == ".glb") {
-      summary = ExportGlb(state->mesh, state->document.project(), arg);
+      summary = ExportGlb(mesh, state->document.project(), arg);
     } else if (ext == ".obj") {
-      summary = ExportObj(state->mesh, arg);
+      summary = ExportObj(mesh, arg);
     } else {
       *error = "export: the file name must end in .glb or .obj";
       return false;

@@ -117,6 +117,12 @@ int main(int argc, char** argv) {
   exporter->add_option("--blender-script", blender_script,
                        "Also write a Blender Python script: imports the model, adds each photo's camera "
                        "(focal length, principal-point shift, pose) with the photo as background");
+  double texels_per_unit = 0.0;
+  exporter
+      ->add_option("--texels-per-unit", texels_per_unit,
+                   "Texture resolution in texels per project unit (per metre for a project in m), capped by the "
+                   "8192 atlas page; 0 (default): from the photos, one texel per photo pixel of the face's best view")
+      ->check(CLI::NonNegativeNumber);
 
   auto* render = cli.add_subcommand("render", "Render the application offscreen (EGL, no display needed) to a PNG");
   facet::app::RenderOptions render_options;
@@ -149,7 +155,7 @@ int main(int argc, char** argv) {
   if (*calibrate) return facet::app::RunCalibrateCommand(lines_path, points_path);
   if (*relate) return facet::app::RunRelateCommand(matches_path);
   if (*solve) return facet::app::RunSolveCommand(solve_project, solve_out);
-  if (*exporter) return facet::app::RunExportCommand(export_project, export_out, blender_script);
+  if (*exporter) return facet::app::RunExportCommand(export_project, export_out, blender_script, texels_per_unit);
   if (*render) {
     if (render_options.project_path.empty()) render_options.project_path = SampleProjectPath();
     if (render_options.project_path.empty()) {

@@ -171,6 +171,10 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
       shell->layout_changed = true;
     }
     ImGui::Separator();
+    ImGui::MenuItem("Texture sources", nullptr, &state->texture.show_sources);
+    RecordItem(state, "menu.texture_sources");
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("Tint each face in the 3D panel by the photo that gave most of its texture, with a legend");
     DrawTeachMenu(state);
     ImGui::EndMenu();
   }

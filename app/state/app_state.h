@@ -17,6 +17,7 @@
 #include "app/state/line_proposals.h"
 #include "app/state/rect.h"
 #include "app/state/teach.h"
+#include "app/state/texture_choices.h"
 #include "core/estimators/calibrate_vp.h"
 #include "core/image/image_io.h"
 #include "core/mesh/primitives.h"
@@ -210,6 +211,8 @@ struct AppState {
   AutosaveState autosave;
   // Teach mode's overlays (View > Teach, app/state/teach.h): view settings, not in the project.
   TeachView teach;
+  // View > Texture sources and File > Export's resolution (app/state/texture_choices.h).
+  TextureView texture;
 
   std::vector<LogEntry> log;
   double time_s = 0.0;

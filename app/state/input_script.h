@@ -89,6 +89,17 @@
 //                                                      epipolar, numbers, state
 //                                                      (app/state/teach.h); teach
 //                                                      second-image INDEX: F's second photo
+//                                   texture ARGS       the user's texture choices
+//                                                      (RunTextureCommand,
+//                                                      app/state/texture_choices.h): source
+//                                                      auto|IMAGE_INDEX and exclude
+//                                                      IMAGE_INDEX on|off on the selected
+//                                                      face; use IMAGE_INDEX on|off (a
+//                                                      photo's Use for texture); sources
+//                                                      on|off (View > Texture sources);
+//                                                      export-resolution N (texels per
+//                                                      project unit of File > Export, 0:
+//                                                      from the photos)
 //                                 Tool names: select, line-x, line-y, line-z, pin,
 //                                 add-primitive (adds at once), split-edge, delete-vertex,
 //                                 connect-vertices, delete-edge, push-pull, move, line-pin,

@@ -208,6 +208,7 @@ OrderedJson WriteImage(const Image& im, const std::string& at, Writer* w) {
   j["estimate_distortion"] = im.estimate_distortion;
   j["distortion_locked"] = im.distortion_locked;
   j["axis_quarter_turns"] = im.axis_quarter_turns;
+  j["use_for_texture"] = im.use_for_texture;
   return j;
 }
 
@@ -237,6 +238,13 @@ OrderedJson WritePrimitive(const Primitive& prim, const std::string& at, Writer*
   j["translation_locked"] = prim.translation_locked;
   j["attached_to"] = prim.attached_to;
   j["mesh"] = WriteMesh(prim.mesh, Join(at, "mesh"), w);
+  // Face ids as the mesh numbers them; source_image 0: the bake chooses.
+  OrderedJson overrides = OrderedJson::array();
+  for (const FaceTextureOverride& o : prim.face_textures) {
+    overrides.push_back(
+        OrderedJson{{"face", o.face}, {"source_image", o.source_image}, {"excluded_images", o.excluded_images}});
+  }
+  j["face_textures"] = std::move(overrides);
   return j;
 }
 
@@ -438,7 +446,7 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
                  {"id", "path", "width_px", "height_px", "camera", "camera_calibrated", "principal_point_mode",
                   "fixed_principal_point_px", "pose_locked", "focal_locked", "principal_point_locked", "focal_mode",
                   "fixed_focal_px", "focal_prior_px", "focal_prior_std_px", "use_horizon", "horizon_px",
-                  "estimate_distortion", "distortion_locked", "axis_quarter_turns"}))
+                  "estimate_distortion", "distortion_locked", "axis_quarter_turns", "use_for_texture"}))
     return false;
   constexpr int kMaxSize = std::numeric_limits<int>::max();
   if (!r->IdField(j, at, "id", &im->id) || !r->String(j, at, "path", &im->path) ||
@@ -510,6 +518,7 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
   if (j.contains("axis_quarter_turns") &&
       !r->Int(j, at, "axis_quarter_turns", Image::kAxisTurnsUnchosen, 3, &im->axis_quarter_turns))
     return false;
+  if (!r->Bool(j, at, "use_for_texture", &im->use_for_texture)) return false;
   if (im->focal_mode == FocalMode::kFixed && !(im->fixed_focal_px > 0))
     return r->Fail(Join(at, "fixed_focal_px"), "must be positive when focal_mode is \"fixed\"");
   if (im->focal_mode == FocalMode::kPrior && !(im->focal_prior_px > 0 && im->focal_prior_std_px > 0))
@@ -628,11 +637,58 @@ bool ReadMesh(const Json& j, const std::string& at, PrimitiveId primitive, Reade
   return true;
 }
 
+// A positive id in an array (an excluded image).
+bool ReadIdValue(const Json& j, const std::string& path, Reader* r, Id* out) {
+  if (!j.is_number_unsigned() || j.get<std::uint64_t>() == 0)
+    return r->Fail(path, "expected a positive integer id, found " + Reader::Describe(j));
+  *out = j.get<std::uint64_t>();
+  return true;
+}
+
+// A primitive's per-face texture overrides: ascending by face, each with a source or an
+// exclusion (a default entry is never stored), excluded images ascending. Faces and images
+// are not checked against the project: an override outliving its face or photo is ignored
+// by the bake (core/scene/project.h).
+bool ReadFaceTextures(const Json& j, const std::string& at, Reader* r, std::vector<FaceTextureOverride>* out) {
+  const Json* list = nullptr;
+  if (!r->Array(j, at, "face_textures", &list)) return false;
+  out->clear();
+  const std::string list_at = Join(at, "face_textures");
+  for (size_t i = 0; i < list->size(); ++i) {
+    const Json& jo = (*list)[i];
+    const std::string oat = Index(list_at, i);
+    FaceTextureOverride o;
+    int face = 0;
+    const Json* source = nullptr;
+    const Json* excluded = nullptr;
+    if (!r->Object(jo, oat, {"face", "source_image", "excluded_images"}) ||
+        !r->Int(jo, oat, "face", 0, std::numeric_limits<int>::max(), &face) ||
+        !(source = r->Field(jo, oat, "source_image")) || !r->Array(jo, oat, "excluded_images", &excluded))
+      return false;
+    o.face = static_cast<FaceId>(face);
+    if (!source->is_number_unsigned()) return r->Fail(Join(oat, "source_image"), "expected an image id or 0");
+    o.source_image = source->get<std::uint64_t>();
+    for (size_t k = 0; k < excluded->size(); ++k) {
+      Id id = kNoId;
+      const std::string kat = Index(Join(oat, "excluded_images"), k);
+      if (!ReadIdValue((*excluded)[k], kat, r, &id)) return false;
+      if (!o.excluded_images.empty() && id <= o.excluded_images.back())
+        return r->Fail(kat, "excluded images must be ascending, each once");
+      o.excluded_images.push_back(id);
+    }
+    if (o.IsDefault()) return r->Fail(oat, "names neither a source image nor an excluded one");
+    if (!out->empty() && o.face <= out->back().face)
+      return r->Fail(Join(oat, "face"), "overrides must be ascending by face, each face once");
+    out->push_back(std::move(o));
+  }
+  return true;
+}
+
 bool ReadPrimitive(const Json& j, const std::string& at, Reader* r, Primitive* prim) {
   std::string kind;
   if (!r->Object(j, at,
                  {"id", "name", "kind", "params", "segments", "ridge", "rotation", "translation", "param_locked",
-                  "rotation_locked", "translation_locked", "attached_to", "mesh"}) ||
+                  "rotation_locked", "translation_locked", "attached_to", "mesh", "face_textures"}) ||
       !r->IdField(j, at, "id", &prim->id) || !r->String(j, at, "name", &prim->name) || !r->String(j, at, "kind", &kind))
     return false;
   PrimitiveShape& shape = prim->shape;
@@ -671,6 +727,7 @@ bool ReadPrimitive(const Json& j, const std::string& at, Reader* r, Primitive* p
   if (!attached) return false;
   if (!attached->is_number_unsigned()) return r->Fail(Join(at, "attached_to"), "expected an id or 0");
   prim->attached_to = attached->get<std::uint64_t>();
+  if (!ReadFaceTextures(j, at, r, &prim->face_textures)) return false;
   const Json* mesh = r->Field(j, at, "mesh");
   if (!mesh) return false;
   // "from_shape" builds the primitive's unedited mesh: what files from version 1 (and
@@ -907,8 +964,26 @@ bool MigrateVersion1To2(Json* doc, std::string* error) {
   return true;
 }
 
+// Version 2 -> 3: the user's texture choices arrive, none made yet: every photo may texture
+// (use_for_texture), no face has an override.
+bool MigrateVersion2To3(Json* doc, std::string* /*error*/) {
+  Json& root = *doc;
+  if (root.contains("images") && root["images"].is_array()) {
+    for (Json& image : root["images"]) {
+      if (image.is_object()) image["use_for_texture"] = true;
+    }
+  }
+  if (root.contains("primitives") && root["primitives"].is_array()) {
+    for (Json& primitive : root["primitives"]) {
+      if (primitive.is_object()) primitive["face_textures"] = Json::array();
+    }
+  }
+  return true;
+}
+
 // kMigrationSteps[k] turns version k + 1 into k + 2.
-constexpr std::array<MigrationStep, Project::kFormatVersion - 1> kMigrationSteps = {MigrateVersion1To2};
+constexpr std::array<MigrationStep, Project::kFormatVersion - 1> kMigrationSteps = {MigrateVersion1To2,
+                                                                                    MigrateVersion2To3};
 
 bool MigrateToCurrent(Json* doc, int version, std::string* error) {
   for (int v = version; v < Project::kFormatVersion; ++v) {

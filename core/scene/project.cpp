@@ -87,6 +87,29 @@ void RefreshAllPrimitives(Project* project) {
   }
 }
 
+const FaceTextureOverride* FindFaceTextureOverride(const Primitive& primitive, FaceId face) {
+  const auto it = std::lower_bound(primitive.face_textures.begin(), primitive.face_textures.end(), face,
+                                   [](const FaceTextureOverride& o, FaceId f) { return o.face < f; });
+  return it != primitive.face_textures.end() && it->face == face ? &*it : nullptr;
+}
+
+void SetFaceTextureOverride(Primitive* primitive, FaceTextureOverride entry) {
+  std::sort(entry.excluded_images.begin(), entry.excluded_images.end());
+  entry.excluded_images.erase(std::unique(entry.excluded_images.begin(), entry.excluded_images.end()),
+                              entry.excluded_images.end());
+  std::vector<FaceTextureOverride>& list = primitive->face_textures;
+  const auto it = std::lower_bound(list.begin(), list.end(), entry.face,
+                                   [](const FaceTextureOverride& o, FaceId f) { return o.face < f; });
+  const bool present = it != list.end() && it->face == entry.face;
+  if (entry.IsDefault()) {
+    if (present) list.erase(it);
+  } else if (present) {
+    *it = std::move(entry);
+  } else {
+    list.insert(it, std::move(entry));
+  }
+}
+
 const char* ConstraintKindName(ConstraintKind kind) {
   switch (kind) {
     case ConstraintKind::kCoplanar: return "coplanar";
@@ -126,7 +149,8 @@ bool operator==(const Image& a, const Image& b) {
          a.fixed_focal_px == b.fixed_focal_px && a.focal_prior_px == b.focal_prior_px &&
          a.focal_prior_std_px == b.focal_prior_std_px && a.use_horizon == b.use_horizon &&
          a.horizon_px == b.horizon_px && a.estimate_distortion == b.estimate_distortion &&
-         a.distortion_locked == b.distortion_locked && a.axis_quarter_turns == b.axis_quarter_turns;
+         a.distortion_locked == b.distortion_locked && a.axis_quarter_turns == b.axis_quarter_turns &&
+         a.use_for_texture == b.use_for_texture;
 }
 bool operator==(const PrimitiveShape& a, const PrimitiveShape& b) {
   return a.id == b.id && a.kind == b.kind && a.params == b.params && a.segments == b.segments &&
@@ -135,7 +159,8 @@ bool operator==(const PrimitiveShape& a, const PrimitiveShape& b) {
 bool operator==(const Primitive& a, const Primitive& b) {
   return a.id == b.id && a.name == b.name && a.shape == b.shape && a.mesh == b.mesh &&
          a.param_locked == b.param_locked && a.rotation_locked == b.rotation_locked &&
-         a.translation_locked == b.translation_locked && a.attached_to == b.attached_to;
+         a.translation_locked == b.translation_locked && a.attached_to == b.attached_to &&
+         a.face_textures == b.face_textures;
 }
 bool operator==(const Constraint& a, const Constraint& b) {
   return a.id == b.id && a.kind == b.kind && a.vertices == b.vertices && a.value == b.value && a.point == b.point &&

@@ -57,6 +57,22 @@ struct Image {
   // kAxisTurnsUnchosen until then (and in files written before it existed).
   static constexpr int kAxisTurnsUnchosen = -1;
   int axis_quarter_turns = kAxisTurnsUnchosen;
+  // Whether the texture bake may take colour from this photo at all (false: e.g. a passer-by
+  // stands in front of the model; the photo still calibrates and pins as before).
+  bool use_for_texture = true;
+};
+
+// The user's say over where one face's texture comes from (issue 13): a photo forced as its
+// source (kNoId: chosen by the bake) and photos that never texture it. The bake honours a
+// forced photo where it sees the face and takes the texels it does not see from the next
+// view (core/texture/textured_mesh.h says how it reports that). An override that names a face
+// or photo no longer in the project is kept, and ignored by the bake.
+struct FaceTextureOverride {
+  FaceId face = kNoElement;
+  Id source_image = kNoId;
+  std::vector<Id> excluded_images;  // ascending, each once
+  bool IsDefault() const { return source_image == kNoId && excluded_images.empty(); }
+  friend bool operator==(const FaceTextureOverride&, const FaceTextureOverride&) = default;
 };
 
 // K_create: a primitive with its own mesh. The shape (kind, parameters, pose) is the
@@ -78,7 +94,15 @@ struct Primitive {
   // The box this primitive sits on (AttachOnTop in core/mesh/primitives.h), or kNoId. Its
   // footprint and pose follow the base's after every change.
   Id attached_to = kNoId;
+  // Per-face texture overrides, ascending by face, never a default one (SetFaceTextureOverride).
+  std::vector<FaceTextureOverride> face_textures;
 };
+
+// The override of `face`, or null when the bake chooses freely.
+const FaceTextureOverride* FindFaceTextureOverride(const Primitive& primitive, FaceId face);
+// Stores `entry` (its face names which one) in the primitive's list, normalised: excluded
+// images sorted and unique, a default entry removed, the list kept ascending by face.
+void SetFaceTextureOverride(Primitive* primitive, FaceTextureOverride entry);
 
 // A vertex of a primitive's mesh.
 struct VertexRef {
@@ -135,8 +159,9 @@ struct Constraint {
 
 struct Project {
   // 1: boxes with corner pins (read and migrated); 2: primitives with meshes, vertex pins
-  // and constraints.
-  static constexpr int kFormatVersion = 2;
+  // and constraints; 3: the user's texture choices (Image::use_for_texture,
+  // Primitive::face_textures), which version 2 files migrate to "none".
+  static constexpr int kFormatVersion = 3;
   std::vector<Image> images;
   std::vector<Segment> segments;
   std::vector<Primitive> primitives;

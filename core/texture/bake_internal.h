@@ -25,6 +25,8 @@ constexpr std::uint8_t kOutsideGrey = 128;
 // and texture go in the TexturedMesh.
 struct FaceGeometry {
   size_t primitive_index = 0;
+  Id primitive_id = kNoId;
+  FaceId face_id = kNoFace;
   std::vector<Eigen::Vector3d> corners;  // counter-clockwise from outside, FaceHalfedges order
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   // Plane frame: p = origin + s * axis_u + t * axis_v for face coordinates (s, t).
@@ -79,6 +81,10 @@ struct FaceTexture {
   int view = -1;  // best view (index into the ViewContext list), -1 when untextured
   double score = 0.0;
   std::vector<int> candidates;  // views in front of and facing the face, best first
+  // The user's forced source photo is `view` (and candidates[0]): sampled alone, not blended.
+  bool forced = false;
+  bool forced_unavailable = false;
+  bool size_capped = false;
   int width = 0;                // texels at full resolution, before any atlas shrinking
   int height = 0;
   int packed_width = 0;
@@ -104,6 +110,10 @@ void FitViewGains(const std::vector<FaceGeometry>& geometry, const std::vector<F
 struct SamplingCounts {
   long from_other_views = 0;
   long hidden = 0;
+  long forced_fallback = 0;  // a forced face's texels taken from another view than the forced one
+  // Per candidate view of the face (FaceTexture::candidates order): its part of the texels
+  // the face's views coloured, each texel counting 1 split by normalised weight.
+  std::vector<double> view_share;
 };
 
 // Fills face f's packed rectangle and its padding in `page`: each texel inside the polygon

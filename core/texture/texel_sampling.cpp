@@ -278,9 +278,11 @@ void SampleFace(const FaceGeometry& g, int face_index, const FaceTexture& t, con
   const Eigen::Matrix3d face_from_texel = FaceFromTexel(g, w, h);
   const std::vector<FaceView> fvs = FaceViews(g, t, views, face_from_texel);
   const TexelMask mask = OwnTexels(g, face_from_texel, w, h);
-  const bool blended = options.source == TextureSource::kBlended;
+  // A forced photo is the face's one source where it sees the texel, as in best view.
+  const bool blended = options.source == TextureSource::kBlended && !t.forced;
   // One candidate view: its sample is the texel's whatever its weight.
   const bool need_weights = blended && fvs.size() > 1;
+  counts->view_share.assign(fvs.size(), 0.0);
   const float grey[3] = {kOutsideGrey, kOutsideGrey, kOutsideGrey};
   std::vector<ViewSample> samples(fvs.size());
   std::vector<Look> looks(fvs.size());
@@ -319,6 +321,8 @@ void SampleFace(const FaceGeometry& g, int face_index, const FaceTexture& t, con
         const Eigen::Vector3d& gain = fvs[chosen].context->gain;
         for (int c = 0; c < 3; ++c) colour[c] = static_cast<float>(gain[c] * samples[chosen].rgba[c]);
         counts->from_other_views += chosen > 0;
+        if (t.forced && chosen > 0) ++counts->forced_fallback;
+        counts->view_share[chosen] += 1.0;
       } else if (max_weight > 0.0) {
         // The blend of the views whose weight is not negligible, each fetched only now.
         double weight_sum = 0.0;
@@ -335,6 +339,11 @@ void SampleFace(const FaceGeometry& g, int face_index, const FaceTexture& t, con
           other = other || v > 0;
         }
         for (int c = 0; c < 3; ++c) colour[c] = static_cast<float>(blend[c] / weight_sum);
+        for (size_t v = 0; v < fvs.size(); ++v) {
+          if (looks[v] != Look::kSeen) continue;
+          const double weight = samples[v].quality * samples[v].feather;
+          if (weight >= kContributionShare * max_weight) counts->view_share[v] += weight / weight_sum;
+        }
         counts->from_other_views += other;
       } else if (any_hidden) {
         ++counts->hidden;  // left for the dilation

@@ -43,6 +43,8 @@ constexpr double kMinProjectedAreaPx2 = 16.0;
 constexpr int kMinFaceTexels = 2;
 constexpr int kMinAtlasSize = 16;
 constexpr int kMaxAtlasPages = 64;
+// A texel per micrometre in metres: beyond any photo, and far from overflowing a texel count.
+constexpr double kMaxTexelsPerUnit = 1e6;
 // Face samples tested for occlusion in the z-buffers, per side of the face's rectangle.
 constexpr int kOcclusionSamples = 4;
 
@@ -154,6 +156,8 @@ TexturedMesh BuildMesh(const Project& project, std::vector<FaceGeometry>* geomet
       const std::vector<HalfedgeId> corners = FaceHalfedges(poly, f);
       FaceGeometry g;
       g.primitive_index = pi;
+      g.primitive_id = primitive.id;
+      g.face_id = f;
       g.normal = FaceNormal(poly, f);
       g.first_vertex = static_cast<std::uint32_t>(mesh.positions.size());
       g.first_triangle = mesh.triangle_face.size();
@@ -333,12 +337,18 @@ bool PackFaces(const std::vector<int>& textured, int padding, int max_size, int 
 
 // The calibrated images with loaded pixels, with the scale from the camera's pixels to the
 // photo's, each with its z-buffer and (when filtering) its pyramid.
+// Images the user took out of texturing (use_for_texture off) are not views at all.
 std::vector<ViewContext> UsableViews(const Project& project, const std::vector<const ImageRgba8*>& photos,
                                      const std::vector<DepthTriangle>& depth_triangles,
-                                     const TextureBakeOptions& options) {
+                                     const TextureBakeOptions& options, int* images_excluded) {
   std::vector<ViewContext> views;
+  *images_excluded = 0;
   for (size_t i = 0; i < project.images.size(); ++i) {
     const Image& image = project.images[i];
+    if (!image.use_for_texture) {
+      *images_excluded += image.camera_calibrated ? 1 : 0;
+      continue;
+    }
     if (photos[i] == nullptr) continue;
     const ImageRgba8& photo = *photos[i];
     if (!image.camera_calibrated || photo.empty() ||
@@ -372,20 +382,37 @@ std::vector<ViewContext> UsableViews(const Project& project, const std::vector<c
 }
 
 // Each face's candidate views (best first), best view and texel size; returns the faces some
-// view sees.
-std::vector<int> ChooseFaceViews(const std::vector<FaceGeometry>& geometry, const std::vector<ViewContext>& views,
-                                 const TextureBakeOptions& options, std::vector<FaceTexture>* faces_out) {
+// view sees. A face's override (Primitive::face_textures) drops the views it excludes and puts
+// its forced view first, as the best view, when that view can see the face at all.
+std::vector<int> ChooseFaceViews(const Project& project, const std::vector<FaceGeometry>& geometry,
+                                 const std::vector<ViewContext>& views, const TextureBakeOptions& options,
+                                 std::vector<FaceTexture>* faces_out) {
   std::vector<FaceTexture>& faces = *faces_out;
   std::vector<int> textured;
   for (size_t f = 0; f < geometry.size(); ++f) {
     if (!geometry[f].valid) continue;
+    const FaceTextureOverride* user =
+        FindFaceTextureOverride(project.primitives[geometry[f].primitive_index], geometry[f].face_id);
+    auto excluded = [&](const ViewContext& view) {
+      const Id id = project.images[view.image_index].id;
+      return user != nullptr && std::binary_search(user->excluded_images.begin(), user->excluded_images.end(), id);
+    };
     double best_u = 0.0, best_v = 0.0;
+    double forced_u = 0.0, forced_v = 0.0;
+    int forced = -1;
     std::vector<std::pair<double, int>> ranked;  // (score, view), then (geometric score, view) for hidden views
     for (size_t v = 0; v < views.size(); ++v) {
+      if (excluded(views[v])) continue;
       double geometric = 0.0, length_u = 0.0, length_v = 0.0;
       const double score = ScoreView(geometry[f], static_cast<int>(f), views[v], options.depth_tolerance, &geometric,
                                      &length_u, &length_v);
       if (!(geometric > 0.0)) continue;
+      if (user != nullptr && user->source_image != kNoId &&
+          project.images[views[v].image_index].id == user->source_image) {
+        forced = static_cast<int>(v);
+        forced_u = length_u;
+        forced_v = length_v;
+      }
       // Views that see the face rank by score; those whose samples are all hidden come last
       // (they may still see some texels).
       ranked.emplace_back(score > 0.0 ? score : -1.0 / geometric, static_cast<int>(v));
@@ -396,16 +423,39 @@ std::vector<int> ChooseFaceViews(const std::vector<FaceGeometry>& geometry, cons
         best_v = length_v;
       }
     }
+    faces[f].forced_unavailable = user != nullptr && user->source_image != kNoId && forced < 0;
+    if (forced >= 0) {
+      faces[f].forced = true;
+      faces[f].view = forced;
+      best_u = forced_u;
+      best_v = forced_v;
+    }
     if (faces[f].view < 0) continue;
     std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-    for (const auto& [score, v] : ranked) faces[f].candidates.push_back(v);
-    auto texels = [&](double length_px) {
-      const double n = std::ceil(length_px * options.texels_per_image_px) + 1.0;
-      return static_cast<int>(
-          std::clamp(n, static_cast<double>(kMinFaceTexels), static_cast<double>(options.max_face_texels)));
-    };
-    faces[f].width = texels(best_u);
-    faces[f].height = texels(best_v);
+    if (forced >= 0) faces[f].candidates.push_back(forced);
+    for (const auto& [score, v] : ranked) {
+      if (v != forced) faces[f].candidates.push_back(v);
+    }
+    if (options.texels_per_unit > 0.0) {
+      // The asked density, capped so that the face with its padding fits one page.
+      const double cap = std::max(kMinFaceTexels, options.max_atlas_size - 2 * options.padding_texels);
+      const Eigen::Vector2d extent = geometry[f].st_max - geometry[f].st_min;
+      auto texels = [&](double length) {
+        const double n = std::round(length * options.texels_per_unit) + 1.0;
+        faces[f].size_capped = faces[f].size_capped || n > cap;
+        return static_cast<int>(std::clamp(n, static_cast<double>(kMinFaceTexels), cap));
+      };
+      faces[f].width = texels(extent.x());
+      faces[f].height = texels(extent.y());
+    } else {
+      auto texels = [&](double length_px) {
+        const double n = std::ceil(length_px * options.texels_per_image_px) + 1.0;
+        return static_cast<int>(
+            std::clamp(n, static_cast<double>(kMinFaceTexels), static_cast<double>(options.max_face_texels)));
+      };
+      faces[f].width = texels(best_u);
+      faces[f].height = texels(best_v);
+    }
     textured.push_back(static_cast<int>(f));
   }
   return textured;
@@ -413,10 +463,11 @@ std::vector<int> ChooseFaceViews(const std::vector<FaceGeometry>& geometry, cons
 
 // Allocates the pages, samples each textured face into its page and points its corners' UVs
 // there.
+// face_counts gets each textured face's counts, in `textured` order.
 void WriteAtlas(const std::vector<FaceGeometry>& geometry, const std::vector<ViewContext>& views,
                 const std::vector<int>& textured, const std::vector<FaceTexture>& faces,
                 const TextureBakeOptions& options, const std::vector<std::pair<int, int>>& page_sizes,
-                TexturedMesh* mesh, bake::SamplingCounts* counts) {
+                TexturedMesh* mesh, bake::SamplingCounts* counts, std::vector<bake::SamplingCounts>* face_counts_out) {
   std::vector<ImageRgba8> pages(page_sizes.size());
   for (size_t p = 0; p < pages.size(); ++p) {
     pages[p].width = page_sizes[p].first;
@@ -425,7 +476,8 @@ void WriteAtlas(const std::vector<FaceGeometry>& geometry, const std::vector<Vie
   }
   mesh->triangle_page.assign(mesh->triangle_face.size(), 0);
   // Faces write disjoint rectangles (padding included) of their pages: one face per task.
-  std::vector<bake::SamplingCounts> face_counts(textured.size());
+  std::vector<bake::SamplingCounts>& face_counts = *face_counts_out;
+  face_counts.assign(textured.size(), {});
   ParallelFor(static_cast<int>(textured.size()), options.max_threads, [&](int k) {
     const int f = textured[k];
     bake::SampleFace(geometry[f], f, faces[f], views, options, &pages[faces[f].page], &face_counts[k]);
@@ -433,6 +485,7 @@ void WriteAtlas(const std::vector<FaceGeometry>& geometry, const std::vector<Vie
   for (const bake::SamplingCounts& c : face_counts) {
     counts->from_other_views += c.from_other_views;
     counts->hidden += c.hidden;
+    counts->forced_fallback += c.forced_fallback;
   }
   for (int f : textured) {
     const FaceTexture& t = faces[f];
@@ -451,6 +504,89 @@ void WriteAtlas(const std::vector<FaceGeometry>& geometry, const std::vector<Vie
   }
   mesh->atlas = std::move(pages[0]);
   mesh->more_atlas_pages.assign(std::make_move_iterator(pages.begin() + 1), std::make_move_iterator(pages.end()));
+}
+
+// One report per face, untextured: what a bake that stops early returns.
+std::vector<FaceTextureReport> EmptyReports(const std::vector<FaceGeometry>& geometry) {
+  std::vector<FaceTextureReport> reports(geometry.size());
+  for (size_t f = 0; f < geometry.size(); ++f) {
+    reports[f].primitive_id = geometry[f].primitive_id;
+    reports[f].face = geometry[f].face_id;
+  }
+  return reports;
+}
+
+// The per-face reports of a finished bake, and the summary's totals of the overrides.
+void ReportFaces(const Project& project, const std::vector<FaceGeometry>& geometry,
+                 const std::vector<ViewContext>& views, const std::vector<FaceTexture>& faces,
+                 const std::vector<int>& textured, const std::vector<bake::SamplingCounts>& face_counts,
+                 TextureBakeSummary* summary) {
+  summary->faces = EmptyReports(geometry);
+  for (size_t f = 0; f < geometry.size(); ++f) {
+    if (faces[f].forced_unavailable) {
+      summary->faces[f].forced_unavailable = true;
+      ++summary->faces_forced_unavailable;
+    }
+  }
+  for (size_t k = 0; k < textured.size(); ++k) {
+    const int f = textured[k];
+    const FaceTexture& t = faces[f];
+    FaceTextureReport& report = summary->faces[f];
+    report.width_texels = t.packed_width;
+    report.height_texels = t.packed_height;
+    report.size_capped = t.size_capped;
+    summary->faces_size_capped += t.size_capped ? 1 : 0;
+    if (t.forced) report.forced_image = project.images[views[t.view].image_index].id;
+    report.forced_fallback_texels = face_counts[k].forced_fallback;
+    const std::vector<double>& share = face_counts[k].view_share;
+    double total = 0.0;
+    for (double s : share) total += s;
+    if (!(total > 0.0)) continue;
+    for (size_t c = 0; c < share.size() && c < t.candidates.size(); ++c) {
+      if (share[c] > 0.0) {
+        report.sources.push_back({project.images[views[t.candidates[c]].image_index].id, share[c] / total});
+      }
+    }
+    std::stable_sort(report.sources.begin(), report.sources.end(),
+                     [](const TextureSourceShare& a, const TextureSourceShare& b) { return a.share > b.share; });
+  }
+}
+
+// "box face 3" for the summary's message.
+std::string FaceName(const Project& project, const FaceTextureReport& report) {
+  const Primitive* primitive = project.FindPrimitive(report.primitive_id);
+  return (primitive != nullptr ? primitive->name : std::string("?")) + " face " + std::to_string(report.face);
+}
+
+// What the user's choices did, for the summary's message: empty when nothing to say.
+std::string OverrideNotes(const Project& project, const TextureBakeSummary& summary) {
+  constexpr size_t kNamedFaces = 3;
+  std::string notes;
+  auto list = [&](auto pick, const std::string& what) {
+    std::vector<std::string> names;
+    for (const FaceTextureReport& r : summary.faces) {
+      if (pick(r)) names.push_back(FaceName(project, r));
+    }
+    if (names.empty()) return;
+    std::string text;
+    for (size_t i = 0; i < names.size() && i < kNamedFaces; ++i) text += (i ? ", " : "") + names[i];
+    if (names.size() > kNamedFaces) text += " and " + std::to_string(names.size() - kNamedFaces) + " more";
+    notes += "; " + text + ": " + what;
+  };
+  list([](const FaceTextureReport& r) { return r.forced_fallback_texels > 0; },
+       "the forced photo does not see some texels (" + std::to_string(summary.texels_forced_fallback) +
+           " in all), taken from the next view");
+  list([](const FaceTextureReport& r) { return r.forced_unavailable; },
+       "the forced photo cannot texture it (not calibrated, excluded or not facing it), chosen automatically");
+  if (summary.images_excluded > 0) {
+    notes += "; " + std::to_string(summary.images_excluded) + " photo" + (summary.images_excluded > 1 ? "s" : "") +
+             " not used for texture";
+  }
+  if (summary.faces_size_capped > 0) {
+    notes += "; " + std::to_string(summary.faces_size_capped) + " face" + (summary.faces_size_capped > 1 ? "s" : "") +
+             " capped at the atlas page size";
+  }
+  return notes;
 }
 
 }  // namespace
@@ -480,6 +616,9 @@ bool TextureBakeOptions::Check(std::string* error) const {
     message = "feather_fraction must be in [0, 0.5], got " + std::to_string(feather_fraction);
   } else if (!(std::isfinite(blend_sharpness) && blend_sharpness >= 0.0 && blend_sharpness <= 16.0)) {
     message = "blend_sharpness must be in [0, 16], got " + std::to_string(blend_sharpness);
+  } else if (!(std::isfinite(texels_per_unit) && texels_per_unit >= 0.0 && texels_per_unit <= kMaxTexelsPerUnit)) {
+    message = "texels_per_unit must be in [0, " + std::to_string(static_cast<int>(kMaxTexelsPerUnit)) +
+              "] (0: from the photos), got " + std::to_string(texels_per_unit);
   }
   if (error != nullptr) *error = message;
   return message.empty();
@@ -495,6 +634,7 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
   const int face_count = static_cast<int>(geometry.size());
   summary.faces_untextured = face_count;
   summary.exposure_gains.assign(project.images.size(), Eigen::Vector3d::Ones());
+  summary.faces = EmptyReports(geometry);
   auto fail = [&](const std::string& message, SolverTermination termination = SolverTermination::kFailed) {
     summary.termination = termination;
     summary.message = message;
@@ -510,18 +650,21 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
   }
 
   auto step_start = std::chrono::steady_clock::now();
-  std::vector<ViewContext> views = UsableViews(project, photos, depth_triangles, options);
+  std::vector<ViewContext> views = UsableViews(project, photos, depth_triangles, options, &summary.images_excluded);
   summary.depth_maps_ms = ElapsedMs(step_start);
 
   step_start = std::chrono::steady_clock::now();
   std::vector<FaceTexture> faces(geometry.size());
-  const std::vector<int> textured = ChooseFaceViews(geometry, views, options, &faces);
+  const std::vector<int> textured = ChooseFaceViews(project, geometry, views, options, &faces);
   summary.selection_ms = ElapsedMs(step_start);
   if (textured.empty()) {
     summary.termination = SolverTermination::kConverged;
     summary.message = geometry.empty() ? "the project has no primitives"
-                      : views.empty()  ? "no calibrated image with loaded pixels; the mesh is untextured"
+                      : views.empty()  ? "no calibrated image with loaded pixels and used for texture; the mesh is "
+                                         "untextured"
                                        : "no face is seen by a calibrated image; the mesh is untextured";
+    ReportFaces(project, geometry, views, faces, textured, {}, &summary);
+    summary.message += OverrideNotes(project, summary);
     summary.time_ms = ElapsedMs(start);
     return summary;
   }
@@ -558,8 +701,11 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
 
   step_start = std::chrono::steady_clock::now();
   bake::SamplingCounts counts;
-  WriteAtlas(geometry, views, textured, faces, options, page_sizes, mesh, &counts);
+  std::vector<bake::SamplingCounts> face_counts;
+  WriteAtlas(geometry, views, textured, faces, options, page_sizes, mesh, &counts, &face_counts);
   summary.sampling_ms = ElapsedMs(step_start);
+  ReportFaces(project, geometry, views, faces, textured, face_counts, &summary);
+  summary.texels_forced_fallback = counts.forced_fallback;
 
   summary.termination = SolverTermination::kConverged;
   summary.faces_textured = static_cast<int>(textured.size());
@@ -574,7 +720,7 @@ TextureBakeSummary BakeTexturedMesh(const Project& project, const std::vector<co
                     " faces into " +
                     (page_sizes.size() > 1 ? std::to_string(page_sizes.size()) + " atlas pages, the first " : "a ") +
                     std::to_string(summary.atlas_width) + "x" + std::to_string(summary.atlas_height) + " atlas" +
-                    (shrink < 1.0 ? " (faces shrunk to fit)" : "");
+                    (shrink < 1.0 ? " (faces shrunk to fit)" : "") + OverrideNotes(project, summary);
   return summary;
 }
 

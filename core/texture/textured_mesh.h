@@ -63,6 +63,14 @@ enum class TextureSource {
 struct TextureBakeOptions {
   double texels_per_image_px = 1.0;  // face resolution relative to its size in its best photo
   int max_face_texels = 2048;        // per side
+  // Face resolution in texels per project unit (per metre when the units are m) instead of
+  // texels_per_image_px: a face whose bounding rectangle is W x H units gets round(W x
+  // texels_per_unit) + 1 by round(H x texels_per_unit) + 1 texels (texel centres on its
+  // outline, so W x texels_per_unit texel steps across it), each side capped by the atlas page
+  // (max_atlas_size - 2 x padding_texels; max_face_texels does not apply), and then, as always,
+  // every face shrunk by one factor when max_atlas_pages pages cannot hold them. 0: the rule
+  // of texels_per_image_px.
+  double texels_per_unit = 0.0;
   // Texels around each face, and any texel of its rectangle outside the polygon or hidden
   // from every photo, dilated from the face's own texels (nearest first) against bleeding.
   int padding_texels = 4;
@@ -91,6 +99,32 @@ struct TextureBakeOptions {
   bool Check(std::string* error) const;
 };
 
+// One photo's part in a face's texture.
+struct TextureSourceShare {
+  Id image_id = kNoId;
+  // Of the face's texels that a photo coloured, the part this photo gave: each such texel
+  // counts 1, split between the blended photos by their normalised weights.
+  double share = 0.0;
+};
+
+// Which photos textured one face of the mesh, and how the user's override fared.
+struct FaceTextureReport {
+  Id primitive_id = kNoId;
+  FaceId face = kNoFace;
+  std::vector<TextureSourceShare> sources;  // largest share first; empty when untextured
+  int width_texels = 0;                     // as packed into its atlas page; 0 when untextured
+  int height_texels = 0;
+  bool size_capped = false;  // texels_per_unit asked for more than an atlas page holds
+  // The override's forced photo (Primitive::face_textures) when the bake honoured it: the face
+  // takes its texels from that photo alone (never blended), except those the photo does not
+  // see (its frame, an occluder), which come from the next view that sees them.
+  Id forced_image = kNoId;
+  long forced_fallback_texels = 0;
+  // The override forces a photo that cannot texture the face at all (not calibrated or not
+  // loaded, excluded, behind or edge-on to the face): the face was textured as if unforced.
+  bool forced_unavailable = false;
+};
+
 // The shape every step's summary shares (core/optim/solver_summary.h), so the app reports a
 // bake like a solve; a bake has no cost or iterations, those stay 0. termination kConverged when the bake ran (also
 // when nothing could be textured: the message says why), kInvalidInput for bad options or photos, kFailed when the
@@ -107,6 +141,13 @@ struct TextureBakeSummary : SolverSummary {
   long texels_hidden = 0;  // seen by no photo (occluded): dilated from the face's texels
   // Per project image: the exposure gain (R, G, B) applied to it; 1 where none was fitted.
   std::vector<Eigen::Vector3d> exposure_gains;
+  // Per face of the mesh, in BuildUntexturedMesh's order (one entry per face, also when the
+  // bake fails or a face stays untextured): the photos that textured it.
+  std::vector<FaceTextureReport> faces;
+  int images_excluded = 0;          // calibrated images whose use_for_texture is off
+  long texels_forced_fallback = 0;  // over all faces: texels a forced photo did not see
+  int faces_forced_unavailable = 0;
+  int faces_size_capped = 0;
   // Where the time went, ms.
   double depth_maps_ms = 0.0;
   double selection_ms = 0.0;  // face scores and texel sizes
@@ -115,13 +156,17 @@ struct TextureBakeSummary : SolverSummary {
   double sampling_ms = 0.0;  // visibility per texel, sampling, blending, dilation
 };
 
-// Bakes a textured mesh. `photos[i]` points to the pixels of project.images[i] (nullptr or an
-// empty image for a photo that is not loaded); the bake only reads them, never copies them, and
-// the caller keeps them alive and unchanged until it returns (the app bakes on a worker thread
-// from photos it shares read-only). A face's best view is the calibrated image in front of
-// which it lies, facing it, with the largest projected area times cosine of the view angle
-// times the fraction of the face the z-buffer shows (a 4 x 4 grid over the face's rectangle,
-// kept inside the polygon); its texel size comes from that view. A face no view sees stays
+// Bakes a textured mesh, honouring the user's choices: an image whose use_for_texture is off,
+// and an image a face's override excludes, gives that face no colour and no weight; a face's
+// forced source photo is its only source where it sees the face (FaceTextureReport says what
+// came from elsewhere, and the summary's message names such faces). `photos[i]` points to the
+// pixels of project.images[i] (nullptr or an empty image for a photo that is not loaded); the
+// bake only reads them, never copies them, and the caller keeps them alive and unchanged until
+// it returns (the app bakes on a worker thread from photos it shares read-only). A face's best
+// view is the calibrated image in front of which it lies, facing it, with the largest
+// projected area times cosine of the view angle times the fraction of the face the z-buffer
+// shows (a 4 x 4 grid over the face's rectangle, kept inside the polygon); its texel size
+// comes from that view (or from the forced photo). A face no view sees stays
 // untextured. A texel no photo sees because something hides it is dilated from the face's
 // seen texels; one outside every photo's frame is opaque grey (128).
 // Face frame: u along the first edge (face.halfedge) projected into the face's plane, v the

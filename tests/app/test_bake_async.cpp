@@ -1,10 +1,15 @@
-// The texture bake off the main thread, in the real application offscreen (`facet render`
-// with an input script and `bake-status` snapshots): an edit's frame returns with the new
+// The texture bake in the real application offscreen (`facet render` with an input script
+// and `bake-status` snapshots): off the main thread, an edit's frame returns with the new
 // geometry and the bake still in flight, the result that arrives is bit-identical to a
 // synchronous bake of the same project and photo, an edit made while a bake runs drops that
-// bake's result, and a screenshot waits for the texture.
+// bake's result, and a screenshot waits for the texture. The user's texture choices (issue
+// 13): View > Texture sources with its legend, per-face and per-photo overrides as undoable
+// edits, and the export resolution (File > Export and `facet export --texels-per-unit`).
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <sstream>
@@ -14,12 +19,14 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/image/image_io.h"
 #include "core/io/project_io.h"
 #include "core/texture/textured_mesh.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
+#include "tests/textured_scene.h"
 
 using namespace facet::testing;
 
@@ -166,4 +173,218 @@ TEST_CASE("texture bake in the background: the edit's frame does not wait, the r
   CHECK_FALSE(s5.at("texture_pending").get<bool>());
   CHECK(s5.at("triangles").get<size_t>() == 5 * one_box_triangles);
   CHECK(s5.at("started").get<int>() == s4.at("started").get<int>() + 1);
+}
+
+namespace {
+
+// Pixels of `shot` inside the 3D panel (the report's viewport) that show a source colour of
+// View > Texture sources: saturated (> 0.55) and within 12 degrees of hue of a palette entry
+// (the frustums' light blue and the grey of untextured faces are far less saturated).
+int SourceTintedPixels(const cv::Mat& shot, const nlohmann::json& viewport, const std::vector<double>& hues_deg) {
+  const int x0 = static_cast<int>(viewport.at("origin_x").get<double>());
+  const int y0 = static_cast<int>(viewport.at("origin_y").get<double>());
+  const int w = viewport.at("width_px").get<int>(), h = viewport.at("height_px").get<int>();
+  cv::Mat hsv;
+  cv::cvtColor(shot(cv::Rect(x0, y0, std::min(w, shot.cols - x0), std::min(h, shot.rows - y0))), hsv,
+               cv::COLOR_BGR2HSV_FULL);
+  int count = 0;
+  for (int y = 0; y < hsv.rows; ++y) {
+    for (int x = 0; x < hsv.cols; ++x) {
+      const cv::Vec3b p = hsv.at<cv::Vec3b>(y, x);
+      if (p[1] < 0.55 * 255 || p[2] < 40) continue;
+      const double hue = p[0] * 360.0 / 256.0;
+      for (double target : hues_deg) {
+        const double d = std::abs(std::remainder(hue - target, 360.0));
+        if (d < 12.0) {
+          ++count;
+          break;
+        }
+      }
+    }
+  }
+  return count;
+}
+
+double HueDeg(const std::array<int, 3>& rgb) {
+  cv::Mat one(1, 1, CV_8UC3, cv::Scalar(rgb[2], rgb[1], rgb[0]));
+  cv::Mat hsv;
+  cv::cvtColor(one, hsv, cv::COLOR_BGR2HSV_FULL);
+  return hsv.at<cv::Vec3b>(0, 0)[0] * 360.0 / 256.0;
+}
+
+}  // namespace
+
+TEST_CASE("the user's texture choices in the app: source colours and legend, overrides undoable, export resolution") {
+  TempDir dir("texture_choices");
+  // The box seen by two photos of different exposure (a uniform paint at gains 1 and 0.6):
+  // photo 1 frontal to its -Y face, photo 2 frontal to its +X face.
+  SyntheticScene scene = MakeBoxScene();
+  facet::Project project = scene.project;
+  project.segments.clear();  // nothing to re-calibrate: the cameras are the truth
+  project.pins.clear();
+  SyntheticSceneOptions o1, o2;
+  o1.camera_center = {2.0, -11.0, 1.6};
+  o1.look_at = {2.0, 0.0, 1.2};
+  o2.camera_center = {14.0, -3.0, 3.0};
+  o2.look_at = {4.0, 1.0, 1.2};
+  project.images[0].camera = MakeLookAtCamera(o1);
+  project.images[0].path = "photo1.png";
+  facet::Image second = project.images[0];
+  second.id = project.NewId();
+  second.camera = MakeLookAtCamera(o2);
+  second.path = "photo2.png";
+  project.images.push_back(second);
+  const std::vector<facet::testing::PaintedFace> faces = facet::testing::PaintedFaces(project);
+  const facet::testing::Paint paint = [](const facet::testing::PaintedFace&, const Eigen::Vector3d&) {
+    return Eigen::Vector3d(170, 150, 130);
+  };
+  for (int k = 0; k < 2; ++k) {
+    const facet::ImageRgba8 photo =
+        facet::testing::RenderTexturedPhoto(faces, project.images[k].camera, paint, k == 0 ? 1.0 : 0.6);
+    REQUIRE(facet::WritePng(dir / project.images[k].path, photo).empty());
+  }
+  facet::FaceId front = facet::kNoFace, side = facet::kNoFace;
+  const facet::PolyMesh& mesh = project.primitives[0].mesh;
+  for (facet::FaceId f = 0; f < mesh.FaceIdEnd(); ++f) {
+    if (!mesh.IsFace(f)) continue;
+    const Eigen::Vector3d n = facet::FaceNormal(mesh, f);
+    if ((n + Eigen::Vector3d::UnitY()).norm() < 1e-9) front = f;
+    if ((n - Eigen::Vector3d::UnitX()).norm() < 1e-9) side = f;
+  }
+  REQUIRE(front != facet::kNoFace);
+  REQUIRE(side != facet::kNoFace);
+  const facet::Id box = project.primitives[0].id, image1 = project.images[0].id, image2 = project.images[1].id;
+  const std::string project_path = dir / "scene.facet";
+  REQUIRE(facet::SaveProject(project, project_path) == "");
+
+  std::ostringstream s;
+  s << "frames 2\ncommand wait-bake\n";
+  s << "screenshot " << (dir / "plain.png") << "\n";
+  s << "command texture sources on\n";
+  s << "screenshot " << (dir / "sources.png") << "\n";
+  s << "command save " << (dir / "s0.facet") << "\n";
+  s << "command select face " << box << " " << front << "\n";
+  s << "command texture source 1\n";
+  s << "command save " << (dir / "s1.facet") << "\n";
+  s << "command texture exclude 0 on\n";
+  s << "command save " << (dir / "s2.facet") << "\n";
+  s << "command texture use 1 off\n";
+  s << "command save " << (dir / "s3.facet") << "\n";
+  s << "command undo\ncommand save " << (dir / "u2.facet") << "\n";
+  s << "command undo\ncommand save " << (dir / "u1.facet") << "\n";
+  s << "command undo\ncommand save " << (dir / "u0.facet") << "\n";
+  s << "command redo\ncommand redo\ncommand save " << (dir / "r2.facet") << "\n";
+  s << "command redo\ncommand save " << (dir / "r3.facet") << "\n";
+  s << "command undo\n";
+  // The export dialog's resolution, then File > Export.
+  s << "command texture export-resolution 50\n";
+  s << "command export " << (dir / "model.obj") << "\n";
+  s << "command wait-bake\n";
+  s << "screenshot " << (dir / "forced.png") << "\n";
+  const nlohmann::json report = RenderScript(dir, project_path, "choices", s.str());
+  INFO("log:\n" << ReportLog(report));
+
+  // Undo and redo restore the overrides exactly: the saved files are byte for byte the same.
+  CHECK(ReadText(dir / "u2.facet") == ReadText(dir / "s2.facet"));
+  CHECK(ReadText(dir / "u1.facet") == ReadText(dir / "s1.facet"));
+  CHECK(ReadText(dir / "u0.facet") == ReadText(dir / "s0.facet"));
+  CHECK(ReadText(dir / "r2.facet") == ReadText(dir / "s2.facet"));
+  CHECK(ReadText(dir / "r3.facet") == ReadText(dir / "s3.facet"));
+  const facet::Project s0 = LoadProjectFile(dir / "s0.facet");
+  const facet::Project s1 = LoadProjectFile(dir / "s1.facet");
+  const facet::Project s2 = LoadProjectFile(dir / "s2.facet");
+  const facet::Project s3 = LoadProjectFile(dir / "s3.facet");
+  CHECK(s0.primitives[0].face_textures.empty());
+  REQUIRE(s1.primitives[0].face_textures.size() == 1);
+  CHECK(s1.primitives[0].face_textures[0] == facet::FaceTextureOverride{front, image2, {}});
+  REQUIRE(s2.primitives[0].face_textures.size() == 1);
+  CHECK(s2.primitives[0].face_textures[0] == facet::FaceTextureOverride{front, image2, {image1}});
+  CHECK(s2.images[1].use_for_texture);
+  CHECK_FALSE(s3.images[1].use_for_texture);
+  const std::vector<std::string> undo = report.at("undo_stack").get<std::vector<std::string>>();
+  REQUIRE(undo.size() == 2);
+  CHECK(undo[0].find("from photo 2") != std::string::npos);
+  CHECK(undo[1].find("Exclude photo 1") != std::string::npos);
+
+  // What the last bake reports (state s2): the front face from photo 2 alone, as forced,
+  // photo 1 excluded there; the side face photo 2's; the legend names photo 2.
+  const nlohmann::json& texture = report.at("texture");
+  INFO("texture: " << texture.dump());
+  CHECK(texture.at("show_sources").get<bool>());
+  bool front_seen = false, side_seen = false;
+  for (const nlohmann::json& f : texture.at("faces")) {
+    if (f.at("primitive_id") != box) continue;
+    if (f.at("face") == front) {
+      front_seen = true;
+      CHECK(f.at("forced_image") == image2);
+      REQUIRE(f.at("sources").size() >= 1);
+      CHECK(f.at("sources")[0].at("image_id") == image2);
+      for (const nlohmann::json& source : f.at("sources")) CHECK(source.at("image_id") != image1);
+    }
+    if (f.at("face") == side) {
+      side_seen = true;
+      REQUIRE(f.at("sources").size() >= 1);
+      CHECK(f.at("sources")[0].at("image_id") == image2);
+    }
+  }
+  CHECK(front_seen);
+  CHECK(side_seen);
+  bool legend_names_photo2 = false;
+  for (const nlohmann::json& row : texture.at("legend")) {
+    legend_names_photo2 = legend_names_photo2 || row.at("label").get<std::string>().find("photo 2 (photo2.png)") == 0;
+  }
+  CHECK(legend_names_photo2);
+
+  // The pictures: with the sources shown the faces carry the photos' colours (the swatches
+  // of the legend too); without, none of them.
+  const cv::Mat plain = cv::imread(dir / "plain.png");
+  const cv::Mat sources = cv::imread(dir / "sources.png");
+  REQUIRE_FALSE(plain.empty());
+  REQUIRE_FALSE(sources.empty());
+  std::vector<double> hues;
+  for (const nlohmann::json& row : texture.at("legend")) {
+    hues.push_back(
+        HueDeg({row.at("colour")[0].get<int>(), row.at("colour")[1].get<int>(), row.at("colour")[2].get<int>()}));
+  }
+  hues.push_back(HueDeg({66, 133, 244}));  // photo 1's colour: the front face at the start
+  const int tinted = SourceTintedPixels(sources, report.at("viewport"), hues);
+  const int untinted = SourceTintedPixels(plain, report.at("viewport"), hues);
+  MESSAGE("source-coloured pixels in the 3D panel: " << tinted << " shown, " << untinted << " hidden");
+  constexpr int kMinTintedPixels = 3000;
+  CHECK(tinted > kMinTintedPixels);
+  CHECK(tinted > 10 * untinted);
+
+  // The export at 50 texels per metre: the atlas a core bake of the project makes at that
+  // resolution, not the one from the photos.
+  const facet::Project exported_project = LoadProjectFile(dir / "s2.facet");
+  std::vector<facet::ImageRgba8> photos;
+  for (const facet::Image& image : exported_project.images) {
+    facet::ImageReadResult read = facet::ReadImage(dir / image.path);
+    REQUIRE_MESSAGE(read.ok(), read.error);
+    photos.push_back(std::move(read.image));
+  }
+  facet::TextureBakeOptions at_50;
+  at_50.texels_per_unit = 50.0;
+  at_50.max_atlas_pages = 8;
+  facet::TexturedMesh expected, from_photos;
+  REQUIRE(facet::BakeTexturedMesh(exported_project, photos, at_50, &expected).IsUsable());
+  REQUIRE(facet::BakeTexturedMesh(exported_project, photos, {}, &from_photos).IsUsable());
+  const cv::Mat atlas = cv::imread(dir / "model.png", cv::IMREAD_UNCHANGED);
+  REQUIRE_FALSE(atlas.empty());
+  CHECK(atlas.cols == expected.atlas.width);
+  CHECK(atlas.rows == expected.atlas.height);
+  MESSAGE("export atlas at 50 texels/m: " << atlas.cols << " x " << atlas.rows << " (from the photos: "
+                                          << from_photos.atlas.width << " x " << from_photos.atlas.height << ")");
+
+  // `facet export --texels-per-unit` makes the same atlas.
+  const CliResult cli =
+      RunFacet(dir, "export '" + (dir / "s2.facet") + "' -o '" + (dir / "cli.obj") + "' --texels-per-unit 50");
+  INFO("stderr: " << cli.err);
+  REQUIRE(cli.exit_code == 0);
+  const cv::Mat cli_atlas = cv::imread(dir / "cli.png", cv::IMREAD_UNCHANGED);
+  REQUIRE_FALSE(cli_atlas.empty());
+  CHECK(cli_atlas.cols == expected.atlas.width);
+  CHECK(cli_atlas.rows == expected.atlas.height);
+  CHECK(RunFacet(dir, "export '" + (dir / "s2.facet") + "' -o '" + (dir / "bad.obj") + "' --texels-per-unit -3")
+            .exit_code != 0);
 }
