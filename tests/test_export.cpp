@@ -15,6 +15,7 @@
 #include "core/io/export.h"
 #include "core/io/gltf_read.h"
 #include "core/io/project_io.h"
+#include "core/io/reference_mesh.h"
 #include "core/mesh/operators.h"
 #include "core/mesh/primitives.h"
 #include "core/texture/textured_mesh.h"
@@ -786,4 +787,69 @@ TEST_CASE("Leuven sample: every exported camera projects the exported model onto
                               << worst_px << " px of the project's projection (" << worst_without_extras_px
                               << " px with the principal point at the image centre, as glTF alone says)");
   }
+}
+
+TEST_CASE("reference meshes: an exported OBJ and GLB read back as references land on the model") {
+  const Fixture f = BakedScene();
+  const fs::path dir = TempDir("reference");
+  REQUIRE(facet::ExportObj(f.mesh, (dir / "house.obj").string()).success);
+  REQUIRE(facet::ExportGlb(f.mesh, f.scene.project, (dir / "house.glb").string()).success);
+  CHECK_GLTF_VALID((dir / "house.glb").string());
+  size_t textured = 0;
+  for (auto t : f.mesh.triangle_textured) textured += t;
+  for (const char* name : {"house.obj", "house.glb"}) {
+    CAPTURE(name);
+    facet::ReferenceMesh reference;
+    const std::string error = facet::ReadReferenceMesh((dir / name).string(), /*y_up=*/true, &reference);
+    REQUIRE_MESSAGE(error.empty(), error);
+    CHECK(reference.triangles.size() == f.mesh.indices.size() / 3);
+    // Every triangle corner is where the model's is, in the world frame (Z up): the Y-up
+    // axes of both files are undone. OBJ text keeps 9 digits, GLB floats.
+    constexpr double kPositionTolerance = 1e-6;
+    double worst = 0.0;
+    // OBJ keeps the mesh's vertices in order; the GLB repeats them per primitive.
+    for (size_t v = 0; v < reference.positions.size(); ++v) {
+      const Eigen::Vector3d model = f.mesh.positions[v % f.mesh.positions.size()].cast<double>();
+      worst = std::max(worst, (reference.positions[v] - model).norm());
+    }
+    CHECK(worst < kPositionTolerance);
+    CHECK(reference.lo.z() == doctest::Approx(0.0).epsilon(1e-6));
+    CHECK(reference.hi.z() == doctest::Approx(2.5).epsilon(1e-6));
+    CHECK(!reference.edges.empty());
+  }
+  // Z-up axes take the file's numbers as they are: the box's height is then along y.
+  facet::ReferenceMesh z_up;
+  REQUIRE(facet::ReadReferenceMesh((dir / "house.obj").string(), /*y_up=*/false, &z_up).empty());
+  CHECK(z_up.hi.y() == doctest::Approx(2.5).epsilon(1e-6));
+}
+
+TEST_CASE("reference meshes: OBJ faces, negative indices and errors that name the file and line") {
+  const fs::path dir = TempDir("reference_obj");
+  const std::string path = (dir / "plan.obj").string();
+  std::ofstream(path) << "# a quad and a triangle\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\n"
+                         "f 1/1 2/1 3/1 4/1\nv 0 0 1\nf -1 1 2\nusemtl x\n";
+  facet::ReferenceMesh mesh;
+  std::string error = facet::ReadReferenceMesh(path, /*y_up=*/false, &mesh);
+  REQUIRE_MESSAGE(error.empty(), error);
+  CHECK(mesh.positions.size() == 5);
+  CHECK(mesh.triangles.size() == 3);  // the quad fanned into two
+  CHECK(mesh.triangles[2] == std::array<int, 3>{4, 0, 1});
+  CHECK(mesh.edges.size() == 6);  // the quad's 4 sides and 2 new ones (edge 0-1 is shared)
+
+  std::ofstream(path, std::ios::trunc) << "v 0 0 0\nv 1 0 0\nf 1 2 3\n";
+  error = facet::ReadReferenceMesh(path, true, &mesh);
+  CHECK(error.find(path + ", line 3") == 0);
+  CHECK(error.find("'3'") != std::string::npos);
+  CHECK(mesh.positions.empty());
+  std::ofstream(path, std::ios::trunc) << "v 0 0 zero\n";
+  CHECK(facet::ReadReferenceMesh(path, true, &mesh).find("line 1: a vertex needs three finite numbers") !=
+        std::string::npos);
+  std::ofstream(path, std::ios::trunc) << "v 0 0 0\n";
+  CHECK(facet::ReadReferenceMesh(path, true, &mesh).find("holds no triangles") != std::string::npos);
+  const std::string missing = (dir / "gone.obj").string();
+  error = facet::ReadReferenceMesh(missing, true, &mesh);
+  CHECK(error.find(missing) != std::string::npos);
+  MESSAGE("a missing reference: " << error);
+  CHECK(facet::ReadReferenceMesh((dir / "plan.stl").string(), true, &mesh).find(".obj or a binary glTF .glb") !=
+        std::string::npos);
 }

@@ -260,6 +260,14 @@ Project MakeFullProject() {
     c.line_b_px = {-1.5, 1e3 / 7.0};
     p.constraints.push_back(c);
   }
+  for (int k = 0; k < 2; ++k) {
+    facet::Reference ref;
+    ref.id = p.NewId();
+    ref.path = k == 0 ? "survey/site plan.obj" : "../scans/church.glb";
+    ref.y_up = k == 0;
+    ref.visible = k == 1;
+    p.references.push_back(ref);
+  }
   p.next_id += 17;
   return p;
 }
@@ -295,6 +303,10 @@ Project MakeSmallProject() {
   c.vertices = {{box_id, 0}, {box_id, 6}};
   c.value = 4.5;
   p.constraints.push_back(c);
+  facet::Reference ref;
+  ref.id = p.NewId();
+  ref.path = "site.obj";
+  p.references.push_back(ref);
   return p;
 }
 
@@ -420,6 +432,9 @@ TEST_CASE("each single field is written and read back") {
       {"constraint.image_id", [](Project& p) { p.constraints[8].image_id = p.images[0].id; }},
       {"constraint.line_a_px", [](Project& p) { p.constraints[8].line_a_px.y() = 0.5; }},
       {"constraint.line_b_px", [](Project& p) { p.constraints[8].line_b_px.x() = 0.5; }},
+      {"reference.path", [](Project& p) { p.references[0].path = "other.obj"; }},
+      {"reference.y_up", [](Project& p) { p.references[0].y_up = false; }},
+      {"reference.visible", [](Project& p) { p.references[1].visible = false; }},
   };
   for (const auto& [name, edit] : edits) {
     const std::string& edit_name = name;  // clang 14 cannot capture a structured binding (INFO)
@@ -652,7 +667,8 @@ TEST_CASE("version: newer files are refused clearly, bad versions are errors") {
   Json j = SmallJson();
   j["version"] = 7;
   const facet::ProjectLoadResult r = facet::ProjectFromJson(j.dump());
-  CHECK(r.error == "version: written by a newer Facet: version 7, this build reads up to 2");
+  CHECK(r.error == "version: written by a newer Facet: version 7, this build reads up to " +
+                       std::to_string(Project::kFormatVersion));
   j["version"] = 0;
   CheckErrorNames(j.dump(), "version: expected a positive integer");
   j["version"] = -3;
@@ -1321,12 +1337,12 @@ TEST_CASE("the version-1 fixture keeps loading: boxes become box primitives, cor
   // The photos are not in the repository: the project still opens, with warnings.
   CHECK(r.warnings.size() == 2);
 
-  // Saving writes version 2, which loads back equal.
+  // Saving writes the current version, which loads back equal.
   TempDir dir;
   const std::string saved = dir / "upgraded.facet";
   REQUIRE(facet::SaveProject(p, saved) == "");
   const Json j = Json::parse(ReadFile(saved));
-  CHECK(j["version"] == 2);
+  CHECK(j["version"] == Project::kFormatVersion);
   CHECK_FALSE(j.contains("boxes"));
   CHECK(j["primitives"].size() == 2);
   CHECK(j["pins"][2]["vertex"] == 7);
@@ -1354,4 +1370,61 @@ TEST_CASE("version-1 content errors still name their location") {
     bad["pins"][0]["box_id"] = 99;
     CheckErrorNames(bad.dump(), "pins[0].vertex: refers to a missing primitive 99");
   }
+}
+
+TEST_CASE("the version-2 fixture loads without references and saves as the current version") {
+  // tests/fixtures/project_v2.facet is a frozen copy of the Leuven sample as version 2 wrote it.
+  const std::string fixture = std::string(FACET_SOURCE_DIR) + "/tests/fixtures/project_v2.facet";
+  REQUIRE(Json::parse(ReadFile(fixture))["version"] == 2);
+  const facet::ProjectLoadResult r = facet::LoadProject(fixture);
+  INFO(r.error);
+  REQUIRE(r.ok());
+  CHECK(r.project.references.empty());
+  CHECK(r.project.primitives.size() == 1);
+  CHECK(r.project.images.size() == 1);
+  TempDir dir;
+  REQUIRE(facet::SaveProject(r.project, dir / "upgraded.facet") == "");
+  const Json j = Json::parse(ReadFile(dir / "upgraded.facet"));
+  CHECK(j["version"] == Project::kFormatVersion);
+  CHECK(j["references"] == Json::array());
+  const facet::ProjectLoadResult again = facet::LoadProject(dir / "upgraded.facet");
+  REQUIRE(again.ok());
+  CHECK(again.project == r.project);
+}
+
+TEST_CASE("references: round trip, bad fields named, a missing mesh file is a warning that loses nothing") {
+  Project p = MakeSmallProject();
+  CheckRoundTrip(p);
+  const Json good = Json::parse(facet::ProjectToJson(p));
+  CHECK(good["references"][0]["path"] == "site.obj");
+  CHECK(good["references"][0]["axes"] == "y_up");
+  Json bad = good;
+  bad["references"][0]["axes"] = "x_up";
+  CheckErrorNames(bad.dump(), "references[0].axes: expected \"y_up\" or \"z_up\"");
+  bad = good;
+  bad["references"][0]["path"] = "";
+  CheckErrorNames(bad.dump(), "references[0].path");
+  bad = good;
+  bad["references"][0]["id"] = good["images"][0]["id"];
+  CheckErrorNames(bad.dump(), "references[0].id: duplicate id");
+
+  // Saved beside no mesh file: the load warns with the resolved path and keeps the reference;
+  // saving again writes it unchanged.
+  TempDir dir;
+  const std::string path = dir / "p.facet";
+  REQUIRE(facet::SaveProject(p, path) == "");
+  const facet::ProjectLoadResult loaded = facet::LoadProject(path);
+  REQUIRE(loaded.ok());
+  bool warned = false;
+  for (const std::string& w : loaded.warnings)
+    warned = warned || (w.find("references[0]: reference mesh not found: " + (dir / "site.obj")) == 0);
+  CHECK(warned);
+  CHECK(loaded.project == p);
+  const std::string first = ReadFile(path);
+  REQUIRE(facet::SaveProject(loaded.project, path) == "");
+  CHECK(ReadFile(path) == first);
+
+  // Save as into another folder keeps pointing at the same mesh file.
+  facet::RebaseImagePaths(path, dir / "sub/q.facet", &p);
+  CHECK(p.references[0].path == "../site.obj");
 }

@@ -29,6 +29,7 @@
 #include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
 #include "app/state/move_tool.h"
+#include "app/state/reference_edits.h"
 #include "core/io/export.h"
 #include "core/util/file_write.h"
 
@@ -724,6 +725,33 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   if (name == "line-pin-move") return RunLinePinMoveCommand(state, arg, error);
   if (name == "calibration") return RunCalibrationCommand(state, &shell->properties_panel.exif_feedback, arg, error);
   if (name == "move-selection") return RunMoveCommand(state, arg, error);
+  if (name == "reference") {
+    // reference add PATH | reference add-z-up PATH | reference remove INDEX (app/state/reference_edits.h)
+    const size_t space = arg.find(' ');
+    const std::string verb = arg.substr(0, space);
+    const std::string rest = space == std::string::npos ? std::string() : arg.substr(space + 1);
+    if ((verb == "add" || verb == "add-z-up") && !rest.empty()) {
+      if (!AddReferenceEdit(state, rest, verb == "add")) {
+        *error = LastLoggedError(*state);
+        return false;
+      }
+      NoteRecentFile(state, shell, rest);
+      return true;
+    }
+    if (verb == "remove") {
+      const auto& references = state->document.project().references;
+      char* end = nullptr;
+      const long index = std::strtol(rest.c_str(), &end, 10);
+      if (rest.empty() || *end != '\0' || index < 0 || index >= static_cast<long>(references.size())) {
+        *error = "reference remove: index " + rest + " is not in 0.." +
+                 std::to_string(static_cast<long>(references.size()) - 1);
+        return false;
+      }
+      return RemoveReferenceEdit(state, references[index].id);
+    }
+    *error = "reference: expected 'add PATH', 'add-z-up PATH' or 'remove INDEX'";
+    return false;
+  }
   if (name == "free-vertex" || name == "planar-face") {
     const ElementRef& e = state->selection.element;
     const bool vertex = name == "free-vertex";
@@ -795,6 +823,7 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   state->time_s = time_s;
   state->bake_mode = shell->offscreen ? BakeMode::kFinishNextFrame : BakeMode::kBackground;
   RefreshDerived(state);
+  SyncReferenceMeshes(state);
   CollectLineDetection(state, /*wait=*/false);
   AutosaveTick(state);
   if (state->autosave.offer && shell->dialog == Dialog::kNone) OpenDialog(shell, Dialog::kRecover);

@@ -53,6 +53,7 @@ OrderedJson WriteEdit(const Edit& edit, const std::string& at, std::string* erro
   WriteChanges(edit.primitives, "primitives", at, &j, error);
   WriteChanges(edit.pins, "pins", at, &j, error);
   WriteChanges(edit.constraints, "constraints", at, &j, error);
+  WriteChanges(edit.references, "references", at, &j, error);
   if (edit.units_before || edit.units_after)
     j["units"] = {edit.units_before.value_or(""), edit.units_after.value_or("")};
   if (edit.next_id_before != kNoId || edit.next_id_after != kNoId)
@@ -128,13 +129,15 @@ bool ReadChanges(const Json& edit, const char* key, const std::string& at, Reade
 }
 
 bool ReadEdit(const Json& j, const std::string& at, Reader* r, Edit* edit) {
-  if (!r->Object(j, at, {"label", "images", "segments", "primitives", "pins", "constraints", "units", "next_id"}))
+  if (!r->Object(j, at,
+                 {"label", "images", "segments", "primitives", "pins", "constraints", "references", "units", "next_id"}))
     return false;
   if (!j.contains("label") || !j["label"].is_string()) return r->Fail(Join(at, "label"), "expected a string");
   edit->label = j["label"].get<std::string>();
   if (!ReadChanges(j, "images", at, r, &edit->images) || !ReadChanges(j, "segments", at, r, &edit->segments) ||
       !ReadChanges(j, "primitives", at, r, &edit->primitives) || !ReadChanges(j, "pins", at, r, &edit->pins) ||
-      !ReadChanges(j, "constraints", at, r, &edit->constraints))
+      !ReadChanges(j, "constraints", at, r, &edit->constraints) ||
+      !ReadChanges(j, "references", at, r, &edit->references))
     return false;
   if (j.contains("units")) {
     const Json& units = j["units"];
