@@ -159,6 +159,7 @@ const char* DialogName(Dialog dialog) {
     case Dialog::kExport: return "export";
     case Dialog::kAddPhoto: return "add-photo";
     case Dialog::kRelinkPhoto: return "relink-photo";
+    case Dialog::kAddReference: return "add-reference";
     case Dialog::kAbout: return "about";
     case Dialog::kConfirmQuit: return "confirm-quit";
     case Dialog::kConfirmNew: return "confirm-new";

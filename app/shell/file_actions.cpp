@@ -18,6 +18,7 @@ BrowsePurpose PurposeOf(Dialog dialog) {
     case Dialog::kExport: return BrowsePurpose::kExport;
     case Dialog::kAddPhoto: return BrowsePurpose::kAddPhoto;
     case Dialog::kRelinkPhoto: return BrowsePurpose::kRelinkPhoto;
+    case Dialog::kAddReference: return BrowsePurpose::kAddReference;
     default: return BrowsePurpose::kOpenProject;
   }
 }
@@ -29,6 +30,7 @@ const char* CommandOf(BrowsePurpose purpose) {
     case BrowsePurpose::kExport: return "export";
     case BrowsePurpose::kAddPhoto: return "add-photo";
     case BrowsePurpose::kRelinkPhoto: return "relink-photo";
+    case BrowsePurpose::kAddReference: return "add-reference";
   }
   return "";
 }

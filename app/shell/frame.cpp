@@ -314,6 +314,7 @@ const char* DialogTitle(Dialog dialog) {
     case Dialog::kExport: return "Export model";
     case Dialog::kAddPhoto: return "Add photo";
     case Dialog::kRelinkPhoto: return "Relink photo";
+    case Dialog::kAddReference: return "Add reference mesh";
     case Dialog::kAbout: return "About Facet";
     case Dialog::kConfirmQuit: return "Unsaved changes##quit";
     case Dialog::kConfirmNew: return "Unsaved changes##new";
@@ -338,6 +339,8 @@ void DrawPathDialog(AppState* state, ShellState* shell) {
     ImGui::Checkbox("Detect lines (proposals to accept in the image panel)", &state->detect_lines_on_add);
   }
   if (d == Dialog::kExport) ImGui::TextColored(kDimText, "The extension chooses the format: .glb (glTF) or .obj");
+  if (d == Dialog::kAddReference)
+    ImGui::TextColored(kDimText, "A mesh to model against (.obj or .glb, Y up): drawn, snapped to, never exported");
   if (d == Dialog::kRelinkPhoto) {
     const Image* image = state->document.project().FindImage(state->active_image_id);
     if (image != nullptr)
@@ -381,6 +384,7 @@ void DrawDialogs(AppState* state, ShellState* shell) {
     case Dialog::kSaveAs:
     case Dialog::kAddPhoto:
     case Dialog::kRelinkPhoto:
+    case Dialog::kAddReference:
     case Dialog::kExport: DrawPathDialog(state, shell); break;
     case Dialog::kAbout:
       ImGui::Text("Facet %s", "0.1");
@@ -725,6 +729,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   if (name == "line-pin-move") return RunLinePinMoveCommand(state, arg, error);
   if (name == "calibration") return RunCalibrationCommand(state, &shell->properties_panel.exif_feedback, arg, error);
   if (name == "move-selection") return RunMoveCommand(state, arg, error);
+  if (name == "add-reference") return RunAppCommand(state, shell, "reference", {"add " + arg}, error);
   if (name == "reference") {
     // reference add PATH | reference add-z-up PATH | reference remove INDEX (app/state/reference_edits.h)
     const size_t space = arg.find(' ');

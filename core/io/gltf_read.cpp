@@ -8,6 +8,7 @@
 #include <functional>
 
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <nlohmann/json.hpp>
 
 #include "core/util/file_read.h"
@@ -143,10 +144,15 @@ Eigen::Matrix4d NodeMatrix(const Json& node) {
   }
   Eigen::Vector3d t = Eigen::Vector3d::Zero(), s = Eigen::Vector3d::Ones();
   Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-  if (node.contains("translation")) t = {node["translation"][0], node["translation"][1], node["translation"][2]};
-  if (node.contains("scale")) s = {node["scale"][0], node["scale"][1], node["scale"][2]};
+  auto vector3 = [](const Json& v) {
+    if (!v.is_array() || v.size() != 3) Fail("a node's translation or scale does not have 3 numbers");
+    return Eigen::Vector3d(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+  };
+  if (node.contains("translation")) t = vector3(node["translation"]);
+  if (node.contains("scale")) s = vector3(node["scale"]);
   if (node.contains("rotation")) {
     const Json& r = node["rotation"];  // x, y, z, w
+    if (!r.is_array() || r.size() != 4) Fail("a node's rotation does not have 4 numbers");
     q = Eigen::Quaterniond(r[3].get<double>(), r[0].get<double>(), r[1].get<double>(), r[2].get<double>());
     if (std::abs(q.norm() - 1.0) > 1e-3) Fail("a node's rotation is not a unit quaternion");
     q.normalize();
@@ -178,7 +184,7 @@ void ReadPrimitive(const GlbReader& reader, const Json& primitive, const Eigen::
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
     if (!nrm.empty()) normal = (normal_matrix * Eigen::Vector3d(nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2])).normalized();
     scene->normals.push_back(normal.cast<float>());
-    scene->uvs.push_back(uv.empty() ? Eigen::Vector2f::Zero()
+    scene->uvs.push_back(uv.empty() ? Eigen::Vector2f(0.0f, 0.0f)
                                     : Eigen::Vector2f(static_cast<float>(uv[2 * v]), static_cast<float>(uv[2 * v + 1])));
   }
   GltfBatch batch;

@@ -4,13 +4,15 @@
 // or line/column), and never crashes. Doubles are written in the shortest form that reads
 // back to the same bits, so a save/load round-trip is exact.
 //
-// Layout (version 2): {"format": "facet-project", "version": 2, "units", "next_id", "images",
-// "segments", "primitives", "pins", "constraints"}; every field of core/scene/project.h is stored,
+// Layout (version 3): {"format": "facet-project", "version": 3, "units", "next_id", "images",
+// "segments", "primitives", "pins", "constraints", "references"}; every field of core/scene/project.h is stored,
 // camera rotations as 9 numbers row-major (exact), primitive rotations as angle-axis, each
 // primitive's mesh record by record with its ids (holes included) so that pins and
 // constraints keep naming the same vertices; a mesh may also be "from_shape" (the unedited
-// primitive). Version 1 files (boxes with corner pins) are upgraded on load
-// (project_io.cpp, kMigrationSteps); tests/fixtures/project_v1.facet is one.
+// primitive); a reference is {"id", "path" (relative to the project file), "axes": "y_up" |
+// "z_up", "visible"}, its mesh read from the file, never stored. Older files are upgraded on
+// load (project_io.cpp, kMigrationSteps): version 1 (boxes with corner pins,
+// tests/fixtures/project_v1.facet) and version 2 (no references, tests/fixtures/project_v2.facet).
 #pragma once
 
 #include <cstdint>
