@@ -292,8 +292,9 @@ TEST_CASE("reference geometry: added by script and drawn; a dragged vertex snaps
   {
     std::ofstream obj(dir / "plan.obj");
     obj.precision(17);
-    obj << "v " << target.x() << " " << target.y() << " " << target.z() << "\nv " << target.x() + 2 << " "
-        << target.y() << " " << target.z() << "\nv " << target.x() << " " << target.y() + 2 << " " << target.z()
+    // Its other corners reach back over the box's top, so that the panel shows most of it.
+    obj << "v " << target.x() << " " << target.y() << " " << target.z() << "\nv " << target.x() - 3 << " "
+        << target.y() << " " << target.z() << "\nv " << target.x() << " " << target.y() - 2.5 << " " << target.z()
         << "\nf 1 2 3\n";
   }
   const std::string add = "command reference add-z-up " + (dir / "plan.obj") + "\nframes 2\n";
