@@ -239,3 +239,30 @@ TEST_CASE("a history that does not lead to its project is an error naming the ed
   error = mutated([](json& j) { j["clean_undo_depth"] = 7; });
   CHECK(error.find("history: clean_undo_depth: 7 is beyond the history (3 edits)") == 0);
 }
+
+TEST_CASE("adding and removing reference geometry round-trips through the recovery file") {
+  Document doc(facet::testing::MakeBoxScene().project);
+  Project added = doc.project();
+  for (const char* path : {"plan.obj", "../scans/site.glb"}) {
+    facet::Reference reference;
+    reference.id = added.NewId();
+    reference.path = path;
+    reference.y_up = path[0] == 'p';
+    added.references.push_back(reference);
+  }
+  REQUIRE(doc.Commit("Add references", added));
+  Project removed = doc.project();
+  removed.references.erase(removed.references.begin());
+  REQUIRE(doc.Commit("Remove reference plan.obj", removed));
+  REQUIRE(doc.Undo());  // the removal waits on the redo stack
+  REQUIRE(doc.undo_stack().back().references.size() == 2);
+  const RecoveryLoadResult loaded = RecoveryFromJson(Text(doc));
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+  CheckSameDocument(loaded.document, doc);
+  Document rebuilt = loaded.document;
+  REQUIRE(rebuilt.Redo());
+  CHECK(rebuilt.project() == removed);
+  REQUIRE(rebuilt.Undo());
+  REQUIRE(rebuilt.Undo());
+  CHECK(rebuilt.project().references.empty());
+}
