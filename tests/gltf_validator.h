@@ -68,9 +68,10 @@ inline GltfValidation ValidateGltf(const std::string& path) {
 #define CHECK_GLTF_VALID(path)                                                                                      \
   do {                                                                                                              \
     const ::facet::testing::GltfValidation gltf_validation_ = ::facet::testing::ValidateGltf(path);                 \
-    INFO("glTF Validator on " << (path) << ": " << gltf_validation_.error << gltf_validation_.messages);             \
-    CHECK(gltf_validation_.ran);                                                                                    \
-    CHECK(gltf_validation_.errors == 0);                                                                            \
+    CHECK_MESSAGE(gltf_validation_.ran, "the glTF Validator did not run on " << (path) << ": "                      \
+                                                                               << gltf_validation_.error);          \
+    CHECK_MESSAGE(gltf_validation_.errors == 0,                                                                     \
+                  "glTF Validator on " << (path) << ":\n" << gltf_validation_.messages);                           \
     if (gltf_validation_.ran)                                                                                       \
       MESSAGE("glTF Validator " << gltf_validation_.validator_version << " on " << (path) << ": "                   \
                                 << gltf_validation_.errors << " errors, " << gltf_validation_.warnings            \

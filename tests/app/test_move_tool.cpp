@@ -17,6 +17,7 @@
 #include "core/io/project_io.h"
 #include "core/mesh/primitives.h"
 #include "tests/app/app_test_util.h"
+#include "tests/gltf_validator.h"
 #include "tests/synthetic_scene.h"
 
 using namespace facet::testing;
@@ -352,6 +353,7 @@ TEST_CASE("reference geometry: the Leuven street exported and added back lies on
   const CliResult exported =
       RunFacet(dir, "export '" + sample_dir + "/street.facet' -o '" + (dir / "street.glb") + "'");
   REQUIRE(exported.exit_code == 0);
+  CHECK_GLTF_VALID(dir / "street.glb");
   const nlohmann::json report =
       Render(dir, sample_dir + "/street.facet", "leuven",
              "frames 3\ncommand reference add " + (dir / "street.glb") + "\nframes 3\n");
