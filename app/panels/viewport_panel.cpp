@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <memory>
@@ -22,12 +23,14 @@
 #include <vector>
 
 #include "app/panels/teach_overlay.h"
+#include "app/panels/widgets.h"
 #include "app/platform/gl_camera.h"
 #include "app/platform/viewport_shaders.h"
 #include "app/state/model_edits.h"
 #include "app/state/model_pick.h"
 #include "app/state/move_tool.h"
 #include "app/state/orbit_camera.h"
+#include "app/state/reference_edits.h"
 
 namespace facet::app {
 namespace {
@@ -865,6 +868,28 @@ void DrawToolbar(AppState* state, PanelState* panel, const SceneMeasure& measure
     ImGui::Checkbox("Mesh edges", &panel->show_wireframe);
     ImGui::Checkbox("Cameras and photos", &panel->show_cameras);
     ImGui::Checkbox("Ground grid", &panel->show_grid);
+    // Reference meshes (File > Add reference mesh...): shown or hidden, removed; each an edit.
+    const std::vector<Reference> references = state->document.project().references;
+    if (!references.empty()) {
+      ImGui::Separator();
+      ImGui::TextDisabled("Reference meshes");
+    }
+    for (const Reference& reference : references) {
+      ImGui::PushID(static_cast<int>(reference.id));
+      bool visible = reference.visible;
+      const std::string name = std::filesystem::path(reference.path).filename().string();
+      if (ImGui::Checkbox(name.c_str(), &visible)) SetReferenceVisibleEdit(state, reference.id, visible);
+      RecordItem(state, "viewport.reference." + std::to_string(reference.id));
+      const auto loaded = state->references.find(reference.id);
+      if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("%s", loaded != state->references.end() && !loaded->second.error.empty()
+                                    ? loaded->second.error.c_str()
+                                    : reference.path.c_str());
+      ImGui::SameLine();
+      if (ImGui::SmallButton("Remove")) RemoveReferenceEdit(state, reference.id);
+      RecordItem(state, "viewport.reference_remove." + std::to_string(reference.id));
+      ImGui::PopID();
+    }
     ImGui::EndPopup();
   }
 }

@@ -743,18 +743,19 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
       NoteRecentFile(state, shell, rest);
       return true;
     }
-    if (verb == "remove") {
+    if (verb == "remove" || verb == "show" || verb == "hide") {
       const auto& references = state->document.project().references;
       char* end = nullptr;
       const long index = std::strtol(rest.c_str(), &end, 10);
       if (rest.empty() || *end != '\0' || index < 0 || index >= static_cast<long>(references.size())) {
-        *error = "reference remove: index " + rest + " is not in 0.." +
+        *error = "reference " + verb + ": index " + rest + " is not in 0.." +
                  std::to_string(static_cast<long>(references.size()) - 1);
         return false;
       }
-      return RemoveReferenceEdit(state, references[index].id);
+      if (verb == "remove") return RemoveReferenceEdit(state, references[index].id);
+      return SetReferenceVisibleEdit(state, references[index].id, verb == "show");
     }
-    *error = "reference: expected 'add PATH', 'add-z-up PATH' or 'remove INDEX'";
+    *error = "reference: expected 'add PATH', 'add-z-up PATH', or 'remove|show|hide INDEX'";
     return false;
   }
   if (name == "free-vertex" || name == "planar-face") {

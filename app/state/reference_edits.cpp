@@ -67,6 +67,21 @@ bool RemoveReferenceEdit(AppState* state, Id id) {
   return true;
 }
 
+bool SetReferenceVisibleEdit(AppState* state, Id id, bool visible) {
+  Project after = state->document.project();
+  Reference* reference = after.FindReference(id);
+  if (reference == nullptr) {
+    state->Log(LogLevel::kError, "Show reference: there is no reference " + std::to_string(id));
+    return false;
+  }
+  if (reference->visible == visible) return true;
+  reference->visible = visible;
+  const std::string label =
+      std::string(visible ? "Show" : "Hide") + " reference " + std::filesystem::path(reference->path).filename().string();
+  if (state->document.Commit(label, after)) state->Log(LogLevel::kInfo, label);
+  return true;
+}
+
 void SyncReferenceMeshes(AppState* state) {
   const Project& project = state->document.project();
   for (auto it = state->references.begin(); it != state->references.end();) {

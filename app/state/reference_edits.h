@@ -20,6 +20,9 @@ namespace facet::app {
 bool AddReferenceEdit(AppState* state, const std::string& file_path, bool y_up);
 // Removes the reference `id` in one undoable edit. False (logged) when there is none.
 bool RemoveReferenceEdit(AppState* state, Id id);
+// Shows or hides the reference `id` (drawing and snapping) in one undoable edit; stored in the
+// project. False (logged) when there is none; true without an edit when it is so already.
+bool SetReferenceVisibleEdit(AppState* state, Id id, bool visible);
 
 // Keeps state->references in step with the project's references: reads each new or changed
 // one once (a missing or bad file logs one warning naming it and stays undrawn; the reference

@@ -260,7 +260,8 @@ TEST_CASE("move tool: an undetermined depth keeps the dragged value through the 
 namespace {
 
 // Pixels of the reference geometry's colour (app/panels/image_overlay.h, viewport_panel.cpp:
-// a cyan no other drawing uses: green and blue both well above red) inside a panel's rect.
+// cyan, green and blue alike and well above red, as it shows blended over the photo or the
+// model; the z family's blue and the y family's green are not) inside a panel's rect.
 int ReferencePixels(const cv::Mat& shot, const nlohmann::json& panel_rect) {
   const int x0 = std::max(0, static_cast<int>(panel_rect.at("x").get<double>()));
   const int y0 = std::max(0, static_cast<int>(panel_rect.at("y").get<double>()));
@@ -270,7 +271,7 @@ int ReferencePixels(const cv::Mat& shot, const nlohmann::json& panel_rect) {
   for (int y = y0; y < y1; ++y)
     for (int x = x0; x < x1; ++x) {
       const cv::Vec3b bgr = shot.at<cv::Vec3b>(y, x);
-      count += bgr[1] > bgr[2] + 60 && bgr[0] > bgr[2] + 60;
+      count += bgr[1] > bgr[2] + 50 && bgr[0] > bgr[2] + 50 && std::abs(bgr[1] - bgr[0]) < 30;
     }
   return count;
 }
@@ -356,16 +357,26 @@ TEST_CASE("reference geometry: the Leuven street exported and added back lies on
   CHECK_GLTF_VALID(dir / "street.glb");
   const nlohmann::json report =
       Render(dir, sample_dir + "/street.facet", "leuven",
-             "frames 3\ncommand reference add " + (dir / "street.glb") + "\nframes 3\n");
+             "frames 3\ncommand reference add " + (dir / "street.glb") + "\nframes 3\nscreenshot " +
+                 (dir / "shown.png") + "\ncommand reference hide 0\nframes 3\n");
   INFO("log:\n" << LogText(report));
   REQUIRE(report.at("references").size() == 1);
   CHECK(report["references"][0]["loaded"].get<bool>());
-  const cv::Mat shot = cv::imread(dir / "leuven.png", cv::IMREAD_COLOR);
-  REQUIRE(!shot.empty());
-  CHECK(ReferencePixels(shot, report.at("panels").at("Image")) > 200);
-  CHECK(ReferencePixels(shot, report.at("panels").at("3D")) > 200);
+  const cv::Mat shown = cv::imread(dir / "shown.png", cv::IMREAD_COLOR);
+  REQUIRE(!shown.empty());
+  const int in_image = ReferencePixels(shown, report.at("panels").at("Image"));
+  const int in_3d = ReferencePixels(shown, report.at("panels").at("3D"));
+  MESSAGE("reference pixels: " << in_image << " in the image panel, " << in_3d << " in the 3D panel");
+  CHECK(in_image > 200);
+  CHECK(in_3d > 200);
+  // Hidden (an undoable edit, stored in the project): drawn in neither panel.
+  CHECK(report.at("undo_stack").back() == "Hide reference street.glb");
+  const cv::Mat hidden = cv::imread(dir / "leuven.png", cv::IMREAD_COLOR);
+  CHECK(ReferencePixels(hidden, report.at("panels").at("Image")) == 0);
+  CHECK(ReferencePixels(hidden, report.at("panels").at("3D")) == 0);
   // Stored relative to the project file, as photos are.
   const facet::Project project = FromReport(report);
+  CHECK_FALSE(project.references[0].visible);
   CHECK(facet::ResolveImagePath(sample_dir + "/street.facet", project.references[0].path) ==
         std::filesystem::path(dir / "street.glb").lexically_normal().string());
 }
