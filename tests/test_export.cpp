@@ -13,9 +13,13 @@
 
 #include "core/io/blender_script.h"
 #include "core/io/export.h"
+#include "core/io/gltf_read.h"
+#include "core/io/project_io.h"
+#include "core/io/reference_mesh.h"
 #include "core/mesh/operators.h"
 #include "core/mesh/primitives.h"
 #include "core/texture/textured_mesh.h"
+#include "gltf_validator.h"
 #include "synthetic_scene.h"
 
 namespace fs = std::filesystem;
@@ -191,6 +195,7 @@ TEST_CASE("GLB: container, accessors, bounds, embedded atlas and triangles") {
   const facet::ExportSummary summary = facet::ExportGlb(f.mesh, f.scene.project, path.string());
   REQUIRE_MESSAGE(summary.success, summary.message);
   CHECK(summary.files_written == std::vector<std::string>{path.string()});
+  CHECK_GLTF_VALID(path.string());
   // Atomic write leaves no temporary file behind.
   CHECK(std::distance(fs::directory_iterator(dir), fs::directory_iterator()) == 1);
 
@@ -294,6 +299,7 @@ TEST_CASE("GLB: one camera node per calibrated image, at the camera's pose in Y-
   const fs::path path = TempDir("glb_camera") / "model.glb";
   const facet::ExportSummary summary = facet::ExportGlb(f.mesh, f.scene.project, path.string());
   REQUIRE_MESSAGE(summary.success, summary.message);
+  CHECK_GLTF_VALID(path.string());
   const Glb glb = ParseGlb(path);
   const json& g = glb.gltf;
   CHECK(g["meshes"][0]["primitives"].size() == 1);
@@ -485,6 +491,7 @@ TEST_CASE("GLB and OBJ round trip: vertex and triangle counts of a split box and
   const fs::path dir = TempDir("roundtrip");
   const auto glb_summary = facet::ExportGlb(f.mesh, project, (dir / "m.glb").string());
   REQUIRE_MESSAGE(glb_summary.success, glb_summary.message);
+  CHECK_GLTF_VALID((dir / "m.glb").string());
   const Glb glb = ParseGlb(dir / "m.glb");
   const json& primitives = glb.gltf["meshes"][0]["primitives"];
   REQUIRE(primitives.size() == 2);
@@ -570,6 +577,7 @@ TEST_CASE("GLB and OBJ with a paged atlas: one image, texture and material per p
   const fs::path dir = TempDir("paged");
   const facet::ExportSummary summary = facet::ExportGlb(mesh, scene.project, (dir / "paged.glb").string());
   REQUIRE_MESSAGE(summary.success, summary.message);
+  CHECK_GLTF_VALID((dir / "paged.glb").string());
   const Glb glb = ParseGlb(dir / "paged.glb");
   const json& g = glb.gltf;
   const int pages = mesh.AtlasPageCount();
@@ -628,4 +636,220 @@ TEST_CASE("GLB and OBJ with a paged atlas: one image, texture and material per p
     const cv::Mat png = cv::imread((dir / png_name).string(), cv::IMREAD_UNCHANGED);
     CHECK(png.cols == mesh.AtlasPage(page).width);
   }
+}
+
+namespace {
+
+// Writes a GLB from a JSON document and a BIN chunk (both padded), for the validator's own test.
+void WriteGlb(const fs::path& path, const json& gltf, const std::vector<std::uint8_t>& bin) {
+  std::string text = gltf.dump();
+  while (text.size() % 4 != 0) text.push_back(' ');
+  std::vector<std::uint8_t> padded = bin;
+  while (padded.size() % 4 != 0) padded.push_back(0);
+  std::string out;
+  auto u32 = [&](std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
+  };
+  u32(0x46546C67);
+  u32(2);
+  u32(static_cast<std::uint32_t>(12 + 8 + text.size() + 8 + padded.size()));
+  u32(static_cast<std::uint32_t>(text.size()));
+  u32(0x4E4F534A);
+  out += text;
+  u32(static_cast<std::uint32_t>(padded.size()));
+  u32(0x004E4942);
+  out.append(padded.begin(), padded.end());
+  std::ofstream(path, std::ios::binary) << out;
+}
+
+}  // namespace
+
+TEST_CASE("glTF Validator: it runs, and it reports an error in a GLB that has one") {
+  // Without this the zero-error checks above could pass on a validator that never looks.
+  const Fixture f = BakedScene();
+  const fs::path dir = TempDir("validator");
+  const fs::path good = dir / "good.glb";
+  REQUIRE(facet::ExportGlb(f.mesh, f.scene.project, good.string()).success);
+  CHECK_GLTF_VALID(good.string());
+  Glb glb = ParseGlb(good);
+  // An accessor that claims one vertex more than its bufferView holds.
+  glb.gltf["accessors"][0]["count"] = glb.gltf["accessors"][0]["count"].get<size_t>() + 1;
+  const fs::path bad = dir / "bad.glb";
+  WriteGlb(bad, glb.gltf, glb.bin);
+  const facet::testing::GltfValidation v = facet::testing::ValidateGltf(bad.string());
+  INFO(v.error);
+  REQUIRE(v.ran);
+  CHECK(v.errors >= 1);
+  CHECK(v.messages.find("ACCESSOR_TOO_LONG") != std::string::npos);
+  MESSAGE("the validator on a broken GLB: " << v.messages);
+}
+
+TEST_CASE("ReadGlb gives back what ExportGlb wrote: vertices, triangles per material, atlas, camera") {
+  const Fixture f = BakedScene();
+  const fs::path path = TempDir("read_back") / "m.glb";
+  REQUIRE(facet::ExportGlb(f.mesh, f.scene.project, path.string()).success);
+  facet::GltfScene scene;
+  const std::string error = facet::ReadGlb(path.string(), {}, &scene);
+  REQUIRE_MESSAGE(error.empty(), error);
+  // One position run per primitive (textured and plain), each a copy of the mesh's vertices.
+  REQUIRE(scene.batches.size() == 2);
+  REQUIRE(scene.positions.size() == 2 * f.mesh.positions.size());
+  constexpr double kPositionTolerance = 1e-6;
+  for (size_t v = 0; v < f.mesh.positions.size(); ++v)
+    CHECK((scene.positions[v].cast<double>() - YUp(f.mesh.positions[v].cast<double>())).norm() < kPositionTolerance);
+  size_t triangles = 0, textured = 0;
+  for (const facet::GltfBatch& b : scene.batches) {
+    triangles += b.indices.size() / 3;
+    if (b.image >= 0) textured += b.indices.size() / 3;
+  }
+  size_t expected_textured = 0;
+  for (auto t : f.mesh.triangle_textured) expected_textured += t;
+  CHECK(triangles == f.mesh.indices.size() / 3);
+  CHECK(textured == expected_textured);
+  REQUIRE(scene.images.size() == 1);
+  CHECK(scene.images[0].pixels == f.mesh.atlas.pixels);
+  REQUIRE(scene.cameras.size() == 1);
+  const facet::GltfCamera& c = scene.cameras[0];
+  CHECK(c.has_principal_point);
+  CHECK(c.camera.width_px == f.scene.true_camera.width_px);
+  CHECK(c.camera.height_px == f.scene.true_camera.height_px);
+
+  // A damaged file is refused with its name, and the scene is left empty.
+  std::string bytes = std::string(std::istreambuf_iterator<char>(std::ifstream(path, std::ios::binary).rdbuf()), {});
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes.substr(0, bytes.size() / 2);
+  const std::string truncated = facet::ReadGlb(path.string(), {}, &scene);
+  CHECK(truncated.find(path.string()) != std::string::npos);
+  CHECK(truncated.find("truncated") != std::string::npos);
+  CHECK(scene.positions.empty());
+}
+
+// The Leuven sample's model seen through the camera the exported file holds lands where the
+// project's own camera projects it. Read from the file: the vertices (POSITION accessor) and
+// each camera (node pose, yfov, aspect ratio and the principal point kept in the camera's
+// extras, which glTF's camera cannot hold); compared with Camera::Project of the project.
+// The render of the file itself over the photo is tests/app/test_cli.cpp.
+TEST_CASE("Leuven sample: every exported camera projects the exported model onto the project's projection") {
+  const std::string sample = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/street.facet";
+  facet::ProjectLoadResult loaded = facet::LoadProject(sample);
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+  const facet::Project& project = loaded.project;
+  // Geometry and cameras are what this checks; the textured render is tests/app/test_cli.cpp's.
+  const facet::TexturedMesh mesh = facet::BuildUntexturedMesh(project);
+  REQUIRE(!mesh.positions.empty());
+  const fs::path path = TempDir("leuven") / "street.glb";
+  const facet::ExportSummary summary = facet::ExportGlb(mesh, project, path.string());
+  REQUIRE_MESSAGE(summary.success, summary.message);
+  CHECK_GLTF_VALID(path.string());
+
+  facet::GltfScene scene;
+  const std::string error = facet::ReadGlb(path.string(), {}, &scene);
+  REQUIRE_MESSAGE(error.empty(), error);
+  int calibrated = 0;
+  for (const facet::Image& image : project.images) calibrated += image.camera_calibrated;
+  REQUIRE(calibrated >= 1);
+  REQUIRE(scene.cameras.size() == static_cast<size_t>(calibrated));
+  // The file's vertices are the mesh's, once per primitive that uses them.
+  REQUIRE(scene.positions.size() % mesh.positions.size() == 0);
+
+  size_t camera_index = 0;
+  for (const facet::Image& image : project.images) {
+    if (!image.camera_calibrated) continue;
+    const facet::Camera& truth = image.camera;
+    const facet::GltfCamera& exported = scene.cameras[camera_index++];
+    CAPTURE(exported.name);
+    // The sample's principal point is 23 px off the centre: without the extras every pixel
+    // would be off by that much.
+    const Eigen::Vector2d centre((truth.width_px - 1) / 2.0, (truth.height_px - 1) / 2.0);
+    REQUIRE((truth.principal_point_px - centre).norm() > 10.0);
+    CHECK(exported.has_principal_point);
+    CHECK(exported.camera.width_px == truth.width_px);
+    CHECK(exported.camera.height_px == truth.height_px);
+    double worst_px = 0.0, worst_without_extras_px = 0.0;
+    facet::Camera without_extras = exported.camera;
+    without_extras.principal_point_px = centre;
+    int visible = 0;
+    for (size_t v = 0; v < scene.positions.size(); ++v) {
+      const Eigen::Vector3d p_in_world = mesh.positions[v % mesh.positions.size()].cast<double>();
+      if (truth.CamFromWorld(p_in_world).z() <= 0.0) continue;
+      ++visible;
+      const Eigen::Vector3d p_in_file = scene.positions[v].cast<double>();
+      worst_px = std::max(worst_px, (exported.camera.Project(p_in_file) - truth.Project(p_in_world)).norm());
+      worst_without_extras_px =
+          std::max(worst_without_extras_px, (without_extras.Project(p_in_file) - truth.Project(p_in_world)).norm());
+    }
+    CHECK(visible >= 8);
+    // Float positions 20 m from the camera (6e-8 relative) and the quaternion's doubles: far
+    // below a thousandth of a pixel.
+    constexpr double kProjectionTolerancePx = 1e-3;
+    CHECK(worst_px < kProjectionTolerancePx);
+    CHECK(worst_without_extras_px > 10.0);
+    MESSAGE("Leuven, camera " << exported.name << ": exported vertices through the exported camera land within "
+                              << worst_px << " px of the project's projection (" << worst_without_extras_px
+                              << " px with the principal point at the image centre, as glTF alone says)");
+  }
+}
+
+TEST_CASE("reference meshes: an exported OBJ and GLB read back as references land on the model") {
+  const Fixture f = BakedScene();
+  const fs::path dir = TempDir("reference");
+  REQUIRE(facet::ExportObj(f.mesh, (dir / "house.obj").string()).success);
+  REQUIRE(facet::ExportGlb(f.mesh, f.scene.project, (dir / "house.glb").string()).success);
+  CHECK_GLTF_VALID((dir / "house.glb").string());
+  size_t textured = 0;
+  for (auto t : f.mesh.triangle_textured) textured += t;
+  for (const char* name : {"house.obj", "house.glb"}) {
+    CAPTURE(name);
+    facet::ReferenceMesh reference;
+    const std::string error = facet::ReadReferenceMesh((dir / name).string(), /*y_up=*/true, &reference);
+    REQUIRE_MESSAGE(error.empty(), error);
+    CHECK(reference.triangles.size() == f.mesh.indices.size() / 3);
+    // Every triangle corner is where the model's is, in the world frame (Z up): the Y-up
+    // axes of both files are undone. OBJ text keeps 9 digits, GLB floats.
+    constexpr double kPositionTolerance = 1e-6;
+    double worst = 0.0;
+    // OBJ keeps the mesh's vertices in order; the GLB repeats them per primitive.
+    for (size_t v = 0; v < reference.positions.size(); ++v) {
+      const Eigen::Vector3d model = f.mesh.positions[v % f.mesh.positions.size()].cast<double>();
+      worst = std::max(worst, (reference.positions[v] - model).norm());
+    }
+    CHECK(worst < kPositionTolerance);
+    CHECK(reference.lo.z() == doctest::Approx(0.0).epsilon(1e-6));
+    CHECK(reference.hi.z() == doctest::Approx(2.5).epsilon(1e-6));
+    CHECK(!reference.edges.empty());
+  }
+  // Z-up axes take the file's numbers as they are: the box's height is then along y.
+  facet::ReferenceMesh z_up;
+  REQUIRE(facet::ReadReferenceMesh((dir / "house.obj").string(), /*y_up=*/false, &z_up).empty());
+  CHECK(z_up.hi.y() == doctest::Approx(2.5).epsilon(1e-6));
+}
+
+TEST_CASE("reference meshes: OBJ faces, negative indices and errors that name the file and line") {
+  const fs::path dir = TempDir("reference_obj");
+  const std::string path = (dir / "plan.obj").string();
+  std::ofstream(path) << "# a quad and a triangle\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\n"
+                         "f 1/1 2/1 3/1 4/1\nv 0 0 1\nf -1 1 2\nusemtl x\n";
+  facet::ReferenceMesh mesh;
+  std::string error = facet::ReadReferenceMesh(path, /*y_up=*/false, &mesh);
+  REQUIRE_MESSAGE(error.empty(), error);
+  CHECK(mesh.positions.size() == 5);
+  CHECK(mesh.triangles.size() == 3);  // the quad fanned into two
+  CHECK(mesh.triangles[2] == std::array<int, 3>{4, 0, 1});
+  CHECK(mesh.edges.size() == 6);  // the quad's 4 sides and 2 new ones (edge 0-1 is shared)
+
+  std::ofstream(path, std::ios::trunc) << "v 0 0 0\nv 1 0 0\nf 1 2 3\n";
+  error = facet::ReadReferenceMesh(path, true, &mesh);
+  CHECK(error.find(path + ", line 3") == 0);
+  CHECK(error.find("'3'") != std::string::npos);
+  CHECK(mesh.positions.empty());
+  std::ofstream(path, std::ios::trunc) << "v 0 0 zero\n";
+  CHECK(facet::ReadReferenceMesh(path, true, &mesh).find("line 1: a vertex needs three finite numbers") !=
+        std::string::npos);
+  std::ofstream(path, std::ios::trunc) << "v 0 0 0\n";
+  CHECK(facet::ReadReferenceMesh(path, true, &mesh).find("holds no triangles") != std::string::npos);
+  const std::string missing = (dir / "gone.obj").string();
+  error = facet::ReadReferenceMesh(missing, true, &mesh);
+  CHECK(error.find(missing) != std::string::npos);
+  MESSAGE("a missing reference: " << error);
+  CHECK(facet::ReadReferenceMesh((dir / "plan.stl").string(), true, &mesh).find(".obj or a binary glTF .glb") !=
+        std::string::npos);
 }

@@ -266,6 +266,14 @@ Project MakeFullProject() {
   facet::SetFaceTextureOverride(&p.primitives[32], {0, p.images[0].id, {p.images[2].id}});
   facet::SetFaceTextureOverride(&p.primitives[32], {2, facet::kNoId, {p.images[1].id, p.images[0].id}});
   facet::SetFaceTextureOverride(&p.primitives[3], {4000, p.next_id + 1000, {}});
+  for (int k = 0; k < 2; ++k) {
+    facet::Reference ref;
+    ref.id = p.NewId();
+    ref.path = k == 0 ? "survey/site plan.obj" : "../scans/church.glb";
+    ref.y_up = k == 0;
+    ref.visible = k == 1;
+    p.references.push_back(ref);
+  }
   p.next_id += 17;
   return p;
 }
@@ -301,6 +309,10 @@ Project MakeSmallProject() {
   c.vertices = {{box_id, 0}, {box_id, 6}};
   c.value = 4.5;
   p.constraints.push_back(c);
+  facet::Reference ref;
+  ref.id = p.NewId();
+  ref.path = "site.obj";
+  p.references.push_back(ref);
   return p;
 }
 
@@ -434,6 +446,9 @@ TEST_CASE("each single field is written and read back") {
       {"constraint.image_id", [](Project& p) { p.constraints[8].image_id = p.images[0].id; }},
       {"constraint.line_a_px", [](Project& p) { p.constraints[8].line_a_px.y() = 0.5; }},
       {"constraint.line_b_px", [](Project& p) { p.constraints[8].line_b_px.x() = 0.5; }},
+      {"reference.path", [](Project& p) { p.references[0].path = "other.obj"; }},
+      {"reference.y_up", [](Project& p) { p.references[0].y_up = false; }},
+      {"reference.visible", [](Project& p) { p.references[1].visible = false; }},
   };
   for (const auto& [name, edit] : edits) {
     const std::string& edit_name = name;  // clang 14 cannot capture a structured binding (INFO)
@@ -922,6 +937,7 @@ TEST_CASE("LoadProject: missing files are errors, missing images are warnings") 
   CHECK(empty.error.find("empty") != std::string::npos);
 
   Project p = MakeSmallProject();
+  p.references.clear();  // a missing reference mesh warns too (tested with the references)
   Image second = p.images[0];
   second.id = p.NewId();
   second.path = "photos/missing.jpg";
@@ -1374,9 +1390,9 @@ TEST_CASE("version-1 content errors still name their location") {
   }
 }
 
-TEST_CASE("texture choices: version 2 files migrate to none; version 3 keeps them exactly") {
+TEST_CASE("texture choices: version 2 files migrate to none; the current version keeps them exactly") {
   // The shipped Leuven sample is a version-2 file: it loads with every photo used for texture
-  // and no face override, and saves as version 3 that loads back equal.
+  // and no face override, and saves as the current version that loads back equal.
   const std::string sample_path = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuven.facet";
   const Json sample = Json::parse(ReadFile(sample_path));
   REQUIRE(sample["version"] == 2);
@@ -1388,13 +1404,13 @@ TEST_CASE("texture choices: version 2 files migrate to none; version 3 keeps the
   for (const facet::Image& image : old.project.images) CHECK(image.use_for_texture);
   for (const facet::Primitive& primitive : old.project.primitives) CHECK(primitive.face_textures.empty());
   const Json upgraded = Json::parse(facet::ProjectToJson(old.project));
-  CHECK(upgraded["version"] == 3);
+  CHECK(upgraded["version"] == Project::kFormatVersion);
   CHECK(upgraded["images"][0]["use_for_texture"] == true);
   CHECK(upgraded["primitives"][0]["face_textures"] == Json::array());
   CheckRoundTrip(old.project);
 
   // The full project written as version 2 (without the new fields) migrates to the same
-  // project without its choices; with them (version 3) it is exact, the override whose face
+  // project without its choices and references; with them (the current version) it is exact, the override whose face
   // and photo are gone included.
   const Project full = MakeFullProject();
   REQUIRE_FALSE(full.images[1].use_for_texture);
@@ -1403,11 +1419,13 @@ TEST_CASE("texture choices: version 2 files migrate to none; version 3 keeps the
   v2["version"] = 2;
   for (Json& image : v2["images"]) image.erase("use_for_texture");
   for (Json& primitive : v2["primitives"]) primitive.erase("face_textures");
+  v2.erase("references");
   const facet::ProjectLoadResult migrated = facet::ProjectFromJson(v2.dump());
   INFO(migrated.error);
   REQUIRE(migrated.ok());
   CHECK(migrated.warnings.empty());
   Project without_choices = full;
+  without_choices.references.clear();
   for (facet::Image& image : without_choices.images) image.use_for_texture = true;
   for (facet::Primitive& primitive : without_choices.primitives) primitive.face_textures.clear();
   CHECK(migrated.project == without_choices);
@@ -1447,4 +1465,61 @@ TEST_CASE("texture choices: malformed overrides are errors naming their path") {
                   at + "[0].face: missing field");
   CheckErrorNames(with([](Json& j) { j["images"][1]["use_for_texture"] = 0; }),
                   "images[1].use_for_texture: expected true or false");
+}
+
+TEST_CASE("the version-2 fixture loads without references and saves as the current version") {
+  // tests/fixtures/project_v2.facet is a frozen copy of the Leuven sample as version 2 wrote it.
+  const std::string fixture = std::string(FACET_SOURCE_DIR) + "/tests/fixtures/project_v2.facet";
+  REQUIRE(Json::parse(ReadFile(fixture))["version"] == 2);
+  const facet::ProjectLoadResult r = facet::LoadProject(fixture);
+  INFO(r.error);
+  REQUIRE(r.ok());
+  CHECK(r.project.references.empty());
+  CHECK(r.project.primitives.size() == 1);
+  CHECK(r.project.images.size() == 1);
+  TempDir dir;
+  REQUIRE(facet::SaveProject(r.project, dir / "upgraded.facet") == "");
+  const Json j = Json::parse(ReadFile(dir / "upgraded.facet"));
+  CHECK(j["version"] == Project::kFormatVersion);
+  CHECK(j["references"] == Json::array());
+  const facet::ProjectLoadResult again = facet::LoadProject(dir / "upgraded.facet");
+  REQUIRE(again.ok());
+  CHECK(again.project == r.project);
+}
+
+TEST_CASE("references: round trip, bad fields named, a missing mesh file is a warning that loses nothing") {
+  Project p = MakeSmallProject();
+  CheckRoundTrip(p);
+  const Json good = Json::parse(facet::ProjectToJson(p));
+  CHECK(good["references"][0]["path"] == "site.obj");
+  CHECK(good["references"][0]["axes"] == "y_up");
+  Json bad = good;
+  bad["references"][0]["axes"] = "x_up";
+  CheckErrorNames(bad.dump(), "references[0].axes: expected \"y_up\" or \"z_up\"");
+  bad = good;
+  bad["references"][0]["path"] = "";
+  CheckErrorNames(bad.dump(), "references[0].path");
+  bad = good;
+  bad["references"][0]["id"] = good["images"][0]["id"];
+  CheckErrorNames(bad.dump(), "references[0].id: duplicate id");
+
+  // Saved beside no mesh file: the load warns with the resolved path and keeps the reference;
+  // saving again writes it unchanged.
+  TempDir dir;
+  const std::string path = dir / "p.facet";
+  REQUIRE(facet::SaveProject(p, path) == "");
+  const facet::ProjectLoadResult loaded = facet::LoadProject(path);
+  REQUIRE(loaded.ok());
+  bool warned = false;
+  for (const std::string& w : loaded.warnings)
+    warned = warned || (w.find("references[0]: reference mesh not found: " + (dir / "site.obj")) == 0);
+  CHECK(warned);
+  CHECK(loaded.project == p);
+  const std::string first = ReadFile(path);
+  REQUIRE(facet::SaveProject(loaded.project, path) == "");
+  CHECK(ReadFile(path) == first);
+
+  // Save as into another folder keeps pointing at the same mesh file.
+  facet::RebaseImagePaths(path, dir / "sub/q.facet", &p);
+  CHECK(p.references[0].path == "../site.obj");
 }

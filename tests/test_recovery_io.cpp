@@ -141,6 +141,36 @@ TEST_CASE("an unreachable saved state and an empty history round-trip") {
   CheckSameDocument(loaded.document, empty);
 }
 
+// A recovery file left by the Facet before an update (its project in an older format) still
+// gives the work back: the project is migrated like a project file; its edits, written in the
+// old layout, cannot be replayed, so the history is dropped and the warning says so.
+TEST_CASE("a recovery file from an older Facet restores the project without its history") {
+  Document doc = VariedDocument(21, 4, 1, 0);
+  doc.MarkClean();  // the restored work is unsaved whatever the file said
+  nlohmann::json j = nlohmann::json::parse(Text(doc));
+  // The project as version 2 wrote it: no texture choices, no references.
+  j["project"]["version"] = 2;
+  j["project"].erase("references");
+  for (auto& image : j["project"]["images"]) image.erase("use_for_texture");
+  for (auto& primitive : j["project"]["primitives"]) primitive.erase("face_textures");
+  const RecoveryLoadResult loaded = RecoveryFromJson(j.dump());
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+  Project expected = doc.project();
+  expected.references.clear();
+  for (facet::Image& image : expected.images) image.use_for_texture = true;
+  for (facet::Primitive& primitive : expected.primitives) primitive.face_textures.clear();
+  CHECK(loaded.document.project() == expected);
+  CHECK(loaded.document.undo_stack().empty());
+  CHECK(loaded.document.redo_stack().empty());
+  CHECK(loaded.document.dirty());
+  bool warned = false;
+  for (const std::string& w : loaded.warnings) warned = warned || w.find("its undo history is not") != std::string::npos;
+  CHECK(warned);
+  // A newer project version is refused by name.
+  j["project"]["version"] = Project::kFormatVersion + 1;
+  CHECK(ErrorOf(j.dump()).find("project.version:") == 0);
+}
+
 TEST_CASE("malformed recovery files are errors naming the place, never crashes") {
   const Document doc = VariedDocument(5, 6, 2, 1);
   const std::string good = Text(doc);
@@ -238,4 +268,31 @@ TEST_CASE("a history that does not lead to its project is an error naming the ed
   // A saved state beyond the history.
   error = mutated([](json& j) { j["clean_undo_depth"] = 7; });
   CHECK(error.find("history: clean_undo_depth: 7 is beyond the history (3 edits)") == 0);
+}
+
+TEST_CASE("adding and removing reference geometry round-trips through the recovery file") {
+  Document doc(facet::testing::MakeBoxScene().project);
+  Project added = doc.project();
+  for (const char* path : {"plan.obj", "../scans/site.glb"}) {
+    facet::Reference reference;
+    reference.id = added.NewId();
+    reference.path = path;
+    reference.y_up = path[0] == 'p';
+    added.references.push_back(reference);
+  }
+  REQUIRE(doc.Commit("Add references", added));
+  Project removed = doc.project();
+  removed.references.erase(removed.references.begin());
+  REQUIRE(doc.Commit("Remove reference plan.obj", removed));
+  REQUIRE(doc.Undo());  // the removal waits on the redo stack
+  REQUIRE(doc.undo_stack().back().references.size() == 2);
+  const RecoveryLoadResult loaded = RecoveryFromJson(Text(doc));
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+  CheckSameDocument(loaded.document, doc);
+  Document rebuilt = loaded.document;
+  REQUIRE(rebuilt.Redo());
+  CHECK(rebuilt.project() == removed);
+  REQUIRE(rebuilt.Undo());
+  REQUIRE(rebuilt.Undo());
+  CHECK(rebuilt.project().references.empty());
 }

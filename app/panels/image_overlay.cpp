@@ -182,6 +182,24 @@ void FillFace(ImDrawList* draw_list, const Primitive& primitive, const Projected
   }
 }
 
+// The visible reference meshes' outlines, under the model.
+void DrawReferences(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view,
+                    const ScreenRect& rect) {
+  const Camera& camera = input.image->camera;
+  for (const Reference& reference : input.project->references) {
+    const auto loaded = input.references->find(reference.id);
+    if (!reference.visible || loaded == input.references->end()) continue;
+    const ReferenceMesh& mesh = loaded->second.mesh;
+    for (const auto& e : mesh.edges) {
+      Eigen::Vector2d a, b;
+      if (!ProjectEdge(camera, view, camera.CamFromWorld(mesh.positions[e[0]]),
+                       camera.CamFromWorld(mesh.positions[e[1]]), &a, &b))
+        continue;
+      DrawScreenLine(draw_list, a, b, rect, kReferenceEdgeColor, kReferenceEdgeThicknessPx);
+    }
+  }
+}
+
 // Every edge of every primitive in the model colour; the selected primitive with a light
 // underlay; the selected and hovered faces filled, edges thickened.
 void DrawModel(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view, const ScreenRect& rect) {
@@ -464,6 +482,8 @@ void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const V
 
   // The projected model: edges cut at the near depth so that nothing behind the camera
   // projects through the centre.
+  if (options.show_model && image.camera_calibrated && input.references != nullptr)
+    DrawReferences(draw_list, input, view, rect);
   if (options.show_model && image.camera_calibrated) DrawModel(draw_list, input, view, rect);
 
   if (options.show_segments) {

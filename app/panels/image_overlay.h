@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <map>
 #include <vector>
 
 #include <imgui.h>
@@ -21,6 +22,10 @@ namespace facet::app {
 // Colour of the projected model in every image: the shell's screenshot tests look for it.
 constexpr ImU32 kModelEdgeColor = IM_COL32(255, 220, 0, 255);
 constexpr float kModelEdgeThicknessPx = 2.0f;
+// Reference geometry's outlines (app/state/reference_edits.h): see-through, thinner than the
+// model's, in the 3D panel's reference colour.
+constexpr ImU32 kReferenceEdgeColor = IM_COL32(70, 205, 215, 150);
+constexpr float kReferenceEdgeThicknessPx = 1.5f;
 
 // A line pin's end handle (a diamond at each of the two points its line was drawn through):
 // its half-size in screen px, larger when hovered or dragged.
@@ -60,6 +65,7 @@ struct OverlayInput {
   const Image* image = nullptr;
   const VpCalibrationSummary* calibration = nullptr;       // may be null
   const std::vector<ProjectedPrimitive>* model = nullptr;  // from ProjectModel
+  const std::map<Id, LoadedReference>* references = nullptr;  // AppState::references; may be null
   ElementRef other_hover;                                  // hovered in the 3D panel: highlighted here too
   Tool tool = Tool::kSelect;
   Selection selection;

@@ -1009,6 +1009,7 @@ OverlayInput MakeOverlayInput(AppState* state, const PanelState& panel, const Im
   overlay.image = &current_image;
   overlay.calibration = CalibrationFor(*state, current_image.id);
   overlay.model = &model;
+  overlay.references = &state->references;
   overlay.tool = state->tool;
   if (state->hover_panel != kImagePanelHover) overlay.other_hover = state->hover;
   overlay.selection = state->selection;

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <memory>
@@ -23,12 +24,14 @@
 
 #include "app/panels/teach_overlay.h"
 #include "app/panels/texture_sections.h"
+#include "app/panels/widgets.h"
 #include "app/platform/gl_camera.h"
 #include "app/platform/viewport_shaders.h"
 #include "app/state/model_edits.h"
 #include "app/state/model_pick.h"
 #include "app/state/move_tool.h"
 #include "app/state/orbit_camera.h"
+#include "app/state/reference_edits.h"
 
 namespace facet::app {
 namespace {
@@ -72,6 +75,9 @@ constexpr Rgba kAxisY = {70, 200, 70, 255};
 constexpr Rgba kAxisZ = {70, 120, 255, 255};
 constexpr Rgba kGridMinor = {150, 155, 165, 80};
 constexpr Rgba kGridMajor = {190, 195, 205, 190};
+// Reference geometry: see-through faces and firmer outlines in a colour the model never uses.
+constexpr Rgba kReferenceFaceColor = {70, 205, 215, 60};
+constexpr Rgba kReferenceEdgeColor = {70, 205, 215, 170};
 
 // A range of vertices inside one buffer.
 struct DrawRange {
@@ -101,6 +107,8 @@ struct SceneKey {
   Id active_image_id = kNoId;
   Id selected_primitive_id = kNoId;
   Id photo_view_image_id = kNoId;
+  std::vector<Reference> references;  // their visibility
+  std::uint64_t reference_revision = 0;
   bool operator==(const SceneKey&) const = default;
 };
 
@@ -130,6 +138,7 @@ struct GlResources {
 
   GLuint lines_vao = 0, lines_vbo = 0;
   DrawRange box_edges, frustums, active_frustum, axes, grid_minor, grid_major;
+  DrawRange reference_faces, reference_edges;  // triangles and lines of the visible references
   GLuint photos_vao = 0, photos_vbo = 0;
   std::vector<CameraDraw> cameras;
   DrawRange background;  // unit quad for the photo behind a photo view
@@ -519,6 +528,29 @@ void BuildSceneGeometry(const AppState& state, const SceneMeasure& measure, Id p
   }
   end_range(&gl->box_edges);
 
+  // Reference meshes (app/state/reference_edits.h): faces as triangles, then their outlines.
+  auto visible_references = [&](auto&& each) {
+    for (const Reference& reference : project.references) {
+      const auto loaded = state.references.find(reference.id);
+      if (reference.visible && loaded != state.references.end()) each(loaded->second.mesh);
+    }
+  };
+  begin_range(&gl->reference_faces);
+  visible_references([&](const ReferenceMesh& mesh) {
+    for (const auto& t : mesh.triangles) {
+      PushLine(&lines, mesh.positions[t[0]], mesh.positions[t[1]], kReferenceFaceColor);
+      LineVertex third = lines.back();  // PushLine gives two corners; the third shares their colour
+      for (int k = 0; k < 3; ++k) third.position[k] = static_cast<float>(mesh.positions[t[2]][k]);
+      lines.push_back(third);
+    }
+  });
+  end_range(&gl->reference_faces);
+  begin_range(&gl->reference_edges);
+  visible_references([&](const ReferenceMesh& mesh) {
+    for (const auto& e : mesh.edges) PushLine(&lines, mesh.positions[e[0]], mesh.positions[e[1]], kReferenceEdgeColor);
+  });
+  end_range(&gl->reference_edges);
+
   std::vector<PhotoVertex> photo_vertices;
   gl->cameras.clear();
   gl->active_frustum = DrawRange();
@@ -756,6 +788,14 @@ void RenderScene(const AppState& state, const PanelState& panel, const ViewSetup
 
   glUseProgram(gl.line_program.id);
   glBindVertexArray(gl.lines_vao);
+  // Reference geometry: see-through, so it never hides the model or the photo behind it, and
+  // without writing depth, so overlapping faces of it do not hide each other.
+  if (gl.reference_faces.count > 0 || gl.reference_edges.count > 0) {
+    glDepthMask(GL_FALSE);
+    glDrawArrays(GL_TRIANGLES, gl.reference_faces.first, gl.reference_faces.count);
+    glDrawArrays(GL_LINES, gl.reference_edges.first, gl.reference_edges.count);
+    glDepthMask(GL_TRUE);
+  }
   if (panel.show_wireframe) {
     glUniform1i(gl.line_lighten_dark, panel.show_mesh && gl.mesh_vertex_count > 0 ? 0 : 1);
     glDrawArrays(GL_LINES, gl.box_edges.first, gl.box_edges.count);
@@ -859,6 +899,28 @@ void DrawToolbar(AppState* state, PanelState* panel, const SceneMeasure& measure
     ImGui::Checkbox("Mesh edges", &panel->show_wireframe);
     ImGui::Checkbox("Cameras and photos", &panel->show_cameras);
     ImGui::Checkbox("Ground grid", &panel->show_grid);
+    // Reference meshes (File > Add reference mesh...): shown or hidden, removed; each an edit.
+    const std::vector<Reference> references = state->document.project().references;
+    if (!references.empty()) {
+      ImGui::Separator();
+      ImGui::TextDisabled("Reference meshes");
+    }
+    for (const Reference& reference : references) {
+      ImGui::PushID(static_cast<int>(reference.id));
+      bool visible = reference.visible;
+      const std::string name = std::filesystem::path(reference.path).filename().string();
+      if (ImGui::Checkbox(name.c_str(), &visible)) SetReferenceVisibleEdit(state, reference.id, visible);
+      RecordItem(state, "viewport.reference." + std::to_string(reference.id));
+      const auto loaded = state->references.find(reference.id);
+      if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("%s", loaded != state->references.end() && !loaded->second.error.empty()
+                                    ? loaded->second.error.c_str()
+                                    : reference.path.c_str());
+      ImGui::SameLine();
+      if (ImGui::SmallButton("Remove")) RemoveReferenceEdit(state, reference.id);
+      RecordItem(state, "viewport.reference_remove." + std::to_string(reference.id));
+      ImGui::PopID();
+    }
     ImGui::EndPopup();
   }
 }
@@ -1078,6 +1140,7 @@ void HandlePicking(AppState* state, PanelState* panel, const ViewSetup& view, co
     if (move.pressed) move.pressed_on = PickByRay(project, move.ray, filter, radius_px);
     move.released = ImGui::IsMouseReleased(ImGuiMouseButton_Left);
     move.shift = io.KeyShift;
+    move.no_snap = io.KeyAlt;
     move.cancel = ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false);
     MoveToolFrame(state, &panel->move_drag, move);
   }
@@ -1112,8 +1175,10 @@ bool RenderToTarget(const AppState& state, PanelState* panel, const ViewSetup& v
   UpdatePhotoTextures(state, &gl);
   // The project may have changed (a tool click): read it again.
   const Project& current = state.document.project();
-  SceneKey key{current.primitives, current.images, state.active_image_id, state.selection.primitive_id,
-               panel->orbit.photo_image_id};
+  SceneKey key{current.primitives,           current.images,
+               state.active_image_id,        state.selection.primitive_id,
+               panel->orbit.photo_image_id, current.references,
+               state.reference_revision};
   if (!gl.scene_built || !(key == gl.scene_key)) {
     BuildSceneGeometry(state, measure, panel->orbit.photo_image_id, &gl);
     gl.scene_key = std::move(key);

@@ -188,7 +188,7 @@ void OffscreenTarget::Bind() const {
   glViewport(0, 0, width_, height_);
 }
 
-ImageRgba8 OffscreenTarget::Read() const {
+ImageRgba8 OffscreenTarget::Read(bool keep_alpha) const {
   ImageRgba8 image;
   image.width = width_;
   image.height = height_;
@@ -201,6 +201,7 @@ ImageRgba8 OffscreenTarget::Read() const {
   for (int y = 0; y < height_; ++y) {
     std::memcpy(&image.pixels[y * stride], &rows[(height_ - 1 - y) * stride], stride);
   }
+  if (keep_alpha) return image;
   for (size_t i = 3; i < image.pixels.size(); i += 4) image.pixels[i] = 255;  // an opaque screenshot
   return image;
 }

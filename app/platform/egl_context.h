@@ -37,7 +37,8 @@ class OffscreenTarget {
   bool Create(int width, int height, std::string* error);
   void Bind() const;
   // Reads the framebuffer, top row first (GL's rows run bottom-up, so they are flipped).
-  ImageRgba8 Read() const;
+  // Opaque (alpha 255) unless keep_alpha, which returns the alpha that was drawn.
+  ImageRgba8 Read(bool keep_alpha = false) const;
 
  private:
   unsigned fbo_ = 0, color_ = 0, depth_ = 0;

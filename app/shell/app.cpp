@@ -159,6 +159,7 @@ const char* DialogName(Dialog dialog) {
     case Dialog::kExport: return "export";
     case Dialog::kAddPhoto: return "add-photo";
     case Dialog::kRelinkPhoto: return "relink-photo";
+    case Dialog::kAddReference: return "add-reference";
     case Dialog::kAbout: return "about";
     case Dialog::kConfirmQuit: return "confirm-quit";
     case Dialog::kConfirmNew: return "confirm-new";
@@ -242,6 +243,19 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
   report["undo_stack"] = undo;
   report["redo_stack"] = redo;
   report["dirty"] = state.document.dirty();
+  // Reference meshes as the panels draw them: read (with their triangle count) or why not.
+  nlohmann::json references = nlohmann::json::array();
+  for (const Reference& reference : state.document.project().references) {
+    const auto loaded = state.references.find(reference.id);
+    const bool read = loaded != state.references.end() && loaded->second.error.empty();
+    references.push_back(
+        {{"id", reference.id},
+         {"path", reference.path},
+         {"loaded", read},
+         {"triangles", read ? loaded->second.mesh.triangles.size() : 0},
+         {"error", loaded != state.references.end() ? loaded->second.error : std::string("not read yet")}});
+  }
+  report["references"] = references;
   report["tool"] = ToolName(state.tool);
   report["active_image_id"] = state.active_image_id;
   const LineDetectionStats& lines = state.line_detection.stats;

@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "app/platform/egl_context.h"
+#include "app/platform/gltf_camera_render.h"
 #include "app/state/calgui_exif_prior.h"
 #include "app/state/texture_choices.h"
 #include "core/image/image_io.h"
@@ -14,6 +16,7 @@
 #include "core/io/calibrate_io.h"
 #include "core/io/calibrate_points_io.h"
 #include "core/io/export.h"
+#include "core/io/gltf_read.h"
 #include "core/io/project_io.h"
 #include "core/io/relate_io.h"
 #include "core/solve/joint_solve.h"
@@ -273,6 +276,46 @@ int RunExportCommand(const std::string& project_path, const std::string& output_
     }
     std::cout << blender_script_path << "\n";
   }
+  return 0;
+}
+
+int RunRenderGlbCommand(const std::string& glb_path, int camera_index, const std::string& output_png) {
+  GltfScene scene;
+  const std::string read_error = ReadGlb(glb_path, GltfReadOptions(), &scene);
+  if (!read_error.empty()) {
+    std::cerr << "facet render-glb: " << read_error << "\n";
+    return 1;
+  }
+  if (scene.cameras.empty()) {
+    std::cerr << "facet render-glb: " << glb_path << " has no camera node to look through\n";
+    return 1;
+  }
+  EglContext egl;
+  std::string error;
+  if (!egl.Create(&error)) {
+    std::cerr << "facet render-glb: " << error << "\n";
+    return 1;
+  }
+  ImageRgba8 shot;
+  if (!RenderGltfThroughCamera(scene, camera_index, &shot, &error)) {
+    std::cerr << "facet render-glb: " << glb_path << ": " << error << "\n";
+    return 1;
+  }
+  error = WritePng(output_png, shot);
+  if (!error.empty()) {
+    std::cerr << "facet render-glb: " << error << "\n";
+    return 1;
+  }
+  const GltfCamera& camera = scene.cameras[camera_index];
+  nlohmann::ordered_json out = {{"output", output_png},
+                                {"camera", camera_index},
+                                {"name", camera.name},
+                                {"size_px", {shot.width, shot.height}},
+                                {"focal_px", camera.camera.focal_px},
+                                {"principal_point_px",
+                                 {camera.camera.principal_point_px.x(), camera.camera.principal_point_px.y()}},
+                                {"principal_point_from_extras", camera.has_principal_point}};
+  std::cout << out.dump(2) << "\n";
   return 0;
 }
 

@@ -1,5 +1,5 @@
-// The command-line verbs that work without a window: calibrate, relate, solve, export. Each prints
-// its result (JSON where a program may read it) on stdout, errors on stderr, and returns the
+// The command-line verbs that work without a window: calibrate, relate, solve, export,
+// render-glb (offscreen EGL). Each prints its result (JSON where a program may read it) on stdout, errors on stderr, and returns the
 // process exit code (0 success, 1 unusable input).
 #pragma once
 
@@ -22,5 +22,11 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
 // 0 keeps the rule from the photos.
 int RunExportCommand(const std::string& project_path, const std::string& output_path,
                      const std::string& blender_script_path = "", double texels_per_unit = 0.0);
+
+// Renders a .glb through its camera node number camera_index (0-based, in node order) with
+// the 3D panel's renderer in an offscreen EGL context, at the camera's image size
+// (extras.image_size_px, else 1000 px high), to an RGBA PNG whose alpha is 0 where no
+// triangle is; prints the camera used as JSON (app/platform/gltf_camera_render.h).
+int RunRenderGlbCommand(const std::string& glb_path, int camera_index, const std::string& output_png);
 
 }  // namespace facet::app

@@ -1,5 +1,6 @@
 #include "app/shell/file_actions.h"
 
+#include <cctype>
 #include <filesystem>
 
 #include <imgui.h>
@@ -17,6 +18,7 @@ BrowsePurpose PurposeOf(Dialog dialog) {
     case Dialog::kExport: return BrowsePurpose::kExport;
     case Dialog::kAddPhoto: return BrowsePurpose::kAddPhoto;
     case Dialog::kRelinkPhoto: return BrowsePurpose::kRelinkPhoto;
+    case Dialog::kAddReference: return BrowsePurpose::kAddReference;
     default: return BrowsePurpose::kOpenProject;
   }
 }
@@ -28,6 +30,7 @@ const char* CommandOf(BrowsePurpose purpose) {
     case BrowsePurpose::kExport: return "export";
     case BrowsePurpose::kAddPhoto: return "add-photo";
     case BrowsePurpose::kRelinkPhoto: return "relink-photo";
+    case BrowsePurpose::kAddReference: return "add-reference";
   }
   return "";
 }
@@ -169,13 +172,22 @@ void HandleDroppedFiles(AppState* state, ShellState* shell) {
   for (const std::string& path : dropped.unknown) {
     std::error_code ec;
     const std::string name = fs::path(path).filename().string();
+    std::string extension = fs::path(path).extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if ((extension == ".obj" || extension == ".glb") && fs::is_regular_file(path, ec)) {
+      // A mesh made elsewhere comes in as reference geometry (one undoable edit).
+      std::string error;
+      RunAppCommand(state, shell, "reference", {"add " + path}, &error);
+      continue;
+    }
     if (fs::is_directory(path, ec)) {
       state->Log(LogLevel::kError, "Dropped " + name + " is a folder: drop a project (.facet) or photos");
     } else if (!fs::exists(path, ec)) {
       state->Log(LogLevel::kError, "Dropped " + path + " does not exist");
     } else {
       state->Log(LogLevel::kError,
-                 "Dropped " + name + " is neither a Facet project (.facet) nor a photo (" + PhotoExtensionList() + ")");
+                 "Dropped " + name + " is neither a Facet project (.facet) nor a photo (" + PhotoExtensionList() +
+                     ") nor a reference mesh (.obj, .glb)");
     }
   }
   if (!dropped.projects.empty()) {

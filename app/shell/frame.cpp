@@ -29,6 +29,7 @@
 #include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
 #include "app/state/move_tool.h"
+#include "app/state/reference_edits.h"
 #include "core/io/export.h"
 #include "core/util/file_write.h"
 
@@ -313,6 +314,7 @@ const char* DialogTitle(Dialog dialog) {
     case Dialog::kExport: return "Export model";
     case Dialog::kAddPhoto: return "Add photo";
     case Dialog::kRelinkPhoto: return "Relink photo";
+    case Dialog::kAddReference: return "Add reference mesh";
     case Dialog::kAbout: return "About Facet";
     case Dialog::kConfirmQuit: return "Unsaved changes##quit";
     case Dialog::kConfirmNew: return "Unsaved changes##new";
@@ -337,6 +339,8 @@ void DrawPathDialog(AppState* state, ShellState* shell) {
     ImGui::Checkbox("Detect lines (proposals to accept in the image panel)", &state->detect_lines_on_add);
   }
   if (d == Dialog::kExport) ImGui::TextColored(kDimText, "The extension chooses the format: .glb (glTF) or .obj");
+  if (d == Dialog::kAddReference)
+    ImGui::TextColored(kDimText, "A mesh to model against (.obj or .glb, Y up): drawn, snapped to, never exported");
   if (d == Dialog::kRelinkPhoto) {
     const Image* image = state->document.project().FindImage(state->active_image_id);
     if (image != nullptr)
@@ -380,6 +384,7 @@ void DrawDialogs(AppState* state, ShellState* shell) {
     case Dialog::kSaveAs:
     case Dialog::kAddPhoto:
     case Dialog::kRelinkPhoto:
+    case Dialog::kAddReference:
     case Dialog::kExport: DrawPathDialog(state, shell); break;
     case Dialog::kAbout:
       ImGui::Text("Facet %s", "0.1");
@@ -725,6 +730,35 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   if (name == "calibration") return RunCalibrationCommand(state, &shell->properties_panel.exif_feedback, arg, error);
   if (name == "move-selection") return RunMoveCommand(state, arg, error);
   if (name == "texture") return RunTextureCommand(state, arg, error);
+  if (name == "add-reference") return RunAppCommand(state, shell, "reference", {"add " + arg}, error);
+  if (name == "reference") {
+    // reference add PATH | reference add-z-up PATH | reference remove INDEX (app/state/reference_edits.h)
+    const size_t space = arg.find(' ');
+    const std::string verb = arg.substr(0, space);
+    const std::string rest = space == std::string::npos ? std::string() : arg.substr(space + 1);
+    if ((verb == "add" || verb == "add-z-up") && !rest.empty()) {
+      if (!AddReferenceEdit(state, rest, verb == "add")) {
+        *error = LastLoggedError(*state);
+        return false;
+      }
+      NoteRecentFile(state, shell, rest);
+      return true;
+    }
+    if (verb == "remove" || verb == "show" || verb == "hide") {
+      const auto& references = state->document.project().references;
+      char* end = nullptr;
+      const long index = std::strtol(rest.c_str(), &end, 10);
+      if (rest.empty() || *end != '\0' || index < 0 || index >= static_cast<long>(references.size())) {
+        *error = "reference " + verb + ": index " + rest + " is not in 0.." +
+                 std::to_string(static_cast<long>(references.size()) - 1);
+        return false;
+      }
+      if (verb == "remove") return RemoveReferenceEdit(state, references[index].id);
+      return SetReferenceVisibleEdit(state, references[index].id, verb == "show");
+    }
+    *error = "reference: expected 'add PATH', 'add-z-up PATH', or 'remove|show|hide INDEX'";
+    return false;
+  }
   if (name == "free-vertex" || name == "planar-face") {
     const ElementRef& e = state->selection.element;
     const bool vertex = name == "free-vertex";
@@ -804,6 +838,7 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   state->time_s = time_s;
   state->bake_mode = shell->offscreen ? BakeMode::kFinishNextFrame : BakeMode::kBackground;
   RefreshDerived(state);
+  SyncReferenceMeshes(state);
   CollectLineDetection(state, /*wait=*/false);
   AutosaveTick(state);
   if (state->autosave.offer && shell->dialog == Dialog::kNone) OpenDialog(shell, Dialog::kRecover);

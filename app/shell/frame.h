@@ -25,6 +25,7 @@ enum class Dialog {
   kExport,
   kAddPhoto,
   kRelinkPhoto,
+  kAddReference,
   kAbout,
   kConfirmQuit,
   kConfirmNew,
@@ -34,7 +35,7 @@ enum class Dialog {
 // The dialogs that are the file browser (app/shell/file_actions.h).
 inline bool IsFileBrowserDialog(Dialog d) {
   return d == Dialog::kOpen || d == Dialog::kSaveAs || d == Dialog::kExport || d == Dialog::kAddPhoto ||
-         d == Dialog::kRelinkPhoto;
+         d == Dialog::kRelinkPhoto || d == Dialog::kAddReference;
 }
 
 struct ShellState {

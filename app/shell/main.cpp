@@ -124,6 +124,15 @@ int main(int argc, char** argv) {
                    "8192 atlas page; 0 (default): from the photos, one texel per photo pixel of the face's best view")
       ->check(CLI::NonNegativeNumber);
 
+  auto* render_glb = cli.add_subcommand(
+      "render-glb", "Render a .glb through one of its camera nodes offscreen (EGL) to an RGBA PNG, as a glTF viewer "
+                    "looking through it shows it (the principal point from the camera's extras when there)");
+  std::string render_glb_path, render_glb_out;
+  int render_glb_camera = 0;
+  render_glb->add_option("model", render_glb_path, "FILE.glb")->required()->check(CLI::ExistingFile);
+  render_glb->add_option("-o,--output", render_glb_out, "SHOT.png (alpha 0 where no triangle is)")->required();
+  render_glb->add_option("--camera", render_glb_camera, "Camera node, 0-based in node order")->capture_default_str();
+
   auto* render = cli.add_subcommand("render", "Render the application offscreen (EGL, no display needed) to a PNG");
   facet::app::RenderOptions render_options;
   std::string render_size = "1600x900";
@@ -156,6 +165,7 @@ int main(int argc, char** argv) {
   if (*relate) return facet::app::RunRelateCommand(matches_path);
   if (*solve) return facet::app::RunSolveCommand(solve_project, solve_out);
   if (*exporter) return facet::app::RunExportCommand(export_project, export_out, blender_script, texels_per_unit);
+  if (*render_glb) return facet::app::RunRenderGlbCommand(render_glb_path, render_glb_camera, render_glb_out);
   if (*render) {
     if (render_options.project_path.empty()) render_options.project_path = SampleProjectPath();
     if (render_options.project_path.empty()) {

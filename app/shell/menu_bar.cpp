@@ -104,6 +104,11 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
     if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
       ImGui::SetTooltip("Point the active image at its photo file after the project or the photo moved; its camera, "
                         "pins and lines stay");
+    if (ImGui::MenuItem("Add reference mesh...")) OpenFileBrowser(state, shell, Dialog::kAddReference);
+    RecordItem(state, "menu.add_reference");
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("A mesh made elsewhere (.obj, .glb) to model against: drawn see-through in both panels, a "
+                        "snap target for the Move tool, not part of the model (or drop it onto the window)");
     ImGui::Separator();
     if (ImGui::MenuItem("Save", "Ctrl+S")) {
       if (state->project_path.empty()) {

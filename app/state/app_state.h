@@ -20,6 +20,7 @@
 #include "app/state/texture_choices.h"
 #include "core/estimators/calibrate_vp.h"
 #include "core/image/image_io.h"
+#include "core/io/reference_mesh.h"
 #include "core/mesh/primitives.h"
 #include "core/scene/document.h"
 #include "core/solve/model_update.h"
@@ -131,6 +132,15 @@ struct BakeStats {
   double last_wait_ms = 0.0;  // main thread blocked on the latest collected or dropped bake
 };
 
+// A reference's mesh as read for drawing and snapping (app/state/reference_edits.h), or why it
+// could not be.
+struct LoadedReference {
+  std::string file;    // the resolved file it was read from
+  bool y_up = true;    // the axes it was read with
+  ReferenceMesh mesh;  // empty when error is set
+  std::string error;
+};
+
 struct AppState {
   Document document;
   std::string project_path;  // empty for an unsaved project
@@ -175,6 +185,10 @@ struct AppState {
   // The file each entry of photos or photo_errors was read from: when an image's path changes
   // (Relink photo, its undo), the photo is read again.
   std::map<Id, std::string> photo_paths;
+  // Reference meshes by reference id, read from their files (SyncReferenceMeshes);
+  // reference_revision increments whenever one is read or dropped.
+  std::map<Id, LoadedReference> references;
+  std::uint64_t reference_revision = 0;
 
   // Derived from the project after each change (RefreshDerived).
   TexturedMesh mesh;

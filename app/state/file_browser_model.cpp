@@ -65,6 +65,7 @@ const std::vector<std::string>& PurposeExtensions(BrowsePurpose purpose) {
     case BrowsePurpose::kExport: return kExportExtensions;
     case BrowsePurpose::kAddPhoto:
     case BrowsePurpose::kRelinkPhoto: return kPhotoExtensions;
+    case BrowsePurpose::kAddReference: return kExportExtensions;  // the meshes Facet writes are the ones it reads
   }
   return kProjectExtensions;
 }
@@ -76,6 +77,7 @@ const char* PurposeTitle(BrowsePurpose purpose) {
     case BrowsePurpose::kExport: return "Export model";
     case BrowsePurpose::kAddPhoto: return "Add photo";
     case BrowsePurpose::kRelinkPhoto: return "Relink photo";
+    case BrowsePurpose::kAddReference: return "Add reference mesh";
   }
   return "";
 }
@@ -87,6 +89,7 @@ const char* PurposeVerb(BrowsePurpose purpose) {
     case BrowsePurpose::kExport: return "Export";
     case BrowsePurpose::kAddPhoto: return "Add";
     case BrowsePurpose::kRelinkPhoto: return "Relink";
+    case BrowsePurpose::kAddReference: return "Add";
   }
   return "";
 }
@@ -98,6 +101,7 @@ const char* PurposeFilterLabel(BrowsePurpose purpose) {
     case BrowsePurpose::kExport: return "Models (*.glb, *.obj)";
     case BrowsePurpose::kAddPhoto:
     case BrowsePurpose::kRelinkPhoto: return "Photos (*.jpg, *.png, *.tif, ...)";
+    case BrowsePurpose::kAddReference: return "Meshes (*.obj, *.glb)";
   }
   return "";
 }

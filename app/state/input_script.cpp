@@ -75,6 +75,7 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"bake-status", {1, 1}}, {"lines", {1, 1}},          {"ridge", {1, 1}},       {"relink-photo", {1, 1}},
       {"recover", {1, 1}},     {"wait-autosave", {0, 0}},  {"new", {0, 0}},         {"teach", {1, 1}},
       {"texture", {1, 1}},
+      {"reference", {1, 1}},   {"add-reference", {1, 1}},
   };
   return arity;
 }

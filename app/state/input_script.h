@@ -46,6 +46,9 @@
 //                                                      RunConstrainCommand (app/state/model_edits.h)
 //                                   add-photo PATH     a new image (app/state/add_photo.h)
 //                                   relink-photo PATH  the active image's photo file (RelinkPhotoEdit)
+//                                   reference add|add-z-up PATH, reference remove|show|hide INDEX
+//                                                      reference geometry (.obj, .glb), one
+//                                                      undoable edit each (app/state/reference_edits.h)
 //                                   select-add vertex|edge|face PRIMITIVE_ID ELEMENT_ID
 //                                                      add to the selection (RunSelectAddCommand)
 //                                   line-pin IMAGE_INDEX X1 Y1 X2 Y2  the selected edge on the

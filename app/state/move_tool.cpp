@@ -3,12 +3,14 @@
 #include <cmath>
 #include <sstream>
 
+#include "app/state/reference_edits.h"
 #include "core/solve/vertex_move.h"
 
 namespace facet::app {
 namespace {
 
 constexpr double kStartDragPx = 2.0;      // the mouse must leave the press point before a drag begins
+constexpr double kReferenceSnapPx = 8.0;  // a dragged vertex snaps to a reference vertex this near (as the image panel snaps)
 constexpr double kParallelCosine = 1e-3;  // a ray this close to parallel to the drag plane or axis is ignored
 constexpr const char* kToolHelp =
     "Move: drag a vertex (in the plane facing you) or an edge/face (the primitive, horizontally); "
@@ -121,7 +123,11 @@ void MoveToolFrame(AppState* state, MoveDrag* drag_state, const MoveToolInput& i
   }
   if (drag.started) {
     Eigen::Vector3d point;
-    if (DragPoint(drag, input.ray, input.shift, &point)) {
+    // A dragged vertex lands exactly on a reference vertex near the mouse (not along z, not with Alt).
+    bool snapped = false;
+    if (drag.vertex && !input.shift && !input.no_snap)
+      snapped = NearestReferenceVertex(*state, input.ray, kReferenceSnapPx, &point);
+    if (snapped || DragPoint(drag, input.ray, input.shift, &point)) {
       const Project& start = *state->drag_start;
       Project moved;
       bool ok = false;
@@ -129,7 +135,7 @@ void MoveToolFrame(AppState* state, MoveDrag* drag_state, const MoveToolInput& i
       if (drag.vertex) {
         const VertexMoveSummary summary = MoveVertex(start, drag.ref, point, VertexMoveOptions{}, &moved);
         ok = summary.IsUsable();
-        message = summary.message;
+        message = summary.message + (snapped ? " (snapped to a reference vertex)" : "");
       } else {
         const PrimitiveMoveSummary summary = MovePrimitive(start, drag.primitive_id, point - drag.anchor, &moved);
         ok = summary.IsUsable();

@@ -3,7 +3,8 @@
 // solver"). The geometry is core/solve/vertex_move.h; this file is the interaction.
 //
 // Press on a vertex and drag: the vertex follows the mouse in the plane through it facing the
-// camera (with Shift: along the world z axis through it). Press on an edge or a face: the
+// camera (with Shift: along the world z axis through it), and lands on a vertex of a visible
+// reference mesh that shows within 8 px of the mouse (not with Alt). Press on an edge or a face: the
 // whole primitive follows in the horizontal plane through the pressed point (Shift: along z).
 // Each frame previews the moved project WITHOUT a solve (the user sees the geometry where
 // they put it); the release commits one undoable edit, "Move vertex" or "Move primitive",
@@ -47,6 +48,7 @@ struct MoveToolInput {
   bool pressed = false;    // the left button went down on the panel this frame
   bool released = false;   // the left button went up this frame
   bool shift = false;      // along the world z axis
+  bool no_snap = false;    // Alt: a dragged vertex does not snap to reference vertices
   bool cancel = false;     // Escape
 };
 

@@ -274,6 +274,15 @@ OrderedJson WriteConstraint(const Constraint& c, const std::string& at, Writer* 
   return j;
 }
 
+OrderedJson WriteReference(const Reference& ref, const std::string& at, Writer* w) {
+  OrderedJson j;
+  j["id"] = ref.id;
+  j["path"] = w->String(Join(at, "path"), std::filesystem::path(ref.path).generic_string());
+  j["axes"] = ref.y_up ? "y_up" : "z_up";
+  j["visible"] = ref.visible;
+  return j;
+}
+
 template <typename T, typename WriteFn>
 OrderedJson WriteList(const std::vector<T>& list, const char* key, WriteFn write, Writer* w) {
   OrderedJson out = OrderedJson::array();
@@ -292,6 +301,7 @@ OrderedJson WriteProject(const Project& p, Writer* w) {
   root["primitives"] = WriteList(p.primitives, "primitives", WritePrimitive, w);
   root["pins"] = WriteList(p.pins, "pins", WritePin, w);
   root["constraints"] = WriteList(p.constraints, "constraints", WriteConstraint, w);
+  root["references"] = WriteList(p.references, "references", WriteReference, w);
   return root;
 }
 
@@ -785,6 +795,18 @@ bool ReadConstraint(const Json& j, const std::string& at, Reader* r, Constraint*
   return true;
 }
 
+bool ReadReference(const Json& j, const std::string& at, Reader* r, Reference* ref) {
+  std::string axes;
+  if (!(r->Object(j, at, {"id", "path", "axes", "visible"}) && r->IdField(j, at, "id", &ref->id) &&
+        r->String(j, at, "path", &ref->path) && r->String(j, at, "axes", &axes) &&
+        r->Bool(j, at, "visible", &ref->visible)))
+    return false;
+  if (ref->path.empty()) return r->Fail(Join(at, "path"), "a reference needs the path of its mesh file");
+  if (axes != "y_up" && axes != "z_up") return r->Fail(Join(at, "axes"), "expected \"y_up\" or \"z_up\", found \"" + axes + "\"");
+  ref->y_up = axes == "y_up";
+  return true;
+}
+
 // How many vertices a constraint kind takes: exactly `min` when `max` == `min`.
 void ConstraintArity(ConstraintKind kind, size_t* min, size_t* max) {
   constexpr size_t kAny = std::numeric_limits<size_t>::max();
@@ -886,6 +908,9 @@ bool CheckReferences(const Project& p, Reader* r) {
     if (c.kind == ConstraintKind::kEdgeOnImageLine && !image_ids.count(c.image_id))
       return r->Fail(Join(at, "image_id"), "refers to a missing image " + std::to_string(c.image_id));
   }
+  for (size_t i = 0; i < p.references.size(); ++i) {
+    if (!claim(p.references[i].id, Index("references", i))) return false;
+  }
   if (p.next_id <= max_id)
     return r->Fail("next_id", "must be greater than every id (" + std::to_string(p.next_id) +
                                   " <= " + std::to_string(max_id) + ")");
@@ -981,9 +1006,15 @@ bool MigrateVersion2To3(Json* doc, std::string* /*error*/) {
   return true;
 }
 
+// Version 3 -> 4: reference geometry came; an older project has none.
+bool MigrateVersion3To4(Json* doc, std::string* /*error*/) {
+  (*doc)["references"] = Json::array();
+  return true;
+}
+
 // kMigrationSteps[k] turns version k + 1 into k + 2.
-constexpr std::array<MigrationStep, Project::kFormatVersion - 1> kMigrationSteps = {MigrateVersion1To2,
-                                                                                    MigrateVersion2To3};
+constexpr std::array<MigrationStep, Project::kFormatVersion - 1> kMigrationSteps = {
+    MigrateVersion1To2, MigrateVersion2To3, MigrateVersion3To4};
 
 bool MigrateToCurrent(Json* doc, int version, std::string* error) {
   for (int v = version; v < Project::kFormatVersion; ++v) {
@@ -1015,13 +1046,15 @@ bool ReadProject(Json& root, Reader* r, Project* p) {
 
   if (!r->Object(
           root, "",
-          {"format", "version", "units", "next_id", "images", "segments", "primitives", "pins", "constraints"}) ||
+          {"format", "version", "units", "next_id", "images", "segments", "primitives", "pins", "constraints",
+           "references"}) ||
       !r->String(root, "", "units", &p->units) || !r->IdField(root, "", "next_id", &p->next_id) ||
       !ReadList(root, "images", r, ReadImage, &p->images) ||
       !ReadList(root, "segments", r, ReadSegment, &p->segments) ||
       !ReadList(root, "primitives", r, ReadPrimitive, &p->primitives) ||
       !ReadList(root, "pins", r, ReadPin, &p->pins) ||
-      !ReadList(root, "constraints", r, ReadConstraint, &p->constraints))
+      !ReadList(root, "constraints", r, ReadConstraint, &p->constraints) ||
+      !ReadList(root, "references", r, ReadReference, &p->references))
     return false;
   return CheckReferences(*p, r);
 }
@@ -1150,6 +1183,15 @@ ProjectLoadResult LoadProject(const std::string& path) {
                                 (name.empty() ? "" : " (nor " + name + " beside the project)"));
     }
   }
+  // A reference mesh that is gone stays in the project (saved again as it was); only its
+  // drawing is missing until the file is back.
+  for (size_t i = 0; i < result.project.references.size(); ++i) {
+    const std::string resolved = ResolveImagePath(path, result.project.references[i].path);
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(resolved, ec))
+      result.warnings.push_back("references[" + std::to_string(i) + "]: reference mesh not found: " + resolved +
+                                " (kept in the project; it is not drawn until the file is there)");
+  }
   return result;
 }
 
@@ -1173,12 +1215,14 @@ std::string RelativeImagePath(const std::string& project_path, const std::string
 }
 
 void RebaseImagePaths(const std::string& old_project_path, const std::string& new_project_path, Project* project) {
-  for (Image& image : project->images) {
-    if (image.path.empty()) continue;
+  auto rebase = [&](std::string* stored) {
+    if (stored->empty()) return;
     std::error_code ec;
-    const std::string absolute = std::filesystem::absolute(ResolveImagePath(old_project_path, image.path), ec).string();
-    if (!ec) image.path = RelativeImagePath(new_project_path, absolute);
-  }
+    const std::string absolute = std::filesystem::absolute(ResolveImagePath(old_project_path, *stored), ec).string();
+    if (!ec) *stored = RelativeImagePath(new_project_path, absolute);
+  };
+  for (Image& image : project->images) rebase(&image.path);
+  for (Reference& reference : project->references) rebase(&reference.path);
 }
 
 }  // namespace facet
@@ -1223,6 +1267,9 @@ OrderedJson ObjectToJson(const Pin& pin, const std::string& at, std::string* err
 OrderedJson ObjectToJson(const Constraint& constraint, const std::string& at, std::string* error) {
   return WriteOne(WriteConstraint, constraint, at, error);
 }
+OrderedJson ObjectToJson(const Reference& reference, const std::string& at, std::string* error) {
+  return WriteOne(WriteReference, reference, at, error);
+}
 OrderedJson ProjectToJsonObject(const Project& project, std::string* error) {
   Writer writer;
   OrderedJson json = WriteProject(project, &writer);
@@ -1249,6 +1296,10 @@ bool ObjectFromJson(const Json& json, const std::string& at, Pin* pin, std::stri
 bool ObjectFromJson(const Json& json, const std::string& at, Constraint* constraint, std::string* error,
                     std::vector<std::string>* warnings) {
   return ReadOne(ReadConstraint, json, at, constraint, error, warnings);
+}
+bool ObjectFromJson(const Json& json, const std::string& at, Reference* reference, std::string* error,
+                    std::vector<std::string>* warnings) {
+  return ReadOne(ReadReference, json, at, reference, error, warnings);
 }
 
 bool ProjectFromJsonObject(Json& root, Project* project, std::string* error, std::vector<std::string>* warnings) {

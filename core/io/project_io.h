@@ -5,15 +5,17 @@
 // back to the same bits, so a save/load round-trip is exact.
 //
 // Layout (version 3): {"format": "facet-project", "version": 3, "units", "next_id", "images",
-// "segments", "primitives", "pins", "constraints"}; every field of core/scene/project.h is stored,
+// "segments", "primitives", "pins", "constraints", "references"}; every field of core/scene/project.h is stored,
 // camera rotations as 9 numbers row-major (exact), primitive rotations as angle-axis, each
 // primitive's mesh record by record with its ids (holes included) so that pins and
 // constraints keep naming the same vertices; a mesh may also be "from_shape" (the unedited
 // primitive); each image's "use_for_texture" and each primitive's "face_textures" (per face:
 // {"face", "source_image" (0: the bake chooses), "excluded_images"}) are the user's texture
-// choices. Version 1 files (boxes with corner pins) and version 2 files (no texture choices)
-// are upgraded on load (project_io.cpp, kMigrationSteps); tests/fixtures/project_v1.facet is
-// one, assets/samples/leuven/*.facet are version 2.
+// choices; a reference is {"id", "path" (relative to the project file), "axes": "y_up" |
+// "z_up", "visible"}, its mesh read from the file, never stored. Older files are upgraded on
+// load (project_io.cpp, kMigrationSteps): version 1 (boxes with corner pins,
+// tests/fixtures/project_v1.facet), version 2 (no texture choices, no references;
+// tests/fixtures/project_v2.facet, assets/samples/leuven/*.facet) and version 3 (no references).
 #pragma once
 
 #include <cstdint>

@@ -23,6 +23,7 @@ OrderedJson ObjectToJson(const Segment& segment, const std::string& at, std::str
 OrderedJson ObjectToJson(const Primitive& primitive, const std::string& at, std::string* error);
 OrderedJson ObjectToJson(const Pin& pin, const std::string& at, std::string* error);
 OrderedJson ObjectToJson(const Constraint& constraint, const std::string& at, std::string* error);
+OrderedJson ObjectToJson(const Reference& reference, const std::string& at, std::string* error);
 // The whole project file's object ("format": "facet-project", current version).
 OrderedJson ProjectToJsonObject(const Project& project, std::string* error);
 
@@ -39,6 +40,8 @@ bool ObjectFromJson(const Json& json, const std::string& at, Primitive* primitiv
 bool ObjectFromJson(const Json& json, const std::string& at, Pin* pin, std::string* error,
                     std::vector<std::string>* warnings);
 bool ObjectFromJson(const Json& json, const std::string& at, Constraint* constraint, std::string* error,
+                    std::vector<std::string>* warnings);
+bool ObjectFromJson(const Json& json, const std::string& at, Reference* reference, std::string* error,
                     std::vector<std::string>* warnings);
 // A whole project file's object (older versions migrated, `root` changed in place), with the
 // loader's reference checks. Error paths are the project file's (e.g. "pins[2].vertex").

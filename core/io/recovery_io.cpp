@@ -53,6 +53,7 @@ OrderedJson WriteEdit(const Edit& edit, const std::string& at, std::string* erro
   WriteChanges(edit.primitives, "primitives", at, &j, error);
   WriteChanges(edit.pins, "pins", at, &j, error);
   WriteChanges(edit.constraints, "constraints", at, &j, error);
+  WriteChanges(edit.references, "references", at, &j, error);
   if (edit.units_before || edit.units_after)
     j["units"] = {edit.units_before.value_or(""), edit.units_after.value_or("")};
   if (edit.next_id_before != kNoId || edit.next_id_after != kNoId)
@@ -128,13 +129,15 @@ bool ReadChanges(const Json& edit, const char* key, const std::string& at, Reade
 }
 
 bool ReadEdit(const Json& j, const std::string& at, Reader* r, Edit* edit) {
-  if (!r->Object(j, at, {"label", "images", "segments", "primitives", "pins", "constraints", "units", "next_id"}))
+  if (!r->Object(j, at,
+                 {"label", "images", "segments", "primitives", "pins", "constraints", "references", "units", "next_id"}))
     return false;
   if (!j.contains("label") || !j["label"].is_string()) return r->Fail(Join(at, "label"), "expected a string");
   edit->label = j["label"].get<std::string>();
   if (!ReadChanges(j, "images", at, r, &edit->images) || !ReadChanges(j, "segments", at, r, &edit->segments) ||
       !ReadChanges(j, "primitives", at, r, &edit->primitives) || !ReadChanges(j, "pins", at, r, &edit->pins) ||
-      !ReadChanges(j, "constraints", at, r, &edit->constraints))
+      !ReadChanges(j, "constraints", at, r, &edit->constraints) ||
+      !ReadChanges(j, "references", at, r, &edit->references))
     return false;
   if (j.contains("units")) {
     const Json& units = j["units"];
@@ -180,15 +183,26 @@ bool ReadRecovery(Json& root, Reader* r, Document* document) {
     return false;
   if (!root.contains("project")) return r->Fail("project", "missing field");
   Json& project_json = root["project"];
-  // The edits' objects are in the current project layout: a project from another version
-  // would be migrated and no longer match them, so only the current one is accepted.
+  // The edits' objects are in the current project layout. A project from an older version
+  // (a recovery file left by the Facet before an update) is migrated like a project file,
+  // but its edits would no longer match it: the work is restored without its history.
   if (!project_json.is_object() || !project_json.contains("version") ||
-      project_json["version"] != Project::kFormatVersion)
-    return r->Fail("project.version", "expected " + std::to_string(Project::kFormatVersion));
+      !project_json["version"].is_number_unsigned() ||
+      project_json["version"].get<std::uint64_t>() > static_cast<std::uint64_t>(Project::kFormatVersion))
+    return r->Fail("project.version", "expected " + std::to_string(Project::kFormatVersion) + " or older");
+  const std::uint64_t project_version = project_json["version"].get<std::uint64_t>();
   Project project;
   std::string project_error;
   if (!project_io_internal::ProjectFromJsonObject(project_json, &project, &project_error, r->warnings))
     return r->Fail("project", project_error);
+  if (project_version < static_cast<std::uint64_t>(Project::kFormatVersion)) {
+    r->warnings->push_back("written by an older Facet (project version " + std::to_string(project_version) +
+                           "): the project is restored, its undo history is not");
+    const std::string rebuild_error =
+        Document::Rebuild(project, {}, {}, 0, true, project_io_internal::CheckProjectReferences, document);
+    if (!rebuild_error.empty()) return r->Fail("project", rebuild_error);
+    return true;
+  }
   std::vector<Edit> undo, redo;
   if (!ReadEdits(root, "undo", r, &undo) || !ReadEdits(root, "redo", r, &redo)) return false;
   std::uint64_t clean_depth = 0;

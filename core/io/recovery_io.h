@@ -5,10 +5,10 @@
 // readers (core/io/project_io_internal.h), image paths exactly as the document holds them
 // (relative to the project file's folder, absolute in an unsaved project).
 //
-// Layout (version 1): {"format": "facet-recovery", "version": 1, "project": {a version-2
-// project file}, "undo": [edit, ...] (oldest first), "redo": [edit, ...] (next redo last),
+// Layout (version 1): {"format": "facet-recovery", "version": 1, "project": {a project file
+// of the current version}, "undo": [edit, ...] (oldest first), "redo": [edit, ...] (next redo last),
 // "clean_undo_depth", "clean_is_unreachable"}; an edit is {"label", and for each non-empty
-// list of "images", "segments", "primitives", "pins", "constraints": [{"id", "before",
+// list of "images", "segments", "primitives", "pins", "constraints", "references": [{"id", "before",
 // "before_index", "after", "after_index"}, ...] (a side absent for an insertion or removal),
 // "units": [before, after] and "next_id": [before, after] when they change}.
 //

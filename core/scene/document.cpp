@@ -82,6 +82,7 @@ void ApplyDirection(const Edit& edit, bool forward, Project* project) {
   ApplyList(edit.primitives, forward, &project->primitives);
   ApplyList(edit.pins, forward, &project->pins);
   ApplyList(edit.constraints, forward, &project->constraints);
+  ApplyList(edit.references, forward, &project->references);
   const auto& units = forward ? edit.units_after : edit.units_before;
   if (units) project->units = *units;
   const Id next_id = forward ? edit.next_id_after : edit.next_id_before;
@@ -143,6 +144,7 @@ std::string CheckedApplyDirection(const Edit& edit, bool forward, Project* proje
   if (error.empty()) error = CheckedApplyList(edit.primitives, forward, "primitives", &project->primitives);
   if (error.empty()) error = CheckedApplyList(edit.pins, forward, "pins", &project->pins);
   if (error.empty()) error = CheckedApplyList(edit.constraints, forward, "constraints", &project->constraints);
+  if (error.empty()) error = CheckedApplyList(edit.references, forward, "references", &project->references);
   if (!error.empty()) return error;
   if (edit.units_before.has_value() != edit.units_after.has_value()) return "units: only one side is recorded";
   if (edit.units_before) {
@@ -163,6 +165,7 @@ std::string CheckedApplyDirection(const Edit& edit, bool forward, Project* proje
 
 bool Edit::Empty() const {
   return images.empty() && segments.empty() && primitives.empty() && pins.empty() && constraints.empty() &&
+         references.empty() &&
          !units_after && next_id_after == kNoId;
 }
 
@@ -174,6 +177,7 @@ Edit DiffProjects(const std::string& label, const Project& before, const Project
   DiffList(before.primitives, after.primitives, &edit.primitives);
   DiffList(before.pins, after.pins, &edit.pins);
   DiffList(before.constraints, after.constraints, &edit.constraints);
+  DiffList(before.references, after.references, &edit.references);
   if (before.units != after.units) {
     edit.units_before = before.units;
     edit.units_after = after.units;
@@ -291,9 +295,14 @@ void Document::ForgetCleanState() {
 
 void Document::RewriteImagePaths(const std::function<std::string(const std::string&)>& rewrite) {
   for (Image& image : project_.images) image.path = rewrite(image.path);
+  for (Reference& reference : project_.references) reference.path = rewrite(reference.path);
   for (std::vector<Edit>* stack : {&undo_, &redo_}) {
     for (Edit& edit : *stack) {
       for (Change<Image>& change : edit.images) {
+        if (change.before) change.before->path = rewrite(change.before->path);
+        if (change.after) change.after->path = rewrite(change.after->path);
+      }
+      for (Change<Reference>& change : edit.references) {
         if (change.before) change.before->path = rewrite(change.before->path);
         if (change.after) change.after->path = rewrite(change.after->path);
       }

@@ -30,6 +30,7 @@ struct Edit {
   std::vector<Change<Primitive>> primitives;
   std::vector<Change<Pin>> pins;
   std::vector<Change<Constraint>> constraints;
+  std::vector<Change<Reference>> references;
   std::optional<std::string> units_before, units_after;
   Id next_id_before = kNoId, next_id_after = kNoId;
 
@@ -104,8 +105,8 @@ class Document {
   std::uint64_t revision() const { return revision_; }
   // Replaces the whole document (File > Open, New); clears history.
   void Reset(Project project);
-  // Rewrites every image's stored path, in the project and in every image held by the
-  // history, so that undo and redo keep finding the photos after the project file moved
+  // Rewrites every image's and reference's stored path, in the project and in every one held
+  // by the history, so that undo and redo keep finding the files after the project file moved
   // (Save as into another folder). Not an edit: history and dirty flag stay as they are.
   void RewriteImagePaths(const std::function<std::string(const std::string&)>& rewrite);
 

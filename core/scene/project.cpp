@@ -26,6 +26,8 @@ const Primitive* Project::FindPrimitive(Id id) const { return FindById(primitive
 Primitive* Project::FindPrimitive(Id id) { return FindById(primitives, id); }
 const Constraint* Project::FindConstraint(Id id) const { return FindById(constraints, id); }
 Constraint* Project::FindConstraint(Id id) { return FindById(constraints, id); }
+const Reference* Project::FindReference(Id id) const { return FindById(references, id); }
+Reference* Project::FindReference(Id id) { return FindById(references, id); }
 
 const MeshVertex* Project::FindVertex(const VertexRef& ref) const {
   const Primitive* primitive = FindPrimitive(ref.primitive_id);
@@ -171,7 +173,8 @@ bool operator==(const Pin& a, const Pin& b) {
 }
 bool operator==(const Project& a, const Project& b) {
   return a.images == b.images && a.segments == b.segments && a.primitives == b.primitives && a.pins == b.pins &&
-         a.constraints == b.constraints && a.units == b.units && a.next_id == b.next_id;
+         a.constraints == b.constraints && a.references == b.references && a.units == b.units &&
+         a.next_id == b.next_id;
 }
 
 }  // namespace facet

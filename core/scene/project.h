@@ -157,16 +157,34 @@ struct Constraint {
   Eigen::Vector2d line_b_px = Eigen::Vector2d::Zero();
 };
 
+// Reference geometry (issue 13): a mesh made elsewhere (a Wavefront OBJ or a binary glTF),
+// drawn in both panels to model against and offered as a snap target when moving vertices.
+// It is not part of the model: never solved, textured or exported. The project stores where
+// the file is and how its axes sit; the triangles are read from the file
+// (core/io/reference_mesh.h), so a file that has gone missing loses nothing but its drawing.
+struct Reference {
+  Id id = kNoId;
+  std::string path;  // as stored: relative to the project file's folder, like Image::path
+  // The file's axes. True (OBJ's and glTF's convention, and what `facet export` writes): file
+  // (x, y, z) is world (x, -z, y), so an exported model comes back where it was. False: file
+  // coordinates are world coordinates (Z up).
+  bool y_up = true;
+  bool visible = true;
+  friend bool operator==(const Reference&, const Reference&) = default;
+};
+
 struct Project {
   // 1: boxes with corner pins (read and migrated); 2: primitives with meshes, vertex pins
   // and constraints; 3: the user's texture choices (Image::use_for_texture,
-  // Primitive::face_textures), which version 2 files migrate to "none".
-  static constexpr int kFormatVersion = 3;
+  // Primitive::face_textures), which version 2 files migrate to "none"; 4: reference geometry
+  // (references), none in older files.
+  static constexpr int kFormatVersion = 4;
   std::vector<Image> images;
   std::vector<Segment> segments;
   std::vector<Primitive> primitives;
   std::vector<Pin> pins;
   std::vector<Constraint> constraints;
+  std::vector<Reference> references;
   std::string units = "m";
   Id next_id = 1;  // ids are never reused within a project
 
@@ -182,6 +200,8 @@ struct Project {
   Pin* FindPin(Id id);
   const Constraint* FindConstraint(Id id) const;
   Constraint* FindConstraint(Id id);
+  const Reference* FindReference(Id id) const;
+  Reference* FindReference(Id id);
   // The vertex record a reference names, or null when the primitive or vertex is gone.
   const MeshVertex* FindVertex(const VertexRef& ref) const;
 };

@@ -13,6 +13,7 @@
 
 #include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
+#include "tests/gltf_validator.h"
 #include "tests/synthetic_scene.h"
 
 using namespace facet::testing;
@@ -233,6 +234,7 @@ TEST_CASE("File > Export glTF: a typed name gets .glb and the model is written t
   glb.read(magic, 4);
   CHECK(std::string(magic, 4) == "glTF");
   CHECK(LogHas(exported, "info", "Exported " + (dir / "model.glb")));
+  CHECK_GLTF_VALID(dir / "model.glb");
 }
 
 TEST_CASE("The browser explains what it cannot do and keeps open; Escape cancels") {

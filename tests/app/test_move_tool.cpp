@@ -17,6 +17,7 @@
 #include "core/io/project_io.h"
 #include "core/mesh/primitives.h"
 #include "tests/app/app_test_util.h"
+#include "tests/gltf_validator.h"
 #include "tests/synthetic_scene.h"
 
 using namespace facet::testing;
@@ -254,4 +255,128 @@ TEST_CASE("move tool: an undetermined depth keeps the dragged value through the 
   CHECK(center_error < 1e-6);
   MESSAGE("undetermined depth after the app's re-solve: " << depth << " (dragged " << dragged_depth
                                                           << "), camera centre error " << center_error);
+}
+
+namespace {
+
+// Pixels of the reference geometry's colour (app/panels/image_overlay.h, viewport_panel.cpp:
+// cyan, green and blue alike and well above red, as it shows blended over the photo or the
+// model; the z family's blue and the y family's green are not) inside a panel's rect.
+int ReferencePixels(const cv::Mat& shot, const nlohmann::json& panel_rect) {
+  const int x0 = std::max(0, static_cast<int>(panel_rect.at("x").get<double>()));
+  const int y0 = std::max(0, static_cast<int>(panel_rect.at("y").get<double>()));
+  const int x1 = std::min(shot.cols, static_cast<int>(x0 + panel_rect.at("w").get<double>()));
+  const int y1 = std::min(shot.rows, static_cast<int>(y0 + panel_rect.at("h").get<double>()));
+  int count = 0;
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const cv::Vec3b bgr = shot.at<cv::Vec3b>(y, x);
+      count += bgr[1] > bgr[2] + 50 && bgr[0] > bgr[2] + 50 && std::abs(bgr[1] - bgr[0]) < 30;
+    }
+  return count;
+}
+
+}  // namespace
+
+TEST_CASE("reference geometry: added by script and drawn; a dragged vertex snaps onto it; undo; a missing file") {
+  TempDir dir("reference_snap");
+  facet::Id box_id = facet::kNoId;
+  const std::string path = WriteFreeBox(dir, &box_id);
+  const std::string prefix = "frames 3\nkey m\nframes 2\n";
+  const nlohmann::json start = Render(dir, path, "start", prefix);
+  const Viewport3d view = ViewportFromReport(start);
+  const facet::Project before = FromReport(start);
+  const facet::VertexId corner = 7;
+  const Eigen::Vector3d p0 = before.FindPrimitive(box_id)->mesh.vertex(corner).position;
+  // A reference triangle (Z-up file: its numbers are world coordinates) whose first vertex
+  // lies up and beside the box's corner.
+  const Eigen::Vector3d target = p0 + Eigen::Vector3d(0.75, -0.5, 0.625);
+  {
+    std::ofstream obj(dir / "plan.obj");
+    obj.precision(17);
+    // Its other corners reach back over the box's top, so that the panel shows most of it.
+    obj << "v " << target.x() << " " << target.y() << " " << target.z() << "\nv " << target.x() - 3 << " "
+        << target.y() << " " << target.z() << "\nv " << target.x() << " " << target.y() - 2.5 << " " << target.z()
+        << "\nf 1 2 3\n";
+  }
+  const std::string add = "command reference add-z-up " + (dir / "plan.obj") + "\nframes 2\n";
+  // Released 3 px right and 2 px below where the reference vertex shows: within the 8 px snap.
+  const Eigen::Vector2d from = Rounded(view.ToScreen(p0));
+  const Eigen::Vector2d to = Rounded(view.ToScreen(target)) + Eigen::Vector2d(3.0, 2.0);
+  std::ostringstream s;
+  s << prefix << add << "screenshot " << (dir / "added.png") << "\n"
+    << DragScript(from, to, 6, "") << "command save " << (dir / "after.facet") << "\nframes 1\n"
+    << "command undo\nframes 2\ncommand undo\nframes 2\nscreenshot " << (dir / "undone.png") << "\n";
+  const nlohmann::json report = Render(dir, path, "snap", s.str());
+  INFO("log:\n" << LogText(report));
+  CHECK(LogText(report).find("Add reference plan.obj (1 triangles)") != std::string::npos);
+  CHECK(LogText(report).find("snapped to a reference vertex") != std::string::npos);
+  // Undo took the move and then the reference away.
+  CHECK(report.at("references").empty());
+  CHECK(report.at("undo_stack").empty());
+  CHECK(report.at("redo_stack").get<std::vector<std::string>>() ==
+        std::vector<std::string>{"Move vertex", "Add reference plan.obj"});
+  // Drawn in the 3D panel (see-through faces and outlines) while it was there, not after.
+  const cv::Mat added = cv::imread(dir / "added.png", cv::IMREAD_COLOR);
+  const cv::Mat undone_shot = cv::imread(dir / "undone.png", cv::IMREAD_COLOR);
+  REQUIRE(!added.empty());
+  REQUIRE(!undone_shot.empty());
+  CHECK(ReferencePixels(added, report.at("panels").at("3D")) > 200);
+  CHECK(ReferencePixels(undone_shot, report.at("panels").at("3D")) == 0);
+
+  const facet::Project after = Load(dir / "after.facet");
+  REQUIRE(after.references.size() == 1);
+  CHECK(after.references[0].path == "plan.obj");  // relative to the project file
+  CHECK_FALSE(after.references[0].y_up);
+  const Eigen::Vector3d p1 = after.FindPrimitive(box_id)->mesh.vertex(corner).position;
+  CAPTURE(p1.transpose());
+  CAPTURE(target.transpose());
+  // Exactly on the reference vertex, not under the mouse 3.6 px away.
+  constexpr double kOnReference = 1e-9;
+  CHECK((p1 - target).norm() < kOnReference);
+  CHECK((p1 - p0).norm() > 0.5);
+
+  // The mesh file gone: the project opens, says which file is missing, keeps the reference and
+  // saves it again as it was.
+  std::filesystem::rename(dir / "plan.obj", dir / "plan.obj.away");
+  const nlohmann::json missing =
+      Render(dir, dir / "after.facet", "missing", "frames 3\ncommand save " + (dir / "again.facet") + "\nframes 1\n");
+  REQUIRE(missing.at("references").size() == 1);
+  CHECK_FALSE(missing["references"][0]["loaded"].get<bool>());
+  CHECK(missing["references"][0]["error"].get<std::string>().find(dir / "plan.obj") != std::string::npos);
+  CHECK(LogText(missing).find("plan.obj") != std::string::npos);
+  CHECK(Load(dir / "again.facet").references == after.references);
+}
+
+TEST_CASE("reference geometry: the Leuven street exported and added back lies on the model in both panels") {
+  TempDir dir("reference_leuven");
+  const std::string sample_dir = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven";
+  const CliResult exported =
+      RunFacet(dir, "export '" + sample_dir + "/street.facet' -o '" + (dir / "street.glb") + "'");
+  REQUIRE(exported.exit_code == 0);
+  CHECK_GLTF_VALID(dir / "street.glb");
+  const nlohmann::json report =
+      Render(dir, sample_dir + "/street.facet", "leuven",
+             "frames 3\ncommand reference add " + (dir / "street.glb") + "\nframes 3\nscreenshot " +
+                 (dir / "shown.png") + "\ncommand reference hide 0\nframes 3\n");
+  INFO("log:\n" << LogText(report));
+  REQUIRE(report.at("references").size() == 1);
+  CHECK(report["references"][0]["loaded"].get<bool>());
+  const cv::Mat shown = cv::imread(dir / "shown.png", cv::IMREAD_COLOR);
+  REQUIRE(!shown.empty());
+  const int in_image = ReferencePixels(shown, report.at("panels").at("Image"));
+  const int in_3d = ReferencePixels(shown, report.at("panels").at("3D"));
+  MESSAGE("reference pixels: " << in_image << " in the image panel, " << in_3d << " in the 3D panel");
+  CHECK(in_image > 200);
+  CHECK(in_3d > 200);
+  // Hidden (an undoable edit, stored in the project): drawn in neither panel.
+  CHECK(report.at("undo_stack").back() == "Hide reference street.glb");
+  const cv::Mat hidden = cv::imread(dir / "leuven.png", cv::IMREAD_COLOR);
+  CHECK(ReferencePixels(hidden, report.at("panels").at("Image")) == 0);
+  CHECK(ReferencePixels(hidden, report.at("panels").at("3D")) == 0);
+  // Stored relative to the project file, as photos are.
+  const facet::Project project = FromReport(report);
+  CHECK_FALSE(project.references[0].visible);
+  CHECK(facet::ResolveImagePath(sample_dir + "/street.facet", project.references[0].path) ==
+        std::filesystem::path(dir / "street.glb").lexically_normal().string());
 }

@@ -1,0 +1,32 @@
+// Reading the triangles of a reference mesh (core/scene/project.h, Reference): a Wavefront
+// OBJ or a binary glTF (.glb), placed in the world as the reference's axes say.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace facet {
+
+struct ReferenceMesh {
+  std::vector<Eigen::Vector3d> positions;      // world frame (Z up)
+  std::vector<std::array<int, 3>> triangles;   // indices into positions
+  std::vector<std::array<int, 2>> edges;       // each polygon side of the file once, for outlines
+  Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();  // bounds of positions
+};
+
+// The most vertices a reference may have: far above a survey's or a building's scan reduced
+// for modelling against, and a bound on what one file can make the app draw every frame.
+constexpr size_t kMaxReferenceVertices = 2'000'000;
+
+// Reads `path` (told by its extension: .obj, or .glb; other extensions are refused). OBJ: `v`
+// and `f` records (polygons fanned into triangles; 1-based or negative indices, v/vt/vn
+// forms), every other record ignored. glTF: every mesh node's triangles with their node
+// transforms (core/io/gltf_read.h). y_up: file (x, y, z) is world (x, -z, y); otherwise file
+// coordinates are world coordinates. Returns an empty string on success, else the error
+// naming the file (and the line, for OBJ); *mesh is then empty.
+std::string ReadReferenceMesh(const std::string& path, bool y_up, ReferenceMesh* mesh);
+
+}  // namespace facet
