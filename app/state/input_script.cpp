@@ -74,6 +74,7 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"calibration", {1, 1}}, {"move-selection", {1, 1}}, {"add-photo", {1, 1}},   {"wait-bake", {0, 0}},
       {"bake-status", {1, 1}}, {"lines", {1, 1}},          {"ridge", {1, 1}},       {"relink-photo", {1, 1}},
       {"recover", {1, 1}},     {"wait-autosave", {0, 0}},  {"new", {0, 0}},         {"teach", {1, 1}},
+      {"export-view", {1, 1}},
   };
   return arity;
 }
