@@ -353,16 +353,11 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
         return false;
       }
     }
-    if (shell->pending_export_view) {  // `export-view`: after the frame that asked for it
-      const std::string args = std::move(*shell->pending_export_view);
-      shell->pending_export_view.reset();
-      ExportViewRequest request;
-      std::string export_error = ParseExportViewArgs(args, *shell, &request);
-      if (export_error.empty()) export_error = ExportView(state, shell, request, frame * kFrameTimeS);
-      if (!export_error.empty()) {
-        error = "script line " + std::to_string(step ? step->line : 0) + ": " + export_error;
-        return false;
-      }
+    // `export-view` (the command or File > Export view's dialog): after the frame that asked.
+    const std::string export_error = RunPendingExportView(state, shell, frame * kFrameTimeS);
+    if (!export_error.empty()) {
+      error = "script line " + std::to_string(step ? step->line : 0) + ": " + export_error;
+      return false;
     }
     return true;
   };

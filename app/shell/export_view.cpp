@@ -161,8 +161,8 @@ std::string ExportView(AppState* state, ShellState* shell, const ExportViewReque
   return error;
 }
 
-void RunPendingExportView(AppState* state, ShellState* shell, double time_s) {
-  if (!shell->pending_export_view) return;
+std::string RunPendingExportView(AppState* state, ShellState* shell, double time_s) {
+  if (!shell->pending_export_view) return "";
   const std::string args = std::move(*shell->pending_export_view);
   shell->pending_export_view.reset();
   ExportViewRequest request;
@@ -175,6 +175,7 @@ void RunPendingExportView(AppState* state, ShellState* shell, double time_s) {
   } else {
     state->Log(LogLevel::kError, error);
   }
+  return error;
 }
 
 }  // namespace facet::app

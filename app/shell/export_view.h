@@ -33,7 +33,7 @@ std::string ParseExportViewArgs(const std::string& args, const ShellState& shell
 std::string ExportView(AppState* state, ShellState* shell, const ExportViewRequest& request, double time_s);
 
 // Runs shell->pending_export_view, if any (the frame loops call it after each frame), and logs
-// the outcome.
-void RunPendingExportView(AppState* state, ShellState* shell, double time_s);
+// the outcome. "" when there was none or it succeeded, else why it failed.
+std::string RunPendingExportView(AppState* state, ShellState* shell, double time_s);
 
 }  // namespace facet::app

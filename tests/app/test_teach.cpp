@@ -441,6 +441,20 @@ TEST_CASE("export view: render --panel writes the image or the 3D panel alone, a
   CHECK(backdrop_share < 0.98);
 
   CHECK(RunRender(dir, "'" + path + "' -o '" + (dir / "bad.png") + "' --panel history --size 480x320").exit_code != 0);
+
+  // Through the menu: File > Export view..., a name typed, Enter: the dialog's default, the
+  // image panel at 1920 x 1080.
+  const std::string figure = dir / "figure.png";
+  const nlohmann::json menu = RenderScript(dir, path, "export_menu",
+                                           "frames 3\nclick left item menu.file\nframes 2\nclick left item "
+                                           "menu.export_view\nframes 3\nkey ctrl+a\ntype " +
+                                               figure + "\nkey enter\nframes 3\n");
+  CHECK(menu.at("dialog").get<std::string>() == "");
+  CHECK(ReportLog(menu).find("Exported the image view (1920 x 1080 px)") != std::string::npos);
+  const cv::Mat from_menu = cv::imread(figure);
+  REQUIRE(!from_menu.empty());
+  CHECK(from_menu.cols == 1920);
+  CHECK(from_menu.rows == 1080);
 }
 
 TEST_CASE("Numbers window: K, R, t of the active camera, F of two photos, copied as text and LaTeX") {
