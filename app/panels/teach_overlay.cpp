@@ -402,6 +402,10 @@ void DrawSolverSteps(ImDrawList* draw, const AppState& state, const Image& image
   lines.push_back({kResidualColor, "residual vectors (projection - pin) drawn x" + FormatNumber(scale, 4)});
   // A bar about 80 screen px long, of a round number of residual px.
   const double px_per_residual_px = scale * s.view.zoom;
+  if (!(px_per_residual_px > 0.0) || !std::isfinite(px_per_residual_px)) {
+    TextBox(draw, s, text_y, lines);
+    return;
+  }
   const double bar_px = NiceBelow(80.0 / px_per_residual_px);
   const std::string bar_text = "bar = " + FormatNumber(bar_px, 4) + " px of residual";
   lines.push_back({kResidualColor, bar_text});

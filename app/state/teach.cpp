@@ -300,6 +300,9 @@ bool TeachStep(AppState* state) {
   }
   JointSolveSummary failure;
   if (!StepJointSolve(&*solver.steps, &failure)) {
+    // Nothing stepped yet: the panels go back to the project rather than show a start that
+    // cannot be solved.
+    if (solver.steps->steps == 0) TeachEndSteps(state);
     solver.message = "the step failed: " + failure.message;
     return false;
   }
