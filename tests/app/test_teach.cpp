@@ -563,7 +563,28 @@ TEST_CASE("screenshots of each teach overlay") {
   r = shot(street, "teach-steps",
            "frames 3\ncommand teach steps on\ncommand teach step\ncommand teach step\ncommand teach residual-scale 4\n"
            "frames 2\ncommand export-view 3d 960x540 " + steps_3d + "\nframes 2");
-  CHECK(r.at("teach").at("steps").at("steps").get<int>() == 2);
+  const nlohmann::json& steps = r.at("teach").at("steps");
+  REQUIRE(steps.at("steps").get<int>() == 2);
+  // With spatial constraints (the augmented Lagrangian's rounds) too, the app's steps are the
+  // solve's own iterates (the opened project is the file: opening keeps its stored solution),
+  // and the violations listed are the solve's.
+  JointSolveOptions budget = SolveStepsOptions();
+  budget.max_iterations = 2;
+  Project solved;
+  std::vector<LmIteration> trace;
+  const JointSolveSummary once = SolveJointTraced(
+      PerturbForSteps(LoadProjectFile(street), steps.at("perturbation").get<double>()), budget, &solved, &trace);
+  REQUIRE(once.IsUsable());
+  CHECK(MaxRelativeDifference(steps, solved) <= 1e-12);
+  REQUIRE(steps.at("constraints").size() == once.constraints.size());
+  REQUIRE(once.constraints.size() == 3u);
+  for (size_t i = 0; i < once.constraints.size(); ++i) {
+    const nlohmann::json& c = steps.at("constraints").at(i);
+    CHECK(c.at("constraint_id").get<Id>() == once.constraints[i].constraint_id);
+    CHECK(std::abs(c.at("residual").get<double>() - once.constraints[i].residual) <=
+          1e-12 * std::max(1.0, std::abs(once.constraints[i].residual)));
+    CHECK(c.at("satisfied").get<bool>() == once.constraints[i].satisfied);
+  }
   const cv::Mat exported = cv::imread(steps_3d);
   REQUIRE(!exported.empty());
   CHECK(exported.cols == 960);
