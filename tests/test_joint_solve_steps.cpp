@@ -1,6 +1,8 @@
 // The joint solve stepped one iteration at a time (core/solve/joint_solve_steps.h): N steps
 // give the project of one solve with a budget of N iterations, the trace holds every trial's
-// cost, damping and step norm, and Reset restores the start exactly.
+// cost, damping and step norm, and Reset restores the start exactly. The lesson's start,
+// PerturbForSteps: moves exactly the free values by the stated amounts, and the steps lead
+// back to the answer.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -105,6 +107,63 @@ TEST_CASE("N steps equal one solve of N iterations; the trace is the solve's; Re
   CHECK(steps.current == start);
   CHECK(steps.steps == 0);
   CHECK(steps.trace.empty());
+}
+
+TEST_CASE("PerturbForSteps moves the free values by the stated amounts and keeps the locked ones") {
+  // Rotations and centres go through SetPose and back: rounding only.
+  constexpr double kRounding = 1e-12;
+  testing::SyntheticSceneOptions o;
+  Project p = testing::MakeBoxScene(o).project;
+  p.images[0].focal_locked = false;
+  Primitive& box = p.primitives[0];
+  box.param_locked = {false, true, false, false};
+  box.translation_locked = false;
+  box.rotation_locked = true;
+  RefreshAllPrimitives(&p);
+  CHECK(PerturbForSteps(p, 0.0) == p);
+  constexpr double kAmount = 0.05;
+  const Project q = PerturbForSteps(p, kAmount);
+  const Camera& before = p.images[0].camera;
+  const Camera& after = q.images[0].camera;
+  // The turn: amount x 20 degrees.
+  const Eigen::AngleAxisd turn(before.cam_from_world_rotation.transpose() * after.cam_from_world_rotation);
+  CHECK(std::abs(turn.angle() - kAmount * 20.0 * M_PI / 180.0) < kRounding);
+  // The centre: amount x its distance to the model's centre (the box's centre here).
+  Eigen::AlignedBox3d bounds;
+  for (VertexId v = 0; v < box.mesh.VertexIdEnd(); ++v)
+    if (box.mesh.IsVertex(v)) bounds.extend(box.mesh.vertex(v).position);
+  const double distance = (before.CenterInWorld() - bounds.center()).norm();
+  CHECK(std::abs((after.CenterInWorld() - before.CenterInWorld()).norm() - kAmount * distance) <
+        kRounding * distance);
+  CHECK(after.focal_px == before.focal_px * (1.0 + kAmount));
+  CHECK(after.principal_point_px == before.principal_point_px);  // locked
+  const PrimitiveShape& a = q.primitives[0].shape;
+  CHECK(a.params(0) == box.shape.params(0) * (1.0 + kAmount));
+  CHECK(a.params(1) == box.shape.params(1));  // locked
+  CHECK(a.params(2) == box.shape.params(2) * (1.0 + kAmount));
+  CHECK(std::abs((a.translation - box.shape.translation).norm() - kAmount * bounds.diagonal().norm()) <
+        kRounding * bounds.diagonal().norm());
+  CHECK(a.rotation == box.shape.rotation);  // locked
+  // The cached vertices follow the new shape.
+  const Primitive& moved = q.primitives[0];
+  CHECK((moved.mesh.vertex(7).position - box.mesh.vertex(7).position).norm() > 0.01);
+  // Locked pose: the camera stays.
+  p.images[0].pose_locked = true;
+  p.images[0].focal_locked = true;
+  CHECK(PerturbForSteps(p, kAmount).images[0].camera == before);
+}
+
+TEST_CASE("from the perturbed start the steps lead back to the answer") {
+  // Noise-free pins and segments: the answer fits them to rounding.
+  constexpr double kFitPx = 1e-6;
+  const Project truth = testing::MakeBoxScene().project;
+  const Project start = PerturbForSteps(truth, 0.05);
+  JointSolveSteps steps = BeginJointSolveSteps(start, SolveStepsOptions());
+  for (int n = 0; n < 60 && !steps.finished; ++n) REQUIRE(StepJointSolve(&steps));
+  CHECK(steps.finished);
+  CHECK(steps.steps >= 3);  // the start was not the answer
+  CHECK(steps.summary.initial_cost > 1.0);
+  CHECK(steps.summary.reprojection_max_px < kFitPx);
 }
 
 }  // namespace

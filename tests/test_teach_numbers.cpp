@@ -1,7 +1,8 @@
 // The numbers teach mode shows and lets a course copy: matrices as plain text and LaTeX
 // (core/util/matrix_text.h), F and the epipoles of two cameras (core/solve/multiview_init.h)
 // checked against the geometry, the modelling state's counts per history state
-// (core/scene/modelling_state.h) and the degrees of freedom the joint solve leaves.
+// (core/scene/modelling_state.h) and the degrees of freedom the joint solve leaves; the closest
+// points of two rays (core/geometry/ray_pair.h) that the epipolar overlay draws in 3D.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -12,6 +13,7 @@
 
 #include <Eigen/Dense>
 
+#include "core/geometry/ray_pair.h"
 #include "core/mesh/operators.h"
 #include "core/scene/modelling_state.h"
 #include "core/solve/joint_solve.h"
@@ -119,6 +121,58 @@ TEST_CASE("F from two cameras: x_b^T F x_a = 0 on projected points; the epipoles
   const Eigen::Vector3d seen = a.K() * a.CamFromWorld(b.CenterInWorld());
   CHECK((seen.head<2>() / seen.z() - epipoles.in_a.head<2>() / epipoles.in_a.z()).norm() < 1e-9 * a.width_px);
   CHECK(EpipolesOfCameras(a, a).in_a.isZero());
+}
+
+TEST_CASE("closest points of two rays: skew rays of known closest points, at 1e-3 and 1e3 scale, and a camera pair") {
+  // Closed form on exact inputs: rounding, relative to the scene's size.
+  constexpr double kRelative = 1e-9;
+  std::mt19937 rng(15);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const double scale : {1e-3, 1.0, 1e3}) {
+    for (int k = 0; k < 50; ++k) {
+      CAPTURE(scale);
+      CAPTURE(k);
+      // P on ray a, Q on ray b, PQ perpendicular to both directions: P and Q are the answer.
+      const Eigen::Vector3d P = scale * Eigen::Vector3d(u(rng), u(rng), u(rng));
+      const Eigen::Vector3d n = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+      const double gap = scale * (0.1 + std::abs(u(rng)));
+      const Eigen::Vector3d Q = P + gap * n;
+      Eigen::Vector3d da = Eigen::Vector3d(u(rng), u(rng), u(rng)), db = Eigen::Vector3d(u(rng), u(rng), u(rng));
+      da = (da - da.dot(n) * n).normalized();
+      db = (db - db.dot(n) * n).normalized();
+      if (std::abs(da.dot(db)) > 0.99) continue;  // nearly parallel: not this case's subject
+      const double s = scale * (1.0 + 3.0 * std::abs(u(rng))), t = scale * (1.0 + 3.0 * std::abs(u(rng)));
+      const Eigen::Vector3d origin_a = P - s * da, origin_b = Q - t * db;
+      // Directions of any length.
+      const RayPairClosestPoints c = ClosestPointsOfRays(origin_a, 2.5 * da, origin_b, 0.3 * db);
+      REQUIRE(c.valid);
+      CHECK((c.on_a - P).norm() < kRelative * scale);
+      CHECK((c.on_b - Q).norm() < kRelative * scale);
+      CHECK((c.midpoint - 0.5 * (P + Q)).norm() < kRelative * scale);
+      CHECK(std::abs(c.gap - gap) < kRelative * scale);
+      CHECK(std::abs(c.s - s) < kRelative * scale);
+      CHECK(std::abs(c.t - t) < kRelative * scale);
+    }
+  }
+  // Two cameras' rays through one point's projections meet at the point.
+  const testing::SyntheticScene scene = testing::MakeBoxScene();
+  const Camera& a = scene.true_camera;
+  const Camera b = SecondCamera(scene);
+  for (int v = 0; v < 8; ++v) {
+    const Eigen::Vector3d X = scene.true_box.mesh.vertex(v).position;
+    const RayPairClosestPoints c = ClosestPointsOfRays(a.CenterInWorld(), a.RayDirectionInWorld(a.Project(X)),
+                                                       b.CenterInWorld(), b.RayDirectionInWorld(b.Project(X)));
+    REQUIRE(c.valid);
+    const double size = (a.CenterInWorld() - X).norm();
+    CHECK((c.on_a - X).norm() < kRelative * size);
+    CHECK((c.on_b - X).norm() < kRelative * size);
+    CHECK(c.gap < kRelative * size);
+    CHECK(c.s > 0.0);
+    CHECK(c.t > 0.0);
+  }
+  // Parallel rays, and a zero direction, have no closest pair.
+  CHECK_FALSE(ClosestPointsOfRays({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-2, 0, 0}).valid);
+  CHECK_FALSE(ClosestPointsOfRays({0, 0, 0}, {0, 0, 0}, {0, 1, 0}, {1, 0, 0}).valid);
 }
 
 TEST_CASE("the modelling state per history entry: counts of K and F in every state, undo and redo") {

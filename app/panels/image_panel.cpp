@@ -99,6 +99,9 @@ struct ImagePanelState::Impl {
   Eigen::Vector2d last_pointer_uv = Eigen::Vector2d::Zero();
   PhotoFeatures photo_features;
   SnapResult snap;  // this frame's, drawn before the click; kNone when nothing snapped
+  // File > Export view: the view of another panel to show, scaled to this panel's canvas
+  // (RequestImageViewLike); applied every frame while set.
+  std::optional<ImageViewReport> like_view;
 };
 
 ImagePanelState::ImagePanelState() = default;
@@ -1115,6 +1118,18 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   frame.width_px = frame.texture ? frame.texture->width : std::max(1, image.width_px);
   frame.height_px = frame.texture ? frame.texture->height : std::max(1, image.height_px);
   FitAndZoomView(panel, &view, frame, fit_now, one_to_one);
+  if (panel->like_view && panel->like_view->image_id == image.id && panel->like_view->rect_w > 0.0f &&
+      panel->like_view->rect_h > 0.0f) {
+    // The other panel's view scaled about the canvas centres, all of it in view.
+    const ImageViewReport& like = *panel->like_view;
+    const float s = std::min(frame.rect_size.x / like.rect_w, frame.rect_size.y / like.rect_h);
+    const ImVec2 center(frame.rect_min.x + 0.5f * frame.rect_size.x, frame.rect_min.y + 0.5f * frame.rect_size.y);
+    view.zoom = like.zoom * s;
+    view.origin = ImVec2(center.x + s * (like.origin_x - (like.rect_x + 0.5f * like.rect_w)),
+                         center.y + s * (like.origin_y - (like.rect_y + 0.5f * like.rect_h)));
+    view.initialized = true;
+    view.fitted = false;
+  }
 
   const std::vector<ProjectedPrimitive> model = ProjectModel(state->document.project(), image);
   const ViewTransform transform = TransformOf(view);
@@ -1129,11 +1144,15 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ContinueInteraction(state, panel, &view, frame);
   DrawSegmentContextMenu(state, panel);
 
-  // Drawing (the project may have changed above: read it again).
-  const Image* current_image = state->document.project().FindImage(image.id);
+  // Drawing (the project may have changed above: read it again). While View > Teach > Solver
+  // steps steps the solve, the model and pins are drawn in its stepped state.
+  const Project* stepped = TeachSteppedProject(*state);
+  const Project& shown = stepped != nullptr ? *stepped : state->document.project();
+  const Image* current_image = shown.FindImage(image.id);
   if (current_image == nullptr) return;
-  const std::vector<ProjectedPrimitive> current_model = ProjectModel(state->document.project(), *current_image);
-  const OverlayInput overlay = MakeOverlayInput(state, *panel, *current_image, current_model, frame.hover);
+  const std::vector<ProjectedPrimitive> current_model = ProjectModel(shown, *current_image);
+  OverlayInput overlay = MakeOverlayInput(state, *panel, *current_image, current_model, frame.hover);
+  overlay.project = &shown;
   DrawViewContents(*state, *panel, view, image, overlay, frame,
                    [&](Id id) { return TextureFor(panel, *state, id); });  // teach mode's insets
   DrawViewStatus(*state, *panel, view, frame);
@@ -1174,6 +1193,8 @@ ImageViewReport LastImageViewReport(const ImagePanelState& panel) {
 }
 
 void RequestImageFit(ImagePanelState* panel) { Panel(panel).fit_requested = true; }
+
+void RequestImageViewLike(ImagePanelState* panel, const ImageViewReport& like) { Panel(panel).like_view = like; }
 
 void ShutdownImagePanel(ImagePanelState* panel) {
   if (!panel->impl) return;

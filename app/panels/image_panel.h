@@ -36,6 +36,9 @@ void DrawImagePanel(AppState* state, ImagePanelState* panel);
 ImageViewReport LastImageViewReport(const ImagePanelState& panel);
 // Fits the active image to the panel on the next frame (the F key does the same).
 void RequestImageFit(ImagePanelState* panel);
+// Shows `like`'s view (another panel's report) from the next frame on, scaled about the
+// canvas centres so that what it showed fills this panel's canvas (File > Export view).
+void RequestImageViewLike(ImagePanelState* panel, const ImageViewReport& like);
 // Frees GL resources (before the context goes away).
 void ShutdownImagePanel(ImagePanelState* panel);
 

@@ -1,7 +1,9 @@
 #include "app/panels/teach_overlay.h"
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -28,6 +30,11 @@ constexpr ImU32 kHorizonColor = IM_COL32(120, 255, 160, 230);
 constexpr ImU32 kEpipolarColor = IM_COL32(120, 230, 255, 240);
 constexpr ImU32 kAssumptionColor = IM_COL32(250, 200, 80, 255);
 constexpr ImU32 kPanelBackground = IM_COL32(0, 0, 0, 165);
+// The solver's residual vectors: white, apart from the families' red, green and blue, the
+// model's yellow and the pins' magenta.
+constexpr ImU32 kResidualColor = IM_COL32(255, 255, 255, 255);
+constexpr ImU32 kRayColor = IM_COL32(120, 230, 255, 255);      // rays of a vertex's pins in 3D
+constexpr ImU32 kGapColor = IM_COL32(255, 120, 60, 255);
 // The 95 % ellipse of a 2-D Gaussian: sqrt of chi^2(2 dof) at 0.95.
 constexpr double kEllipse95Scale = 2.4477;
 
@@ -346,14 +353,106 @@ void MatrixBlock(AppState* state, const char* name, const char* caption, const E
   ImGui::Unindent();
 }
 
+// 1, 2 or 5 x 10^k, the largest not above x (x > 0).
+double NiceBelow(double x) {
+  const double decade = std::pow(10.0, std::floor(std::log10(x)));
+  for (const double m : {5.0, 2.0, 1.0})
+    if (m * decade <= x) return m * decade;
+  return decade;
+}
+
+// The stepped state's residual vectors over this photo: from each pin along projection minus
+// pin, residual_scale times as long, with the scale and a bar that says how many px it is.
+void DrawSolverSteps(ImDrawList* draw, const AppState& state, const Image& image, const Screen& s, float* text_y) {
+  const TeachSolverSteps& solver = state.teach.solver;
+  const Project* stepped = TeachSteppedProject(state);
+  std::vector<std::pair<ImU32, std::string>> lines;
+  const ImU32 white = IM_COL32(255, 255, 255, 240), dim = IM_COL32(200, 200, 200, 230);
+  if (stepped == nullptr) {
+    lines.push_back({white, "Solver steps: press Step (the panels then show the stepped state)"});
+    TextBox(draw, s, text_y, lines);
+    return;
+  }
+  const double scale = solver.residual_scale;
+  double largest = 0.0;
+  for (const TeachPinResidual& r : TeachPinResiduals(*stepped)) {
+    if (r.image_id != image.id) continue;
+    largest = std::max(largest, r.residual_px.norm());
+    const Eigen::Vector2d a = s(r.uv_px), b = s(r.uv_px + scale * r.residual_px);
+    Line(draw, s, a, b, kResidualColor, 2.0f);
+    const double length = (b - a).norm();
+    if (length > 4.0) {  // an arrow head at the projection's end
+      const Eigen::Vector2d d = (b - a) / length, n(-d.y(), d.x());
+      const double head = std::min(9.0, 0.4 * length);
+      const ImVec2 tip = Im(b), left = Im(b - head * d + 0.5 * head * n), right = Im(b - head * d - 0.5 * head * n);
+      draw->AddTriangleFilled(tip, left, right, kResidualColor);
+    }
+    Marker(draw, a, kResidualColor, 2.5f);
+  }
+  const JointSolveSteps& steps = *solver.steps;
+  lines.push_back({white, "Solver steps: step " + std::to_string(steps.steps) +
+                              (steps.finished ? " (finished)" : "") + ", showing the stepped state, not the project"});
+  if (steps.steps > 0)
+    lines.push_back({dim, "observation cost " + FormatNumber(steps.summary.initial_cost, 5) + " -> " +
+                              FormatNumber(steps.summary.final_cost, 5) + " px^2; largest residual here " +
+                              FormatNumber(largest, 4) + " px"});
+  else
+    lines.push_back({dim, std::string("the start (") + TeachStepStartName(solver.start) + "); largest residual here " +
+                              FormatNumber(largest, 4) + " px"});
+  lines.push_back({kResidualColor, "residual vectors (projection - pin) drawn x" + FormatNumber(scale, 4)});
+  // A bar about 80 screen px long, of a round number of residual px.
+  const double px_per_residual_px = scale * s.view.zoom;
+  if (!(px_per_residual_px > 0.0) || !std::isfinite(px_per_residual_px)) {
+    TextBox(draw, s, text_y, lines);
+    return;
+  }
+  const double bar_px = NiceBelow(80.0 / px_per_residual_px);
+  const std::string bar_text = "bar = " + FormatNumber(bar_px, 4) + " px of residual";
+  lines.push_back({kResidualColor, bar_text});
+  const float before = *text_y;
+  TextBox(draw, s, text_y, lines);
+  // The bar beside the box's last line.
+  const float line_h = ImGui::GetTextLineHeight();
+  const float x0 = static_cast<float>(s.rect_min.x()) + 16.0f + ImGui::CalcTextSize(bar_text.c_str()).x + 14.0f;
+  const float y0 = before - 5.0f - 0.5f * line_h - 2.0f;
+  const float length = static_cast<float>(bar_px * px_per_residual_px);
+  draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kShadow, 5.0f);
+  draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kResidualColor, 3.0f);
+  for (const float x : {x0, x0 + length}) draw->AddLine(ImVec2(x, y0 - 5.0f), ImVec2(x, y0 + 5.0f), kResidualColor, 2.0f);
+}
+
+// log10 of each value (the plots span orders of magnitude); non-positive values as the
+// smallest positive one.
+std::vector<float> Log10Series(const std::vector<double>& values) {
+  double smallest = std::numeric_limits<double>::infinity();
+  for (const double v : values)
+    if (v > 0.0 && std::isfinite(v)) smallest = std::min(smallest, v);
+  std::vector<float> out;
+  for (const double v : values)
+    out.push_back(static_cast<float>(std::log10(v > 0.0 && std::isfinite(v) ? v : std::isfinite(smallest) ? smallest : 1.0)));
+  return out;
+}
+
+void Plot(const char* label, const std::vector<double>& values, const std::string& last) {
+  const std::vector<float> series = Log10Series(values);
+  if (series.empty()) {
+    ImGui::TextColored(kDimText, "%s: (no iterations yet)", label);
+    return;
+  }
+  const std::string overlay = std::string(label) + ": " + last;
+  ImGui::PlotLines((std::string("##") + label).c_str(), series.data(), static_cast<int>(series.size()), 0,
+                   overlay.c_str(), FLT_MAX, FLT_MAX, ImVec2(ImGui::GetContentRegionAvail().x, 70.0f));
+}
+
 }  // namespace
 
 void DrawTeachImageOverlay(ImDrawList* draw_list, const AppState& state, const Image& image, const ViewTransform& view,
                            ImVec2 clip_min, ImVec2 clip_max, const std::function<const TiledTexture*(Id)>& texture_of) {
-  if (!state.teach.vanishing_points && !state.teach.epipolar) return;
+  if (!state.teach.vanishing_points && !state.teach.epipolar && !state.teach.solver_steps) return;
   draw_list->PushClipRect(clip_min, clip_max, true);
   const Screen s{view, Eigen::Vector2d(clip_min.x, clip_min.y), Eigen::Vector2d(clip_max.x, clip_max.y)};
   float text_y = clip_max.y - 8.0f;
+  if (state.teach.solver_steps) DrawSolverSteps(draw_list, state, image, s, &text_y);
   if (state.teach.vanishing_points) DrawVanishingConstruction(draw_list, state, image, s, &text_y);
   if (state.teach.epipolar) DrawEpipolar(draw_list, state, image, s, &text_y, texture_of);
   draw_list->PopClipRect();
@@ -361,6 +460,13 @@ void DrawTeachImageOverlay(ImDrawList* draw_list, const AppState& state, const I
 
 void DrawTeachViewportOverlay(ImDrawList* draw_list, const AppState& state, double length,
                               const std::function<bool(const Eigen::Vector3d&, ImVec2*)>& to_screen) {
+  if (state.teach.epipolar) DrawTeachRays(draw_list, state, to_screen);
+  if (state.teach.solver_steps && TeachSteppedProject(state) != nullptr) {
+    const JointSolveSteps& steps = *state.teach.solver.steps;
+    const ImVec2 min = draw_list->GetClipRectMin();
+    DrawShadowedText(draw_list, ImVec2(min.x + 8.0f, min.y + 26.0f), kResidualColor,
+                     ("Solver steps: step " + std::to_string(steps.steps) + " shown (not the project)").c_str());
+  }
   if (!state.teach.vanishing_points) return;
   for (const Image& image : state.document.project().images) {
     if (!image.camera_calibrated) continue;
@@ -380,6 +486,157 @@ void DrawTeachViewportOverlay(ImDrawList* draw_list, const AppState& state, doub
                        (std::string("to v") + kAxisNames[k]).c_str());
     }
   }
+}
+
+void DrawTeachRays(ImDrawList* draw, const AppState& state,
+                   const std::function<bool(const Eigen::Vector3d&, ImVec2*)>& to_screen) {
+  const std::string units = state.document.project().units;
+  for (const TeachRayPair& pair : TeachRayPairs(state)) {
+    const RayPairClosestPoints& c = pair.closest;
+    // Each ray from its camera centre (or, when the centre is behind the view, from the first
+    // of a few points towards the closest point that is in front) to a little beyond it.
+    auto ray = [&](const Eigen::Vector3d& center, const Eigen::Vector3d& direction, double along) {
+      ImVec2 a, b;
+      if (!to_screen(center + 1.15 * std::max(along, 0.0) * direction, &b)) return;
+      bool seen = false;
+      for (const double f : {0.0, 0.5, 0.75, 0.9, 0.97}) {
+        if (to_screen(center + f * std::max(along, 0.0) * direction, &a)) {
+          seen = true;
+          break;
+        }
+      }
+      if (!seen) return;
+      draw->AddLine(a, b, kShadow, 4.0f);
+      draw->AddLine(a, b, kRayColor, 2.0f);
+    };
+    ray(pair.center_a, pair.direction_a, c.s);
+    ray(pair.center_b, pair.direction_b, c.t);
+    ImVec2 pa, pb;
+    if (!to_screen(c.on_a, &pa) || !to_screen(c.on_b, &pb)) continue;
+    draw->AddLine(pa, pb, kShadow, 5.0f);
+    draw->AddLine(pa, pb, kGapColor, 3.0f);
+    for (const ImVec2& p : {pa, pb}) {
+      draw->AddCircleFilled(p, 5.0f, kShadow);
+      draw->AddCircleFilled(p, 3.5f, kGapColor);
+    }
+    const std::string label = "ray gap " + FormatNumber(c.gap, 4) + " " + units + " (" +
+                              FormatNumber(pair.gap_px_in_a, 3) + " / " + FormatNumber(pair.gap_px_in_b, 3) +
+                              " px in the two photos)";
+    // Beside the points, moved left as far as needed to stay in the panel.
+    const float x = std::min(std::max(pa.x, pb.x) + 8.0f,
+                             draw->GetClipRectMax().x - ImGui::CalcTextSize(label.c_str()).x - 6.0f);
+    DrawShadowedText(draw, ImVec2(x, 0.5f * (pa.y + pb.y) + 8.0f), kGapColor, label.c_str());
+  }
+}
+
+void DrawTeachStepsWindow(AppState* state) {
+  if (!state->teach.solver_steps) return;
+  TeachSolverSteps& solver = state->teach.solver;
+  ImGui::SetNextWindowSize(ImVec2(440, 560), ImGuiCond_FirstUseEver);
+  const ImGuiViewport* viewport = ImGui::GetMainViewport();
+  ImGui::SetNextWindowPos(ImVec2(viewport->Pos.x + viewport->Size.x - 460, viewport->Pos.y + 60),
+                          ImGuiCond_FirstUseEver);
+  if (!ImGui::Begin("Solver steps (teach)", &state->teach.solver_steps)) {
+    ImGui::End();
+    return;
+  }
+  ImGui::TextWrapped(
+      "The joint solve, one Levenberg-Marquardt iteration per Step. Stepping never changes the project: the image and "
+      "3D panels show the stepped state until this window closes or the project is edited.");
+  const bool stepping = TeachSteppedProject(*state) != nullptr;
+  ImGui::BeginDisabled(stepping);
+  ImGui::SetNextItemWidth(150);
+  if (ImGui::BeginCombo("start", solver.start == TeachStepStart::kPerturbed ? "perturbed" : "as it is")) {
+    if (ImGui::Selectable("perturbed", solver.start == TeachStepStart::kPerturbed))
+      solver.start = TeachStepStart::kPerturbed;
+    if (ImGui::Selectable("as it is", solver.start == TeachStepStart::kAsIs)) solver.start = TeachStepStart::kAsIs;
+    ImGui::EndCombo();
+  }
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("perturbed: the solved project moved off its answer (the same way every time);\n"
+                      "as it is: the project as solved (a converged solve stops at once)");
+  if (solver.start == TeachStepStart::kPerturbed) {
+    ImGui::SameLine();
+    float percent = static_cast<float>(100.0 * solver.perturbation);
+    ImGui::SetNextItemWidth(120);
+    if (ImGui::SliderFloat("amount", &percent, 1.0f, 40.0f, "%.0f %%")) solver.perturbation = percent / 100.0;
+  }
+  ImGui::EndDisabled();
+  if (ImGui::Button("Step")) TeachStep(state);
+  RecordItem(state, "teach.step");
+  ImGui::SameLine();
+  ImGui::BeginDisabled(!stepping);
+  if (ImGui::Button("Reset")) TeachResetSteps(state);
+  RecordItem(state, "teach.reset");
+  ImGui::SameLine();
+  if (ImGui::Button("Show the project")) TeachEndSteps(state);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("End stepping: the panels show the project again");
+  ImGui::EndDisabled();
+  if (!solver.message.empty()) ImGui::TextColored(kDimText, "%s", solver.message.c_str());
+  if (stepping) {
+    // Set when stepping begins so that the vectors shrink as the solve converges; the
+    // lecturer may still enlarge them for the back row.
+    ImGui::Text("residual vectors drawn x%s", FormatNumber(solver.residual_scale, 4).c_str());
+    ImGui::SameLine();
+    if (ImGui::SmallButton("x2")) solver.residual_scale *= 2.0;
+    ImGui::SameLine();
+    if (ImGui::SmallButton("/2")) solver.residual_scale /= 2.0;
+  }
+  if (!stepping) {
+    ImGui::End();
+    return;
+  }
+  const JointSolveSteps& steps = *solver.steps;
+  ImGui::Separator();
+  // The cost Levenberg-Marquardt minimises (the observations' plus the constraints' augmented
+  // Lagrangian rows), damping and step norm, after every trial.
+  std::vector<double> cost, lambda, step_norm;
+  for (const LmIteration& it : steps.trace) {
+    cost.push_back(it.cost);
+    lambda.push_back(it.lambda);
+    step_norm.push_back(std::sqrt(it.step_squared_norm));
+  }
+  const auto last = [](const std::vector<double>& v, const char* unit) {
+    return v.empty() ? std::string("-") : FormatNumber(v.back(), 4) + unit;
+  };
+  ImGui::TextColored(kDimText, "log10 scale; one point per trial (a rejected trial keeps the cost)");
+  Plot("LM cost (with the constraints' rows)", cost, last(cost, " px^2"));
+  Plot("damping lambda", lambda, last(lambda, ""));
+  Plot("step norm", step_norm, last(step_norm, " (scaled)"));
+  if (steps.steps > 0) {
+    ImGui::Text("%d step(s), %s%s", steps.steps, SolverTerminationName(steps.summary.termination),
+                steps.finished ? " (finished)" : "");
+    ImGui::Text("observation cost %s -> %s px^2", FormatNumber(steps.summary.initial_cost, 5).c_str(),
+                FormatNumber(steps.summary.final_cost, 5).c_str());
+    ImGui::Text("pins RMS %s px, max %s px", FormatNumber(steps.summary.reprojection_rms_px, 4).c_str(),
+                FormatNumber(steps.summary.reprojection_max_px, 4).c_str());
+  }
+  ImGui::Separator();
+  const Project& project = state->document.project();
+  if (project.constraints.empty()) {
+    ImGui::TextColored(kDimText, "No spatial constraints.");
+  } else if (steps.steps == 0) {
+    ImGui::TextColored(kDimText, "Constraint violations: after the first step.");
+  } else if (ImGui::BeginTable("##teach_constraints", 3,
+                               ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerV | ImGuiTableFlags_SizingFixedFit)) {
+    ImGui::TableSetupColumn("constraint", ImGuiTableColumnFlags_WidthStretch);
+    ImGui::TableSetupColumn("violation");
+    ImGui::TableSetupColumn("holds");
+    ImGui::TableHeadersRow();
+    for (const ConstraintDiagnostic& c : steps.summary.constraints) {
+      const Constraint* constraint = project.FindConstraint(c.constraint_id);
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::Text("#%d %s", static_cast<int>(c.constraint_id),
+                  constraint != nullptr ? ConstraintKindName(constraint->kind) : "?");
+      ImGui::TableNextColumn();
+      ImGui::Text("%s %s", FormatNumber(c.residual, 3).c_str(), c.unit.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextColored(c.satisfied ? ImVec4(0.5f, 0.9f, 0.5f, 1.0f) : kWarningText, "%s", c.satisfied ? "yes" : "no");
+    }
+    ImGui::EndTable();
+  }
+  ImGui::End();
 }
 
 void DrawTeachNumbersWindow(AppState* state) {

@@ -21,10 +21,21 @@ void DrawTeachImageOverlay(ImDrawList* draw_list, const AppState& state, const I
                            ImVec2 clip_min, ImVec2 clip_max, const std::function<const TiledTexture*(Id)>& texture_of);
 
 // In the 3D panel: each calibrated image's vanishing directions as rays from its camera
-// centre, `length` world units long. `to_screen` maps a world point to the screen (false
+// centre, `length` world units long; the rays of the epipolar overlay (DrawTeachRays); a note
+// while the Solver steps window shows a stepped state. `to_screen` maps a world point to the screen (false
 // when it is behind the view).
 void DrawTeachViewportOverlay(ImDrawList* draw_list, const AppState& state, double length,
                               const std::function<bool(const Eigen::Vector3d&, ImVec2*)>& to_screen);
+
+// In the 3D panel, with the epipolar overlay on: the two rays of each selected vertex's pins
+// in two calibrated photos, their closest points and the gap between them (TeachRayPairs).
+// Called by DrawTeachViewportOverlay.
+void DrawTeachRays(ImDrawList* draw_list, const AppState& state,
+                   const std::function<bool(const Eigen::Vector3d&, ImVec2*)>& to_screen);
+
+// The floating Solver steps window (Step, Reset, the start, plots of cost, damping and step
+// norm per trial, the constraint violations), while TeachView::solver_steps is on.
+void DrawTeachStepsWindow(AppState* state);
 
 // The floating Numbers window, while TeachView::numbers is on.
 void DrawTeachNumbersWindow(AppState* state);

@@ -361,26 +361,32 @@ std::vector<std::array<float, 4>> SourceTints(const AppState& state) {
   return tints;
 }
 
-void UploadMesh(const TexturedMesh& mesh, const std::vector<std::array<float, 4>>& tints, std::uint64_t revision,
+// `geometry`, when given, replaces the mesh's positions and normals (the same triangles moved:
+// the Solver steps window's stepped state keeps the document's texture). `tints`: per
+// triangle, View > Texture sources' colour (SourceTints), or empty.
+void UploadMesh(const TexturedMesh& mesh, const TexturedMesh* geometry, const std::vector<std::array<float, 4>>& tints,
+                std::uint64_t revision,
                 std::uint64_t atlas_revision, GlResources* gl) {
   // Triangles are expanded to their own vertices so that "textured" can be per triangle.
   std::vector<GpuMeshVertex> vertices;
   const size_t triangle_count = mesh.indices.size() / 3;
   vertices.reserve(triangle_count * 3);
-  const bool has_normals = mesh.normals.size() == mesh.positions.size();
+  const std::vector<Eigen::Vector3f>& positions = geometry != nullptr ? geometry->positions : mesh.positions;
+  const std::vector<Eigen::Vector3f>& normals = geometry != nullptr ? geometry->normals : mesh.normals;
+  const bool has_normals = normals.size() == positions.size();
   const bool has_uvs = mesh.uvs.size() == mesh.positions.size();
   const bool has_atlas = !mesh.atlas.empty();
   for (size_t t = 0; t < triangle_count; ++t) {
     std::uint32_t idx[3] = {mesh.indices[3 * t], mesh.indices[3 * t + 1], mesh.indices[3 * t + 2]};
-    if (idx[0] >= mesh.positions.size() || idx[1] >= mesh.positions.size() || idx[2] >= mesh.positions.size()) continue;
+    if (idx[0] >= positions.size() || idx[1] >= positions.size() || idx[2] >= positions.size()) continue;
     Eigen::Vector3f face_normal =
-        (mesh.positions[idx[1]] - mesh.positions[idx[0]]).cross(mesh.positions[idx[2]] - mesh.positions[idx[0]]);
+        (positions[idx[1]] - positions[idx[0]]).cross(positions[idx[2]] - positions[idx[0]]);
     face_normal = face_normal.norm() > 0 ? face_normal.normalized() : Eigen::Vector3f::UnitZ();
     const bool textured = has_atlas && has_uvs && t < mesh.triangle_textured.size() && mesh.triangle_textured[t] != 0;
     for (std::uint32_t i : idx) {
       GpuMeshVertex v{};
-      const Eigen::Vector3f& p = mesh.positions[i];
-      const Eigen::Vector3f n = has_normals ? mesh.normals[i] : face_normal;
+      const Eigen::Vector3f& p = positions[i];
+      const Eigen::Vector3f n = has_normals ? normals[i] : face_normal;
       v.position[0] = p.x(), v.position[1] = p.y(), v.position[2] = p.z();
       v.normal[0] = n.x(), v.normal[1] = n.y(), v.normal[2] = n.z();
       if (has_uvs) v.uv[0] = mesh.uvs[i].x(), v.uv[1] = mesh.uvs[i].y();
@@ -510,8 +516,15 @@ bool Drawable(const Image& image) {
   return image.camera_calibrated && camera.width_px > 0 && camera.height_px > 0 && camera.focal_px > 0;
 }
 
+// The project the panel draws: the Solver steps window's stepped state while it steps, else
+// the document's.
+const Project& ShownProject(const AppState& state) {
+  const Project* stepped = TeachSteppedProject(state);
+  return stepped != nullptr ? *stepped : state.document.project();
+}
+
 void BuildSceneGeometry(const AppState& state, const SceneMeasure& measure, Id photo_view_id, GlResources* gl) {
-  const Project& project = state.document.project();
+  const Project& project = ShownProject(state);
   std::vector<LineVertex> lines;
   auto begin_range = [&](DrawRange* range) { range->first = static_cast<GLint>(lines.size()); };
   auto end_range = [&](DrawRange* range) { range->count = static_cast<GLsizei>(lines.size()) - range->first; };
@@ -929,7 +942,7 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
                  ImVec2 view_scale) {
   ImDrawList* draw = ImGui::GetWindowDrawList();
   draw->PushClipRect(origin, ImVec2(origin.x + size.x, origin.y + size.y), true);
-  const Project& project = state.document.project();
+  const Project& project = ShownProject(state);
 
   // The selected, hovered and V_connect-start elements: faces tinted, edges thick, vertices
   // as dots and rings (drawn over the rendered picture, so hidden ones show too).
@@ -1170,11 +1183,26 @@ bool RenderToTarget(const AppState& state, PanelState* panel, const ViewSetup& v
                     const CanvasFrame& frame) {
   GlResources& gl = panel->gl;
   const SavedGlState saved = SavedGlState::Capture();
-  if (!gl.mesh_uploaded || gl.mesh_revision != state.mesh_revision)
-    UploadMesh(state.mesh, SourceTints(state), state.mesh_revision, state.atlas_revision, &gl);
+  if (TeachSteppedProject(state) != nullptr) {
+    // Revisions of the stepped mesh have the top bit set, so they never equal the document's;
+    // a new texture of the document (a bake that finished) is uploaded with the next one.
+    const TexturedMesh& stepped = state.teach.solver.mesh;
+    const std::uint64_t revision =
+        (std::uint64_t{1} << 63) | ((state.teach.solver.mesh_revision << 32) ^ state.mesh_revision);
+    if (!gl.mesh_uploaded || gl.mesh_revision != revision) {
+      const bool same_triangles = stepped.positions.size() == state.mesh.positions.size() &&
+                                  stepped.triangle_face == state.mesh.triangle_face &&
+                                  stepped.triangle_primitive == state.mesh.triangle_primitive;
+      UploadMesh(same_triangles ? state.mesh : stepped, same_triangles ? &stepped : nullptr,
+                 same_triangles ? SourceTints(state) : std::vector<std::array<float, 4>>(), revision,
+                 state.atlas_revision, &gl);
+    }
+  } else if (!gl.mesh_uploaded || gl.mesh_revision != state.mesh_revision) {
+    UploadMesh(state.mesh, nullptr, SourceTints(state), state.mesh_revision, state.atlas_revision, &gl);
+  }
   UpdatePhotoTextures(state, &gl);
   // The project may have changed (a tool click): read it again.
-  const Project& current = state.document.project();
+  const Project& current = ShownProject(state);
   SceneKey key{current.primitives,           current.images,
                state.active_image_id,        state.selection.primitive_id,
                panel->orbit.photo_image_id, current.references,
@@ -1250,7 +1278,7 @@ void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
     DrawTextureSourceLegend(draw, *state, frame.origin, size);
     draw->PopClipRect();
   }
-  if (state->teach.vanishing_points) {  // View > Teach: the vanishing directions as rays
+  if (state->teach.vanishing_points || state->teach.epipolar || state->teach.solver_steps) {  // View > Teach
     ImDrawList* draw = ImGui::GetWindowDrawList();
     draw->PushClipRect(frame.origin, ImVec2(frame.origin.x + size.x, frame.origin.y + size.y), true);
     DrawTeachViewportOverlay(draw, *state, 0.5 * measure.size, [&](const Eigen::Vector3d& p, ImVec2* out) {
@@ -1264,6 +1292,23 @@ void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
 }
 
 void RequestViewportFrame(ViewportPanelState* panel) { Panel(panel).frame_requested = true; }
+
+void CopyViewportView(const ViewportPanelState& from, ViewportPanelState* to) {
+  PanelState& out = Panel(to);
+  if (!from.impl) return;
+  const PanelState& in = *from.impl;
+  out.orbit = in.orbit;
+  out.framed_once = in.framed_once;
+  out.framed_project_path = in.framed_project_path;
+  out.had_content = in.had_content;
+  out.framed_bounds = in.framed_bounds;
+  out.had_primitives = in.had_primitives;
+  out.show_texture = in.show_texture;
+  out.show_mesh = in.show_mesh;
+  out.show_wireframe = in.show_wireframe;
+  out.show_cameras = in.show_cameras;
+  out.show_grid = in.show_grid;
+}
 
 ViewportReport LastViewportReport(const ViewportPanelState& panel) {
   return panel.impl ? panel.impl->report : ViewportReport();

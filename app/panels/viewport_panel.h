@@ -46,5 +46,8 @@ void ShutdownViewportPanel(ViewportPanelState* panel);
 // through the camera of a calibrated image (ignored when it is not calibrated).
 void RequestViewportFrame(ViewportPanelState* panel);
 void RequestViewportViewFromPhoto(ViewportPanelState* panel, Id image_id);
+// Gives `to` the view of `from` (orbit or photo view, display toggles, what was framed), so
+// that it shows the same picture at its own size (File > Export view).
+void CopyViewportView(const ViewportPanelState& from, ViewportPanelState* to);
 
 }  // namespace facet::app

@@ -18,6 +18,7 @@
 #include "app/panels/side_panels.h"
 #include "app/panels/viewport_panel.h"
 #include "app/platform/egl_context.h"
+#include "app/shell/export_view.h"
 #include "app/shell/file_actions.h"
 #include "app/shell/frame.h"
 #include "app/shell/glfw_window.h"
@@ -157,6 +158,7 @@ const char* DialogName(Dialog dialog) {
     case Dialog::kOpen: return "open";
     case Dialog::kSaveAs: return "save-as";
     case Dialog::kExport: return "export";
+    case Dialog::kExportView: return "export-view";
     case Dialog::kAddPhoto: return "add-photo";
     case Dialog::kRelinkPhoto: return "relink-photo";
     case Dialog::kAddReference: return "add-reference";
@@ -399,6 +401,12 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
         return false;
       }
     }
+    // `export-view` (the command or File > Export view's dialog): after the frame that asked.
+    const std::string export_error = RunPendingExportView(state, shell, frame * kFrameTimeS);
+    if (!export_error.empty()) {
+      error = "script line " + std::to_string(step ? step->line : 0) + ": " + export_error;
+      return false;
+    }
     return true;
   };
 
@@ -409,8 +417,18 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
   for (int i = 0; ok && i < kSettleFrames; ++i) ok = run_frame(nullptr);
   if (!ok) return Fail(error);
 
-  const std::string write_error = WritePng(options.output_png, target.Read());
-  if (!write_error.empty()) return Fail("cannot write " + options.output_png + ": " + write_error);
+  if (options.panel.empty()) {
+    const std::string write_error = WritePng(options.output_png, target.Read());
+    if (!write_error.empty()) return Fail("cannot write " + options.output_png + ": " + write_error);
+  } else {  // --panel: the panel alone, its canvas the asked size (app/shell/export_view.h)
+    ExportViewRequest request;
+    request.panel = options.panel == "image" ? PanelId::kImage : PanelId::kViewport;
+    request.width_px = options.panel_width;
+    request.height_px = options.panel_height;
+    request.path = options.output_png;
+    const std::string export_error = ExportView(state, shell, request, frame * kFrameTimeS);
+    if (!export_error.empty()) return Fail(export_error);
+  }
   if (!options.report_path.empty()) {
     const std::string report = BuildReport(*state, *shell, options, renderer, frame, script);
     const std::string report_error = WriteFileAtomically(options.report_path, report);
@@ -461,6 +479,8 @@ int RunGui(const GuiOptions& options) {
 
 int RunOffscreen(const RenderOptions& options) {
   if (options.output_png.empty()) return Fail("no output file (-o SHOT.png)");
+  if (!options.panel.empty() && options.panel != "image" && options.panel != "3d")
+    return Fail("--panel must be image or 3d, not " + options.panel);
   if (options.width < 64 || options.height < 64 || options.width > 8192 || options.height > 8192) {
     return Fail("size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
                 " is outside 64..8192 px");
@@ -489,7 +509,15 @@ int RunOffscreen(const RenderOptions& options) {
     ImGui::DestroyContext();
     return Fail("the ImGui OpenGL3 renderer failed to start on " + egl.Renderer());
   }
-  const int code = RenderWithContext(options, &state, &shell, script, egl.Renderer());
+  // --panel: the app runs in its default window size; --size is the panel's picture.
+  RenderOptions run = options;
+  if (!options.panel.empty()) {
+    run.panel_width = options.width;
+    run.panel_height = options.height;
+    run.width = RenderOptions().width;
+    run.height = RenderOptions().height;
+  }
+  const int code = RenderWithContext(run, &state, &shell, script, egl.Renderer());
   FinishAutosave(&state);  // the end of a script is a clean exit, failed or not
   ShutdownImagePanel(&shell.image_panel);
   ShutdownViewportPanel(&shell.viewport_panel);

@@ -31,6 +31,11 @@ struct RenderOptions {
   // that renders of shared projects (the samples, tests running side by side) never write
   // or offer recovery files beside them.
   bool autosave = false;
+  // "image" or "3d": the PNG is that panel alone, its canvas width x height px, drawn after
+  // the script (File > Export view headless, app/shell/export_view.h); the app then runs in
+  // the default window size. Empty: the whole window.
+  std::string panel;
+  int panel_width = 0, panel_height = 0;  // set by RunOffscreen from width, height
 };
 
 // Renders the default layout (never the user's saved layout) offscreen at a fixed 60 Hz

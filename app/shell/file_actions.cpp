@@ -16,6 +16,7 @@ BrowsePurpose PurposeOf(Dialog dialog) {
   switch (dialog) {
     case Dialog::kSaveAs: return BrowsePurpose::kSaveProject;
     case Dialog::kExport: return BrowsePurpose::kExport;
+    case Dialog::kExportView: return BrowsePurpose::kExportView;
     case Dialog::kAddPhoto: return BrowsePurpose::kAddPhoto;
     case Dialog::kRelinkPhoto: return BrowsePurpose::kRelinkPhoto;
     case Dialog::kAddReference: return BrowsePurpose::kAddReference;
@@ -28,6 +29,7 @@ const char* CommandOf(BrowsePurpose purpose) {
     case BrowsePurpose::kOpenProject: return "open";
     case BrowsePurpose::kSaveProject: return "save";
     case BrowsePurpose::kExport: return "export";
+    case BrowsePurpose::kExportView: return "export-view";
     case BrowsePurpose::kAddPhoto: return "add-photo";
     case BrowsePurpose::kRelinkPhoto: return "relink-photo";
     case BrowsePurpose::kAddReference: return "add-reference";
@@ -46,7 +48,8 @@ std::string StartFolder(const AppState& state, const ShellState& shell, BrowsePu
   // file of that kind came from.
   std::vector<std::string> candidates;
   const std::vector<std::string> same_kind = RecentFilesWith(shell.recent_files, PurposeExtensions(purpose));
-  if (purpose == BrowsePurpose::kSaveProject || purpose == BrowsePurpose::kExport) {
+  if (purpose == BrowsePurpose::kSaveProject || purpose == BrowsePurpose::kExport ||
+      purpose == BrowsePurpose::kExportView) {
     candidates.push_back(ProjectFolder(state));
     if (!same_kind.empty()) candidates.push_back(ParentFolder(same_kind.front()));
   } else {

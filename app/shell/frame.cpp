@@ -23,6 +23,7 @@
 #include "app/panels/teach_overlay.h"
 #include "app/panels/viewport_panel.h"
 #include "app/panels/widgets.h"
+#include "app/shell/export_view.h"
 #include "app/shell/file_actions.h"
 #include "app/shell/menu_bar.h"
 #include "app/state/add_photo.h"
@@ -312,6 +313,7 @@ const char* DialogTitle(Dialog dialog) {
     case Dialog::kOpen: return "Open project";
     case Dialog::kSaveAs: return "Save project as";
     case Dialog::kExport: return "Export model";
+    case Dialog::kExportView: return "Export view";
     case Dialog::kAddPhoto: return "Add photo";
     case Dialog::kRelinkPhoto: return "Relink photo";
     case Dialog::kAddReference: return "Add reference mesh";
@@ -341,6 +343,22 @@ void DrawPathDialog(AppState* state, ShellState* shell) {
   if (d == Dialog::kExport) ImGui::TextColored(kDimText, "The extension chooses the format: .glb (glTF) or .obj");
   if (d == Dialog::kAddReference)
     ImGui::TextColored(kDimText, "A mesh to model against (.obj or .glb, Y up): drawn, snapped to, never exported");
+  if (d == Dialog::kExportView) {
+    ImGui::TextColored(kDimText, "The panel with its overlays, as on screen, at this size (a PNG):");
+    int panel = shell->export_view_panel == PanelId::kImage ? 0 : 1;
+    ImGui::RadioButton("Image panel", &panel, 0);
+    ImGui::SameLine();
+    ImGui::RadioButton("3D panel", &panel, 1);
+    shell->export_view_panel = panel == 0 ? PanelId::kImage : PanelId::kViewport;
+    ImGui::SameLine();
+    ImGui::SetNextItemWidth(110);
+    ImGui::InputInt("x##export_w", &shell->export_view_width, 0);
+    ImGui::SameLine();
+    ImGui::SetNextItemWidth(110);
+    ImGui::InputInt("px##export_h", &shell->export_view_height, 0);
+    shell->export_view_width = std::clamp(shell->export_view_width, 64, 8192);
+    shell->export_view_height = std::clamp(shell->export_view_height, 64, 8192);
+  }
   if (d == Dialog::kRelinkPhoto) {
     const Image* image = state->document.project().FindImage(state->active_image_id);
     if (image != nullptr)
@@ -385,7 +403,8 @@ void DrawDialogs(AppState* state, ShellState* shell) {
     case Dialog::kAddPhoto:
     case Dialog::kRelinkPhoto:
     case Dialog::kAddReference:
-    case Dialog::kExport: DrawPathDialog(state, shell); break;
+    case Dialog::kExport:
+    case Dialog::kExportView: DrawPathDialog(state, shell); break;
     case Dialog::kAbout:
       ImGui::Text("Facet %s", "0.1");
       ImGui::TextColored(kDimText, "Textured 3D models from uncalibrated photos:");
@@ -576,9 +595,52 @@ bool RunTeachCommand(AppState* state, const std::vector<std::string>& args, std:
     state->teach.second_image_id = project.images[index].id;
     return true;
   }
+  // The Solver steps window: step, reset, start perturbed|as-is, perturbation AMOUNT.
+  if (args.size() == 1 && args[0] == "step") {
+    TeachStep(state);  // a step that changes nothing (finished, failed) says why in the window
+    return true;
+  }
+  if (args.size() == 1 && args[0] == "reset") {
+    TeachResetSteps(state);
+    return true;
+  }
+  if (args.size() == 2 && args[0] == "start") {
+    const std::optional<TeachStepStart> start = TeachStepStartFromName(args[1]);
+    if (!start) {
+      *error = "teach start: expected perturbed or as-is";
+      return false;
+    }
+    TeachEndSteps(state);
+    state->teach.solver.start = *start;
+    return true;
+  }
+  if (args.size() == 2 && args[0] == "residual-scale") {
+    char* end = nullptr;
+    const double scale = std::strtod(args[1].c_str(), &end);
+    if (*end != '\0' || !(scale > 0.0) || !std::isfinite(scale)) {
+      *error = "teach residual-scale: expected a positive factor, e.g. 5";
+      return false;
+    }
+    state->teach.solver.residual_scale = scale;  // until stepping begins again
+    return true;
+  }
+  if (args.size() == 2 && args[0] == "perturbation") {
+    char* end = nullptr;
+    const double amount = std::strtod(args[1].c_str(), &end);
+    if (*end != '\0' || !(amount > 0.0) || amount > 0.5) {
+      *error = "teach perturbation: expected an amount in (0, 0.5], e.g. 0.05";
+      return false;
+    }
+    TeachEndSteps(state);
+    state->teach.solver.perturbation = amount;
+    return true;
+  }
   bool* flag = args.size() == 2 ? TeachFlag(&state->teach, args[0]) : nullptr;
   if (flag == nullptr || (args[1] != "on" && args[1] != "off")) {
-    *error = "teach: expected 'teach vanishing|epipolar|numbers|state on|off' or 'teach second-image INDEX'";
+    *error =
+        "teach: expected 'teach vanishing|epipolar|numbers|state|steps on|off', 'teach second-image INDEX', "
+        "'teach step', 'teach reset', 'teach start perturbed|as-is', 'teach perturbation AMOUNT' or "
+        "'teach residual-scale S'";
     return false;
   }
   *flag = args[1] == "on";
@@ -777,6 +839,13 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     for (std::string w; in >> w;) words.push_back(w);
     return RunTeachCommand(state, words, error);
   }
+  if (name == "export-view") {  // done after this frame (app/shell/export_view.h)
+    ExportViewRequest request;
+    *error = ParseExportViewArgs(arg, *shell, &request);
+    if (!error->empty()) return false;
+    shell->pending_export_view = arg;
+    return true;
+  }
   if (name == "select-image") {
     const auto& images = state->document.project().images;
     char* end = nullptr;
@@ -834,12 +903,49 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   return false;
 }
 
+namespace {
+
+// A frame of File > Export view (app/shell/export_view.h): the exported panel alone, filling
+// the display without a title bar; its canvas is noted for the crop.
+void DrawExportViewFrame(AppState* state, ShellState* shell) {
+  state->item_rects.clear();
+  const ImGuiViewport* vp = ImGui::GetMainViewport();
+  ImGui::SetNextWindowPos(vp->Pos, ImGuiCond_Always);
+  ImGui::SetNextWindowSize(vp->Size, ImGuiCond_Always);
+  ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(3, 3));
+  ImGui::PushStyleVar(ImGuiStyleVar_WindowRounding, 0.0f);
+  ImGui::PushStyleVar(ImGuiStyleVar_WindowBorderSize, 0.0f);
+  constexpr ImGuiWindowFlags kFlags = ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoSavedSettings |
+                                      ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoScrollWithMouse |
+                                      ImGuiWindowFlags_NoBringToFrontOnFocus;
+  ImGui::Begin("##export_view", nullptr, kFlags);
+  ImGui::PopStyleVar(3);
+  if (shell->export_image_panel != nullptr) {
+    DrawImagePanel(state, shell->export_image_panel);
+    const ImageViewReport r = LastImageViewReport(*shell->export_image_panel);
+    shell->export_canvas = {r.rect_x, r.rect_y, r.rect_w, r.rect_h};
+  } else if (shell->export_viewport_panel != nullptr) {
+    DrawViewportPanel(state, shell->export_viewport_panel);
+    const ViewportReport r = LastViewportReport(*shell->export_viewport_panel);
+    if (r.drawn)
+      shell->export_canvas = {r.origin_x, r.origin_y, static_cast<float>(r.width_px), static_cast<float>(r.height_px)};
+  }
+  ImGui::End();
+}
+
+}  // namespace
+
 void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   state->time_s = time_s;
   state->bake_mode = shell->offscreen ? BakeMode::kFinishNextFrame : BakeMode::kBackground;
   RefreshDerived(state);
   SyncReferenceMeshes(state);
   CollectLineDetection(state, /*wait=*/false);
+  UpdateTeachSteps(state);  // View > Teach > Solver steps: dropped when the document changed
+  if (shell->export_image_panel != nullptr || shell->export_viewport_panel != nullptr) {
+    DrawExportViewFrame(state, shell);
+    return;
+  }
   AutosaveTick(state);
   if (state->autosave.offer && shell->dialog == Dialog::kNone) OpenDialog(shell, Dialog::kRecover);
   if (state->request_quit) {
@@ -883,6 +989,7 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   }
 
   DrawTeachNumbersWindow(state);  // View > Teach > Numbers
+  DrawTeachStepsWindow(state);    // View > Teach > Solver steps
   DrawDialogs(state, shell);
   if (shell->dialog == Dialog::kNone) HandleToolShortcuts(state);
 }

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,7 @@ enum class Dialog {
   kOpen,
   kSaveAs,
   kExport,
+  kExportView,  // File > Export view: a panel as a PNG (app/shell/export_view.h)
   kAddPhoto,
   kRelinkPhoto,
   kAddReference,
@@ -34,8 +36,8 @@ enum class Dialog {
 };
 // The dialogs that are the file browser (app/shell/file_actions.h).
 inline bool IsFileBrowserDialog(Dialog d) {
-  return d == Dialog::kOpen || d == Dialog::kSaveAs || d == Dialog::kExport || d == Dialog::kAddPhoto ||
-         d == Dialog::kRelinkPhoto || d == Dialog::kAddReference;
+  return d == Dialog::kOpen || d == Dialog::kSaveAs || d == Dialog::kExport || d == Dialog::kExportView ||
+         d == Dialog::kAddPhoto || d == Dialog::kRelinkPhoto || d == Dialog::kAddReference;
 }
 
 struct ShellState {
@@ -72,6 +74,15 @@ struct ShellState {
   float tear_press_x = 0, tear_press_y = 0;
   int floating_to_place = -1;   // a panel that became floating this frame: set its rect once
   bool layout_changed = false;  // to persist the layout on exit
+
+  // File > Export view (app/shell/export_view.h): the dialog's choices, the export asked for
+  // (done after the frame), and while its frames run, the panel drawn alone.
+  PanelId export_view_panel = PanelId::kImage;
+  int export_view_width = 1920, export_view_height = 1080;
+  std::optional<std::string> pending_export_view;  // the `export-view` arguments
+  ImagePanelState* export_image_panel = nullptr;       // set only during the export's frames
+  ViewportPanelState* export_viewport_panel = nullptr;
+  Rect export_canvas;  // the exported panel's canvas in the last export frame (screen px)
 
   // What the last frame drew, for the render report (screen px).
   std::array<Rect, kNumPanels> panel_rects{};

@@ -15,6 +15,7 @@
 
 #include "app/panels/image_panel.h"
 #include "app/panels/viewport_panel.h"
+#include "app/shell/export_view.h"
 #include "app/shell/window_placement.h"
 
 namespace facet::app {
@@ -125,6 +126,7 @@ int RunGlfwWindow(AppState* state, ShellState* shell, const std::string& imgui_i
     glClear(GL_COLOR_BUFFER_BIT);
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     glfwSwapBuffers(window);
+    RunPendingExportView(state, shell, glfwGetTime());  // File > Export view, between frames
 
     const std::string new_title = WindowTitle(*state);
     if (new_title != title) {

@@ -153,6 +153,11 @@ int main(int argc, char** argv) {
                    "renders never write beside a project)");
   render->add_flag("--no-snap", [&](std::int64_t) { render_options.snapping = false; },
                    "Start with the image panel's Snap option off (points land where the mouse goes)");
+  render
+      ->add_option("--panel", render_options.panel,
+                   "Write only this panel, with its overlays, its canvas --size large: image | 3d (File > Export "
+                   "view)")
+      ->check(CLI::IsMember({"image", "3d"}));
   render->add_option("--config-dir", render_options.config_dir,
                      "Read and keep recent files in this folder (default: none, so renders never touch the "
                      "user's settings)");

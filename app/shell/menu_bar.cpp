@@ -66,6 +66,11 @@ void DrawTeachMenu(AppState* state) {
   RecordItem(state, "menu.teach.numbers");
   ImGui::MenuItem("Modelling state in History", nullptr, &teach.modelling_state);
   RecordItem(state, "menu.teach.state");
+  ImGui::MenuItem("Solver steps", nullptr, &teach.solver_steps);
+  RecordItem(state, "menu.teach.steps");
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("The joint solve one Levenberg-Marquardt iteration per Step, from a perturbed start: residual "
+                      "vectors on the photo, cost, damping and step norm, constraint violations");
   ImGui::EndMenu();
 }
 
@@ -128,6 +133,12 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
     if (ImGui::MenuItem("Export OBJ...", nullptr, false, has_mesh)) {
       OpenFileBrowser(state, shell, Dialog::kExport, StemOf(state->project_path) + ".obj");
     }
+    if (ImGui::MenuItem("Export view...")) {
+      OpenFileBrowser(state, shell, Dialog::kExportView, StemOf(state->project_path) + "-view.png");
+    }
+    RecordItem(state, "menu.export_view");
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("The image panel or the 3D panel with its overlays as a PNG of a chosen size (for slides)");
     ImGui::Separator();
     if (ImGui::MenuItem("Quit", "Ctrl+Q")) RequestQuit(state, shell);
     ImGui::EndMenu();

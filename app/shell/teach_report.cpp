@@ -66,6 +66,91 @@ nlohmann::json VanishingJson(const TeachVanishing& t) {
           {"directions_in_world", directions}};
 }
 
+// The Solver steps window's state: what is stepped, the trace, the constraint violations and
+// the residual vectors drawn, and the stepped cameras and primitives (full precision, so a
+// test compares them with its own solve).
+nlohmann::json StepsJson(const AppState& state) {
+  const TeachSolverSteps& solver = state.teach.solver;
+  const Project* stepped = TeachSteppedProject(state);
+  nlohmann::json out = {{"on", state.teach.solver_steps},
+                        {"start", TeachStepStartName(solver.start)},
+                        {"perturbation", solver.perturbation},
+                        {"active", stepped != nullptr},
+                        {"message", solver.message},
+                        {"residual_scale", solver.residual_scale}};
+  if (stepped == nullptr) return out;
+  const JointSolveSteps& steps = *solver.steps;
+  out["steps"] = steps.steps;
+  out["finished"] = steps.finished;
+  out["termination"] = steps.steps > 0 ? SolverTerminationName(steps.summary.termination) : "";
+  out["initial_cost"] = steps.steps > 0 ? Number(steps.summary.initial_cost) : nlohmann::json(nullptr);
+  out["final_cost"] = steps.steps > 0 ? Number(steps.summary.final_cost) : nlohmann::json(nullptr);
+  nlohmann::json trace = nlohmann::json::array();
+  for (const LmIteration& it : steps.trace)
+    trace.push_back({{"iteration", it.iteration},
+                     {"cost", Number(it.cost)},
+                     {"trial_cost", Number(it.trial_cost)},
+                     {"lambda", Number(it.lambda)},
+                     {"step_norm", Number(std::sqrt(it.step_squared_norm))},
+                     {"accepted", it.accepted}});
+  out["trace"] = trace;
+  nlohmann::json constraints = nlohmann::json::array();
+  if (steps.steps > 0)
+    for (const ConstraintDiagnostic& c : steps.summary.constraints)
+      constraints.push_back({{"constraint_id", c.constraint_id},
+                             {"residual", Number(c.residual)},
+                             {"unit", c.unit},
+                             {"satisfied", c.satisfied}});
+  out["constraints"] = constraints;
+  nlohmann::json pins = nlohmann::json::array();
+  for (const TeachPinResidual& r : TeachPinResiduals(*stepped))
+    pins.push_back({{"pin_id", r.pin_id},
+                    {"image_id", r.image_id},
+                    {"uv_px", Vector(r.uv_px)},
+                    {"projection_px", Vector(r.projection_px)},
+                    {"residual_px", Vector(r.residual_px)}});
+  out["pins"] = pins;
+  nlohmann::json images = nlohmann::json::array();
+  for (const Image& image : stepped->images)
+    images.push_back({{"id", image.id},
+                      {"focal_px", image.camera.focal_px},
+                      {"principal_point_px", Vector(image.camera.principal_point_px)},
+                      {"cam_from_world_rotation", Matrix(image.camera.cam_from_world_rotation)},
+                      {"cam_from_world_translation", Vector(image.camera.cam_from_world_translation)}});
+  out["images"] = images;
+  nlohmann::json primitives = nlohmann::json::array();
+  for (const Primitive& primitive : stepped->primitives)
+    primitives.push_back({{"id", primitive.id},
+                          {"params", Vector(primitive.shape.params)},
+                          {"rotation", Vector(primitive.shape.rotation)},
+                          {"translation", Vector(primitive.shape.translation)}});
+  out["primitives"] = primitives;
+  return out;
+}
+
+nlohmann::json RaysJson(const AppState& state) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const TeachRayPair& r : TeachRayPairs(state))
+    out.push_back({{"vertex", {{"primitive_id", r.vertex.primitive_id}, {"vertex", r.vertex.vertex}}},
+                   {"pin_a", r.pin_a},
+                   {"pin_b", r.pin_b},
+                   {"image_a", r.image_a},
+                   {"image_b", r.image_b},
+                   {"center_a", Vector(r.center_a)},
+                   {"center_b", Vector(r.center_b)},
+                   {"direction_a", Vector(r.direction_a)},
+                   {"direction_b", Vector(r.direction_b)},
+                   {"s", Number(r.closest.s)},
+                   {"t", Number(r.closest.t)},
+                   {"on_a", Vector(r.closest.on_a)},
+                   {"on_b", Vector(r.closest.on_b)},
+                   {"midpoint", Vector(r.closest.midpoint)},
+                   {"gap", Number(r.closest.gap)},
+                   {"gap_px_in_a", Number(r.gap_px_in_a)},
+                   {"gap_px_in_b", Number(r.gap_px_in_b)}});
+  return out;
+}
+
 }  // namespace
 
 nlohmann::json TeachReportJson(const AppState& state) {
@@ -75,6 +160,7 @@ nlohmann::json TeachReportJson(const AppState& state) {
                  {"epipolar", view.epipolar},
                  {"numbers", view.numbers},
                  {"state", view.modelling_state},
+                 {"steps", view.solver_steps},
                  {"second_image_id", view.second_image_id}};
   nlohmann::json vanishing = nlohmann::json::array();
   for (const Image& image : state.document.project().images)
@@ -92,6 +178,8 @@ nlohmann::json TeachReportJson(const AppState& state) {
                      {"epipole", Vector(l.epipole)},
                      {"pin_distance_px", Number(l.pin_distance_px)}});
   out["epipolar"] = lines;
+  out["rays"] = RaysJson(state);
+  out["steps"] = StepsJson(state);
   if (const std::optional<TeachNumbers> n = TeachNumbersFor(state)) {
     out["numbers"] = {{"image_id", n->image_id},
                       {"K", Matrix(n->K)},

@@ -29,6 +29,7 @@ std::string Lower(std::string s) {
 
 const std::vector<std::string> kProjectExtensions = {".facet"};
 const std::vector<std::string> kExportExtensions = {".glb", ".obj"};
+const std::vector<std::string> kViewExtensions = {".png"};
 // What OpenCV's imgcodecs (core/image/image_io.h) reads on Debian 12.
 const std::vector<std::string> kPhotoExtensions = {".jpg", ".jpeg", ".png", ".tif", ".tiff", ".bmp", ".webp"};
 
@@ -63,6 +64,7 @@ const std::vector<std::string>& PurposeExtensions(BrowsePurpose purpose) {
     case BrowsePurpose::kOpenProject:
     case BrowsePurpose::kSaveProject: return kProjectExtensions;
     case BrowsePurpose::kExport: return kExportExtensions;
+    case BrowsePurpose::kExportView: return kViewExtensions;
     case BrowsePurpose::kAddPhoto:
     case BrowsePurpose::kRelinkPhoto: return kPhotoExtensions;
     case BrowsePurpose::kAddReference: return kExportExtensions;  // the meshes Facet writes are the ones it reads
@@ -75,6 +77,7 @@ const char* PurposeTitle(BrowsePurpose purpose) {
     case BrowsePurpose::kOpenProject: return "Open project";
     case BrowsePurpose::kSaveProject: return "Save project as";
     case BrowsePurpose::kExport: return "Export model";
+    case BrowsePurpose::kExportView: return "Export view";
     case BrowsePurpose::kAddPhoto: return "Add photo";
     case BrowsePurpose::kRelinkPhoto: return "Relink photo";
     case BrowsePurpose::kAddReference: return "Add reference mesh";
@@ -86,7 +89,8 @@ const char* PurposeVerb(BrowsePurpose purpose) {
   switch (purpose) {
     case BrowsePurpose::kOpenProject: return "Open";
     case BrowsePurpose::kSaveProject: return "Save";
-    case BrowsePurpose::kExport: return "Export";
+    case BrowsePurpose::kExport:
+    case BrowsePurpose::kExportView: return "Export";
     case BrowsePurpose::kAddPhoto: return "Add";
     case BrowsePurpose::kRelinkPhoto: return "Relink";
     case BrowsePurpose::kAddReference: return "Add";
@@ -99,6 +103,7 @@ const char* PurposeFilterLabel(BrowsePurpose purpose) {
     case BrowsePurpose::kOpenProject:
     case BrowsePurpose::kSaveProject: return "Facet projects (*.facet)";
     case BrowsePurpose::kExport: return "Models (*.glb, *.obj)";
+    case BrowsePurpose::kExportView: return "PNG pictures (*.png)";
     case BrowsePurpose::kAddPhoto:
     case BrowsePurpose::kRelinkPhoto: return "Photos (*.jpg, *.png, *.tif, ...)";
     case BrowsePurpose::kAddReference: return "Meshes (*.obj, *.glb)";
@@ -107,7 +112,8 @@ const char* PurposeFilterLabel(BrowsePurpose purpose) {
 }
 
 bool PurposeWrites(BrowsePurpose purpose) {
-  return purpose == BrowsePurpose::kSaveProject || purpose == BrowsePurpose::kExport;
+  return purpose == BrowsePurpose::kSaveProject || purpose == BrowsePurpose::kExport ||
+         purpose == BrowsePurpose::kExportView;
 }
 
 bool HasExtension(const std::string& name, const std::vector<std::string>& extensions) {

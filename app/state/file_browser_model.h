@@ -13,7 +13,7 @@
 namespace facet::app {
 
 // The four uses of the one browser.
-enum class BrowsePurpose { kOpenProject, kSaveProject, kExport, kAddPhoto, kRelinkPhoto, kAddReference };
+enum class BrowsePurpose { kOpenProject, kSaveProject, kExport, kAddPhoto, kRelinkPhoto, kAddReference, kExportView };
 
 // The extensions a purpose offers, lower case with the dot; the first is the one Save as and
 // Export append to a name without one (".facet", ".glb").

@@ -89,9 +89,15 @@
 //                                                      the document as it is now (render
 //                                                      --autosave)
 //                                   teach NAME on|off  View > Teach's overlays: vanishing,
-//                                                      epipolar, numbers, state
+//                                                      epipolar, numbers, state, steps
 //                                                      (app/state/teach.h); teach
-//                                                      second-image INDEX: F's second photo
+//                                                      second-image INDEX: F's second photo;
+//                                                      teach step, teach reset: the Solver
+//                                                      steps window's buttons; teach start
+//                                                      perturbed|as-is, teach perturbation
+//                                                      AMOUNT (0.2 = 20 %): where it starts;
+//                                                      teach residual-scale S: the vectors
+//                                                      drawn S times as long
 //                                   texture ARGS       the user's texture choices
 //                                                      (RunTextureCommand,
 //                                                      app/state/texture_choices.h): source
@@ -103,6 +109,10 @@
 //                                                      export-resolution N (texels per
 //                                                      project unit of File > Export, 0:
 //                                                      from the photos)
+//                                   export-view image|3d WxH PATH  File > Export view: the
+//                                                      panel alone, its canvas W x H px, as
+//                                                      a PNG (after this step's frame;
+//                                                      app/shell/export_view.h)
 //                                 Tool names: select, line-x, line-y, line-z, pin,
 //                                 add-primitive (adds at once), split-edge, delete-vertex,
 //                                 connect-vertices, delete-edge, push-pull, move, line-pin,

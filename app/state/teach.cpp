@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "app/state/app_state.h"
 #include "core/solve/multiview_init.h"
@@ -37,6 +38,7 @@ bool* TeachFlag(TeachView* view, const std::string& name) {
   if (name == "epipolar") return &view->epipolar;
   if (name == "numbers") return &view->numbers;
   if (name == "state") return &view->modelling_state;
+  if (name == "steps") return &view->solver_steps;
   return nullptr;
 }
 
@@ -173,6 +175,165 @@ void UpdateTeachHistoryCounts(AppState* state) {
   if (state->teach.history_counts_revision == state->document.revision()) return;
   state->teach.history_counts = HistoryStateCounts(state->document);
   state->teach.history_counts_revision = state->document.revision();
+}
+
+std::vector<TeachRayPair> TeachRayPairs(const AppState& state) {
+  std::vector<TeachRayPair> out;
+  const Project& project = state.document.project();
+  std::vector<VertexRef> vertices = SelectedVertices(state);
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    if (std::find(vertices.begin(), vertices.begin() + i, vertices[i]) != vertices.begin() + i) continue;
+    std::vector<const Pin*> pins;
+    for (const Pin& pin : project.pins)
+      if (pin.vertex == vertices[i] && CalibratedImage(project, pin.image_id) != nullptr) pins.push_back(&pin);
+    for (size_t a = 0; a < pins.size(); ++a) {
+      for (size_t b = a + 1; b < pins.size(); ++b) {
+        if (pins[a]->image_id == pins[b]->image_id) continue;
+        const Camera& ca = project.FindImage(pins[a]->image_id)->camera;
+        const Camera& cb = project.FindImage(pins[b]->image_id)->camera;
+        TeachRayPair pair;
+        pair.vertex = vertices[i];
+        pair.pin_a = pins[a]->id;
+        pair.pin_b = pins[b]->id;
+        pair.image_a = pins[a]->image_id;
+        pair.image_b = pins[b]->image_id;
+        pair.center_a = ca.CenterInWorld();
+        pair.center_b = cb.CenterInWorld();
+        pair.direction_a = ca.RayDirectionInWorld(pins[a]->uv_px);
+        pair.direction_b = cb.RayDirectionInWorld(pins[b]->uv_px);
+        pair.closest = ClosestPointsOfRays(pair.center_a, pair.direction_a, pair.center_b, pair.direction_b);
+        if (!pair.closest.valid) continue;
+        pair.gap_px_in_a = (ca.Project(pair.closest.on_b) - pins[a]->uv_px).norm();
+        pair.gap_px_in_b = (cb.Project(pair.closest.on_a) - pins[b]->uv_px).norm();
+        out.push_back(pair);
+      }
+    }
+  }
+  return out;
+}
+
+const char* TeachStepStartName(TeachStepStart start) {
+  return start == TeachStepStart::kPerturbed ? "perturbed" : "as-is";
+}
+
+std::optional<TeachStepStart> TeachStepStartFromName(const std::string& name) {
+  if (name == "perturbed") return TeachStepStart::kPerturbed;
+  if (name == "as-is") return TeachStepStart::kAsIs;
+  return std::nullopt;
+}
+
+std::vector<TeachPinResidual> TeachPinResiduals(const Project& project) {
+  std::vector<TeachPinResidual> out;
+  for (const Pin& pin : project.pins) {
+    const Image* image = CalibratedImage(project, pin.image_id);
+    if (image == nullptr || project.FindVertex(pin.vertex) == nullptr) continue;
+    const Eigen::Vector3d x = VertexInWorld(project, pin.vertex);
+    if (!(image->camera.CamFromWorld(x).z() > 0.0)) continue;
+    TeachPinResidual r;
+    r.pin_id = pin.id;
+    r.image_id = pin.image_id;
+    r.uv_px = pin.uv_px;
+    r.projection_px = image->camera.Project(x);
+    r.residual_px = r.projection_px - pin.uv_px;
+    out.push_back(r);
+  }
+  return out;
+}
+
+namespace {
+
+// 1, 2 or 5 x 10^k, the largest not above `x` (x > 0).
+double RoundScaleDown(double x) {
+  const double decade = std::pow(10.0, std::floor(std::log10(x)));
+  for (const double m : {5.0, 2.0, 1.0})
+    if (m * decade <= x) return m * decade;
+  return decade;
+}
+
+void RefreshSteppedMesh(TeachSolverSteps* solver) {
+  solver->mesh = BuildUntexturedMesh(solver->steps->current);
+  ++solver->mesh_revision;
+}
+
+void BeginSteps(AppState* state) {
+  TeachSolverSteps& solver = state->teach.solver;
+  const Project& document = state->document.project();
+  const Project start =
+      solver.start == TeachStepStart::kPerturbed ? PerturbForSteps(document, solver.perturbation) : document;
+  solver.steps = BeginJointSolveSteps(start, SolveStepsOptions());
+  solver.document_revision = state->document.revision();
+  constexpr double kLongestVectorOfDiagonal = 0.08;
+  constexpr double kMinScale = 1e-3, kMaxScale = 1e6;
+  double scale = std::numeric_limits<double>::infinity();
+  for (const TeachPinResidual& r : TeachPinResiduals(start)) {
+    const Image* image = start.FindImage(r.image_id);
+    const double length = r.residual_px.norm();
+    if (!(length > 0.0)) continue;
+    scale = std::min(scale, kLongestVectorOfDiagonal * std::hypot(image->width_px, image->height_px) / length);
+  }
+  solver.residual_scale = std::isfinite(scale) ? std::clamp(RoundScaleDown(scale), kMinScale, kMaxScale) : 1.0;
+  solver.message = std::string("start: ") +
+                   (solver.start == TeachStepStart::kPerturbed
+                        ? "the project moved off its answer by " + FormatNumber(100.0 * solver.perturbation, 3) + " %"
+                        : "the project as it is");
+  RefreshSteppedMesh(&solver);
+}
+
+}  // namespace
+
+const Project* TeachSteppedProject(const AppState& state) {
+  const TeachSolverSteps& solver = state.teach.solver;
+  if (!state.teach.solver_steps || !solver.steps || solver.document_revision != state.document.revision())
+    return nullptr;
+  return &solver.steps->current;
+}
+
+bool TeachStep(AppState* state) {
+  state->teach.solver_steps = true;
+  UpdateTeachSteps(state);
+  TeachSolverSteps& solver = state->teach.solver;
+  if (!solver.steps) BeginSteps(state);
+  if (solver.steps->finished) {
+    solver.message = "the solve has finished (" + std::string(SolverTerminationName(solver.steps->summary.termination)) +
+                     "): Reset to step again";
+    return false;
+  }
+  JointSolveSummary failure;
+  if (!StepJointSolve(&*solver.steps, &failure)) {
+    // Nothing stepped yet: the panels go back to the project rather than show a start that
+    // cannot be solved.
+    if (solver.steps->steps == 0) TeachEndSteps(state);
+    solver.message = "the step failed: " + failure.message;
+    return false;
+  }
+  const JointSolveSteps& steps = *solver.steps;
+  solver.message = "step " + std::to_string(steps.steps) + ": observation cost " +
+                   FormatNumber(steps.summary.final_cost, 6) + " px^2" + (steps.finished ? std::string(", finished (") +
+                                                   SolverTerminationName(steps.summary.termination) + ")"
+                                             : std::string());
+  RefreshSteppedMesh(&solver);
+  return true;
+}
+
+void TeachResetSteps(AppState* state) {
+  UpdateTeachSteps(state);
+  TeachSolverSteps& solver = state->teach.solver;
+  if (!solver.steps) return;
+  ResetJointSolveSteps(&*solver.steps);
+  solver.message = "reset to the start";
+  RefreshSteppedMesh(&solver);
+}
+
+void TeachEndSteps(AppState* state) {
+  state->teach.solver.steps.reset();
+  state->teach.solver.mesh = TexturedMesh();
+  ++state->teach.solver.mesh_revision;
+}
+
+void UpdateTeachSteps(AppState* state) {
+  const TeachSolverSteps& solver = state->teach.solver;
+  if (solver.steps && (!state->teach.solver_steps || solver.document_revision != state->document.revision()))
+    TeachEndSteps(state);
 }
 
 }  // namespace facet::app

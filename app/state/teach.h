@@ -15,18 +15,64 @@
 #include <Eigen/Core>
 
 #include "core/geometry/ids.h"
+#include "core/geometry/ray_pair.h"
 #include "core/geometry/vanishing_construction.h"
 #include "core/scene/modelling_state.h"
+#include "core/solve/joint_solve_steps.h"
+#include "core/texture/textured_mesh.h"
 
 namespace facet::app {
 
 struct AppState;
+
+// Where the Solver steps window starts stepping from.
+//   kPerturbed (the default): the document's project moved off its answer by PerturbForSteps
+//     (core/solve/joint_solve_steps.h). A lecturer needs a start a visible distance from the
+//     answer (residual vectors of tens of px, a cost falling over several orders of magnitude),
+//     the same in every lecture and on every machine, with the distance in their hands (the
+//     amount), and on any project: the document itself is always already solved, so stepping
+//     it shows nothing. The joint solve's cold start is no better for this: it is the geometry
+//     solve's own converged result (a linear initialisation followed by its Levenberg-Marquardt
+//     run on the pins), so stepping from it shows only the last few iterations, and projects
+//     over 300 parameters have none.
+//   kAsIs: the document's project as it is (after an edit whose solve stopped early, or to show
+//     that a converged solve takes one step and stops).
+enum class TeachStepStart { kPerturbed, kAsIs };
+const char* TeachStepStartName(TeachStepStart start);  // "perturbed", "as-is"
+std::optional<TeachStepStart> TeachStepStartFromName(const std::string& name);
+
+// The joint solve stepped one Levenberg-Marquardt iteration at a time (View > Teach > Solver
+// steps). Stepping never edits the document: the image and 3D panels draw `steps->current`
+// instead of the document's project while it exists, and the steps are dropped (the panels
+// show the document again) when the document changes or the window closes.
+struct TeachSolverSteps {
+  TeachStepStart start = TeachStepStart::kPerturbed;
+  // PerturbForSteps' amount. 0.2 (each camera turned by 4 degrees): on the Leuven street the
+  // first two steps still leave residuals of tens of px before the quadratic convergence
+  // shows (observation cost 48308, 8642, 1169, 72.8, 72.2 px^2); from 0.05 the first step is
+  // already nearly the answer, which shows less.
+  double perturbation = 0.2;
+  // Begun by the first Step: empty while the panels show the document.
+  std::optional<JointSolveSteps> steps;
+  std::uint64_t document_revision = 0;  // Document::revision() the steps start from
+  // The residual vectors are drawn this many times their length. Fixed when stepping begins
+  // (the start's largest residual drawn 8 % of the photo's diagonal long, rounded to 1, 2 or
+  // 5 x 10^k) so that the vectors visibly shrink as the solve converges.
+  double residual_scale = 1.0;
+  std::string message;  // what the last Step or Reset did, or why it did nothing
+  // The stepped project's triangles (BuildUntexturedMesh: the document mesh's texture still
+  // fits them, stepping changes no topology), for the 3D panel; the revision for its upload.
+  TexturedMesh mesh;
+  std::uint64_t mesh_revision = 0;
+};
 
 struct TeachView {
   bool vanishing_points = false;  // the construction on the photo, vanishing directions in 3D
   bool epipolar = false;          // epipolar lines and epipoles of a selected pin or the pointer
   bool numbers = false;           // the Numbers window: K, R, t, F with copy buttons
   bool modelling_state = false;   // the (K, F) counts per History entry
+  bool solver_steps = false;      // the Solver steps window, residual vectors, stepped state
+  TeachSolverSteps solver;
   Id second_image_id = kNoId;     // F between the active image and this one (Numbers window)
   // HistoryStateCounts of the document at history_counts_revision (Document::revision()).
   std::vector<ModellingStateCounts> history_counts;
@@ -34,7 +80,7 @@ struct TeachView {
 };
 
 // Names of the overlays for menus and the `command teach NAME on|off` of input scripts:
-// "vanishing", "epipolar", "numbers", "state". Null for an unknown name.
+// "vanishing", "epipolar", "numbers", "state", "steps". Null for an unknown name.
 bool* TeachFlag(TeachView* view, const std::string& name);
 
 // The vanishing-point overlay of one image: the construction on each family's own fitted
@@ -94,5 +140,49 @@ std::optional<TeachNumbers> TeachNumbersFor(const AppState& state);
 
 // Refreshes state->teach.history_counts when the document changed.
 void UpdateTeachHistoryCounts(AppState* state);
+
+// The two rays of one vertex's pins in two calibrated photos and their closest points (the
+// epipolar overlay in 3D): for each selected vertex (as TeachEpipolarLines selects them) and
+// each pair of its pins in different calibrated photos, a before b in project order.
+struct TeachRayPair {
+  VertexRef vertex;
+  Id pin_a = kNoId, pin_b = kNoId;
+  Id image_a = kNoId, image_b = kNoId;
+  Eigen::Vector3d center_a = Eigen::Vector3d::Zero(), center_b = Eigen::Vector3d::Zero();
+  Eigen::Vector3d direction_a = Eigen::Vector3d::Zero(), direction_b = Eigen::Vector3d::Zero();  // unit
+  RayPairClosestPoints closest;  // gap in project units
+  // The gap as each photo sees it: the other ray's closest point projected into the photo,
+  // its distance from the pin there (px; the own ray's point projects onto the pin).
+  double gap_px_in_a = 0.0, gap_px_in_b = 0.0;
+};
+std::vector<TeachRayPair> TeachRayPairs(const AppState& state);
+
+// --- The Solver steps window (TeachSolverSteps) ---
+
+// The project the image and 3D panels draw: the stepped one while stepping, else null (the
+// document's).
+const Project* TeachSteppedProject(const AppState& state);
+// One Levenberg-Marquardt iteration more, beginning from the chosen start first when not
+// stepping yet. False (with solver.message saying why) when nothing changed: the solve had
+// finished, or failed.
+bool TeachStep(AppState* state);
+// Back to the state before the first step, exactly (the start stays shown).
+void TeachResetSteps(AppState* state);
+// Drops the steps (the panels show the document again), e.g. to begin from a new start.
+void TeachEndSteps(AppState* state);
+// Once per frame: drops the steps when the window was closed or the document changed.
+void UpdateTeachSteps(AppState* state);
+
+// A pin's residual in the shown project (stepped or the document's): the projection of its
+// vertex minus the pin, px, what the joint solve minimises.
+struct TeachPinResidual {
+  Id pin_id = kNoId;
+  Id image_id = kNoId;
+  Eigen::Vector2d uv_px = Eigen::Vector2d::Zero();
+  Eigen::Vector2d projection_px = Eigen::Vector2d::Zero();
+  Eigen::Vector2d residual_px = Eigen::Vector2d::Zero();
+};
+// Of the pins in calibrated images whose vertex exists and is in front of the camera.
+std::vector<TeachPinResidual> TeachPinResiduals(const Project& project);
 
 }  // namespace facet::app

@@ -40,4 +40,21 @@ bool StepJointSolve(JointSolveSteps* steps, JointSolveSummary* failure = nullptr
 // Back to the start, exactly (steps, trace and summary cleared).
 void ResetJointSolveSteps(JointSolveSteps* steps);
 
+// The options the app's Solver steps window steps with (and its tests solve with): the
+// interactive defaults, without the rank diagnostics (a dense SVD per step that the window
+// does not show).
+JointSolveOptions SolveStepsOptions();
+
+// A start for a lesson (the Solver steps window): a converged project shows nothing when
+// stepped, so the free parameters are moved off the answer by a relative `amount`, the same
+// way every time: each free primitive dimension scaled by 1 + amount (even indices) or
+// 1 - amount (odd), each free primitive translation moved by amount x the model's size (the
+// diagonal of its vertices' bounding box) along a fixed direction, a free primitive rotation
+// turned by amount x 20 degrees about z; each calibrated camera whose pose is free turned by
+// amount x 20 degrees (0.05: 1 degree) about a fixed axis and its centre moved by amount x its
+// distance to the model's centre; a free focal length scaled by 1 + amount. Alternate images
+// and primitives go the opposite way. Locked values are kept; amount 0 returns the project.
+// Cached vertex positions are refreshed.
+Project PerturbForSteps(const Project& project, double amount);
+
 }  // namespace facet

@@ -2,12 +2,17 @@
 // overlays draw, read back from the render report, against the synthetic cameras that made the
 // scene: the vanishing construction (orthocentre = principal point, circles, f, horizon,
 // directions), the epipolar lines of a selected pin and of the pointer, the Numbers window's
-// F (x_b^T F x_a = 0) and its copy buttons, the modelling state per History entry. Then the
-// screenshots of each overlay (FACET_BINARY_DIR/teach/; README "Teaching with Facet" shows
-// copies from assets/samples/leuven/teach/).
+// F (x_b^T F x_a = 0) and its copy buttons, the modelling state per History entry, the two
+// rays of a selected vertex's pins and their closest points in 3D; the Solver steps window
+// (N steps = one solve of N iterations, Reset, residual vectors, the document untouched);
+// File > Export view headless (`render --panel`). Then the screenshots of each overlay
+// (FACET_BINARY_DIR/teach/; README "Teaching with Facet" shows copies from
+// assets/samples/leuven/teach/).
 #include <doctest/doctest.h>
 
 #include "core/geometry/camera.h"
+#include "core/geometry/ray_pair.h"
+#include "core/solve/joint_solve_steps.h"
 #include "core/util/matrix_text.h"
 #include "tests/app/app_test_util.h"
 
@@ -216,6 +221,240 @@ TEST_CASE("epipolar overlay: a selected vertex's pins and the pointer give the t
   }
   CHECK(pin_lines == 2);      // vertex 2's pin in a drawn in b, and its pin in b drawn in a
   CHECK(pointer_lines == 1);  // the pointer in a, drawn in b's inset
+
+  // In 3D: the rays from the two camera centres through vertex 2's pins meet at the vertex.
+  const nlohmann::json& rays = report.at("teach").at("rays");
+  REQUIRE(rays.size() == 1u);
+  const nlohmann::json& r = rays.at(0);
+  const Eigen::Vector3d vertex = scene.true_box.mesh.vertex(2).position;
+  const double size = (a.CenterInWorld() - vertex).norm();
+  CHECK((Vec3(r.at("center_a")) - a.CenterInWorld()).norm() < kDirectionTolerance * size);
+  CHECK((Vec3(r.at("center_b")) - b.CenterInWorld()).norm() < kDirectionTolerance * size);
+  CHECK((Vec3(r.at("on_a")) - vertex).norm() < kDirectionTolerance * size);
+  CHECK((Vec3(r.at("on_b")) - vertex).norm() < kDirectionTolerance * size);
+  CHECK(r.at("gap").get<double>() < kDirectionTolerance * size);
+  CHECK(r.at("gap_px_in_a").get<double>() < 1e-6);
+  CHECK(r.at("gap_px_in_b").get<double>() < 1e-6);
+  // The closest points are where the reported rays are nearest (not only near the truth).
+  const RayPairClosestPoints c = ClosestPointsOfRays(Vec3(r.at("center_a")), Vec3(r.at("direction_a")),
+                                                     Vec3(r.at("center_b")), Vec3(r.at("direction_b")));
+  CHECK((c.on_a - Vec3(r.at("on_a"))).norm() < kNoiseFreeRelative * size);
+  CHECK((c.on_b - Vec3(r.at("on_b"))).norm() < kNoiseFreeRelative * size);
+}
+
+// The largest difference between the stepped cameras and primitives of the report's
+// teach.steps and a project's, relative to their size.
+double MaxRelativeDifference(const nlohmann::json& steps, const Project& p) {
+  double worst = 0.0;
+  auto compare = [&](double x, double y) { worst = std::max(worst, std::abs(x - y) / std::max(1.0, std::abs(y))); };
+  REQUIRE(steps.at("images").size() == p.images.size());
+  for (size_t i = 0; i < p.images.size(); ++i) {
+    const nlohmann::json& j = steps.at("images").at(i);
+    const Camera& c = p.images[i].camera;
+    REQUIRE(j.at("id").get<Id>() == p.images[i].id);
+    compare(j.at("focal_px").get<double>(), c.focal_px);
+    for (int k = 0; k < 2; ++k) compare(j.at("principal_point_px").at(k).get<double>(), c.principal_point_px(k));
+    const Eigen::Matrix3d R = Mat3(j.at("cam_from_world_rotation"));
+    for (int k = 0; k < 9; ++k) compare(R(k), c.cam_from_world_rotation(k));
+    for (int k = 0; k < 3; ++k)
+      compare(j.at("cam_from_world_translation").at(k).get<double>(), c.cam_from_world_translation(k));
+  }
+  REQUIRE(steps.at("primitives").size() == p.primitives.size());
+  for (size_t i = 0; i < p.primitives.size(); ++i) {
+    const nlohmann::json& j = steps.at("primitives").at(i);
+    const PrimitiveShape& shape = p.primitives[i].shape;
+    REQUIRE(j.at("id").get<Id>() == p.primitives[i].id);
+    for (int k = 0; k < shape.params.size(); ++k) compare(j.at("params").at(k).get<double>(), shape.params(k));
+    for (int k = 0; k < 3; ++k) compare(j.at("rotation").at(k).get<double>(), shape.rotation(k));
+    for (int k = 0; k < 3; ++k) compare(j.at("translation").at(k).get<double>(), shape.translation(k));
+  }
+  return worst;
+}
+
+TEST_CASE("solver steps: N steps in the app are one solve of N iterations; Reset restores the start; the project stays") {
+  // The same arithmetic in the same order (core's SolveJointTraced in both processes), read
+  // back through JSON's round-trip doubles: equal to rounding.
+  constexpr double kSameSolveRelative = 1e-12;
+  constexpr double kRoundingPx = 1e-9;
+  constexpr int kSteps = 4;
+  constexpr double kDrawnScale = 200.0;
+  TempDir dir("teach_steps");
+  SyntheticSceneOptions options;
+  options.noise_px = 0.5;
+  const SyntheticScene scene = MakeBoxScene(options);
+  const std::string path = WriteScene(dir, scene, scene.project);
+  const std::string before_path = dir / "before.facet";
+  std::string script = "frames 3\ncommand save " + before_path + "\ncommand teach steps on\nframes 1\n";
+  for (int k = 0; k < kSteps; ++k) script += "command teach step\nframes 1\n";
+  // Vectors long enough to find on the screenshot (the scale the window starts with suits the
+  // start's residuals, which the steps have shrunk).
+  script += "command teach residual-scale " + std::to_string(static_cast<int>(kDrawnScale)) +
+            "\nframes 2\nscreenshot " + (dir / "steps_shot.png");
+  const nlohmann::json report = RenderScript(dir, path, "steps", script);
+  const nlohmann::json& steps = report.at("teach").at("steps");
+  INFO(steps.at("message").get<std::string>());
+  REQUIRE(steps.at("active").get<bool>());
+  CHECK(steps.at("start").get<std::string>() == "perturbed");
+  REQUIRE(steps.at("steps").get<int>() == kSteps);
+
+  // Stepping never edits the document: it is the saved project, with no history.
+  const Project before = LoadProjectFile(before_path);
+  CHECK(report.at("project") == nlohmann::json::parse(ProjectToJson(before)));
+  CHECK(report.at("undo_stack").empty());
+
+  const Project start = PerturbForSteps(before, steps.at("perturbation").get<double>());
+  JointSolveOptions budget = SolveStepsOptions();
+  budget.max_iterations = kSteps;
+  Project solved;
+  std::vector<LmIteration> trace;
+  const JointSolveSummary once = SolveJointTraced(start, budget, &solved, &trace);
+  REQUIRE(once.IsUsable());
+  CHECK(MaxRelativeDifference(steps, solved) <= kSameSolveRelative);
+  CHECK(std::abs(steps.at("final_cost").get<double>() - once.final_cost) <= kSameSolveRelative * once.final_cost);
+  CHECK(std::abs(steps.at("initial_cost").get<double>() - once.initial_cost) <= kSameSolveRelative * once.initial_cost);
+  REQUIRE(steps.at("trace").size() == trace.size());
+  for (size_t i = 0; i < trace.size(); ++i) {
+    const nlohmann::json& t = steps.at("trace").at(i);
+    CHECK(std::abs(t.at("cost").get<double>() - trace[i].cost) <= kSameSolveRelative * trace[i].cost);
+    CHECK(std::abs(t.at("lambda").get<double>() - trace[i].lambda) <= kSameSolveRelative * trace[i].lambda);
+    CHECK(t.at("accepted").get<bool>() == trace[i].accepted);
+  }
+  // The start was not the answer: the cost fell.
+  CHECK(once.final_cost < 0.5 * once.initial_cost);
+  CHECK(steps.at("finished").get<bool>() == (once.termination != SolverTermination::kMaxIterations));
+
+  // The residual vectors drawn are projection minus pin in the stepped state.
+  REQUIRE(steps.at("pins").size() == solved.pins.size());
+  for (const nlohmann::json& j : steps.at("pins")) {
+    const Pin* pin = solved.FindPin(j.at("pin_id").get<Id>());
+    REQUIRE(pin != nullptr);
+    const Camera& camera = solved.FindImage(pin->image_id)->camera;
+    const Eigen::Vector2d projection = camera.Project(VertexInWorld(solved, pin->vertex));
+    CHECK((Vec2(j.at("projection_px")) - projection).norm() < kRoundingPx);
+    CHECK((Vec2(j.at("uv_px")) - pin->uv_px).norm() == 0.0);
+    CHECK((Vec2(j.at("residual_px")) - (projection - pin->uv_px)).norm() < kRoundingPx);
+  }
+  // Drawn where computed: halfway along each vector (long enough to tell, at the scale the
+  // script set), the screenshot is the vectors' white, not the grey photo.
+  const double scale = steps.at("residual_scale").get<double>();
+  CHECK(scale == kDrawnScale);
+  const View view = ViewFromReport(report);
+  const cv::Mat shot = cv::imread(dir / "steps_shot.png");
+  REQUIRE(!shot.empty());
+  int long_vectors = 0, white_middles = 0;
+  for (const nlohmann::json& j : steps.at("pins")) {
+    const Eigen::Vector2d a = view.ToScreen(Vec2(j.at("uv_px")));
+    const Eigen::Vector2d b = view.ToScreen(Vec2(j.at("uv_px")) + scale * Vec2(j.at("residual_px")));
+    const Eigen::Vector2d middle = 0.5 * (a + b);
+    if ((b - a).norm() < 20.0 || !view.Inside(middle, 30.0)) continue;
+    ++long_vectors;
+    bool white = false;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const cv::Vec3b bgr = shot.at<cv::Vec3b>(static_cast<int>(std::lround(middle.y())) + dy,
+                                                 static_cast<int>(std::lround(middle.x())) + dx);
+        white |= bgr[2] > 235 && bgr[1] > 235 && bgr[0] > 235;  // kResidualColor on the grey photo
+      }
+    white_middles += white ? 1 : 0;
+  }
+  CHECK(long_vectors >= 3);
+  CHECK(white_middles == long_vectors);
+
+  // Reset: back to the start exactly, the residuals there.
+  const nlohmann::json reset_report =
+      RenderScript(dir, before_path, "steps_reset",
+                   "frames 3\ncommand teach steps on\ncommand teach step\ncommand teach step\ncommand teach reset\n"
+                   "frames 2\n");
+  const nlohmann::json& reset = reset_report.at("teach").at("steps");
+  REQUIRE(reset.at("active").get<bool>());
+  CHECK(reset.at("steps").get<int>() == 0);
+  CHECK(reset.at("trace").empty());
+  CHECK(MaxRelativeDifference(reset, start) == 0.0);
+  for (const nlohmann::json& j : reset.at("pins")) {
+    const Pin* pin = start.FindPin(j.at("pin_id").get<Id>());
+    REQUIRE(pin != nullptr);
+    const Eigen::Vector2d projection = start.FindImage(pin->image_id)->camera.Project(VertexInWorld(start, pin->vertex));
+    CHECK((Vec2(j.at("projection_px")) - projection).norm() == 0.0);
+  }
+  CHECK(reset_report.at("project") == nlohmann::json::parse(ProjectToJson(before)));
+}
+
+TEST_CASE("export view: render --panel writes the image or the 3D panel alone, at the asked size") {
+  TempDir dir("teach_export");
+  const SyntheticScene scene = MakeBoxScene();
+  const std::string path = WriteScene(dir, scene, scene.project);
+  // The photo: left half red, right half blue, so that the picture shows which part is where.
+  const Camera& camera = scene.true_camera;
+  cv::Mat photo(camera.height_px, camera.width_px, CV_8UC3, cv::Scalar(220, 40, 40));  // BGR blue
+  photo(cv::Rect(0, 0, camera.width_px / 2, camera.height_px)).setTo(cv::Scalar(40, 40, 220));
+  REQUIRE(cv::imwrite(dir / "synthetic.png", photo));
+
+  constexpr int kW = 640, kH = 400;
+  const RunResult image_run = RunRender(dir, "'" + path + "' -o '" + (dir / "image.png") + "' --panel image --size " +
+                                                 std::to_string(kW) + "x" + std::to_string(kH));
+  INFO("stderr: " << image_run.stderr_text);
+  REQUIRE(image_run.exit_code == 0);
+  const cv::Mat image = cv::imread(dir / "image.png");
+  REQUIRE(!image.empty());
+  CHECK(image.cols == kW);
+  CHECK(image.rows == kH);
+  // The view is the app's (fitted, centred), scaled to the picture: the photo's middle is the
+  // picture's middle, red to its left and blue to its right (the model's lines cross a few).
+  auto share = [&](int cx, int cy, const cv::Vec3b& bgr) {
+    int hits = 0, all = 0;
+    for (int y = cy - 10; y <= cy + 10; ++y)
+      for (int x = cx - 10; x <= cx + 10; ++x, ++all) {
+        const cv::Vec3b p = image.at<cv::Vec3b>(y, x);
+        hits += std::abs(p[0] - bgr[0]) + std::abs(p[1] - bgr[1]) + std::abs(p[2] - bgr[2]) < 30 ? 1 : 0;
+      }
+    return static_cast<double>(hits) / all;
+  };
+  const cv::Vec3b red(40, 40, 220), blue(220, 40, 40);
+  CHECK(share(kW / 2 - 40, kH / 2, red) > 0.3);
+  CHECK(share(kW / 2 - 40, kH / 2, blue) < 0.02);
+  CHECK(share(kW / 2 + 40, kH / 2, blue) > 0.3);
+  CHECK(share(kW / 2 + 40, kH / 2, red) < 0.02);
+  // With its overlays: the projected model.
+  int model = 0;
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x) model += IsModelColor(image.at<cv::Vec3b>(y, x), 40) ? 1 : 0;
+  CHECK(model > 50);
+
+  const RunResult viewport_run =
+      RunRender(dir, "'" + path + "' -o '" + (dir / "3d.png") + "' --panel 3d --size 480x320");
+  INFO("stderr: " << viewport_run.stderr_text);
+  REQUIRE(viewport_run.exit_code == 0);
+  const cv::Mat view3d = cv::imread(dir / "3d.png");
+  REQUIRE(!view3d.empty());
+  CHECK(view3d.cols == 480);
+  CHECK(view3d.rows == 320);
+  // The 3D panel's backdrop (RenderScene's clear colour, RGB 37 40 45) around the model.
+  int backdrop = 0;
+  for (int y = 0; y < view3d.rows; ++y)
+    for (int x = 0; x < view3d.cols; ++x) {
+      const cv::Vec3b p = view3d.at<cv::Vec3b>(y, x);
+      backdrop += std::abs(p[0] - 45) + std::abs(p[1] - 40) + std::abs(p[2] - 37) < 12 ? 1 : 0;
+    }
+  const double backdrop_share = static_cast<double>(backdrop) / (view3d.rows * view3d.cols);
+  CAPTURE(backdrop_share);
+  CHECK(backdrop_share > 0.2);
+  CHECK(backdrop_share < 0.98);
+
+  CHECK(RunRender(dir, "'" + path + "' -o '" + (dir / "bad.png") + "' --panel history --size 480x320").exit_code != 0);
+
+  // Through the menu: File > Export view..., a name typed, Enter: the dialog's default, the
+  // image panel at 1920 x 1080.
+  const std::string figure = dir / "figure.png";
+  const nlohmann::json menu = RenderScript(dir, path, "export_menu",
+                                           "frames 3\nclick left item menu.file\nframes 2\nclick left item "
+                                           "menu.export_view\nframes 3\nkey ctrl+a\ntype " +
+                                               figure + "\nkey enter\nframes 3\n");
+  CHECK(menu.at("dialog").get<std::string>() == "");
+  CHECK(ReportLog(menu).find("Exported the image view (1920 x 1080 px)") != std::string::npos);
+  const cv::Mat from_menu = cv::imread(figure);
+  REQUIRE(!from_menu.empty());
+  CHECK(from_menu.cols == 1920);
+  CHECK(from_menu.rows == 1080);
 }
 
 TEST_CASE("Numbers window: K, R, t of the active camera, F of two photos, copied as text and LaTeX") {
@@ -315,6 +554,42 @@ TEST_CASE("screenshots of each teach overlay") {
            "frames 3\ncommand teach epipolar on\ncommand select vertex " + std::to_string(scene.box_id) +
                " 2\nframes 2\nmove image " + FormatXY(pointer) + "\nframes 2");
   CHECK(r.at("teach").at("epipolar").size() == 3u);
+  // The solver stepped on the street: two steps from the perturbed start (the residuals still
+  // tens of px), and the 3D panel of the same state exported through File > Export view's
+  // command.
+  const std::string street = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/street.facet";
+  const std::string steps_3d = (shots / "teach-steps-3d.png").string();
+  fs::remove(steps_3d);
+  r = shot(street, "teach-steps",
+           "frames 3\ncommand teach steps on\ncommand teach step\ncommand teach step\ncommand teach residual-scale 4\n"
+           "frames 2\ncommand export-view 3d 960x540 " + steps_3d + "\nframes 2");
+  const nlohmann::json& steps = r.at("teach").at("steps");
+  REQUIRE(steps.at("steps").get<int>() == 2);
+  // With spatial constraints (the augmented Lagrangian's rounds) too, the app's steps are the
+  // solve's own iterates (the opened project is the file: opening keeps its stored solution),
+  // and the violations listed are the solve's.
+  JointSolveOptions budget = SolveStepsOptions();
+  budget.max_iterations = 2;
+  Project solved;
+  std::vector<LmIteration> trace;
+  const JointSolveSummary once = SolveJointTraced(
+      PerturbForSteps(LoadProjectFile(street), steps.at("perturbation").get<double>()), budget, &solved, &trace);
+  REQUIRE(once.IsUsable());
+  CHECK(MaxRelativeDifference(steps, solved) <= 1e-12);
+  REQUIRE(steps.at("constraints").size() == once.constraints.size());
+  REQUIRE(once.constraints.size() == 3u);
+  for (size_t i = 0; i < once.constraints.size(); ++i) {
+    const nlohmann::json& c = steps.at("constraints").at(i);
+    CHECK(c.at("constraint_id").get<Id>() == once.constraints[i].constraint_id);
+    CHECK(std::abs(c.at("residual").get<double>() - once.constraints[i].residual) <=
+          1e-12 * std::max(1.0, std::abs(once.constraints[i].residual)));
+    CHECK(c.at("satisfied").get<bool>() == once.constraints[i].satisfied);
+  }
+  const cv::Mat exported = cv::imread(steps_3d);
+  REQUIRE(!exported.empty());
+  CHECK(exported.cols == 960);
+  CHECK(exported.rows == 540);
+  CHECK(cv::imwrite((shots / "teach-steps-3d.jpg").string(), exported, {cv::IMWRITE_JPEG_QUALITY, 75}));
 }
 
 }  // namespace
