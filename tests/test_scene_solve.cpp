@@ -395,6 +395,48 @@ TEST_CASE("two pins in one image: the depth no pin sees is held at its value, an
   CHECK_FALSE(HasWarningContaining(summary, "camera centre"));
 }
 
+// A roof on a box (AttachOnTop) takes the box's footprint: a pin on the roof's ridge sees the
+// box's depth. This solve treats the two apart and holds that depth, but the note must not tell
+// the user that no pin sees it (the joint solve fits it from the ridge), nor name the roof's own
+// footprint, which follows the box.
+TEST_CASE("held dimensions: a base's footprint seen through the roof on it is not called unseen") {
+  SyntheticScene scene = MakeBoxScene();
+  Project& p = scene.project;
+  std::vector<Pin> kept;  // the box's front bottom corners: the width; the height is locked
+  for (const Pin& pin : p.pins) {
+    if (pin.vertex.vertex == 0 || pin.vertex.vertex == 1) kept.push_back(pin);
+  }
+  p.pins = kept;
+  Id roof_id = kNoId;
+  REQUIRE(AddPrimitiveToProject(&p, MakeWedge(kNoId, Eigen::Vector3d(1.0, 1.0, 1.5)), "roof", &roof_id, nullptr));
+  p.primitives.back().attached_to = scene.box_id;
+  RefreshAllPrimitives(&p);
+  const Primitive& roof = *p.FindPrimitive(roof_id);
+  const Eigen::Vector3d box_size = p.primitives[0].shape.params.head<3>();
+  REQUIRE(roof.shape.params.head<2>() == box_size.head<2>());  // the footprint follows the box
+  // Both ends of the ridge, which runs along x at half the depth.
+  for (VertexId v : {4u, 5u}) {
+    const Eigen::Vector3d x = roof.mesh.vertex(v).position;
+    REQUIRE(std::abs(x.y() - (p.primitives[0].shape.translation.y() + 0.5 * box_size.y())) < 1e-12);
+    Pin pin;
+    pin.id = p.NewId();
+    pin.image_id = scene.image_id;
+    pin.vertex = {roof_id, v};
+    pin.uv_px = scene.true_camera.Project(x);
+    p.pins.push_back(pin);
+  }
+  Project solved;
+  const SceneSolveSummary summary = SolveScene(p, SceneSolveOptions(), &solved);
+  INFO(summary.message, " ", AllWarnings(summary));
+  REQUIRE(summary.IsUsable());
+  for (const std::string& held : summary.held_parameters) {
+    MESSAGE("held: ", held);
+    CHECK(held.find("of box 'box'") == std::string::npos);
+    CHECK(held.find("width") == std::string::npos);
+    CHECK(held.find("depth") == std::string::npos);
+  }
+}
+
 // The new user's first box: added at the origin, pinned by the four corners of its front face
 // in a photo whose camera the calibration just put at the origin too (on corner 0). No pin sees
 // the depth; before, the linear start was rank deficient, the start not finite, and the solve

@@ -132,6 +132,23 @@ SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
     const ParamCoefficients c = project.primitives[bi].mesh.vertex(project.pins[p].vertex.vertex).local.Collapsed();
     for (int k = 0; k < kMaxPrimitiveParams; ++k) seen_params[bi][k] = seen_params[bi][k] || !c.col(k).isZero();
   }
+  // Seen through a primitive on top (AttachOnTop): the joint solve fits a base's footprint
+  // from the top's pinned vertices and every base's height below them. This solve treats the
+  // primitives apart, so it still holds those; only the user's note must not call them unseen.
+  std::vector<std::array<bool, kMaxPrimitiveParams>> seen_through_top(num_primitives, {false, false, false, false});
+  for (size_t p = 0; p < project.pins.size(); ++p) {
+    const int bi = pin_targets[p].second;
+    if (bi < 0) continue;
+    const ParamCoefficients c = project.primitives[bi].mesh.vertex(project.pins[p].vertex.vertex).local.Collapsed();
+    const Primitive* top = &project.primitives[bi];
+    for (int depth = 0; depth < 64 && FootprintFollowsBase(project, *top); ++depth) {
+      const int base = primitive_index(top->attached_to);
+      if (base < 0 || base == bi) break;
+      seen_through_top[base][2] = true;
+      for (int k = 0; k < 2; ++k) seen_through_top[base][k] = seen_through_top[base][k] || !c.col(k).isZero();
+      top = &project.primitives[base];
+    }
+  }
 
   // Blocks in project order, so that the parameter numbering does not depend on pin order.
   std::vector<int> camera_of_image(num_images, -1), block_of_primitive(num_primitives, -1);
@@ -180,7 +197,7 @@ SceneProblem BuildSceneProblem(const Project& project, SceneState* state) {
       if (!seen_params[i][k]) {
         // A top's footprint is its base box's (AttachOnTop): the joint solve fits it there,
         // so naming it here would name the wrong primitive (and a value that changes).
-        if (!(k < 2 && FootprintFollowsBase(project, primitive))) {
+        if (!(k < 2 && FootprintFollowsBase(project, primitive)) && !seen_through_top[i][k]) {
           problem.held_parameters.push_back(HeldParameterNote(primitive, k));
         }
         continue;
