@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <limits>
 #include <numeric>
 #include <random>
@@ -670,20 +671,25 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
   // the threshold there. A flagged match within kReadmitFactor thresholds is fitted back in,
   // and kept when the refit F holds it and every inlier within the threshold.
   if (robust) {
-    for (int i = 0; i < n; ++i) {
-      if (inliers[i] ||
-          MatchSquaredError(f_final, uv1[i], uv2[i]) >= std::pow(kReadmitFactor * options.inlier_threshold_px, 2))
-        continue;
+    // Adds the flagged matches `added` and keeps them when the refit classifies exactly the
+    // enlarged set as inliers.
+    auto try_readmit = [&](std::initializer_list<int> added) {
       std::vector<bool> trial = inliers;
-      trial[i] = true;
+      for (int i : added) trial[i] = true;
       Eigen::Matrix3d trial_linear, trial_final;
       LmResult trial_result;
-      if (!fit(trial, &trial_linear, &trial_final, &trial_result)) continue;
-      if (Classify(trial_final, uv1, uv2, options.inlier_threshold_px) != trial) continue;
+      if (!fit(trial, &trial_linear, &trial_final, &trial_result)) return;
+      if (Classify(trial_final, uv1, uv2, options.inlier_threshold_px) != trial) return;
       inliers = trial;
       f_linear = trial_linear;
       f_final = trial_final;
       refine_result = trial_result;
+    };
+    for (int i = 0; i < n; ++i) {
+      if (inliers[i] ||
+          MatchSquaredError(f_final, uv1[i], uv2[i]) >= std::pow(kReadmitFactor * options.inlier_threshold_px, 2))
+        continue;
+      try_readmit({i});
     }
     // Two true matches in the same far region can each hold the other's fit: fitted without
     // both, F misses both, and neither comes back alone. Pairs of the flagged matches within
@@ -700,17 +706,7 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
       for (size_t a = 0; a < candidates.size(); ++a) {
         for (size_t b = a + 1; b < candidates.size(); ++b) {
           if (inliers[candidates[a]] || inliers[candidates[b]]) continue;
-          std::vector<bool> trial = inliers;
-          trial[candidates[a]] = true;
-          trial[candidates[b]] = true;
-          Eigen::Matrix3d trial_linear, trial_final;
-          LmResult trial_result;
-          if (!fit(trial, &trial_linear, &trial_final, &trial_result)) continue;
-          if (Classify(trial_final, uv1, uv2, options.inlier_threshold_px) != trial) continue;
-          inliers = trial;
-          f_linear = trial_linear;
-          f_final = trial_final;
-          refine_result = trial_result;
+          try_readmit({candidates[a], candidates[b]});
         }
       }
     }
