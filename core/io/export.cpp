@@ -13,11 +13,15 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "core/io/gltf_constants.h"
+
 #include "core/image/image_io.h"
 #include "core/io/project_io.h"
 
 namespace facet {
 namespace {
+
+using namespace gltf;
 
 using Json = nlohmann::ordered_json;
 
@@ -30,15 +34,9 @@ Eigen::Matrix3d YUpFromWorld() {
 
 Eigen::Vector3f ToYUp(const Eigen::Vector3f& p) { return {p.x(), p.z(), -p.y()}; }
 
-constexpr std::uint32_t kGlbMagic = 0x46546C67;  // "glTF"
 constexpr std::uint32_t kGlbVersion = 2;
-constexpr std::uint32_t kChunkJson = 0x4E4F534A;  // "JSON"
-constexpr std::uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
-constexpr int kFloat = 5126;
-constexpr int kUnsignedInt = 5125;
 constexpr int kArrayBuffer = 34962;
 constexpr int kElementArrayBuffer = 34963;
-constexpr int kTriangles = 4;
 constexpr int kLinear = 9729;
 constexpr int kLinearMipmapLinear = 9987;
 constexpr int kClampToEdge = 33071;

@@ -11,21 +11,17 @@
 #include <Eigen/SVD>
 #include <nlohmann/json.hpp>
 
+#include "core/io/gltf_constants.h"
+
 #include "core/util/file_read.h"
 
 namespace facet {
 namespace {
 
+using namespace gltf;
+
 using Json = nlohmann::json;
 
-constexpr std::uint32_t kGlbMagic = 0x46546C67;   // "glTF"
-constexpr std::uint32_t kChunkJson = 0x4E4F534A;  // "JSON"
-constexpr std::uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
-constexpr int kUnsignedByte = 5121;
-constexpr int kUnsignedShort = 5123;
-constexpr int kUnsignedInt = 5125;
-constexpr int kFloat = 5126;
-constexpr int kTriangles = 4;
 constexpr std::uint64_t kMaxGlbBytes = 1ull << 30;
 
 std::uint32_t U32(const std::vector<std::uint8_t>& b, size_t offset) {
@@ -182,10 +178,12 @@ void ReadPrimitive(const GlbReader& reader, const Json& primitive, const Eigen::
     const Eigen::Vector3d x = (world_from_node * Eigen::Vector4d(p[3 * v], p[3 * v + 1], p[3 * v + 2], 1.0)).head<3>();
     scene->positions.push_back(x.cast<float>());
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-    if (!nrm.empty()) normal = (normal_matrix * Eigen::Vector3d(nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2])).normalized();
+    if (!nrm.empty())
+      normal = (normal_matrix * Eigen::Vector3d(nrm[3 * v], nrm[3 * v + 1], nrm[3 * v + 2])).normalized();
     scene->normals.push_back(normal.cast<float>());
-    scene->uvs.push_back(uv.empty() ? Eigen::Vector2f(0.0f, 0.0f)
-                                    : Eigen::Vector2f(static_cast<float>(uv[2 * v]), static_cast<float>(uv[2 * v + 1])));
+    scene->uvs.push_back(uv.empty()
+                             ? Eigen::Vector2f(0.0f, 0.0f)
+                             : Eigen::Vector2f(static_cast<float>(uv[2 * v]), static_cast<float>(uv[2 * v + 1])));
   }
   GltfBatch batch;
   if (primitive.contains("material")) {
@@ -209,7 +207,8 @@ void ReadPrimitive(const GlbReader& reader, const Json& primitive, const Eigen::
 
 GltfCamera ReadCamera(const Json& camera_json, const Json& node, const Eigen::Matrix4d& world_from_node,
                       const GltfReadOptions& options) {
-  if (camera_json.value("type", "") != "perspective") Fail("camera " + camera_json.value("name", "") + " is not perspective");
+  if (camera_json.value("type", "") != "perspective")
+    Fail("camera " + camera_json.value("name", "") + " is not perspective");
   const Json& p = camera_json.at("perspective");
   GltfCamera out;
   out.name = node.value("name", camera_json.value("name", ""));
@@ -260,10 +259,12 @@ void ReadScene(const GlbReader& reader, const GltfReadOptions& options, GltfScen
     int image = -1;
     if (pbr.contains("baseColorTexture")) {
       const Json& info = pbr["baseColorTexture"];
-      if (info.value("texCoord", 0) != 0) Fail("a material samples TEXCOORD_" + std::to_string(info.value("texCoord", 0)));
+      if (info.value("texCoord", 0) != 0)
+        Fail("a material samples TEXCOORD_" + std::to_string(info.value("texCoord", 0)));
       const int texture = info.at("index").get<int>();
       const Json& textures = g.at("textures");
-      if (texture < 0 || texture >= static_cast<int>(textures.size())) Fail("texture " + std::to_string(texture) + " missing");
+      if (texture < 0 || texture >= static_cast<int>(textures.size()))
+        Fail("texture " + std::to_string(texture) + " missing");
       image = textures[texture].value("source", -1);
     }
     material_image.push_back(image);
