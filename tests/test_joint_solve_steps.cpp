@@ -2,13 +2,17 @@
 // give the project of one solve with a budget of N iterations, the trace holds every trial's
 // cost, damping and step norm, and Reset restores the start exactly. The lesson's start,
 // PerturbForSteps: moves exactly the free values by the stated amounts, and the steps lead
-// back to the answer.
+// back to the answer. The same stepping of the vanishing-point fit and of the two-view
+// refinement of F (core/estimators/fit_steps.h): N steps = the fit with a budget of N, the
+// trace a prefix of the unbudgeted fit's, Reset exact.
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <random>
 
 #include <Eigen/Geometry>
 
+#include "core/estimators/fit_steps.h"
 #include "core/solve/joint_solve_steps.h"
 #include "tests/synthetic_scene.h"
 
@@ -164,6 +168,150 @@ TEST_CASE("from the perturbed start the steps lead back to the answer") {
   CHECK(steps.steps >= 3);  // the start was not the answer
   CHECK(steps.summary.initial_cost > 1.0);
   CHECK(steps.summary.reprojection_max_px < kFitPx);
+}
+
+// --- The vanishing-point fit and the two-view refinement ---
+
+// The same arithmetic in the same order: equal to rounding.
+constexpr double kSameFitRelative = 1e-12;
+
+double Relative(double a, double b) { return std::abs(a - b) / std::max(1.0, std::abs(b)); }
+
+// The box scene's segments with 0.5 px noise; the principal point held at the image centre
+// while the true one is 15 px off it, so that the orthogonal directions cannot meet the
+// families' own vanishing points and the fit has some iterations to show.
+std::vector<Segment> NoisySegments(VpCalibrationOptions* options) {
+  testing::SyntheticSceneOptions o;
+  o.noise_px = 0.5;
+  const testing::SyntheticScene scene = testing::MakeBoxScene(o);
+  options->width_px = o.width_px;
+  options->height_px = o.height_px;
+  options->principal_point_mode = PrincipalPointMode::kImageCenter;
+  return scene.project.segments;
+}
+
+TEST_CASE("vanishing-point fit: N steps equal the fit with N iterations; the trace is the fit's; Reset restores the start") {
+  VpCalibrationOptions options;
+  const std::vector<Segment> segments = NoisySegments(&options);
+  VpFitSteps steps;
+  REQUIRE(BeginVpFitSteps(segments, options, &steps));
+  REQUIRE(steps.path.size() == 1);
+  // The unbudgeted fit (one round, as stepped), for the trace and the end.
+  VpCalibrationOptions full = steps.options;
+  const VpCalibrationSummary all = CalibrateFromVanishingLines(segments, full);
+  REQUIRE(all.IsUsable());
+  // The start is the fit's own initial estimate: the cost its first trial started from.
+  REQUIRE_FALSE(all.joint_trace.empty());
+  const double px2 = all.conditioning_scale_px * all.conditioning_scale_px;
+  CHECK(Relative(steps.path[0].cost_px2, all.initial_cost) <= kSameFitRelative);
+  const VpFitState start = steps.path[0];
+  VpFitState first;
+  for (int n = 1; n <= 100 && !steps.finished; ++n) {
+    CAPTURE(n);
+    REQUIRE(StepVpFit(&steps));
+    if (n == 1) first = steps.path[1];
+    VpCalibrationOptions budget = steps.options;
+    budget.max_joint_iterations = n;
+    const VpCalibrationSummary once = CalibrateFromVanishingLines(segments, budget);
+    REQUIRE(once.IsUsable());
+    CHECK(Relative(steps.summary.focal_px, once.focal_px) <= kSameFitRelative);
+    CHECK((steps.summary.principal_point_px - once.principal_point_px).norm() <= kSameFitRelative * once.focal_px);
+    CHECK((steps.summary.cam_from_world_rotation - once.cam_from_world_rotation).norm() <= kSameFitRelative);
+    for (int a = 0; a < 3; ++a)
+      CHECK((steps.path.back().vanishing_points[a] - once.vanishing_points[a]).norm() <= kSameFitRelative);
+    for (size_t i = 0; i < segments.size(); ++i)
+      CHECK(std::abs(steps.summary.segment_residuals_px[i] - once.segment_residuals_px[i]) <= kSameFitRelative);
+    // The budgeted fit's trials are the unbudgeted fit's first ones.
+    REQUIRE(steps.trace.size() <= all.joint_trace.size());
+    for (size_t i = 0; i < steps.trace.size(); ++i) {
+      CHECK(Relative(steps.trace[i].trial_cost * px2, all.joint_trace[i].trial_cost * px2) <= kSameFitRelative);
+      CHECK(steps.trace[i].lambda == all.joint_trace[i].lambda);
+    }
+    CHECK(steps.trace.back().iteration == n);
+    CHECK(steps.path.size() == static_cast<size_t>(n + 1));
+    CHECK(steps.path[n].cost_px2 <= steps.path[n - 1].cost_px2);
+  }
+  // The start was not the answer, and the steps end at the unbudgeted fit.
+  CHECK(steps.finished);
+  CHECK(steps.steps >= 3);
+  CHECK(steps.summary.final_cost < 0.5 * start.cost_px2);
+  CHECK(steps.trace.size() == all.joint_trace.size());
+  CHECK(Relative(steps.summary.focal_px, all.focal_px) <= kSameFitRelative);
+  CHECK_FALSE(StepVpFit(&steps));
+
+  ResetVpFitSteps(&steps);
+  CHECK(steps.steps == 0);
+  CHECK(steps.trace.empty());
+  REQUIRE(steps.path.size() == 1);
+  CHECK(steps.summary.focal_px == start.focal_px);
+  CHECK(steps.summary.principal_point_px == start.principal_point_px);
+  CHECK(steps.summary.final_cost == start.cost_px2);
+  for (int a = 0; a < 3; ++a) CHECK(steps.path[0].vanishing_points[a] == start.vanishing_points[a]);
+  // Stepping again after Reset repeats the first step exactly.
+  REQUIRE(StepVpFit(&steps));
+  CHECK(steps.path[1].focal_px == first.focal_px);
+  CHECK(steps.path[1].cost_px2 == first.cost_px2);
+}
+
+// 30 points seen by two cameras, 1 px noise.
+void NoisyPair(std::vector<Eigen::Vector2d>* uv1, std::vector<Eigen::Vector2d>* uv2) {
+  testing::SyntheticSceneOptions o1;
+  testing::SyntheticSceneOptions o2 = o1;
+  o2.focal_px = 1100;
+  o2.camera_center = {11.0, 2.0, 3.5};
+  o2.look_at = {1.5, 1.0, 1.2};
+  o2.roll_deg = -4.0;
+  const Camera c1 = testing::MakeLookAtCamera(o1), c2 = testing::MakeLookAtCamera(o2);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> ux(-1.0, 5.0), uy(-1.0, 4.0), uz(0.0, 3.0);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  while (uv1->size() < 30) {
+    const double x = ux(rng), y = uy(rng), z = uz(rng);
+    const Eigen::Vector3d p(x, y, z);
+    const double n1 = noise(rng), n2 = noise(rng), n3 = noise(rng), n4 = noise(rng);
+    uv1->push_back(c1.Project(p) + Eigen::Vector2d(n1, n2));
+    uv2->push_back(c2.Project(p) + Eigen::Vector2d(n3, n4));
+  }
+}
+
+TEST_CASE("two-view refinement: N steps equal the refinement with N iterations; Reset restores the linear start") {
+  std::vector<Eigen::Vector2d> uv1, uv2;
+  NoisyPair(&uv1, &uv2);
+  FundamentalFitSteps steps;
+  REQUIRE(BeginFundamentalFitSteps(uv1, uv2, FundamentalOptions(), &steps));
+  const FundamentalSummary all = EstimateFundamentalMatrix(uv1, uv2, steps.options);
+  REQUIRE(all.IsUsable());
+  // The start is the linear estimate the refinement starts from.
+  CHECK(Relative(steps.summary.symmetric_epipolar_rms_px, all.initial_symmetric_epipolar_rms_px) <= kSameFitRelative);
+  const Eigen::Matrix3d start = steps.path[0];
+  for (int n = 1; n <= 100 && !steps.finished; ++n) {
+    CAPTURE(n);
+    REQUIRE(StepFundamentalFit(&steps));
+    FundamentalOptions budget = steps.options;
+    budget.max_refine_iterations = n;
+    const FundamentalSummary once = EstimateFundamentalMatrix(uv1, uv2, budget);
+    REQUIRE(once.IsUsable());
+    CHECK((steps.summary.F - once.F).norm() <= kSameFitRelative);  // unit Frobenius norm
+    CHECK(Relative(steps.summary.final_cost, once.final_cost) <= kSameFitRelative);
+    REQUIRE(steps.trace.size() <= all.refine_trace.size());
+    for (size_t i = 0; i < steps.trace.size(); ++i) {
+      CHECK(Relative(steps.trace[i].trial_cost, all.refine_trace[i].trial_cost) <= kSameFitRelative);
+      CHECK(steps.trace[i].lambda == all.refine_trace[i].lambda);
+    }
+    CHECK(steps.path.size() == static_cast<size_t>(n + 1));
+  }
+  CHECK(steps.finished);
+  CHECK(steps.steps >= 2);
+  CHECK(steps.summary.final_cost < steps.start.final_cost);
+  CHECK((steps.summary.F - all.F).norm() <= kSameFitRelative);
+  CHECK_FALSE(StepFundamentalFit(&steps));
+
+  ResetFundamentalFitSteps(&steps);
+  CHECK(steps.steps == 0);
+  CHECK(steps.trace.empty());
+  REQUIRE(steps.path.size() == 1);
+  CHECK(steps.summary.F == start);
+  CHECK(steps.summary.final_cost == steps.start.final_cost);
 }
 
 }  // namespace

@@ -288,14 +288,20 @@ class JointFit {
 };
 
 // Levenberg-Marquardt on the joint problem from *camera; the cost is in conditioned units.
-LmResult RefineJointly(const JointProblem& problem, JointCamera* camera) {
-  LmOptions options = TenfoldLmOptions(100);
+LmResult RefineJointly(const JointProblem& problem, const VpCalibrationOptions& vp_options, JointCamera* camera,
+                       std::vector<LmIteration>* trace) {
+  LmOptions options = TenfoldLmOptions(vp_options.max_joint_iterations);
   // Rejections up to 1e12; a damped system without a finite solution ends the fit (as in
   // core/estimators/vanishing_point.cpp).
   options.max_lambda = 1e12;
   options.stop_on_failed_solve = true;
   options.relative_decrease_tolerance = 1e-15;
   options.min_step_squared_norm = 1e-28;  // |step| <= 1e-14 (log f, conditioned px, rad)
+  if (vp_options.record_joint_trace)
+    options.callback = [trace](const LmIteration& it) {
+      trace->push_back(it);
+      return true;
+    };
   JointFit fit(problem, camera);
   return MinimizeLevenbergMarquardt(fit.Cost(), options, fit);
 }
@@ -767,7 +773,7 @@ void FitJointly(const VpCalibrationOptions& options, const JointProblem& full_pr
                                                                             : SolverTermination::kConverged;
   };
   *problem = full_problem;
-  const LmResult first = RefineJointly(*problem, camera);
+  const LmResult first = RefineJointly(*problem, options, camera, &summary->joint_trace);
   summary->initial_cost = first.initial_cost * px_squared;
   record(first);
   std::vector<bool> flagged = FlagOutliers(*problem, full_problem, *camera, options, scale_px, summary);
@@ -782,7 +788,7 @@ void FitJointly(const VpCalibrationOptions& options, const JointProblem& full_pr
       problem->segments.clear();
       for (int i = 0; i < num_segments; ++i)
         if (!removed[i]) problem->segments.push_back(full_problem.segments[i]);
-      record(RefineJointly(*problem, camera));
+      record(RefineJointly(*problem, options, camera, &summary->joint_trace));
       summary->refitted_without_outliers = std::count(removed.begin(), removed.end(), true) > 0;
       flagged = FlagOutliers(*problem, full_problem, *camera, options, scale_px, summary);
     }
@@ -990,6 +996,10 @@ bool VpCalibrationOptions::Check(std::string* error) const {
     *error = "the warm start needs a finite positive focal length, principal point and rotation";
     return false;
   }
+  if (max_joint_iterations < 0) {
+    *error = "the joint fit's iteration budget must not be negative";
+    return false;
+  }
   if (!(outlier_threshold_sigmas > 0.0) || !(outlier_floor_px >= 0.0)) {
     *error = "the outlier threshold must be positive and its floor non-negative";
     return false;
@@ -1010,6 +1020,7 @@ VpCalibrationSummary CalibrateFromVanishingLines(const std::vector<Segment>& seg
   const Conditioning conditioning{Eigen::Vector2d((options.width_px - 1) / 2.0, (options.height_px - 1) / 2.0),
                                   std::max(options.width_px, options.height_px) / 2.0};
   const double scale_px = conditioning.scale_px;
+  summary.conditioning_scale_px = scale_px;
   summary.segment_residuals_px.assign(segments.size(), 0.0);
   FreeVanishingPoints free;
   if (!FitFreeVanishingPoints(families, conditioning, &free, &summary, &error) ||

@@ -22,6 +22,7 @@
 
 #include "core/geometry/intrinsics_modes.h"
 #include "core/geometry/segment.h"
+#include "core/optim/levenberg_marquardt.h"
 #include "core/optim/solver_summary.h"
 
 namespace facet {
@@ -70,6 +71,13 @@ struct VpCalibrationOptions {
   // Fit once more without the flagged segments (a family keeps at least its 2 best
   // segments); residuals are still reported for every segment.
   bool refit_without_outliers = true;
+
+  // The joint fit's budget of Levenberg-Marquardt iterations (linearisations, each with its
+  // trials) per round. Teach mode steps the fit by running it with 0, 1, 2, ...
+  // (core/estimators/fit_steps.h), so that each shown state is the fit's own iterate.
+  int max_joint_iterations = 100;
+  // Fill VpCalibrationSummary::joint_trace.
+  bool record_joint_trace = false;
 
   bool Check(std::string* error) const;
 };
@@ -162,6 +170,11 @@ struct VpCalibrationSummary : SolverSummary {
   // Per input segment (same order): distance in px of its endpoints to the line through its
   // midpoint and its family's vanishing point (RMS of the two).
   std::vector<double> segment_residuals_px;
+  // With VpCalibrationOptions::record_joint_trace: every trial of the joint fit, its rounds in
+  // order (LmIteration::iteration counts within a round); cost and step in conditioned units
+  // (the cost times conditioning_scale_px^2 is px^2).
+  std::vector<LmIteration> joint_trace;
+  double conditioning_scale_px = 0.0;  // max(width, height) / 2
 };
 
 // Calibrates from the segments of one image (their `axis` names the family). Modes: three

@@ -175,7 +175,7 @@ struct SymmetricEpipolarProblem {
 // taken, so the result is never worse than the start.
 template <int D, class State>
 State MinimizeSymmetricEpipolar(State state, const Points& uv1, const Points& uv2, int max_iterations,
-                                LmResult* result) {
+                                LmResult* result, std::vector<LmIteration>* trace = nullptr) {
   SymmetricEpipolarProblem<D, State> problem{uv1, uv2, state, {}, state, {}, {}, {}};
   const double cost = SymmetricEpipolarCost(state.F(), uv1, uv2, &problem.normal);
   // A different rule from the driver's defaults, kept from the refinement's tuning: the
@@ -194,6 +194,11 @@ State MinimizeSymmetricEpipolar(State state, const Points& uv1, const Points& uv
   lm.max_lambda = lm.max_lambda_on_failed_solve = 1e20;
   lm.relative_decrease_tolerance = 1e-10 / (1.0 + 1e-10);
   lm.min_step_squared_norm = 1e-24;
+  if (trace != nullptr)
+    lm.callback = [trace](const LmIteration& it) {
+      trace->push_back(it);
+      return true;
+    };
   *result = MinimizeLevenbergMarquardt(cost, lm, problem);
   return problem.state;
 }
@@ -646,22 +651,27 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
   // changed set is fitted again.
   Eigen::Matrix3d f_linear, f_final;
   LmResult refine_result;
-  auto fit = [&](const std::vector<bool>& flags, Eigen::Matrix3d* linear, Eigen::Matrix3d* refined, LmResult* result) {
+  std::vector<LmIteration> refine_trace;
+  auto fit = [&](const std::vector<bool>& flags, Eigen::Matrix3d* linear, Eigen::Matrix3d* refined, LmResult* result,
+                 std::vector<LmIteration>* trace) {
     const Points in1 = Select(uv1, flags), in2 = Select(uv2, flags);
     if (!LinearFundamental(in1, in2, linear, &error)) return false;
     *refined = *linear;
     *result = LmResult();
     result->termination = LmTermination::kConverged;
+    trace->clear();
     if (options.refine) {
       const internal::OrthonormalFundamental start_state = internal::OrthonormalFundamental::FromF(
           *linear, internal::HartleyNormalization(in1), internal::HartleyNormalization(in2));
-      *refined = MinimizeSymmetricEpipolar<7>(start_state, in1, in2, options.max_refine_iterations, result).F();
+      *refined = MinimizeSymmetricEpipolar<7>(start_state, in1, in2, options.max_refine_iterations, result,
+                                              options.record_refine_trace ? trace : nullptr)
+                     .F();
     }
     return true;
   };
   const bool robust = options.use_ransac && n > 8;
   for (int round = 0; round < kMaxInlierRounds; ++round) {
-    if (!fit(inliers, &f_linear, &f_final, &refine_result)) return fail(error);
+    if (!fit(inliers, &f_linear, &f_final, &refine_result, &refine_trace)) return fail(error);
     if (!robust) break;
     const std::vector<bool> updated = Classify(f_final, uv1, uv2, options.inlier_threshold_px);
     if (updated == inliers || Count(updated) < 7 || round + 1 == kMaxInlierRounds) break;
@@ -678,12 +688,14 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
       for (int i : added) trial[i] = true;
       Eigen::Matrix3d trial_linear, trial_final;
       LmResult trial_result;
-      if (!fit(trial, &trial_linear, &trial_final, &trial_result)) return;
+      std::vector<LmIteration> trial_trace;
+      if (!fit(trial, &trial_linear, &trial_final, &trial_result, &trial_trace)) return;
       if (Classify(trial_final, uv1, uv2, options.inlier_threshold_px) != trial) return;
       inliers = trial;
       f_linear = trial_linear;
       f_final = trial_final;
       refine_result = trial_result;
+      refine_trace = std::move(trial_trace);
     };
     for (int i = 0; i < n; ++i) {
       if (inliers[i] ||
@@ -712,6 +724,7 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
     }
   }
   summary.iterations = refine_result.iterations;
+  summary.refine_trace = std::move(refine_trace);
 
   summary.F = NormalizeFundamental(f_final);
   summary.inliers = inliers;

@@ -25,6 +25,7 @@
 
 #include <Eigen/Core>
 
+#include "core/optim/levenberg_marquardt.h"
 #include "core/optim/solver_summary.h"
 
 namespace facet {
@@ -42,6 +43,8 @@ struct FundamentalOptions {
   // orthonormal representation, started from the normalised 8-point estimate on the inliers.
   bool refine = true;
   int max_refine_iterations = 100;
+  // Fill FundamentalSummary::refine_trace (Teach mode's stepping, core/estimators/fit_steps.h).
+  bool record_refine_trace = false;
   // A warning when a homography explains the matches (symmetric transfer RMS) within this
   // factor of F's RMS plus the slack: a planar scene or a pure rotation leaves F loose.
   double homography_warning_ratio = 2.0;
@@ -67,6 +70,9 @@ struct FundamentalSummary : SolverSummary {
   // Symmetric transfer RMS of the best homography (DLT) on the inliers; 0 if not computed.
   double homography_rms_px = 0.0;
   int ransac_iterations = 0;
+  // With FundamentalOptions::record_refine_trace: every trial of the final refinement (cost in
+  // px^2, step in the orthonormal representation's 7 parameters).
+  std::vector<LmIteration> refine_trace;
 };
 
 // Estimates F from 7 or more matches (uv1.size() == uv2.size()). Fewer than 7 matches (or

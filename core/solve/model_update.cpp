@@ -6,7 +6,6 @@
 #include <cstdio>
 
 namespace facet {
-namespace {
 
 VpCalibrationOptions CalibrationOptionsFor(const Image& image) {
   VpCalibrationOptions options;
@@ -26,6 +25,8 @@ VpCalibrationOptions CalibrationOptionsFor(const Image& image) {
   options.horizon_px = image.horizon_px;
   return options;
 }
+
+namespace {
 
 // The segments with their endpoints mapped (distorted photo px -> pinhole px).
 template <typename Map>

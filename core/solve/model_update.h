@@ -57,6 +57,10 @@ ModelUpdateOptions CommitUpdateOptions();
 // camera initialisation from pins. Benchmarks of a drag frame time exactly this.
 ModelUpdateOptions DragFrameUpdateOptions(int iterations = 5);
 
+// The options the calibration step gives CalibrateFromVanishingLines for this image (its size,
+// principal point and focal modes, horizon); Teach mode steps the same fit.
+VpCalibrationOptions CalibrationOptionsFor(const Image& image);
+
 // What the calibration step of one image read and what it gave, kept between UpdateModel
 // calls so that a drag frame (which moves a pin, not a line) does not calibrate again. Owned
 // by the caller (e.g. the app's state), passed to UpdateModel by pointer; empty at first.
