@@ -421,6 +421,144 @@ void DrawSolverSteps(ImDrawList* draw, const AppState& state, const Image& image
   for (const float x : {x0, x0 + length}) draw->AddLine(ImVec2(x, y0 - 5.0f), ImVec2(x, y0 + 5.0f), kResidualColor, 2.0f);
 }
 
+// A bar of a round number of residual px, ~80 screen px long, beside the text box's last
+// line (added by the caller as the last line, before TextBox moved *text_y to `before`).
+void ScaleBar(ImDrawList* draw, const Screen& s, float before, const std::string& bar_text, double bar_px,
+              double px_per_residual_px) {
+  const float line_h = ImGui::GetTextLineHeight();
+  const float x0 = static_cast<float>(s.rect_min.x()) + 16.0f + ImGui::CalcTextSize(bar_text.c_str()).x + 14.0f;
+  const float y0 = before - 5.0f - 0.5f * line_h - 2.0f;
+  const float length = static_cast<float>(bar_px * px_per_residual_px);
+  draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kShadow, 5.0f);
+  draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kResidualColor, 3.0f);
+  for (const float x : {x0, x0 + length}) draw->AddLine(ImVec2(x, y0 - 5.0f), ImVec2(x, y0 + 5.0f), kResidualColor, 2.0f);
+}
+
+void Arrow(ImDrawList* draw, const Screen& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b, ImU32 color) {
+  Line(draw, s, a, b, color, 2.0f);
+  const double length = (b - a).norm();
+  if (length > 4.0) {
+    const Eigen::Vector2d d = (b - a) / length, n(-d.y(), d.x());
+    const double head = std::min(9.0, 0.4 * length);
+    draw->AddTriangleFilled(Im(b), Im(b - head * d + 0.5 * head * n), Im(b - head * d - 0.5 * head * n), color);
+  }
+}
+
+// The stepped vanishing-point fit over its photo: each segment's residual (from each endpoint
+// to the line through the midpoint and the family's current vanishing point), scaled; the
+// current vanishing points and their paths over the steps.
+void DrawVpSteps(ImDrawList* draw, const AppState& state, const Image& image, const Screen& s, float* text_y) {
+  const TeachSolverSteps& solver = state.teach.solver;
+  std::vector<std::pair<ImU32, std::string>> lines;
+  const ImU32 white = IM_COL32(255, 255, 255, 240), dim = IM_COL32(200, 200, 200, 230);
+  if (!TeachStepping(state)) {
+    lines.push_back({white, "Solver steps (vanishing-point fit of the active photo): press Step"});
+    if (!solver.message.empty()) lines.push_back({dim, solver.message});
+    TextBox(draw, s, text_y, lines);
+    return;
+  }
+  if (solver.vp.image_id != image.id) {
+    lines.push_back({white, "Solver steps: the vanishing-point fit of another photo is stepped"});
+    TextBox(draw, s, text_y, lines);
+    return;
+  }
+  const VpFitSteps& steps = *solver.vp.steps;
+  const double scale = solver.vp.residual_scale;
+  double largest = 0.0;
+  for (const TeachVpSegmentResidual& r : TeachVpResiduals(state)) {
+    largest = std::max(largest, std::abs(r.residual_px));
+    const ImU32 color = AxisColor(static_cast<Axis>(r.axis), 255);
+    // Towards the current vanishing point, thin: the line the residual is measured to.
+    const Eigen::Vector3d& v = steps.summary.vanishing_points[r.axis];
+    const Eigen::Vector2d m = 0.5 * (r.a_px + r.b_px);
+    if (std::abs(v.z()) > 1e-12) Line(draw, s, s(m), s(v.head<2>() / v.z()), AxisColor(static_cast<Axis>(r.axis), 70), 1.0f);
+    Arrow(draw, s, s(r.a_px), s(r.a_px + scale * r.offset_a_px), kResidualColor);
+    Arrow(draw, s, s(r.b_px), s(r.b_px + scale * r.offset_b_px), kResidualColor);
+    Marker(draw, s(r.a_px), color, 2.0f);
+    Marker(draw, s(r.b_px), color, 2.0f);
+  }
+  // Each vanishing point's path over the steps, then where it is now.
+  for (int a = 0; a < 3; ++a) {
+    const ImU32 color = AxisColor(static_cast<Axis>(a), 255);
+    std::vector<Eigen::Vector2d> path;
+    for (const VpFitState& p : steps.path)
+      if (std::abs(p.vanishing_points[a].z()) > 1e-12) path.push_back(p.vanishing_points[a].head<2>() / p.vanishing_points[a].z());
+    if (path.empty()) continue;
+    for (size_t k = 1; k < path.size(); ++k) Line(draw, s, s(path[k - 1]), s(path[k]), color, 1.5f);
+    for (const Eigen::Vector2d& p : path) Marker(draw, s(p), color, 2.0f);
+    Marker(draw, s(path.back()), color, 5.0f);
+    Label(draw, s(path.back()), color,
+          std::string("v") + kAxisNames[a] + " (" + FormatNumber(path.back().x(), 5) + ", " +
+              FormatNumber(path.back().y(), 5) + ")");
+  }
+  lines.push_back({white, "Solver steps: vanishing-point fit, step " + std::to_string(steps.steps) +
+                              (steps.finished ? " (finished)" : "") + ", f = " +
+                              FormatNumber(steps.summary.focal_px, 6) + " px"});
+  lines.push_back({dim, "cost " + FormatNumber(steps.path.front().cost_px2, 5) + " -> " +
+                            FormatNumber(steps.summary.final_cost, 5) + " px^2; largest residual " +
+                            FormatNumber(largest, 4) + " px; dots: the vanishing points' path"});
+  lines.push_back({kResidualColor, "residuals (endpoint to the line through midpoint and v) drawn x" +
+                                       FormatNumber(scale, 4)});
+  const double px_per_residual_px = scale * s.view.zoom;
+  if (!(px_per_residual_px > 0.0) || !std::isfinite(px_per_residual_px)) {
+    TextBox(draw, s, text_y, lines);
+    return;
+  }
+  const double bar_px = NiceBelow(80.0 / px_per_residual_px);
+  const std::string bar_text = "bar = " + FormatNumber(bar_px, 4) + " px of residual";
+  lines.push_back({kResidualColor, bar_text});
+  const float before = *text_y;
+  TextBox(draw, s, text_y, lines);
+  ScaleBar(draw, s, before, bar_text, bar_px, px_per_residual_px);
+}
+
+// The stepped two-view refinement over either photo of the pair: the epipolar lines of a few
+// matches under the current F (solid) and the start's (dashed), each match's point and its
+// distance to its line.
+void DrawTwoViewSteps(ImDrawList* draw, const AppState& state, const Image& image, const Screen& s, float* text_y) {
+  const TeachSolverSteps& solver = state.teach.solver;
+  std::vector<std::pair<ImU32, std::string>> lines;
+  const ImU32 white = IM_COL32(255, 255, 255, 240), dim = IM_COL32(200, 200, 200, 230);
+  if (!TeachStepping(state)) {
+    lines.push_back({white, "Solver steps (two-view refinement of F, active and second photo): press Step"});
+    if (!solver.message.empty()) lines.push_back({dim, solver.message});
+    TextBox(draw, s, text_y, lines);
+    return;
+  }
+  const TeachTwoViewSteps& two = solver.two_view;
+  const bool in_a = image.id == two.image_a, in_b = image.id == two.image_b;
+  if (!in_a && !in_b) {
+    lines.push_back({white, "Solver steps: the two-view refinement of two other photos is stepped"});
+    TextBox(draw, s, text_y, lines);
+    return;
+  }
+  const FundamentalFitSteps& steps = *two.steps;
+  const ImU32 start_color = IM_COL32(200, 200, 200, 170);
+  double largest = 0.0;
+  int drawn = 0;
+  for (const TeachEpipolarMatch& m : TeachEpipolarMatches(state)) {
+    // distances_px: (uv_b to F uv_a, uv_a to F^T uv_b).
+    const double d = in_a ? m.distances_px.y() : m.distances_px.x();
+    largest = std::max(largest, std::abs(d));
+    if (!m.drawn) continue;
+    ++drawn;
+    const Eigen::Vector2d& uv = in_a ? m.uv_a : m.uv_b;
+    InfiniteLine(draw, s, in_a ? m.start_line_in_a : m.start_line_in_b, start_color, 1.0f, true);
+    InfiniteLine(draw, s, in_a ? m.line_in_a : m.line_in_b, kEpipolarColor, 1.5f, false);
+    Marker(draw, s(uv), kEpipolarColor, 4.0f);
+    Label(draw, s(uv), kEpipolarColor, FormatNumber(std::abs(d), 3) + " px");
+  }
+  lines.push_back({white, "Solver steps: two-view refinement of F, step " + std::to_string(steps.steps) +
+                              (steps.finished ? " (finished)" : "") + "; this photo is " + (in_a ? "a" : "b")});
+  lines.push_back({dim, "symmetric epipolar RMS " + FormatNumber(steps.start.symmetric_epipolar_rms_px, 4) + " -> " +
+                            FormatNumber(steps.summary.symmetric_epipolar_rms_px, 4) + " px; largest distance here " +
+                            FormatNumber(largest, 4) + " px"});
+  lines.push_back({kEpipolarColor, "epipolar lines of " + std::to_string(drawn) + " of " +
+                                       std::to_string(steps.uv1.size()) +
+                                       " matches under the current F (dashed grey: the 8-point start)"});
+  TextBox(draw, s, text_y, lines);
+}
+
 // log10 of each value (the plots span orders of magnitude); non-positive values as the
 // smallest positive one.
 std::vector<float> Log10Series(const std::vector<double>& values) {
@@ -452,7 +590,13 @@ void DrawTeachImageOverlay(ImDrawList* draw_list, const AppState& state, const I
   draw_list->PushClipRect(clip_min, clip_max, true);
   const Screen s{view, Eigen::Vector2d(clip_min.x, clip_min.y), Eigen::Vector2d(clip_max.x, clip_max.y)};
   float text_y = clip_max.y - 8.0f;
-  if (state.teach.solver_steps) DrawSolverSteps(draw_list, state, image, s, &text_y);
+  if (state.teach.solver_steps) {
+    switch (state.teach.solver.subject) {
+      case TeachStepSubject::kJointSolve: DrawSolverSteps(draw_list, state, image, s, &text_y); break;
+      case TeachStepSubject::kVanishingPoints: DrawVpSteps(draw_list, state, image, s, &text_y); break;
+      case TeachStepSubject::kTwoView: DrawTwoViewSteps(draw_list, state, image, s, &text_y); break;
+    }
+  }
   if (state.teach.vanishing_points) DrawVanishingConstruction(draw_list, state, image, s, &text_y);
   if (state.teach.epipolar) DrawEpipolar(draw_list, state, image, s, &text_y, texture_of);
   draw_list->PopClipRect();
@@ -529,6 +673,130 @@ void DrawTeachRays(ImDrawList* draw, const AppState& state,
   }
 }
 
+namespace {
+
+// The trace's cost (times cost_unit), damping and step norm, one point per trial.
+void TracePlots(const std::vector<LmIteration>& trace, double cost_unit, const char* step_unit) {
+  std::vector<double> cost, lambda, step_norm;
+  for (const LmIteration& it : trace) {
+    cost.push_back(it.cost * cost_unit);
+    lambda.push_back(it.lambda);
+    step_norm.push_back(std::sqrt(it.step_squared_norm));
+  }
+  const auto last = [](const std::vector<double>& v, const char* unit) {
+    return v.empty() ? std::string("-") : FormatNumber(v.back(), 4) + unit;
+  };
+  ImGui::TextColored(kDimText, "log10 scale; one point per trial (a rejected trial keeps the cost)");
+  Plot("cost", cost, last(cost, " px^2"));
+  Plot("damping lambda", lambda, last(lambda, ""));
+  Plot("step norm", step_norm, last(step_norm, step_unit));
+}
+
+// The Solver steps window for the vanishing-point fit and the two-view refinement.
+void DrawFitStepsBody(AppState* state) {
+  TeachSolverSteps& solver = state->teach.solver;
+  const bool vp = solver.subject == TeachStepSubject::kVanishingPoints;
+  ImGui::TextWrapped(vp ? "The vanishing-point fit of the active photo (f, principal point and rotation fitted to all "
+                          "segments, the three directions orthogonal), one Levenberg-Marquardt iteration per Step, "
+                          "from its closed form. The project does not change."
+                        : "The refinement of F between the active and the second photo (symmetric point-to-epipolar-"
+                          "line distance over the pinned matches RANSAC keeps), one Levenberg-Marquardt iteration "
+                          "per Step, from the 8-point estimate. The project does not change.");
+  if (!vp) {
+    const Project& project = state->document.project();
+    std::string preview = "(first photo sharing 7 pins)";
+    if (const Image* second = project.FindImage(state->teach.second_image_id)) preview = FileName(second->path);
+    ImGui::BeginDisabled(TeachStepping(*state));
+    ImGui::SetNextItemWidth(220);
+    if (ImGui::BeginCombo("second photo##steps", preview.c_str())) {
+      for (const Image& image : project.images) {
+        if (image.id == state->active_image_id) continue;
+        ImGui::PushID(static_cast<int>(image.id));
+        if (ImGui::Selectable(FileName(image.path).c_str(), image.id == state->teach.second_image_id))
+          state->teach.second_image_id = image.id;
+        ImGui::PopID();
+      }
+      ImGui::EndCombo();
+    }
+    ImGui::EndDisabled();
+  }
+  const bool stepping = TeachStepping(*state);
+  if (ImGui::Button("Step")) TeachStep(state);
+  RecordItem(state, "teach.step");
+  ImGui::SameLine();
+  ImGui::BeginDisabled(!stepping);
+  if (ImGui::Button("Reset")) TeachResetSteps(state);
+  RecordItem(state, "teach.reset");
+  ImGui::SameLine();
+  if (ImGui::Button("End")) TeachEndSteps(state);
+  ImGui::EndDisabled();
+  if (!solver.message.empty()) ImGui::TextWrapped("%s", solver.message.c_str());
+  if (!TeachStepping(*state)) return;
+  ImGui::Separator();
+  constexpr ImGuiTableFlags kFlags = ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerV |
+                                     ImGuiTableFlags_SizingFixedFit | ImGuiTableFlags_ScrollY;
+  if (vp) {
+    const VpFitSteps& steps = *solver.vp.steps;
+    ImGui::Text("residuals drawn x%s", FormatNumber(solver.vp.residual_scale, 4).c_str());
+    ImGui::SameLine();
+    if (ImGui::SmallButton("x2")) solver.vp.residual_scale *= 2.0;
+    ImGui::SameLine();
+    if (ImGui::SmallButton("/2")) solver.vp.residual_scale /= 2.0;
+    const double px2 = steps.summary.conditioning_scale_px * steps.summary.conditioning_scale_px;
+    TracePlots(steps.trace, px2, " (log f, px / scale, rad)");
+    ImGui::Text("%d step(s), %s%s", steps.steps, SolverTerminationName(steps.summary.termination),
+                steps.finished ? " (finished)" : "");
+    // The focal length (and principal point) per step: what the fit is for.
+    if (ImGui::BeginTable("##teach_vp_steps", 4, kFlags, ImVec2(0.0f, 160.0f))) {
+      ImGui::TableSetupScrollFreeze(0, 1);
+      for (const char* name : {"step", "f (px)", "principal point (px)", "cost (px^2)"}) ImGui::TableSetupColumn(name);
+      ImGui::TableHeadersRow();
+      for (size_t k = 0; k < steps.path.size(); ++k) {
+        const VpFitState& p = steps.path[k];
+        ImGui::TableNextRow();
+        ImGui::TableNextColumn();
+        ImGui::Text("%d", static_cast<int>(k));
+        ImGui::TableNextColumn();
+        ImGui::TextUnformatted(FormatNumber(p.focal_px, 8).c_str());
+        ImGui::TableNextColumn();
+        ImGui::Text("%s, %s", FormatNumber(p.principal_point_px.x(), 6).c_str(),
+                    FormatNumber(p.principal_point_px.y(), 6).c_str());
+        ImGui::TableNextColumn();
+        ImGui::TextUnformatted(FormatNumber(p.cost_px2, 6).c_str());
+      }
+      ImGui::EndTable();
+    }
+    return;
+  }
+  const FundamentalFitSteps& steps = *solver.two_view.steps;
+  TracePlots(steps.trace, 1.0, " (rad, s)");
+  ImGui::Text("%d step(s), %s%s; symmetric epipolar RMS %s -> %s px", steps.steps,
+              SolverTerminationName(steps.summary.termination), steps.finished ? " (finished)" : "",
+              FormatNumber(steps.start.symmetric_epipolar_rms_px, 4).c_str(),
+              FormatNumber(steps.summary.symmetric_epipolar_rms_px, 4).c_str());
+  // The symmetric distance per match (its lines drawn for the marked ones).
+  if (ImGui::BeginTable("##teach_two_view_matches", 4, kFlags, ImVec2(0.0f, 180.0f))) {
+    ImGui::TableSetupScrollFreeze(0, 1);
+    for (const char* name : {"match", "b to F a (px)", "a to F^T b (px)", "RMS (px)"}) ImGui::TableSetupColumn(name);
+    ImGui::TableHeadersRow();
+    int i = 0;
+    for (const TeachEpipolarMatch& m : TeachEpipolarMatches(*state)) {
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::Text("%d%s", i++, m.drawn ? " (drawn)" : "");
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(FormatNumber(m.distances_px.x(), 4).c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(FormatNumber(m.distances_px.y(), 4).c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(FormatNumber(std::sqrt(0.5 * m.distances_px.squaredNorm()), 4).c_str());
+    }
+    ImGui::EndTable();
+  }
+}
+
+}  // namespace
+
 void DrawTeachStepsWindow(AppState* state) {
   if (!state->teach.solver_steps) return;
   TeachSolverSteps& solver = state->teach.solver;
@@ -537,6 +805,34 @@ void DrawTeachStepsWindow(AppState* state) {
   ImGui::SetNextWindowPos(ImVec2(viewport->Pos.x + viewport->Size.x - 460, viewport->Pos.y + 60),
                           ImGuiCond_FirstUseEver);
   if (!ImGui::Begin("Solver steps (teach)", &state->teach.solver_steps)) {
+    ImGui::End();
+    return;
+  }
+  // What to step: changing it ends the stepping (each subject starts from its own start).
+  static constexpr TeachStepSubject kSubjects[] = {TeachStepSubject::kJointSolve, TeachStepSubject::kVanishingPoints,
+                                                   TeachStepSubject::kTwoView};
+  const auto subject_label = [](TeachStepSubject subject) {
+    switch (subject) {
+      case TeachStepSubject::kJointSolve: return "joint solve (the project)";
+      case TeachStepSubject::kVanishingPoints: return "vanishing points (active photo)";
+      case TeachStepSubject::kTwoView: return "two views (active + second photo)";
+    }
+    return "";
+  };
+  ImGui::SetNextItemWidth(260);
+  if (ImGui::BeginCombo("step", subject_label(solver.subject))) {
+    for (const TeachStepSubject subject : kSubjects) {
+      if (ImGui::Selectable(subject_label(subject), solver.subject == subject) && solver.subject != subject) {
+        TeachEndSteps(state);
+        solver.subject = subject;
+        solver.message.clear();
+      }
+    }
+    ImGui::EndCombo();
+  }
+  RecordItem(state, "teach.subject");
+  if (solver.subject != TeachStepSubject::kJointSolve) {
+    DrawFitStepsBody(state);
     ImGui::End();
     return;
   }

@@ -614,6 +614,16 @@ bool RunTeachCommand(AppState* state, const std::vector<std::string>& args, std:
     state->teach.solver.start = *start;
     return true;
   }
+  if (args.size() == 2 && args[0] == "subject") {
+    const std::optional<TeachStepSubject> subject = TeachStepSubjectFromName(args[1]);
+    if (!subject) {
+      *error = "teach subject: expected joint, vanishing or two-view";
+      return false;
+    }
+    TeachEndSteps(state);
+    state->teach.solver.subject = *subject;
+    return true;
+  }
   if (args.size() == 2 && args[0] == "residual-scale") {
     char* end = nullptr;
     const double scale = std::strtod(args[1].c_str(), &end);
@@ -622,6 +632,7 @@ bool RunTeachCommand(AppState* state, const std::vector<std::string>& args, std:
       return false;
     }
     state->teach.solver.residual_scale = scale;  // until stepping begins again
+    state->teach.solver.vp.residual_scale = scale;
     return true;
   }
   if (args.size() == 2 && args[0] == "perturbation") {
@@ -639,7 +650,8 @@ bool RunTeachCommand(AppState* state, const std::vector<std::string>& args, std:
   if (flag == nullptr || (args[1] != "on" && args[1] != "off")) {
     *error =
         "teach: expected 'teach vanishing|epipolar|numbers|state|steps on|off', 'teach second-image INDEX', "
-        "'teach step', 'teach reset', 'teach start perturbed|as-is', 'teach perturbation AMOUNT' or "
+        "'teach step', 'teach reset', 'teach subject joint|vanishing|two-view', 'teach start perturbed|as-is', "
+        "'teach perturbation AMOUNT' or "
         "'teach residual-scale S'";
     return false;
   }

@@ -66,6 +66,86 @@ nlohmann::json VanishingJson(const TeachVanishing& t) {
           {"directions_in_world", directions}};
 }
 
+nlohmann::json TraceJson(const std::vector<LmIteration>& trace, double cost_unit) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const LmIteration& it : trace)
+    out.push_back({{"iteration", it.iteration},
+                   {"cost", Number(it.cost * cost_unit)},
+                   {"trial_cost", Number(it.trial_cost * cost_unit)},
+                   {"lambda", Number(it.lambda)},
+                   {"step_norm", Number(std::sqrt(it.step_squared_norm))},
+                   {"accepted", it.accepted}});
+  return out;
+}
+
+// The stepped vanishing-point fit: per step (the start first) f, principal point, the
+// vanishing points and the cost; the trace (cost in px^2); per segment the residual drawn.
+nlohmann::json VpStepsJson(const AppState& state) {
+  const TeachVpSteps& vp = state.teach.solver.vp;
+  const VpFitSteps& steps = *vp.steps;
+  nlohmann::json path = nlohmann::json::array();
+  for (const VpFitState& p : steps.path) {
+    nlohmann::json points = nlohmann::json::array();
+    for (int a = 0; a < 3; ++a) points.push_back(Vector(p.vanishing_points[a]));
+    path.push_back({{"focal_px", Number(p.focal_px)},
+                    {"principal_point_px", Vector(p.principal_point_px)},
+                    {"vanishing_points", points},
+                    {"cost", Number(p.cost_px2)}});
+  }
+  nlohmann::json segments = nlohmann::json::array();
+  for (const TeachVpSegmentResidual& r : TeachVpResiduals(state))
+    segments.push_back({{"segment_id", r.segment_id},
+                        {"axis", r.axis},
+                        {"a_px", Vector(r.a_px)},
+                        {"b_px", Vector(r.b_px)},
+                        {"offset_a_px", Vector(r.offset_a_px)},
+                        {"offset_b_px", Vector(r.offset_b_px)},
+                        {"residual_px", Number(r.residual_px)}});
+  const double px2 = steps.summary.conditioning_scale_px * steps.summary.conditioning_scale_px;
+  return {{"image_id", vp.image_id},
+          {"steps", steps.steps},
+          {"finished", steps.finished},
+          {"termination", SolverTerminationName(steps.summary.termination)},
+          {"residual_scale", vp.residual_scale},
+          {"focal_px", Number(steps.summary.focal_px)},
+          {"cam_from_world_rotation", Matrix(steps.summary.cam_from_world_rotation)},
+          {"path", path},
+          {"trace", TraceJson(steps.trace, px2)},
+          {"segments", segments}};
+}
+
+// The stepped two-view refinement: F per step (the start first), the trace, per match the
+// current and the start's epipolar lines and the symmetric distances.
+nlohmann::json TwoViewStepsJson(const AppState& state) {
+  const TeachTwoViewSteps& two = state.teach.solver.two_view;
+  const FundamentalFitSteps& steps = *two.steps;
+  nlohmann::json path = nlohmann::json::array();
+  for (const Eigen::Matrix3d& f : steps.path) path.push_back(Matrix(f));
+  nlohmann::json matches = nlohmann::json::array();
+  for (const TeachEpipolarMatch& m : TeachEpipolarMatches(state))
+    matches.push_back({{"pin_a", m.pin_a},
+                       {"pin_b", m.pin_b},
+                       {"uv_a", Vector(m.uv_a)},
+                       {"uv_b", Vector(m.uv_b)},
+                       {"line_in_a", Vector(m.line_in_a)},
+                       {"line_in_b", Vector(m.line_in_b)},
+                       {"start_line_in_a", Vector(m.start_line_in_a)},
+                       {"start_line_in_b", Vector(m.start_line_in_b)},
+                       {"distances_px", Vector(m.distances_px)},
+                       {"drawn", m.drawn}});
+  return {{"image_a", two.image_a},
+          {"image_b", two.image_b},
+          {"steps", steps.steps},
+          {"finished", steps.finished},
+          {"termination", SolverTerminationName(steps.summary.termination)},
+          {"F", Matrix(steps.summary.F)},
+          {"cost", Number(steps.summary.final_cost)},
+          {"symmetric_epipolar_rms_px", Number(steps.summary.symmetric_epipolar_rms_px)},
+          {"path", path},
+          {"trace", TraceJson(steps.trace, 1.0)},
+          {"matches", matches}};
+}
+
 // The Solver steps window's state: what is stepped, the trace, the constraint violations and
 // the residual vectors drawn, and the stepped cameras and primitives (full precision, so a
 // test compares them with its own solve).
@@ -77,7 +157,10 @@ nlohmann::json StepsJson(const AppState& state) {
                         {"perturbation", solver.perturbation},
                         {"active", stepped != nullptr},
                         {"message", solver.message},
-                        {"residual_scale", solver.residual_scale}};
+                        {"residual_scale", solver.residual_scale},
+                        {"subject", TeachStepSubjectName(solver.subject)}};
+  if (TeachStepping(state) && solver.subject == TeachStepSubject::kVanishingPoints) out["vanishing"] = VpStepsJson(state);
+  if (TeachStepping(state) && solver.subject == TeachStepSubject::kTwoView) out["two_view"] = TwoViewStepsJson(state);
   if (stepped == nullptr) return out;
   const JointSolveSteps& steps = *solver.steps;
   out["steps"] = steps.steps;

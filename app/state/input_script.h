@@ -97,7 +97,9 @@
 //                                                      perturbed|as-is, teach perturbation
 //                                                      AMOUNT (0.2 = 20 %): where it starts;
 //                                                      teach residual-scale S: the vectors
-//                                                      drawn S times as long
+//                                                      drawn S times as long; teach subject
+//                                                      joint|vanishing|two-view: what the
+//                                                      window steps
 //                                   texture ARGS       the user's texture choices
 //                                                      (RunTextureCommand,
 //                                                      app/state/texture_choices.h): source

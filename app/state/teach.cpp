@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "app/state/app_state.h"
+#include "core/solve/model_update.h"
 #include "core/solve/multiview_init.h"
 #include "core/util/format.h"
 
@@ -288,10 +289,210 @@ const Project* TeachSteppedProject(const AppState& state) {
   return &solver.steps->current;
 }
 
+namespace {
+
+std::string PhotoName(const Image& image) {
+  const size_t slash = image.path.find_last_of("/\\");
+  return slash == std::string::npos ? image.path : image.path.substr(slash + 1);
+}
+
+// A pixel as the fits read it: straightened by the camera's distortion, if it has any.
+Eigen::Vector2d FittedPixel(const Image& image, const Eigen::Vector2d& uv_px) {
+  return image.camera_calibrated && image.camera.HasDistortion() ? image.camera.UndistortPixel(uv_px) : uv_px;
+}
+
+std::string StepMessage(int steps, double cost_px2, bool finished, SolverTermination termination,
+                        const std::string& more) {
+  return "step " + std::to_string(steps) + ": cost " + FormatNumber(cost_px2, 6) + " px^2" + more +
+         (finished ? std::string(", finished (") + SolverTerminationName(termination) + ")" : std::string());
+}
+
+bool BeginVpSteps(AppState* state) {
+  TeachSolverSteps& solver = state->teach.solver;
+  TeachVpSteps& vp = solver.vp;
+  const Project& project = state->document.project();
+  const Image* image = project.FindImage(state->active_image_id);
+  if (image == nullptr) {
+    solver.message = "vanishing points: no active photo";
+    return false;
+  }
+  std::vector<Segment> segments;
+  std::vector<Id> ids;
+  for (const Segment& s : project.segments) {
+    if (s.image_id != image->id) continue;
+    Segment fitted = s;
+    fitted.a_px = FittedPixel(*image, s.a_px);
+    fitted.b_px = FittedPixel(*image, s.b_px);
+    segments.push_back(fitted);
+    ids.push_back(s.id);
+  }
+  VpFitSteps steps;
+  VpCalibrationSummary failure;
+  if (!BeginVpFitSteps(segments, CalibrationOptionsFor(*image), &steps, &failure)) {
+    solver.message = "vanishing points of " + PhotoName(*image) + ": " + failure.message;
+    return false;
+  }
+  vp.image_id = image->id;
+  vp.segment_ids = std::move(ids);
+  double largest = 0.0;
+  for (const double r : steps.summary.segment_residuals_px) largest = std::max(largest, std::abs(r));
+  constexpr double kLongestOfDiagonal = 0.06;
+  const double scale = kLongestOfDiagonal * std::hypot(image->width_px, image->height_px) / largest;
+  vp.residual_scale = std::isfinite(scale) && scale > 0.0 ? std::clamp(RoundScaleDown(scale), 1e-3, 1e6) : 1.0;
+  vp.steps = std::move(steps);
+  solver.document_revision = state->document.revision();
+  solver.message = "start: the fit's closed form on " + std::to_string(segments.size()) + " segments of " +
+                   PhotoName(*image) + ", cost " + FormatNumber(vp.steps->summary.final_cost, 6) + " px^2";
+  return true;
+}
+
+// The second photo of the pair: the chosen one, else the first other photo sharing 7 or more
+// pinned vertices with the active one.
+const Image* SecondPhoto(const AppState& state, const Image& a) {
+  const Project& project = state.document.project();
+  if (const Image* b = project.FindImage(state.teach.second_image_id); b != nullptr && b->id != a.id) return b;
+  for (const Image& b : project.images) {
+    if (b.id == a.id) continue;
+    int shared = 0;
+    for (const Pin& pa : project.pins)
+      if (pa.image_id == a.id)
+        for (const Pin& pb : project.pins)
+          if (pb.image_id == b.id && pb.vertex == pa.vertex) {
+            ++shared;
+            break;
+          }
+    if (shared >= 7) return &b;
+  }
+  return nullptr;
+}
+
+bool BeginTwoViewSteps(AppState* state) {
+  TeachSolverSteps& solver = state->teach.solver;
+  TeachTwoViewSteps& two = solver.two_view;
+  const Project& project = state->document.project();
+  const Image* a = project.FindImage(state->active_image_id);
+  const Image* b = a != nullptr ? SecondPhoto(*state, *a) : nullptr;
+  if (b == nullptr) {
+    solver.message = "two views: choose a second photo sharing 7 or more pinned vertices with the active one";
+    return false;
+  }
+  std::vector<Eigen::Vector2d> uv_a, uv_b;
+  std::vector<Id> pins_a, pins_b;
+  for (const Pin& pa : project.pins) {
+    if (pa.image_id != a->id) continue;
+    for (const Pin& pb : project.pins) {
+      if (pb.image_id != b->id || !(pb.vertex == pa.vertex)) continue;
+      uv_a.push_back(FittedPixel(*a, pa.uv_px));
+      uv_b.push_back(FittedPixel(*b, pb.uv_px));
+      pins_a.push_back(pa.id);
+      pins_b.push_back(pb.id);
+      break;
+    }
+  }
+  const std::string pair = PhotoName(*a) + " and " + PhotoName(*b);
+  const FundamentalSummary full = EstimateFundamentalMatrix(uv_a, uv_b, FundamentalOptions());
+  if (!full.IsUsable()) {
+    solver.message = "two views " + pair + ": " + full.message;
+    return false;
+  }
+  std::vector<Eigen::Vector2d> in_a, in_b;
+  two.pins_a.clear();
+  two.pins_b.clear();
+  for (size_t i = 0; i < uv_a.size(); ++i) {
+    if (!full.inliers[i]) continue;
+    in_a.push_back(uv_a[i]);
+    in_b.push_back(uv_b[i]);
+    two.pins_a.push_back(pins_a[i]);
+    two.pins_b.push_back(pins_b[i]);
+  }
+  FundamentalFitSteps steps;
+  FundamentalSummary failure;
+  if (!BeginFundamentalFitSteps(in_a, in_b, FundamentalOptions(), &steps, &failure)) {
+    solver.message = "two views " + pair + ": " + failure.message;
+    return false;
+  }
+  two.image_a = a->id;
+  two.image_b = b->id;
+  two.steps = std::move(steps);
+  solver.document_revision = state->document.revision();
+  solver.message = "start: the 8-point F of " + pair + " on " + std::to_string(in_a.size()) + " of " +
+                   std::to_string(uv_a.size()) + " matches, cost " + FormatNumber(two.steps->summary.final_cost, 6) +
+                   " px^2";
+  return true;
+}
+
+bool StepVp(AppState* state) {
+  TeachSolverSteps& solver = state->teach.solver;
+  if (!solver.vp.steps && !BeginVpSteps(state)) return false;
+  VpFitSteps& steps = *solver.vp.steps;
+  if (steps.finished) {
+    solver.message = "the fit has finished: Reset to step again";
+    return false;
+  }
+  VpCalibrationSummary failure;
+  if (!StepVpFit(&steps, &failure)) {
+    solver.message = "the step failed: " + failure.message;
+    return false;
+  }
+  solver.message = StepMessage(steps.steps, steps.summary.final_cost, steps.finished, steps.summary.termination,
+                               ", f = " + FormatNumber(steps.summary.focal_px, 6) + " px");
+  return true;
+}
+
+bool StepTwoView(AppState* state) {
+  TeachSolverSteps& solver = state->teach.solver;
+  if (!solver.two_view.steps && !BeginTwoViewSteps(state)) return false;
+  FundamentalFitSteps& steps = *solver.two_view.steps;
+  if (steps.finished) {
+    solver.message = "the refinement has finished: Reset to step again";
+    return false;
+  }
+  FundamentalSummary failure;
+  if (!StepFundamentalFit(&steps, &failure)) {
+    solver.message = "the step failed: " + failure.message;
+    return false;
+  }
+  solver.message =
+      StepMessage(steps.steps, steps.summary.final_cost, steps.finished, steps.summary.termination,
+                  ", symmetric epipolar RMS " + FormatNumber(steps.summary.symmetric_epipolar_rms_px, 5) + " px");
+  return true;
+}
+
+}  // namespace
+
+const char* TeachStepSubjectName(TeachStepSubject subject) {
+  switch (subject) {
+    case TeachStepSubject::kJointSolve: return "joint";
+    case TeachStepSubject::kVanishingPoints: return "vanishing";
+    case TeachStepSubject::kTwoView: return "two-view";
+  }
+  return "joint";
+}
+
+std::optional<TeachStepSubject> TeachStepSubjectFromName(const std::string& name) {
+  if (name == "joint") return TeachStepSubject::kJointSolve;
+  if (name == "vanishing") return TeachStepSubject::kVanishingPoints;
+  if (name == "two-view") return TeachStepSubject::kTwoView;
+  return std::nullopt;
+}
+
+bool TeachStepping(const AppState& state) {
+  const TeachSolverSteps& solver = state.teach.solver;
+  if (!state.teach.solver_steps || solver.document_revision != state.document.revision()) return false;
+  switch (solver.subject) {
+    case TeachStepSubject::kJointSolve: return TeachSteppedProject(state) != nullptr;
+    case TeachStepSubject::kVanishingPoints: return solver.vp.steps.has_value();
+    case TeachStepSubject::kTwoView: return solver.two_view.steps.has_value();
+  }
+  return false;
+}
+
 bool TeachStep(AppState* state) {
   state->teach.solver_steps = true;
   UpdateTeachSteps(state);
   TeachSolverSteps& solver = state->teach.solver;
+  if (solver.subject == TeachStepSubject::kVanishingPoints) return StepVp(state);
+  if (solver.subject == TeachStepSubject::kTwoView) return StepTwoView(state);
   if (!solver.steps) BeginSteps(state);
   if (solver.steps->finished) {
     solver.message = "the solve has finished (" + std::string(SolverTerminationName(solver.steps->summary.termination)) +
@@ -318,6 +519,18 @@ bool TeachStep(AppState* state) {
 void TeachResetSteps(AppState* state) {
   UpdateTeachSteps(state);
   TeachSolverSteps& solver = state->teach.solver;
+  if (solver.subject == TeachStepSubject::kVanishingPoints) {
+    if (!solver.vp.steps) return;
+    ResetVpFitSteps(&*solver.vp.steps);
+    solver.message = "reset to the start";
+    return;
+  }
+  if (solver.subject == TeachStepSubject::kTwoView) {
+    if (!solver.two_view.steps) return;
+    ResetFundamentalFitSteps(&*solver.two_view.steps);
+    solver.message = "reset to the start";
+    return;
+  }
   if (!solver.steps) return;
   ResetJointSolveSteps(&*solver.steps);
   solver.message = "reset to the start";
@@ -326,14 +539,77 @@ void TeachResetSteps(AppState* state) {
 
 void TeachEndSteps(AppState* state) {
   state->teach.solver.steps.reset();
+  state->teach.solver.vp.steps.reset();
+  state->teach.solver.two_view.steps.reset();
   state->teach.solver.mesh = TexturedMesh();
   ++state->teach.solver.mesh_revision;
 }
 
 void UpdateTeachSteps(AppState* state) {
   const TeachSolverSteps& solver = state->teach.solver;
-  if (solver.steps && (!state->teach.solver_steps || solver.document_revision != state->document.revision()))
+  const bool any = solver.steps || solver.vp.steps || solver.two_view.steps;
+  if (any && (!state->teach.solver_steps || solver.document_revision != state->document.revision()))
     TeachEndSteps(state);
+}
+
+std::vector<TeachVpSegmentResidual> TeachVpResiduals(const AppState& state) {
+  std::vector<TeachVpSegmentResidual> out;
+  const TeachVpSteps& vp = state.teach.solver.vp;
+  if (!TeachStepping(state) || state.teach.solver.subject != TeachStepSubject::kVanishingPoints) return out;
+  const VpFitSteps& steps = *vp.steps;
+  for (size_t i = 0; i < steps.segments.size(); ++i) {
+    const Segment& s = steps.segments[i];
+    const int axis = static_cast<int>(s.axis);
+    const Eigen::Vector3d& v = steps.summary.vanishing_points[axis];
+    TeachVpSegmentResidual r;
+    r.segment_id = vp.segment_ids[i];
+    r.axis = axis;
+    r.a_px = s.a_px;
+    r.b_px = s.b_px;
+    r.residual_px = steps.summary.segment_residuals_px[i];
+    // The line through the midpoint m and v: direction v_xy - v_z m (at infinity: v_xy).
+    const Eigen::Vector2d m = 0.5 * (s.a_px + s.b_px);
+    const Eigen::Vector2d d = v.head<2>() - v.z() * m;
+    if (d.norm() > 0.0) {
+      const Eigen::Vector2d u = d.normalized();
+      r.offset_a_px = m + u * u.dot(s.a_px - m) - s.a_px;
+      r.offset_b_px = m + u * u.dot(s.b_px - m) - s.b_px;
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
+std::vector<TeachEpipolarMatch> TeachEpipolarMatches(const AppState& state) {
+  std::vector<TeachEpipolarMatch> out;
+  const TeachTwoViewSteps& two = state.teach.solver.two_view;
+  if (!TeachStepping(state) || state.teach.solver.subject != TeachStepSubject::kTwoView) return out;
+  const FundamentalFitSteps& steps = *two.steps;
+  const Eigen::Matrix3d& f = steps.summary.F;
+  const Eigen::Matrix3d& f0 = steps.path.front();
+  const auto unit = [](const Eigen::Vector3d& l) {
+    const double n = l.head<2>().norm();
+    return n > 0.0 ? Eigen::Vector3d(l / n) : Eigen::Vector3d::Zero().eval();
+  };
+  // A few matches spread over the list, so that the lines stay readable.
+  constexpr size_t kDrawn = 6;
+  const size_t n = steps.uv1.size();
+  for (size_t i = 0; i < n; ++i) {
+    TeachEpipolarMatch m;
+    m.pin_a = two.pins_a[i];
+    m.pin_b = two.pins_b[i];
+    m.uv_a = steps.uv1[i];
+    m.uv_b = steps.uv2[i];
+    const Eigen::Vector3d xa(m.uv_a.x(), m.uv_a.y(), 1.0), xb(m.uv_b.x(), m.uv_b.y(), 1.0);
+    m.line_in_b = unit(f * xa);
+    m.line_in_a = unit(f.transpose() * xb);
+    m.start_line_in_b = unit(f0 * xa);
+    m.start_line_in_a = unit(f0.transpose() * xb);
+    m.distances_px = SymmetricEpipolarDistances(f, m.uv_a, m.uv_b);
+    m.drawn = n <= kDrawn || i * kDrawn / n != (i + 1) * kDrawn / n;
+    out.push_back(m);
+  }
+  return out;
 }
 
 }  // namespace facet::app

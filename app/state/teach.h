@@ -18,6 +18,7 @@
 #include "core/geometry/ray_pair.h"
 #include "core/geometry/vanishing_construction.h"
 #include "core/scene/modelling_state.h"
+#include "core/estimators/fit_steps.h"
 #include "core/solve/joint_solve_steps.h"
 #include "core/texture/textured_mesh.h"
 
@@ -41,11 +42,43 @@ enum class TeachStepStart { kPerturbed, kAsIs };
 const char* TeachStepStartName(TeachStepStart start);  // "perturbed", "as-is"
 std::optional<TeachStepStart> TeachStepStartFromName(const std::string& name);
 
+// What the Solver steps window steps: the joint solve (the project), the vanishing-point fit
+// of the active photo, or the two-view refinement of F for the active photo and the second
+// photo (core/estimators/fit_steps.h).
+enum class TeachStepSubject { kJointSolve, kVanishingPoints, kTwoView };
+const char* TeachStepSubjectName(TeachStepSubject subject);  // "joint", "vanishing", "two-view"
+std::optional<TeachStepSubject> TeachStepSubjectFromName(const std::string& name);
+
+// The vanishing-point fit of one photo stepped: from the fit's own start (its closed form),
+// one round on the photo's segments as the calibration step reads them (straightened by the
+// camera's distortion, if any). The document is never changed; the overlay draws the
+// stepped vanishing points, their paths and each segment's residual.
+struct TeachVpSteps {
+  Id image_id = kNoId;
+  std::optional<VpFitSteps> steps;
+  std::vector<Id> segment_ids;  // per stepped segment, the project's segment
+  // Residuals drawn this many times their length; fixed when stepping begins (the start's
+  // largest residual drawn 6 % of the photo's diagonal, rounded to 1, 2 or 5 x 10^k).
+  double residual_scale = 1.0;
+};
+
+// The two-view refinement stepped for the active photo (a) and the second photo (b): the
+// matches are the pins of one vertex in both (7 or more), the stepped ones the inliers of a
+// full estimate (RANSAC is not an iteration of the refinement).
+struct TeachTwoViewSteps {
+  Id image_a = kNoId, image_b = kNoId;
+  std::optional<FundamentalFitSteps> steps;
+  std::vector<Id> pins_a, pins_b;  // per stepped match
+};
+
 // The joint solve stepped one Levenberg-Marquardt iteration at a time (View > Teach > Solver
 // steps). Stepping never edits the document: the image and 3D panels draw `steps->current`
 // instead of the document's project while it exists, and the steps are dropped (the panels
 // show the document again) when the document changes or the window closes.
 struct TeachSolverSteps {
+  TeachStepSubject subject = TeachStepSubject::kJointSolve;
+  TeachVpSteps vp;            // subject kVanishingPoints
+  TeachTwoViewSteps two_view;  // subject kTwoView
   TeachStepStart start = TeachStepStart::kPerturbed;
   // PerturbForSteps' amount. 0.2 (each camera turned by 4 degrees): on the Leuven street the
   // first two steps still leave residuals of tens of px before the quadratic convergence
@@ -162,9 +195,10 @@ std::vector<TeachRayPair> TeachRayPairs(const AppState& state);
 // The project the image and 3D panels draw: the stepped one while stepping, else null (the
 // document's).
 const Project* TeachSteppedProject(const AppState& state);
-// One Levenberg-Marquardt iteration more, beginning from the chosen start first when not
-// stepping yet. False (with solver.message saying why) when nothing changed: the solve had
-// finished, or failed.
+// One Levenberg-Marquardt iteration more of the chosen subject, beginning from its start
+// first when not stepping yet. False (with solver.message saying why) when nothing changed:
+// the fit had finished, or failed, or the subject has nothing to fit (no line families on the
+// active photo, fewer than 7 matches with the second photo).
 bool TeachStep(AppState* state);
 // Back to the state before the first step, exactly (the start stays shown).
 void TeachResetSteps(AppState* state);
@@ -184,5 +218,35 @@ struct TeachPinResidual {
 };
 // Of the pins in calibrated images whose vertex exists and is in front of the camera.
 std::vector<TeachPinResidual> TeachPinResiduals(const Project& project);
+
+// The stepped vanishing-point fit's residual of one segment: each endpoint's offset to its
+// foot on the line through the segment's midpoint and its family's current vanishing point
+// (the two offsets are equal and opposite; their length is the fit's residual, px).
+struct TeachVpSegmentResidual {
+  Id segment_id = kNoId;
+  int axis = 0;
+  Eigen::Vector2d a_px = Eigen::Vector2d::Zero(), b_px = Eigen::Vector2d::Zero();  // as fitted
+  Eigen::Vector2d offset_a_px = Eigen::Vector2d::Zero(), offset_b_px = Eigen::Vector2d::Zero();
+  double residual_px = 0.0;  // the fit's own figure (VpCalibrationSummary::segment_residuals_px)
+};
+// Empty unless the vanishing-point fit is being stepped.
+std::vector<TeachVpSegmentResidual> TeachVpResiduals(const AppState& state);
+
+// The stepped two-view refinement for one match: its epipolar lines under the current F
+// (line_in_a = F^T uv_b through photo a, line_in_b = F uv_a through photo b; (l0, l1) unit)
+// and the start's, and the signed distances (SymmetricEpipolarDistances: uv_b to line_in_b,
+// uv_a to line_in_a).
+struct TeachEpipolarMatch {
+  Id pin_a = kNoId, pin_b = kNoId;
+  Eigen::Vector2d uv_a = Eigen::Vector2d::Zero(), uv_b = Eigen::Vector2d::Zero();
+  Eigen::Vector3d line_in_a = Eigen::Vector3d::Zero(), line_in_b = Eigen::Vector3d::Zero();
+  Eigen::Vector3d start_line_in_a = Eigen::Vector3d::Zero(), start_line_in_b = Eigen::Vector3d::Zero();
+  Eigen::Vector2d distances_px = Eigen::Vector2d::Zero();
+  bool drawn = false;  // one of the few matches whose lines the overlay draws
+};
+// Empty unless the two-view refinement is being stepped.
+std::vector<TeachEpipolarMatch> TeachEpipolarMatches(const AppState& state);
+// True while the chosen subject has a stepped state (the window's Reset applies).
+bool TeachStepping(const AppState& state);
 
 }  // namespace facet::app

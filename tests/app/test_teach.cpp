@@ -4,7 +4,9 @@
 // directions), the epipolar lines of a selected pin and of the pointer, the Numbers window's
 // F (x_b^T F x_a = 0) and its copy buttons, the modelling state per History entry, the two
 // rays of a selected vertex's pins and their closest points in 3D; the Solver steps window
-// (N steps = one solve of N iterations, Reset, residual vectors, the document untouched);
+// (N steps = one solve of N iterations, Reset, residual vectors, the document untouched), and
+// the same for the vanishing-point fit (residuals per segment, the vanishing points' paths, f
+// per step) and the two-view refinement of F (epipolar lines and distances per match);
 // File > Export view headless (`render --panel`). Then the screenshots of each overlay
 // (FACET_BINARY_DIR/teach/; README "Teaching with Facet" shows copies from
 // assets/samples/leuven/teach/).
@@ -12,7 +14,9 @@
 
 #include "core/geometry/camera.h"
 #include "core/geometry/ray_pair.h"
+#include "core/estimators/fit_steps.h"
 #include "core/solve/joint_solve_steps.h"
+#include "core/solve/model_update.h"
 #include "core/util/matrix_text.h"
 #include "tests/app/app_test_util.h"
 
@@ -379,6 +383,232 @@ TEST_CASE("solver steps: N steps in the app are one solve of N iterations; Reset
   CHECK(reset_report.at("project") == nlohmann::json::parse(ProjectToJson(before)));
 }
 
+TEST_CASE("solver steps, vanishing points: N steps in the app are the fit with N iterations; Reset restores the start") {
+  // The same fit (core's CalibrateFromVanishingLines) in both processes, through JSON's
+  // round-trip doubles: equal to rounding.
+  constexpr double kSameFitRelative = 1e-12;
+  constexpr int kSteps = 3;
+  TempDir dir("teach_vp_steps");
+  SyntheticSceneOptions options;
+  options.noise_px = 0.5;
+  const SyntheticScene scene = MakeBoxScene(options);
+  // The principal point held at the centre, 15 px from the truth: the fit has iterations to show.
+  Project project = scene.project;
+  project.images[0].principal_point_mode = PrincipalPointMode::kImageCenter;
+  const std::string path = WriteScene(dir, scene, project);
+  const std::string before_path = dir / "before.facet";
+  std::string script =
+      "frames 3\ncommand save " + before_path + "\ncommand teach steps on\ncommand teach subject vanishing\nframes 1\n";
+  for (int k = 0; k < kSteps; ++k) script += "command teach step\nframes 1\n";
+  const nlohmann::json report = RenderScript(dir, path, "vp_steps", script + "frames 2\n");
+  const nlohmann::json& steps = report.at("teach").at("steps");
+  INFO(steps.at("message").get<std::string>());
+  CHECK(steps.at("subject").get<std::string>() == "vanishing");
+  REQUIRE(steps.contains("vanishing"));
+  const nlohmann::json& vp = steps.at("vanishing");
+  REQUIRE(vp.at("steps").get<int>() == kSteps);
+  // Stepping never edits the document.
+  const Project before = LoadProjectFile(before_path);
+  CHECK(report.at("project") == nlohmann::json::parse(ProjectToJson(before)));
+  CHECK(report.at("undo_stack").empty());
+
+  // The fit as the calibration step runs it, one round, with a budget of kSteps and of 0.
+  const Image& image = before.images[0];
+  std::vector<Segment> segments;
+  for (const Segment& seg : before.segments)
+    if (seg.image_id == image.id) segments.push_back(seg);
+  VpCalibrationOptions budget = CalibrationOptionsFor(image);
+  budget.refit_without_outliers = false;
+  budget.record_joint_trace = true;
+  budget.max_joint_iterations = kSteps;
+  const VpCalibrationSummary once = CalibrateFromVanishingLines(segments, budget);
+  REQUIRE(once.IsUsable());
+  budget.max_joint_iterations = 0;
+  const VpCalibrationSummary start = CalibrateFromVanishingLines(segments, budget);
+  REQUIRE(start.IsUsable());
+  const auto same = [&](double a, double b) { return std::abs(a - b) <= kSameFitRelative * std::max(1.0, std::abs(b)); };
+  CHECK(same(vp.at("focal_px").get<double>(), once.focal_px));
+  CHECK((Mat3(vp.at("cam_from_world_rotation")) - once.cam_from_world_rotation).norm() <= kSameFitRelative);
+  // f per step: the start's, then each step's.
+  REQUIRE(vp.at("path").size() == static_cast<size_t>(kSteps + 1));
+  CHECK(same(vp.at("path").at(0).at("focal_px").get<double>(), start.focal_px));
+  CHECK(same(vp.at("path").at(0).at("cost").get<double>(), start.final_cost));
+  CHECK(same(vp.at("path").at(kSteps).at("cost").get<double>(), once.final_cost));
+  for (int a = 0; a < 3; ++a) {
+    CHECK((Vec3(vp.at("path").at(0).at("vanishing_points").at(a)) - start.vanishing_points[a]).norm() <=
+          kSameFitRelative);
+    CHECK((Vec3(vp.at("path").at(kSteps).at("vanishing_points").at(a)) - once.vanishing_points[a]).norm() <=
+          kSameFitRelative);
+  }
+  // The start was not the answer: the vanishing points moved and the cost fell.
+  CHECK(once.final_cost < 0.9 * start.final_cost);
+  CHECK((once.vanishing_points[0] - start.vanishing_points[0]).norm() > 1e-6);
+  const double px2 = once.conditioning_scale_px * once.conditioning_scale_px;
+  REQUIRE(vp.at("trace").size() == once.joint_trace.size());
+  for (size_t i = 0; i < once.joint_trace.size(); ++i) {
+    CHECK(same(vp.at("trace").at(i).at("trial_cost").get<double>(), once.joint_trace[i].trial_cost * px2));
+    CHECK(vp.at("trace").at(i).at("lambda").get<double>() == once.joint_trace[i].lambda);
+  }
+  // Each segment's residual drawn: from each endpoint to the line through its midpoint and its
+  // family's vanishing point, as long as the fit's residual.
+  REQUIRE(vp.at("segments").size() == segments.size());
+  for (size_t i = 0; i < segments.size(); ++i) {
+    const nlohmann::json& j = vp.at("segments").at(i);
+    CHECK(j.at("segment_id").get<Id>() == segments[i].id);
+    CHECK(same(j.at("residual_px").get<double>(), once.segment_residuals_px[i]));
+    const Eigen::Vector2d foot = Vec2(j.at("a_px")) + Vec2(j.at("offset_a_px"));
+    const Eigen::Vector3d v = once.vanishing_points[static_cast<int>(segments[i].axis)];
+    const Eigen::Vector2d mid = 0.5 * (segments[i].a_px + segments[i].b_px);
+    // The foot lies on the line through mid and v (cross product of the two directions ~ 0).
+    const Eigen::Vector2d to_v = (v.head<2>() - v.z() * mid).normalized();
+    const Eigen::Vector2d to_foot = foot - mid;
+    CHECK(std::abs(to_v.x() * to_foot.y() - to_v.y() * to_foot.x()) <= 1e-9 * std::max(1.0, to_foot.norm()));
+    CHECK(std::abs(Vec2(j.at("offset_a_px")).norm() - std::abs(once.segment_residuals_px[i])) <= 1e-9);
+  }
+
+  // Reset: the start exactly.
+  const nlohmann::json reset_report = RenderScript(
+      dir, before_path, "vp_steps_reset",
+      "frames 3\ncommand teach steps on\ncommand teach subject vanishing\ncommand teach step\ncommand teach step\n"
+      "command teach reset\nframes 2\n");
+  const nlohmann::json& reset = reset_report.at("teach").at("steps").at("vanishing");
+  CHECK(reset.at("steps").get<int>() == 0);
+  CHECK(reset.at("trace").empty());
+  REQUIRE(reset.at("path").size() == 1u);
+  CHECK(reset.at("path").at(0) == vp.at("path").at(0));
+  CHECK(reset.at("focal_px").get<double>() == vp.at("path").at(0).at("focal_px").get<double>());
+  CHECK(reset_report.at("project") == nlohmann::json::parse(ProjectToJson(before)));
+}
+
+// The box scene with a second photo and two more boxes, every corner pinned in both photos
+// with 0.7 px noise: 24 matches for F.
+Project TwoViewMatchesProject(const SyntheticScene& scene) {
+  Project p = scene.project;
+  const Camera second_camera = SecondCamera();
+  Image second;
+  second.id = p.NewId();
+  second.path = "second.png";
+  second.camera = second_camera;
+  second.width_px = second_camera.width_px;
+  second.height_px = second_camera.height_px;
+  second.camera_calibrated = true;
+  p.images.push_back(second);
+  for (const auto& [size, translation] : {std::pair<Eigen::Vector3d, Eigen::Vector3d>{{1.5, 1.0, 1.2}, {1.0, -3.0, 0.0}},
+                                          std::pair<Eigen::Vector3d, Eigen::Vector3d>{{2.0, 1.5, 1.0}, {0.5, 0.5, 3.0}}}) {
+    PrimitiveShape shape = MakeBox(kNoId, size);
+    shape.translation = translation;
+    Id id = kNoId;
+    AddPrimitiveToProject(&p, shape, "box", &id, nullptr);
+  }
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.7);
+  for (const Primitive& primitive : p.primitives) {
+    for (VertexId c = 0; c < 8; ++c) {
+      const Eigen::Vector3d x = primitive.mesh.vertex(c).position;
+      for (const Image* image : {&p.images[0], &p.images[1]}) {
+        const bool first_box = primitive.id == scene.box_id;
+        if (first_box && image == &p.images[0]) continue;  // the scene pinned these
+        Pin pin;
+        pin.id = p.NewId();
+        pin.image_id = image->id;
+        pin.vertex = {primitive.id, c};
+        const double dx = noise(rng);
+        const double dy = noise(rng);
+        pin.uv_px = image->camera.Project(x) + Eigen::Vector2d(dx, dy);
+        REQUIRE(image->camera.CamFromWorld(x).z() > 0.0);
+        p.pins.push_back(pin);
+      }
+    }
+  }
+  return p;
+}
+
+TEST_CASE("solver steps, two views: N steps in the app are the refinement of F with N iterations; Reset restores it") {
+  constexpr double kSameFitRelative = 1e-12;
+  constexpr int kSteps = 2;
+  TempDir dir("teach_two_view_steps");
+  SyntheticSceneOptions options;
+  options.noise_px = 0.5;
+  const SyntheticScene scene = MakeBoxScene(options);
+  const Project project = TwoViewMatchesProject(scene);
+  WriteGreyPhoto(dir / "second.png", SecondCamera());
+  const std::string path = WriteScene(dir, scene, project);
+  const std::string before_path = dir / "before.facet";
+  std::string script = "frames 3\ncommand save " + before_path +
+                       "\ncommand teach steps on\ncommand teach subject two-view\ncommand teach second-image 1\n";
+  for (int k = 0; k < kSteps; ++k) script += "command teach step\nframes 1\n";
+  const nlohmann::json report = RenderScript(dir, path, "two_view_steps", script + "frames 2\n");
+  const nlohmann::json& steps = report.at("teach").at("steps");
+  INFO(steps.at("message").get<std::string>());
+  REQUIRE(steps.contains("two_view"));
+  const nlohmann::json& two = steps.at("two_view");
+  REQUIRE(two.at("steps").get<int>() == kSteps);
+  // Stepping never edits the document.
+  const Project opened = LoadProjectFile(before_path);
+  CHECK(report.at("project") == nlohmann::json::parse(ProjectToJson(opened)));
+  CHECK(two.at("image_a").get<Id>() == opened.images[0].id);
+  CHECK(two.at("image_b").get<Id>() == opened.images[1].id);
+
+  // The matches as the window takes them: pins of one vertex in both photos, RANSAC's inliers.
+  std::vector<Eigen::Vector2d> uv_a, uv_b;
+  for (const Pin& pa : opened.pins) {
+    if (pa.image_id != opened.images[0].id) continue;
+    for (const Pin& pb : opened.pins)
+      if (pb.image_id == opened.images[1].id && pb.vertex == pa.vertex) {
+        uv_a.push_back(pa.uv_px);
+        uv_b.push_back(pb.uv_px);
+        break;
+      }
+  }
+  REQUIRE(uv_a.size() == 24u);
+  const FundamentalSummary full = EstimateFundamentalMatrix(uv_a, uv_b, FundamentalOptions());
+  REQUIRE(full.IsUsable());
+  std::vector<Eigen::Vector2d> in_a, in_b;
+  for (size_t i = 0; i < uv_a.size(); ++i)
+    if (full.inliers[i]) in_a.push_back(uv_a[i]), in_b.push_back(uv_b[i]);
+  FundamentalOptions budget;
+  budget.use_ransac = false;
+  budget.record_refine_trace = true;
+  budget.max_refine_iterations = kSteps;
+  const FundamentalSummary once = EstimateFundamentalMatrix(in_a, in_b, budget);
+  REQUIRE(once.IsUsable());
+  budget.max_refine_iterations = 0;
+  const FundamentalSummary start = EstimateFundamentalMatrix(in_a, in_b, budget);
+  CHECK((Mat3(two.at("F")) - once.F).norm() <= kSameFitRelative);
+  REQUIRE(two.at("path").size() == static_cast<size_t>(kSteps + 1));
+  CHECK((Mat3(two.at("path").at(0)) - start.F).norm() <= kSameFitRelative);
+  CHECK(std::abs(two.at("cost").get<double>() - once.final_cost) <= kSameFitRelative * once.final_cost);
+  CHECK(once.final_cost < start.final_cost);  // the start was not the answer
+  REQUIRE(two.at("trace").size() == once.refine_trace.size());
+  for (size_t i = 0; i < once.refine_trace.size(); ++i)
+    CHECK(two.at("trace").at(i).at("lambda").get<double>() == once.refine_trace[i].lambda);
+  // Per match: the lines under the current F and the start's, the symmetric distances.
+  REQUIRE(two.at("matches").size() == in_a.size());
+  int drawn = 0;
+  for (size_t i = 0; i < in_a.size(); ++i) {
+    const nlohmann::json& m = two.at("matches").at(i);
+    CHECK((Vec2(m.at("uv_a")) - in_a[i]).norm() == 0.0);
+    const Eigen::Vector3d xa(in_a[i].x(), in_a[i].y(), 1.0), xb(in_b[i].x(), in_b[i].y(), 1.0);
+    CHECK(SignFree(Vec3(m.at("line_in_b")), once.F * xa) <= 1e-9);
+    CHECK(SignFree(Vec3(m.at("line_in_a")), once.F.transpose() * xb) <= 1e-9);
+    CHECK(SignFree(Vec3(m.at("start_line_in_b")), start.F * xa) <= 1e-9);
+    const Eigen::Vector2d d = SymmetricEpipolarDistances(once.F, in_a[i], in_b[i]);
+    CHECK((Vec2(m.at("distances_px")) - d).norm() <= 1e-9);
+    drawn += m.at("drawn").get<bool>() ? 1 : 0;
+  }
+  CHECK(drawn == 6);
+
+  const nlohmann::json reset_report = RenderScript(
+      dir, path, "two_view_reset",
+      "frames 3\ncommand teach steps on\ncommand teach subject two-view\ncommand teach second-image 1\n"
+      "command teach step\ncommand teach step\ncommand teach reset\nframes 2\n");
+  const nlohmann::json& reset = reset_report.at("teach").at("steps").at("two_view");
+  CHECK(reset.at("steps").get<int>() == 0);
+  CHECK(reset.at("trace").empty());
+  REQUIRE(reset.at("path").size() == 1u);
+  CHECK(reset.at("F") == two.at("path").at(0));
+}
+
 TEST_CASE("export view: render --panel writes the image or the 3D panel alone, at the asked size") {
   TempDir dir("teach_export");
   const SyntheticScene scene = MakeBoxScene();
@@ -585,6 +815,22 @@ TEST_CASE("screenshots of each teach overlay") {
           1e-12 * std::max(1.0, std::abs(once.constraints[i].residual)));
     CHECK(c.at("satisfied").get<bool>() == once.constraints[i].satisfied);
   }
+  // The vanishing-point fit stepped on the Leuven photo (two steps from its closed form), and
+  // the two-view refinement on the synthetic pair with noisy pins (one step from 8-point).
+  r = shot(leuven, "teach-steps-vp",
+           "frames 3\ncommand teach steps on\ncommand teach subject vanishing\ncommand teach step\n"
+           "command teach step\nframes 3");
+  REQUIRE(r.at("teach").at("steps").contains("vanishing"));
+  CHECK(r.at("teach").at("steps").at("vanishing").at("path").size() == 3u);
+  SyntheticSceneOptions noisy;
+  noisy.noise_px = 0.5;
+  const SyntheticScene noisy_scene = MakeBoxScene(noisy);
+  const std::string pair_path = WriteScene(dir, noisy_scene, TwoViewMatchesProject(noisy_scene));
+  r = shot(pair_path, "teach-steps-two-view",
+           "frames 3\ncommand teach steps on\ncommand teach subject two-view\ncommand teach second-image 1\n"
+           "command teach step\ncommand select-image 1\nframes 3");
+  REQUIRE(r.at("teach").at("steps").contains("two_view"));
+  CHECK(r.at("teach").at("steps").at("two_view").at("steps").get<int>() == 1);
   const cv::Mat exported = cv::imread(steps_3d);
   REQUIRE(!exported.empty());
   CHECK(exported.cols == 960);
