@@ -770,9 +770,9 @@ void DrawFitStepsBody(AppState* state) {
   }
   const FundamentalFitSteps& steps = *solver.two_view.steps;
   TracePlots(steps.trace, 1.0, " (rad, s)");
-  ImGui::Text("%d step(s), %s%s; symmetric epipolar RMS %s -> %s px", steps.steps,
-              SolverTerminationName(steps.summary.termination), steps.finished ? " (finished)" : "",
-              FormatNumber(steps.start.symmetric_epipolar_rms_px, 4).c_str(),
+  ImGui::Text("%d step(s), %s%s", steps.steps, SolverTerminationName(steps.summary.termination),
+              steps.finished ? " (finished)" : "");
+  ImGui::Text("symmetric epipolar RMS %s -> %s px", FormatNumber(steps.start.symmetric_epipolar_rms_px, 4).c_str(),
               FormatNumber(steps.summary.symmetric_epipolar_rms_px, 4).c_str());
   // The symmetric distance per match (its lines drawn for the marked ones).
   if (ImGui::BeginTable("##teach_two_view_matches", 4, kFlags, ImVec2(0.0f, 180.0f))) {

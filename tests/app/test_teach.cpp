@@ -481,8 +481,9 @@ TEST_CASE("solver steps, vanishing points: N steps in the app are the fit with N
 }
 
 // The box scene with a second photo and two more boxes, every corner pinned in both photos
-// with 0.7 px noise: 24 matches for F.
-Project TwoViewMatchesProject(const SyntheticScene& scene) {
+// with `noise_px` noise (the first box's pins in the first photo are the scene's): 24 matches
+// for F.
+Project TwoViewMatchesProject(const SyntheticScene& scene, double noise_px = 0.7) {
   Project p = scene.project;
   const Camera second_camera = SecondCamera();
   Image second;
@@ -501,7 +502,7 @@ Project TwoViewMatchesProject(const SyntheticScene& scene) {
     AddPrimitiveToProject(&p, shape, "box", &id, nullptr);
   }
   std::mt19937 rng(5);
-  std::normal_distribution<double> noise(0.0, 0.7);
+  std::normal_distribution<double> noise(0.0, noise_px);
   for (const Primitive& primitive : p.primitives) {
     for (VertexId c = 0; c < 8; ++c) {
       const Eigen::Vector3d x = primitive.mesh.vertex(c).position;
@@ -819,13 +820,14 @@ TEST_CASE("screenshots of each teach overlay") {
   // the two-view refinement on the synthetic pair with noisy pins (one step from 8-point).
   r = shot(leuven, "teach-steps-vp",
            "frames 3\ncommand teach steps on\ncommand teach subject vanishing\ncommand teach step\n"
-           "command teach step\nframes 3");
+           "command teach step\ncommand teach residual-scale 50\nframes 3");
   REQUIRE(r.at("teach").at("steps").contains("vanishing"));
   CHECK(r.at("teach").at("steps").at("vanishing").at("path").size() == 3u);
+  // 1.5 px clicks, so that the 8-point start is visibly off the refined F.
   SyntheticSceneOptions noisy;
-  noisy.noise_px = 0.5;
+  noisy.noise_px = 1.5;
   const SyntheticScene noisy_scene = MakeBoxScene(noisy);
-  const std::string pair_path = WriteScene(dir, noisy_scene, TwoViewMatchesProject(noisy_scene));
+  const std::string pair_path = WriteScene(dir, noisy_scene, TwoViewMatchesProject(noisy_scene, 1.5));
   r = shot(pair_path, "teach-steps-two-view",
            "frames 3\ncommand teach steps on\ncommand teach subject two-view\ncommand teach second-image 1\n"
            "command teach step\ncommand select-image 1\nframes 3");
