@@ -5,9 +5,10 @@
 // the ground at the scale of the one measured length, the half-timbered front is split at its
 // storey line (E_split, V_connect: two faces, the line level and pinned on the photo's sill),
 // the houses are textured wherever the photo sees them, take at most 40 UI events each
-// (issue 12's target for a house; a new user took 101 for the first one), and the saved result is the sample the app opens
-// (assets/samples/leuven/street.facet). Writes the step screenshots the README shows
-// (FACET_BINARY_DIR/tutorial/; assets/samples/leuven/tutorial/ holds the copies shown).
+// (issue 12's target for a house; a new user took 101 for the first one), and the saved
+// result is the sample the app opens (assets/samples/leuven/street.facet). Writes the step
+// screenshots the README shows (FACET_BINARY_DIR/tutorial/; assets/samples/leuven/tutorial/
+// holds the copies shown).
 #include <doctest/doctest.h>
 
 #include <cmath>

@@ -394,7 +394,8 @@ facet::Project PinTheBoxAndBasin(const DrawnLines& lines, const std::string& nam
   // The basin does not stand on the band's base.
   script += "command constrain remove " + std::to_string(basin_ground_id) + "\nframes 1\n";
   // Its height is seen by nothing either (every observation is on its top): typed too (edge 0-4).
-  script += "command select edge " + std::to_string(basin_id) + " 0\ncommand constrain length 0.1\nframes 1\ncommand tool pin\n";
+  script += "command select edge " + std::to_string(basin_id) +
+            " 0\ncommand constrain length 0.1\nframes 1\ncommand tool pin\n";
   for (size_t i = 0; i < Photos().size(); ++i) {
     const BasinReading& basin = BasinReadings()[i];
     script += "command select-image " + std::to_string(i) + "\nframes 1\n";
