@@ -11,7 +11,10 @@
 //                                 A POINT is `X Y` (screen px), `image U V` (pixel (U, V) of
 //                                 the photo shown in the image panel), `vertex P V` (where
 //                                 vertex V of the P-th primitive, 0 the first added, is drawn
-//                                 over that photo: a corner the user grabs) or `item NAME`
+//                                 over that photo: a corner the user grabs; V is the mesh's
+//                                 vertex id: a box's corners 0-7 (bit 0 x, bit 1 y, bit 2 z),
+//                                 and a vertex Split edge adds takes the next id, never
+//                                 reused: 8, 9, ... on a box) or `item NAME`
 //                                 (the centre of the widget the UI recorded as NAME, e.g.
 //                                 image.accept_lines: the report's "items"). Image, vertex and
 //                                 item points are mapped through what the frame before showed,

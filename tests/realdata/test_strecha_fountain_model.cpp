@@ -5,7 +5,8 @@
 // adds one box on the fountain's wall (its frieze band) and pins its corners in each photo
 // (clicks), and saves. The saved project's cameras are compared with the ground truth: the
 // relative rotation, each rotation after the best common rotation, the baseline direction and
-// the focal length; the figures are printed with MESSAGE.
+// the focal length; the figures are printed with MESSAGE. A third run adds a box with depth on
+// the basin and frees the focal lengths (see the last case).
 //
 // Snapping is off (render --no-snap): every line end and pin below is a pixel read off the
 // photo and stated here; snapping would move it onto whatever corner the detector finds near
@@ -343,6 +344,79 @@ facet::Project PinTheBox(const DrawnLines& lines, const std::string& name, const
   return model;
 }
 
+// Depth for the focal length: a second box on the basin in front of the wall, its top the
+// basin rim's. Pinned in each photo: the rim's two front corners (vertex 4 top left, 5 top
+// right: where the rim's top front edge turns onto the chamfers) and, as a line pin, its top
+// back edge (corners 6-7) on the line where the rim meets the pedestal behind it (the rim's
+// ends are chamfered, so that edge's ends are no points of the photo). Read by eye on 3x-5x
+// crops of the halved photos, to a pixel or two. With the band's pins these are points on two
+// planes, the wall's and the rim's, seen in both photos.
+struct BasinReading {
+  Eigen::Vector2d front_left, front_right;
+  std::array<double, 4> back_line;
+};
+const std::vector<BasinReading>& BasinReadings() {
+  static const std::vector<BasinReading> readings = {
+      {{643.0, 695.5}, {1097.0, 685.0}, {510.0, 667.0, 1000.0, 655.5}},  // 0006
+      {{363.0, 687.0}, {790.0, 695.0}, {400.0, 665.5, 850.0, 668.5}},    // 0004
+  };
+  return readings;
+}
+
+// PinTheBox, then the basin box: added, its two front corners pinned and its top back edge
+// line-pinned in each photo; `before` runs first.
+facet::Project PinTheBoxAndBasin(const DrawnLines& lines, const std::string& name, const std::string& before,
+                                 std::string* log) {
+  const facet::Id box_id = lines.next_id;
+  size_t num_band_pins = 0;
+  for (const Photo& photo : Photos()) num_band_pins += photo.pins.size();
+  // The ids the script's objects get: the band box, its pins, two known lengths, then the basin
+  // box and the ground constraint Add box gives it.
+  const facet::Id basin_id = box_id + 1 + static_cast<facet::Id>(num_band_pins) + 2;
+  const facet::Id basin_ground_id = basin_id + 1;
+  constexpr int kTopBackEdge = 10;  // corners 6-7 in a new box's mesh (core/mesh/box.cpp's order)
+  const std::string saved = *lines.dir / (name + ".facet");
+  std::string script =
+      "frames 2\n" + before + "command select-image 0\nframes 1\ncommand add box\nframes 1\ncommand tool pin\n";
+  for (size_t i = 0; i < Photos().size(); ++i) {
+    script += "command select-image " + std::to_string(i) + "\nframes 1\n";
+    for (const BoxPin& pin : Photos()[i].pins) {
+      script += "command select vertex " + std::to_string(box_id) + " " + std::to_string(pin.vertex) + "\n" +
+                Click(lines.view, pin.uv_px);
+    }
+  }
+  // The band box's depth is seen by nothing; with the focal lengths free its held value
+  // drifted below zero (an unsaveable project), so it is typed as a known length (edge 0-2);
+  // that takes the scale over from the kept height, which gets a known length too (edge 0-4).
+  script += "command select edge " + std::to_string(box_id) + " 3\ncommand constrain length 1\nframes 1\n";
+  script += "command select edge " + std::to_string(box_id) + " 0\ncommand constrain length 1\nframes 1\n";
+  script += "command select-image 0\nframes 1\ncommand select none\ncommand add box\nframes 1\n";
+  // The basin does not stand on the band's base.
+  script += "command constrain remove " + std::to_string(basin_ground_id) + "\nframes 1\n";
+  // Its height is seen by nothing either (every observation is on its top): typed too (edge 0-4).
+  script += "command select edge " + std::to_string(basin_id) +
+            " 0\ncommand constrain length 0.1\nframes 1\ncommand tool pin\n";
+  for (size_t i = 0; i < Photos().size(); ++i) {
+    const BasinReading& basin = BasinReadings()[i];
+    script += "command select-image " + std::to_string(i) + "\nframes 1\n";
+    script += "command select vertex " + std::to_string(basin_id) + " 4\n" + Click(lines.view, basin.front_left);
+    script += "command select vertex " + std::to_string(basin_id) + " 5\n" + Click(lines.view, basin.front_right);
+    std::ostringstream line_pin;
+    line_pin.precision(17);
+    line_pin << "command select edge " << basin_id << " " << kTopBackEdge << "\ncommand line-pin " << i;
+    for (double v : basin.back_line) line_pin << " " << v;
+    script += line_pin.str() + "\nframes 1\n";
+  }
+  script += "frames 2\ncommand save " + saved + "\nframes 1\n";
+  *log = ReportLog(Run(*lines.dir, lines.path, name, script));
+  facet::Project model = LoadProjectFile(saved);
+  REQUIRE(model.images.size() == Photos().size());
+  REQUIRE(model.primitives.size() == 2);
+  REQUIRE(model.primitives[1].id == basin_id);
+  REQUIRE(model.pins.size() == num_band_pins + 2 * Photos().size());
+  return model;
+}
+
 // The recovered cameras against the ground truth.
 struct Comparison {
   std::vector<double> relative_rotation_error_deg;   // per pair (a < b)
@@ -475,4 +549,45 @@ TEST_CASE("Strecha fountain through the app, focal length known: every camera wi
   for (const double error_deg : c.baseline_direction_error_deg) CHECK(error_deg < kMaxBaselineDirectionErrorDeg);
   constexpr double kMaxPinRmsPx = 3.0;
   CHECK(c.pin_rms_px < kMaxPinRmsPx);
+}
+
+// What a PhotoModeler user does without the lens: give the model depth, here a box on the
+// basin in front of the wall (PinTheBoxAndBasin), and let the joint solve free the focal
+// lengths (focal-lock off) with points on two planes in both photos. Figures on this build:
+// f 0006 +7.1 %, 0004 +8.1 % (the lines alone: +25 %, -38 %), the baseline direction off by
+// 0.35 deg (62 deg), but the relative rotation still off by 1.82 deg (1.89 deg): the issue's
+// 1 deg is not met. With f 7-8 % long the line families turn each camera by ~0.9 deg (the
+// rotation error after the best common rotation); the known focal length gives 0.12 deg. The
+// rim is read to a pixel or two over ~30 px of depth in each photo, so f is good to several
+// per cent, not to the ~2 % that 1 deg would need here; the readings were not adjusted
+// towards the ground truth.
+TEST_CASE("Strecha fountain through the app, focal length unknown, a box with depth on the basin: rotations reported") {
+  std::ostringstream before;
+  for (size_t i = 0; i < Photos().size(); ++i) {
+    before << "command select-image " << i << "\nframes 1\ncommand calibration focal-lock off\nframes 1\n";
+  }
+  std::string log;
+  const facet::Project model = PinTheBoxAndBasin(LinesDrawnThroughTheApp(), "model_basin", before.str(), &log);
+  INFO("log:\n" << log);
+  const Comparison c = CompareWithGroundTruth(model);
+  const double worst_deg =
+      *std::max_element(c.relative_rotation_error_deg.begin(), c.relative_rotation_error_deg.end());
+  const facet::Primitive& basin = model.primitives[1];
+  MESSAGE("Strecha fountain, focal length free, band and basin:\n"
+          << c.figures << "basin box " << basin.shape.params.head<3>().transpose() << " (band box "
+          << model.primitives[0].shape.params.head<3>().transpose() << ")\nworst relative rotation error " << worst_deg
+          << " deg: the issue's " << kMaxRelativeRotationErrorDeg << " deg is "
+          << std::string(worst_deg < kMaxRelativeRotationErrorDeg ? "met" : "NOT met"));
+  CHECK(log.find("error:") == std::string::npos);
+  // What the depth buys, with bounds that the lines alone fail (25-38 % and 62 deg above):
+  // each focal length within 15 % (7-8 % measured), the baseline direction within the
+  // known-focal case's 5 deg (0.35 deg measured); the pins met as there.
+  constexpr double kMaxFocalError = 0.15;
+  for (const double error : c.focal_error) CHECK(std::abs(error) < kMaxFocalError);
+  constexpr double kMaxBaselineDirectionErrorDeg = 5.0;
+  for (const double error_deg : c.baseline_direction_error_deg) CHECK(error_deg < kMaxBaselineDirectionErrorDeg);
+  constexpr double kMaxPinRmsPx = 3.0;
+  CHECK(c.pin_rms_px < kMaxPinRmsPx);
+  // The basin box has depth: its top's front and back are apart by more than a tenth of its width.
+  CHECK(model.primitives[1].shape.params[1] > 0.1 * model.primitives[1].shape.params[0]);
 }
