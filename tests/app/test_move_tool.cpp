@@ -82,17 +82,33 @@ std::string DragScript(const Eigen::Vector2d& from, const Eigen::Vector2d& to, i
   return s.str();
 }
 
+// The start every move-tool case shares: a free box, the Move tool chosen (M), the first
+// frame's report, the 3D view it was drawn with and the project before any drag.
+struct MoveToolStart {
+  facet::Id box_id = facet::kNoId;
+  std::string path;
+  std::string prefix = "frames 3\nkey m\nframes 2\n";
+  nlohmann::json report;
+  Viewport3d view;
+  facet::Project before;
+};
+
+MoveToolStart StartWithFreeBox(const TempDir& dir) {
+  MoveToolStart start;
+  start.path = WriteFreeBox(dir, &start.box_id);
+  start.report = Render(dir, start.path, "start", start.prefix);
+  start.view = ViewportFromReport(start.report);
+  start.before = FromReport(start.report);
+  return start;
+}
+
 }  // namespace
 
 TEST_CASE("move tool: a vertex dragged in the 3D panel follows the mouse; undo restores it exactly") {
   TempDir dir("move_vertex");
-  facet::Id box_id = facet::kNoId;
-  const std::string path = WriteFreeBox(dir, &box_id);
-  const std::string prefix = "frames 3\nkey m\nframes 2\n";
-  const nlohmann::json start = Render(dir, path, "start", prefix);
-  CHECK(start.at("tool").get<std::string>() == "Move");
-  const Viewport3d view = ViewportFromReport(start);
-  const facet::Project before = FromReport(start);
+  const MoveToolStart start = StartWithFreeBox(dir);
+  const auto& [box_id, path, prefix, start_report, view, before] = start;
+  CHECK(start_report.at("tool").get<std::string>() == "Move");
   const facet::Primitive& box0 = *before.FindPrimitive(box_id);
   const facet::VertexId corner = 7;  // x, y and z bits: the top far corner
   const Eigen::Vector3d p0 = box0.mesh.vertex(corner).position;
@@ -136,12 +152,8 @@ TEST_CASE("move tool: a vertex dragged in the 3D panel follows the mouse; undo r
 
 TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the move command") {
   TempDir dir("move_primitive");
-  facet::Id box_id = facet::kNoId;
-  const std::string path = WriteFreeBox(dir, &box_id);
-  const std::string prefix = "frames 3\nkey m\nframes 2\n";
-  const nlohmann::json start = Render(dir, path, "start", prefix);
-  const Viewport3d view = ViewportFromReport(start);
-  const facet::Project before = FromReport(start);
+  const MoveToolStart start = StartWithFreeBox(dir);
+  const auto& [box_id, path, prefix, start_report, view, before] = start;
   const facet::Primitive& box0 = *before.FindPrimitive(box_id);
   // The top face's centre (z = 2): seen from above by the default view.
   const Eigen::Vector3d top_centre = box0.shape.translation + Eigen::Vector3d(2.0, 1.5, 2.0);
@@ -280,12 +292,8 @@ int ReferencePixels(const cv::Mat& shot, const nlohmann::json& panel_rect) {
 
 TEST_CASE("reference geometry: added by script and drawn; a dragged vertex snaps onto it; undo; a missing file") {
   TempDir dir("reference_snap");
-  facet::Id box_id = facet::kNoId;
-  const std::string path = WriteFreeBox(dir, &box_id);
-  const std::string prefix = "frames 3\nkey m\nframes 2\n";
-  const nlohmann::json start = Render(dir, path, "start", prefix);
-  const Viewport3d view = ViewportFromReport(start);
-  const facet::Project before = FromReport(start);
+  const MoveToolStart start = StartWithFreeBox(dir);
+  const auto& [box_id, path, prefix, start_report, view, before] = start;
   const facet::VertexId corner = 7;
   const Eigen::Vector3d p0 = before.FindPrimitive(box_id)->mesh.vertex(corner).position;
   // A reference triangle (Z-up file: its numbers are world coordinates) whose first vertex
