@@ -106,24 +106,19 @@ void BoundaryDistances(const std::vector<std::uint8_t>& outside_photo, double de
     float* row = &framed[static_cast<size_t>(j) * stride];
     const float* above = row - stride;
     for (int i = 1; i <= w; ++i) {
-      float v = row[i];
-      v = std::min(v, row[i - 1] + kOrthogonal);
-      v = std::min(v, above[i] + kOrthogonal);
-      v = std::min(v, above[i - 1] + kDiagonal);
-      v = std::min(v, above[i + 1] + kDiagonal);
-      row[i] = v;
+      // The row before last: only the step from row[i - 1] waits for the previous pixel.
+      float v = std::min(std::min(row[i], above[i] + kOrthogonal),
+                         std::min(above[i - 1] + kDiagonal, above[i + 1] + kDiagonal));
+      row[i] = std::min(v, row[i - 1] + kOrthogonal);
     }
   }
   for (int j = h; j >= 1; --j) {
     float* row = &framed[static_cast<size_t>(j) * stride];
     const float* below = row + stride;
     for (int i = w; i >= 1; --i) {
-      float v = row[i];
-      v = std::min(v, row[i + 1] + kOrthogonal);
-      v = std::min(v, below[i] + kOrthogonal);
-      v = std::min(v, below[i + 1] + kDiagonal);
-      v = std::min(v, below[i - 1] + kDiagonal);
-      row[i] = v;
+      float v = std::min(std::min(row[i], below[i] + kOrthogonal),
+                         std::min(below[i + 1] + kDiagonal, below[i - 1] + kDiagonal));
+      row[i] = std::min(v, row[i + 1] + kOrthogonal);
     }
   }
   const float to_photo_px = static_cast<float>(map->photo_px_per_map_px) / kOrthogonal;
