@@ -81,7 +81,8 @@ bool PhotoPyramid::Sample(double x, double y, const Eigen::Vector2d& axis_u, con
   if (photo_ == nullptr || !(x >= -0.5 && x <= photo_->width - 0.5 && y >= -0.5 && y <= photo_->height - 0.5)) {
     return false;
   }
-  const double footprint = std::max(axis_u.norm(), axis_v.norm());
+  const double length_u = axis_u.norm(), length_v = axis_v.norm();
+  const double footprint = std::max(length_u, length_v);
   if (!(footprint > 1.0)) {
     Bilinear(*photo_, x, y, rgba);
     return true;
@@ -91,8 +92,9 @@ bool PhotoPyramid::Sample(double x, double y, const Eigen::Vector2d& axis_u, con
   const int level = std::clamp(static_cast<int>(std::floor(std::log2(footprint))) - 1, 0, levels() - 1);
   const double s = std::ldexp(1.0, -level);
   const Eigen::Vector2d u = axis_u * s, v = axis_v * s;
-  const int taps_u = std::max(1, static_cast<int>(std::ceil(u.norm() - 1e-9)));
-  const int taps_v = std::max(1, static_cast<int>(std::ceil(v.norm() - 1e-9)));
+  // |axis * 2^-level| is |axis| * 2^-level exactly: the lengths need no second square root.
+  const int taps_u = std::max(1, static_cast<int>(std::ceil(length_u * s - 1e-9)));
+  const int taps_v = std::max(1, static_cast<int>(std::ceil(length_v * s - 1e-9)));
   // Level k's pixel centres sit at 2^k (i + 0.5) - 0.5 in photo pixels.
   const Eigen::Vector2d centre((x + 0.5) * s - 0.5, (y + 0.5) * s - 0.5);
   const ImageRgba8& image = Level(level);
