@@ -954,8 +954,9 @@ TEST_CASE("reference meshes: a .gltf with its buffer in a .bin file or a data: U
   nlohmann::json not_base64 = with_file;
   not_base64["buffers"][0]["uri"] = bad_base64;
   const std::vector<Broken> broken = {
-      {"short.gltf", short_buffer.dump(), "buffer 0 holds " + std::to_string(bin.size()) + " bytes, its byteLength says " +
-                                               std::to_string(bin.size() + 40)},
+      {"short.gltf", short_buffer.dump(),
+       "buffer 0 holds " + std::to_string(bin.size()) + " bytes, its byteLength says " +
+           std::to_string(bin.size() + 40)},
       {"missing.gltf", missing_bin.dump(), "buffer 0: " + (dir / "gone.bin").string()},
       {"remote.gltf", remote.dump(), "buffer 0: its URI https:... is not a file beside the glTF"},
       {"no_uri.gltf", no_uri.dump(), "buffer 0 has no uri"},

@@ -1,5 +1,6 @@
 // A deliberately small glTF reader (binary .glb, or JSON .gltf with .bin files or data: URIs):
-// what ExportGlb writes and what a mesh from another tool needs for reference geometry, each access bounds-checked, anything else refused by name.
+// what ExportGlb writes and what a mesh from another tool needs for reference geometry, each
+// access bounds-checked, anything else refused by name.
 #include "core/io/gltf_read.h"
 
 #include <cctype>
@@ -150,15 +151,21 @@ bool DecodeBase64(const std::string& text, size_t begin, std::vector<std::uint8_
   size_t padding = 0;
   for (size_t i = begin; i < text.size(); ++i) {
     const char c = text[i];
-    int value = -1;
-    if (c >= 'A' && c <= 'Z') value = c - 'A';
-    else if (c >= 'a' && c <= 'z') value = c - 'a' + 26;
-    else if (c >= '0' && c <= '9') value = c - '0' + 52;
-    else if (c == '+') value = 62;
-    else if (c == '/') value = 63;
-    else if (c == '=') {
+    if (c == '=') {
       ++padding;
       continue;
+    }
+    int value = -1;
+    if (c >= 'A' && c <= 'Z') {
+      value = c - 'A';
+    } else if (c >= 'a' && c <= 'z') {
+      value = c - 'a' + 26;
+    } else if (c >= '0' && c <= '9') {
+      value = c - '0' + 52;
+    } else if (c == '+') {
+      value = 62;
+    } else if (c == '/') {
+      value = 63;
     }
     if (value < 0 || padding > 0) return false;
     accumulator = (accumulator << 6) | static_cast<std::uint32_t>(value);
@@ -211,8 +218,8 @@ std::vector<std::uint8_t> UriBytes(const std::string& uri, const std::filesystem
 
 // Every buffer of the file, each holding at least its byteLength. A buffer without a URI is
 // the GLB's BIN chunk (`glb_bin`, for buffer 0 of a .glb only).
-std::vector<std::vector<std::uint8_t>> LoadBuffers(const Json& gltf, const std::filesystem::path& folder,
-                                                   bool is_glb, std::vector<std::uint8_t> glb_bin) {
+std::vector<std::vector<std::uint8_t>> LoadBuffers(const Json& gltf, const std::filesystem::path& folder, bool is_glb,
+                                                   std::vector<std::uint8_t> glb_bin) {
   std::vector<std::vector<std::uint8_t>> buffers;
   const Json& list = gltf.value("buffers", Json::array());
   for (size_t i = 0; i < list.size(); ++i) {

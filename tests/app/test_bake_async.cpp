@@ -403,9 +403,9 @@ TEST_CASE("texture sources: twenty photos get twenty distinct colours in the leg
   const facet::testing::Paint paint = [](const facet::testing::PaintedFace&, const Eigen::Vector3d&) {
     return Eigen::Vector3d(170, 150, 130);
   };
-  REQUIRE(facet::WritePng(dir / "photo1.png",
-                          facet::testing::RenderTexturedPhoto(faces, project.images[0].camera, paint))
-              .empty());
+  REQUIRE(
+      facet::WritePng(dir / "photo1.png", facet::testing::RenderTexturedPhoto(faces, project.images[0].camera, paint))
+          .empty());
   // The other photos: small grey files, uncalibrated, not used for texture.
   facet::ImageRgba8 grey;
   grey.width = 64;
@@ -424,8 +424,8 @@ TEST_CASE("texture sources: twenty photos get twenty distinct colours in the leg
   }
   const std::string project_path = dir / "scene.facet";
   REQUIRE(facet::SaveProject(project, project_path).empty());
-  const nlohmann::json report = RenderScript(
-      dir, project_path, "colours", "frames 2\ncommand wait-bake\ncommand texture sources on\nframes 2\n");
+  const nlohmann::json report =
+      RenderScript(dir, project_path, "colours", "frames 2\ncommand wait-bake\ncommand texture sources on\nframes 2\n");
   INFO("log:\n" << ReportLog(report));
   const nlohmann::json& legend = report.at("texture").at("legend");
   REQUIRE(legend.size() == kPhotos);
@@ -446,7 +446,7 @@ TEST_CASE("texture sources: twenty photos get twenty distinct colours in the leg
     CAPTURE(hue);
     CHECK((hue < 15.0 || hue > 50.0));
   }
-  CHECK(legend[0].at("faces").get<int>() > 0);  // photo 1 textures the box
+  CHECK(legend[0].at("faces").get<int>() > 0);            // photo 1 textures the box
   CHECK(colours[0] == std::array<int, 3>{66, 133, 244});  // photo 1 keeps its blue
   // Distinct: every two colours at least 30 levels apart (Euclidean, RGB); the nearest pair
   // is reported.
@@ -455,8 +455,8 @@ TEST_CASE("texture sources: twenty photos get twenty distinct colours in the leg
   size_t nearest_a = 0, nearest_b = 0;
   for (size_t a = 0; a < colours.size(); ++a) {
     for (size_t b = a + 1; b < colours.size(); ++b) {
-      const double d = std::hypot(colours[a][0] - colours[b][0], colours[a][1] - colours[b][1],
-                                  colours[a][2] - colours[b][2]);
+      const double d =
+          std::hypot(colours[a][0] - colours[b][0], colours[a][1] - colours[b][1], colours[a][2] - colours[b][2]);
       if (d < nearest) {
         nearest = d;
         nearest_a = a;
@@ -465,6 +465,6 @@ TEST_CASE("texture sources: twenty photos get twenty distinct colours in the leg
     }
   }
   CHECK(nearest >= kMinColourDistance);
-  MESSAGE("20 photos' legend colours: the nearest two (photos " << nearest_a + 1 << " and " << nearest_b + 1
-                                                                 << ") are " << nearest << " RGB levels apart");
+  MESSAGE("20 photos' legend colours: the nearest two (photos " << nearest_a + 1 << " and " << nearest_b + 1 << ") are "
+                                                                << nearest << " RGB levels apart");
 }

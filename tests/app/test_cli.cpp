@@ -393,8 +393,8 @@ TEST_CASE("export: a synthetic box rendered from the .glb through each of three 
   };
   // Turned about the box's vertical axis through the look-at point; each camera sees two or
   // three faces, so every face is in some photo and the bake blends where they overlap.
-  for (const View& v : {View{100.0, 480, 720, 700.0, {-8.0, 14.0}},  // portrait
-                        View{200.0, 640, 640, 620.0, {0.0, 0.0}}}) {   // square, centred
+  for (const View& v : {View{100.0, 480, 720, 700.0, {-8.0, 14.0}},   // portrait
+                        View{200.0, 640, 640, 620.0, {0.0, 0.0}}}) {  // square, centred
     facet::testing::SyntheticSceneOptions o = options;
     o.camera_center = o.look_at + Eigen::AngleAxisd(v.azimuth_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()) *
                                       (options.camera_center - options.look_at);
@@ -478,8 +478,8 @@ TEST_CASE("export: a synthetic box rendered from the .glb through each of three 
     constexpr double kShiftTolerancePx = 1.0;  // issue 13's bound
     CHECK(shift.norm() < kShiftTolerancePx);
     MESSAGE("synthetic camera " << c << " (" << truth.width_px << " x " << truth.height_px << ", principal point "
-                                << (truth.principal_point_px - Eigen::Vector2d((truth.width_px - 1) / 2.0,
-                                                                               (truth.height_px - 1) / 2.0))
+                                << (truth.principal_point_px -
+                                    Eigen::Vector2d((truth.width_px - 1) / 2.0, (truth.height_px - 1) / 2.0))
                                        .transpose()
                                 << " px off centre): the rendered .glb lies " << shift.x() << ", " << shift.y()
                                 << " px (|" << shift.norm() << "|) from the photo, ECC correlation " << correlation
