@@ -850,6 +850,130 @@ TEST_CASE("reference meshes: OBJ faces, negative indices and errors that name th
   error = facet::ReadReferenceMesh(missing, true, &mesh);
   CHECK(error.find(missing) != std::string::npos);
   MESSAGE("a missing reference: " << error);
-  CHECK(facet::ReadReferenceMesh((dir / "plan.stl").string(), true, &mesh).find(".obj or a binary glTF .glb") !=
+  CHECK(facet::ReadReferenceMesh((dir / "plan.stl").string(), true, &mesh).find(".obj or a glTF .glb or .gltf") !=
         std::string::npos);
+}
+
+namespace {
+
+// Base64 as RFC 4648 writes it, for the data: URIs of the .gltf tests (written here, apart from
+// the reader's decoder, so that a mistake in one is not repeated in the other).
+std::string Base64(const std::vector<std::uint8_t>& bytes) {
+  static const char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    const std::uint32_t n = (static_cast<std::uint32_t>(bytes[i]) << 16) |
+                            (i + 1 < bytes.size() ? static_cast<std::uint32_t>(bytes[i + 1]) << 8 : 0u) |
+                            (i + 2 < bytes.size() ? static_cast<std::uint32_t>(bytes[i + 2]) : 0u);
+    out += kAlphabet[(n >> 18) & 63];
+    out += kAlphabet[(n >> 12) & 63];
+    out += i + 1 < bytes.size() ? kAlphabet[(n >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? kAlphabet[n & 63] : '=';
+  }
+  return out;
+}
+
+// A unit square at z = 0 (two triangles, 16-bit indices) under a node translated by
+// `translation`, as a JSON glTF whose one buffer has the given uri; *bin gets its bytes.
+nlohmann::json SquareGltf(const std::string& uri, const Eigen::Vector3d& translation, std::vector<std::uint8_t>* bin) {
+  const float positions[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+  const std::uint16_t indices[6] = {0, 1, 2, 0, 2, 3};
+  bin->resize(sizeof(positions) + sizeof(indices));
+  std::memcpy(bin->data(), positions, sizeof(positions));
+  std::memcpy(bin->data() + sizeof(positions), indices, sizeof(indices));
+  return {{"asset", {{"version", "2.0"}, {"generator", "test_export"}}},
+          {"scene", 0},
+          {"scenes", {{{"nodes", {0}}}}},
+          {"nodes", {{{"mesh", 0}, {"translation", {translation.x(), translation.y(), translation.z()}}}}},
+          {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
+          {"buffers", {{{"uri", uri}, {"byteLength", bin->size()}}}},
+          {"bufferViews",
+           {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", sizeof(positions)}, {"target", 34962}},
+            {{"buffer", 0}, {"byteOffset", sizeof(positions)}, {"byteLength", sizeof(indices)}, {"target", 34963}}}},
+          {"accessors",
+           {{{"bufferView", 0},
+             {"componentType", 5126},
+             {"count", 4},
+             {"type", "VEC3"},
+             {"min", {0, 0, 0}},
+             {"max", {1, 1, 0}}},
+            {{"bufferView", 1}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}}}};
+}
+
+}  // namespace
+
+TEST_CASE("reference meshes: a .gltf with its buffer in a .bin file or a data: URI; broken ones refused by name") {
+  const fs::path dir = TempDir("reference_gltf");
+  const Eigen::Vector3d translation(2.0, -1.0, 0.5);
+  std::vector<std::uint8_t> bin;
+  // The .bin's name has a space, which a URI writes %20.
+  const nlohmann::json with_file = SquareGltf("square%20data.bin", translation, &bin);
+  {
+    std::ofstream out(dir / "square data.bin", std::ios::binary);
+    out.write(reinterpret_cast<const char*>(bin.data()), static_cast<std::streamsize>(bin.size()));
+  }
+  std::ofstream(dir / "square.gltf") << with_file.dump(1);
+  std::ofstream(dir / "inline.gltf")
+      << SquareGltf("data:application/octet-stream;base64," + Base64(bin), translation, &bin).dump(1);
+  for (const std::string name : {"square.gltf", "inline.gltf"}) {
+    CAPTURE(name);
+    const std::string path = (dir / name).string();
+    // The test's files are glTF as the specification has it (tests/gltf/validate.js reads no
+    // external resource, so the data: URI one is validated; the other differs only in its uri).
+    if (name == "inline.gltf") CHECK_GLTF_VALID(path);
+    facet::ReferenceMesh mesh;
+    const std::string error = facet::ReadReferenceMesh(path, /*y_up=*/false, &mesh);
+    REQUIRE_MESSAGE(error.empty(), error);
+    REQUIRE(mesh.positions.size() == 4);
+    CHECK(mesh.triangles.size() == 2);
+    CHECK(mesh.triangles[1] == std::array<int, 3>{0, 2, 3});
+    CHECK(mesh.edges.size() == 5);  // the square's 4 sides and its diagonal
+    // The node's translation is applied; the float positions are exact in this range.
+    constexpr double kPositionTolerance = 1e-6;
+    CHECK((mesh.positions[2] - (translation + Eigen::Vector3d(1, 1, 0))).norm() < kPositionTolerance);
+    CHECK((mesh.lo - translation).norm() < kPositionTolerance);
+    // Y-up axes turn the square upright: file y is world z.
+    REQUIRE(facet::ReadReferenceMesh(path, /*y_up=*/true, &mesh).empty());
+    CHECK(std::abs(mesh.hi.z() - (translation.y() + 1.0)) < kPositionTolerance);
+  }
+
+  // What is wrong is said after the file's name, and nothing is read.
+  struct Broken {
+    std::string name, text, says;
+  };
+  nlohmann::json short_buffer = with_file;
+  short_buffer["buffers"][0]["byteLength"] = bin.size() + 40;
+  nlohmann::json missing_bin = with_file;
+  missing_bin["buffers"][0]["uri"] = "gone.bin";
+  nlohmann::json remote = with_file;
+  remote["buffers"][0]["uri"] = "https://example.com/square.bin";
+  nlohmann::json no_uri = with_file;
+  no_uri["buffers"][0].erase("uri");
+  std::string bad_base64 = "data:application/octet-stream;base64," + Base64(bin);
+  bad_base64[bad_base64.size() / 2] = '*';
+  nlohmann::json not_base64 = with_file;
+  not_base64["buffers"][0]["uri"] = bad_base64;
+  const std::vector<Broken> broken = {
+      {"short.gltf", short_buffer.dump(),
+       "buffer 0 holds " + std::to_string(bin.size()) + " bytes, its byteLength says " +
+           std::to_string(bin.size() + 40)},
+      {"missing.gltf", missing_bin.dump(), "buffer 0: " + (dir / "gone.bin").string()},
+      {"remote.gltf", remote.dump(), "buffer 0: its URI https:... is not a file beside the glTF"},
+      {"no_uri.gltf", no_uri.dump(), "buffer 0 has no uri"},
+      {"not_base64.gltf", not_base64.dump(), "buffer 0: its data: URI holds a character that is not base64"},
+      {"truncated.gltf", with_file.dump().substr(0, 80), "malformed glTF JSON"},
+      {"array.gltf", "[1, 2]", "not a glTF file"},
+  };
+  for (const Broken& b : broken) {
+    CAPTURE(b.name);
+    const std::string path = (dir / b.name).string();
+    std::ofstream(path) << b.text;
+    facet::ReferenceMesh mesh;
+    const std::string error = facet::ReadReferenceMesh(path, true, &mesh);
+    CAPTURE(error);
+    CHECK(error.find(path + ": ") == 0);
+    CHECK(error.find(b.says) != std::string::npos);
+    CHECK(mesh.positions.empty());
+    CHECK(mesh.triangles.empty());
+  }
 }

@@ -177,7 +177,7 @@ void HandleDroppedFiles(AppState* state, ShellState* shell) {
     const std::string name = fs::path(path).filename().string();
     std::string extension = fs::path(path).extension().string();
     for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if ((extension == ".obj" || extension == ".glb") && fs::is_regular_file(path, ec)) {
+    if ((extension == ".obj" || extension == ".glb" || extension == ".gltf") && fs::is_regular_file(path, ec)) {
       // A mesh made elsewhere comes in as reference geometry (one undoable edit).
       std::string error;
       RunAppCommand(state, shell, "reference", {"add " + path}, &error);
@@ -190,7 +190,7 @@ void HandleDroppedFiles(AppState* state, ShellState* shell) {
     } else {
       state->Log(LogLevel::kError,
                  "Dropped " + name + " is neither a Facet project (.facet) nor a photo (" + PhotoExtensionList() +
-                     ") nor a reference mesh (.obj, .glb)");
+                     ") nor a reference mesh (.obj, .glb, .gltf)");
     }
   }
   if (!dropped.projects.empty()) {

@@ -342,7 +342,8 @@ void DrawPathDialog(AppState* state, ShellState* shell) {
   }
   if (d == Dialog::kExport) ImGui::TextColored(kDimText, "The extension chooses the format: .glb (glTF) or .obj");
   if (d == Dialog::kAddReference)
-    ImGui::TextColored(kDimText, "A mesh to model against (.obj or .glb, Y up): drawn, snapped to, never exported");
+    ImGui::TextColored(kDimText,
+                       "A mesh to model against (.obj, .glb or .gltf, Y up): drawn, snapped to, never exported");
   if (d == Dialog::kExportView) {
     ImGui::TextColored(kDimText, "The panel with its overlays, as on screen, at this size (a PNG):");
     int panel = shell->export_view_panel == PanelId::kImage ? 0 : 1;

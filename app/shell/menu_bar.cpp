@@ -112,7 +112,7 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
     if (ImGui::MenuItem("Add reference mesh...")) OpenFileBrowser(state, shell, Dialog::kAddReference);
     RecordItem(state, "menu.add_reference");
     if (ImGui::IsItemHovered())
-      ImGui::SetTooltip("A mesh made elsewhere (.obj, .glb) to model against: drawn see-through in both panels, a "
+      ImGui::SetTooltip("A mesh made elsewhere (.obj, .glb, .gltf) to model against: drawn see-through in both panels, a "
                         "snap target for the Move tool, not part of the model (or drop it onto the window)");
     ImGui::Separator();
     if (ImGui::MenuItem("Save", "Ctrl+S")) {

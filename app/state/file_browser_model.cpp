@@ -29,6 +29,8 @@ std::string Lower(std::string s) {
 
 const std::vector<std::string> kProjectExtensions = {".facet"};
 const std::vector<std::string> kExportExtensions = {".glb", ".obj"};
+// What Facet writes, and glTF's JSON form, which other tools write as often as .glb.
+const std::vector<std::string> kReferenceExtensions = {".glb", ".gltf", ".obj"};
 const std::vector<std::string> kViewExtensions = {".png"};
 // What OpenCV's imgcodecs (core/image/image_io.h) reads on Debian 12.
 const std::vector<std::string> kPhotoExtensions = {".jpg", ".jpeg", ".png", ".tif", ".tiff", ".bmp", ".webp"};
@@ -67,7 +69,7 @@ const std::vector<std::string>& PurposeExtensions(BrowsePurpose purpose) {
     case BrowsePurpose::kExportView: return kViewExtensions;
     case BrowsePurpose::kAddPhoto:
     case BrowsePurpose::kRelinkPhoto: return kPhotoExtensions;
-    case BrowsePurpose::kAddReference: return kExportExtensions;  // the meshes Facet writes are the ones it reads
+    case BrowsePurpose::kAddReference: return kReferenceExtensions;
   }
   return kProjectExtensions;
 }
@@ -106,7 +108,7 @@ const char* PurposeFilterLabel(BrowsePurpose purpose) {
     case BrowsePurpose::kExportView: return "PNG pictures (*.png)";
     case BrowsePurpose::kAddPhoto:
     case BrowsePurpose::kRelinkPhoto: return "Photos (*.jpg, *.png, *.tif, ...)";
-    case BrowsePurpose::kAddReference: return "Meshes (*.obj, *.glb)";
+    case BrowsePurpose::kAddReference: return "Meshes (*.obj, *.glb, *.gltf)";
   }
   return "";
 }

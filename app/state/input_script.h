@@ -50,7 +50,7 @@
 //                                   add-photo PATH     a new image (app/state/add_photo.h)
 //                                   relink-photo PATH  the active image's photo file (RelinkPhotoEdit)
 //                                   reference add|add-z-up PATH, reference remove|show|hide INDEX
-//                                                      reference geometry (.obj, .glb), one
+//                                                      reference geometry (.obj, .glb, .gltf), one
 //                                                      undoable edit each (app/state/reference_edits.h)
 //                                   select-add vertex|edge|face PRIMITIVE_ID ELEMENT_ID
 //                                                      add to the selection (RunSelectAddCommand)

@@ -13,7 +13,7 @@
 
 namespace facet::app {
 
-// Reads `file_path` (.obj or .glb) and, when it holds triangles, adds it to the project as a
+// Reads `file_path` (.obj, .glb or .gltf) and, when it holds triangles, adds it to the project as a
 // reference (stored relative to the project file, as photos are) in one undoable edit
 // "Add reference NAME". A file that cannot be read is refused with the reason in the log and
 // changes nothing. Returns whether it was added.

@@ -13,17 +13,36 @@
 namespace facet::app {
 namespace {
 
-// Hues far apart, none grey (untextured faces are grey), none the selection's orange.
-constexpr std::array<std::array<std::uint8_t, 3>, 8> kPalette = {{
-    {66, 133, 244},  // blue
-    {219, 68, 55},   // red
-    {15, 157, 88},   // green
-    {171, 71, 188},  // purple
-    {0, 172, 193},   // cyan
-    {244, 180, 0},   // yellow
-    {233, 30, 99},   // pink
-    {124, 179, 66},  // lime
-}};
+// Photo colours: hues in golden-ratio steps (each photo's hue 0.618 of the usable circle on
+// from the one before), which never repeat and leave any number of photos spread evenly, the
+// gaps at most ~2.6 times apart. The circle leaves out the band of the selection's orange
+// (hues 29-34 deg) with a margin; saturation is high, so that no photo's colour is the grey of
+// untextured faces, and the value alternates, so neighbouring hues of many photos still differ
+// in brightness. Photo 1 keeps the blue it had.
+constexpr double kGoldenStep = 0.6180339887498949;
+constexpr double kOrangeBandLoDeg = 15.0;
+constexpr double kOrangeBandHiDeg = 50.0;
+constexpr double kFirstHueDeg = 217.4;  // {66, 133, 244}
+constexpr double kSaturation = 0.73;
+constexpr double kValues[2] = {0.957, 0.78};
+
+std::array<std::uint8_t, 3> FromHsv(double hue_deg, double saturation, double value) {
+  const double h = std::fmod(hue_deg, 360.0) / 60.0;
+  const double c = value * saturation;
+  const double x = c * (1.0 - std::abs(std::fmod(h, 2.0) - 1.0));
+  double r = 0.0, g = 0.0, b = 0.0;
+  switch (static_cast<int>(h)) {
+    case 0: r = c, g = x; break;
+    case 1: r = x, g = c; break;
+    case 2: g = c, b = x; break;
+    case 3: g = x, b = c; break;
+    case 4: r = x, b = c; break;
+    default: r = c, b = x; break;
+  }
+  const double m = value - c;
+  auto byte = [m](double channel) { return static_cast<std::uint8_t>(std::lround(255.0 * (channel + m))); };
+  return {byte(r), byte(g), byte(b)};
+}
 
 // Commits a texture choice: no geometry changes, so no re-solve; one history entry.
 bool CommitTextureChoice(AppState* state, const std::string& label, const Project& edited) {
@@ -70,7 +89,13 @@ bool ParseIndex(const std::string& word, size_t count, size_t* out) {
 
 }  // namespace
 
-std::array<std::uint8_t, 3> TextureSourceColour(size_t image_index) { return kPalette[image_index % kPalette.size()]; }
+std::array<std::uint8_t, 3> TextureSourceColour(size_t image_index) {
+  const double usable_deg = 360.0 - (kOrangeBandHiDeg - kOrangeBandLoDeg);
+  // The turn of photo i, exact in the index (no accumulated steps), from photo 1's hue.
+  const double turn = std::fmod(static_cast<double>(image_index) * kGoldenStep, 1.0);
+  const double along = std::fmod(kFirstHueDeg - kOrangeBandHiDeg + turn * usable_deg, usable_deg);
+  return FromHsv(kOrangeBandHiDeg + along, kSaturation, kValues[image_index % 2]);
+}
 
 std::string PhotoLabel(const Project& project, size_t image_index) {
   std::string text = "photo " + std::to_string(image_index + 1);

@@ -25,8 +25,8 @@ struct TextureView {
   double export_texels_per_unit = 0.0;  // File > Export's resolution; 0: as the photos give it
 };
 
-// The colour of the photo at `image_index` in project.images (sRGB, 0-255): a fixed palette
-// of well-separated hues, repeating after its length.
+// The colour of the photo at `image_index` in project.images (sRGB, 0-255): every photo its
+// own hue (golden-ratio steps round the hue circle, never the selection's orange nor grey).
 std::array<std::uint8_t, 3> TextureSourceColour(size_t image_index);
 // "photo 2 (leuvenA.jpg)": the 1-based index the panels and the legend use, and the file name.
 std::string PhotoLabel(const Project& project, size_t image_index);

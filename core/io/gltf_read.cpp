@@ -1,10 +1,13 @@
-// A deliberately small glTF reader: what ExportGlb writes and what a mesh from another tool
-// needs for reference geometry, each access bounds-checked, anything else refused by name.
+// A deliberately small glTF reader (binary .glb, or JSON .gltf with .bin files or data: URIs):
+// what ExportGlb writes and what a mesh from another tool needs for reference geometry, each
+// access bounds-checked, anything else refused by name.
 #include "core/io/gltf_read.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <functional>
 
 #include <Eigen/Geometry>
@@ -57,20 +60,27 @@ int ComponentCount(const std::string& type) {
 
 class GlbReader {
  public:
-  GlbReader(Json gltf, std::vector<std::uint8_t> bin) : gltf_(std::move(gltf)), bin_(std::move(bin)) {}
+  // buffers[i] holds the bytes of the file's buffer i (the BIN chunk, a .bin file or a data:
+  // URI), already checked to hold at least its byteLength.
+  // `folder` is where the glTF file is: its images' relative URIs are resolved there.
+  GlbReader(Json gltf, std::vector<std::vector<std::uint8_t>> buffers, std::filesystem::path folder)
+      : gltf_(std::move(gltf)), buffers_(std::move(buffers)), folder_(std::move(folder)) {}
 
-  // The bytes of a bufferView, checked against the BIN chunk.
+  // The bytes of a bufferView, checked against its buffer.
   const std::uint8_t* View(int index, size_t* length, size_t* stride) const {
     const Json& views = gltf_.at("bufferViews");
     if (index < 0 || index >= static_cast<int>(views.size())) Fail("bufferView " + std::to_string(index) + " missing");
     const Json& view = views[index];
-    if (view.value("buffer", 0) != 0) Fail("bufferView " + std::to_string(index) + " uses an external buffer");
+    const int buffer = view.value("buffer", 0);
+    if (buffer < 0 || buffer >= static_cast<int>(buffers_.size()))
+      Fail("bufferView " + std::to_string(index) + " uses buffer " + std::to_string(buffer) + ", which is missing");
+    const std::vector<std::uint8_t>& bytes = buffers_[buffer];
     const size_t offset = view.value("byteOffset", size_t{0});
     *length = view.at("byteLength").get<size_t>();
     *stride = view.value("byteStride", size_t{0});
-    if (offset > bin_.size() || *length > bin_.size() - offset)
-      Fail("bufferView " + std::to_string(index) + " runs past the BIN chunk");
-    return bin_.data() + offset;
+    if (offset > bytes.size() || *length > bytes.size() - offset)
+      Fail("bufferView " + std::to_string(index) + " runs past its buffer");
+    return bytes.data() + offset;
   }
 
   // Accessor `index` as doubles, `components` per element (which must match its type).
@@ -123,11 +133,112 @@ class GlbReader {
   }
 
   const Json& gltf() const { return gltf_; }
+  const std::filesystem::path& folder() const { return folder_; }
 
  private:
   Json gltf_;
-  std::vector<std::uint8_t> bin_;
+  std::vector<std::vector<std::uint8_t>> buffers_;
+  std::filesystem::path folder_;
 };
+
+// RFC 4648 base64 (the alphabet with + and /, '=' padding at the end only); false on any
+// other character.
+bool DecodeBase64(const std::string& text, size_t begin, std::vector<std::uint8_t>* out) {
+  out->clear();
+  out->reserve((text.size() - begin) / 4 * 3);
+  std::uint32_t accumulator = 0;
+  int bits = 0;
+  size_t padding = 0;
+  for (size_t i = begin; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '=') {
+      ++padding;
+      continue;
+    }
+    int value = -1;
+    if (c >= 'A' && c <= 'Z') {
+      value = c - 'A';
+    } else if (c >= 'a' && c <= 'z') {
+      value = c - 'a' + 26;
+    } else if (c >= '0' && c <= '9') {
+      value = c - '0' + 52;
+    } else if (c == '+') {
+      value = 62;
+    } else if (c == '/') {
+      value = 63;
+    }
+    if (value < 0 || padding > 0) return false;
+    accumulator = (accumulator << 6) | static_cast<std::uint32_t>(value);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out->push_back(static_cast<std::uint8_t>((accumulator >> bits) & 0xFF));
+    }
+  }
+  return padding <= 2 && (text.size() - begin) % 4 == 0;
+}
+
+// A relative URI reference as a file name: %XX escapes decoded (a space is written %20).
+std::string DecodePercentEscapes(const std::string& uri) {
+  std::string out;
+  for (size_t i = 0; i < uri.size(); ++i) {
+    if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+      out += static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      out += uri[i];
+    }
+  }
+  return out;
+}
+
+// The bytes a `uri` names, for `what` ("buffer 0", "image 2"): a data: URI with base64
+// content, or a file relative to the folder of the glTF file (`folder`). Other schemes
+// (http:, file:) are refused: a mesh is never fetched from elsewhere.
+std::vector<std::uint8_t> UriBytes(const std::string& uri, const std::filesystem::path& folder, std::uint64_t max_bytes,
+                                   const std::string& what) {
+  std::vector<std::uint8_t> bytes;
+  if (uri.rfind("data:", 0) == 0) {
+    const size_t comma = uri.find(',');
+    if (comma == std::string::npos || uri.rfind(";base64", comma) == std::string::npos ||
+        uri.rfind(";base64", comma) + 7 != comma)
+      Fail(what + ": its data: URI is not base64");
+    if (!DecodeBase64(uri, comma + 1, &bytes)) Fail(what + ": its data: URI holds a character that is not base64");
+    return bytes;
+  }
+  const size_t colon = uri.find(':');
+  if (colon != std::string::npos && uri.find('/') > colon)
+    Fail(what + ": its URI " + uri.substr(0, colon + 1) + "... is not a file beside the glTF (not read)");
+  std::string error;
+  if (!ReadRegularFile((folder / DecodePercentEscapes(uri)).string(), max_bytes, &bytes, &error))
+    Fail(what + ": " + error);
+  return bytes;
+}
+
+// Every buffer of the file, each holding at least its byteLength. A buffer without a URI is
+// the GLB's BIN chunk (`glb_bin`, for buffer 0 of a .glb only).
+std::vector<std::vector<std::uint8_t>> LoadBuffers(const Json& gltf, const std::filesystem::path& folder, bool is_glb,
+                                                   std::vector<std::uint8_t> glb_bin) {
+  std::vector<std::vector<std::uint8_t>> buffers;
+  const Json& list = gltf.value("buffers", Json::array());
+  for (size_t i = 0; i < list.size(); ++i) {
+    const std::string what = "buffer " + std::to_string(i);
+    const Json& buffer = list[i];
+    if (buffer.contains("uri")) {
+      buffers.push_back(UriBytes(buffer["uri"].get<std::string>(), folder, kMaxGlbBytes, what));
+    } else if (is_glb && i == 0) {
+      buffers.push_back(std::move(glb_bin));
+    } else {
+      Fail(what + " has no uri" + (is_glb ? "" : " (only a .glb's first buffer may be its BIN chunk)"));
+    }
+    const size_t declared = buffer.at("byteLength").get<size_t>();
+    if (buffers.back().size() < declared)
+      Fail(what + " holds " + std::to_string(buffers.back().size()) + " bytes, its byteLength says " +
+           std::to_string(declared));
+  }
+  return buffers;
+}
 
 Eigen::Matrix4d NodeMatrix(const Json& node) {
   Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
@@ -275,10 +386,18 @@ void ReadScene(const GlbReader& reader, const GltfReadOptions& options, GltfScen
   }
   if (options.decode_images) {
     for (const Json& image : g.value("images", Json::array())) {
-      if (!image.contains("bufferView")) Fail("an image is not embedded (uri: not supported)");
-      size_t length = 0, stride = 0;
-      const std::uint8_t* data = reader.View(image["bufferView"].get<int>(), &length, &stride);
-      ImageReadResult decoded = DecodeImage(std::vector<std::uint8_t>(data, data + length), "embedded image");
+      std::vector<std::uint8_t> bytes;
+      if (image.contains("uri")) {
+        bytes = UriBytes(image["uri"].get<std::string>(), reader.folder(), kMaxImageFileBytes,
+                         "image " + std::to_string(scene->images.size()));
+      } else if (image.contains("bufferView")) {
+        size_t length = 0, stride = 0;
+        const std::uint8_t* data = reader.View(image["bufferView"].get<int>(), &length, &stride);
+        bytes.assign(data, data + length);
+      } else {
+        Fail("image " + std::to_string(scene->images.size()) + " has neither a uri nor a bufferView");
+      }
+      ImageReadResult decoded = DecodeImage(bytes, "image " + std::to_string(scene->images.size()));
       if (!decoded.ok()) Fail(decoded.error);
       scene->images.push_back(std::move(decoded.image));
     }
@@ -340,9 +459,35 @@ std::string ReadGlb(const std::string& path, const GltfReadOptions& options, Glt
     bin.assign(bytes.begin() + static_cast<long>(bin_header + 8),
                bytes.begin() + static_cast<long>(bin_header + 8 + bin_length));
   }
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
   try {
     Json gltf = Json::parse(bytes.begin() + 20, bytes.begin() + 20 + static_cast<long>(json_length));
-    ReadScene(GlbReader(std::move(gltf), std::move(bin)), options, scene);
+    std::vector<std::vector<std::uint8_t>> buffers = LoadBuffers(gltf, folder, true, std::move(bin));
+    ReadScene(GlbReader(std::move(gltf), std::move(buffers), folder), options, scene);
+  } catch (const GltfError& e) {
+    *scene = GltfScene();
+    return path + ": " + e.message;
+  } catch (const Json::exception& e) {
+    *scene = GltfScene();
+    return path + ": malformed glTF JSON (" + std::string(e.what()) + ")";
+  }
+  return "";
+}
+
+std::string ReadGltf(const std::string& path, const GltfReadOptions& options, GltfScene* scene) {
+  *scene = GltfScene();
+  std::vector<std::uint8_t> head;
+  std::string error;
+  if (!ReadRegularFileHead(path, 4, &head, &error)) return error;
+  if (head.size() == 4 && U32(head, 0) == kGlbMagic) return ReadGlb(path, options, scene);
+  std::string text;
+  if (!ReadRegularFile(path, kMaxTextFileBytes, &text, &error)) return error;
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  try {
+    Json gltf = Json::parse(text);
+    if (!gltf.is_object()) Fail("not a glTF file (its JSON is not an object)");
+    std::vector<std::vector<std::uint8_t>> buffers = LoadBuffers(gltf, folder, false, {});
+    ReadScene(GlbReader(std::move(gltf), std::move(buffers), folder), options, scene);
   } catch (const GltfError& e) {
     *scene = GltfScene();
     return path + ": " + e.message;

@@ -1,4 +1,4 @@
-// Reading a binary glTF 2.0 file (.glb) back: the triangles of every mesh node in the scene's
+// Reading a glTF 2.0 file (binary .glb or JSON .gltf) back: the triangles of every mesh node in the scene's
 // frame (node transforms applied), their texture coordinates, base-colour textures and
 // factors, and every camera node. Used to check what ExportGlb wrote as other tools read it
 // (the render of the exported file through its own cameras, tests/app/test_cli.cpp) and to
@@ -12,7 +12,9 @@
 // centre unless the camera's `extras` give `principal_point_px` (what ExportGlb writes, since
 // glTF cameras cannot say it).
 //
-// Supported: one GLB file with its BIN chunk (no external or data: URIs), TRIANGLES
+// Supported: a GLB file with its BIN chunk, or a JSON .gltf file (ReadGltf); either's buffers
+// and images may also be data: URIs (base64) or files beside it (relative URIs, %XX escapes
+// decoded; never http: or another scheme), TRIANGLES
 // primitives, float positions / normals / texture coordinates (any byte stride), indices of
 // 8, 16 or 32 bits or none, node hierarchies with matrix or TRS, perspective cameras. Anything
 // else is refused with a message naming it, never read wrongly.
@@ -64,5 +66,10 @@ struct GltfReadOptions {
 // Reads `path`. Returns an empty string on success, else the error naming the file and what
 // is wrong or unsupported (and *scene is left empty).
 std::string ReadGlb(const std::string& path, const GltfReadOptions& options, GltfScene* scene);
+
+// Reads `path` as ReadGlb does when it starts with the GLB magic, else as a JSON glTF (.gltf)
+// whose buffers are files beside it or data: URIs. Errors as ReadGlb's; a buffer that is
+// missing, shorter than its byteLength or not base64 is named ("buffer 1: ...").
+std::string ReadGltf(const std::string& path, const GltfReadOptions& options, GltfScene* scene);
 
 }  // namespace facet

@@ -69,7 +69,7 @@ std::string ReadGltfReference(const std::string& path, bool y_up, ReferenceMesh*
   GltfScene scene;
   GltfReadOptions options;
   options.decode_images = false;
-  const std::string error = ReadGlb(path, options, &scene);
+  const std::string error = ReadGltf(path, options, &scene);
   if (!error.empty()) return error;
   if (scene.positions.size() > kMaxReferenceVertices)
     return path + ": more than " + std::to_string(kMaxReferenceVertices) + " vertices";
@@ -107,10 +107,10 @@ std::string ReadReferenceMesh(const std::string& path, bool y_up, ReferenceMesh*
     std::string text;
     if (!ReadRegularFile(path, kMaxTextFileBytes, &text, &error)) return error;
     error = ReadObj(path, text, y_up, mesh);
-  } else if (extension == ".glb") {
+  } else if (extension == ".glb" || extension == ".gltf") {
     error = ReadGltfReference(path, y_up, mesh);
   } else {
-    return path + ": a reference mesh must be a Wavefront .obj or a binary glTF .glb";
+    return path + ": a reference mesh must be a Wavefront .obj or a glTF .glb or .gltf";
   }
   if (error.empty() && mesh->triangles.empty()) error = path + ": the file holds no triangles";
   if (!error.empty()) {

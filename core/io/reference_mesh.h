@@ -1,5 +1,6 @@
 // Reading the triangles of a reference mesh (core/scene/project.h, Reference): a Wavefront
-// OBJ or a binary glTF (.glb), placed in the world as the reference's axes say.
+// OBJ or a glTF (binary .glb, or JSON .gltf with its buffers beside it or in data: URIs),
+// placed in the world as the reference's axes say.
 #pragma once
 
 #include <array>
@@ -21,8 +22,8 @@ struct ReferenceMesh {
 // for modelling against, and a bound on what one file can make the app draw every frame.
 constexpr size_t kMaxReferenceVertices = 2'000'000;
 
-// Reads `path` (told by its extension: .obj, or .glb; other extensions are refused). OBJ: `v`
-// and `f` records (polygons fanned into triangles; 1-based or negative indices, v/vt/vn
+// Reads `path` (told by its extension: .obj, .glb or .gltf; other extensions are refused).
+// OBJ: `v` and `f` records (polygons fanned into triangles; 1-based or negative indices, v/vt/vn
 // forms), every other record ignored. glTF: every mesh node's triangles with their node
 // transforms (core/io/gltf_read.h). y_up: file (x, y, z) is world (x, -z, y); otherwise file
 // coordinates are world coordinates. Returns an empty string on success, else the error

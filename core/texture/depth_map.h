@@ -7,7 +7,9 @@
 // camera pixels uv_pinhole (core/geometry/conventions.h: pixel centres at integers).
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -50,9 +52,29 @@ struct DepthMap {
   // reads either shows the same face or nothing nearer than depth_z - tolerance. Conservative
   // by up to a map pixel at an occluder's outline, so the photo pixels a sample there blends
   // hold no occluder. False outside the map.
-  bool Sees(const Eigen::Vector2d& uv_pinhole_px, double depth_z, std::int32_t face_index, double tolerance) const;
+  // (Both are defined here, inline: the bake calls them for every texel and view.)
+  bool Sees(const Eigen::Vector2d& uv_pinhole_px, double depth_z, std::int32_t face_index, double tolerance) const {
+    const Eigen::Vector2d m = MapFromPinhole(uv_pinhole_px);
+    if (!(m.x() >= 0.0 && m.y() >= 0.0 && m.x() < width && m.y() < height)) return false;
+    // The 2 x 2 pixels whose centres surround m (clamped at the map's edge).
+    const int i0 = std::clamp(static_cast<int>(std::floor(m.x() - 0.5)), 0, width - 1);
+    const int j0 = std::clamp(static_cast<int>(std::floor(m.y() - 0.5)), 0, height - 1);
+    const int i1 = std::min(i0 + 1, width - 1), j1 = std::min(j0 + 1, height - 1);
+    const float limit = static_cast<float>(depth_z - tolerance);
+    for (int j : {j0, j1}) {
+      for (int i : {i0, i1}) {
+        const size_t k = static_cast<size_t>(j) * width + i;
+        if (face[k] != face_index && depth[k] < limit) return false;
+      }
+    }
+    return true;
+  }
   // boundary_distance_px at the map pixel holding the point (0 outside the map).
-  float BoundaryDistancePx(const Eigen::Vector2d& uv_pinhole_px) const;
+  float BoundaryDistancePx(const Eigen::Vector2d& uv_pinhole_px) const {
+    const Eigen::Vector2d m = MapFromPinhole(uv_pinhole_px);
+    if (!(m.x() >= 0.0 && m.y() >= 0.0 && m.x() < width && m.y() < height)) return 0.0f;
+    return boundary_distance_px[static_cast<size_t>(m.y()) * width + static_cast<size_t>(m.x())];
+  }
 };
 
 // Renders the triangles seen by `camera` into a map covering the photo of

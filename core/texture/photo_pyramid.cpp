@@ -16,7 +16,15 @@ ImageRgba8 HalfSize(const ImageRgba8& in) {
     const std::uint8_t* row0 = in.At(0, y0);
     const std::uint8_t* row1 = in.At(0, y1);
     std::uint8_t* dst = out.At(0, y);
-    for (int x = 0; x < out.width; ++x) {
+    // Whole 2 x 2 blocks without clamping, then the odd last column averaged with itself.
+    const int pairs = in.width / 2;
+    for (int x = 0; x < pairs; ++x) {
+      const std::uint8_t* a = row0 + 8 * x;
+      const std::uint8_t* b = row1 + 8 * x;
+      std::uint8_t* o = dst + 4 * x;
+      for (int c = 0; c < 4; ++c) o[c] = static_cast<std::uint8_t>((a[c] + a[c + 4] + b[c] + b[c + 4] + 2) / 4);
+    }
+    for (int x = pairs; x < out.width; ++x) {
       const int x0 = std::min(2 * x, in.width - 1) * 4, x1 = std::min(2 * x + 1, in.width - 1) * 4;
       for (int c = 0; c < 4; ++c) {
         dst[4 * x + c] = static_cast<std::uint8_t>((row0[x0 + c] + row0[x1 + c] + row1[x0 + c] + row1[x1 + c] + 2) / 4);
@@ -30,6 +38,18 @@ ImageRgba8 HalfSize(const ImageRgba8& in) {
 void Bilinear(const ImageRgba8& image, double x, double y, float rgba[4]) {
   const double fx = std::floor(x), fy = std::floor(y);
   const float ax = static_cast<float>(x - fx), ay = static_cast<float>(y - fy);
+  const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
+  if (ix >= 0 && iy >= 0 && ix + 1 < image.width && iy + 1 < image.height) {
+    // Inside: the four pixels without clamping (nearly every tap of a bake).
+    const std::uint8_t* p00 = image.At(ix, iy);
+    const std::uint8_t* p01 = p00 + static_cast<size_t>(image.width) * 4;
+    for (int c = 0; c < 4; ++c) {
+      const float top = p00[c] + ax * (p00[c + 4] - p00[c]);
+      const float bottom = p01[c] + ax * (p01[c + 4] - p01[c]);
+      rgba[c] = top + ay * (bottom - top);
+    }
+    return;
+  }
   const int x0 = std::clamp(static_cast<int>(fx), 0, image.width - 1);
   const int y0 = std::clamp(static_cast<int>(fy), 0, image.height - 1);
   const int x1 = std::clamp(static_cast<int>(fx) + 1, 0, image.width - 1);
@@ -61,7 +81,8 @@ bool PhotoPyramid::Sample(double x, double y, const Eigen::Vector2d& axis_u, con
   if (photo_ == nullptr || !(x >= -0.5 && x <= photo_->width - 0.5 && y >= -0.5 && y <= photo_->height - 0.5)) {
     return false;
   }
-  const double footprint = std::max(axis_u.norm(), axis_v.norm());
+  const double length_u = axis_u.norm(), length_v = axis_v.norm();
+  const double footprint = std::max(length_u, length_v);
   if (!(footprint > 1.0)) {
     Bilinear(*photo_, x, y, rgba);
     return true;
@@ -71,8 +92,9 @@ bool PhotoPyramid::Sample(double x, double y, const Eigen::Vector2d& axis_u, con
   const int level = std::clamp(static_cast<int>(std::floor(std::log2(footprint))) - 1, 0, levels() - 1);
   const double s = std::ldexp(1.0, -level);
   const Eigen::Vector2d u = axis_u * s, v = axis_v * s;
-  const int taps_u = std::max(1, static_cast<int>(std::ceil(u.norm() - 1e-9)));
-  const int taps_v = std::max(1, static_cast<int>(std::ceil(v.norm() - 1e-9)));
+  // |axis * 2^-level| is |axis| * 2^-level exactly: the lengths need no second square root.
+  const int taps_u = std::max(1, static_cast<int>(std::ceil(length_u * s - 1e-9)));
+  const int taps_v = std::max(1, static_cast<int>(std::ceil(length_v * s - 1e-9)));
   // Level k's pixel centres sit at 2^k (i + 0.5) - 0.5 in photo pixels.
   const Eigen::Vector2d centre((x + 0.5) * s - 0.5, (y + 0.5) * s - 0.5);
   const ImageRgba8& image = Level(level);

@@ -478,7 +478,17 @@ void WriteAtlas(const std::vector<FaceGeometry>& geometry, const std::vector<Vie
   // Faces write disjoint rectangles (padding included) of their pages: one face per task.
   std::vector<bake::SamplingCounts>& face_counts = *face_counts_out;
   face_counts.assign(textured.size(), {});
-  ParallelFor(static_cast<int>(textured.size()), options.max_threads, [&](int k) {
+  // Largest faces first: the threads then finish together instead of one sampling the last big
+  // face alone (what each face writes does not depend on the order).
+  std::vector<int> order(textured.size());
+  for (size_t k = 0; k < order.size(); ++k) order[k] = static_cast<int>(k);
+  auto texels = [&](int k) {
+    const FaceTexture& t = faces[textured[k]];
+    return static_cast<long>(t.packed_width) * t.packed_height * static_cast<long>(t.candidates.size());
+  };
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return texels(a) > texels(b); });
+  ParallelFor(static_cast<int>(order.size()), options.max_threads, [&](int n) {
+    const int k = order[n];
     const int f = textured[k];
     bake::SampleFace(geometry[f], f, faces[f], views, options, &pages[faces[f].page], &face_counts[k]);
   });

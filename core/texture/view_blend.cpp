@@ -46,19 +46,4 @@ std::vector<Eigen::Vector3d> FitExposureGains(int view_count, const std::vector<
   return gains;
 }
 
-double FeatherWeight(double boundary_distance_px, double feather_px) {
-  if (!(feather_px > 0.0)) return 1.0;
-  const double t = std::clamp(boundary_distance_px / feather_px, 0.0, 1.0);
-  return t * t * (3.0 - 2.0 * t);
-}
-
-double ViewQuality(double cos_angle, double focal_px, double distance, double radius_fraction, double sharpness) {
-  if (!(cos_angle > 0.0) || !(distance > 0.0)) return 0.0;
-  const double resolution = (focal_px / distance) * (focal_px / distance);
-  const double r = std::min(radius_fraction, 1.0);
-  const double base = resolution * cos_angle;
-  const double preference = sharpness == 2.0 ? base * base : std::pow(base, sharpness);
-  return preference * (1.0 - 0.5 * r * r);
-}
-
 }  // namespace facet

@@ -2,6 +2,8 @@
 // overlap, and the weight of one view at one texel.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include <Eigen/Core>
@@ -29,13 +31,26 @@ std::vector<Eigen::Vector3d> FitExposureGains(int view_count, const std::vector<
 
 // Feather: 0 on a view's visibility boundary, rising smoothly (smoothstep) to 1 at
 // feather_px photo pixels from it; 1 everywhere when feather_px <= 0.
-double FeatherWeight(double boundary_distance_px, double feather_px);
+// (Inline, as ViewQuality: the bake weighs every view at every texel.)
+inline double FeatherWeight(double boundary_distance_px, double feather_px) {
+  if (!(feather_px > 0.0)) return 1.0;
+  const double t = std::clamp(boundary_distance_px / feather_px, 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
 
 // A view's preference at a texel before feathering: (resolution * frontality)^sharpness *
 // centrality, where resolution = (focal_px / distance)^2 (photo pixels per square metre of a
 // frontal surface), frontality = cos(angle between the face normal and the ray to the camera),
 // and centrality = 1 - 0.5 (r / r_corner)^2 for the sample's distance r from the photo's
 // centre (half weight in a corner, where lenses are softest). 0 when cos_angle <= 0.
-double ViewQuality(double cos_angle, double focal_px, double distance, double radius_fraction, double sharpness);
+inline double ViewQuality(double cos_angle, double focal_px, double distance, double radius_fraction,
+                          double sharpness) {
+  if (!(cos_angle > 0.0) || !(distance > 0.0)) return 0.0;
+  const double resolution = (focal_px / distance) * (focal_px / distance);
+  const double r = std::min(radius_fraction, 1.0);
+  const double base = resolution * cos_angle;
+  const double preference = sharpness == 2.0 ? base * base : std::pow(base, sharpness);
+  return preference * (1.0 - 0.5 * r * r);
+}
 
 }  // namespace facet

@@ -388,3 +388,83 @@ TEST_CASE("the user's texture choices in the app: source colours and legend, ove
   CHECK(RunFacet(dir, "export '" + (dir / "s2.facet") + "' -o '" + (dir / "bad.obj") + "' --texels-per-unit -3")
             .exit_code != 0);
 }
+
+// Issue 13's legend with many photos: the colours used to repeat after 8 (a palette of 8),
+// so photo 9 looked like photo 1. Twenty photos: photo 1 textures the box, the other 19 are
+// taken out of texturing (so the legend lists them too); every one gets its own colour.
+TEST_CASE("texture sources: twenty photos get twenty distinct colours in the legend, none grey or orange") {
+  TempDir dir("texture_colours");
+  SyntheticScene scene = MakeBoxScene();
+  facet::Project project = scene.project;
+  project.segments.clear();
+  project.pins.clear();
+  project.images[0].path = "photo1.png";
+  const std::vector<facet::testing::PaintedFace> faces = facet::testing::PaintedFaces(project);
+  const facet::testing::Paint paint = [](const facet::testing::PaintedFace&, const Eigen::Vector3d&) {
+    return Eigen::Vector3d(170, 150, 130);
+  };
+  REQUIRE(
+      facet::WritePng(dir / "photo1.png", facet::testing::RenderTexturedPhoto(faces, project.images[0].camera, paint))
+          .empty());
+  // The other photos: small grey files, uncalibrated, not used for texture.
+  facet::ImageRgba8 grey;
+  grey.width = 64;
+  grey.height = 48;
+  grey.pixels.assign(static_cast<size_t>(grey.width) * grey.height * 4, 128);
+  constexpr int kPhotos = 20;
+  for (int k = 1; k < kPhotos; ++k) {
+    facet::Image image;
+    image.id = project.NewId();
+    image.path = "photo" + std::to_string(k + 1) + ".png";
+    image.width_px = grey.width;
+    image.height_px = grey.height;
+    image.use_for_texture = false;
+    REQUIRE(facet::WritePng(dir / image.path, grey).empty());
+    project.images.push_back(image);
+  }
+  const std::string project_path = dir / "scene.facet";
+  REQUIRE(facet::SaveProject(project, project_path).empty());
+  const nlohmann::json report =
+      RenderScript(dir, project_path, "colours", "frames 2\ncommand wait-bake\ncommand texture sources on\nframes 2\n");
+  INFO("log:\n" << ReportLog(report));
+  const nlohmann::json& legend = report.at("texture").at("legend");
+  REQUIRE(legend.size() == kPhotos);
+
+  std::vector<std::array<int, 3>> colours;
+  for (size_t row = 0; row < legend.size(); ++row) {
+    CAPTURE(row);
+    CHECK(legend[row].at("image_index").get<size_t>() == row);
+    CHECK(legend[row].at("used").get<bool>() == (row == 0));
+    const std::array<int, 3> c = {legend[row].at("colour")[0].get<int>(), legend[row].at("colour")[1].get<int>(),
+                                  legend[row].at("colour")[2].get<int>()};
+    colours.push_back(c);
+    // Not grey (untextured faces are): the channels spread over at least 100 levels.
+    constexpr int kMinChroma = 100;
+    CHECK(*std::max_element(c.begin(), c.end()) - *std::min_element(c.begin(), c.end()) >= kMinChroma);
+    // Not the selection's orange (hue 29-34 deg): outside 15-50 deg (HueDeg steps 1.4 deg).
+    const double hue = HueDeg(c);
+    CAPTURE(hue);
+    CHECK((hue < 15.0 || hue > 50.0));
+  }
+  CHECK(legend[0].at("faces").get<int>() > 0);            // photo 1 textures the box
+  CHECK(colours[0] == std::array<int, 3>{66, 133, 244});  // photo 1 keeps its blue
+  // Distinct: every two colours at least 30 levels apart (Euclidean, RGB); the nearest pair
+  // is reported.
+  constexpr double kMinColourDistance = 30.0;
+  double nearest = 1e9;
+  size_t nearest_a = 0, nearest_b = 0;
+  for (size_t a = 0; a < colours.size(); ++a) {
+    for (size_t b = a + 1; b < colours.size(); ++b) {
+      const double d =
+          std::hypot(colours[a][0] - colours[b][0], colours[a][1] - colours[b][1], colours[a][2] - colours[b][2]);
+      if (d < nearest) {
+        nearest = d;
+        nearest_a = a;
+        nearest_b = b;
+      }
+    }
+  }
+  CHECK(nearest >= kMinColourDistance);
+  MESSAGE("20 photos' legend colours: the nearest two (photos " << nearest_a + 1 << " and " << nearest_b + 1 << ") are "
+                                                                << nearest << " RGB levels apart");
+}

@@ -7,6 +7,8 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -387,4 +389,54 @@ TEST_CASE("reference geometry: the Leuven street exported and added back lies on
   CHECK_FALSE(project.references[0].visible);
   CHECK(facet::ResolveImagePath(sample_dir + "/street.facet", project.references[0].path) ==
         std::filesystem::path(dir / "street.glb").lexically_normal().string());
+}
+
+// A JSON glTF with its buffer in a .bin beside it comes in as a reference through the app's
+// command, stored by its relative path; one whose .bin is missing is refused with the file's
+// name and the buffer's, and the project keeps no reference.
+TEST_CASE("reference geometry: a .gltf with its .bin is added by the app; one without its .bin is refused by name") {
+  TempDir dir("reference_gltf");
+  facet::Id box_id = facet::kNoId;
+  const std::string path = WriteFreeBox(dir, &box_id);
+  // Two triangles: a unit square at height 3 (a Z-up file: world coordinates).
+  const float positions[12] = {0, 0, 3, 1, 0, 3, 1, 1, 3, 0, 1, 3};
+  const std::uint16_t indices[6] = {0, 1, 2, 0, 2, 3};
+  {
+    std::ofstream bin(dir / "square.bin", std::ios::binary);
+    bin.write(reinterpret_cast<const char*>(positions), sizeof(positions));
+    bin.write(reinterpret_cast<const char*>(indices), sizeof(indices));
+  }
+  const nlohmann::json gltf = {
+      {"asset", {{"version", "2.0"}}},
+      {"nodes", {{{"mesh", 0}}}},
+      {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
+      {"buffers", {{{"uri", "square.bin"}, {"byteLength", sizeof(positions) + sizeof(indices)}}}},
+      {"bufferViews",
+       {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", sizeof(positions)}},
+        {{"buffer", 0}, {"byteOffset", sizeof(positions)}, {"byteLength", sizeof(indices)}}}},
+      {"accessors",
+       {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}},
+        {{"bufferView", 1}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}}}};
+  std::ofstream(dir / "square.gltf") << gltf.dump();
+  nlohmann::json broken = gltf;
+  broken["buffers"][0]["uri"] = "gone.bin";
+  std::ofstream(dir / "broken.gltf") << broken.dump();
+
+  const nlohmann::json report = Render(dir, path, "gltf",
+                                       "frames 2\ncommand reference add-z-up " + (dir / "square.gltf") +
+                                           "\nframes 2\ncommand save " + (dir / "with.facet") + "\nframes 1\n");
+  INFO("log:\n" << LogText(report));
+  REQUIRE(report.at("references").size() == 1);
+  CHECK(report["references"][0]["loaded"].get<bool>());
+  CHECK(report["references"][0]["triangles"].get<int>() == 2);
+  CHECK(LogText(report).find("Add reference square.gltf (2 triangles)") != std::string::npos);
+  const facet::Project with = Load(dir / "with.facet");
+  REQUIRE(with.references.size() == 1);
+  CHECK(with.references[0].path == "square.gltf");
+
+  const std::string refused = RenderScriptRefused(
+      dir, path, "broken", "frames 2\ncommand reference add " + (dir / "broken.gltf") + "\nframes 1\n");
+  CHECK(refused.find(dir / "broken.gltf") != std::string::npos);
+  CHECK(refused.find("buffer 0") != std::string::npos);
+  CHECK(refused.find("gone.bin") != std::string::npos);
 }
