@@ -1,6 +1,6 @@
 // Autosave and crash recovery (issue 14, "work is never lost"). While the document has
 // unsaved changes, the whole document, undo and redo history included, is kept in a recovery
-// file (core/io/recovery_io.h): rewritten after every completed edit, undo or redo (a drag
+// file (core/io/recovery_io.h): brought up to date after every completed edit, undo or redo (a drag
 // once it is released, never per drag frame), and every 30 s during a drag that lasts longer
 // (the drag then appears as an "(unfinished)" edit). The main thread hands the worker only what
 // changed since the last write (MakeRecoveryDelta: the new edits, found by their ids), and the
@@ -10,7 +10,9 @@
 // middle of an append leaves a torn last record, which the reader drops. A write starts at most
 // once per ten times the last write's duration (at most once per 30 s): after a slow write (a
 // compaction of a large history) the worker is busy at most a tenth of the time; changes made
-// meanwhile are pending and go into the next write.
+// meanwhile are pending and go into the next write. A failed write (a full disk, a folder in
+// the way) is logged once until its message changes, and tried again at the next change of the
+// document or 30 s later, never every frame; the first success after it is logged too.
 //
 // Where: beside the project as `NAME.facet.recovery` (not hidden: a user looking for lost work
 // finds it next to the project, and the file browser lists only projects, so it does not
