@@ -450,7 +450,8 @@ TEST_CASE("a torn journal restores up to its last whole record and says so") {
     Project next = doc.project();
     next.units = "unit" + std::to_string(i);
     if (!doc.Commit("units " + std::to_string(i), next)) continue;
-    const facet::RecoveryWriteResult result = journal.Write(file.path, facet::MakeRecoveryDelta(doc, nullptr, &written));
+    const facet::RecoveryWriteResult result =
+        journal.Write(file.path, facet::MakeRecoveryDelta(doc, nullptr, &written));
     REQUIRE_MESSAGE(result.ok(), result.error);
     REQUIRE_FALSE(result.compacted);
     after.push_back(doc);
@@ -474,10 +475,11 @@ TEST_CASE("a torn journal restores up to its last whole record and says so") {
     CHECK(loaded.journal_records == 3);
     CheckSameDocument(loaded.document, after[2]);
     REQUIRE(loaded.warnings.size() == 1);
-    CHECK(loaded.warnings[0] == "journal[3]: " +
-                                    std::string(cut == last_start + 3 ? "the header line is incomplete" : "the record is cut short") +
-                                    " (a write cut short by a crash): its " + std::to_string(cut - last_start) +
-                                    " bytes are dropped and the document is restored as of journal[2]");
+    CHECK(loaded.warnings[0] ==
+          "journal[3]: " +
+              std::string(cut == last_start + 3 ? "the header line is incomplete" : "the record is cut short") +
+              " (a write cut short by a crash): its " + std::to_string(cut - last_start) +
+              " bytes are dropped and the document is restored as of journal[2]");
   }
   // A byte of the last record's payload that did not reach the disk: its checksum fails.
   std::string damaged = whole;

@@ -44,7 +44,7 @@ struct AppState;
 struct AutosaveStats {
   int writes = 0;
   int failures = 0;
-  int compactions = 0;             // writes that rewrote the whole file
+  int compactions = 0;            // writes that rewrote the whole file
   double last_snapshot_ms = 0.0;  // main thread: the delta (copying the new edits)
   double last_write_ms = 0.0;     // worker: serialising and writing (fsync included)
   std::uint64_t last_bytes = 0;   // the file's size after the last write

@@ -76,7 +76,8 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"recover", {1, 1}},     {"wait-autosave", {0, 0}},  {"new", {0, 0}},         {"teach", {1, 1}},
       {"texture", {1, 1}},
       {"reference", {1, 1}},   {"add-reference", {1, 1}},
-      {"export-view", {1, 1}}, {"advance-clock", {1, 1}}, {"wait-removed", {1, 1}},
+      {"export-view", {1, 1}},
+      {"advance-clock", {1, 1}}, {"wait-removed", {1, 1}},
   };
   return arity;
 }

@@ -86,10 +86,10 @@ struct RecoveryWritten {
 RecoveryDelta MakeRecoveryDelta(const Document& document, const Edit* unfinished, RecoveryWritten* written);
 
 struct RecoveryWriteResult {
-  std::string error;              // empty on success
+  std::string error;  // empty on success
   std::uint64_t bytes_written = 0;
-  std::uint64_t file_bytes = 0;   // the file's size after the write
-  bool compacted = false;         // the whole file was rewritten (else a record was appended)
+  std::uint64_t file_bytes = 0;  // the file's size after the write
+  bool compacted = false;        // the whole file was rewritten (else a record was appended)
   bool ok() const { return error.empty(); }
 };
 

@@ -246,8 +246,8 @@ const char* kLongDrag =
 TEST_CASE("a drag longer than 30 s is autosaved as an unfinished edit, and restores as one") {
   // The same drag released: its label and where the pin lands.
   const TempDir reference_dir("autosave_drag_reference");
-  const nlohmann::json reference = facet::testing::RenderScript(
-      reference_dir, CopySample(reference_dir), "drag", std::string(kLongDrag) + "up left\nframes 2\n");
+  const nlohmann::json reference = facet::testing::RenderScript(reference_dir, CopySample(reference_dir), "drag",
+                                                                std::string(kLongDrag) + "up left\nframes 2\n");
   REQUIRE(reference.at("undo_stack").size() == 1);
   const std::string label = reference.at("undo_stack")[0].get<std::string>();
   const facet::Project reference_project = ProjectOf(reference);
@@ -262,8 +262,9 @@ TEST_CASE("a drag longer than 30 s is autosaved as an unfinished edit, and resto
   // ends with the mouse still down, so the drag never becomes an edit.
   const TempDir early_dir("autosave_drag_early");
   const nlohmann::json early = RenderAutosave(early_dir, CopySample(early_dir), "early",
-                                              std::string(kLongDrag) + "command advance-clock 29\nframes 3\n"
-                                                                       "command wait-autosave\n");
+                                              std::string(kLongDrag) +
+                                                  "command advance-clock 29\nframes 3\n"
+                                                  "command wait-autosave\n");
   CHECK(early.at("autosave").at("writes").get<int>() == 0);
 
   // 31 s into the drag the drag so far is written, as one more edit; then the session dies.
@@ -287,8 +288,8 @@ TEST_CASE("a drag longer than 30 s is autosaved as an unfinished edit, and resto
   REQUIRE(held != nullptr);
   CHECK((held->uv_px - moved->uv_px).norm() < 1e-9);  // where the mouse was when it was written
 
-  const nlohmann::json restored = RenderAutosave(dir, project, "restore",
-                                                 "frames 2\ncommand recover restore\nframes 2\n");
+  const nlohmann::json restored =
+      RenderAutosave(dir, project, "restore", "frames 2\ncommand recover restore\nframes 2\n");
   INFO(facet::testing::ReportLog(restored));
   CHECK(Labels(restored.at("undo_stack")) == std::vector<std::string>{label + " (unfinished)"});
   CHECK(ReportProject(restored) == left.document.project());
@@ -304,24 +305,24 @@ TEST_CASE("a failed autosave is reported once, and written at the next edit once
   fs::create_symlink(dir / "missing/leuven.facet.recovery", blocker);
   // Two edits, each tried once (and 20 frames after each: no attempt per frame); then the
   // test removes the folder and a third edit is written.
-  facet::testing::WriteText(dir / "fail.txt", "frames 2\n"
-                                              "command add box\n"
-                                              "frames 20\n"
-                                              "command add box\n"
-                                              "frames 20\n"
-                                              "screenshot " +
-                                                  (dir / "failed.png") +
-                                                  "\n"
-                                                  "command wait-removed " +
-                                                  blocker +
-                                                  "\n"
-                                                  "command add box\n"
-                                                  "command wait-autosave\n"
-                                                  "frames 2\n");
-  facet::testing::BackgroundRender session =
-      facet::testing::StartRender(dir, "fail",
-                                  {"--autosave", project, "-o", dir / "fail.png", "--script", dir / "fail.txt",
-                                   "--report", dir / "fail.json"});
+  facet::testing::WriteText(dir / "fail.txt",
+                            "frames 2\n"
+                            "command add box\n"
+                            "frames 20\n"
+                            "command add box\n"
+                            "frames 20\n"
+                            "screenshot " +
+                                (dir / "failed.png") +
+                                "\n"
+                                "command wait-removed " +
+                                blocker +
+                                "\n"
+                                "command add box\n"
+                                "command wait-autosave\n"
+                                "frames 2\n");
+  facet::testing::BackgroundRender session = facet::testing::StartRender(
+      dir, "fail",
+      {"--autosave", project, "-o", dir / "fail.png", "--script", dir / "fail.txt", "--report", dir / "fail.json"});
   const bool failed = facet::testing::WaitForFile(dir / "failed.png", &session, 240.0);
   const bool still_blocked = fs::is_symlink(blocker);
   fs::remove(blocker);
@@ -343,8 +344,8 @@ TEST_CASE("a failed autosave is reported once, and written at the next edit once
        at = log.find("warning: Autosave: ", at + 1))
     ++warnings;
   CHECK(warnings == 1);
-  CHECK(log.find("warning: Autosave: cannot create a temporary file beside " + (dir / "missing/leuven.facet.recovery")) !=
-        std::string::npos);
+  CHECK(log.find("warning: Autosave: cannot create a temporary file beside " +
+                 (dir / "missing/leuven.facet.recovery")) != std::string::npos);
   CHECK(log.find("(trying again at the next change, or in 30 s)") != std::string::npos);
   CHECK(log.find("info: Autosave: written to " + blocker + " again") != std::string::npos);
   CHECK(Labels(report.at("undo_stack")) == std::vector<std::string>{"Add box", "Add box", "Add box"});
@@ -375,7 +376,8 @@ TEST_CASE("an unsaved project's recovery file is offered at start and restores a
   REQUIRE(journal.Write(recovery, facet::MakeRecoveryDelta(document, nullptr, &written)).ok());
   edited.units = "yd";
   REQUIRE(document.Commit("Units again", edited));
-  const facet::RecoveryWriteResult appended = journal.Write(recovery, facet::MakeRecoveryDelta(document, nullptr, &written));
+  const facet::RecoveryWriteResult appended =
+      journal.Write(recovery, facet::MakeRecoveryDelta(document, nullptr, &written));
   REQUIRE(appended.ok());
   REQUIRE_FALSE(appended.compacted);
   {
