@@ -3,8 +3,15 @@
 // malformed or inconsistent files are errors that name what is wrong, never crashes.
 #include <doctest/doctest.h>
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -17,9 +24,9 @@
 using facet::Document;
 using facet::Edit;
 using facet::Project;
-using facet::RecoveryFromJson;
+using facet::RecoveryFromText;
 using facet::RecoveryLoadResult;
-using facet::RecoveryToJson;
+using facet::RecoveryToText;
 
 namespace {
 
@@ -69,7 +76,7 @@ void CheckSameDocument(const Document& got, const Document& want) {
 }
 
 std::string ErrorOf(const std::string& text) {
-  const RecoveryLoadResult loaded = RecoveryFromJson(text);
+  const RecoveryLoadResult loaded = RecoveryFromText(text);
   CHECK_FALSE(loaded.ok());
   MESSAGE(loaded.error);
   return loaded.error;
@@ -77,10 +84,18 @@ std::string ErrorOf(const std::string& text) {
 
 std::string Text(const Document& doc) {
   std::string error;
-  const std::string text = RecoveryToJson(doc, &error);
+  const std::string text = RecoveryToText(doc, &error);
   REQUIRE_MESSAGE(error.empty(), error);
   return text;
 }
+
+// The base record's JSON of a one-record file (the payload is the second line: compact JSON
+// holds no raw newline), and a file made of a changed one.
+nlohmann::json Base(const std::string& text) {
+  const size_t start = text.find('\n', text.find('\n') + 1) + 1;
+  return nlohmann::json::parse(text.substr(start, text.find('\n', start) - start));
+}
+std::string Framed(const nlohmann::json& base) { return facet::FrameRecoveryRecords({base.dump()}); }
 
 }  // namespace
 
@@ -93,7 +108,7 @@ TEST_CASE("a document with a varied history round-trips exactly, and behaves the
     // Every fourth seed ends where it was saved: not dirty, with a redo stack beyond it.
     const int clean_at = seed % 4 == 0 ? edits - undos : static_cast<int>(seed % 5);
     const Document original = VariedDocument(seed, edits, undos, clean_at);
-    const RecoveryLoadResult loaded = RecoveryFromJson(Text(original));
+    const RecoveryLoadResult loaded = RecoveryFromText(Text(original));
     REQUIRE_MESSAGE(loaded.ok(), loaded.error);
     CHECK(loaded.warnings.empty());
     CheckSameDocument(loaded.document, original);
@@ -130,13 +145,13 @@ TEST_CASE("an unreachable saved state and an empty history round-trip") {
   while (!Savable(next) || next == doc.project()) next = facet::testing::RandomEdit(doc.project(), rng);
   REQUIRE(doc.Commit("branch", next));  // the saved state is now beyond reach
   REQUIRE(doc.clean_is_unreachable());
-  RecoveryLoadResult loaded = RecoveryFromJson(Text(doc));
+  RecoveryLoadResult loaded = RecoveryFromText(Text(doc));
   REQUIRE_MESSAGE(loaded.ok(), loaded.error);
   CheckSameDocument(loaded.document, doc);
   CHECK(loaded.document.dirty());
 
   const Document empty(facet::testing::MakeBoxScene().project);
-  loaded = RecoveryFromJson(Text(empty));
+  loaded = RecoveryFromText(Text(empty));
   REQUIRE_MESSAGE(loaded.ok(), loaded.error);
   CheckSameDocument(loaded.document, empty);
 }
@@ -147,13 +162,13 @@ TEST_CASE("an unreachable saved state and an empty history round-trip") {
 TEST_CASE("a recovery file from an older Facet restores the project without its history") {
   Document doc = VariedDocument(21, 4, 1, 0);
   doc.MarkClean();  // the restored work is unsaved whatever the file said
-  nlohmann::json j = nlohmann::json::parse(Text(doc));
+  nlohmann::json j = Base(Text(doc));
   // The project as version 2 wrote it: no texture choices, no references.
   j["project"]["version"] = 2;
   j["project"].erase("references");
   for (auto& image : j["project"]["images"]) image.erase("use_for_texture");
   for (auto& primitive : j["project"]["primitives"]) primitive.erase("face_textures");
-  const RecoveryLoadResult loaded = RecoveryFromJson(j.dump());
+  const RecoveryLoadResult loaded = RecoveryFromText(Framed(j));
   REQUIRE_MESSAGE(loaded.ok(), loaded.error);
   Project expected = doc.project();
   expected.references.clear();
@@ -168,26 +183,28 @@ TEST_CASE("a recovery file from an older Facet restores the project without its 
   CHECK(warned);
   // A newer project version is refused by name.
   j["project"]["version"] = Project::kFormatVersion + 1;
-  CHECK(ErrorOf(j.dump()).find("project.version:") == 0);
+  CHECK(ErrorOf(Framed(j)).find("project.version:") == 0);
 }
 
 TEST_CASE("malformed recovery files are errors naming the place, never crashes") {
   const Document doc = VariedDocument(5, 6, 2, 1);
   const std::string good = Text(doc);
-  CHECK(RecoveryFromJson(good).ok());
+  CHECK(RecoveryFromText(good).ok());
 
   CHECK(ErrorOf("") == "line 1, column 1: the file is empty");
-  CHECK(ErrorOf(good.substr(0, good.size() / 2)).find("line 1, column") == 0);
+  // The base is written whole (atomically), so a cut one is damage, not a torn append.
+  CHECK(ErrorOf(good.substr(0, good.size() / 2)) == "base: the record is cut short");
+  CHECK(ErrorOf("facet-recovery 3\n" + good.substr(good.find('\n') + 1)).find("version: \"facet-recovery 3\" is not") ==
+        0);
   CHECK(ErrorOf("[]").find("expected a JSON object") != std::string::npos);
   CHECK(ErrorOf(facet::ProjectToJson(doc.project())).find("format:") == 0);
 
   using nlohmann::json;
   auto mutated = [&](auto change) {
-    json j = json::parse(good);
+    json j = Base(good);
     change(j);
-    return ErrorOf(j.dump());
+    return ErrorOf(Framed(j));
   };
-  CHECK(mutated([](json& j) { j["version"] = 2; }).find("version:") == 0);
   CHECK(mutated([](json& j) { j.erase("undo"); }) == "undo: missing field");
   CHECK(mutated([](json& j) { j["undo"][1]["label"] = 3; }) == "undo[1].label: expected a string");
   CHECK(mutated([](json& j) { j["clean_undo_depth"] = -1; }).find("clean_undo_depth:") == 0);
@@ -219,12 +236,12 @@ TEST_CASE("a history that does not lead to its project is an error naming the ed
   }
   REQUIRE(doc.Undo());  // undo: 700, 800; redo: 900
   const std::string good = Text(doc);
-  REQUIRE(RecoveryFromJson(good).ok());
+  REQUIRE(RecoveryFromText(good).ok());
   using nlohmann::json;
   auto mutated = [&](auto change) {
-    json j = json::parse(good);
+    json j = Base(good);
     change(j);
-    return ErrorOf(j.dump());
+    return ErrorOf(Framed(j));
   };
 
   // The last undo edit's "after" is not the current project.
@@ -286,7 +303,7 @@ TEST_CASE("adding and removing reference geometry round-trips through the recove
   REQUIRE(doc.Commit("Remove reference plan.obj", removed));
   REQUIRE(doc.Undo());  // the removal waits on the redo stack
   REQUIRE(doc.undo_stack().back().references.size() == 2);
-  const RecoveryLoadResult loaded = RecoveryFromJson(Text(doc));
+  const RecoveryLoadResult loaded = RecoveryFromText(Text(doc));
   REQUIRE_MESSAGE(loaded.ok(), loaded.error);
   CheckSameDocument(loaded.document, doc);
   Document rebuilt = loaded.document;
@@ -295,4 +312,213 @@ TEST_CASE("adding and removing reference geometry round-trips through the recove
   REQUIRE(rebuilt.Undo());
   REQUIRE(rebuilt.Undo());
   CHECK(rebuilt.project().references.empty());
+}
+
+namespace {
+
+// A private file in the temporary folder, removed at the end of the test.
+struct TempFile {
+  std::string path;
+  explicit TempFile(const std::string& name)
+      : path((std::filesystem::temp_directory_path() /
+              ("facet_test_recovery_" + std::to_string(::getpid()) + "_" + name))
+                 .string()) {
+    std::filesystem::remove(path);
+  }
+  ~TempFile() { std::filesystem::remove(path); }
+};
+
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// The document a write with an unfinished drag edit describes.
+Document WithUnfinished(const Document& doc, const Project& drag_start, const Project& preview) {
+  Document copy = doc;
+  copy.CancelPreview(drag_start);
+  *copy.MutableProjectForPreview() = preview;
+  REQUIRE(copy.CommitFrom("drag (unfinished)", drag_start));
+  return copy;
+}
+
+}  // namespace
+
+// The journal (version 2): after every write the file loads to exactly the document written
+// (project, both stacks, dirty flag), through commits, undos, redos, saves, a branch that
+// drops the redo stack and a drag written unfinished; most writes are appends of a record the
+// size of the change, and the file stays within about twice its base.
+TEST_CASE("the recovery journal holds the document after every write, appending what changed") {
+  const TempFile file("journal");
+  std::mt19937 rng(2024);
+  Document doc(facet::testing::MakeBoxScene().project);
+  facet::RecoveryJournal journal;
+  facet::RecoveryWritten written;
+  int appends = 0, compactions = 0, undos = 0, redos = 0, branches = 0, drags = 0;
+  std::uint64_t max_append = 0;
+  size_t largest_whole = 0;
+  auto write = [&](const Edit* unfinished, const Document& want) {
+    const facet::RecoveryWriteResult result =
+        journal.Write(file.path, facet::MakeRecoveryDelta(doc, unfinished, &written));
+    REQUIRE_MESSAGE(result.ok(), result.error);
+    CHECK(result.file_bytes == std::filesystem::file_size(file.path));
+    if (result.compacted) {
+      ++compactions;
+    } else {
+      ++appends;
+      max_append = std::max(max_append, result.bytes_written);
+    }
+    const RecoveryLoadResult loaded = facet::LoadRecovery(file.path);
+    REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+    CHECK(loaded.warnings.empty());
+    CheckSameDocument(loaded.document, want);
+    // The journal never grows beyond the base, a whole write of an earlier document, so the
+    // file is at most twice the largest whole write.
+    std::string error;
+    largest_whole = std::max(largest_whole, RecoveryToText(want, &error).size());
+    CHECK(result.file_bytes <= 2 * largest_whole);
+  };
+  for (int step = 0; step < 60; ++step) {
+    CAPTURE(step);
+    const int op = static_cast<int>(rng() % 10);
+    if (op < 5 || !doc.CanUndo()) {
+      const Project next = facet::testing::RandomEdit(doc.project(), rng);
+      if (!Savable(next)) continue;
+      branches += doc.CanRedo() ? 1 : 0;
+      if (!doc.Commit("edit " + std::to_string(step), next)) continue;
+    } else if (op < 7) {
+      REQUIRE(doc.Undo());
+      ++undos;
+    } else if (op < 9 && doc.CanRedo()) {
+      REQUIRE(doc.Redo());
+      ++redos;
+    } else if (op == 9) {
+      // A drag in progress: its edit so far is written as one more undo edit.
+      const Project drag_start = doc.project();
+      Project preview = facet::testing::RandomEdit(drag_start, rng);
+      if (!Savable(preview) || preview == drag_start) continue;
+      const Document want = WithUnfinished(doc, drag_start, preview);
+      *doc.MutableProjectForPreview() = preview;
+      const Edit unfinished = facet::DiffProjects("drag (unfinished)", drag_start, preview);
+      write(&unfinished, want);
+      ++drags;
+      if (rng() % 2) {
+        doc.CancelPreview(drag_start);  // cancelled: the next write drops the unfinished edit
+      } else {
+        REQUIRE(doc.CommitFrom("drag", drag_start));
+      }
+    } else {
+      doc.MarkClean();
+    }
+    write(nullptr, doc);
+  }
+  MESSAGE("appends " << appends << ", compactions " << compactions << ", largest append " << max_append << " B");
+  CHECK(undos >= 5);
+  CHECK(redos >= 3);
+  CHECK(branches >= 1);
+  CHECK(drags >= 3);
+  // Appends are the rule, compactions the exception (the base doubles between them).
+  CHECK(appends >= 4 * compactions);
+
+  // A new document (File > Open): the next write is whole, and holds the new document alone.
+  doc.Reset(facet::testing::MakeBoxScene().project);
+  const facet::RecoveryDelta whole = facet::MakeRecoveryDelta(doc, nullptr, &written);
+  CHECK(whole.project.has_value());
+  CHECK(journal.Write(file.path, whole).compacted);
+  CheckSameDocument(facet::LoadRecovery(file.path).document, doc);
+}
+
+// A crash in the middle of an append leaves the last record cut short, or (on a disk that
+// reorders writes) with bytes that never arrived: the file restores as of the record before,
+// and says so.
+TEST_CASE("a torn journal restores up to its last whole record and says so") {
+  const TempFile file("torn");
+  std::mt19937 rng(7);
+  Document doc(facet::testing::MakeBoxScene().project);
+  facet::RecoveryJournal journal;
+  facet::RecoveryWritten written;
+  REQUIRE(journal.Write(file.path, facet::MakeRecoveryDelta(doc, nullptr, &written)).compacted);
+  // A large base (many edits at once) so that the next small edits are appended.
+  for (int i = 0; i < 12;) {
+    const Project next = facet::testing::RandomEdit(doc.project(), rng);
+    i += Savable(next) && doc.Commit("base edit", next) ? 1 : 0;
+  }
+  REQUIRE(journal.Write(file.path, facet::MakeRecoveryDelta(doc, nullptr, &written)).compacted);
+  std::vector<Document> after;  // the document as of each journal record
+  std::vector<size_t> ends;     // the file's size after each record
+  for (int i = 0; i < 3;) {
+    Project next = doc.project();
+    next.units = "unit" + std::to_string(i);
+    if (!doc.Commit("units " + std::to_string(i), next)) continue;
+    const facet::RecoveryWriteResult result =
+        journal.Write(file.path, facet::MakeRecoveryDelta(doc, nullptr, &written));
+    REQUIRE_MESSAGE(result.ok(), result.error);
+    REQUIRE_FALSE(result.compacted);
+    after.push_back(doc);
+    ends.push_back(result.file_bytes);
+    ++i;
+  }
+  REQUIRE(doc.Undo());
+  REQUIRE_FALSE(journal.Write(file.path, facet::MakeRecoveryDelta(doc, nullptr, &written)).compacted);
+  after.push_back(doc);
+  ends.push_back(std::filesystem::file_size(file.path));
+  const std::string whole = ReadAll(file.path);
+  REQUIRE(whole.size() == ends.back());
+
+  const size_t last_start = ends[ends.size() - 2];
+  const size_t header_end = whole.find('\n', last_start);
+  // Cut inside the header line, inside the payload, and just before the closing newline.
+  for (const size_t cut : {last_start + 3, (header_end + whole.size()) / 2, whole.size() - 1}) {
+    CAPTURE(cut);
+    const RecoveryLoadResult loaded = RecoveryFromText(whole.substr(0, cut));
+    REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+    CHECK(loaded.journal_records == 3);
+    CheckSameDocument(loaded.document, after[2]);
+    REQUIRE(loaded.warnings.size() == 1);
+    CHECK(loaded.warnings[0] ==
+          "journal[3]: " +
+              std::string(cut == last_start + 3 ? "the header line is incomplete" : "the record is cut short") +
+              " (a write cut short by a crash): its " + std::to_string(cut - last_start) +
+              " bytes are dropped and the document is restored as of journal[2]");
+  }
+  // A byte of the last record's payload that did not reach the disk: its checksum fails.
+  std::string damaged = whole;
+  damaged[whole.size() - 5] ^= 0x20;
+  RecoveryLoadResult loaded = RecoveryFromText(damaged);
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+  CheckSameDocument(loaded.document, after[2]);
+  REQUIRE(loaded.warnings.size() == 1);
+  CHECK(loaded.warnings[0].find("journal[3]: its checksum does not match") == 0);
+  // Cut inside the first journal record: the base alone, as of the base record.
+  loaded = RecoveryFromText(whole.substr(0, ends[0] - 2));
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+  CHECK(loaded.journal_records == 0);
+  CHECK(loaded.document.undo_stack().size() == 12);
+  REQUIRE(loaded.warnings.size() == 1);
+  CHECK(loaded.warnings[0].find("restored as of the base record") != std::string::npos);
+
+  // A whole record (its checksum right) that does not fit the document is damage, named.
+  Document two(facet::testing::MakeBoxScene().project);
+  const std::string base = Base(Text(two)).dump();
+  const std::string bad_keep = R"({"undo_keep":9,"redo_keep":0,"undo":[],"redo":[],"clean_undo_depth":0,)"
+                               R"("clean_is_unreachable":false})";
+  CHECK(ErrorOf(facet::FrameRecoveryRecords({base, bad_keep})) ==
+        "journal[0].undo_keep: 9 is beyond the undo history (0 edits)");
+}
+
+// Version 1 (one JSON object, rewritten whole after every edit) is still read: its document
+// comes back exactly; another version is refused by name.
+TEST_CASE("a version 1 recovery file is migrated; an unknown version is refused by name") {
+  const Document doc = VariedDocument(31, 7, 2, 3);
+  nlohmann::json v1 = Base(Text(doc));
+  nlohmann::ordered_json legacy;
+  legacy["format"] = "facet-recovery";
+  legacy["version"] = 1;
+  for (auto& [key, value] : v1.items()) legacy[key] = value;
+  const RecoveryLoadResult loaded = RecoveryFromText(legacy.dump());
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+  CHECK(loaded.warnings.empty());
+  CheckSameDocument(loaded.document, doc);
+  legacy["version"] = 7;
+  CHECK(ErrorOf(legacy.dump()) == "version: version 7 is not one this build reads (2, in records; 1, one JSON object)");
 }

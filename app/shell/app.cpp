@@ -245,6 +245,7 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
   report["undo_stack"] = undo;
   report["redo_stack"] = redo;
   report["dirty"] = state.document.dirty();
+  report["project_path"] = state.project_path;  // empty for an unsaved project
   // Reference meshes as the panels draw them: read (with their triangle count) or why not.
   nlohmann::json references = nlohmann::json::array();
   for (const Reference& reference : state.document.project().references) {
@@ -306,6 +307,9 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
                         {"recovery_file", autosave.owned_path},
                         {"writes", autosave.stats.writes},
                         {"failures", autosave.stats.failures},
+                        {"compactions", autosave.stats.compactions},
+                        {"bytes_written", autosave.stats.bytes_written},
+                        {"last_bytes_written", autosave.stats.last_bytes_written},
                         {"last_snapshot_ms", autosave.stats.last_snapshot_ms},
                         {"last_write_ms", autosave.stats.last_write_ms},
                         {"last_bytes", autosave.stats.last_bytes},
@@ -387,7 +391,7 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
     }
     ImGui_ImplOpenGL3_NewFrame();
     ImGui::NewFrame();
-    DrawFrame(state, shell, frame * kFrameTimeS);
+    DrawFrame(state, shell, frame * kFrameTimeS + shell->clock_offset_s);
     ImGui::Render();
     target.Bind();
     glClearColor(0.075f, 0.08f, 0.09f, 1.0f);
@@ -402,7 +406,7 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
       }
     }
     // `export-view` (the command or File > Export view's dialog): after the frame that asked.
-    const std::string export_error = RunPendingExportView(state, shell, frame * kFrameTimeS);
+    const std::string export_error = RunPendingExportView(state, shell, frame * kFrameTimeS + shell->clock_offset_s);
     if (!export_error.empty()) {
       error = "script line " + std::to_string(step ? step->line : 0) + ": " + export_error;
       return false;
@@ -498,7 +502,8 @@ int RunOffscreen(const RenderOptions& options) {
     return Fail("cannot open project " + options.project_path);
   }
   state.autosave.enabled = options.autosave;
-  FindRecovery(&state, /*also_unsaved=*/false);
+  // As the GUI's start: the project's recovery file, else an unsaved project's.
+  FindRecovery(&state, /*also_unsaved=*/true);
 
   EglContext egl;
   if (!egl.Create(&error)) return Fail("no offscreen OpenGL context: " + error);

@@ -1,6 +1,7 @@
 #include "app/shell/frame.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -8,6 +9,7 @@
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <thread>
 
 #include <imgui.h>
 #include <imgui_internal.h>  // the window's title-bar rectangle, for the Dock/Undock button
@@ -712,6 +714,29 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     return true;
   }
   if (name == "wait-autosave") return WaitForAutosave(state, error);
+  if (name == "advance-clock") {
+    char* end = nullptr;
+    const double seconds = std::strtod(arg.c_str(), &end);
+    if (!shell->offscreen || end == arg.c_str() || *end != '\0' || !(seconds > 0.0 && seconds < 1e6)) {
+      *error = shell->offscreen ? "expected a number of seconds in (0, 1e6)" : "only offscreen";
+      return false;
+    }
+    shell->clock_offset_s += seconds;
+    return true;
+  }
+  if (name == "wait-removed") {
+    if (!shell->offscreen) {
+      *error = "only offscreen";
+      return false;
+    }
+    for (int i = 0; i < 12000; ++i) {
+      std::error_code ec;
+      if (!std::filesystem::exists(std::filesystem::symlink_status(arg, ec))) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    *error = arg + " still exists after 120 s";
+    return false;
+  }
   if (name == "tool") {
     const std::optional<Tool> tool = ToolFromName(arg);
     if (!tool) {

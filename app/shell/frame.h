@@ -48,6 +48,9 @@ struct ShellState {
   ViewportPanelState viewport_panel;
   PropertiesPanelState properties_panel;
   bool offscreen = false;  // no quitting dialogs, no layout persistence
+  // Offscreen only: added to the fixed-step clock by the script's `advance-clock`, so a test
+  // reaches a 30 s timer (autosave during a long drag) without rendering 30 s of frames.
+  double clock_offset_s = 0.0;
 
   // Modal dialogs.
   Dialog dialog = Dialog::kNone;

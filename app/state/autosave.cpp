@@ -39,22 +39,23 @@ void RemoveFile(const std::string& path) {
   fs::remove(path, ec);
 }
 
-void StartWrite(AppState* state, Document snapshot, const std::string& path, std::uint64_t revision,
-                std::chrono::steady_clock::time_point snapshot_start) {
+void StartWrite(AppState* state, const Edit* unfinished, const std::string& path, std::uint64_t revision) {
   AutosaveState& autosave = state->autosave;
+  const auto snapshot_start = std::chrono::steady_clock::now();
+  RecoveryDelta delta = MakeRecoveryDelta(state->document, unfinished, &autosave.written);
   autosave.stats.last_snapshot_ms = MsSince(snapshot_start);
   AutosaveJob job;
   job.path = path;
   job.started_s = state->time_s;
   job.revision = revision;
-  // The worker owns its copy: the document goes on changing on the main thread meanwhile.
-  job.result = std::async(std::launch::async, [path, document = std::move(snapshot)]() {
+  // The worker owns the delta and, until it is done, the journal: the document goes on
+  // changing on the main thread meanwhile.
+  job.result = std::async(std::launch::async, [path, journal = autosave.journal, delta = std::move(delta)]() mutable {
     const auto start = std::chrono::steady_clock::now();
     AutosaveWrite write;
     std::error_code ec;
     fs::create_directories(fs::path(path).parent_path().empty() ? fs::path(".") : fs::path(path).parent_path(), ec);
-    write.error = SaveRecovery(document, path);
-    if (write.error.empty()) write.bytes = fs::file_size(path, ec);
+    write.result = journal->Write(path, std::move(delta));
     write.ms = MsSince(start);
     return write;
   });
@@ -70,21 +71,29 @@ void CollectWrite(AppState* state, bool wait) {
   const AutosaveJob job = {autosave.job->path, autosave.job->started_s, autosave.job->revision, {}};
   autosave.job.reset();
   autosave.next_write_s = job.started_s + std::min(kIntervalS, kThrottleFactor * write.ms / 1000.0);
-  if (!write.error.empty()) {
+  const std::string& error = write.result.error;
+  if (!error.empty()) {
     ++autosave.stats.failures;
+    // Not every frame: at the next change, or in 30 s (the cause may go away on its own).
     autosave.retry_after_s = state->time_s + kIntervalS;
-    if (write.error != autosave.last_error)
-      state->Log(LogLevel::kWarning, "Autosave: " + write.error + " (trying again every 30 s)");
-    autosave.last_error = write.error;
+    autosave.failed_revision = state->document.revision();
+    if (error != autosave.last_error)
+      state->Log(LogLevel::kWarning, "Autosave: " + error + " (trying again at the next change, or in 30 s)");
+    autosave.last_error = error;
     return;
   }
+  if (!autosave.last_error.empty()) state->Log(LogLevel::kInfo, "Autosave: written to " + job.path + " again");
   autosave.last_error.clear();
+  autosave.retry_after_s = 0.0;
   if (!autosave.owned_path.empty() && autosave.owned_path != job.path) RemoveFile(autosave.owned_path);
   autosave.owned_path = job.path;
   autosave.written_revision = job.revision;
   ++autosave.stats.writes;
+  autosave.stats.compactions += write.result.compacted ? 1 : 0;
   autosave.stats.last_write_ms = write.ms;
-  autosave.stats.last_bytes = write.bytes;
+  autosave.stats.last_bytes = write.result.file_bytes;
+  autosave.stats.last_bytes_written = write.result.bytes_written;
+  autosave.stats.bytes_written += write.result.bytes_written;
 }
 
 // Whether the document's saved state (its clean depth) is `saved`: the project file it was
@@ -153,10 +162,8 @@ void AutosaveTick(AppState* state) {
     if (!autosave.drag_since_s) autosave.drag_since_s = state->time_s;
     if (state->time_s - *autosave.drag_since_s < kIntervalS || state->time_s < autosave.retry_after_s) return;
     autosave.drag_since_s = state->time_s;
-    const auto start = std::chrono::steady_clock::now();
-    Document snapshot = document;
-    snapshot.CommitFrom(state->drag_label + " (unfinished)", *state->drag_start);
-    StartWrite(state, std::move(snapshot), target, kDragRevision, start);
+    const Edit unfinished = DiffProjects(state->drag_label + " (unfinished)", *state->drag_start, document.project());
+    StartWrite(state, unfinished.Empty() ? nullptr : &unfinished, target, kDragRevision);
     return;
   }
   autosave.drag_since_s.reset();
@@ -167,8 +174,9 @@ void AutosaveTick(AppState* state) {
     return;
   }
   if (document.revision() == autosave.written_revision && target == autosave.owned_path) return;
-  if (state->time_s < autosave.retry_after_s || state->time_s < autosave.next_write_s) return;
-  StartWrite(state, document, target, document.revision(), std::chrono::steady_clock::now());
+  if (state->time_s < autosave.retry_after_s && document.revision() == autosave.failed_revision) return;
+  if (state->time_s < autosave.next_write_s) return;
+  StartWrite(state, nullptr, target, document.revision());
 }
 
 bool WaitForAutosave(AppState* state, std::string* error) {

@@ -1,16 +1,18 @@
 // Autosave and crash recovery (issue 14, "work is never lost"). While the document has
 // unsaved changes, the whole document, undo and redo history included, is kept in a recovery
-// file (core/io/recovery_io.h): rewritten after every completed edit, undo or redo (a drag
+// file (core/io/recovery_io.h): brought up to date after every completed edit, undo or redo (a drag
 // once it is released, never per drag frame), and every 30 s during a drag that lasts longer
-// (the drag then appears as an "(unfinished)" edit). The file is serialised and written on a
-// worker thread from a copy of the document, so the frame never waits for the disk; it is
-// written atomically (core/util/file_write.h), so a crash in the middle of a write leaves the
-// previous recovery file whole. The file grows with the history (tests/bench/bench_recovery.cpp:
-// ~0.9 MB per edit that re-solves a 100-box scene), so a write starts at most once per ten times
-// the last write's duration (at most once per 30 s): the worker is busy at most a tenth of the
-// time and the main thread's copy happens as rarely; changes made meanwhile are pending and go
-// into the next write. For a typical project (the Leuven sample: 52 KB, ~45 ms) that is every
-// edit, within half a second.
+// (the drag then appears as an "(unfinished)" edit). The main thread hands the worker only what
+// changed since the last write (MakeRecoveryDelta: the new edits, found by their ids), and the
+// worker appends it to the file as a journal record, compacting the file (rewriting it whole,
+// atomically) when the journal outgrows the base (core/io/recovery_io.h), so the cost of a
+// write is that of the edit, not of the history (tests/bench/bench_recovery.cpp). A crash in the
+// middle of an append leaves a torn last record, which the reader drops. A write starts at most
+// once per ten times the last write's duration (at most once per 30 s): after a slow write (a
+// compaction of a large history) the worker is busy at most a tenth of the time; changes made
+// meanwhile are pending and go into the next write. A failed write (a full disk, a folder in
+// the way) is logged once until its message changes, and tried again at the next change of the
+// document or 30 s later, never every frame; the first success after it is logged too.
 //
 // Where: beside the project as `NAME.facet.recovery` (not hidden: a user looking for lost work
 // finds it next to the project, and the file browser lists only projects, so it does not
@@ -27,9 +29,11 @@
 
 #include <cstdint>
 #include <future>
+#include <memory>
 #include <optional>
 #include <string>
 
+#include "core/io/recovery_io.h"
 #include "core/scene/document.h"
 
 namespace facet::app {
@@ -40,14 +44,16 @@ struct AppState;
 struct AutosaveStats {
   int writes = 0;
   int failures = 0;
-  double last_snapshot_ms = 0.0;  // main thread: copying the document
-  double last_write_ms = 0.0;     // worker: serialising and writing the file (fsync included)
-  std::uint64_t last_bytes = 0;
+  int compactions = 0;            // writes that rewrote the whole file
+  double last_snapshot_ms = 0.0;  // main thread: the delta (copying the new edits)
+  double last_write_ms = 0.0;     // worker: serialising and writing (fsync included)
+  std::uint64_t last_bytes = 0;   // the file's size after the last write
+  std::uint64_t last_bytes_written = 0;
+  std::uint64_t bytes_written = 0;  // in all
 };
 
 struct AutosaveWrite {
-  std::string error;  // empty on success
-  std::uint64_t bytes = 0;
+  RecoveryWriteResult result;
   double ms = 0.0;
 };
 
@@ -70,11 +76,17 @@ struct AutosaveState {
   // The recovery file this session wrote and removes when it is no longer needed.
   std::string owned_path;
   std::uint64_t written_revision = 0;  // Document::revision() of what owned_path holds
-  double retry_after_s = 0.0;          // after a failed write: the next attempt, 30 s later
+  // After a failed write: the next attempt, at the next change of the document or 30 s later.
+  double retry_after_s = 0.0;
+  std::uint64_t failed_revision = 0;
   double next_write_s = 0.0;           // throttle: not before this (see above)
   std::string last_error;              // logged once until it changes
   std::optional<double> drag_since_s;  // when the drag in progress was first seen, or last written
   std::optional<AutosaveJob> job;
+  // What the journal has been told (main thread), and the journal itself (the worker's while
+  // a job runs).
+  RecoveryWritten written;
+  std::shared_ptr<RecoveryJournal> journal = std::make_shared<RecoveryJournal>();
   std::optional<RecoveryOffer> offer;
   AutosaveStats stats;
 };

@@ -77,6 +77,7 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"texture", {1, 1}},
       {"reference", {1, 1}},   {"add-reference", {1, 1}},
       {"export-view", {1, 1}},
+      {"advance-clock", {1, 1}}, {"wait-removed", {1, 1}},
   };
   return arity;
 }
@@ -364,12 +365,14 @@ std::string ParseDrop(const std::string& line, ScriptStep step, Steps* steps) {
 }
 
 // Whether a script line of this kind is something a user does by hand (Script::ui_events).
-// The test-only commands (wait-bake, bake-status, wait-autosave) are not.
+// The test-only commands (wait-bake, bake-status, wait-autosave, advance-clock, wait-removed)
+// are not.
 bool IsUiEvent(const std::vector<std::string>& t) {
   const std::string cmd = Lower(t[0]);
   if (cmd == "command")
     return t.size() < 2 ||
-           (Lower(t[1]) != "wait-bake" && Lower(t[1]) != "bake-status" && Lower(t[1]) != "wait-autosave");
+           (Lower(t[1]) != "wait-bake" && Lower(t[1]) != "bake-status" && Lower(t[1]) != "wait-autosave" &&
+            Lower(t[1]) != "advance-clock" && Lower(t[1]) != "wait-removed");
   return cmd == "click" || cmd == "drag" || cmd == "key" || cmd == "type" || cmd == "wheel" || cmd == "drop" ||
          cmd == "down" || cmd == "hold";
 }

@@ -91,6 +91,12 @@
 //                                   wait-autosave      block until the recovery file holds
 //                                                      the document as it is now (render
 //                                                      --autosave)
+//                                   advance-clock S    the offscreen clock jumps S seconds
+//                                                      ahead (what the autosave's 30 s
+//                                                      timers read), without S s of frames
+//                                   wait-removed PATH  block (at most 120 s) until PATH
+//                                                      no longer exists: a test outside
+//                                                      removes what made a write fail
 //                                   teach NAME on|off  View > Teach's overlays: vanishing,
 //                                                      epipolar, numbers, state, steps
 //                                                      (app/state/teach.h); teach

@@ -1,6 +1,9 @@
 #include "core/io/recovery_io.h"
 
+#include <array>
+#include <cassert>
 #include <cstdint>
+#include <cstdio>
 #include <optional>
 
 #include "core/io/project_io_internal.h"
@@ -14,7 +17,24 @@ using project_io_internal::Json;
 using project_io_internal::OrderedJson;
 
 constexpr const char* kFormatName = "facet-recovery";
-constexpr int kFormatVersion = 1;
+constexpr int kFormatVersion = 2;
+constexpr int kLegacyVersion = 1;  // one JSON object, rewritten whole after every edit
+
+// CRC-32 (IEEE 802.3, as zlib's crc32): catches a record whose bytes did not all reach the disk.
+std::uint32_t Crc32(const std::string& bytes) {
+  static const auto table = [] {
+    std::array<std::uint32_t, 256> t{};
+    for (std::uint32_t i = 0; i < 256; ++i) {
+      std::uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+      t[i] = c;
+    }
+    return t;
+  }();
+  std::uint32_t crc = 0xFFFFFFFFu;
+  for (const char ch : bytes) crc = table[(crc ^ static_cast<unsigned char>(ch)) & 0xFFu] ^ (crc >> 8);
+  return crc ^ 0xFFFFFFFFu;
+}
 
 std::string Join(const std::string& base, const std::string& key) { return base + "." + key; }
 std::string Index(const std::string& base, size_t i) { return base + "[" + std::to_string(i) + "]"; }
@@ -159,27 +179,53 @@ bool ReadEdit(const Json& j, const std::string& at, Reader* r, Edit* edit) {
   return true;
 }
 
-bool ReadEdits(const Json& root, const char* key, Reader* r, std::vector<Edit>* out) {
-  if (!root.contains(key)) return r->Fail(key, "missing field");
-  const Json& list = root[key];
-  if (!list.is_array()) return r->Fail(key, "expected an array");
+bool ReadEdits(const Json& parent, const char* key, const std::string& at, Reader* r, std::vector<Edit>* out) {
+  const std::string list_at = at.empty() ? key : Join(at, key);
+  if (!parent.contains(key)) return r->Fail(list_at, "missing field");
+  const Json& list = parent[key];
+  if (!list.is_array()) return r->Fail(list_at, "expected an array");
   out->resize(list.size());
   for (size_t i = 0; i < list.size(); ++i)
-    if (!ReadEdit(list[i], Index(key, i), r, &(*out)[i])) return false;
+    if (!ReadEdit(list[i], Index(list_at, i), r, &(*out)[i])) return false;
   return true;
 }
 
-bool ReadRecovery(Json& root, Reader* r, Document* document) {
+// The document as the records describe it, before Document::Rebuild checks it.
+struct History {
+  Project project;
+  std::vector<Edit> undo, redo;
+  std::uint64_t clean_undo_depth = 0;
+  bool clean_is_unreachable = false;
+  bool without_history = false;  // an older project layout: the edits cannot be replayed
+};
+
+bool ReadCleanState(const Json& j, const std::string& at, Reader* r, History* h) {
+  const std::string depth_at = at.empty() ? "clean_undo_depth" : Join(at, "clean_undo_depth");
+  const std::string flag_at = at.empty() ? "clean_is_unreachable" : Join(at, "clean_is_unreachable");
+  if (!j.contains("clean_undo_depth") || !r->Unsigned(j["clean_undo_depth"], depth_at, &h->clean_undo_depth))
+    return r->Fail(depth_at, "expected a non-negative integer");
+  if (!j.contains("clean_is_unreachable") || !j["clean_is_unreachable"].is_boolean())
+    return r->Fail(flag_at, "expected true or false");
+  h->clean_is_unreachable = j["clean_is_unreachable"].get<bool>();
+  return true;
+}
+
+// The base record (or a whole version 1 file, `legacy`, with its format and version).
+bool ReadBase(Json& root, bool legacy, Reader* r, History* h) {
   if (!root.is_object()) return r->Fail("(top level)", "expected a JSON object");
-  if (!root.contains("format") || root["format"] != kFormatName)
-    return r->Fail("format", std::string("expected \"") + kFormatName + "\": this is not a Facet recovery file");
-  if (!root.contains("version") || !root["version"].is_number_unsigned())
-    return r->Fail("version", "expected a positive integer");
-  if (root["version"].get<std::uint64_t>() != kFormatVersion)
-    return r->Fail("version", "version " + root["version"].dump() + " is not the one this build reads (" +
-                                  std::to_string(kFormatVersion) + ")");
-  if (!r->Object(root, "",
-                 {"format", "version", "project", "undo", "redo", "clean_undo_depth", "clean_is_unreachable"}))
+  if (legacy) {
+    if (!root.contains("format") || root["format"] != kFormatName)
+      return r->Fail("format", std::string("expected \"") + kFormatName + "\": this is not a Facet recovery file");
+    if (!root.contains("version") || !root["version"].is_number_unsigned())
+      return r->Fail("version", "expected a positive integer");
+    if (root["version"].get<std::uint64_t>() != kLegacyVersion)
+      return r->Fail("version", "version " + root["version"].dump() + " is not one this build reads (" +
+                                    std::to_string(kFormatVersion) + ", in records; " + std::to_string(kLegacyVersion) +
+                                    ", one JSON object)");
+  }
+  if (legacy ? !r->Object(root, "",
+                          {"format", "version", "project", "undo", "redo", "clean_undo_depth", "clean_is_unreachable"})
+             : !r->Object(root, "", {"project", "undo", "redo", "clean_undo_depth", "clean_is_unreachable"}))
     return false;
   if (!root.contains("project")) return r->Fail("project", "missing field");
   Json& project_json = root["project"];
@@ -191,62 +237,201 @@ bool ReadRecovery(Json& root, Reader* r, Document* document) {
       project_json["version"].get<std::uint64_t>() > static_cast<std::uint64_t>(Project::kFormatVersion))
     return r->Fail("project.version", "expected " + std::to_string(Project::kFormatVersion) + " or older");
   const std::uint64_t project_version = project_json["version"].get<std::uint64_t>();
-  Project project;
   std::string project_error;
-  if (!project_io_internal::ProjectFromJsonObject(project_json, &project, &project_error, r->warnings))
+  if (!project_io_internal::ProjectFromJsonObject(project_json, &h->project, &project_error, r->warnings))
     return r->Fail("project", project_error);
   if (project_version < static_cast<std::uint64_t>(Project::kFormatVersion)) {
     r->warnings->push_back("written by an older Facet (project version " + std::to_string(project_version) +
                            "): the project is restored, its undo history is not");
-    const std::string rebuild_error =
-        Document::Rebuild(project, {}, {}, 0, true, project_io_internal::CheckProjectReferences, document);
-    if (!rebuild_error.empty()) return r->Fail("project", rebuild_error);
+    h->without_history = true;
     return true;
   }
+  if (!ReadEdits(root, "undo", "", r, &h->undo) || !ReadEdits(root, "redo", "", r, &h->redo)) return false;
+  return ReadCleanState(root, "", r, h);
+}
+
+// A journal record, applied to *h: the project follows the undo stack (reverting what it
+// drops, applying what it gains), each step checked against the project it meets.
+bool ReadJournal(const Json& j, const std::string& at, Reader* r, History* h) {
+  if (!r->Object(j, at, {"undo_keep", "redo_keep", "undo", "redo", "clean_undo_depth", "clean_is_unreachable"}))
+    return false;
+  std::uint64_t undo_keep = 0, redo_keep = 0;
+  if (!j.contains("undo_keep") || !r->Unsigned(j["undo_keep"], Join(at, "undo_keep"), &undo_keep))
+    return r->Fail(Join(at, "undo_keep"), "expected a non-negative integer");
+  if (!j.contains("redo_keep") || !r->Unsigned(j["redo_keep"], Join(at, "redo_keep"), &redo_keep))
+    return r->Fail(Join(at, "redo_keep"), "expected a non-negative integer");
+  if (undo_keep > h->undo.size())
+    return r->Fail(Join(at, "undo_keep"), std::to_string(undo_keep) + " is beyond the undo history (" +
+                                              std::to_string(h->undo.size()) + " edits)");
+  if (redo_keep > h->redo.size())
+    return r->Fail(Join(at, "redo_keep"), std::to_string(redo_keep) + " is beyond the redo history (" +
+                                              std::to_string(h->redo.size()) + " edits)");
   std::vector<Edit> undo, redo;
-  if (!ReadEdits(root, "undo", r, &undo) || !ReadEdits(root, "redo", r, &redo)) return false;
-  std::uint64_t clean_depth = 0;
-  if (!root.contains("clean_undo_depth") || !r->Unsigned(root["clean_undo_depth"], "clean_undo_depth", &clean_depth))
-    return r->Fail("clean_undo_depth", "expected a non-negative integer");
-  if (!root.contains("clean_is_unreachable") || !root["clean_is_unreachable"].is_boolean())
-    return r->Fail("clean_is_unreachable", "expected true or false");
-  const std::string rebuild_error =
-      Document::Rebuild(project, undo, redo, static_cast<size_t>(clean_depth), root["clean_is_unreachable"].get<bool>(),
-                        project_io_internal::CheckProjectReferences, document);
-  if (!rebuild_error.empty()) return r->Fail("history", rebuild_error);
+  if (!ReadEdits(j, "undo", at, r, &undo) || !ReadEdits(j, "redo", at, r, &redo)) return false;
+  if (!ReadCleanState(j, at, r, h)) return false;
+  if (h->without_history) return true;  // the edits cannot be replayed on an older layout
+  while (h->undo.size() > undo_keep) {
+    const std::string error = TryRevertEdit(h->undo.back(), &h->project);
+    if (!error.empty())
+      return r->Fail(at, "undo[" + std::to_string(h->undo.size() - 1) + "] does not revert onto the project: " + error);
+    h->undo.pop_back();
+  }
+  h->redo.resize(static_cast<size_t>(redo_keep));
+  for (size_t i = 0; i < undo.size(); ++i) {
+    const std::string error = TryApplyEdit(undo[i], &h->project);
+    if (!error.empty()) return r->Fail(Index(Join(at, "undo"), i), "does not apply onto the project: " + error);
+    h->undo.push_back(std::move(undo[i]));
+  }
+  for (Edit& edit : redo) h->redo.push_back(std::move(edit));
   return true;
 }
 
-}  // namespace
-
-std::string RecoveryToJson(const Document& document, std::string* error) {
-  error->clear();
-  OrderedJson root;
-  root["format"] = kFormatName;
-  root["version"] = kFormatVersion;
-  std::string project_error;
-  root["project"] = project_io_internal::ProjectToJsonObject(document.project(), &project_error);
-  if (!project_error.empty()) *error = "project." + project_error;
-  for (const bool undo : {true, false}) {
-    const char* key = undo ? "undo" : "redo";
-    const std::vector<Edit>& stack = undo ? document.undo_stack() : document.redo_stack();
-    OrderedJson list = OrderedJson::array();
-    for (size_t i = 0; i < stack.size(); ++i) list.push_back(WriteEdit(stack[i], Index(key, i), error));
-    root[key] = std::move(list);
-  }
-  root["clean_undo_depth"] = document.clean_undo_depth();
-  root["clean_is_unreachable"] = document.clean_is_unreachable();
-  if (!error->empty()) return {};
-  return root.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+bool Rebuild(const History& h, Reader* r, Document* document) {
+  const std::string rebuild_error =
+      h.without_history
+          ? Document::Rebuild(h.project, {}, {}, 0, true, project_io_internal::CheckProjectReferences, document)
+          : Document::Rebuild(h.project, h.undo, h.redo, static_cast<size_t>(h.clean_undo_depth),
+                              h.clean_is_unreachable, project_io_internal::CheckProjectReferences, document);
+  if (!rebuild_error.empty()) return r->Fail(h.without_history ? "project" : "history", rebuild_error);
+  return true;
 }
 
-RecoveryLoadResult RecoveryFromJson(const std::string& text) {
+// One framed record at *pos: its header line, payload and newline, with the checksum right.
+// Advances *pos past it; false (with *why) when it is incomplete or damaged.
+bool NextRecord(const std::string& text, size_t* pos, std::string* kind, std::string* payload, std::string* why) {
+  const size_t eol = text.find('\n', *pos);
+  if (eol == std::string::npos) return *why = "the header line is incomplete", false;
+  const std::string header = text.substr(*pos, eol - *pos);
+  const size_t s1 = header.find(' '), s2 = s1 == std::string::npos ? s1 : header.find(' ', s1 + 1);
+  if (s2 == std::string::npos || header.size() - s2 - 1 != 8) return *why = "the header line is malformed", false;
+  *kind = header.substr(0, s1);
+  std::uint64_t bytes = 0;
+  const std::string bytes_text = header.substr(s1 + 1, s2 - s1 - 1);
+  if (bytes_text.empty() || bytes_text.size() > 12) return *why = "the header line is malformed", false;
+  for (const char c : bytes_text) {
+    if (c < '0' || c > '9') return *why = "the header line is malformed", false;
+    bytes = 10 * bytes + static_cast<std::uint64_t>(c - '0');
+  }
+  std::uint32_t crc = 0;
+  for (const char c : header.substr(s2 + 1)) {
+    const int digit = c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : -1;
+    if (digit < 0) return *why = "the header line is malformed", false;
+    crc = (crc << 4) | static_cast<std::uint32_t>(digit);
+  }
+  if (bytes + 1 > text.size() - eol - 1) return *why = "the record is cut short", false;
+  *payload = text.substr(eol + 1, static_cast<size_t>(bytes));
+  if (text[eol + 1 + bytes] != '\n') return *why = "the record does not end where its length says", false;
+  if (Crc32(*payload) != crc) return *why = "its checksum does not match", false;
+  *pos = eol + 2 + static_cast<size_t>(bytes);
+  return true;
+}
+
+bool ParsePayload(const std::string& payload, const std::string& at, Json* j, Reader* r) {
+  std::string error;
+  if (!project_io_internal::ParseJson(payload, j, &error)) return r->Fail(at, error);
+  return true;
+}
+
+// A version 2 file: the header line, the base record and the journal.
+bool ReadRecords(const std::string& text, Reader* r, Document* document, size_t* journal_records) {
+  const size_t eol = text.find('\n');
+  const std::string header = text.substr(0, eol);
+  const std::string want = std::string(kFormatName) + " " + std::to_string(kFormatVersion);
+  if (header != want)
+    return r->Fail("version", "\"" + header.substr(0, 40) + "\" is not a version this build reads (" + want +
+                                  "; version " + std::to_string(kLegacyVersion) + " is read as one JSON object)");
+  size_t pos = eol == std::string::npos ? text.size() : eol + 1;
+  std::string kind, payload, why;
+  if (!NextRecord(text, &pos, &kind, &payload, &why)) return r->Fail("base", why);
+  if (kind != "base") return r->Fail("base", "expected the base record first, found \"" + kind + "\"");
+  History h;
+  Json base;
+  if (!ParsePayload(payload, "base", &base, r) || !ReadBase(base, /*legacy=*/false, r, &h)) return false;
+  for (size_t k = 0; pos < text.size(); ++k) {
+    const std::string at = "journal[" + std::to_string(k) + "]";
+    const size_t record_start = pos;
+    if (!NextRecord(text, &pos, &kind, &payload, &why)) {
+      // What a crash during an append leaves: the work up to the record before is whole.
+      r->warnings->push_back(at + ": " + why + " (a write cut short by a crash): its " +
+                             std::to_string(text.size() - record_start) +
+                             " bytes are dropped and the document is restored as of " +
+                             (k == 0 ? std::string("the base record") : "journal[" + std::to_string(k - 1) + "]"));
+      break;
+    }
+    if (kind != "journal") return r->Fail(at, "expected a journal record, found \"" + kind + "\"");
+    Json j;
+    if (!ParsePayload(payload, at, &j, r) || !ReadJournal(j, at, r, &h)) return false;
+    ++*journal_records;
+  }
+  if (h.without_history && *journal_records > 0)
+    r->warnings->push_back("the project is restored as of the base record: the " + std::to_string(*journal_records) +
+                           " journal records after it are in the older layout and are not replayed");
+  return Rebuild(h, r, document);
+}
+
+// ---------------------------------------------------------------------------------------
+// Writing records.
+
+OrderedJson EditsJson(const std::vector<Edit>& edits, const std::string& at, std::string* error) {
+  OrderedJson list = OrderedJson::array();
+  for (size_t i = 0; i < edits.size(); ++i) list.push_back(WriteEdit(edits[i], Index(at, i), error));
+  return list;
+}
+
+std::string Dump(const OrderedJson& j) { return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace); }
+
+std::string BasePayload(const Project& project, const std::vector<Edit>& undo, const std::vector<Edit>& redo,
+                        size_t clean_undo_depth, bool clean_is_unreachable, std::string* error) {
+  error->clear();
+  OrderedJson root;
+  std::string project_error;
+  root["project"] = project_io_internal::ProjectToJsonObject(project, &project_error);
+  if (!project_error.empty()) *error = "project." + project_error;
+  root["undo"] = EditsJson(undo, "undo", error);
+  root["redo"] = EditsJson(redo, "redo", error);
+  root["clean_undo_depth"] = clean_undo_depth;
+  root["clean_is_unreachable"] = clean_is_unreachable;
+  if (!error->empty()) return {};
+  return Dump(root);
+}
+
+std::string Frame(const char* kind, const std::string& payload) {
+  char crc[9];
+  std::snprintf(crc, sizeof crc, "%08x", static_cast<unsigned>(Crc32(payload)));
+  return std::string(kind) + " " + std::to_string(payload.size()) + " " + crc + "\n" + payload + "\n";
+}
+
+std::string FileHeader() { return std::string(kFormatName) + " " + std::to_string(kFormatVersion) + "\n"; }
+
+}  // namespace
+
+std::string RecoveryToText(const Document& document, std::string* error) {
+  const std::string base = BasePayload(document.project(), document.undo_stack(), document.redo_stack(),
+                                       document.clean_undo_depth(), document.clean_is_unreachable(), error);
+  if (!error->empty()) return {};
+  return FileHeader() + Frame("base", base);
+}
+
+std::string FrameRecoveryRecords(const std::vector<std::string>& payloads) {
+  std::string text = FileHeader();
+  for (size_t i = 0; i < payloads.size(); ++i) text += Frame(i == 0 ? "base" : "journal", payloads[i]);
+  return text;
+}
+
+RecoveryLoadResult RecoveryFromText(const std::string& text) {
   RecoveryLoadResult result;
   try {
-    Json root;
-    if (!project_io_internal::ParseJson(text, &root, &result.error)) return result;
     Reader reader{{}, &result.warnings};
-    if (!ReadRecovery(root, &reader, &result.document)) result.error = reader.error;
+    if (text.rfind(std::string(kFormatName) + " ", 0) == 0) {
+      if (!ReadRecords(text, &reader, &result.document, &result.journal_records)) result.error = reader.error;
+    } else {
+      // Version 1: one JSON object (or not a recovery file at all: the format check says so).
+      Json root;
+      History h;
+      if (!project_io_internal::ParseJson(text, &root, &result.error)) return result;
+      if (!ReadBase(root, /*legacy=*/true, &reader, &h) || !Rebuild(h, &reader, &result.document))
+        result.error = reader.error;
+    }
   } catch (const std::exception& e) {
     result.error = std::string("cannot read the recovery file: ") + e.what();
   }
@@ -256,7 +441,7 @@ RecoveryLoadResult RecoveryFromJson(const std::string& text) {
 
 std::string SaveRecovery(const Document& document, const std::string& path) {
   std::string error;
-  const std::string text = RecoveryToJson(document, &error);
+  const std::string text = RecoveryToText(document, &error);
   if (!error.empty()) return "cannot write " + path + ": " + error;
   return WriteFileAtomically(path, text);
 }
@@ -265,8 +450,103 @@ RecoveryLoadResult LoadRecovery(const std::string& path) {
   RecoveryLoadResult result;
   std::string bytes;
   if (!ReadRegularFile(path, kMaxTextFileBytes, &bytes, &result.error)) return result;
-  result = RecoveryFromJson(bytes);
+  result = RecoveryFromText(bytes);
   if (!result.ok()) result.error = path + ": " + result.error;
+  return result;
+}
+
+RecoveryDelta MakeRecoveryDelta(const Document& document, const Edit* unfinished, RecoveryWritten* written) {
+  RecoveryDelta delta;
+  delta.clean_undo_depth = document.clean_undo_depth();
+  delta.clean_is_unreachable = document.clean_is_unreachable();
+  const std::vector<Edit>& undo = document.undo_stack();
+  const std::vector<Edit>& redo = document.redo_stack();
+  if (written->epoch != document.epoch()) {
+    // During a drag the project is the preview, which the unfinished edit leads to.
+    delta.project = document.project();
+    delta.undo = undo;
+    delta.redo = redo;
+  } else {
+    auto common = [](const std::vector<std::uint64_t>& a, const std::vector<std::uint64_t>& b) {
+      size_t n = 0;
+      while (n < a.size() && n < b.size() && a[n] == b[n]) ++n;
+      return n;
+    };
+    delta.undo_keep = common(written->undo_ids, document.undo_ids());
+    delta.redo_keep = common(written->redo_ids, document.redo_ids());
+    delta.undo.assign(undo.begin() + static_cast<std::ptrdiff_t>(delta.undo_keep), undo.end());
+    delta.redo.assign(redo.begin() + static_cast<std::ptrdiff_t>(delta.redo_keep), redo.end());
+  }
+  written->epoch = document.epoch();
+  written->undo_ids = document.undo_ids();
+  written->redo_ids = document.redo_ids();
+  if (unfinished) {
+    delta.undo.push_back(*unfinished);
+    written->undo_ids.push_back(0);  // no edit's id: the next delta replaces it
+  }
+  return delta;
+}
+
+RecoveryWriteResult RecoveryJournal::Write(const std::string& path, RecoveryDelta delta) {
+  RecoveryWriteResult result;
+  std::string record, error;
+  clean_undo_depth_ = delta.clean_undo_depth;
+  clean_is_unreachable_ = delta.clean_is_unreachable;
+  if (delta.project) {
+    project_ = std::move(*delta.project);
+    undo_ = std::move(delta.undo);
+    redo_ = std::move(delta.redo);
+    path_.clear();
+  } else {
+    assert(delta.undo_keep <= undo_.size() && delta.redo_keep <= redo_.size());
+    OrderedJson j;
+    j["undo_keep"] = delta.undo_keep;
+    j["redo_keep"] = delta.redo_keep;
+    j["undo"] = EditsJson(delta.undo, "undo", &error);
+    j["redo"] = EditsJson(delta.redo, "redo", &error);
+    j["clean_undo_depth"] = delta.clean_undo_depth;
+    j["clean_is_unreachable"] = delta.clean_is_unreachable;
+    if (!error.empty()) path_.clear();  // the state below still changes: the next write is whole
+    record = Frame("journal", Dump(j));
+    while (undo_.size() > delta.undo_keep) {
+      RevertEdit(undo_.back(), &project_);
+      undo_.pop_back();
+    }
+    redo_.resize(delta.redo_keep);
+    for (Edit& edit : delta.undo) {
+      ApplyEdit(edit, &project_);
+      undo_.push_back(std::move(edit));
+    }
+    for (Edit& edit : delta.redo) redo_.push_back(std::move(edit));
+    if (!error.empty()) {
+      result.error = "cannot write " + path + ": " + error;
+      return result;
+    }
+  }
+  if (!path_.empty() && path_ == path && journal_bytes_ + record.size() <= base_bytes_) {
+    const std::string append_error = AppendToFile(path, record);
+    if (append_error.empty()) {
+      journal_bytes_ += record.size();
+      result.bytes_written = record.size();
+      result.file_bytes = base_bytes_ + journal_bytes_;
+      return result;
+    }
+    // Removed meanwhile (nothing was unsaved for a while), or the disk refused: write it whole.
+  }
+  path_.clear();
+  const std::string base = BasePayload(project_, undo_, redo_, clean_undo_depth_, clean_is_unreachable_, &error);
+  if (!error.empty()) {
+    result.error = "cannot write " + path + ": " + error;
+    return result;
+  }
+  const std::string text = FileHeader() + Frame("base", base);
+  result.error = WriteFileAtomically(path, text);
+  if (!result.error.empty()) return result;
+  path_ = path;
+  base_bytes_ = text.size();
+  journal_bytes_ = 0;
+  result.bytes_written = result.file_bytes = text.size();
+  result.compacted = true;
   return result;
 }
 

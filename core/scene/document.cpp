@@ -1,6 +1,7 @@
 #include "core/scene/document.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <string>
 #include <unordered_map>
@@ -243,24 +244,32 @@ std::string Document::Rebuild(const Project& current, const std::vector<Edit>& u
   return {};
 }
 
+std::uint64_t Document::NewSerial() {
+  static std::atomic<std::uint64_t> next{1};
+  return next.fetch_add(1, std::memory_order_relaxed);
+}
+
+void Document::PushUndo(Edit edit) {
+  if (undo_.size() < clean_undo_depth_) clean_is_unreachable_ = true;
+  undo_.push_back(std::move(edit));
+  undo_ids_.push_back(NewSerial());
+  redo_.clear();
+  redo_ids_.clear();
+  ++revision_;
+}
+
 bool Document::Commit(const std::string& label, const Project& after) {
   Edit edit = DiffProjects(label, project_, after);
   if (edit.Empty()) return false;
   ApplyEdit(edit, &project_);
-  if (undo_.size() < clean_undo_depth_) clean_is_unreachable_ = true;
-  undo_.push_back(std::move(edit));
-  redo_.clear();
-  ++revision_;
+  PushUndo(std::move(edit));
   return true;
 }
 
 bool Document::CommitFrom(const std::string& label, const Project& before) {
   Edit edit = DiffProjects(label, before, project_);
   if (edit.Empty()) return false;
-  if (undo_.size() < clean_undo_depth_) clean_is_unreachable_ = true;
-  undo_.push_back(std::move(edit));
-  redo_.clear();
-  ++revision_;
+  PushUndo(std::move(edit));
   return true;
 }
 
@@ -269,6 +278,8 @@ bool Document::Undo() {
   RevertEdit(undo_.back(), &project_);
   redo_.push_back(std::move(undo_.back()));
   undo_.pop_back();
+  redo_ids_.push_back(undo_ids_.back());
+  undo_ids_.pop_back();
   ++revision_;
   return true;
 }
@@ -278,6 +289,8 @@ bool Document::Redo() {
   ApplyEdit(redo_.back(), &project_);
   undo_.push_back(std::move(redo_.back()));
   redo_.pop_back();
+  undo_ids_.push_back(redo_ids_.back());
+  redo_ids_.pop_back();
   ++revision_;
   return true;
 }
@@ -308,6 +321,7 @@ void Document::RewriteImagePaths(const std::function<std::string(const std::stri
       }
     }
   }
+  epoch_ = NewSerial();
   ++revision_;
 }
 
@@ -315,6 +329,9 @@ void Document::Reset(Project project) {
   project_ = std::move(project);
   undo_.clear();
   redo_.clear();
+  undo_ids_.clear();
+  redo_ids_.clear();
+  epoch_ = NewSerial();
   MarkClean();
 }
 

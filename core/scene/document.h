@@ -89,6 +89,15 @@ class Document {
   bool Redo();
   const std::vector<Edit>& undo_stack() const { return undo_; }  // oldest first
   const std::vector<Edit>& redo_stack() const { return redo_; }  // next redo last
+  // An id for each edit of undo_stack() and redo_stack() (same order), unique in the process
+  // and kept by an edit as it moves between the stacks, and the epoch, which changes whenever
+  // the project or the recorded edits change other than through the history (Reset, Rebuild,
+  // RewriteImagePaths). Equal ids in the same epoch are the same edit, so a watcher (the
+  // recovery journal, core/io/recovery_io.h) finds what changed by comparing ids, in time
+  // proportional to the number of edits, not their size, and copies only the new ones.
+  const std::vector<std::uint64_t>& undo_ids() const { return undo_ids_; }
+  const std::vector<std::uint64_t>& redo_ids() const { return redo_ids_; }
+  std::uint64_t epoch() const { return epoch_; }
 
   bool dirty() const { return undo_.size() != clean_undo_depth_ || clean_is_unreachable_; }
   // The undo depth at the last MarkClean, and whether an edit since has made it unreachable
@@ -111,9 +120,15 @@ class Document {
   void RewriteImagePaths(const std::function<std::string(const std::string&)>& rewrite);
 
  private:
+  // Process-wide, never 0: for edit ids and epochs.
+  static std::uint64_t NewSerial();
+  void PushUndo(Edit edit);
+
   Project project_;
   std::vector<Edit> undo_;
   std::vector<Edit> redo_;
+  std::vector<std::uint64_t> undo_ids_, redo_ids_;
+  std::uint64_t epoch_ = NewSerial();
   size_t clean_undo_depth_ = 0;
   bool clean_is_unreachable_ = false;
   std::uint64_t revision_ = 0;

@@ -65,4 +65,33 @@ std::string WriteFileAtomically(const std::string& requested_path, const std::st
   return "";
 }
 
+std::string AppendToFile(const std::string& path, const std::string& bytes) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC | O_NOFOLLOW);
+  if (fd < 0) return "cannot append to " + path + ": " + std::strerror(errno);
+  struct stat before {};
+  if (::fstat(fd, &before) != 0 || !S_ISREG(before.st_mode)) {
+    ::close(fd);
+    return "cannot append to " + path + ": not a regular file";
+  }
+  auto fail = [&](const std::string& what, int err) {
+    // A partial record at the end would be dropped by the reader, but the next append would
+    // land behind it and be dropped with it: cut it off.
+    if (::ftruncate(fd, before.st_size) == 0) ::fsync(fd);
+    ::close(fd);
+    return "cannot append to " + path + ": " + what + ": " + std::strerror(err);
+  };
+  size_t written = 0;
+  while (written < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return fail("writing", errno);
+    }
+    written += static_cast<size_t>(n);
+  }
+  if (::fdatasync(fd) != 0) return fail("flushing to disk", errno);
+  if (::close(fd) != 0) return "cannot append to " + path + ": closing: " + std::strerror(errno);
+  return "";
+}
+
 }  // namespace facet

@@ -1,7 +1,11 @@
 // Autosave and crash recovery through the real application (issue 14): a session killed with
 // SIGKILL after an autosave is restored, history included, exactly as it was autosaved; a
-// clean exit leaves no recovery file, for a saved project and an unsaved one; Discard deletes
+// session killed 30 s into a drag restores the drag as an unfinished edit; a failed write is
+// reported once and written at the next edit once its cause is gone; a clean exit leaves no
+// recovery file, for a saved project and an unsaved one; an unsaved project's file is offered
+// at start and restores as an unsaved project, also when its journal is torn; Discard deletes
 // the file; a corrupt or inconsistent recovery file is reported and the project opens as saved.
+// The 30 s timers read the offscreen clock, which the scripts move on with `advance-clock`.
 #include <doctest/doctest.h>
 
 #include <signal.h>
@@ -180,7 +184,7 @@ TEST_CASE("a corrupt or inconsistent recovery file is reported, and the project 
   const facet::Project saved = facet::testing::LoadProjectFile(project);
   const std::string recovery = project + ".recovery";
 
-  // Truncated JSON: the loader's line and column.
+  // Truncated JSON (a version 1 file): the loader's line and column.
   facet::testing::WriteText(recovery, "{\"format\": \"facet-recovery\", \"version\": 1, \"project\": {");
   nlohmann::json report = RenderAutosave(dir, project, "truncated", "frames 2\n");
   INFO(facet::testing::ReportLog(report));
@@ -197,10 +201,13 @@ TEST_CASE("a corrupt or inconsistent recovery file is reported, and the project 
   edited.units = "ft";
   REQUIRE(document.Commit("Units", edited));
   std::string error;
-  nlohmann::json text = nlohmann::json::parse(facet::RecoveryToJson(document, &error));
+  const std::string whole = facet::RecoveryToText(document, &error);
   REQUIRE(error.empty());
+  // The base record's JSON is the file's second line (compact JSON holds no raw newline).
+  const size_t base_start = whole.find('\n', whole.find('\n') + 1) + 1;
+  nlohmann::json text = nlohmann::json::parse(whole.substr(base_start, whole.find('\n', base_start) - base_start));
   text["undo"][0]["units"] = {"m", "yd"};  // the project it leads to is in feet
-  facet::testing::WriteText(recovery, text.dump());
+  facet::testing::WriteText(recovery, facet::FrameRecoveryRecords({text.dump()}));
   report = RenderAutosave(dir, project, "inconsistent", "frames 2\n");
   CHECK(LogHas(report, "Recovery file not restored: " + recovery +
                            ": history: undo[0]: does not revert onto the project after it: units: the project's "
@@ -208,4 +215,192 @@ TEST_CASE("a corrupt or inconsistent recovery file is reported, and the project 
                            project + " opened as saved"));
   CHECK(ReportProject(report) == saved);
   CHECK(report.at("dialog") == "");
+}
+
+namespace {
+
+facet::Project ProjectOf(const nlohmann::json& report) { return ReportProject(report); }
+
+const facet::Pin* PinOf(const facet::Project& project, facet::Id id) {
+  for (const facet::Pin& pin : project.pins)
+    if (pin.id == id) return &pin;
+  return nullptr;
+}
+
+// A pin of the Leuven sample (its first) dragged by (11.5, 8.5) px of the photo, the mouse
+// held down at the end.
+constexpr facet::Id kDraggedPin = 41;
+const char* kLongDrag =
+    "frames 2\n"
+    "move image 318.5 395.5\n"
+    "frames 1\n"
+    "down left\n"
+    "frames 1\n"
+    "move image 324 399\n"
+    "frames 1\n"
+    "move image 330 404\n"
+    "frames 2\n";
+
+}  // namespace
+
+TEST_CASE("a drag longer than 30 s is autosaved as an unfinished edit, and restores as one") {
+  // The same drag released: its label and where the pin lands.
+  const TempDir reference_dir("autosave_drag_reference");
+  const nlohmann::json reference = facet::testing::RenderScript(reference_dir, CopySample(reference_dir), "drag",
+                                                                std::string(kLongDrag) + "up left\nframes 2\n");
+  REQUIRE(reference.at("undo_stack").size() == 1);
+  const std::string label = reference.at("undo_stack")[0].get<std::string>();
+  const facet::Project reference_project = ProjectOf(reference);
+  const facet::Pin* moved = PinOf(reference_project, kDraggedPin);
+  REQUIRE(moved != nullptr);
+  const facet::Project sample = facet::testing::LoadProjectFile(kSampleFolder + "leuven.facet");
+  const facet::Pin* original = PinOf(sample, kDraggedPin);
+  REQUIRE(original != nullptr);
+  REQUIRE((moved->uv_px - original->uv_px).norm() > 5.0);  // the drag moved it
+
+  // 29 s into the drag nothing is written (the file would hold no completed edit); the script
+  // ends with the mouse still down, so the drag never becomes an edit.
+  const TempDir early_dir("autosave_drag_early");
+  const nlohmann::json early = RenderAutosave(early_dir, CopySample(early_dir), "early",
+                                              std::string(kLongDrag) +
+                                                  "command advance-clock 29\nframes 3\n"
+                                                  "command wait-autosave\n");
+  CHECK(early.at("autosave").at("writes").get<int>() == 0);
+
+  // 31 s into the drag the drag so far is written, as one more edit; then the session dies.
+  const TempDir dir("autosave_drag");
+  const std::string project = CopySample(dir);
+  const std::string recovery = project + ".recovery";
+  facet::testing::WriteText(dir / "session.txt", std::string(kLongDrag) +
+                                                     "command advance-clock 31\nframes 3\ncommand wait-autosave\n"
+                                                     "screenshot " +
+                                                     (dir / "autosaved.png") + "\nframes 90000\n");
+  facet::testing::BackgroundRender session = facet::testing::StartRender(
+      dir, "session", {"--autosave", project, "-o", dir / "session.png", "--script", dir / "session.txt"});
+  const bool autosaved = facet::testing::WaitForFile(dir / "autosaved.png", &session, 240.0);
+  CHECK(facet::testing::StopRender(&session, SIGKILL) == SIGKILL);
+  INFO("stderr: " << facet::testing::ReadText(dir / "session.stderr.txt"));
+  REQUIRE(autosaved);
+  const facet::RecoveryLoadResult left = facet::LoadRecovery(recovery);
+  REQUIRE_MESSAGE(left.ok(), left.error);
+  CHECK(Labels(left.document.undo_stack()) == std::vector<std::string>{label + " (unfinished)"});
+  const facet::Pin* held = PinOf(left.document.project(), kDraggedPin);
+  REQUIRE(held != nullptr);
+  CHECK((held->uv_px - moved->uv_px).norm() < 1e-9);  // where the mouse was when it was written
+
+  const nlohmann::json restored =
+      RenderAutosave(dir, project, "restore", "frames 2\ncommand recover restore\nframes 2\n");
+  INFO(facet::testing::ReportLog(restored));
+  CHECK(Labels(restored.at("undo_stack")) == std::vector<std::string>{label + " (unfinished)"});
+  CHECK(ReportProject(restored) == left.document.project());
+  CHECK(restored.at("dirty") == true);
+}
+
+TEST_CASE("a failed autosave is reported once, and written at the next edit once the cause is gone") {
+  // The recovery file a link into a missing folder: every write fails at once (the writer
+  // writes where a link points, and cannot create its temporary file there).
+  const TempDir dir("autosave_fail");
+  const std::string project = CopySample(dir);
+  const std::string blocker = project + ".recovery";
+  fs::create_symlink(dir / "missing/leuven.facet.recovery", blocker);
+  // Two edits, each tried once (and 20 frames after each: no attempt per frame); then the
+  // test removes the folder and a third edit is written.
+  facet::testing::WriteText(dir / "fail.txt",
+                            "frames 2\n"
+                            "command add box\n"
+                            "frames 20\n"
+                            "command add box\n"
+                            "frames 20\n"
+                            "screenshot " +
+                                (dir / "failed.png") +
+                                "\n"
+                                "command wait-removed " +
+                                blocker +
+                                "\n"
+                                "command add box\n"
+                                "command wait-autosave\n"
+                                "frames 2\n");
+  facet::testing::BackgroundRender session = facet::testing::StartRender(
+      dir, "fail",
+      {"--autosave", project, "-o", dir / "fail.png", "--script", dir / "fail.txt", "--report", dir / "fail.json"});
+  const bool failed = facet::testing::WaitForFile(dir / "failed.png", &session, 240.0);
+  const bool still_blocked = fs::is_symlink(blocker);
+  fs::remove(blocker);
+  const bool reported = failed && facet::testing::WaitForFile(dir / "fail.json", &session, 240.0);
+  facet::testing::StopRender(&session, SIGKILL);  // reaps it (it has exited, or hangs)
+  INFO("stderr: " << facet::testing::ReadText(dir / "fail.stderr.txt"));
+  REQUIRE(failed);
+  REQUIRE(reported);
+  CHECK(still_blocked);
+  const nlohmann::json report = facet::testing::ReadJson(dir / "fail.json");
+  const std::string log = facet::testing::ReportLog(report);
+  INFO(log);
+  const nlohmann::json& autosave = report.at("autosave");
+  // One attempt per edit, never one per frame; one warning for the two.
+  CHECK(autosave.at("failures").get<int>() == 2);
+  CHECK(autosave.at("writes").get<int>() >= 1);
+  size_t warnings = 0;
+  for (size_t at = log.find("warning: Autosave: "); at != std::string::npos;
+       at = log.find("warning: Autosave: ", at + 1))
+    ++warnings;
+  CHECK(warnings == 1);
+  CHECK(log.find("warning: Autosave: cannot create a temporary file beside " +
+                 (dir / "missing/leuven.facet.recovery")) != std::string::npos);
+  CHECK(log.find("(trying again at the next change, or in 30 s)") != std::string::npos);
+  CHECK(log.find("info: Autosave: written to " + blocker + " again") != std::string::npos);
+  CHECK(Labels(report.at("undo_stack")) == std::vector<std::string>{"Add box", "Add box", "Add box"});
+  CHECK_FALSE(fs::exists(blocker));  // the clean exit removed the file it wrote
+}
+
+TEST_CASE("an unsaved project's recovery file is offered at start and restores as an unsaved project") {
+  const TempDir dir("autosave_untitled");
+  CopySample(dir);
+  // What a crashed unsaved session left: the photo added by absolute path, two edits, one
+  // more appended to the journal and then a record cut short by the crash.
+  facet::Project start;
+  {
+    facet::Project sample = facet::testing::LoadProjectFile(kSampleFolder + "leuven.facet");
+    start.next_id = sample.next_id;
+    start.images = sample.images;
+    start.images[0].path = dir / "leuvenA.jpg";
+  }
+  facet::Document document(start);
+  facet::Project edited = start;
+  edited.units = "ft";
+  REQUIRE(document.Commit("Units", edited));
+  const std::string folder = dir / "data/facet/recovery";
+  fs::create_directories(folder);
+  const std::string recovery = folder + "/untitled-2147483000.facet.recovery";  // no such process
+  facet::RecoveryJournal journal;
+  facet::RecoveryWritten written;
+  REQUIRE(journal.Write(recovery, facet::MakeRecoveryDelta(document, nullptr, &written)).ok());
+  edited.units = "yd";
+  REQUIRE(document.Commit("Units again", edited));
+  const facet::RecoveryWriteResult appended =
+      journal.Write(recovery, facet::MakeRecoveryDelta(document, nullptr, &written));
+  REQUIRE(appended.ok());
+  REQUIRE_FALSE(appended.compacted);
+  {
+    std::ofstream torn(recovery, std::ios::app | std::ios::binary);
+    torn << "journal 120 0000";
+  }
+
+  // At start, with no project: the dialog offers it.
+  const nlohmann::json offered = RenderAutosave(dir, "", "offered", "frames 2\n");
+  INFO(facet::testing::ReportLog(offered));
+  CHECK(offered.at("dialog") == "recover");
+  CHECK(offered.at("autosave").at("offer") == recovery);
+  CHECK(LogHas(offered, recovery + ": journal[1]: the header line is incomplete (a write cut short by a crash): its 16 "
+                                   "bytes are dropped and the document is restored as of journal[0]"));
+  CHECK(fs::exists(recovery));  // nothing answered: kept
+
+  const nlohmann::json restored =
+      RenderAutosave(dir, "", "restored", "frames 2\nclick left item recover.restore\nframes 2\n");
+  INFO(facet::testing::ReportLog(restored));
+  CHECK(LogHas(restored, "Restored from " + recovery + " (2 edits to undo, 0 to redo)"));
+  CHECK(Labels(restored.at("undo_stack")) == std::vector<std::string>{"Units", "Units again"});
+  CHECK(ReportProject(restored) == document.project());
+  CHECK(restored.at("project_path") == "");
+  CHECK(restored.at("dirty") == true);
+  CHECK(restored.at("dialog") == "");
 }

@@ -1,10 +1,15 @@
 // Autosave's cost (issue 14, app/state/autosave.h) on the 100-primitive scene (100 boxes, 10
-// images, 1,000 pins): the main thread's snapshot of the document (a copy) and the worker's
-// serialisation + atomic write (fsync included) of the recovery file, for histories of 1, 10
-// and 30 edits. Each edit is what the app commits: one pin moved by 0.5 px and the model
-// update's re-solve, which moves every free box and camera, so every edit records the whole
-// scene twice (before and after) and the file grows linearly with the history. Counters: the
-// file's size (MB) and its share per edit. Also the restore (read, check and rebuild).
+// images, 1,000 pins), for histories of 1, 10 and 30 edits. Each edit is what the app commits:
+// one pin moved by 0.5 px and the model update's re-solve, which moves every free box and
+// camera, so every edit records the whole scene twice (before and after).
+// - BM_RecoveryDelta: the main thread's part of a write since the journal (recovery format 2):
+//   the delta of the last edit (MakeRecoveryDelta), against BM_RecoverySnapshot, the copy of
+//   the whole document that format 1 took.
+// - BM_RecoveryJournal: a session of N edits written one write per edit as autosave does
+//   (appends, and compactions when the journal outgrows the base). Counters: the bytes written
+//   per edit (all writes / N), the last write's, the number of compactions and the file's size.
+// - BM_RecoveryWrite: a whole write (what format 1 did after every edit; now a compaction).
+// - BM_RecoveryRestore: read, check and rebuild.
 #include <benchmark/benchmark.h>
 
 #include <unistd.h>
@@ -55,6 +60,63 @@ void BM_RecoverySnapshot(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_RecoverySnapshot)->ArgName("edits")->Arg(1)->Arg(10)->Arg(30)->Unit(benchmark::kMillisecond);
+
+void BM_RecoveryDelta(benchmark::State& state) {
+  Document document = SceneWithHistory(static_cast<int>(state.range(0)));
+  // What the journal was told before the last edit.
+  document.Undo();
+  RecoveryWritten before;
+  MakeRecoveryDelta(document, nullptr, &before);
+  document.Redo();
+  for (auto _ : state) {
+    RecoveryWritten written = before;
+    RecoveryDelta delta = MakeRecoveryDelta(document, nullptr, &written);
+    benchmark::DoNotOptimize(delta);
+  }
+}
+BENCHMARK(BM_RecoveryDelta)->ArgName("edits")->Arg(1)->Arg(10)->Arg(30)->Unit(benchmark::kMillisecond);
+
+void BM_RecoveryJournal(benchmark::State& state) {
+  const int edits = static_cast<int>(state.range(0));
+  const Document& full = SceneWithHistory(edits);
+  Project first = full.project();
+  for (size_t i = full.undo_stack().size(); i-- > 0;) RevertEdit(full.undo_stack()[i], &first);
+  const std::string path = TempPath() + "_journal";
+  std::uint64_t total = 0, last = 0, file = 0;
+  int compactions = 0;
+  for (auto _ : state) {
+    std::filesystem::remove(path);
+    Document document(first);
+    RecoveryJournal journal;
+    RecoveryWritten written;
+    total = 0;
+    compactions = 0;
+    for (int i = 0; i < edits; ++i) {
+      Project next = document.project();
+      ApplyEdit(full.undo_stack()[static_cast<size_t>(i)], &next);
+      document.Commit("Move pin", next);
+      const RecoveryWriteResult result = journal.Write(path, MakeRecoveryDelta(document, nullptr, &written));
+      if (!result.ok()) state.SkipWithError(result.error.c_str());
+      total += result.bytes_written;
+      last = result.bytes_written;
+      file = result.file_bytes;
+      compactions += result.compacted ? 1 : 0;
+    }
+  }
+  state.counters["MB_per_edit"] = static_cast<double>(total) / 1e6 / edits;
+  state.counters["last_MB"] = static_cast<double>(last) / 1e6;
+  state.counters["file_MB"] = static_cast<double>(file) / 1e6;
+  state.counters["compactions"] = compactions;
+  std::filesystem::remove(path);
+}
+BENCHMARK(BM_RecoveryJournal)
+    ->ArgName("edits")
+    ->Arg(1)
+    ->Arg(10)
+    ->Arg(30)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->UseRealTime();
 
 void BM_RecoveryWrite(benchmark::State& state) {
   const Document& document = SceneWithHistory(static_cast<int>(state.range(0)));

@@ -1,37 +1,40 @@
 // The recovery file (core/io/recovery_io.h), which the app reads at start after a crash: any
-// bytes either load or are refused with a message. A file that loads must write back, the
-// written text must load back to the same document (project, undo and redo history, clean
-// state) and write the same text again; the loaded history must be live: undoing all of it
-// and redoing all of it returns to the loaded project.
+// bytes either load or are refused with a message. The input is read twice: as a whole file
+// (version 2 records, or a version 1 JSON object), and as one JSON payload per line framed into
+// records with correct lengths and checksums (FrameRecoveryRecords), so that mutations reach
+// the base and journal readers instead of stopping at a checksum. A file that loads must write
+// back, the written text must load back to the same document (project, undo and redo history,
+// clean state) and write the same text again; the loaded history must be live: undoing all of
+// it and redoing all of it returns to the loaded project.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/io/recovery_io.h"
 #include "tests/fuzz/fuzz_check.h"
 
 namespace {
 
+using facet::fuzz::Fail;
+constexpr const char* kTarget = "fuzz_recovery";
+
 bool SameDocument(const facet::Document& a, const facet::Document& b) {
   return a.project() == b.project() && a.undo_stack() == b.undo_stack() && a.redo_stack() == b.redo_stack() &&
          a.clean_undo_depth() == b.clean_undo_depth() && a.clean_is_unreachable() == b.clean_is_unreachable();
 }
 
-}  // namespace
-
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  using facet::fuzz::Fail;
-  constexpr const char* kTarget = "fuzz_recovery";
-  const std::string text(reinterpret_cast<const char*>(data), size);
-  const facet::RecoveryLoadResult loaded = facet::RecoveryFromJson(text);
-  if (!loaded.ok()) return 0;
+void Check(const std::string& text) {
+  const facet::RecoveryLoadResult loaded = facet::RecoveryFromText(text);
+  if (!loaded.ok()) return;
   std::string error;
-  const std::string written = facet::RecoveryToJson(loaded.document, &error);
+  const std::string written = facet::RecoveryToText(loaded.document, &error);
   if (!error.empty()) Fail(kTarget, "a loaded recovery file cannot be written: " + error);
-  const facet::RecoveryLoadResult reloaded = facet::RecoveryFromJson(written);
+  const facet::RecoveryLoadResult reloaded = facet::RecoveryFromText(written);
   if (!reloaded.ok()) Fail(kTarget, "the written text does not load: " + reloaded.error + "\n" + written);
   if (!SameDocument(reloaded.document, loaded.document)) Fail(kTarget, "the written text loads back different");
-  if (facet::RecoveryToJson(reloaded.document, &error) != written) Fail(kTarget, "writing it again changes the text");
+  if (facet::RecoveryToText(reloaded.document, &error) != written) Fail(kTarget, "writing it again changes the text");
 
   facet::Document live = loaded.document;
   while (live.CanUndo()) {
@@ -45,5 +48,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (loaded.document.redo_stack().empty() && !(live.project() == loaded.document.project())) {
     Fail(kTarget, "undo all + redo all does not return to the loaded project");
   }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  Check(text);
+  std::vector<std::string> payloads;
+  for (size_t start = 0; start <= text.size();) {
+    const size_t end = std::min(text.find('\n', start), text.size());
+    payloads.push_back(text.substr(start, end - start));
+    start = end + 1;
+  }
+  Check(facet::FrameRecoveryRecords(payloads));
   return 0;
 }
