@@ -21,4 +21,12 @@ endif()
 # over the build type's -O2/-O3.
 add_compile_options(${facet_sanitize_flags})
 add_link_options(-fsanitize=${facet_sanitizers})
+# LLVM's linker (lld-14, scripts/deps-debian.txt's checked part) when clang has it: this tree
+# links about a hundred sanitized executables, each 5x faster with lld than with GNU ld.
+if(CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+  find_program(FACET_LLD NAMES ld.lld-14 ld.lld)
+  if(FACET_LLD)
+    add_link_options(--ld-path=${FACET_LLD})
+  endif()
+endif()
 message(STATUS "Facet: checked build (${facet_sanitizers}) with ${CMAKE_CXX_COMPILER_ID} ${CMAKE_CXX_COMPILER_VERSION}")
