@@ -49,22 +49,9 @@ void DrawDashedScreenLine(ImDrawList* draw_list, const Eigen::Vector2d& a, const
 // An infinite image line a*u + b*v + c = 0 drawn across the view.
 void DrawInfiniteImageLine(ImDrawList* draw_list, const Eigen::Vector3d& line, const ViewTransform& view,
                            const ScreenRect& rect, ImU32 color, float thickness_px, bool dashed) {
-  const double n2 = line.x() * line.x() + line.y() * line.y();
-  if (n2 < 1e-300) return;  // the line at infinity
-  double cu, cv;
-  view.ToImage(ToImVec2(0.5 * (rect.min + rect.max)), &cu, &cv);
-  const Eigen::Vector2d center(cu, cv);
-  const double offset = (line.x() * cu + line.y() * cv + line.z()) / n2;
-  const Eigen::Vector2d foot = center - offset * Eigen::Vector2d(line.x(), line.y());
-  const Eigen::Vector2d dir = Eigen::Vector2d(-line.y(), line.x()) / std::sqrt(n2);
-  const double reach_px = 2.0 * (rect.max - rect.min).norm() / view.zoom + 1.0;
-  const Eigen::Vector2d a = ImageToScreen(view, foot - reach_px * dir);
-  const Eigen::Vector2d b = ImageToScreen(view, foot + reach_px * dir);
-  if (dashed) {
-    DrawDashedScreenLine(draw_list, a, b, rect, color, thickness_px, 10.0);
-  } else {
-    DrawScreenLine(draw_list, a, b, rect, color, thickness_px);
-  }
+  Eigen::Vector2d a, b;
+  if (!ImageLineAcrossView(view, line, rect.min, rect.max, &a, &b)) return;
+  DrawClippedScreenLine(draw_list, a, b, rect.min, rect.max, color, thickness_px, dashed ? 10.0 : 0.0);
 }
 
 // Marks a vanishing point: a target when it is in or near the view, else an arrow at the
@@ -390,6 +377,23 @@ Eigen::Vector2d ImageToScreen(const ViewTransform& view, const Eigen::Vector2d& 
 }
 
 ImVec2 ToImVec2(const Eigen::Vector2d& p) { return ImVec2(static_cast<float>(p.x()), static_cast<float>(p.y())); }
+
+bool ImageLineAcrossView(const ViewTransform& view, const Eigen::Vector3d& line, const Eigen::Vector2d& rect_min,
+                         const Eigen::Vector2d& rect_max, Eigen::Vector2d* a, Eigen::Vector2d* b) {
+  const double n2 = line.x() * line.x() + line.y() * line.y();
+  if (!(n2 >= 1e-300)) return false;  // the line at infinity
+  double cu, cv;
+  view.ToImage(ToImVec2(0.5 * (rect_min + rect_max)), &cu, &cv);
+  const Eigen::Vector2d center(cu, cv);
+  const double offset = (line.x() * cu + line.y() * cv + line.z()) / n2;
+  const Eigen::Vector2d foot = center - offset * Eigen::Vector2d(line.x(), line.y());
+  const Eigen::Vector2d dir = Eigen::Vector2d(-line.y(), line.x()) / std::sqrt(n2);
+  // Twice the view's diagonal from its centre's foot: past the view on both sides.
+  const double reach_px = 2.0 * (rect_max - rect_min).norm() / view.zoom + 1.0;
+  *a = ImageToScreen(view, foot - reach_px * dir);
+  *b = ImageToScreen(view, foot + reach_px * dir);
+  return true;
+}
 
 void DrawClippedScreenLine(ImDrawList* draw_list, Eigen::Vector2d a, Eigen::Vector2d b, const Eigen::Vector2d& rect_min,
                            const Eigen::Vector2d& rect_max, ImU32 color, float thickness_px, double dash_px,

@@ -45,6 +45,11 @@ bool ClipSegmentToRect(Eigen::Vector2d* a, Eigen::Vector2d* b, const Eigen::Vect
 Eigen::Vector2d ImageToScreen(const ViewTransform& view, const Eigen::Vector2d& uv_px);
 ImVec2 ToImVec2(const Eigen::Vector2d& p);
 
+// The screen end points (*a, *b) of a stretch of the image line l . (u, v, 1) = 0 that crosses
+// the whole view [rect_min, rect_max] (screen px); false for the line at infinity.
+bool ImageLineAcrossView(const ViewTransform& view, const Eigen::Vector3d& line, const Eigen::Vector2d& rect_min,
+                         const Eigen::Vector2d& rect_max, Eigen::Vector2d* a, Eigen::Vector2d* b);
+
 // The screen segment a-b clipped to [rect_min, rect_max] grown by a margin (so that thick lines
 // at the border are not cut visibly short) and drawn; dashed (dash_px on, dash_px off) when
 // dash_px > 0; each piece over a shadow 2 px wider when `shadow` is not 0.

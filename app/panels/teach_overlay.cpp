@@ -51,15 +51,8 @@ void Line(ImDrawList* draw, const Screen& s, const Eigen::Vector2d& a, const Eig
 
 // An image line l . (u, v, 1) = 0 across the view.
 void InfiniteLine(ImDrawList* draw, const Screen& s, const Eigen::Vector3d& l, ImU32 color, float width, bool dashed) {
-  const double n = l.head<2>().norm();
-  if (!(n > 0.0)) return;
-  double cu, cv;
-  s.view.ToImage(ToImVec2(0.5 * (s.rect_min + s.rect_max)), &cu, &cv);
-  const Eigen::Vector2d center(cu, cv), normal = l.head<2>() / n;
-  const Eigen::Vector2d foot = center - (l.dot(Eigen::Vector3d(cu, cv, 1.0)) / n) * normal;
-  const Eigen::Vector2d dir(-normal.y(), normal.x());
-  const double reach = 2.0 * (s.rect_max - s.rect_min).norm() / s.view.zoom + 1.0;
-  Line(draw, s, s(foot - reach * dir), s(foot + reach * dir), color, width, dashed);
+  Eigen::Vector2d a, b;
+  if (ImageLineAcrossView(s.view, l, s.rect_min, s.rect_max, &a, &b)) Line(draw, s, a, b, color, width, dashed);
 }
 
 void Marker(ImDrawList* draw, const Eigen::Vector2d& p, ImU32 color, float radius) {
