@@ -192,6 +192,21 @@ std::vector<Segment> NoisySegments(VpCalibrationOptions* options) {
   return scene.project.segments;
 }
 
+// Reset gives the start back exactly, and stepping again repeats the first step exactly.
+void CheckResetRestores(VpFitSteps* steps, const VpFitState& start, const VpFitState& first) {
+  ResetVpFitSteps(steps);
+  CHECK(steps->steps == 0);
+  CHECK(steps->trace.empty());
+  REQUIRE(steps->path.size() == 1);
+  CHECK(steps->summary.focal_px == start.focal_px);
+  CHECK(steps->summary.principal_point_px == start.principal_point_px);
+  CHECK(steps->summary.final_cost == start.cost_px2);
+  for (int a = 0; a < 3; ++a) CHECK(steps->path[0].vanishing_points[a] == start.vanishing_points[a]);
+  REQUIRE(StepVpFit(steps));
+  CHECK(steps->path[1].focal_px == first.focal_px);
+  CHECK(steps->path[1].cost_px2 == first.cost_px2);
+}
+
 // The state after steps.steps steps is the fit from `from` with that budget: f, principal
 // point, rotation, vanishing points, residuals and cost.
 void CheckStepIsBudgetedFit(const VpFitSteps& steps, const std::vector<Segment>& segments,
@@ -250,18 +265,7 @@ TEST_CASE(
   CHECK(Relative(steps.summary.focal_px, all.focal_px) <= kSameFitRelative);
   CHECK_FALSE(StepVpFit(&steps));
 
-  ResetVpFitSteps(&steps);
-  CHECK(steps.steps == 0);
-  CHECK(steps.trace.empty());
-  REQUIRE(steps.path.size() == 1);
-  CHECK(steps.summary.focal_px == start.focal_px);
-  CHECK(steps.summary.principal_point_px == start.principal_point_px);
-  CHECK(steps.summary.final_cost == start.cost_px2);
-  for (int a = 0; a < 3; ++a) CHECK(steps.path[0].vanishing_points[a] == start.vanishing_points[a]);
-  // Stepping again after Reset repeats the first step exactly.
-  REQUIRE(StepVpFit(&steps));
-  CHECK(steps.path[1].focal_px == first.focal_px);
-  CHECK(steps.path[1].cost_px2 == first.cost_px2);
+  CheckResetRestores(&steps, start, first);
 }
 
 // 30 points seen by two cameras, 1 px noise.
@@ -283,6 +287,16 @@ void NoisyPair(std::vector<Eigen::Vector2d>* uv1, std::vector<Eigen::Vector2d>* 
     uv1->push_back(c1.Project(p) + Eigen::Vector2d(n1, n2));
     uv2->push_back(c2.Project(p) + Eigen::Vector2d(n3, n4));
   }
+}
+
+// Reset gives the start F back exactly.
+void CheckResetRestores(FundamentalFitSteps* steps, const Eigen::Matrix3d& start) {
+  ResetFundamentalFitSteps(steps);
+  CHECK(steps->steps == 0);
+  CHECK(steps->trace.empty());
+  REQUIRE(steps->path.size() == 1);
+  CHECK(steps->summary.F == start);
+  CHECK(steps->summary.final_cost == steps->start.final_cost);
 }
 
 // The state after steps.steps steps is the refinement from `from` with that budget.
@@ -323,12 +337,7 @@ TEST_CASE("two-view refinement: N steps equal the refinement with N iterations; 
   CHECK((steps.summary.F - all.F).norm() <= kSameFitRelative);
   CHECK_FALSE(StepFundamentalFit(&steps));
 
-  ResetFundamentalFitSteps(&steps);
-  CHECK(steps.steps == 0);
-  CHECK(steps.trace.empty());
-  REQUIRE(steps.path.size() == 1);
-  CHECK(steps.summary.F == start);
-  CHECK(steps.summary.final_cost == steps.start.final_cost);
+  CheckResetRestores(&steps, start);
 }
 
 // The lessons' amount (the app's default).
@@ -383,16 +392,7 @@ TEST_CASE(
           steps.summary.final_cost, " px^2 (answer ", answer.final_cost, "), f ", start.focal_px, " -> ",
           steps.summary.focal_px, " px (answer ", answer.focal_px, ")");
 
-  ResetVpFitSteps(&steps);
-  CHECK(steps.steps == 0);
-  CHECK(steps.trace.empty());
-  REQUIRE(steps.path.size() == 1);
-  CHECK(steps.summary.focal_px == start.focal_px);
-  CHECK(steps.summary.principal_point_px == start.principal_point_px);
-  CHECK(steps.summary.final_cost == start.cost_px2);
-  REQUIRE(StepVpFit(&steps));
-  CHECK(steps.path[1].focal_px == first.focal_px);
-  CHECK(steps.path[1].cost_px2 == first.cost_px2);
+  CheckResetRestores(&steps, start, first);
 }
 
 TEST_CASE(
@@ -435,12 +435,7 @@ TEST_CASE(
   MESSAGE("two views from the perturbed start: ", steps.steps, " steps, RMS ", steps.start.symmetric_epipolar_rms_px,
           " -> ", steps.summary.symmetric_epipolar_rms_px, " px (answer ", answer.symmetric_epipolar_rms_px, ")");
 
-  ResetFundamentalFitSteps(&steps);
-  CHECK(steps.steps == 0);
-  CHECK(steps.trace.empty());
-  REQUIRE(steps.path.size() == 1);
-  CHECK(steps.summary.F == start);
-  CHECK(steps.summary.final_cost == steps.start.final_cost);
+  CheckResetRestores(&steps, start);
 }
 
 }  // namespace
