@@ -32,7 +32,7 @@ max_len_of() {
   case "$1" in
     fuzz_project | fuzz_recovery) echo 65536 ;;
     fuzz_image) echo 65536 ;;
-    fuzz_input_script) echo 8192 ;;
+    fuzz_input_script) echo 16384 ;;  # the Leuven tutorial seed is 6.6 KiB
     *) echo 16384 ;;
   esac
 }

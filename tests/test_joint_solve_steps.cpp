@@ -4,7 +4,8 @@
 // PerturbForSteps: moves exactly the free values by the stated amounts, and the steps lead
 // back to the answer. The same stepping of the vanishing-point fit and of the two-view
 // refinement of F (core/estimators/fit_steps.h): N steps = the fit with a budget of N, the
-// trace a prefix of the unbudgeted fit's, Reset exact.
+// trace a prefix of the unbudgeted fit's, Reset exact; from the perturbed start (the fit's
+// answer moved by the stated amounts) the same, and the steps lead back to the answer.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -13,6 +14,8 @@
 #include <Eigen/Geometry>
 
 #include "core/estimators/fit_steps.h"
+#include "core/geometry/camera.h"
+#include "core/geometry/hartley_normalization.h"
 #include "core/solve/joint_solve_steps.h"
 #include "tests/synthetic_scene.h"
 
@@ -137,8 +140,7 @@ TEST_CASE("PerturbForSteps moves the free values by the stated amounts and keeps
   for (VertexId v = 0; v < box.mesh.VertexIdEnd(); ++v)
     if (box.mesh.IsVertex(v)) bounds.extend(box.mesh.vertex(v).position);
   const double distance = (before.CenterInWorld() - bounds.center()).norm();
-  CHECK(std::abs((after.CenterInWorld() - before.CenterInWorld()).norm() - kAmount * distance) <
-        kRounding * distance);
+  CHECK(std::abs((after.CenterInWorld() - before.CenterInWorld()).norm() - kAmount * distance) < kRounding * distance);
   CHECK(after.focal_px == before.focal_px * (1.0 + kAmount));
   CHECK(after.principal_point_px == before.principal_point_px);  // locked
   const PrimitiveShape& a = q.primitives[0].shape;
@@ -190,11 +192,45 @@ std::vector<Segment> NoisySegments(VpCalibrationOptions* options) {
   return scene.project.segments;
 }
 
-TEST_CASE("vanishing-point fit: N steps equal the fit with N iterations; the trace is the fit's; Reset restores the start") {
+// Reset gives the start back exactly, and stepping again repeats the first step exactly.
+void CheckResetRestores(VpFitSteps* steps, const VpFitState& start, const VpFitState& first) {
+  ResetVpFitSteps(steps);
+  CHECK(steps->steps == 0);
+  CHECK(steps->trace.empty());
+  REQUIRE(steps->path.size() == 1);
+  CHECK(steps->summary.focal_px == start.focal_px);
+  CHECK(steps->summary.principal_point_px == start.principal_point_px);
+  CHECK(steps->summary.final_cost == start.cost_px2);
+  for (int a = 0; a < 3; ++a) CHECK(steps->path[0].vanishing_points[a] == start.vanishing_points[a]);
+  REQUIRE(StepVpFit(steps));
+  CHECK(steps->path[1].focal_px == first.focal_px);
+  CHECK(steps->path[1].cost_px2 == first.cost_px2);
+}
+
+// The state after steps.steps steps is the fit from `from` with that budget: f, principal
+// point, rotation, vanishing points, residuals and cost.
+void CheckStepIsBudgetedFit(const VpFitSteps& steps, const std::vector<Segment>& segments,
+                            const VpCalibrationOptions& from) {
+  VpCalibrationOptions budget = from;
+  budget.max_joint_iterations = steps.steps;
+  const VpCalibrationSummary once = CalibrateFromVanishingLines(segments, budget);
+  REQUIRE(once.IsUsable());
+  CHECK(Relative(steps.summary.focal_px, once.focal_px) <= kSameFitRelative);
+  CHECK((steps.summary.principal_point_px - once.principal_point_px).norm() <= kSameFitRelative * once.focal_px);
+  CHECK((steps.summary.cam_from_world_rotation - once.cam_from_world_rotation).norm() <= kSameFitRelative);
+  for (int a = 0; a < 3; ++a)
+    CHECK((steps.path.back().vanishing_points[a] - once.vanishing_points[a]).norm() <= kSameFitRelative);
+  for (size_t i = 0; i < segments.size(); ++i)
+    CHECK(std::abs(steps.summary.segment_residuals_px[i] - once.segment_residuals_px[i]) <= kSameFitRelative);
+  CHECK(Relative(steps.summary.final_cost, once.final_cost) <= kSameFitRelative);
+}
+
+TEST_CASE(
+    "vanishing-point fit: N steps equal the fit with N iterations; the trace is the fit's; Reset restores the start") {
   VpCalibrationOptions options;
   const std::vector<Segment> segments = NoisySegments(&options);
   VpFitSteps steps;
-  REQUIRE(BeginVpFitSteps(segments, options, &steps));
+  REQUIRE(BeginVpFitSteps(segments, options, 0.0, &steps));
   REQUIRE(steps.path.size() == 1);
   // The unbudgeted fit (one round, as stepped), for the trace and the end.
   VpCalibrationOptions full = steps.options;
@@ -210,17 +246,7 @@ TEST_CASE("vanishing-point fit: N steps equal the fit with N iterations; the tra
     CAPTURE(n);
     REQUIRE(StepVpFit(&steps));
     if (n == 1) first = steps.path[1];
-    VpCalibrationOptions budget = steps.options;
-    budget.max_joint_iterations = n;
-    const VpCalibrationSummary once = CalibrateFromVanishingLines(segments, budget);
-    REQUIRE(once.IsUsable());
-    CHECK(Relative(steps.summary.focal_px, once.focal_px) <= kSameFitRelative);
-    CHECK((steps.summary.principal_point_px - once.principal_point_px).norm() <= kSameFitRelative * once.focal_px);
-    CHECK((steps.summary.cam_from_world_rotation - once.cam_from_world_rotation).norm() <= kSameFitRelative);
-    for (int a = 0; a < 3; ++a)
-      CHECK((steps.path.back().vanishing_points[a] - once.vanishing_points[a]).norm() <= kSameFitRelative);
-    for (size_t i = 0; i < segments.size(); ++i)
-      CHECK(std::abs(steps.summary.segment_residuals_px[i] - once.segment_residuals_px[i]) <= kSameFitRelative);
+    CheckStepIsBudgetedFit(steps, segments, steps.options);
     // The budgeted fit's trials are the unbudgeted fit's first ones.
     REQUIRE(steps.trace.size() <= all.joint_trace.size());
     for (size_t i = 0; i < steps.trace.size(); ++i) {
@@ -239,18 +265,7 @@ TEST_CASE("vanishing-point fit: N steps equal the fit with N iterations; the tra
   CHECK(Relative(steps.summary.focal_px, all.focal_px) <= kSameFitRelative);
   CHECK_FALSE(StepVpFit(&steps));
 
-  ResetVpFitSteps(&steps);
-  CHECK(steps.steps == 0);
-  CHECK(steps.trace.empty());
-  REQUIRE(steps.path.size() == 1);
-  CHECK(steps.summary.focal_px == start.focal_px);
-  CHECK(steps.summary.principal_point_px == start.principal_point_px);
-  CHECK(steps.summary.final_cost == start.cost_px2);
-  for (int a = 0; a < 3; ++a) CHECK(steps.path[0].vanishing_points[a] == start.vanishing_points[a]);
-  // Stepping again after Reset repeats the first step exactly.
-  REQUIRE(StepVpFit(&steps));
-  CHECK(steps.path[1].focal_px == first.focal_px);
-  CHECK(steps.path[1].cost_px2 == first.cost_px2);
+  CheckResetRestores(&steps, start, first);
 }
 
 // 30 points seen by two cameras, 1 px noise.
@@ -274,11 +289,32 @@ void NoisyPair(std::vector<Eigen::Vector2d>* uv1, std::vector<Eigen::Vector2d>* 
   }
 }
 
+// Reset gives the start F back exactly.
+void CheckResetRestores(FundamentalFitSteps* steps, const Eigen::Matrix3d& start) {
+  ResetFundamentalFitSteps(steps);
+  CHECK(steps->steps == 0);
+  CHECK(steps->trace.empty());
+  REQUIRE(steps->path.size() == 1);
+  CHECK(steps->summary.F == start);
+  CHECK(steps->summary.final_cost == steps->start.final_cost);
+}
+
+// The state after steps.steps steps is the refinement from `from` with that budget.
+void CheckStepIsBudgetedRefinement(const FundamentalFitSteps& steps, const std::vector<Eigen::Vector2d>& uv1,
+                                   const std::vector<Eigen::Vector2d>& uv2, const FundamentalOptions& from) {
+  FundamentalOptions budget = from;
+  budget.max_refine_iterations = steps.steps;
+  const FundamentalSummary once = EstimateFundamentalMatrix(uv1, uv2, budget);
+  REQUIRE(once.IsUsable());
+  CHECK((steps.summary.F - once.F).norm() <= kSameFitRelative);  // unit Frobenius norm
+  CHECK(Relative(steps.summary.final_cost, once.final_cost) <= kSameFitRelative);
+}
+
 TEST_CASE("two-view refinement: N steps equal the refinement with N iterations; Reset restores the linear start") {
   std::vector<Eigen::Vector2d> uv1, uv2;
   NoisyPair(&uv1, &uv2);
   FundamentalFitSteps steps;
-  REQUIRE(BeginFundamentalFitSteps(uv1, uv2, FundamentalOptions(), &steps));
+  REQUIRE(BeginFundamentalFitSteps(uv1, uv2, FundamentalOptions(), 0.0, &steps));
   const FundamentalSummary all = EstimateFundamentalMatrix(uv1, uv2, steps.options);
   REQUIRE(all.IsUsable());
   // The start is the linear estimate the refinement starts from.
@@ -287,12 +323,7 @@ TEST_CASE("two-view refinement: N steps equal the refinement with N iterations; 
   for (int n = 1; n <= 100 && !steps.finished; ++n) {
     CAPTURE(n);
     REQUIRE(StepFundamentalFit(&steps));
-    FundamentalOptions budget = steps.options;
-    budget.max_refine_iterations = n;
-    const FundamentalSummary once = EstimateFundamentalMatrix(uv1, uv2, budget);
-    REQUIRE(once.IsUsable());
-    CHECK((steps.summary.F - once.F).norm() <= kSameFitRelative);  // unit Frobenius norm
-    CHECK(Relative(steps.summary.final_cost, once.final_cost) <= kSameFitRelative);
+    CheckStepIsBudgetedRefinement(steps, uv1, uv2, steps.options);
     REQUIRE(steps.trace.size() <= all.refine_trace.size());
     for (size_t i = 0; i < steps.trace.size(); ++i) {
       CHECK(Relative(steps.trace[i].trial_cost, all.refine_trace[i].trial_cost) <= kSameFitRelative);
@@ -306,12 +337,105 @@ TEST_CASE("two-view refinement: N steps equal the refinement with N iterations; 
   CHECK((steps.summary.F - all.F).norm() <= kSameFitRelative);
   CHECK_FALSE(StepFundamentalFit(&steps));
 
-  ResetFundamentalFitSteps(&steps);
-  CHECK(steps.steps == 0);
-  CHECK(steps.trace.empty());
+  CheckResetRestores(&steps, start);
+}
+
+// The lessons' amount (the app's default).
+constexpr double kLessonAmount = 0.2;
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+
+TEST_CASE(
+    "vanishing-point fit from the perturbed start: N steps equal the fit with N iterations from it; back to "
+    "the answer; Reset exact") {
+  VpCalibrationOptions options;
+  const std::vector<Segment> segments = NoisySegments(&options);
+  options.principal_point_mode = PrincipalPointMode::kSolve;  // the principal point moves too
+  options.refit_without_outliers = false;
+  options.record_joint_trace = true;
+  const VpCalibrationSummary answer = CalibrateFromVanishingLines(segments, options);
+  REQUIRE(answer.IsUsable());
+  // The stated start, built here from the header's words.
+  VpCalibrationOptions from = options;
+  from.warm_start = true;
+  from.warm_start_focal_px = answer.focal_px * (1.0 + kLessonAmount);
+  from.warm_start_principal_point_px =
+      answer.principal_point_px + kLessonAmount * 0.25 * Eigen::Vector2d(options.width_px, -options.height_px);
+  from.warm_start_rotation =
+      RotationFromAngleAxis(kLessonAmount * 20.0 * kDegree * Eigen::Vector3d(1.0, 2.0, 3.0).normalized()) *
+      answer.cam_from_world_rotation;
+
+  VpFitSteps steps;
+  REQUIRE(BeginVpFitSteps(segments, options, kLessonAmount, &steps));
   REQUIRE(steps.path.size() == 1);
-  CHECK(steps.summary.F == start);
-  CHECK(steps.summary.final_cost == steps.start.final_cost);
+  const VpFitState start = steps.path[0];
+  CHECK(Relative(start.focal_px, from.warm_start_focal_px) <= kSameFitRelative);
+  CHECK((start.principal_point_px - from.warm_start_principal_point_px).norm() <= kSameFitRelative * start.focal_px);
+  // Far enough off to show: the cost at least 10 times the answer's.
+  CHECK(start.cost_px2 > 10.0 * answer.final_cost);
+  VpFitState first;
+  for (int n = 1; n <= 100 && !steps.finished; ++n) {
+    CAPTURE(n);
+    REQUIRE(StepVpFit(&steps));
+    if (n == 1) first = steps.path[1];
+    CheckStepIsBudgetedFit(steps, segments, from);
+    CHECK(steps.path[n].cost_px2 <= steps.path[n - 1].cost_px2);
+  }
+  // Back to the answer: the same minimum, to the fit's own stopping tolerance.
+  constexpr double kSameAnswerRelative = 1e-6;
+  CHECK(steps.finished);
+  CHECK(steps.steps >= 3);
+  CHECK(Relative(steps.summary.focal_px, answer.focal_px) <= kSameAnswerRelative);
+  CHECK((steps.summary.principal_point_px - answer.principal_point_px).norm() <= kSameAnswerRelative * answer.focal_px);
+  CHECK((steps.summary.cam_from_world_rotation - answer.cam_from_world_rotation).norm() <= kSameAnswerRelative);
+  CHECK(Relative(steps.summary.final_cost, answer.final_cost) <= kSameAnswerRelative);
+  MESSAGE("vp from the perturbed start: ", steps.steps, " steps, cost ", start.cost_px2, " -> ",
+          steps.summary.final_cost, " px^2 (answer ", answer.final_cost, "), f ", start.focal_px, " -> ",
+          steps.summary.focal_px, " px (answer ", answer.focal_px, ")");
+
+  CheckResetRestores(&steps, start, first);
+}
+
+TEST_CASE(
+    "two-view refinement from the perturbed start: N steps equal the refinement with N iterations from it; "
+    "back to the answer; Reset exact") {
+  std::vector<Eigen::Vector2d> uv1, uv2;
+  NoisyPair(&uv1, &uv2);
+  FundamentalOptions options;
+  options.use_ransac = false;
+  options.record_refine_trace = true;
+  const FundamentalSummary answer = EstimateFundamentalMatrix(uv1, uv2, options);
+  REQUIRE(answer.IsUsable());
+  // The stated start, in F's orthonormal representation.
+  internal::OrthonormalFundamental o = internal::OrthonormalFundamental::FromF(
+      answer.F, internal::HartleyNormalization(uv1), internal::HartleyNormalization(uv2));
+  const double angle = kLessonAmount * 10.0 * kDegree;
+  o.U = o.U * RotationFromAngleAxis(angle * Eigen::Vector3d(1.0, 2.0, 3.0).normalized());
+  o.V = o.V * RotationFromAngleAxis(angle * Eigen::Vector3d(3.0, -1.0, 2.0).normalized());
+  o.s *= 1.0 - kLessonAmount;
+  FundamentalOptions from = options;
+  from.warm_start = true;
+  from.warm_start_F = o.F();
+
+  FundamentalFitSteps steps;
+  REQUIRE(BeginFundamentalFitSteps(uv1, uv2, FundamentalOptions(), kLessonAmount, &steps));
+  REQUIRE(steps.path.size() == 1);
+  const Eigen::Matrix3d start = steps.path[0];
+  CHECK((start - NormalizeFundamental(o.F())).norm() <= kSameFitRelative);
+  CHECK(steps.summary.symmetric_epipolar_rms_px > 10.0 * answer.symmetric_epipolar_rms_px);
+  for (int n = 1; n <= 100 && !steps.finished; ++n) {
+    CAPTURE(n);
+    REQUIRE(StepFundamentalFit(&steps));
+    CheckStepIsBudgetedRefinement(steps, uv1, uv2, from);
+  }
+  constexpr double kSameAnswer = 1e-6;  // unit Frobenius norm; the refinement's stopping tolerance
+  CHECK(steps.finished);
+  CHECK(steps.steps >= 3);
+  CHECK((steps.summary.F - answer.F).norm() <= kSameAnswer);
+  CHECK(Relative(steps.summary.final_cost, answer.final_cost) <= kSameAnswer);
+  MESSAGE("two views from the perturbed start: ", steps.steps, " steps, RMS ", steps.start.symmetric_epipolar_rms_px,
+          " -> ", steps.summary.symmetric_epipolar_rms_px, " px (answer ", answer.symmetric_epipolar_rms_px, ")");
+
+  CheckResetRestores(&steps, start);
 }
 
 }  // namespace

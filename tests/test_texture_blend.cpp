@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -109,16 +110,28 @@ Stats Compare(const TexturedMesh& mesh, const PaintedFace& face, const std::vect
   return s;
 }
 
+// The box scene with one more photo per azimuth (CameraAround), every photo ray-cast with
+// SmoothPaint, photo k at exposure gain first_gain + k x gain_step.
+struct BoxSeenAround {
+  facet::testing::SyntheticScene scene;
+  std::vector<PaintedFace> faces;
+  std::vector<ImageRgba8> photos;
+};
+BoxSeenAround MakeBoxSeenAround(std::initializer_list<double> azimuths, double first_gain = 1.0,
+                                double gain_step = 0.0) {
+  BoxSeenAround b{facet::testing::MakeBoxScene(BoxOptions()), {}, {}};
+  for (double azimuth : azimuths) AddView(&b.scene.project, CameraAround(azimuth));
+  b.faces = facet::testing::PaintedFaces(b.scene.project);
+  for (const facet::Image& image : b.scene.project.images)
+    b.photos.push_back(facet::testing::RenderTexturedPhoto(b.faces, image.camera, SmoothPaint,
+                                                           first_gain + gain_step * b.photos.size()));
+  return b;
+}
+
 }  // namespace
 
 TEST_CASE("blended bake from four views: every face seen matches its known paint") {
-  auto scene = facet::testing::MakeBoxScene(BoxOptions());
-  for (double azimuth : {90.0, 180.0, 270.0}) AddView(&scene.project, CameraAround(azimuth));
-  const std::vector<PaintedFace> faces = facet::testing::PaintedFaces(scene.project);
-  std::vector<ImageRgba8> photos;
-  for (const facet::Image& image : scene.project.images) {
-    photos.push_back(facet::testing::RenderTexturedPhoto(faces, image.camera, SmoothPaint));
-  }
+  const auto [scene, faces, photos] = MakeBoxSeenAround({90.0, 180.0, 270.0});
   TexturedMesh mesh;
   const auto summary = facet::BakeTexturedMesh(scene.project, photos, TextureBakeOptions{}, &mesh);
   REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
@@ -398,13 +411,7 @@ TEST_CASE("aliasing: a checkerboard at a grazing angle in a 12 MP photo bakes li
 }
 
 TEST_CASE("atlas pages: faces that overflow a page go to the next one, each face on its page") {
-  auto scene = facet::testing::MakeBoxScene(BoxOptions());
-  for (double azimuth : {90.0, 180.0, 270.0}) AddView(&scene.project, CameraAround(azimuth));
-  const std::vector<PaintedFace> faces = facet::testing::PaintedFaces(scene.project);
-  std::vector<ImageRgba8> photos;
-  for (const facet::Image& image : scene.project.images) {
-    photos.push_back(facet::testing::RenderTexturedPhoto(faces, image.camera, SmoothPaint));
-  }
+  const auto [scene, faces, photos] = MakeBoxSeenAround({90.0, 180.0, 270.0});
   // A small page stands for 8192: the packing does not depend on the size.
   TextureBakeOptions options;
   options.max_atlas_size = 512;
@@ -609,13 +616,7 @@ TEST_CASE("exposure gains: Brown-Lowe's fit recovers known gain ratios; the pyra
 }
 
 TEST_CASE("the bake's threads do not change its result: one thread and two give the same atlas") {
-  auto scene = facet::testing::MakeBoxScene(BoxOptions());
-  for (double azimuth : {90.0, 180.0}) AddView(&scene.project, CameraAround(azimuth));
-  const std::vector<PaintedFace> faces = facet::testing::PaintedFaces(scene.project);
-  std::vector<ImageRgba8> photos;
-  for (const facet::Image& image : scene.project.images) {
-    photos.push_back(facet::testing::RenderTexturedPhoto(faces, image.camera, SmoothPaint, 0.8 + 0.1 * photos.size()));
-  }
+  const auto [scene, faces, photos] = MakeBoxSeenAround({90.0, 180.0}, 0.8, 0.1);
   TextureBakeOptions one, two;
   one.max_threads = 1;
   two.max_threads = 2;

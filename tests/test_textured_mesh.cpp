@@ -15,6 +15,7 @@
 #include "core/mesh/primitives.h"
 #include "core/texture/textured_mesh.h"
 #include "synthetic_scene.h"
+#include "tests/polygon_2d.h"
 
 using facet::Camera;
 using facet::FaceId;
@@ -69,28 +70,6 @@ struct TestFace {
   }
   bool Faces(const Camera& cam) const { return normal.dot(cam.CenterInWorld() - Centroid()) > 0; }
 };
-
-bool InsidePolygon(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p) {
-  bool inside = false;
-  for (size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
-    const Eigen::Vector2d& a = polygon[i];
-    const Eigen::Vector2d& b = polygon[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < a.x() + (p.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y())) {
-      inside = !inside;
-    }
-  }
-  return inside;
-}
-
-double DistanceToOutline(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p) {
-  double best = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i < polygon.size(); ++i) {
-    const Eigen::Vector2d a = polygon[i], b = polygon[(i + 1) % polygon.size()];
-    const double t = std::clamp((p - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
-    best = std::min(best, (a + t * (b - a) - p).norm());
-  }
-  return best;
-}
 
 std::vector<TestFace> SceneFaces(const Project& project) {
   std::vector<TestFace> faces;
@@ -149,7 +128,7 @@ const TestFace* FirstHit(const std::vector<TestFace>& faces, const Camera& cam, 
     const double depth = (face.c0 - center).dot(face.normal) / denominator;
     if (!(depth > 0.0) || depth >= best) continue;
     const Eigen::Vector3d p = center + depth * dir;
-    if (!InsidePolygon(face.polygon, face.Unscaled(p))) continue;
+    if (!facet::testing::InsidePolygon2d(face.polygon, face.Unscaled(p))) continue;
     best = depth;
     hit = &face;
     if (st != nullptr) *st = face.FaceCoords(p);
@@ -261,7 +240,9 @@ PaintCheck CheckPaint(const TexturedMesh& mesh, const TestFace& face, const Face
     for (int x = fa.x_min; x <= fa.x_max; ++x) {
       const Eigen::Vector2d st = fa.FaceCoords(Eigen::Vector2d(x, y));
       const Eigen::Vector2d uv = cam.Project(face.InWorld(st));
-      if (!InsidePolygon(outline_px, uv) || DistanceToOutline(outline_px, uv) < kMarginPx) continue;
+      if (!facet::testing::InsidePolygon2d(outline_px, uv) ||
+          facet::testing::DistanceToPolygonOutline(outline_px, uv) < kMarginPx)
+        continue;
       if (uv.x() < kMarginPx || uv.y() < kMarginPx || uv.x() > cam.width_px - 1 - kMarginPx ||
           uv.y() > cam.height_px - 1 - kMarginPx) {
         continue;

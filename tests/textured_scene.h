@@ -18,6 +18,7 @@
 #include "core/mesh/mesh.h"
 #include "core/scene/project.h"
 #include "core/texture/textured_mesh.h"
+#include "tests/polygon_2d.h"
 
 namespace facet::testing {
 
@@ -43,28 +44,6 @@ struct PaintedFace {
 
 // The paint: RGB in grey levels (0-255) of a world point on a face.
 using Paint = std::function<Eigen::Vector3d(const PaintedFace& face, const Eigen::Vector3d& x_in_world)>;
-
-inline bool InsidePolygon2d(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p) {
-  bool inside = false;
-  for (size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
-    const Eigen::Vector2d& a = polygon[i];
-    const Eigen::Vector2d& b = polygon[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < a.x() + (p.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y())) {
-      inside = !inside;
-    }
-  }
-  return inside;
-}
-
-inline double DistanceToPolygonOutline(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p) {
-  double best = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i < polygon.size(); ++i) {
-    const Eigen::Vector2d a = polygon[i], b = polygon[(i + 1) % polygon.size()];
-    const double t = std::clamp((p - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
-    best = std::min(best, (a + t * (b - a) - p).norm());
-  }
-  return best;
-}
 
 inline std::vector<PaintedFace> PaintedFaces(const Project& project) {
   std::vector<PaintedFace> faces;

@@ -28,13 +28,6 @@ constexpr ImU32 kLinePinColor = IM_COL32(0, 255, 200, 255);      // a line pin's
 constexpr ImU32 kLinePinLineColor = IM_COL32(0, 255, 200, 110);  // ... extended across the view
 constexpr ImU32 kLinePinResidualColor = IM_COL32(255, 70, 200, 255);
 
-Eigen::Vector2d ToScreenD(const ViewTransform& view, const Eigen::Vector2d& uv_px) {
-  return {view.origin.x + static_cast<double>(view.zoom) * uv_px.x(),
-          view.origin.y + static_cast<double>(view.zoom) * uv_px.y()};
-}
-
-ImVec2 ToImVec(const Eigen::Vector2d& p) { return ImVec2(static_cast<float>(p.x()), static_cast<float>(p.y())); }
-
 struct ScreenRect {
   Eigen::Vector2d min, max;
   bool Contains(const Eigen::Vector2d& p, double margin = 0.0) const {
@@ -43,46 +36,22 @@ struct ScreenRect {
   }
 };
 
-// A screen-space line (double) clipped and drawn.
-void DrawScreenLine(ImDrawList* draw_list, Eigen::Vector2d a, Eigen::Vector2d b, const ScreenRect& rect, ImU32 color,
-                    float thickness_px) {
-  const Eigen::Vector2d margin(kClipMarginPx, kClipMarginPx);
-  if (!ClipSegmentToRect(&a, &b, rect.min - margin, rect.max + margin)) return;
-  draw_list->AddLine(ToImVec(a), ToImVec(b), color, thickness_px);
+void DrawScreenLine(ImDrawList* draw_list, const Eigen::Vector2d& a, const Eigen::Vector2d& b, const ScreenRect& rect,
+                    ImU32 color, float thickness_px) {
+  DrawClippedScreenLine(draw_list, a, b, rect.min, rect.max, color, thickness_px);
 }
 
-void DrawDashedScreenLine(ImDrawList* draw_list, Eigen::Vector2d a, Eigen::Vector2d b, const ScreenRect& rect,
-                          ImU32 color, float thickness_px, double dash_px) {
-  const Eigen::Vector2d margin(kClipMarginPx, kClipMarginPx);
-  if (!ClipSegmentToRect(&a, &b, rect.min - margin, rect.max + margin)) return;
-  const double length = (b - a).norm();
-  if (length <= 0.0) return;
-  const Eigen::Vector2d dir = (b - a) / length;
-  for (double s = 0.0; s < length; s += 2.0 * dash_px) {
-    const double e = std::min(length, s + dash_px);
-    draw_list->AddLine(ToImVec(a + s * dir), ToImVec(a + e * dir), color, thickness_px);
-  }
+void DrawDashedScreenLine(ImDrawList* draw_list, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                          const ScreenRect& rect, ImU32 color, float thickness_px, double dash_px) {
+  DrawClippedScreenLine(draw_list, a, b, rect.min, rect.max, color, thickness_px, dash_px);
 }
 
 // An infinite image line a*u + b*v + c = 0 drawn across the view.
 void DrawInfiniteImageLine(ImDrawList* draw_list, const Eigen::Vector3d& line, const ViewTransform& view,
                            const ScreenRect& rect, ImU32 color, float thickness_px, bool dashed) {
-  const double n2 = line.x() * line.x() + line.y() * line.y();
-  if (n2 < 1e-300) return;  // the line at infinity
-  double cu, cv;
-  view.ToImage(ToImVec(0.5 * (rect.min + rect.max)), &cu, &cv);
-  const Eigen::Vector2d center(cu, cv);
-  const double offset = (line.x() * cu + line.y() * cv + line.z()) / n2;
-  const Eigen::Vector2d foot = center - offset * Eigen::Vector2d(line.x(), line.y());
-  const Eigen::Vector2d dir = Eigen::Vector2d(-line.y(), line.x()) / std::sqrt(n2);
-  const double reach_px = 2.0 * (rect.max - rect.min).norm() / view.zoom + 1.0;
-  const Eigen::Vector2d a = ToScreenD(view, foot - reach_px * dir);
-  const Eigen::Vector2d b = ToScreenD(view, foot + reach_px * dir);
-  if (dashed) {
-    DrawDashedScreenLine(draw_list, a, b, rect, color, thickness_px, 10.0);
-  } else {
-    DrawScreenLine(draw_list, a, b, rect, color, thickness_px);
-  }
+  Eigen::Vector2d a, b;
+  if (!ImageLineAcrossView(view, line, rect.min, rect.max, &a, &b)) return;
+  DrawClippedScreenLine(draw_list, a, b, rect.min, rect.max, color, thickness_px, dashed ? 10.0 : 0.0);
 }
 
 // Marks a vanishing point: a target when it is in or near the view, else an arrow at the
@@ -95,9 +64,9 @@ void DrawVanishingPoint(ImDrawList* draw_list, Axis axis, const Eigen::Vector3d&
   Eigen::Vector2d direction;
   const bool finite = std::abs(vp.z()) > 1e-12 * vp.head<2>().norm();
   if (finite) {
-    const Eigen::Vector2d vp_screen = ToScreenD(view, vp.head<2>() / vp.z());
+    const Eigen::Vector2d vp_screen = ImageToScreen(view, vp.head<2>() / vp.z());
     if (rect.Contains(vp_screen, 40.0)) {
-      const ImVec2 p = ToImVec(vp_screen);
+      const ImVec2 p = ToImVec2(vp_screen);
       draw_list->AddCircle(p, 9.0f, kShadowColor, 0, 4.0f);
       draw_list->AddCircle(p, 9.0f, color, 0, 2.0f);
       draw_list->AddLine(ImVec2(p.x - 14, p.y), ImVec2(p.x + 14, p.y), color, 1.5f);
@@ -119,10 +88,10 @@ void DrawVanishingPoint(ImDrawList* draw_list, Axis axis, const Eigen::Vector3d&
   const Eigen::Vector2d tip = center + s * direction;
   const Eigen::Vector2d normal(-direction.y(), direction.x());
   const Eigen::Vector2d base = tip - 12.0 * direction;
-  draw_list->AddTriangleFilled(ToImVec(tip), ToImVec(base + 6.0 * normal), ToImVec(base - 6.0 * normal), color);
+  draw_list->AddTriangleFilled(ToImVec2(tip), ToImVec2(base + 6.0 * normal), ToImVec2(base - 6.0 * normal), color);
   if (show_labels) {
     const Eigen::Vector2d text_pos = base - 14.0 * direction - Eigen::Vector2d(10.0, 7.0);
-    DrawShadowedText(draw_list, ToImVec(text_pos), color, label.c_str());
+    DrawShadowedText(draw_list, ToImVec2(text_pos), color, label.c_str());
   }
 }
 
@@ -137,8 +106,8 @@ bool ProjectEdge(const Camera& camera, const ViewTransform& view, Eigen::Vector3
     return Eigen::Vector2d(camera.focal_px * x.x() / x.z() + camera.principal_point_px.x(),
                            camera.focal_px * x.y() / x.z() + camera.principal_point_px.y());
   };
-  *a = ToScreenD(view, project_px(p));
-  *b = ToScreenD(view, project_px(q));
+  *a = ImageToScreen(view, project_px(p));
+  *b = ImageToScreen(view, project_px(q));
   return true;
 }
 
@@ -158,7 +127,7 @@ void FillFace(ImDrawList* draw_list, const Primitive& primitive, const Projected
   std::vector<ImVec2> polygon;
   for (VertexId v : FaceVertices(mesh, f)) {
     if (v >= pp.in_front.size() || !pp.in_front[v]) return;
-    polygon.push_back(ToImVec(ToScreenD(view, pp.uv_px[v])));
+    polygon.push_back(ToImVec2(ImageToScreen(view, pp.uv_px[v])));
   }
   int positive = 0, negative = 0;
   const size_t n = polygon.size();
@@ -176,7 +145,7 @@ void FillFace(ImDrawList* draw_list, const Primitive& primitive, const Projected
     ImVec2 p[3];
     for (int i = 0; i < 3; ++i) {
       const VertexId v = mesh.Origin(tri[i]);
-      p[i] = ToImVec(ToScreenD(view, pp.uv_px[v]));
+      p[i] = ToImVec2(ImageToScreen(view, pp.uv_px[v]));
     }
     draw_list->AddTriangleFilled(p[0], p[1], p[2], color);
   }
@@ -242,7 +211,7 @@ void DrawModel(ImDrawList* draw_list, const OverlayInput& input, const ViewTrans
                                    input.hover.edge_t * mesh.vertex(mesh.Dest(2 * e)).position;
         const Eigen::Vector3d at_in_cam = camera.CamFromWorld(at);
         if (at_in_cam.z() > kNearDepth) {
-          const ImVec2 c = ToImVec(ToScreenD(view, camera.Project(at)));
+          const ImVec2 c = ToImVec2(ImageToScreen(view, camera.Project(at)));
           draw_list->AddCircleFilled(c, 5.0f, kShadowColor);
           draw_list->AddCircleFilled(c, 4.0f, kSelectedElementColor);
         }
@@ -259,12 +228,12 @@ void DrawModelVertices(ImDrawList* draw_list, const OverlayInput& input, const V
     if (primitive == nullptr) continue;
     for (VertexId v = 0; v < pp.in_front.size(); ++v) {
       if (!pp.in_front[v] || !primitive->mesh.IsVertex(v)) continue;
-      const Eigen::Vector2d p = ToScreenD(view, pp.uv_px[v]);
+      const Eigen::Vector2d p = ImageToScreen(view, pp.uv_px[v]);
       if (!rect.Contains(p, kClipMarginPx)) continue;
       const ElementRef ref{ElementKind::kVertex, pp.primitive_id, v};
       const bool hot = input.hover.element == ref || input.other_hover == ref;
       const bool chosen = IsSelected(input.selection, ref) || input.selection.connect_from == ref;
-      const ImVec2 c = ToImVec(p);
+      const ImVec2 c = ToImVec2(p);
       draw_list->AddCircleFilled(c, 4.0f, kShadowColor);
       if (primitive->mesh.vertex(v).local.free) {
         draw_list->AddCircle(c, 4.5f, kFreeVertexColor, 0, 2.0f);
@@ -290,7 +259,7 @@ struct PinnedLineLook {
 // A diamond handle centred on p.
 void DrawLinePinHandle(ImDrawList* draw_list, const Eigen::Vector2d& p, bool hot) {
   const float r = hot ? kLinePinHandleHotRadiusPx : kLinePinHandleRadiusPx;
-  const ImVec2 c = ToImVec(p);
+  const ImVec2 c = ToImVec2(p);
   const ImVec2 q[4] = {{c.x, c.y - r}, {c.x + r, c.y}, {c.x, c.y + r}, {c.x - r, c.y}};
   const ImVec2 o[4] = {{c.x, c.y - r - 1.5f}, {c.x + r + 1.5f, c.y}, {c.x, c.y + r + 1.5f}, {c.x - r - 1.5f, c.y}};
   draw_list->AddConvexPolyFilled(o, 4, kShadowColor);
@@ -303,7 +272,7 @@ void DrawPinnedLine(ImDrawList* draw_list, const ViewTransform& view, const Eige
                     const Eigen::Vector2d& b_px, const ScreenRect& rect, const PinnedLineLook& look = {}) {
   const Eigen::Vector3d line = Eigen::Vector3d(a_px.x(), a_px.y(), 1.0).cross(Eigen::Vector3d(b_px.x(), b_px.y(), 1.0));
   DrawInfiniteImageLine(draw_list, line, view, rect, kLinePinLineColor, 1.0f, true);
-  const Eigen::Vector2d a = ToScreenD(view, a_px), b = ToScreenD(view, b_px);
+  const Eigen::Vector2d a = ImageToScreen(view, a_px), b = ImageToScreen(view, b_px);
   if (look.selected) {
     DrawScreenLine(draw_list, a, b, rect, kSelectedElementColor, 6.0f);
   } else if (look.hovered) {
@@ -341,7 +310,7 @@ void DrawLinePins(ImDrawList* draw_list, const OverlayInput& input, const ViewTr
     }
     const Eigen::Vector2d n = Eigen::Vector2d(-d.y(), d.x()).normalized();
     double worst_px = 0.0;
-    Eigen::Vector2d label_at = ToScreenD(view, 0.5 * (c.line_a_px + c.line_b_px));
+    Eigen::Vector2d label_at = ImageToScreen(view, 0.5 * (c.line_a_px + c.line_b_px));
     for (const VertexRef& v : c.vertices) {
       if (input.project->FindVertex(v) == nullptr) continue;
       const Eigen::Vector3d p = VertexInWorld(*input.project, v);
@@ -349,10 +318,10 @@ void DrawLinePins(ImDrawList* draw_list, const OverlayInput& input, const ViewTr
       const Eigen::Vector2d uv = image.camera.Project(p);
       const double dist = (uv - c.line_a_px).dot(n);
       const Eigen::Vector2d foot = uv - dist * n;
-      residuals.emplace_back(ToScreenD(view, uv), ToScreenD(view, foot));
+      residuals.emplace_back(ImageToScreen(view, uv), ImageToScreen(view, foot));
       if (std::abs(dist) >= worst_px) {
         worst_px = std::abs(dist);
-        label_at = ToScreenD(view, foot);
+        label_at = ImageToScreen(view, foot);
       }
     }
     for (const auto& [from, to] : residuals) DrawScreenLine(draw_list, from, to, rect, kLinePinResidualColor, 1.5f);
@@ -386,8 +355,8 @@ void DrawLinePinPreview(ImDrawList* draw_list, const OverlayInput& input, const 
       if (input.image->camera.CamFromWorld(p).z() <= kNearDepth) continue;
       const Eigen::Vector2d uv = input.image->camera.Project(p);
       const Eigen::Vector2d foot = uv - (uv - a_px).dot(n) * n;
-      DrawDashedScreenLine(draw_list, ToScreenD(view, uv), ToScreenD(view, foot), rect, kLinePinResidualColor, 1.5f,
-                           4.0);
+      DrawDashedScreenLine(draw_list, ImageToScreen(view, uv), ImageToScreen(view, foot), rect, kLinePinResidualColor,
+                           1.5f, 4.0);
     }
   }
   draw_list->PopClipRect();
@@ -400,6 +369,46 @@ ImU32 AxisColor(Axis axis, int alpha) {
     case Axis::kZ: return IM_COL32(70, 140, 255, alpha);
   }
   return IM_COL32(255, 255, 255, alpha);
+}
+
+Eigen::Vector2d ImageToScreen(const ViewTransform& view, const Eigen::Vector2d& uv_px) {
+  return {view.origin.x + static_cast<double>(view.zoom) * uv_px.x(),
+          view.origin.y + static_cast<double>(view.zoom) * uv_px.y()};
+}
+
+ImVec2 ToImVec2(const Eigen::Vector2d& p) { return ImVec2(static_cast<float>(p.x()), static_cast<float>(p.y())); }
+
+bool ImageLineAcrossView(const ViewTransform& view, const Eigen::Vector3d& line, const Eigen::Vector2d& rect_min,
+                         const Eigen::Vector2d& rect_max, Eigen::Vector2d* a, Eigen::Vector2d* b) {
+  const double n2 = line.x() * line.x() + line.y() * line.y();
+  if (!(n2 >= 1e-300)) return false;  // the line at infinity
+  double cu, cv;
+  view.ToImage(ToImVec2(0.5 * (rect_min + rect_max)), &cu, &cv);
+  const Eigen::Vector2d center(cu, cv);
+  const double offset = (line.x() * cu + line.y() * cv + line.z()) / n2;
+  const Eigen::Vector2d foot = center - offset * Eigen::Vector2d(line.x(), line.y());
+  const Eigen::Vector2d dir = Eigen::Vector2d(-line.y(), line.x()) / std::sqrt(n2);
+  // Twice the view's diagonal from its centre's foot: past the view on both sides.
+  const double reach_px = 2.0 * (rect_max - rect_min).norm() / view.zoom + 1.0;
+  *a = ImageToScreen(view, foot - reach_px * dir);
+  *b = ImageToScreen(view, foot + reach_px * dir);
+  return true;
+}
+
+void DrawClippedScreenLine(ImDrawList* draw_list, Eigen::Vector2d a, Eigen::Vector2d b, const Eigen::Vector2d& rect_min,
+                           const Eigen::Vector2d& rect_max, ImU32 color, float thickness_px, double dash_px,
+                           ImU32 shadow) {
+  const Eigen::Vector2d margin(kClipMarginPx, kClipMarginPx);
+  if (!ClipSegmentToRect(&a, &b, rect_min - margin, rect_max + margin)) return;
+  const double length = (b - a).norm();
+  if (!(length > 0.0)) return;
+  const Eigen::Vector2d dir = (b - a) / length;
+  const double dash = dash_px > 0.0 ? dash_px : length;
+  for (double s = 0.0; s < length; s += 2.0 * dash) {
+    const ImVec2 p = ToImVec2(a + s * dir), q = ToImVec2(a + std::min(length, s + dash) * dir);
+    if (shadow != 0) draw_list->AddLine(p, q, shadow, thickness_px + 2.0f);
+    draw_list->AddLine(p, q, color, thickness_px);
+  }
 }
 
 bool ClipSegmentToRect(Eigen::Vector2d* a, Eigen::Vector2d* b, const Eigen::Vector2d& rect_min,
@@ -437,7 +446,7 @@ void DrawShadowedText(ImDrawList* draw_list, ImVec2 pos, ImU32 color, const char
 void DrawImageLine(ImDrawList* draw_list, const ViewTransform& view, const Eigen::Vector2d& a_px,
                    const Eigen::Vector2d& b_px, ImVec2 clip_min, ImVec2 clip_max, ImU32 color, float thickness_px) {
   const ScreenRect rect{{clip_min.x, clip_min.y}, {clip_max.x, clip_max.y}};
-  DrawScreenLine(draw_list, ToScreenD(view, a_px), ToScreenD(view, b_px), rect, color, thickness_px);
+  DrawScreenLine(draw_list, ImageToScreen(view, a_px), ImageToScreen(view, b_px), rect, color, thickness_px);
 }
 
 void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view, ImVec2 clip_min,
@@ -491,8 +500,8 @@ void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const V
       if (segment.image_id != image.id) continue;
       const bool selected = input.selection.segment_id == segment.id;
       const bool hovered = input.hover.segment_id == segment.id;
-      const Eigen::Vector2d a = ToScreenD(view, segment.a_px);
-      const Eigen::Vector2d b = ToScreenD(view, segment.b_px);
+      const Eigen::Vector2d a = ImageToScreen(view, segment.a_px);
+      const Eigen::Vector2d b = ImageToScreen(view, segment.b_px);
       const ImU32 color = AxisColor(segment.axis);
       if (selected || hovered) {
         DrawScreenLine(draw_list, a, b, rect, selected ? kHighlightColor : IM_COL32(255, 255, 255, 140),
@@ -507,7 +516,7 @@ void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const V
         const bool hot =
             (hovered && input.hover.segment_endpoint == end) || (selected && input.selection.segment_endpoint == end);
         const float r = hot ? 5.0f : 3.0f;
-        const ImVec2 c = ToImVec(p);
+        const ImVec2 c = ToImVec2(p);
         draw_list->AddRectFilled(ImVec2(c.x - r - 1, c.y - r - 1), ImVec2(c.x + r + 1, c.y + r + 1), kShadowColor);
         draw_list->AddRectFilled(ImVec2(c.x - r, c.y - r), ImVec2(c.x + r, c.y + r), hot ? kHighlightColor : color);
       }
@@ -522,18 +531,18 @@ void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const V
     for (const Pin& pin : project.pins) {
       if (pin.image_id != image.id) continue;
       ++number;
-      const Eigen::Vector2d p = ToScreenD(view, pin.uv_px);
+      const Eigen::Vector2d p = ImageToScreen(view, pin.uv_px);
       // The residual: from where the user pinned the corner to where the model puts it.
       if (input.model != nullptr) {
         for (const ProjectedPrimitive& pp : *input.model) {
           const VertexId v = pin.vertex.vertex;
           if (pp.primitive_id != pin.vertex.primitive_id || v >= pp.in_front.size() || !pp.in_front[v]) continue;
-          DrawScreenLine(draw_list, p, ToScreenD(view, pp.uv_px[v]), rect, kPinColor, 1.5f);
+          DrawScreenLine(draw_list, p, ImageToScreen(view, pp.uv_px[v]), rect, kPinColor, 1.5f);
         }
       }
       if (!rect.Contains(p, 20.0)) continue;
       const bool hot = input.hover.pin_id == pin.id || input.selection.pin_id == pin.id;
-      const ImVec2 c = ToImVec(p);
+      const ImVec2 c = ToImVec2(p);
       draw_list->AddCircle(c, 6.0f, kShadowColor, 0, 4.0f);
       draw_list->AddCircle(c, 6.0f, hot ? kHighlightColor : kPinColor, 0, 2.0f);
       draw_list->AddCircleFilled(c, 1.5f, kPinColor);

@@ -40,6 +40,23 @@ ImU32 AxisColor(Axis axis, int alpha = 255);
 bool ClipSegmentToRect(Eigen::Vector2d* a, Eigen::Vector2d* b, const Eigen::Vector2d& rect_min,
                        const Eigen::Vector2d& rect_max);
 
+// Image px to screen px in double (ViewTransform's own works in float, which loses points far
+// off the photo, such as vanishing points).
+Eigen::Vector2d ImageToScreen(const ViewTransform& view, const Eigen::Vector2d& uv_px);
+ImVec2 ToImVec2(const Eigen::Vector2d& p);
+
+// The screen end points (*a, *b) of a stretch of the image line l . (u, v, 1) = 0 that crosses
+// the whole view [rect_min, rect_max] (screen px); false for the line at infinity.
+bool ImageLineAcrossView(const ViewTransform& view, const Eigen::Vector3d& line, const Eigen::Vector2d& rect_min,
+                         const Eigen::Vector2d& rect_max, Eigen::Vector2d* a, Eigen::Vector2d* b);
+
+// The screen segment a-b clipped to [rect_min, rect_max] grown by a margin (so that thick lines
+// at the border are not cut visibly short) and drawn; dashed (dash_px on, dash_px off) when
+// dash_px > 0; each piece over a shadow 2 px wider when `shadow` is not 0.
+void DrawClippedScreenLine(ImDrawList* draw_list, Eigen::Vector2d a, Eigen::Vector2d b, const Eigen::Vector2d& rect_min,
+                           const Eigen::Vector2d& rect_max, ImU32 color, float thickness_px, double dash_px = 0.0,
+                           ImU32 shadow = 0);
+
 struct OverlayOptions {
   bool show_segments = true;
   bool show_vanishing_points = true;
@@ -63,10 +80,10 @@ struct OverlayHover {
 struct OverlayInput {
   const Project* project = nullptr;
   const Image* image = nullptr;
-  const VpCalibrationSummary* calibration = nullptr;       // may be null
-  const std::vector<ProjectedPrimitive>* model = nullptr;  // from ProjectModel
+  const VpCalibrationSummary* calibration = nullptr;          // may be null
+  const std::vector<ProjectedPrimitive>* model = nullptr;     // from ProjectModel
   const std::map<Id, LoadedReference>* references = nullptr;  // AppState::references; may be null
-  ElementRef other_hover;                                  // hovered in the 3D panel: highlighted here too
+  ElementRef other_hover;                                     // hovered in the 3D panel: highlighted here too
   Tool tool = Tool::kSelect;
   Selection selection;
   Id selected_line_pin = kNoId;  // drawn highlighted (with its edge, which the selection holds)

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
-#include <limits>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -33,7 +33,7 @@ constexpr ImU32 kPanelBackground = IM_COL32(0, 0, 0, 165);
 // The solver's residual vectors: white, apart from the families' red, green and blue, the
 // model's yellow and the pins' magenta.
 constexpr ImU32 kResidualColor = IM_COL32(255, 255, 255, 255);
-constexpr ImU32 kRayColor = IM_COL32(120, 230, 255, 255);      // rays of a vertex's pins in 3D
+constexpr ImU32 kRayColor = IM_COL32(120, 230, 255, 255);  // rays of a vertex's pins in 3D
 constexpr ImU32 kGapColor = IM_COL32(255, 120, 60, 255);
 // The 95 % ellipse of a 2-D Gaussian: sqrt of chi^2(2 dof) at 0.95.
 constexpr double kEllipse95Scale = 2.4477;
@@ -41,45 +41,23 @@ constexpr double kEllipse95Scale = 2.4477;
 struct Screen {
   const ViewTransform& view;
   Eigen::Vector2d rect_min, rect_max;
-  Eigen::Vector2d operator()(const Eigen::Vector2d& uv_px) const {
-    return {view.origin.x + static_cast<double>(view.zoom) * uv_px.x(),
-            view.origin.y + static_cast<double>(view.zoom) * uv_px.y()};
-  }
+  Eigen::Vector2d operator()(const Eigen::Vector2d& uv_px) const { return ImageToScreen(view, uv_px); }
 };
 
-ImVec2 Im(const Eigen::Vector2d& p) { return ImVec2(static_cast<float>(p.x()), static_cast<float>(p.y())); }
-
-void Line(ImDrawList* draw, const Screen& s, Eigen::Vector2d a, Eigen::Vector2d b, ImU32 color, float width,
-          bool dashed = false) {
-  const Eigen::Vector2d margin(8.0, 8.0);
-  if (!ClipSegmentToRect(&a, &b, s.rect_min - margin, s.rect_max + margin)) return;
-  const double length = (b - a).norm();
-  if (!(length > 0.0)) return;
-  const Eigen::Vector2d dir = (b - a) / length;
-  const double dash = dashed ? 9.0 : length;
-  for (double t = 0.0; t < length; t += dashed ? 2.0 * dash : length) {
-    const Eigen::Vector2d p = a + t * dir, q = a + std::min(length, t + dash) * dir;
-    draw->AddLine(Im(p), Im(q), kShadow, width + 2.0f);
-    draw->AddLine(Im(p), Im(q), color, width);
-  }
+void Line(ImDrawList* draw, const Screen& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b, ImU32 color,
+          float width, bool dashed = false) {
+  DrawClippedScreenLine(draw, a, b, s.rect_min, s.rect_max, color, width, dashed ? 9.0 : 0.0, kShadow);
 }
 
 // An image line l . (u, v, 1) = 0 across the view.
 void InfiniteLine(ImDrawList* draw, const Screen& s, const Eigen::Vector3d& l, ImU32 color, float width, bool dashed) {
-  const double n = l.head<2>().norm();
-  if (!(n > 0.0)) return;
-  double cu, cv;
-  s.view.ToImage(Im(0.5 * (s.rect_min + s.rect_max)), &cu, &cv);
-  const Eigen::Vector2d center(cu, cv), normal = l.head<2>() / n;
-  const Eigen::Vector2d foot = center - (l.dot(Eigen::Vector3d(cu, cv, 1.0)) / n) * normal;
-  const Eigen::Vector2d dir(-normal.y(), normal.x());
-  const double reach = 2.0 * (s.rect_max - s.rect_min).norm() / s.view.zoom + 1.0;
-  Line(draw, s, s(foot - reach * dir), s(foot + reach * dir), color, width, dashed);
+  Eigen::Vector2d a, b;
+  if (ImageLineAcrossView(s.view, l, s.rect_min, s.rect_max, &a, &b)) Line(draw, s, a, b, color, width, dashed);
 }
 
 void Marker(ImDrawList* draw, const Eigen::Vector2d& p, ImU32 color, float radius) {
-  draw->AddCircleFilled(Im(p), radius + 1.5f, kShadow);
-  draw->AddCircleFilled(Im(p), radius, color);
+  draw->AddCircleFilled(ToImVec2(p), radius + 1.5f, kShadow);
+  draw->AddCircleFilled(ToImVec2(p), radius, color);
 }
 
 void Label(ImDrawList* draw, const Eigen::Vector2d& p, ImU32 color, const std::string& text) {
@@ -116,7 +94,7 @@ void Ellipse(ImDrawList* draw, const Screen& s, const Eigen::Vector2d& center_px
   std::vector<ImVec2> points;
   for (int k = 0; k < kSteps; ++k) {
     const double angle = 2.0 * M_PI * k / kSteps;
-    points.push_back(Im(s(center_px + axes * Eigen::Vector2d(std::cos(angle), std::sin(angle)))));
+    points.push_back(ToImVec2(s(center_px + axes * Eigen::Vector2d(std::cos(angle), std::sin(angle)))));
   }
   draw->AddPolyline(points.data(), kSteps, kShadow, ImDrawFlags_Closed, 3.5f);
   draw->AddPolyline(points.data(), kSteps, color, ImDrawFlags_Closed, 1.5f);
@@ -172,7 +150,7 @@ void DrawVanishingConstruction(ImDrawList* draw, const AppState& state, const Im
     const double n = c.horizon.head<2>().norm();
     if (std::abs(c.horizon.y()) > 1e-9 * n) {
       double u0, v0;
-      s.view.ToImage(Im(s.rect_min + Eigen::Vector2d(40.0, 0.0)), &u0, &v0);
+      s.view.ToImage(ToImVec2(s.rect_min + Eigen::Vector2d(40.0, 0.0)), &u0, &v0);
       const double v = -(c.horizon.x() * u0 + c.horizon.z()) / c.horizon.y();
       Label(draw, s(Eigen::Vector2d(u0, v)), kHorizonColor, "horizon");
     }
@@ -199,8 +177,8 @@ void DrawVanishingConstruction(ImDrawList* draw, const AppState& state, const Im
     if (to - from > M_PI) to -= 2.0 * M_PI;
     if (from - to > M_PI) to += 2.0 * M_PI;
     Circle(draw, s, f.altitude_foot_px, hq.norm(), kConstructionColor, from, to);
-    draw->AddLine(Im(s(p)), Im(s(f.focal_end_px)), kShadow, 5.0f);
-    draw->AddLine(Im(s(p)), Im(s(f.focal_end_px)), kConstructionColor, 3.0f);
+    draw->AddLine(ToImVec2(s(p)), ToImVec2(s(f.focal_end_px)), kShadow, 5.0f);
+    draw->AddLine(ToImVec2(s(p)), ToImVec2(s(f.focal_end_px)), kConstructionColor, 3.0f);
     Marker(draw, s(f.altitude_foot_px), kConstructionColor, 3.5f);
     Label(draw, s(f.altitude_foot_px), kConstructionColor, "h");
     Marker(draw, s(f.turned_center_px), kConstructionColor, 4.0f);
@@ -262,7 +240,7 @@ void DrawEpipolarLine(ImDrawList* draw, const Screen& s, const TeachEpipolarLine
   if (label.empty()) return;
   // The label where the line crosses the middle of the view.
   double cu, cv;
-  s.view.ToImage(Im(0.5 * (s.rect_min + s.rect_max)), &cu, &cv);
+  s.view.ToImage(ToImVec2(0.5 * (s.rect_min + s.rect_max)), &cu, &cv);
   const double n = line.line.head<2>().norm();
   const Eigen::Vector2d foot =
       Eigen::Vector2d(cu, cv) - (line.line.dot(Eigen::Vector3d(cu, cv, 1.0)) / n) * line.line.head<2>() / n;
@@ -303,9 +281,10 @@ void DrawEpipolar(ImDrawList* draw, const AppState& state, const Image& image, c
     inset.zoom = static_cast<float>(w / other->width_px);
     inset.origin =
         ImVec2(static_cast<float>(min.x() + 0.5 * inset.zoom), static_cast<float>(min.y() + 0.5 * inset.zoom));
-    draw->AddRectFilled(Im(min), Im(max), IM_COL32(40, 40, 44, 255));
-    if (const TiledTexture* texture = texture_of(other_id)) DrawTiledTexture(draw, *texture, inset, Im(min), Im(max));
-    draw->PushClipRect(Im(min), Im(max), true);
+    draw->AddRectFilled(ToImVec2(min), ToImVec2(max), IM_COL32(40, 40, 44, 255));
+    if (const TiledTexture* texture = texture_of(other_id))
+      DrawTiledTexture(draw, *texture, inset, ToImVec2(min), ToImVec2(max));
+    draw->PushClipRect(ToImVec2(min), ToImVec2(max), true);
     const Screen inset_screen{inset, min, max};
     for (const TeachEpipolarLine& line : lines) {
       if (line.from_image_id != image.id || line.in_image_id != other_id) continue;
@@ -317,7 +296,7 @@ void DrawEpipolar(ImDrawList* draw, const AppState& state, const Image& image, c
           Marker(draw, inset_screen(there.uv_px), IM_COL32(255, 70, 200, 255), 3.5f);
     }
     draw->PopClipRect();
-    draw->AddRect(Im(min), Im(max), kEpipolarColor, 0.0f, 0, 1.5f);
+    draw->AddRect(ToImVec2(min), ToImVec2(max), kEpipolarColor, 0.0f, 0, 1.5f);
     DrawShadowedText(draw, ImVec2(static_cast<float>(min.x()), static_cast<float>(min.y()) - 18.0f), kEpipolarColor,
                      ("in " + FileName(other->path)).c_str());
   }
@@ -384,14 +363,15 @@ void DrawSolverSteps(ImDrawList* draw, const AppState& state, const Image& image
     if (length > 4.0) {  // an arrow head at the projection's end
       const Eigen::Vector2d d = (b - a) / length, n(-d.y(), d.x());
       const double head = std::min(9.0, 0.4 * length);
-      const ImVec2 tip = Im(b), left = Im(b - head * d + 0.5 * head * n), right = Im(b - head * d - 0.5 * head * n);
+      const ImVec2 tip = ToImVec2(b), left = ToImVec2(b - head * d + 0.5 * head * n),
+                   right = ToImVec2(b - head * d - 0.5 * head * n);
       draw->AddTriangleFilled(tip, left, right, kResidualColor);
     }
     Marker(draw, a, kResidualColor, 2.5f);
   }
   const JointSolveSteps& steps = *solver.steps;
-  lines.push_back({white, "Solver steps: step " + std::to_string(steps.steps) +
-                              (steps.finished ? " (finished)" : "") + ", showing the stepped state, not the project"});
+  lines.push_back({white, "Solver steps: step " + std::to_string(steps.steps) + (steps.finished ? " (finished)" : "") +
+                              ", showing the stepped state, not the project"});
   if (steps.steps > 0)
     lines.push_back({dim, "observation cost " + FormatNumber(steps.summary.initial_cost, 5) + " -> " +
                               FormatNumber(steps.summary.final_cost, 5) + " px^2; largest residual here " +
@@ -418,7 +398,8 @@ void DrawSolverSteps(ImDrawList* draw, const AppState& state, const Image& image
   const float length = static_cast<float>(bar_px * px_per_residual_px);
   draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kShadow, 5.0f);
   draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kResidualColor, 3.0f);
-  for (const float x : {x0, x0 + length}) draw->AddLine(ImVec2(x, y0 - 5.0f), ImVec2(x, y0 + 5.0f), kResidualColor, 2.0f);
+  for (const float x : {x0, x0 + length})
+    draw->AddLine(ImVec2(x, y0 - 5.0f), ImVec2(x, y0 + 5.0f), kResidualColor, 2.0f);
 }
 
 // A bar of a round number of residual px, ~80 screen px long, beside the text box's last
@@ -431,7 +412,8 @@ void ScaleBar(ImDrawList* draw, const Screen& s, float before, const std::string
   const float length = static_cast<float>(bar_px * px_per_residual_px);
   draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kShadow, 5.0f);
   draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kResidualColor, 3.0f);
-  for (const float x : {x0, x0 + length}) draw->AddLine(ImVec2(x, y0 - 5.0f), ImVec2(x, y0 + 5.0f), kResidualColor, 2.0f);
+  for (const float x : {x0, x0 + length})
+    draw->AddLine(ImVec2(x, y0 - 5.0f), ImVec2(x, y0 + 5.0f), kResidualColor, 2.0f);
 }
 
 void Arrow(ImDrawList* draw, const Screen& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b, ImU32 color) {
@@ -440,7 +422,8 @@ void Arrow(ImDrawList* draw, const Screen& s, const Eigen::Vector2d& a, const Ei
   if (length > 4.0) {
     const Eigen::Vector2d d = (b - a) / length, n(-d.y(), d.x());
     const double head = std::min(9.0, 0.4 * length);
-    draw->AddTriangleFilled(Im(b), Im(b - head * d + 0.5 * head * n), Im(b - head * d - 0.5 * head * n), color);
+    draw->AddTriangleFilled(ToImVec2(b), ToImVec2(b - head * d + 0.5 * head * n),
+                            ToImVec2(b - head * d - 0.5 * head * n), color);
   }
 }
 
@@ -471,7 +454,8 @@ void DrawVpSteps(ImDrawList* draw, const AppState& state, const Image& image, co
     // Towards the current vanishing point, thin: the line the residual is measured to.
     const Eigen::Vector3d& v = steps.summary.vanishing_points[r.axis];
     const Eigen::Vector2d m = 0.5 * (r.a_px + r.b_px);
-    if (std::abs(v.z()) > 1e-12) Line(draw, s, s(m), s(v.head<2>() / v.z()), AxisColor(static_cast<Axis>(r.axis), 70), 1.0f);
+    if (std::abs(v.z()) > 1e-12)
+      Line(draw, s, s(m), s(v.head<2>() / v.z()), AxisColor(static_cast<Axis>(r.axis), 70), 1.0f);
     Arrow(draw, s, s(r.a_px), s(r.a_px + scale * r.offset_a_px), kResidualColor);
     Arrow(draw, s, s(r.b_px), s(r.b_px + scale * r.offset_b_px), kResidualColor);
     Marker(draw, s(r.a_px), color, 2.0f);
@@ -482,7 +466,8 @@ void DrawVpSteps(ImDrawList* draw, const AppState& state, const Image& image, co
     const ImU32 color = AxisColor(static_cast<Axis>(a), 255);
     std::vector<Eigen::Vector2d> path;
     for (const VpFitState& p : steps.path)
-      if (std::abs(p.vanishing_points[a].z()) > 1e-12) path.push_back(p.vanishing_points[a].head<2>() / p.vanishing_points[a].z());
+      if (std::abs(p.vanishing_points[a].z()) > 1e-12)
+        path.push_back(p.vanishing_points[a].head<2>() / p.vanishing_points[a].z());
     if (path.empty()) continue;
     for (size_t k = 1; k < path.size(); ++k) Line(draw, s, s(path[k - 1]), s(path[k]), color, 1.5f);
     for (const Eigen::Vector2d& p : path) Marker(draw, s(p), color, 2.0f);
@@ -492,13 +477,13 @@ void DrawVpSteps(ImDrawList* draw, const AppState& state, const Image& image, co
               FormatNumber(path.back().y(), 5) + ")");
   }
   lines.push_back({white, "Solver steps: vanishing-point fit, step " + std::to_string(steps.steps) +
-                              (steps.finished ? " (finished)" : "") + ", f = " +
-                              FormatNumber(steps.summary.focal_px, 6) + " px"});
+                              (steps.finished ? " (finished)" : "") +
+                              ", f = " + FormatNumber(steps.summary.focal_px, 6) + " px"});
   lines.push_back({dim, "cost " + FormatNumber(steps.path.front().cost_px2, 5) + " -> " +
                             FormatNumber(steps.summary.final_cost, 5) + " px^2; largest residual " +
                             FormatNumber(largest, 4) + " px; dots: the vanishing points' path"});
-  lines.push_back({kResidualColor, "residuals (endpoint to the line through midpoint and v) drawn x" +
-                                       FormatNumber(scale, 4)});
+  lines.push_back(
+      {kResidualColor, "residuals (endpoint to the line through midpoint and v) drawn x" + FormatNumber(scale, 4)});
   const double px_per_residual_px = scale * s.view.zoom;
   if (!(px_per_residual_px > 0.0) || !std::isfinite(px_per_residual_px)) {
     TextBox(draw, s, text_y, lines);
@@ -555,7 +540,7 @@ void DrawTwoViewSteps(ImDrawList* draw, const AppState& state, const Image& imag
                             FormatNumber(largest, 4) + " px"});
   lines.push_back({kEpipolarColor, "epipolar lines of " + std::to_string(drawn) + " of " +
                                        std::to_string(steps.uv1.size()) +
-                                       " matches under the current F (dashed grey: the 8-point start)"});
+                                       " matches under the current F (dashed grey: the start)"});
   TextBox(draw, s, text_y, lines);
 }
 
@@ -567,7 +552,9 @@ std::vector<float> Log10Series(const std::vector<double>& values) {
     if (v > 0.0 && std::isfinite(v)) smallest = std::min(smallest, v);
   std::vector<float> out;
   for (const double v : values)
-    out.push_back(static_cast<float>(std::log10(v > 0.0 && std::isfinite(v) ? v : std::isfinite(smallest) ? smallest : 1.0)));
+    out.push_back(static_cast<float>(std::log10(v > 0.0 && std::isfinite(v) ? v
+                                                : std::isfinite(smallest)   ? smallest
+                                                                            : 1.0)));
   return out;
 }
 
@@ -667,8 +654,8 @@ void DrawTeachRays(ImDrawList* draw, const AppState& state,
                               FormatNumber(pair.gap_px_in_a, 3) + " / " + FormatNumber(pair.gap_px_in_b, 3) +
                               " px in the two photos)";
     // Beside the points, moved left as far as needed to stay in the panel.
-    const float x = std::min(std::max(pa.x, pb.x) + 8.0f,
-                             draw->GetClipRectMax().x - ImGui::CalcTextSize(label.c_str()).x - 6.0f);
+    const float x =
+        std::min(std::max(pa.x, pb.x) + 8.0f, draw->GetClipRectMax().x - ImGui::CalcTextSize(label.c_str()).x - 6.0f);
     DrawShadowedText(draw, ImVec2(x, 0.5f * (pa.y + pb.y) + 8.0f), kGapColor, label.c_str());
   }
 }
@@ -693,15 +680,44 @@ void TracePlots(const std::vector<LmIteration>& trace, double cost_unit, const c
 }
 
 // The Solver steps window for the vanishing-point fit and the two-view refinement.
+// The start of the steps: the same choice for every subject (the fits' own starts are as
+// close to their answers as a solved project is, so stepping from them shows as little).
+void DrawStepStart(AppState* state, bool stepping) {
+  TeachSolverSteps& solver = state->teach.solver;
+  ImGui::BeginDisabled(stepping);
+  ImGui::SetNextItemWidth(150);
+  if (ImGui::BeginCombo("start", solver.start == TeachStepStart::kPerturbed ? "perturbed" : "as it is")) {
+    if (ImGui::Selectable("perturbed", solver.start == TeachStepStart::kPerturbed))
+      solver.start = TeachStepStart::kPerturbed;
+    if (ImGui::Selectable("as it is", solver.start == TeachStepStart::kAsIs)) solver.start = TeachStepStart::kAsIs;
+    ImGui::EndCombo();
+  }
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip(solver.subject == TeachStepSubject::kJointSolve
+                          ? "perturbed: the solved project moved off its answer (the same way every time);\n"
+                            "as it is: the project as solved (a converged solve stops at once)"
+                          : "perturbed: the fit's answer moved off it (the same way every time);\n"
+                            "as it is: the fit's own start (already close to its answer)");
+  if (solver.start == TeachStepStart::kPerturbed) {
+    ImGui::SameLine();
+    float percent = static_cast<float>(100.0 * solver.perturbation);
+    ImGui::SetNextItemWidth(120);
+    if (ImGui::SliderFloat("amount", &percent, 1.0f, 40.0f, "%.0f %%")) solver.perturbation = percent / 100.0;
+  }
+  ImGui::EndDisabled();
+}
+
 void DrawFitStepsBody(AppState* state) {
   TeachSolverSteps& solver = state->teach.solver;
   const bool vp = solver.subject == TeachStepSubject::kVanishingPoints;
   ImGui::TextWrapped(vp ? "The vanishing-point fit of the active photo (f, principal point and rotation fitted to all "
                           "segments, the three directions orthogonal), one Levenberg-Marquardt iteration per Step, "
-                          "from its closed form. The project does not change."
+                          "from its answer moved off (perturbed) or its closed form (as it is). The project does not "
+                          "change."
                         : "The refinement of F between the active and the second photo (symmetric point-to-epipolar-"
                           "line distance over the pinned matches RANSAC keeps), one Levenberg-Marquardt iteration "
-                          "per Step, from the 8-point estimate. The project does not change.");
+                          "per Step, from its answer moved off (perturbed) or the 8-point estimate (as it is). The "
+                          "project does not change.");
   if (!vp) {
     const Project& project = state->document.project();
     std::string preview = "(first photo sharing 7 pins)";
@@ -721,6 +737,7 @@ void DrawFitStepsBody(AppState* state) {
     ImGui::EndDisabled();
   }
   const bool stepping = TeachStepping(*state);
+  DrawStepStart(state, stepping);
   if (ImGui::Button("Step")) TeachStep(state);
   RecordItem(state, "teach.step");
   ImGui::SameLine();
@@ -733,8 +750,8 @@ void DrawFitStepsBody(AppState* state) {
   if (!solver.message.empty()) ImGui::TextWrapped("%s", solver.message.c_str());
   if (!TeachStepping(*state)) return;
   ImGui::Separator();
-  constexpr ImGuiTableFlags kFlags = ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerV |
-                                     ImGuiTableFlags_SizingFixedFit | ImGuiTableFlags_ScrollY;
+  constexpr ImGuiTableFlags kFlags =
+      ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerV | ImGuiTableFlags_SizingFixedFit | ImGuiTableFlags_ScrollY;
   if (vp) {
     const VpFitSteps& steps = *solver.vp.steps;
     ImGui::Text("residuals drawn x%s", FormatNumber(solver.vp.residual_scale, 4).c_str());
@@ -840,24 +857,7 @@ void DrawTeachStepsWindow(AppState* state) {
       "The joint solve, one Levenberg-Marquardt iteration per Step. Stepping never changes the project: the image and "
       "3D panels show the stepped state until this window closes or the project is edited.");
   const bool stepping = TeachSteppedProject(*state) != nullptr;
-  ImGui::BeginDisabled(stepping);
-  ImGui::SetNextItemWidth(150);
-  if (ImGui::BeginCombo("start", solver.start == TeachStepStart::kPerturbed ? "perturbed" : "as it is")) {
-    if (ImGui::Selectable("perturbed", solver.start == TeachStepStart::kPerturbed))
-      solver.start = TeachStepStart::kPerturbed;
-    if (ImGui::Selectable("as it is", solver.start == TeachStepStart::kAsIs)) solver.start = TeachStepStart::kAsIs;
-    ImGui::EndCombo();
-  }
-  if (ImGui::IsItemHovered())
-    ImGui::SetTooltip("perturbed: the solved project moved off its answer (the same way every time);\n"
-                      "as it is: the project as solved (a converged solve stops at once)");
-  if (solver.start == TeachStepStart::kPerturbed) {
-    ImGui::SameLine();
-    float percent = static_cast<float>(100.0 * solver.perturbation);
-    ImGui::SetNextItemWidth(120);
-    if (ImGui::SliderFloat("amount", &percent, 1.0f, 40.0f, "%.0f %%")) solver.perturbation = percent / 100.0;
-  }
-  ImGui::EndDisabled();
+  DrawStepStart(state, stepping);
   if (ImGui::Button("Step")) TeachStep(state);
   RecordItem(state, "teach.step");
   ImGui::SameLine();
@@ -913,8 +913,9 @@ void DrawTeachStepsWindow(AppState* state) {
     ImGui::TextColored(kDimText, "No spatial constraints.");
   } else if (steps.steps == 0) {
     ImGui::TextColored(kDimText, "Constraint violations: after the first step.");
-  } else if (ImGui::BeginTable("##teach_constraints", 3,
-                               ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerV | ImGuiTableFlags_SizingFixedFit)) {
+  } else if (ImGui::BeginTable(
+                 "##teach_constraints", 3,
+                 ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerV | ImGuiTableFlags_SizingFixedFit)) {
     ImGui::TableSetupColumn("constraint", ImGuiTableColumnFlags_WidthStretch);
     ImGui::TableSetupColumn("violation");
     ImGui::TableSetupColumn("holds");
@@ -981,10 +982,16 @@ void DrawTeachNumbersWindow(AppState* state) {
     ImGui::TextColored(kDimText, "x_b^T F x_a = 0: a = %s, b = %s; ||F|| = 1", FileName(active->path).c_str(),
                        preview.c_str());
     MatrixBlock(state, "F", "fundamental matrix", numbers->F);
+    // Appended piece by piece: GCC 12 warns -Wrestrict (a false positive, its bug 105651) on
+    // the inlined "literal" + std::string temporary that a one-expression concatenation makes.
     auto point = [](const Eigen::Vector3d& e) {
-      return std::abs(e.z()) > 1e-12 * e.norm()
-                 ? "(" + FormatNumber(e.x() / e.z(), 6) + ", " + FormatNumber(e.y() / e.z(), 6) + ") px"
-                 : std::string("at infinity");
+      if (!(std::abs(e.z()) > 1e-12 * e.norm())) return std::string("at infinity");
+      std::string text = "(";
+      text += FormatNumber(e.x() / e.z(), 6);
+      text += ", ";
+      text += FormatNumber(e.y() / e.z(), 6);
+      text += ") px";
+      return text;
     };
     ImGui::Text("epipole in a: %s", point(numbers->epipole_in_a).c_str());
     ImGui::Text("epipole in b: %s", point(numbers->epipole_in_b).c_str());

@@ -328,7 +328,8 @@ bool BeginVpSteps(AppState* state) {
   }
   VpFitSteps steps;
   VpCalibrationSummary failure;
-  if (!BeginVpFitSteps(segments, CalibrationOptionsFor(*image), &steps, &failure)) {
+  const double amount = solver.start == TeachStepStart::kPerturbed ? solver.perturbation : 0.0;
+  if (!BeginVpFitSteps(segments, CalibrationOptionsFor(*image), amount, &steps, &failure)) {
     solver.message = "vanishing points of " + PhotoName(*image) + ": " + failure.message;
     return false;
   }
@@ -341,8 +342,11 @@ bool BeginVpSteps(AppState* state) {
   vp.residual_scale = std::isfinite(scale) && scale > 0.0 ? std::clamp(RoundScaleDown(scale), 1e-3, 1e6) : 1.0;
   vp.steps = std::move(steps);
   solver.document_revision = state->document.revision();
-  solver.message = "start: the fit's closed form on " + std::to_string(segments.size()) + " segments of " +
-                   PhotoName(*image) + ", cost " + FormatNumber(vp.steps->summary.final_cost, 6) + " px^2";
+  solver.message = std::string("start: ") +
+                   (amount != 0.0 ? "the fit's answer moved off by " + FormatNumber(100.0 * amount, 3) + " %"
+                                  : std::string("the fit's closed form")) +
+                   " on " + std::to_string(segments.size()) + " segments of " + PhotoName(*image) + ", cost " +
+                   FormatNumber(vp.steps->summary.final_cost, 6) + " px^2";
   return true;
 }
 
@@ -407,7 +411,8 @@ bool BeginTwoViewSteps(AppState* state) {
   }
   FundamentalFitSteps steps;
   FundamentalSummary failure;
-  if (!BeginFundamentalFitSteps(in_a, in_b, FundamentalOptions(), &steps, &failure)) {
+  const double amount = solver.start == TeachStepStart::kPerturbed ? solver.perturbation : 0.0;
+  if (!BeginFundamentalFitSteps(in_a, in_b, FundamentalOptions(), amount, &steps, &failure)) {
     solver.message = "two views " + pair + ": " + failure.message;
     return false;
   }
@@ -415,9 +420,11 @@ bool BeginTwoViewSteps(AppState* state) {
   two.image_b = b->id;
   two.steps = std::move(steps);
   solver.document_revision = state->document.revision();
-  solver.message = "start: the 8-point F of " + pair + " on " + std::to_string(in_a.size()) + " of " +
-                   std::to_string(uv_a.size()) + " matches, cost " + FormatNumber(two.steps->summary.final_cost, 6) +
-                   " px^2";
+  solver.message = std::string("start: ") +
+                   (amount != 0.0 ? "the refined F moved off by " + FormatNumber(100.0 * amount, 3) + " %"
+                                  : std::string("the 8-point F")) +
+                   " of " + pair + " on " + std::to_string(in_a.size()) + " of " + std::to_string(uv_a.size()) +
+                   " matches, cost " + FormatNumber(two.steps->summary.final_cost, 6) + " px^2";
   return true;
 }
 
@@ -495,8 +502,8 @@ bool TeachStep(AppState* state) {
   if (solver.subject == TeachStepSubject::kTwoView) return StepTwoView(state);
   if (!solver.steps) BeginSteps(state);
   if (solver.steps->finished) {
-    solver.message = "the solve has finished (" + std::string(SolverTerminationName(solver.steps->summary.termination)) +
-                     "): Reset to step again";
+    solver.message = "the solve has finished (" +
+                     std::string(SolverTerminationName(solver.steps->summary.termination)) + "): Reset to step again";
     return false;
   }
   JointSolveSummary failure;
@@ -508,10 +515,11 @@ bool TeachStep(AppState* state) {
     return false;
   }
   const JointSolveSteps& steps = *solver.steps;
-  solver.message = "step " + std::to_string(steps.steps) + ": observation cost " +
-                   FormatNumber(steps.summary.final_cost, 6) + " px^2" + (steps.finished ? std::string(", finished (") +
-                                                   SolverTerminationName(steps.summary.termination) + ")"
-                                             : std::string());
+  solver.message =
+      "step " + std::to_string(steps.steps) + ": observation cost " + FormatNumber(steps.summary.final_cost, 6) +
+      " px^2" +
+      (steps.finished ? std::string(", finished (") + SolverTerminationName(steps.summary.termination) + ")"
+                      : std::string());
   RefreshSteppedMesh(&solver);
   return true;
 }

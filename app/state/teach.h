@@ -49,10 +49,11 @@ enum class TeachStepSubject { kJointSolve, kVanishingPoints, kTwoView };
 const char* TeachStepSubjectName(TeachStepSubject subject);  // "joint", "vanishing", "two-view"
 std::optional<TeachStepSubject> TeachStepSubjectFromName(const std::string& name);
 
-// The vanishing-point fit of one photo stepped: from the fit's own start (its closed form),
-// one round on the photo's segments as the calibration step reads them (straightened by the
-// camera's distortion, if any). The document is never changed; the overlay draws the
-// stepped vanishing points, their paths and each segment's residual.
+// The vanishing-point fit of one photo stepped: from the window's start (perturbed: the fit's
+// answer moved off by `perturbation`; as is: the fit's closed form), one round on the photo's
+// segments as the calibration step reads them (straightened by the camera's distortion, if
+// any). The document is never changed; the overlay draws the stepped vanishing points, their
+// paths and each segment's residual.
 struct TeachVpSteps {
   Id image_id = kNoId;
   std::optional<VpFitSteps> steps;
@@ -62,9 +63,10 @@ struct TeachVpSteps {
   double residual_scale = 1.0;
 };
 
-// The two-view refinement stepped for the active photo (a) and the second photo (b): the
-// matches are the pins of one vertex in both (7 or more), the stepped ones the inliers of a
-// full estimate (RANSAC is not an iteration of the refinement).
+// The two-view refinement stepped for the active photo (a) and the second photo (b), from the
+// window's start (perturbed: the refined F moved off by `perturbation`; as is: the 8-point
+// estimate): the matches are the pins of one vertex in both (7 or more), the stepped ones the
+// inliers of a full estimate (RANSAC is not an iteration of the refinement).
 struct TeachTwoViewSteps {
   Id image_a = kNoId, image_b = kNoId;
   std::optional<FundamentalFitSteps> steps;
@@ -80,10 +82,10 @@ struct TeachSolverSteps {
   TeachVpSteps vp;            // subject kVanishingPoints
   TeachTwoViewSteps two_view;  // subject kTwoView
   TeachStepStart start = TeachStepStart::kPerturbed;
-  // PerturbForSteps' amount. 0.2 (each camera turned by 4 degrees): on the Leuven street the
-  // first two steps still leave residuals of tens of px before the quadratic convergence
-  // shows (observation cost 48308, 8642, 1169, 72.8, 72.2 px^2); from 0.05 the first step is
-  // already nearly the answer, which shows less.
+  // PerturbForSteps' amount, and the fits' (core/estimators/fit_steps.h). 0.2 (each camera
+  // turned by 4 degrees): on the Leuven street the first two steps still leave residuals of
+  // tens of px before the quadratic convergence shows (observation cost 48308, 8642, 1169,
+  // 72.8, 72.2 px^2); from 0.05 the first step is already nearly the answer, which shows less.
   double perturbation = 0.2;
   // Begun by the first Step: empty while the panels show the document.
   std::optional<JointSolveSteps> steps;

@@ -1,6 +1,10 @@
 #include "core/estimators/fit_steps.h"
 
+#include <cmath>
 #include <utility>
+
+#include "core/geometry/camera.h"
+#include "core/geometry/hartley_normalization.h"
 
 namespace facet {
 namespace {
@@ -27,16 +31,51 @@ FundamentalSummary RunFundamentalFit(const FundamentalFitSteps& steps, int itera
   return EstimateFundamentalMatrix(steps.uv1, steps.uv2, options);
 }
 
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+
 }  // namespace
 
-bool BeginVpFitSteps(const std::vector<Segment>& segments, const VpCalibrationOptions& options, VpFitSteps* steps,
-                     VpCalibrationSummary* failure) {
+VpCalibrationOptions PerturbVpStart(const VpCalibrationSummary& answer, const VpCalibrationOptions& options,
+                                    double perturbation) {
+  VpCalibrationOptions moved = options;
+  moved.warm_start = true;
+  moved.warm_start_focal_px = answer.focal_px * (1.0 + perturbation);
+  moved.warm_start_principal_point_px =
+      answer.principal_point_px + perturbation * 0.25 * Eigen::Vector2d(options.width_px, -options.height_px);
+  const Eigen::Vector3d axis = Eigen::Vector3d(1.0, 2.0, 3.0).normalized();
+  moved.warm_start_rotation =
+      RotationFromAngleAxis(perturbation * 20.0 * kDegree * axis) * answer.cam_from_world_rotation;
+  return moved;
+}
+
+Eigen::Matrix3d PerturbFundamental(const Eigen::Matrix3d& F, const std::vector<Eigen::Vector2d>& uv1,
+                                   const std::vector<Eigen::Vector2d>& uv2, double perturbation) {
+  internal::OrthonormalFundamental o = internal::OrthonormalFundamental::FromF(F, internal::HartleyNormalization(uv1),
+                                                                               internal::HartleyNormalization(uv2));
+  const double angle = perturbation * 10.0 * kDegree;
+  o.U = o.U * RotationFromAngleAxis(angle * Eigen::Vector3d(1.0, 2.0, 3.0).normalized());
+  o.V = o.V * RotationFromAngleAxis(angle * Eigen::Vector3d(3.0, -1.0, 2.0).normalized());
+  o.s *= 1.0 - perturbation;
+  return NormalizeFundamental(o.F());
+}
+
+bool BeginVpFitSteps(const std::vector<Segment>& segments, const VpCalibrationOptions& options, double perturbation,
+                     VpFitSteps* steps, VpCalibrationSummary* failure) {
   VpFitSteps begun;
   begun.segments = segments;
   begun.options = options;
+  begun.perturbation = perturbation;
   // The refit without the flagged segments is a second fit on other data, not an iteration.
   begun.options.refit_without_outliers = false;
   begun.options.record_joint_trace = true;
+  if (perturbation != 0.0) {
+    const VpCalibrationSummary answer = CalibrateFromVanishingLines(segments, begun.options);
+    if (!answer.IsUsable()) {
+      if (failure != nullptr) *failure = answer;
+      return false;
+    }
+    begun.options = PerturbVpStart(answer, begun.options, perturbation);
+  }
   VpCalibrationSummary start = RunVpFit(begun, 0);
   if (!start.IsUsable()) {
     if (failure != nullptr) *failure = std::move(start);
@@ -73,15 +112,25 @@ void ResetVpFitSteps(VpFitSteps* steps) {
 }
 
 bool BeginFundamentalFitSteps(const std::vector<Eigen::Vector2d>& uv1, const std::vector<Eigen::Vector2d>& uv2,
-                              const FundamentalOptions& options, FundamentalFitSteps* steps,
+                              const FundamentalOptions& options, double perturbation, FundamentalFitSteps* steps,
                               FundamentalSummary* failure) {
   FundamentalFitSteps begun;
   begun.uv1 = uv1;
   begun.uv2 = uv2;
   begun.options = options;
+  begun.perturbation = perturbation;
   begun.options.use_ransac = false;
   begun.options.refine = true;
   begun.options.record_refine_trace = true;
+  if (perturbation != 0.0) {
+    const FundamentalSummary answer = EstimateFundamentalMatrix(uv1, uv2, begun.options);
+    if (!answer.IsUsable()) {
+      if (failure != nullptr) *failure = answer;
+      return false;
+    }
+    begun.options.warm_start = true;
+    begun.options.warm_start_F = PerturbFundamental(answer.F, uv1, uv2, perturbation);
+  }
   FundamentalSummary start = RunFundamentalFit(begun, 0);
   if (!start.IsUsable()) {
     if (failure != nullptr) *failure = std::move(start);

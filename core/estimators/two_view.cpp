@@ -174,8 +174,8 @@ struct SymmetricEpipolarProblem {
 // Levenberg-Marquardt on the symmetric epipolar residuals. Only steps that lower the cost are
 // taken, so the result is never worse than the start.
 template <int D, class State>
-State MinimizeSymmetricEpipolar(State state, const Points& uv1, const Points& uv2, int max_iterations,
-                                LmResult* result, std::vector<LmIteration>* trace = nullptr) {
+State MinimizeSymmetricEpipolar(State state, const Points& uv1, const Points& uv2, int max_iterations, LmResult* result,
+                                std::vector<LmIteration>* trace = nullptr) {
   SymmetricEpipolarProblem<D, State> problem{uv1, uv2, state, {}, state, {}, {}, {}};
   const double cost = SymmetricEpipolarCost(state.F(), uv1, uv2, &problem.normal);
   // A different rule from the driver's defaults, kept from the refinement's tuning: the
@@ -385,6 +385,10 @@ bool FundamentalOptions::Check(std::string* error) const {
   }
   if (max_refine_iterations < 0) {
     *error = "max_refine_iterations must not be negative";
+    return false;
+  }
+  if (warm_start && (!warm_start_F.allFinite() || !(warm_start_F.norm() > 0.0))) {
+    *error = "the warm start needs a finite non-zero F";
     return false;
   }
   return true;
@@ -656,6 +660,7 @@ FundamentalSummary EstimateFundamentalMatrix(const Points& uv1, const Points& uv
                  std::vector<LmIteration>* trace) {
     const Points in1 = Select(uv1, flags), in2 = Select(uv2, flags);
     if (!LinearFundamental(in1, in2, linear, &error)) return false;
+    if (options.warm_start) *linear = options.warm_start_F;
     *refined = *linear;
     *result = LmResult();
     result->termination = LmTermination::kConverged;

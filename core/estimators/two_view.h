@@ -45,6 +45,11 @@ struct FundamentalOptions {
   int max_refine_iterations = 100;
   // Fill FundamentalSummary::refine_trace (Teach mode's stepping, core/estimators/fit_steps.h).
   bool record_refine_trace = false;
+  // Warm start: begin the refinement at this F (rank 2 is taken from its SVD) instead of the
+  // linear estimate, e.g. Teach mode's start moved off the answer. The inliers are decided as
+  // without it; the "initial" figures of the summary are then this F's.
+  bool warm_start = false;
+  Eigen::Matrix3d warm_start_F = Eigen::Matrix3d::Zero();
   // A warning when a homography explains the matches (symmetric transfer RMS) within this
   // factor of F's RMS plus the slack: a planar scene or a pure rotation leaves F loose.
   double homography_warning_ratio = 2.0;

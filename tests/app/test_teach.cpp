@@ -12,9 +12,9 @@
 // assets/samples/leuven/teach/).
 #include <doctest/doctest.h>
 
+#include "core/estimators/fit_steps.h"
 #include "core/geometry/camera.h"
 #include "core/geometry/ray_pair.h"
-#include "core/estimators/fit_steps.h"
 #include "core/solve/joint_solve_steps.h"
 #include "core/solve/model_update.h"
 #include "core/util/matrix_text.h"
@@ -275,7 +275,8 @@ double MaxRelativeDifference(const nlohmann::json& steps, const Project& p) {
   return worst;
 }
 
-TEST_CASE("solver steps: N steps in the app are one solve of N iterations; Reset restores the start; the project stays") {
+TEST_CASE(
+    "solver steps: N steps in the app are one solve of N iterations; Reset restores the start; the project stays") {
   // The same arithmetic in the same order (core's SolveJointTraced in both processes), read
   // back through JSON's round-trip doubles: equal to rounding.
   constexpr double kSameSolveRelative = 1e-12;
@@ -377,13 +378,15 @@ TEST_CASE("solver steps: N steps in the app are one solve of N iterations; Reset
   for (const nlohmann::json& j : reset.at("pins")) {
     const Pin* pin = start.FindPin(j.at("pin_id").get<Id>());
     REQUIRE(pin != nullptr);
-    const Eigen::Vector2d projection = start.FindImage(pin->image_id)->camera.Project(VertexInWorld(start, pin->vertex));
+    const Eigen::Vector2d projection =
+        start.FindImage(pin->image_id)->camera.Project(VertexInWorld(start, pin->vertex));
     CHECK((Vec2(j.at("projection_px")) - projection).norm() == 0.0);
   }
   CHECK(reset_report.at("project") == nlohmann::json::parse(ProjectToJson(before)));
 }
 
-TEST_CASE("solver steps, vanishing points: N steps in the app are the fit with N iterations; Reset restores the start") {
+TEST_CASE(
+    "solver steps, vanishing points: N steps in the app are the fit with N iterations; Reset restores the start") {
   // The same fit (core's CalibrateFromVanishingLines) in both processes, through JSON's
   // round-trip doubles: equal to rounding.
   constexpr double kSameFitRelative = 1e-12;
@@ -420,13 +423,20 @@ TEST_CASE("solver steps, vanishing points: N steps in the app are the fit with N
   VpCalibrationOptions budget = CalibrationOptionsFor(image);
   budget.refit_without_outliers = false;
   budget.record_joint_trace = true;
+  // The window's default start: the fit's answer moved off by the amount the report states.
+  REQUIRE(steps.at("start").get<std::string>() == "perturbed");
+  const VpCalibrationSummary answer = CalibrateFromVanishingLines(segments, budget);
+  REQUIRE(answer.IsUsable());
+  budget = PerturbVpStart(answer, budget, steps.at("perturbation").get<double>());
   budget.max_joint_iterations = kSteps;
   const VpCalibrationSummary once = CalibrateFromVanishingLines(segments, budget);
   REQUIRE(once.IsUsable());
   budget.max_joint_iterations = 0;
   const VpCalibrationSummary start = CalibrateFromVanishingLines(segments, budget);
   REQUIRE(start.IsUsable());
-  const auto same = [&](double a, double b) { return std::abs(a - b) <= kSameFitRelative * std::max(1.0, std::abs(b)); };
+  const auto same = [&](double a, double b) {
+    return std::abs(a - b) <= kSameFitRelative * std::max(1.0, std::abs(b));
+  };
   CHECK(same(vp.at("focal_px").get<double>(), once.focal_px));
   CHECK((Mat3(vp.at("cam_from_world_rotation")) - once.cam_from_world_rotation).norm() <= kSameFitRelative);
   // f per step: the start's, then each step's.
@@ -494,8 +504,9 @@ Project TwoViewMatchesProject(const SyntheticScene& scene, double noise_px = 0.7
   second.height_px = second_camera.height_px;
   second.camera_calibrated = true;
   p.images.push_back(second);
-  for (const auto& [size, translation] : {std::pair<Eigen::Vector3d, Eigen::Vector3d>{{1.5, 1.0, 1.2}, {1.0, -3.0, 0.0}},
-                                          std::pair<Eigen::Vector3d, Eigen::Vector3d>{{2.0, 1.5, 1.0}, {0.5, 0.5, 3.0}}}) {
+  for (const auto& [size, translation] :
+       {std::pair<Eigen::Vector3d, Eigen::Vector3d>{{1.5, 1.0, 1.2}, {1.0, -3.0, 0.0}},
+        std::pair<Eigen::Vector3d, Eigen::Vector3d>{{2.0, 1.5, 1.0}, {0.5, 0.5, 3.0}}}) {
     PrimitiveShape shape = MakeBox(kNoId, size);
     shape.translation = translation;
     Id id = kNoId;
@@ -570,6 +581,12 @@ TEST_CASE("solver steps, two views: N steps in the app are the refinement of F w
   FundamentalOptions budget;
   budget.use_ransac = false;
   budget.record_refine_trace = true;
+  // The window's default start: the refined F moved off by the amount the report states.
+  REQUIRE(steps.at("start").get<std::string>() == "perturbed");
+  const FundamentalSummary answer = EstimateFundamentalMatrix(in_a, in_b, budget);
+  REQUIRE(answer.IsUsable());
+  budget.warm_start = true;
+  budget.warm_start_F = PerturbFundamental(answer.F, in_a, in_b, steps.at("perturbation").get<double>());
   budget.max_refine_iterations = kSteps;
   const FundamentalSummary once = EstimateFundamentalMatrix(in_a, in_b, budget);
   REQUIRE(once.IsUsable());
@@ -599,10 +616,10 @@ TEST_CASE("solver steps, two views: N steps in the app are the refinement of F w
   }
   CHECK(drawn == 6);
 
-  const nlohmann::json reset_report = RenderScript(
-      dir, path, "two_view_reset",
-      "frames 3\ncommand teach steps on\ncommand teach subject two-view\ncommand teach second-image 1\n"
-      "command teach step\ncommand teach step\ncommand teach reset\nframes 2\n");
+  const nlohmann::json reset_report =
+      RenderScript(dir, path, "two_view_reset",
+                   "frames 3\ncommand teach steps on\ncommand teach subject two-view\ncommand teach second-image 1\n"
+                   "command teach step\ncommand teach step\ncommand teach reset\nframes 2\n");
   const nlohmann::json& reset = reset_report.at("teach").at("steps").at("two_view");
   CHECK(reset.at("steps").get<int>() == 0);
   CHECK(reset.at("trace").empty());
@@ -793,7 +810,8 @@ TEST_CASE("screenshots of each teach overlay") {
   fs::remove(steps_3d);
   r = shot(street, "teach-steps",
            "frames 3\ncommand teach steps on\ncommand teach step\ncommand teach step\ncommand teach residual-scale 4\n"
-           "frames 2\ncommand export-view 3d 960x540 " + steps_3d + "\nframes 2");
+           "frames 2\ncommand export-view 3d 960x540 " +
+               steps_3d + "\nframes 2");
   const nlohmann::json& steps = r.at("teach").at("steps");
   REQUIRE(steps.at("steps").get<int>() == 2);
   // With spatial constraints (the augmented Lagrangian's rounds) too, the app's steps are the
@@ -816,14 +834,14 @@ TEST_CASE("screenshots of each teach overlay") {
           1e-12 * std::max(1.0, std::abs(once.constraints[i].residual)));
     CHECK(c.at("satisfied").get<bool>() == once.constraints[i].satisfied);
   }
-  // The vanishing-point fit stepped on the Leuven photo (two steps from its closed form), and
-  // the two-view refinement on the synthetic pair with noisy pins (one step from 8-point).
+  // The vanishing-point fit stepped on the Leuven photo and the two-view refinement on the
+  // synthetic pair with noisy pins, each one step from the default start (the answer moved off
+  // by 20 %), the residuals at the scale stepping chose.
   r = shot(leuven, "teach-steps-vp",
-           "frames 3\ncommand teach steps on\ncommand teach subject vanishing\ncommand teach step\n"
-           "command teach step\ncommand teach residual-scale 50\nframes 3");
+           "frames 3\ncommand teach steps on\ncommand teach subject vanishing\ncommand teach step\nframes 3");
   REQUIRE(r.at("teach").at("steps").contains("vanishing"));
-  CHECK(r.at("teach").at("steps").at("vanishing").at("path").size() == 3u);
-  // 1.5 px clicks, so that the 8-point start is visibly off the refined F.
+  CHECK(r.at("teach").at("steps").at("vanishing").at("path").size() == 2u);
+  // 1.5 px clicks.
   SyntheticSceneOptions noisy;
   noisy.noise_px = 1.5;
   const SyntheticScene noisy_scene = MakeBoxScene(noisy);
