@@ -88,32 +88,37 @@ Eigen::Vector3d AimRay(const Camera& camera, const Eigen::Vector2d& aim_px) {
   return low.z() < aim.z() ? low : aim;
 }
 
-// Keeps the added box on the ground: its base corners and the first box's in one coplanar
-// constraint. The first box is the origin (its position kept), so its base is the ground the
-// photo's camera stands over. Returns the log note, or "" when there is no such base (the
-// first primitive is not a box standing at z = 0 with its pose kept, or a base corner is gone).
+// Keeps the added box on the ground plane z = 0: its base corners and the world's origin in
+// one coplanar constraint. The origin is the first box's corner 0, held there by its kept
+// position and rotation whatever its sizes; its other base corners are not read, since they
+// move with its width and depth (a ground constraint over them counted an unpinned depth as
+// seen, which then drifted below zero). Returns the log note, or "" when there is no such
+// origin (the first primitive is not a box standing at z = 0 with its pose kept) or a base
+// corner of the added box is gone or off the ground.
 std::string KeepOnGround(Project* project, Id added_id) {
   if (project->primitives.size() < 2) return {};
-  const Primitive& base = project->primitives.front();
+  const Primitive& first = project->primitives.front();
   const Primitive* added = project->FindPrimitive(added_id);
-  if (added == nullptr || added->id == base.id || base.shape.kind != PrimitiveKind::kBox ||
-      added->shape.kind != PrimitiveKind::kBox || !base.translation_locked || !base.rotation_locked ||
-      base.attached_to != kNoId) {
+  constexpr VertexId kOrigin = 0;                    // core/mesh/box.h: the corner at the box's translation
+  constexpr VertexId kBaseCorners[] = {0, 1, 2, 3};  // bit 2 (z) clear
+  if (added == nullptr || added->id == first.id || first.shape.kind != PrimitiveKind::kBox ||
+      added->shape.kind != PrimitiveKind::kBox || !first.translation_locked || !first.rotation_locked ||
+      first.attached_to != kNoId || !first.mesh.IsVertex(kOrigin) ||
+      std::abs(first.mesh.vertex(kOrigin).position.z()) > 1e-9) {
     return {};
   }
   Constraint c;
   c.kind = ConstraintKind::kCoplanar;
-  constexpr VertexId kBaseCorners[] = {0, 1, 2, 3};  // core/mesh/box.h: bit 2 (z) clear
-  for (const Primitive* p : {&base, added}) {
-    for (VertexId v : kBaseCorners) {
-      if (!p->mesh.IsVertex(v) || std::abs(p->mesh.vertex(v).position.z()) > 1e-9) return {};
-      c.vertices.push_back({p->id, v});
-    }
+  c.vertices.push_back({first.id, kOrigin});
+  for (VertexId v : kBaseCorners) {
+    if (!added->mesh.IsVertex(v) || std::abs(added->mesh.vertex(v).position.z()) > 1e-9) return {};
+    c.vertices.push_back({added->id, v});
   }
   c.id = project->NewId();
   project->constraints.push_back(c);
-  return "it stands on the ground: its base is kept coplanar with " + base.name + "'s (constraint " +
-         std::to_string(c.id) + "; remove it to lift the box)";
+  return "it stands on the ground: its base is kept on the plane z = 0 through the origin (" + first.name +
+         "'s corner 0; constraint " + std::to_string(c.id) + "; remove it to lift the box, e.g. when " + first.name +
+         " is not on the ground)";
 }
 
 // The largest "nice" length (1, 1.5, 2, 3, 4, 5, 6 or 8 times a power of ten) not above

@@ -271,12 +271,20 @@ TEST_CASE("issue 12: a new primitive stands on the ground under the aim, in fron
   double lowest = 1e300;
   for (facet::VertexId v = 0; v < box2.mesh.VertexIdEnd(); ++v) lowest = std::min(lowest, box2.mesh.vertex(v).position.z());
   CHECK(std::abs(lowest) < 1e-9);  // on the ground plane
-  // And kept there: its base and the first box's are one coplanar constraint (from one photo
-  // nothing else would stop a box whose foot no pin sees from floating or sinking).
+  // And kept there: its base and the world's origin are one coplanar constraint, the ground
+  // plane z = 0 (from one photo nothing else would stop a box whose foot no pin sees from
+  // floating or sinking). Issue 14: of the first box only its corner 0 (the origin, held by its
+  // kept position), not its base corners, which move with its width and depth.
   CHECK(first.constraints.empty());
   REQUIRE(second.constraints.size() == 1);
-  CHECK(second.constraints[0].kind == facet::ConstraintKind::kCoplanar);
-  CHECK(second.constraints[0].vertices.size() == 8);
+  const facet::Constraint& ground = second.constraints[0];
+  CHECK(ground.kind == facet::ConstraintKind::kCoplanar);
+  REQUIRE(ground.vertices.size() == 5);
+  CHECK(ground.vertices[0] == facet::VertexRef{second.primitives[0].id, 0});
+  for (size_t i = 1; i < 5; ++i) {
+    CHECK(ground.vertices[i].primitive_id == box2.id);
+    CHECK(box2.mesh.vertex(ground.vertices[i].vertex).position.z() == doctest::Approx(0.0).epsilon(1e-9));
+  }
   CHECK(ReportLog(r).find("it stands on the ground") != std::string::npos);
   // As large as it looks where it stands: its largest side a quarter of the photo's height at
   // the aim's depth, rounded down to a round length (by at most 1.5x: 1 -> 1.5 is the widest
