@@ -14,6 +14,7 @@
 
 #include "core/mesh/extrude.h"
 #include "core/mesh/operators.h"
+#include "core/solve/joint_solve.h"
 #include "core/solve/vertex_move.h"
 
 namespace facet::app {
@@ -489,18 +490,37 @@ bool AddConstraint(AppState* state, Constraint c, const std::string& label) {
   for (const Constraint& old : edited.constraints) {
     if (SameConstraint(old, c)) return Refuse(state, label, "the same constraint exists already");
   }
-  // The first known length takes over the scale from the first primitive's kept last
-  // dimension (AddPrimitiveEdit keeps it only so that a model without one has a scale); both
-  // would fix the scale, and they would disagree.
+  // The first known length the pins see takes over the scale from the first primitive's kept
+  // last dimension (AddPrimitiveEdit keeps it only so that a model without one has a scale);
+  // both would fix the scale, and they would disagree. A known length on an edge no pin sees
+  // (a box's depth when only its front is pinned) says nothing about the size of the rest:
+  // releasing the kept dimension for it left nothing to fix the scale, and the solve shrank
+  // the model to 1e-16 (issue 14). The kept dimension then stays, and the log says why.
   std::string released;
-  const bool first_length = std::none_of(edited.constraints.begin(), edited.constraints.end(),
-                                         [](const Constraint& old) { return old.kind == ConstraintKind::kDistance; });
-  if (c.kind == ConstraintKind::kDistance && first_length && !edited.primitives.empty()) {
+  // Before any pin is on the edge's primitives nothing is known yet: the length is taken to
+  // be what the user will pin (as before), not held against them.
+  auto pins_see = [&](const Constraint& length) {
+    const bool pinned = std::any_of(edited.pins.begin(), edited.pins.end(), [&](const Pin& pin) {
+      return pin.vertex.primitive_id == length.vertices[0].primitive_id ||
+             pin.vertex.primitive_id == length.vertices[1].primitive_id;
+    });
+    return !pinned || PinsSeeLength(edited, length.vertices[0], length.vertices[1]);
+  };
+  const bool scale_from_length =
+      std::any_of(edited.constraints.begin(), edited.constraints.end(),
+                  [&](const Constraint& old) { return old.kind == ConstraintKind::kDistance && pins_see(old); });
+  if (c.kind == ConstraintKind::kDistance && !scale_from_length && !edited.primitives.empty()) {
     Primitive& first = edited.primitives.front();
     const int last = NumShapeParams(first.shape.kind) - 1;
     if (last >= 0 && first.param_locked[last]) {
-      first.param_locked[last] = false;
-      released = first.name + "'s " + ShapeParamLabel(first.shape.kind, last) + " is no longer kept: the known length sets the scale";
+      const std::string kept = first.name + "'s " + ShapeParamLabel(first.shape.kind, last);
+      if (pins_see(c)) {
+        first.param_locked[last] = false;
+        released = kept + " is no longer kept: the known length sets the scale";
+      } else {
+        released = kept + " stays kept and sets the scale: no pin sees this edge's length (pin a vertex that moves "
+                   "with it for the known length to set the scale)";
+      }
     }
   }
   c.id = edited.NewId();

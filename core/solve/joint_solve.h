@@ -147,4 +147,10 @@ JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& op
 // or constraints contradict them). Names the primitive and the size; "" when usable.
 std::string WhySolvedModelDegenerate(const Project& before, const Project& solved);
 
+// Whether the pins see the length of the edge (a, b): it varies with a shape parameter that a
+// pin's vertex moves with. A known length on an edge they do not see (a box's depth when only
+// its front face is pinned) says nothing about the size of what they see, so it cannot take
+// the scale over from a kept dimension.
+bool PinsSeeLength(const Project& project, const VertexRef& a, const VertexRef& b);
+
 }  // namespace facet

@@ -1400,3 +1400,26 @@ double NaturalConstraintResidual(const JointProblem& problem, const ConstraintTe
 }
 
 }  // namespace facet::joint_solve_internal
+
+namespace facet {
+
+bool PinsSeeLength(const Project& project, const VertexRef& a, const VertexRef& b) {
+  using namespace joint_solve_internal;
+  if (project.FindVertex(a) == nullptr || project.FindVertex(b) == nullptr) return false;
+  Project pins_only = project;
+  pins_only.constraints.clear();
+  const ProjectIndex index(pins_only);
+  JointProblem scratch;
+  const UsedInputs used = SelectUsedInputs(pins_only, index, &scratch);
+  Constraint length;
+  length.kind = ConstraintKind::kDistance;
+  length.vertices = {a, b};
+  const std::vector<Eigen::Vector3d> x = {project.FindVertex(a)->position, project.FindVertex(b)->position};
+  const std::vector<char> own(2, 1);
+  for (const auto& [key, d] : ConstraintDisplacements(pins_only, index, length)) {
+    if (used.param_seen[key.first][key.second] && ConstraintSeesDisplacement(length, x, own, d)) return true;
+  }
+  return false;
+}
+
+}  // namespace facet
