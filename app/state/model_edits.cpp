@@ -518,7 +518,8 @@ bool AddConstraint(AppState* state, Constraint c, const std::string& label) {
         first.param_locked[last] = false;
         released = kept + " is no longer kept: the known length sets the scale";
       } else {
-        released = kept + " stays kept and sets the scale: no pin sees this edge's length (pin a vertex that moves "
+        released = kept +
+                   " stays kept and sets the scale: no pin sees this edge's length (pin a vertex that moves "
                    "with it for the known length to set the scale)";
       }
     }

@@ -350,7 +350,14 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
   Project solved;
   GeometrySolve(calibrated, solve_options, &summary.solve, &solved);
 
-  if (summary.solve.IsUsable()) {
+  std::string degenerate_geometry;
+  if (summary.solve.IsUsable()) degenerate_geometry = WhySolvedModelDegenerate(edited, solved);
+  if (!degenerate_geometry.empty()) {
+    // Its linear start or its steps took a size to zero or below: no result (issue 14).
+    *updated = edited;
+    summary.ok = false;
+    summary.messages.push_back("Solve: " + degenerate_geometry + "; the model is unchanged");
+  } else if (summary.solve.IsUsable()) {
     *updated = std::move(solved);
   } else {
     // Nothing to do keeps the calibrated cameras; a failure leaves the whole project as the
