@@ -439,6 +439,76 @@ TEST_CASE("joint solve: a dimension no pin sees is held at its value, solve afte
   }
 }
 
+// Issue 14: the ground constraint Add box makes reads the first box's four base corners. Its
+// residual was taken to see the first box's depth (the back corners move with it) although
+// they only slide within the ground plane; with only the front face pinned and the focal
+// lengths free, the depth was then a parameter that the off-plane residual of the second box
+// pulled towards zero and below, solve after solve (an unsaveable project). Now a constraint
+// sees a parameter only when its residual varies with it where the constraint holds.
+TEST_CASE("joint solve: a ground constraint over a box's base does not free its unpinned depth") {
+  Scene s = MakeScene(2, 2, 1.0, 0.5);
+  Project p = s.truth;
+  std::vector<Pin> kept;  // box 0: its front face only; box 1: its top only (it needs the ground)
+  for (const Pin& pin : p.pins) {
+    const bool box0 = pin.vertex.primitive_id == s.boxes[0];
+    if (box0 ? (pin.vertex.vertex & 2) == 0 : (pin.vertex.vertex & 4) != 0) kept.push_back(pin);
+  }
+  p.pins = kept;
+  for (Image& image : p.images) image.focal_locked = false;
+  Constraint ground;
+  ground.id = p.NewId();
+  ground.kind = ConstraintKind::kCoplanar;
+  for (Id box : s.boxes) {
+    for (VertexId v : {0u, 1u, 2u, 3u}) ground.vertices.push_back({box, v});
+  }
+  p.constraints.push_back(ground);
+  // Box 1 starts off the ground, tilted, as an edit leaves it: the constraint does not hold yet.
+  p.primitives[1].rotation_locked = false;
+  p.primitives[1].shape.translation.z() += 0.3;
+  p.primitives[1].shape.rotation = Eigen::Vector3d(0.05, -0.03, 0.0);
+  RefreshAllPrimitives(&p);
+  const double depth = p.primitives[0].shape.params(1);
+  for (int round = 0; round < 5; ++round) {
+    Project solved;
+    const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
+    INFO("round " << round << ": " << summary.message);
+    REQUIRE(summary.IsUsable());
+    CHECK(solved.primitives[0].shape.params(1) == depth);  // held: exactly
+    bool named = false;
+    for (const std::string& u : summary.undetermined)
+      named = named || (u.find("'box0'") != std::string::npos && u.find("(parameter 1) is free") != std::string::npos);
+    CHECK(named);
+    // The ground holds: box 1's base corners at z = 0 (box 0's base) to 1e-6 of the model.
+    for (VertexId v : {0u, 1u, 2u, 3u}) CHECK(std::abs(solved.primitives[1].mesh.vertex(v).position.z()) < 1e-6);
+    p = solved;
+    p.pins[round % p.pins.size()].uv_px += Eigen::Vector2d(2.7, -1.4);  // the user nudges a pin
+  }
+}
+
+// Issue 14: pins that put a box's +x face on the other side of its -x face ask for a
+// negative width. The solve's optimum is no model: it fails by name and changes nothing.
+TEST_CASE("joint solve: a size the pins would take below zero fails by name, the model unchanged") {
+  testing::SyntheticScene s = testing::MakeBoxScene({});
+  Project p = s.project;
+  p.images[0].pose_locked = true;
+  const Primitive& box = p.primitives[0];
+  const double width = box.shape.params(0);
+  for (Pin& pin : p.pins) {
+    if ((pin.vertex.vertex & 1) == 0) continue;
+    Eigen::Vector3d x = box.mesh.vertex(pin.vertex.vertex).position;
+    x.x() -= 1.5 * width;  // the +x corners half a width beyond -x
+    pin.uv_px = p.images[0].camera.Project(x);
+  }
+  Project solved;
+  const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
+  MESSAGE(summary.message);
+  CHECK(summary.termination == SolverTermination::kFailed);
+  CHECK(summary.degenerate);
+  CHECK(summary.message.find("Size x of 'box' would go from 4 to") != std::string::npos);
+  CHECK(summary.message.find("model is unchanged") != std::string::npos);
+  CHECK(solved == p);
+}
+
 TEST_CASE("joint solve: a failing solve leaves the project unchanged and says why") {
   testing::SyntheticScene s = testing::MakeBoxScene({});
   SUBCASE("vertex behind the camera at the start") {

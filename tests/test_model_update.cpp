@@ -393,6 +393,38 @@ TEST_CASE("a failed solve leaves the project as the edit made it") {
   }
 }
 
+// Issue 14: pins that put the box's +x corners beyond its -x face ask for a negative width.
+// Whichever step gets there (the geometry solve's linear start or the joint solve), the
+// update fails by name and the project stays as the edit made it.
+TEST_CASE("a size the pins would take below zero: the update fails by name, the project as edited") {
+  SyntheticScene scene = MakeBoxScene();
+  Project& edited = scene.project;
+  const Primitive& box = edited.primitives[0];
+  for (Pin& pin : edited.pins) {
+    if ((pin.vertex.vertex & 1) == 0) continue;
+    Eigen::Vector3d x = box.mesh.vertex(pin.vertex.vertex).position;
+    x.x() -= 1.5 * box.shape.params(0);
+    pin.uv_px = scene.true_camera.Project(x);
+  }
+  for (const bool warm_start : {false, true}) {
+    CAPTURE(warm_start);
+    ModelUpdateOptions options;
+    options.calibrate = false;
+    options.solve.warm_start = warm_start;
+    Project updated;
+    const ModelUpdateSummary summary = UpdateModel(edited, options, &updated);
+    INFO(Messages(summary));
+    CHECK_FALSE(summary.ok);
+    bool named = false;
+    for (const std::string& m : summary.messages) {
+      named = named || (m.find("Size x of 'box' would go from 4 to") != std::string::npos &&
+                        m.find("the model is unchanged") != std::string::npos);
+    }
+    CHECK(named);
+    CHECK(updated == edited);
+  }
+}
+
 TEST_CASE("nothing to solve is not a failure: the calibrated cameras are kept") {
   SyntheticScene scene = MakeBoxScene();
   Perturb(&scene, 1.0);

@@ -14,6 +14,7 @@
 
 #include "core/mesh/extrude.h"
 #include "core/mesh/operators.h"
+#include "core/solve/joint_solve.h"
 #include "core/solve/vertex_move.h"
 
 namespace facet::app {
@@ -88,32 +89,37 @@ Eigen::Vector3d AimRay(const Camera& camera, const Eigen::Vector2d& aim_px) {
   return low.z() < aim.z() ? low : aim;
 }
 
-// Keeps the added box on the ground: its base corners and the first box's in one coplanar
-// constraint. The first box is the origin (its position kept), so its base is the ground the
-// photo's camera stands over. Returns the log note, or "" when there is no such base (the
-// first primitive is not a box standing at z = 0 with its pose kept, or a base corner is gone).
+// Keeps the added box on the ground plane z = 0: its base corners and the world's origin in
+// one coplanar constraint. The origin is the first box's corner 0, held there by its kept
+// position and rotation whatever its sizes; its other base corners are not read, since they
+// move with its width and depth (a ground constraint over them counted an unpinned depth as
+// seen, which then drifted below zero). Returns the log note, or "" when there is no such
+// origin (the first primitive is not a box standing at z = 0 with its pose kept) or a base
+// corner of the added box is gone or off the ground.
 std::string KeepOnGround(Project* project, Id added_id) {
   if (project->primitives.size() < 2) return {};
-  const Primitive& base = project->primitives.front();
+  const Primitive& first = project->primitives.front();
   const Primitive* added = project->FindPrimitive(added_id);
-  if (added == nullptr || added->id == base.id || base.shape.kind != PrimitiveKind::kBox ||
-      added->shape.kind != PrimitiveKind::kBox || !base.translation_locked || !base.rotation_locked ||
-      base.attached_to != kNoId) {
+  constexpr VertexId kOrigin = 0;                    // core/mesh/box.h: the corner at the box's translation
+  constexpr VertexId kBaseCorners[] = {0, 1, 2, 3};  // bit 2 (z) clear
+  if (added == nullptr || added->id == first.id || first.shape.kind != PrimitiveKind::kBox ||
+      added->shape.kind != PrimitiveKind::kBox || !first.translation_locked || !first.rotation_locked ||
+      first.attached_to != kNoId || !first.mesh.IsVertex(kOrigin) ||
+      std::abs(first.mesh.vertex(kOrigin).position.z()) > 1e-9) {
     return {};
   }
   Constraint c;
   c.kind = ConstraintKind::kCoplanar;
-  constexpr VertexId kBaseCorners[] = {0, 1, 2, 3};  // core/mesh/box.h: bit 2 (z) clear
-  for (const Primitive* p : {&base, added}) {
-    for (VertexId v : kBaseCorners) {
-      if (!p->mesh.IsVertex(v) || std::abs(p->mesh.vertex(v).position.z()) > 1e-9) return {};
-      c.vertices.push_back({p->id, v});
-    }
+  c.vertices.push_back({first.id, kOrigin});
+  for (VertexId v : kBaseCorners) {
+    if (!added->mesh.IsVertex(v) || std::abs(added->mesh.vertex(v).position.z()) > 1e-9) return {};
+    c.vertices.push_back({added->id, v});
   }
   c.id = project->NewId();
   project->constraints.push_back(c);
-  return "it stands on the ground: its base is kept coplanar with " + base.name + "'s (constraint " +
-         std::to_string(c.id) + "; remove it to lift the box)";
+  return "it stands on the ground: its base is kept on the plane z = 0 through the origin (" + first.name +
+         "'s corner 0; constraint " + std::to_string(c.id) + "; remove it to lift the box, e.g. when " + first.name +
+         " is not on the ground)";
 }
 
 // The largest "nice" length (1, 1.5, 2, 3, 4, 5, 6 or 8 times a power of ten) not above
@@ -484,18 +490,38 @@ bool AddConstraint(AppState* state, Constraint c, const std::string& label) {
   for (const Constraint& old : edited.constraints) {
     if (SameConstraint(old, c)) return Refuse(state, label, "the same constraint exists already");
   }
-  // The first known length takes over the scale from the first primitive's kept last
-  // dimension (AddPrimitiveEdit keeps it only so that a model without one has a scale); both
-  // would fix the scale, and they would disagree.
+  // The first known length the pins see takes over the scale from the first primitive's kept
+  // last dimension (AddPrimitiveEdit keeps it only so that a model without one has a scale);
+  // both would fix the scale, and they would disagree. A known length on an edge no pin sees
+  // (a box's depth when only its front is pinned) says nothing about the size of the rest:
+  // releasing the kept dimension for it left nothing to fix the scale, and the solve shrank
+  // the model to 1e-16 (issue 14). The kept dimension then stays, and the log says why.
   std::string released;
-  const bool first_length = std::none_of(edited.constraints.begin(), edited.constraints.end(),
-                                         [](const Constraint& old) { return old.kind == ConstraintKind::kDistance; });
-  if (c.kind == ConstraintKind::kDistance && first_length && !edited.primitives.empty()) {
+  // Before any pin is on the edge's primitives nothing is known yet: the length is taken to
+  // be what the user will pin (as before), not held against them.
+  auto pins_see = [&](const Constraint& length) {
+    const bool pinned = std::any_of(edited.pins.begin(), edited.pins.end(), [&](const Pin& pin) {
+      return pin.vertex.primitive_id == length.vertices[0].primitive_id ||
+             pin.vertex.primitive_id == length.vertices[1].primitive_id;
+    });
+    return !pinned || PinsSeeLength(edited, length.vertices[0], length.vertices[1]);
+  };
+  const bool scale_from_length =
+      std::any_of(edited.constraints.begin(), edited.constraints.end(),
+                  [&](const Constraint& old) { return old.kind == ConstraintKind::kDistance && pins_see(old); });
+  if (c.kind == ConstraintKind::kDistance && !scale_from_length && !edited.primitives.empty()) {
     Primitive& first = edited.primitives.front();
     const int last = NumShapeParams(first.shape.kind) - 1;
     if (last >= 0 && first.param_locked[last]) {
-      first.param_locked[last] = false;
-      released = first.name + "'s " + ShapeParamLabel(first.shape.kind, last) + " is no longer kept: the known length sets the scale";
+      const std::string kept = first.name + "'s " + ShapeParamLabel(first.shape.kind, last);
+      if (pins_see(c)) {
+        first.param_locked[last] = false;
+        released = kept + " is no longer kept: the known length sets the scale";
+      } else {
+        released = kept +
+                   " stays kept and sets the scale: no pin sees this edge's length (pin a vertex that moves "
+                   "with it for the known length to set the scale)";
+      }
     }
   }
   c.id = edited.NewId();

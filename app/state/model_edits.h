@@ -50,10 +50,13 @@ NewPrimitivePlacement PlaceNewPrimitive(const Project& project, const PrimitiveS
 // K_create: adds a primitive of `kind`, on top of `base_id` (a box) when given, else where
 // PlaceNewPrimitive puts it in the active image (aimed at `aim_px`, image px), and selects it.
 // The first primitive of a project gets its last dimension locked (a known length for scale).
-// A later box placed on the ground is kept there: its base and the first box's (the origin,
-// on the ground) are one coplanar constraint, since from one photo a box whose foot no pin
-// sees (or whose depth along the view ray nothing fixes) could otherwise float or sink; the
-// log says so, and removing the constraint lifts it.
+// A later box placed on the ground is kept there: its base corners and the world's origin
+// (the first box's corner 0, which its kept position holds at z = 0) are one coplanar
+// constraint, i.e. its base on the ground plane z = 0, since from one photo a box whose foot
+// no pin sees (or whose depth along the view ray nothing fixes) could otherwise float or
+// sink; the log says so, and removing the constraint lifts it. The first box's other corners
+// are not read: they would tie the new box to that box's size (its depth, on a box pinned on
+// its front only, drifted to zero and below).
 bool AddPrimitiveEdit(AppState* state, PrimitiveKind kind, Id base_id,
                       const std::optional<Eigen::Vector2d>& aim_px = std::nullopt);
 

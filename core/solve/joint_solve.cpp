@@ -17,6 +17,7 @@
 #include "core/solve/joint_solve_internal.h"
 #include "core/solve/joint_solve_steps.h"
 #include "core/solve/scene_solve.h"
+#include "core/solve/vertex_move.h"
 #include "core/util/eigen_decompositions.h"
 
 namespace facet {
@@ -1016,10 +1017,39 @@ JointSolveSummary SolveJointTraced(const Project& project, const JointSolveOptio
   }
   if (start != &project) *solved = *start;
   WriteState(problem, state, solved);
+  if (const std::string degenerate = WhySolvedModelDegenerate(project, *solved); !degenerate.empty()) {
+    *solved = project;
+    summary.undetermined.clear();
+    summary.degenerate = true;
+    return finish(SolverTermination::kFailed, degenerate + "; the model is unchanged");
+  }
   std::ostringstream text;
   text << "RMS " << summary.reprojection_rms_px << " px over " << summary.pins.size() << " pins after "
        << summary.iterations << " iterations";
   return finish(budget_used ? SolverTermination::kMaxIterations : SolverTermination::kConverged, text.str());
+}
+
+std::string WhySolvedModelDegenerate(const Project& before, const Project& solved) {
+  // A solve that shrinks a size a millionfold has found no dimension but the null direction
+  // of an unfixed scale (sizes of 1e-16 were seen with 15.6 px pin RMS).
+  constexpr double kCollapseRatio = 1e-6;
+  for (const Primitive& p : solved.primitives) {
+    const Primitive* old = before.FindPrimitive(p.id);
+    if (old == nullptr || old->shape.kind != p.shape.kind) continue;
+    for (int k = 0; k < ShapeParamCount(p.shape.kind); ++k) {
+      const double was = old->shape.params(k), now = p.shape.params(k);
+      if (now == was) continue;
+      const bool nonpositive = !(now > 0.0);
+      if (!nonpositive && !(was > 0.0 && now < kCollapseRatio * was)) continue;
+      char text[160];
+      std::snprintf(text, sizeof(text), "%s of '%s' would go from %.4g to %.4g", ShapeParamLabel(p.shape.kind, k),
+                    p.name.c_str(), was, now);
+      return std::string(nonpositive ? "a size would be zero or negative: " : "the model collapsed: ") + text +
+             (nonpositive ? " (a size must stay above 0)"
+                          : " (nothing the pins see fixes the scale, or the constraints contradict the pins)");
+    }
+  }
+  return "";
 }
 
 }  // namespace facet

@@ -115,6 +115,9 @@ struct JointSolveSummary : SolverSummary {
   int num_parameters = 0;
   double reprojection_rms_px = 0.0;  // over the pins that took part
   double reprojection_max_px = 0.0;
+  // The solve converged to a degenerate model (WhySolvedModelDegenerate); termination is then
+  // kFailed and the message names the size.
+  bool degenerate = false;
   std::vector<PinDiagnostic> pins;                // project.pins order
   std::vector<ImageDiagnostic> images;            // calibrated images with pins
   std::vector<ConstraintDiagnostic> constraints;  // project.constraints order
@@ -136,5 +139,18 @@ struct JointSolveSummary : SolverSummary {
 // Solves and writes the result to *solved (cameras, primitive shapes and cached vertex
 // positions). When the summary is not usable, *solved is an unchanged copy of `project`.
 JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& options, Project* solved);
+
+// Why a solved model is no answer though its solve converged (issue 14: degenerate geometry
+// gives a named error, never a number that looks like an answer): a primitive's size that
+// `solved` changed to zero or below, or shrank to nothing (below 1e-6 of its value in
+// `before`: the model collapsing towards a point when nothing the pins see fixes its scale,
+// or constraints contradict them). Names the primitive and the size; "" when usable.
+std::string WhySolvedModelDegenerate(const Project& before, const Project& solved);
+
+// Whether the pins see the length of the edge (a, b): it varies with a shape parameter that a
+// pin's vertex moves with. A known length on an edge they do not see (a box's depth when only
+// its front face is pinned) says nothing about the size of what they see, so it cannot take
+// the scale over from a kept dimension.
+bool PinsSeeLength(const Project& project, const VertexRef& a, const VertexRef& b);
 
 }  // namespace facet

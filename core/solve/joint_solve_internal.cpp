@@ -7,6 +7,8 @@
 #include <sstream>
 #include <utility>
 
+#include <Eigen/Eigenvalues>
+
 #include "core/geometry/camera.h"
 #include "core/geometry/cross_product_matrix.h"
 #include "core/mesh/primitives.h"
@@ -634,25 +636,146 @@ struct ProjectIndex {
 struct UsedInputs {
   std::vector<int> pins, constraints;
   std::vector<char> image_used, primitive_used;
-  // Per project primitive and shape parameter: whether a used pin's or constraint's vertex
-  // moves with it (with attachment, a top's footprint is its root's and its bases' heights
-  // raise it).
+  // Per project primitive and shape parameter: whether a used pin's vertex moves with it, or a
+  // used constraint's residual varies with it (with attachment, a top's footprint is its
+  // root's and its bases' heights raise it).
   std::vector<std::array<bool, kMaxPrimitiveParams>> param_seen;
 };
+
+// How a shape parameter moves the vertices of one constraint: per vertex its world
+// displacement per unit of the parameter.
+using ParamKey = std::pair<int, int>;  // project primitive, parameter
+using Displacements = std::map<ParamKey, std::vector<Eigen::Vector3d>>;
+
+Displacements ConstraintDisplacements(const Project& project, const ProjectIndex& index, const Constraint& c) {
+  Displacements out;
+  const size_t n = c.vertices.size();
+  for (size_t i = 0; i < n; ++i) {
+    const int p = index.primitive_lookup.at(c.vertices[i].primitive_id);
+    const std::vector<int> chain = BaseChain(project, p);
+    const int root = chain.empty() ? p : chain.back();
+    const Eigen::Matrix3d r = RotationFromAngleAxis(project.primitives[root].shape.rotation);
+    auto add = [&](int primitive, int k, const Eigen::Vector3d& d) {
+      std::vector<Eigen::Vector3d>& v = out[{primitive, k}];
+      if (v.empty()) v.assign(n, Eigen::Vector3d::Zero());
+      v[i] += d;
+    };
+    for (int b : chain) add(b, 2, r.col(2));
+    const ParamCoefficients coefficients = project.FindVertex(c.vertices[i])->local.Collapsed();
+    for (int k = 0; k < kMaxPrimitiveParams; ++k) {
+      if (!coefficients.col(k).isZero()) add(!chain.empty() && k < 2 ? root : p, k, r * coefficients.col(k));
+    }
+  }
+  return out;
+}
+
+// Whether the constraint's residual varies, to first order at a configuration that meets it,
+// with a parameter that moves its vertices by `d` (per vertex). Moving vertices within what
+// the constraint allows does not count: the back corners of a box's base slide within the
+// ground plane as its depth changes, so a ground constraint over them does not see the depth
+// (it did, and with a residual that varies off the plane it pulled an unpinned depth to zero
+// and below, solve after solve). The plane (line) is fitted to the constraint's vertices on
+// the primitives the parameter moves (`own`, when they span one), since they meet it however
+// far the others are off it before the solve; else to all of them.
+bool ConstraintSeesDisplacement(const Constraint& c, const std::vector<Eigen::Vector3d>& x,
+                                const std::vector<char>& own, const std::vector<Eigen::Vector3d>& d) {
+  // Relative to the largest displacement.
+  constexpr double kTolerance = 1e-6;
+  const size_t n = x.size();
+  double largest = 0.0;
+  for (const Eigen::Vector3d& v : d) largest = std::max(largest, v.norm());
+  if (!(largest > 0.0)) return false;
+  const double tol = kTolerance * largest;
+  auto spread = [&](const std::vector<Eigen::Vector3d>& v) {
+    double s = 0.0;
+    for (size_t i = 1; i < v.size(); ++i) s = std::max(s, (v[i] - v[0]).norm());
+    return s;
+  };
+  // Principal axes of a subset of the vertices, and whether it spans `dims` dimensions.
+  auto fit = [&](bool only_own, int dims, Eigen::Matrix3d* axes) {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    int count = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if (only_own && !own[i]) continue;
+      centroid += x[i];
+      ++count;
+    }
+    if (count <= dims) return false;
+    centroid /= count;
+    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    for (size_t i = 0; i < n; ++i) {
+      if (!only_own || own[i]) scatter += (x[i] - centroid) * (x[i] - centroid).transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+    *axes = eig.eigenvectors();
+    const Eigen::Vector3d values = eig.eigenvalues();
+    return values(3 - dims) > 1e-12 * values(2);
+  };
+  Eigen::Matrix3d axes;
+  switch (c.kind) {
+    case ConstraintKind::kCoplanar:
+    case ConstraintKind::kCollinear: {
+      const int dims = c.kind == ConstraintKind::kCoplanar ? 2 : 1;
+      if (!fit(true, dims, &axes) && !fit(false, dims, &axes)) return true;
+      // Motion out of the plane (off the line) counts unless every vertex makes the same: the
+      // whole set moving.
+      std::vector<Eigen::Vector3d> off;
+      for (const Eigen::Vector3d& v : d) {
+        Eigen::Vector3d o = v;
+        for (int k = 3 - dims; k < 3; ++k) o -= axes.col(k).dot(v) * axes.col(k);
+        off.push_back(o);
+      }
+      return spread(off) > tol;
+    }
+    case ConstraintKind::kParallel:
+    case ConstraintKind::kPerpendicular:
+    case ConstraintKind::kEqualLength:
+    case ConstraintKind::kDistance:
+    case ConstraintKind::kAlongAxis:
+      // Edges: only a change of an edge vector counts (moving both ends alike does not).
+      for (size_t e = 0; e + 1 < n; e += 2) {
+        if ((d[e + 1] - d[e]).norm() > tol) return true;
+      }
+      return false;
+    case ConstraintKind::kFixedPoint:
+    case ConstraintKind::kEdgeOnImageLine: return true;
+  }
+  return true;
+}
+
+void MarkSeenByConstraint(const Project& project, const ProjectIndex& index, const Constraint& c, UsedInputs* used) {
+  std::vector<Eigen::Vector3d> x;
+  std::vector<int> primitive;
+  for (const VertexRef& v : c.vertices) {
+    x.push_back(project.FindVertex(v)->position);
+    primitive.push_back(index.primitive_lookup.at(v.primitive_id));
+  }
+  for (const auto& [key, d] : ConstraintDisplacements(project, index, c)) {
+    std::vector<char> own(x.size(), 0);
+    for (size_t i = 0; i < x.size(); ++i) {
+      if (d[i].isZero()) continue;
+      for (size_t j = 0; j < x.size(); ++j) own[j] = own[j] || primitive[j] == primitive[i];
+    }
+    if (ConstraintSeesDisplacement(c, x, own, d)) used->param_seen[key.first][key.second] = true;
+  }
+}
 
 UsedInputs SelectUsedInputs(const Project& project, const ProjectIndex& index, JointProblem* problem) {
   UsedInputs used;
   used.image_used.assign(project.images.size(), 0);
   used.primitive_used.assign(project.primitives.size(), 0);
   used.param_seen.assign(project.primitives.size(), {false, false, false, false});
-  auto use_vertex = [&](const VertexRef& ref) {
+  // A pin sees every parameter that moves its vertex; a constraint only those its residual
+  // varies with (MarkSeenByConstraint).
+  auto use_vertex = [&](const VertexRef& ref, bool by_pin) {
     const int p = index.primitive_lookup.at(ref.primitive_id);
     used.primitive_used[p] = 1;
     const std::vector<int> chain = BaseChain(project, p);
     for (int b : chain) {
       used.primitive_used[b] = 1;
-      used.param_seen[b][2] = true;
+      if (by_pin) used.param_seen[b][2] = true;
     }
+    if (!by_pin) return;
     const ParamCoefficients coefficients = project.FindVertex(ref)->local.Collapsed();
     for (int k = 0; k < kMaxPrimitiveParams; ++k) {
       if (!coefficients.col(k).isZero()) used.param_seen[!chain.empty() && k < 2 ? chain.back() : p][k] = true;
@@ -677,7 +800,7 @@ UsedInputs SelectUsedInputs(const Project& project, const ProjectIndex& index, J
     }
     used.pins.push_back(static_cast<int>(i));
     used.image_used[im] = 1;
-    use_vertex(pin.vertex);
+    use_vertex(pin.vertex, true);
   }
   for (size_t i = 0; i < project.constraints.size(); ++i) {
     const Constraint& c = project.constraints[i];
@@ -697,7 +820,8 @@ UsedInputs SelectUsedInputs(const Project& project, const ProjectIndex& index, J
     }
     used.constraints.push_back(static_cast<int>(i));
     if (c.kind == ConstraintKind::kEdgeOnImageLine) used.image_used[index.FindImage(c.image_id)] = 1;
-    for (const VertexRef& v : c.vertices) use_vertex(v);
+    for (const VertexRef& v : c.vertices) use_vertex(v, false);
+    MarkSeenByConstraint(project, index, c, &used);
   }
   return used;
 }
@@ -1276,3 +1400,26 @@ double NaturalConstraintResidual(const JointProblem& problem, const ConstraintTe
 }
 
 }  // namespace facet::joint_solve_internal
+
+namespace facet {
+
+bool PinsSeeLength(const Project& project, const VertexRef& a, const VertexRef& b) {
+  using namespace joint_solve_internal;
+  if (project.FindVertex(a) == nullptr || project.FindVertex(b) == nullptr) return false;
+  Project pins_only = project;
+  pins_only.constraints.clear();
+  const ProjectIndex index(pins_only);
+  JointProblem scratch;
+  const UsedInputs used = SelectUsedInputs(pins_only, index, &scratch);
+  Constraint length;
+  length.kind = ConstraintKind::kDistance;
+  length.vertices = {a, b};
+  const std::vector<Eigen::Vector3d> x = {project.FindVertex(a)->position, project.FindVertex(b)->position};
+  const std::vector<char> own(2, 1);
+  for (const auto& [key, d] : ConstraintDisplacements(pins_only, index, length)) {
+    if (used.param_seen[key.first][key.second] && ConstraintSeesDisplacement(length, x, own, d)) return true;
+  }
+  return false;
+}
+
+}  // namespace facet

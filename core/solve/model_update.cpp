@@ -350,7 +350,14 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
   Project solved;
   GeometrySolve(calibrated, solve_options, &summary.solve, &solved);
 
-  if (summary.solve.IsUsable()) {
+  std::string degenerate_geometry;
+  if (summary.solve.IsUsable()) degenerate_geometry = WhySolvedModelDegenerate(edited, solved);
+  if (!degenerate_geometry.empty()) {
+    // Its linear start or its steps took a size to zero or below: no result (issue 14).
+    *updated = edited;
+    summary.ok = false;
+    summary.messages.push_back("Solve: " + degenerate_geometry + "; the model is unchanged");
+  } else if (summary.solve.IsUsable()) {
     *updated = std::move(solved);
   } else {
     // Nothing to do keeps the calibrated cameras; a failure leaves the whole project as the
@@ -375,10 +382,22 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
     summary.joint = SolveJoint(*updated, joint_options, &joint_solved);
     if (summary.joint.IsUsable()) {
       *updated = std::move(joint_solved);
+    } else if (summary.joint.degenerate) {
+      // Its sizes went to zero or below: the model keeps the state the edit left it in.
+      *updated = edited;
+      summary.ok = false;
+      summary.messages.push_back("Joint solve: " + summary.joint.message);
     } else if (summary.joint.termination != SolverTermination::kNothingToSolve) {
       // The geometry solve's result stands; the joint refinement says why it did not apply.
       summary.messages.push_back("Joint solve: " + summary.joint.message);
     }
+  }
+  // Whichever step gave it, a model with a size at or below zero or shrunk to nothing is no
+  // result (issue 14): the project stays as the edit made it.
+  if (const std::string degenerate = WhySolvedModelDegenerate(edited, *updated); !degenerate.empty()) {
+    *updated = edited;
+    summary.ok = false;
+    summary.messages.push_back("Solve: " + degenerate + "; the model is unchanged");
   }
   summary.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return summary;

@@ -2,6 +2,7 @@
 // each item replayed through the input scripts on the real application offscreen.
 #include <doctest/doctest.h>
 
+#include <sstream>
 #include <string>
 
 #include "tests/app/app_test_util.h"
@@ -271,12 +272,20 @@ TEST_CASE("issue 12: a new primitive stands on the ground under the aim, in fron
   double lowest = 1e300;
   for (facet::VertexId v = 0; v < box2.mesh.VertexIdEnd(); ++v) lowest = std::min(lowest, box2.mesh.vertex(v).position.z());
   CHECK(std::abs(lowest) < 1e-9);  // on the ground plane
-  // And kept there: its base and the first box's are one coplanar constraint (from one photo
-  // nothing else would stop a box whose foot no pin sees from floating or sinking).
+  // And kept there: its base and the world's origin are one coplanar constraint, the ground
+  // plane z = 0 (from one photo nothing else would stop a box whose foot no pin sees from
+  // floating or sinking). Issue 14: of the first box only its corner 0 (the origin, held by its
+  // kept position), not its base corners, which move with its width and depth.
   CHECK(first.constraints.empty());
   REQUIRE(second.constraints.size() == 1);
-  CHECK(second.constraints[0].kind == facet::ConstraintKind::kCoplanar);
-  CHECK(second.constraints[0].vertices.size() == 8);
+  const facet::Constraint& ground = second.constraints[0];
+  CHECK(ground.kind == facet::ConstraintKind::kCoplanar);
+  REQUIRE(ground.vertices.size() == 5);
+  CHECK(ground.vertices[0] == facet::VertexRef{second.primitives[0].id, 0});
+  for (size_t i = 1; i < 5; ++i) {
+    CHECK(ground.vertices[i].primitive_id == box2.id);
+    CHECK(box2.mesh.vertex(ground.vertices[i].vertex).position.z() == doctest::Approx(0.0).epsilon(1e-9));
+  }
   CHECK(ReportLog(r).find("it stands on the ground") != std::string::npos);
   // As large as it looks where it stands: its largest side a quarter of the photo's height at
   // the aim's depth, rounded down to a round length (by at most 1.5x: 1 -> 1.5 is the widest
@@ -537,4 +546,65 @@ TEST_CASE("issue 12: a new box aimed at the ground near the camera is as large a
   // Every corner in front of the camera, at least half the aim's depth away.
   for (const Eigen::Vector3d& corner : BoxCorners(added))
     CHECK(camera.CamFromWorld(corner).z() >= 0.5 * aim_depth - 1e-9);
+}
+
+namespace {
+
+// The mesh edge of a box from corner a to corner b (either way).
+facet::EdgeId BoxEdge(const facet::PolyMesh& mesh, facet::VertexId a, facet::VertexId b) {
+  for (facet::EdgeId e = 0; e < mesh.EdgeIdEnd(); ++e) {
+    if (!mesh.IsEdge(e)) continue;
+    const facet::VertexId o = mesh.Origin(2 * e), d = mesh.Dest(2 * e);
+    if ((o == a && d == b) || (o == b && d == a)) return e;
+  }
+  return facet::kNoElement;
+}
+
+}  // namespace
+
+// Issue 14: a known length on a box's depth when only its front face is pinned took the scale
+// over from the kept height; nothing the pins see fixed it then, and the model shrank to
+// 1e-16. A known length no pin sees now leaves the kept height, and the log says why; one
+// that the pins see (the front's width) takes the scale over as before.
+TEST_CASE("issue 14: a known length no pin sees leaves the kept height; one they see takes the scale") {
+  TempDir dir("known_length_unseen");
+  SyntheticScene scene = MakeBoxScene();
+  facet::Project p = scene.project;
+  std::erase_if(p.pins, [](const facet::Pin& pin) { return (pin.vertex.vertex & 2) != 0; });  // front face only
+  facet::Primitive& box = p.primitives.front();
+  box.translation_locked = true;  // as the app's first box
+  REQUIRE(box.param_locked[2]);   // its height kept: the scale
+  const std::string path = dir / "front_pinned.facet";
+  REQUIRE(facet::SaveProject(p, path) == "");
+  const facet::EdgeId depth_edge = BoxEdge(box.mesh, 0, 2), width_edge = BoxEdge(box.mesh, 0, 1);
+  REQUIRE(depth_edge != facet::kNoElement);
+  REQUIRE(width_edge != facet::kNoElement);
+  auto run = [&](const std::string& name, facet::EdgeId edge, double length) {
+    std::ostringstream s;
+    s << "frames 2\ncommand select edge " << box.id << " " << edge << "\ncommand constrain length " << length
+      << "\nframes 2\ncommand save " << (dir / (name + ".facet")) << "\nframes 1\n";
+    const nlohmann::json r = RenderScript(dir, path, name, s.str());
+    return std::make_pair(ReportLog(r), LoadProjectFile(dir / (name + ".facet")));
+  };
+  {
+    const auto [log, model] = run("depth", depth_edge, 1.0);
+    INFO("log:\n" << log);
+    const facet::Primitive& solved = model.primitives.front();
+    CHECK(solved.param_locked[2]);
+    CHECK(log.find("stays kept and sets the scale: no pin sees this edge's length") != std::string::npos);
+    // The pins keep fixing the front at the kept height's scale (noise-free: to 1e-6).
+    CHECK(solved.shape.params(0) == doctest::Approx(scene.true_box.shape.params(0)).epsilon(1e-6));
+    CHECK(solved.shape.params(2) == scene.true_box.shape.params(2));
+    CHECK(solved.shape.params(1) == doctest::Approx(1.0).epsilon(1e-6));  // the typed depth
+  }
+  {
+    const double width = 2.0 * scene.true_box.shape.params(0);  // the model twice as large
+    const auto [log, model] = run("width", width_edge, width);
+    INFO("log:\n" << log);
+    const facet::Primitive& solved = model.primitives.front();
+    CHECK_FALSE(solved.param_locked[2]);
+    CHECK(log.find("is no longer kept: the known length sets the scale") != std::string::npos);
+    CHECK(solved.shape.params(0) == doctest::Approx(width).epsilon(1e-6));
+    CHECK(solved.shape.params(2) == doctest::Approx(2.0 * scene.true_box.shape.params(2)).epsilon(1e-6));
+  }
 }
