@@ -385,9 +385,9 @@ facet::Project PinTheBoxAndBasin(const DrawnLines& lines, const std::string& nam
                 Click(lines.view, pin.uv_px);
     }
   }
-  // The band box's depth is seen by nothing; with the focal lengths free its held value
-  // drifted below zero (an unsaveable project), so it is typed as a known length (edge 0-2);
-  // that takes the scale over from the kept height, which gets a known length too (edge 0-4).
+  // The band box's depth is seen by nothing, and its height sets the scale: both typed as known
+  // lengths (edges 0-2 and 0-4), as a user who measured the band would. (Before the joint solve
+  // held an unseen size, the depth drifted below zero here with the focal lengths free.)
   script += "command select edge " + std::to_string(box_id) + " 3\ncommand constrain length 1\nframes 1\n";
   script += "command select edge " + std::to_string(box_id) + " 0\ncommand constrain length 1\nframes 1\n";
   script += "command select-image 0\nframes 1\ncommand select none\ncommand add box\nframes 1\n";
