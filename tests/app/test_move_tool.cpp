@@ -109,7 +109,12 @@ MoveToolStart StartWithFreeBox(const TempDir& dir) {
 TEST_CASE("move tool: a vertex dragged in the 3D panel follows the mouse; undo restores it exactly") {
   TempDir dir("move_vertex");
   const MoveToolStart start = StartWithFreeBox(dir);
-  const auto& [box_id, path, prefix, start_report, view, before] = start;
+  const facet::Id box_id = start.box_id;
+  const std::string& path = start.path;
+  const std::string& prefix = start.prefix;
+  const nlohmann::json& start_report = start.report;
+  const Viewport3d& view = start.view;
+  const facet::Project& before = start.before;
   CHECK(start_report.at("tool").get<std::string>() == "Move");
   const facet::Primitive& box0 = *before.FindPrimitive(box_id);
   const facet::VertexId corner = 7;  // x, y and z bits: the top far corner
@@ -155,7 +160,12 @@ TEST_CASE("move tool: a vertex dragged in the 3D panel follows the mouse; undo r
 TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the move command") {
   TempDir dir("move_primitive");
   const MoveToolStart start = StartWithFreeBox(dir);
-  const auto& [box_id, path, prefix, start_report, view, before] = start;
+  const facet::Id box_id = start.box_id;
+  const std::string& path = start.path;
+  const std::string& prefix = start.prefix;
+  const nlohmann::json& start_report = start.report;
+  const Viewport3d& view = start.view;
+  const facet::Project& before = start.before;
   const facet::Primitive& box0 = *before.FindPrimitive(box_id);
   // The top face's centre (z = 2): seen from above by the default view.
   const Eigen::Vector3d top_centre = box0.shape.translation + Eigen::Vector3d(2.0, 1.5, 2.0);
@@ -295,7 +305,12 @@ int ReferencePixels(const cv::Mat& shot, const nlohmann::json& panel_rect) {
 TEST_CASE("reference geometry: added by script and drawn; a dragged vertex snaps onto it; undo; a missing file") {
   TempDir dir("reference_snap");
   const MoveToolStart start = StartWithFreeBox(dir);
-  const auto& [box_id, path, prefix, start_report, view, before] = start;
+  const facet::Id box_id = start.box_id;
+  const std::string& path = start.path;
+  const std::string& prefix = start.prefix;
+  const nlohmann::json& start_report = start.report;
+  const Viewport3d& view = start.view;
+  const facet::Project& before = start.before;
   const facet::VertexId corner = 7;
   const Eigen::Vector3d p0 = before.FindPrimitive(box_id)->mesh.vertex(corner).position;
   // A reference triangle (Z-up file: its numbers are world coordinates) whose first vertex

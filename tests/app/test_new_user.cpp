@@ -587,7 +587,10 @@ TEST_CASE("issue 14: a known length no pin sees leaves the kept height; one they
     return std::make_pair(ReportLog(r), LoadProjectFile(dir / (name + ".facet")));
   };
   {
-    const auto [log, model] = run("depth", depth_edge, 1.0);
+    // Named, not a structured binding: clang 14 cannot capture one in INFO's lambda.
+    const auto result = run("depth", depth_edge, 1.0);
+    const std::string& log = result.first;
+    const facet::Project& model = result.second;
     INFO("log:\n" << log);
     const facet::Primitive& solved = model.primitives.front();
     CHECK(solved.param_locked[2]);
@@ -599,7 +602,10 @@ TEST_CASE("issue 14: a known length no pin sees leaves the kept height; one they
   }
   {
     const double width = 2.0 * scene.true_box.shape.params(0);  // the model twice as large
-    const auto [log, model] = run("width", width_edge, width);
+    // Named, not a structured binding: clang 14 cannot capture one in INFO's lambda.
+    const auto result = run("width", width_edge, width);
+    const std::string& log = result.first;
+    const facet::Project& model = result.second;
     INFO("log:\n" << log);
     const facet::Primitive& solved = model.primitives.front();
     CHECK_FALSE(solved.param_locked[2]);
