@@ -72,6 +72,14 @@ ModelUpdateOptions DragFrameOptions() {
   return options;
 }
 
+// The update of an edit that should fail, with calibration and a warm start each on or off.
+ModelUpdateSummary UpdateEdited(const Project& edited, bool calibrate, bool warm_start, Project* updated) {
+  ModelUpdateOptions options;
+  options.calibrate = calibrate;
+  options.solve.warm_start = warm_start;
+  return UpdateModel(edited, options, updated);
+}
+
 // Two images of the same box: the first scene's, and a second view from another side whose
 // segments and pins (at 0.1 px noise) went through a lens with k1 = `second_k1` (OpenCV
 // model), so that a plumb-line estimate there is significant.
@@ -376,11 +384,8 @@ TEST_CASE("a failed solve leaves the project as the edit made it") {
     for (const bool warm_start : {false, true}) {
       CAPTURE(calibrate);
       CAPTURE(warm_start);
-      ModelUpdateOptions options;
-      options.calibrate = calibrate;
-      options.solve.warm_start = warm_start;
       Project updated;
-      const ModelUpdateSummary summary = UpdateModel(edited, options, &updated);
+      const ModelUpdateSummary summary = UpdateEdited(edited, calibrate, warm_start, &updated);
       INFO(Messages(summary));
       CHECK_FALSE(summary.ok);
       CHECK_FALSE(summary.solve.IsUsable());
@@ -408,11 +413,8 @@ TEST_CASE("a size the pins would take below zero: the update fails by name, the 
   }
   for (const bool warm_start : {false, true}) {
     CAPTURE(warm_start);
-    ModelUpdateOptions options;
-    options.calibrate = false;
-    options.solve.warm_start = warm_start;
     Project updated;
-    const ModelUpdateSummary summary = UpdateModel(edited, options, &updated);
+    const ModelUpdateSummary summary = UpdateEdited(edited, /*calibrate=*/false, warm_start, &updated);
     INFO(Messages(summary));
     CHECK_FALSE(summary.ok);
     bool named = false;

@@ -30,6 +30,8 @@ constexpr ImU32 kHorizonColor = IM_COL32(120, 255, 160, 230);
 constexpr ImU32 kEpipolarColor = IM_COL32(120, 230, 255, 240);
 constexpr ImU32 kAssumptionColor = IM_COL32(250, 200, 80, 255);
 constexpr ImU32 kPanelBackground = IM_COL32(0, 0, 0, 165);
+constexpr ImU32 kStepsText = IM_COL32(255, 255, 255, 240);     // the solver steps' boxes: first line
+constexpr ImU32 kStepsDimText = IM_COL32(200, 200, 200, 230);  // and the lines under it
 // The solver's residual vectors: white, apart from the families' red, green and blue, the
 // model's yellow and the pins' magenta.
 constexpr ImU32 kResidualColor = IM_COL32(255, 255, 255, 255);
@@ -340,82 +342,7 @@ double NiceBelow(double x) {
   return decade;
 }
 
-// The stepped state's residual vectors over this photo: from each pin along projection minus
-// pin, residual_scale times as long, with the scale and a bar that says how many px it is.
-void DrawSolverSteps(ImDrawList* draw, const AppState& state, const Image& image, const Screen& s, float* text_y) {
-  const TeachSolverSteps& solver = state.teach.solver;
-  const Project* stepped = TeachSteppedProject(state);
-  std::vector<std::pair<ImU32, std::string>> lines;
-  const ImU32 white = IM_COL32(255, 255, 255, 240), dim = IM_COL32(200, 200, 200, 230);
-  if (stepped == nullptr) {
-    lines.push_back({white, "Solver steps: press Step (the panels then show the stepped state)"});
-    TextBox(draw, s, text_y, lines);
-    return;
-  }
-  const double scale = solver.residual_scale;
-  double largest = 0.0;
-  for (const TeachPinResidual& r : TeachPinResiduals(*stepped)) {
-    if (r.image_id != image.id) continue;
-    largest = std::max(largest, r.residual_px.norm());
-    const Eigen::Vector2d a = s(r.uv_px), b = s(r.uv_px + scale * r.residual_px);
-    Line(draw, s, a, b, kResidualColor, 2.0f);
-    const double length = (b - a).norm();
-    if (length > 4.0) {  // an arrow head at the projection's end
-      const Eigen::Vector2d d = (b - a) / length, n(-d.y(), d.x());
-      const double head = std::min(9.0, 0.4 * length);
-      const ImVec2 tip = ToImVec2(b), left = ToImVec2(b - head * d + 0.5 * head * n),
-                   right = ToImVec2(b - head * d - 0.5 * head * n);
-      draw->AddTriangleFilled(tip, left, right, kResidualColor);
-    }
-    Marker(draw, a, kResidualColor, 2.5f);
-  }
-  const JointSolveSteps& steps = *solver.steps;
-  lines.push_back({white, "Solver steps: step " + std::to_string(steps.steps) + (steps.finished ? " (finished)" : "") +
-                              ", showing the stepped state, not the project"});
-  if (steps.steps > 0)
-    lines.push_back({dim, "observation cost " + FormatNumber(steps.summary.initial_cost, 5) + " -> " +
-                              FormatNumber(steps.summary.final_cost, 5) + " px^2; largest residual here " +
-                              FormatNumber(largest, 4) + " px"});
-  else
-    lines.push_back({dim, std::string("the start (") + TeachStepStartName(solver.start) + "); largest residual here " +
-                              FormatNumber(largest, 4) + " px"});
-  lines.push_back({kResidualColor, "residual vectors (projection - pin) drawn x" + FormatNumber(scale, 4)});
-  // A bar about 80 screen px long, of a round number of residual px.
-  const double px_per_residual_px = scale * s.view.zoom;
-  if (!(px_per_residual_px > 0.0) || !std::isfinite(px_per_residual_px)) {
-    TextBox(draw, s, text_y, lines);
-    return;
-  }
-  const double bar_px = NiceBelow(80.0 / px_per_residual_px);
-  const std::string bar_text = "bar = " + FormatNumber(bar_px, 4) + " px of residual";
-  lines.push_back({kResidualColor, bar_text});
-  const float before = *text_y;
-  TextBox(draw, s, text_y, lines);
-  // The bar beside the box's last line.
-  const float line_h = ImGui::GetTextLineHeight();
-  const float x0 = static_cast<float>(s.rect_min.x()) + 16.0f + ImGui::CalcTextSize(bar_text.c_str()).x + 14.0f;
-  const float y0 = before - 5.0f - 0.5f * line_h - 2.0f;
-  const float length = static_cast<float>(bar_px * px_per_residual_px);
-  draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kShadow, 5.0f);
-  draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kResidualColor, 3.0f);
-  for (const float x : {x0, x0 + length})
-    draw->AddLine(ImVec2(x, y0 - 5.0f), ImVec2(x, y0 + 5.0f), kResidualColor, 2.0f);
-}
-
-// A bar of a round number of residual px, ~80 screen px long, beside the text box's last
-// line (added by the caller as the last line, before TextBox moved *text_y to `before`).
-void ScaleBar(ImDrawList* draw, const Screen& s, float before, const std::string& bar_text, double bar_px,
-              double px_per_residual_px) {
-  const float line_h = ImGui::GetTextLineHeight();
-  const float x0 = static_cast<float>(s.rect_min.x()) + 16.0f + ImGui::CalcTextSize(bar_text.c_str()).x + 14.0f;
-  const float y0 = before - 5.0f - 0.5f * line_h - 2.0f;
-  const float length = static_cast<float>(bar_px * px_per_residual_px);
-  draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kShadow, 5.0f);
-  draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kResidualColor, 3.0f);
-  for (const float x : {x0, x0 + length})
-    draw->AddLine(ImVec2(x, y0 - 5.0f), ImVec2(x, y0 + 5.0f), kResidualColor, 2.0f);
-}
-
+// An arrow from a to b (screen px) with its head at b when it is long enough to show one.
 void Arrow(ImDrawList* draw, const Screen& s, const Eigen::Vector2d& a, const Eigen::Vector2d& b, ImU32 color) {
   Line(draw, s, a, b, color, 2.0f);
   const double length = (b - a).norm();
@@ -427,24 +354,92 @@ void Arrow(ImDrawList* draw, const Screen& s, const Eigen::Vector2d& a, const Ei
   }
 }
 
+// The text box of a stepped fit whose residuals are drawn `scale` times as long: `lines`, then
+// a last line and, beside it, a bar of a round number of residual px about 80 screen px long.
+void ResidualTextBox(ImDrawList* draw, const Screen& s, float* text_y, std::vector<std::pair<ImU32, std::string>> lines,
+                     double scale) {
+  const double px_per_residual_px = scale * s.view.zoom;
+  if (!(px_per_residual_px > 0.0) || !std::isfinite(px_per_residual_px)) {
+    TextBox(draw, s, text_y, lines);
+    return;
+  }
+  const double bar_px = NiceBelow(80.0 / px_per_residual_px);
+  const std::string bar_text = "bar = " + FormatNumber(bar_px, 4) + " px of residual";
+  lines.push_back({kResidualColor, bar_text});
+  const float before = *text_y;
+  TextBox(draw, s, text_y, lines);
+  const float line_h = ImGui::GetTextLineHeight();
+  const float x0 = static_cast<float>(s.rect_min.x()) + 16.0f + ImGui::CalcTextSize(bar_text.c_str()).x + 14.0f;
+  const float y0 = before - 5.0f - 0.5f * line_h - 2.0f;
+  const float length = static_cast<float>(bar_px * px_per_residual_px);
+  draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kShadow, 5.0f);
+  draw->AddLine(ImVec2(x0, y0), ImVec2(x0 + length, y0), kResidualColor, 3.0f);
+  for (const float x : {x0, x0 + length})
+    draw->AddLine(ImVec2(x, y0 - 5.0f), ImVec2(x, y0 + 5.0f), kResidualColor, 2.0f);
+}
+
+// The opening of a stepped fit's overlay: while nothing is stepped, or the fit of other photos
+// is, a box that says so (`pending` or `elsewhere`) and false; true when this photo's fit is
+// stepped.
+bool FitStepsShownHere(ImDrawList* draw, const Screen& s, float* text_y, const AppState& state, bool on_this_photo,
+                       const std::string& pending, const std::string& elsewhere) {
+  std::vector<std::pair<ImU32, std::string>> lines;
+  if (!TeachStepping(state)) {
+    lines.push_back({kStepsText, pending});
+    if (!state.teach.solver.message.empty()) lines.push_back({kStepsDimText, state.teach.solver.message});
+  } else if (!on_this_photo) {
+    lines.push_back({kStepsText, elsewhere});
+  } else {
+    return true;
+  }
+  TextBox(draw, s, text_y, lines);
+  return false;
+}
+
+// The stepped state's residual vectors over this photo: from each pin along projection minus
+// pin, residual_scale times as long, with the scale and a bar that says how many px it is.
+void DrawSolverSteps(ImDrawList* draw, const AppState& state, const Image& image, const Screen& s, float* text_y) {
+  const TeachSolverSteps& solver = state.teach.solver;
+  const Project* stepped = TeachSteppedProject(state);
+  std::vector<std::pair<ImU32, std::string>> lines;
+  if (stepped == nullptr) {
+    lines.push_back({kStepsText, "Solver steps: press Step (the panels then show the stepped state)"});
+    TextBox(draw, s, text_y, lines);
+    return;
+  }
+  const double scale = solver.residual_scale;
+  double largest = 0.0;
+  for (const TeachPinResidual& r : TeachPinResiduals(*stepped)) {
+    if (r.image_id != image.id) continue;
+    largest = std::max(largest, r.residual_px.norm());
+    const Eigen::Vector2d a = s(r.uv_px);
+    Arrow(draw, s, a, s(r.uv_px + scale * r.residual_px), kResidualColor);  // its head at the projection
+    Marker(draw, a, kResidualColor, 2.5f);
+  }
+  const JointSolveSteps& steps = *solver.steps;
+  lines.push_back({kStepsText, "Solver steps: step " + std::to_string(steps.steps) +
+                                   (steps.finished ? " (finished)" : "") +
+                                   ", showing the stepped state, not the project"});
+  if (steps.steps > 0)
+    lines.push_back({kStepsDimText, "observation cost " + FormatNumber(steps.summary.initial_cost, 5) + " -> " +
+                                        FormatNumber(steps.summary.final_cost, 5) + " px^2; largest residual here " +
+                                        FormatNumber(largest, 4) + " px"});
+  else
+    lines.push_back({kStepsDimText, std::string("the start (") + TeachStepStartName(solver.start) +
+                                        "); largest residual here " + FormatNumber(largest, 4) + " px"});
+  lines.push_back({kResidualColor, "residual vectors (projection - pin) drawn x" + FormatNumber(scale, 4)});
+  ResidualTextBox(draw, s, text_y, std::move(lines), scale);
+}
+
 // The stepped vanishing-point fit over its photo: each segment's residual (from each endpoint
 // to the line through the midpoint and the family's current vanishing point), scaled; the
 // current vanishing points and their paths over the steps.
 void DrawVpSteps(ImDrawList* draw, const AppState& state, const Image& image, const Screen& s, float* text_y) {
   const TeachSolverSteps& solver = state.teach.solver;
-  std::vector<std::pair<ImU32, std::string>> lines;
-  const ImU32 white = IM_COL32(255, 255, 255, 240), dim = IM_COL32(200, 200, 200, 230);
-  if (!TeachStepping(state)) {
-    lines.push_back({white, "Solver steps (vanishing-point fit of the active photo): press Step"});
-    if (!solver.message.empty()) lines.push_back({dim, solver.message});
-    TextBox(draw, s, text_y, lines);
+  if (!FitStepsShownHere(draw, s, text_y, state, solver.vp.image_id == image.id,
+                         "Solver steps (vanishing-point fit of the active photo): press Step",
+                         "Solver steps: the vanishing-point fit of another photo is stepped"))
     return;
-  }
-  if (solver.vp.image_id != image.id) {
-    lines.push_back({white, "Solver steps: the vanishing-point fit of another photo is stepped"});
-    TextBox(draw, s, text_y, lines);
-    return;
-  }
   const VpFitSteps& steps = *solver.vp.steps;
   const double scale = solver.vp.residual_scale;
   double largest = 0.0;
@@ -476,47 +471,28 @@ void DrawVpSteps(ImDrawList* draw, const AppState& state, const Image& image, co
           std::string("v") + kAxisNames[a] + " (" + FormatNumber(path.back().x(), 5) + ", " +
               FormatNumber(path.back().y(), 5) + ")");
   }
-  lines.push_back({white, "Solver steps: vanishing-point fit, step " + std::to_string(steps.steps) +
-                              (steps.finished ? " (finished)" : "") +
-                              ", f = " + FormatNumber(steps.summary.focal_px, 6) + " px"});
-  lines.push_back({dim, "cost " + FormatNumber(steps.path.front().cost_px2, 5) + " -> " +
-                            FormatNumber(steps.summary.final_cost, 5) + " px^2; largest residual " +
-                            FormatNumber(largest, 4) + " px; dots: the vanishing points' path"});
+  std::vector<std::pair<ImU32, std::string>> lines;
+  lines.push_back({kStepsText, "Solver steps: vanishing-point fit, step " + std::to_string(steps.steps) +
+                                   (steps.finished ? " (finished)" : "") +
+                                   ", f = " + FormatNumber(steps.summary.focal_px, 6) + " px"});
+  lines.push_back({kStepsDimText, "cost " + FormatNumber(steps.path.front().cost_px2, 5) + " -> " +
+                                      FormatNumber(steps.summary.final_cost, 5) + " px^2; largest residual " +
+                                      FormatNumber(largest, 4) + " px; dots: the vanishing points' path"});
   lines.push_back(
       {kResidualColor, "residuals (endpoint to the line through midpoint and v) drawn x" + FormatNumber(scale, 4)});
-  const double px_per_residual_px = scale * s.view.zoom;
-  if (!(px_per_residual_px > 0.0) || !std::isfinite(px_per_residual_px)) {
-    TextBox(draw, s, text_y, lines);
-    return;
-  }
-  const double bar_px = NiceBelow(80.0 / px_per_residual_px);
-  const std::string bar_text = "bar = " + FormatNumber(bar_px, 4) + " px of residual";
-  lines.push_back({kResidualColor, bar_text});
-  const float before = *text_y;
-  TextBox(draw, s, text_y, lines);
-  ScaleBar(draw, s, before, bar_text, bar_px, px_per_residual_px);
+  ResidualTextBox(draw, s, text_y, std::move(lines), scale);
 }
 
 // The stepped two-view refinement over either photo of the pair: the epipolar lines of a few
 // matches under the current F (solid) and the start's (dashed), each match's point and its
 // distance to its line.
 void DrawTwoViewSteps(ImDrawList* draw, const AppState& state, const Image& image, const Screen& s, float* text_y) {
-  const TeachSolverSteps& solver = state.teach.solver;
-  std::vector<std::pair<ImU32, std::string>> lines;
-  const ImU32 white = IM_COL32(255, 255, 255, 240), dim = IM_COL32(200, 200, 200, 230);
-  if (!TeachStepping(state)) {
-    lines.push_back({white, "Solver steps (two-view refinement of F, active and second photo): press Step"});
-    if (!solver.message.empty()) lines.push_back({dim, solver.message});
-    TextBox(draw, s, text_y, lines);
-    return;
-  }
-  const TeachTwoViewSteps& two = solver.two_view;
+  const TeachTwoViewSteps& two = state.teach.solver.two_view;
   const bool in_a = image.id == two.image_a, in_b = image.id == two.image_b;
-  if (!in_a && !in_b) {
-    lines.push_back({white, "Solver steps: the two-view refinement of two other photos is stepped"});
-    TextBox(draw, s, text_y, lines);
+  if (!FitStepsShownHere(draw, s, text_y, state, in_a || in_b,
+                         "Solver steps (two-view refinement of F, active and second photo): press Step",
+                         "Solver steps: the two-view refinement of two other photos is stepped"))
     return;
-  }
   const FundamentalFitSteps& steps = *two.steps;
   const ImU32 start_color = IM_COL32(200, 200, 200, 170);
   double largest = 0.0;
@@ -533,11 +509,12 @@ void DrawTwoViewSteps(ImDrawList* draw, const AppState& state, const Image& imag
     Marker(draw, s(uv), kEpipolarColor, 4.0f);
     Label(draw, s(uv), kEpipolarColor, FormatNumber(std::abs(d), 3) + " px");
   }
-  lines.push_back({white, "Solver steps: two-view refinement of F, step " + std::to_string(steps.steps) +
-                              (steps.finished ? " (finished)" : "") + "; this photo is " + (in_a ? "a" : "b")});
-  lines.push_back({dim, "symmetric epipolar RMS " + FormatNumber(steps.start.symmetric_epipolar_rms_px, 4) + " -> " +
-                            FormatNumber(steps.summary.symmetric_epipolar_rms_px, 4) + " px; largest distance here " +
-                            FormatNumber(largest, 4) + " px"});
+  std::vector<std::pair<ImU32, std::string>> lines;
+  lines.push_back({kStepsText, "Solver steps: two-view refinement of F, step " + std::to_string(steps.steps) +
+                                   (steps.finished ? " (finished)" : "") + "; this photo is " + (in_a ? "a" : "b")});
+  lines.push_back({kStepsDimText, "symmetric epipolar RMS " + FormatNumber(steps.start.symmetric_epipolar_rms_px, 4) +
+                                      " -> " + FormatNumber(steps.summary.symmetric_epipolar_rms_px, 4) +
+                                      " px; largest distance here " + FormatNumber(largest, 4) + " px"});
   lines.push_back({kEpipolarColor, "epipolar lines of " + std::to_string(drawn) + " of " +
                                        std::to_string(steps.uv1.size()) +
                                        " matches under the current F (dashed grey: the start)"});
@@ -662,8 +639,10 @@ void DrawTeachRays(ImDrawList* draw, const AppState& state,
 
 namespace {
 
-// The trace's cost (times cost_unit), damping and step norm, one point per trial.
-void TracePlots(const std::vector<LmIteration>& trace, double cost_unit, const char* step_unit) {
+// The trace's cost (times cost_unit, plotted as `cost_label`), damping and step norm, one point
+// per trial.
+void TracePlots(const std::vector<LmIteration>& trace, double cost_unit, const char* step_unit,
+                const char* cost_label = "cost") {
   std::vector<double> cost, lambda, step_norm;
   for (const LmIteration& it : trace) {
     cost.push_back(it.cost * cost_unit);
@@ -674,7 +653,7 @@ void TracePlots(const std::vector<LmIteration>& trace, double cost_unit, const c
     return v.empty() ? std::string("-") : FormatNumber(v.back(), 4) + unit;
   };
   ImGui::TextColored(kDimText, "log10 scale; one point per trial (a rejected trial keeps the cost)");
-  Plot("cost", cost, last(cost, " px^2"));
+  Plot(cost_label, cost, last(cost, " px^2"));
   Plot("damping lambda", lambda, last(lambda, ""));
   Plot("step norm", step_norm, last(step_norm, step_unit));
 }
@@ -707,6 +686,30 @@ void DrawStepStart(AppState* state, bool stepping) {
   ImGui::EndDisabled();
 }
 
+// The start, then Step, Reset and `end` (which ends the stepping; `end_tooltip` on it unless null).
+void DrawStepButtons(AppState* state, bool stepping, const char* end, const char* end_tooltip) {
+  DrawStepStart(state, stepping);
+  if (ImGui::Button("Step")) TeachStep(state);
+  RecordItem(state, "teach.step");
+  ImGui::SameLine();
+  ImGui::BeginDisabled(!stepping);
+  if (ImGui::Button("Reset")) TeachResetSteps(state);
+  RecordItem(state, "teach.reset");
+  ImGui::SameLine();
+  if (ImGui::Button(end)) TeachEndSteps(state);
+  if (end_tooltip != nullptr && ImGui::IsItemHovered()) ImGui::SetTooltip("%s", end_tooltip);
+  ImGui::EndDisabled();
+}
+
+// "<what> drawn xN" and buttons that double and halve N (`*scale`).
+void ResidualScaleRow(const char* what, double* scale) {
+  ImGui::Text("%s drawn x%s", what, FormatNumber(*scale, 4).c_str());
+  ImGui::SameLine();
+  if (ImGui::SmallButton("x2")) *scale *= 2.0;
+  ImGui::SameLine();
+  if (ImGui::SmallButton("/2")) *scale /= 2.0;
+}
+
 void DrawFitStepsBody(AppState* state) {
   TeachSolverSteps& solver = state->teach.solver;
   const bool vp = solver.subject == TeachStepSubject::kVanishingPoints;
@@ -736,17 +739,7 @@ void DrawFitStepsBody(AppState* state) {
     }
     ImGui::EndDisabled();
   }
-  const bool stepping = TeachStepping(*state);
-  DrawStepStart(state, stepping);
-  if (ImGui::Button("Step")) TeachStep(state);
-  RecordItem(state, "teach.step");
-  ImGui::SameLine();
-  ImGui::BeginDisabled(!stepping);
-  if (ImGui::Button("Reset")) TeachResetSteps(state);
-  RecordItem(state, "teach.reset");
-  ImGui::SameLine();
-  if (ImGui::Button("End")) TeachEndSteps(state);
-  ImGui::EndDisabled();
+  DrawStepButtons(state, TeachStepping(*state), "End", nullptr);
   if (!solver.message.empty()) ImGui::TextWrapped("%s", solver.message.c_str());
   if (!TeachStepping(*state)) return;
   ImGui::Separator();
@@ -754,11 +747,7 @@ void DrawFitStepsBody(AppState* state) {
       ImGuiTableFlags_RowBg | ImGuiTableFlags_BordersInnerV | ImGuiTableFlags_SizingFixedFit | ImGuiTableFlags_ScrollY;
   if (vp) {
     const VpFitSteps& steps = *solver.vp.steps;
-    ImGui::Text("residuals drawn x%s", FormatNumber(solver.vp.residual_scale, 4).c_str());
-    ImGui::SameLine();
-    if (ImGui::SmallButton("x2")) solver.vp.residual_scale *= 2.0;
-    ImGui::SameLine();
-    if (ImGui::SmallButton("/2")) solver.vp.residual_scale /= 2.0;
+    ResidualScaleRow("residuals", &solver.vp.residual_scale);
     const double px2 = steps.summary.conditioning_scale_px * steps.summary.conditioning_scale_px;
     TracePlots(steps.trace, px2, " (log f, px / scale, rad)");
     ImGui::Text("%d step(s), %s%s", steps.steps, SolverTerminationName(steps.summary.termination),
@@ -857,26 +846,12 @@ void DrawTeachStepsWindow(AppState* state) {
       "The joint solve, one Levenberg-Marquardt iteration per Step. Stepping never changes the project: the image and "
       "3D panels show the stepped state until this window closes or the project is edited.");
   const bool stepping = TeachSteppedProject(*state) != nullptr;
-  DrawStepStart(state, stepping);
-  if (ImGui::Button("Step")) TeachStep(state);
-  RecordItem(state, "teach.step");
-  ImGui::SameLine();
-  ImGui::BeginDisabled(!stepping);
-  if (ImGui::Button("Reset")) TeachResetSteps(state);
-  RecordItem(state, "teach.reset");
-  ImGui::SameLine();
-  if (ImGui::Button("Show the project")) TeachEndSteps(state);
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("End stepping: the panels show the project again");
-  ImGui::EndDisabled();
+  DrawStepButtons(state, stepping, "Show the project", "End stepping: the panels show the project again");
   if (!solver.message.empty()) ImGui::TextColored(kDimText, "%s", solver.message.c_str());
   if (stepping) {
     // Set when stepping begins so that the vectors shrink as the solve converges; the
     // lecturer may still enlarge them for the back row.
-    ImGui::Text("residual vectors drawn x%s", FormatNumber(solver.residual_scale, 4).c_str());
-    ImGui::SameLine();
-    if (ImGui::SmallButton("x2")) solver.residual_scale *= 2.0;
-    ImGui::SameLine();
-    if (ImGui::SmallButton("/2")) solver.residual_scale /= 2.0;
+    ResidualScaleRow("residual vectors", &solver.residual_scale);
   }
   if (!stepping) {
     ImGui::End();
@@ -886,19 +861,7 @@ void DrawTeachStepsWindow(AppState* state) {
   ImGui::Separator();
   // The cost Levenberg-Marquardt minimises (the observations' plus the constraints' augmented
   // Lagrangian rows), damping and step norm, after every trial.
-  std::vector<double> cost, lambda, step_norm;
-  for (const LmIteration& it : steps.trace) {
-    cost.push_back(it.cost);
-    lambda.push_back(it.lambda);
-    step_norm.push_back(std::sqrt(it.step_squared_norm));
-  }
-  const auto last = [](const std::vector<double>& v, const char* unit) {
-    return v.empty() ? std::string("-") : FormatNumber(v.back(), 4) + unit;
-  };
-  ImGui::TextColored(kDimText, "log10 scale; one point per trial (a rejected trial keeps the cost)");
-  Plot("LM cost (with the constraints' rows)", cost, last(cost, " px^2"));
-  Plot("damping lambda", lambda, last(lambda, ""));
-  Plot("step norm", step_norm, last(step_norm, " (scaled)"));
+  TracePlots(steps.trace, 1.0, " (scaled)", "LM cost (with the constraints' rows)");
   if (steps.steps > 0) {
     ImGui::Text("%d step(s), %s%s", steps.steps, SolverTerminationName(steps.summary.termination),
                 steps.finished ? " (finished)" : "");

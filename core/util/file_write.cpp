@@ -9,6 +9,24 @@
 #include <filesystem>
 
 namespace facet {
+namespace {
+
+// Writes all of `bytes` to `fd`, going on after short and interrupted writes: 0, else the
+// failed write's errno.
+int WriteAll(int fd, const std::string& bytes) {
+  size_t written = 0;
+  while (written < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return errno;
+    }
+    written += static_cast<size_t>(n);
+  }
+  return 0;
+}
+
+}  // namespace
 
 std::string WriteFileAtomically(const std::string& requested_path, const std::string& bytes) {
   namespace fs = std::filesystem;
@@ -35,15 +53,7 @@ std::string WriteFileAtomically(const std::string& requested_path, const std::st
   const mode_t mode =
       ::stat(path.c_str(), &existing) == 0 && S_ISREG(existing.st_mode) ? (existing.st_mode & 07777) : 0644;
   if (::fchmod(fd, mode) != 0) return fail("setting permissions", errno);
-  size_t written = 0;
-  while (written < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return fail("writing", errno);
-    }
-    written += static_cast<size_t>(n);
-  }
+  if (const int err = WriteAll(fd, bytes); err != 0) return fail("writing", err);
   if (::fsync(fd) != 0) return fail("flushing to disk", errno);
   if (::close(fd) != 0) {
     const int err = errno;
@@ -80,15 +90,7 @@ std::string AppendToFile(const std::string& path, const std::string& bytes) {
     ::close(fd);
     return "cannot append to " + path + ": " + what + ": " + std::strerror(err);
   };
-  size_t written = 0;
-  while (written < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return fail("writing", errno);
-    }
-    written += static_cast<size_t>(n);
-  }
+  if (const int err = WriteAll(fd, bytes); err != 0) return fail("writing", err);
   if (::fdatasync(fd) != 0) return fail("flushing to disk", errno);
   if (::close(fd) != 0) return "cannot append to " + path + ": closing: " + std::strerror(errno);
   return "";

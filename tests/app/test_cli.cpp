@@ -281,6 +281,63 @@ Eigen::Vector2d MeasureShiftPx(const cv::Mat& photo_bgr, const cv::Mat& render_b
   return {warp.at<float>(0, 2), warp.at<float>(1, 2)};
 }
 
+// The cameras and the rest of `glb` as Facet's reader reads it back (its images not decoded).
+facet::GltfScene ReadGlbGeometry(const std::string& glb) {
+  facet::GltfScene scene;
+  facet::GltfReadOptions geometry_only;
+  geometry_only.decode_images = false;
+  const std::string read_error = facet::ReadGlb(glb, geometry_only, &scene);
+  REQUIRE_MESSAGE(read_error.empty(), read_error);
+  return scene;
+}
+
+// `facet render-glb` through camera `c` of `glb` into `shot`: what it printed (its principal
+// point checked to come from the camera's extras), and the render, checked to be `photo`'s
+// size, with the number of pixels the model covers.
+struct GlbCameraRender {
+  nlohmann::json printed;
+  cv::Mat render;
+  int covered = 0;
+};
+GlbCameraRender RenderGlbCamera(const TempDir& dir, const std::string& glb, size_t c, const std::string& shot,
+                                const cv::Mat& photo) {
+  const CliResult rendered =
+      RunFacet(dir, "render-glb '" + glb + "' --camera " + std::to_string(c) + " -o '" + shot + "'");
+  INFO(rendered.err);
+  REQUIRE(rendered.exit_code == 0);
+  GlbCameraRender out;
+  out.printed = nlohmann::json::parse(rendered.out);
+  CHECK(out.printed.at("principal_point_from_extras").get<bool>());
+  out.render = cv::imread(shot, cv::IMREAD_UNCHANGED);
+  REQUIRE(out.render.type() == CV_8UC4);
+  REQUIRE(out.render.size() == photo.size());
+  std::vector<cv::Mat> channels;
+  cv::split(out.render, channels);
+  out.covered = cv::countNonZero(channels[3] == 255);
+  return out;
+}
+
+// The render's shift from its photo, checked under issue 13's bound, with the ECC correlation;
+// and checked that the measurement sees a shift that is there: the render moved by `known` px.
+Eigen::Vector2d CheckRenderOnPhoto(const cv::Mat& photo, const cv::Mat& render, const Eigen::Vector2d& known,
+                                   double* correlation) {
+  const Eigen::Vector2d shift = MeasureShiftPx(photo, render, correlation);
+  // The render samples the baked atlas, itself resampled from the photo: alike, not equal.
+  CHECK(*correlation > 0.9);
+  constexpr double kShiftTolerancePx = 1.0;  // issue 13's bound
+  CHECK(shift.norm() < kShiftTolerancePx);
+  cv::Mat moved;
+  const cv::Mat translation = (cv::Mat_<double>(2, 3) << 1, 0, known.x(), 0, 1, known.y());
+  cv::warpAffine(render, moved, translation, render.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+                 cv::Scalar(0, 0, 0, 0));
+  double moved_correlation = 0.0;
+  const Eigen::Vector2d moved_shift = MeasureShiftPx(photo, moved, &moved_correlation);
+  CAPTURE(moved_shift.transpose());
+  constexpr double kMeasurementTolerancePx = 0.1;
+  CHECK((moved_shift - (shift + known)).norm() < kMeasurementTolerancePx);
+  return shift;
+}
+
 }  // namespace
 
 // Issue 13: the exported cameras show the model exactly over the photo when looked through.
@@ -297,56 +354,26 @@ TEST_CASE("export: the Leuven street rendered from the .glb through each exporte
   REQUIRE(exported.exit_code == 0);
   CHECK_GLTF_VALID(glb);
 
-  facet::GltfScene scene;
-  facet::GltfReadOptions geometry_only;
-  geometry_only.decode_images = false;
-  const std::string read_error = facet::ReadGlb(glb, geometry_only, &scene);
-  REQUIRE_MESSAGE(read_error.empty(), read_error);
+  const facet::GltfScene scene = ReadGlbGeometry(glb);
   const facet::Project project = facet::testing::LoadProjectFile(sample_dir + "/street.facet");
   REQUIRE(scene.cameras.size() == project.images.size());  // every photo of the sample is calibrated
 
   for (size_t c = 0; c < scene.cameras.size(); ++c) {
     CAPTURE(c);
-    const std::string shot = dir / ("view" + std::to_string(c) + ".png");
-    const CliResult rendered =
-        RunFacet(dir, "render-glb '" + glb + "' --camera " + std::to_string(c) + " -o '" + shot + "'");
-    INFO(rendered.err);
-    REQUIRE(rendered.exit_code == 0);
-    const nlohmann::json printed = nlohmann::json::parse(rendered.out);
-    CHECK(printed.at("principal_point_from_extras").get<bool>());
-    const cv::Mat render = cv::imread(shot, cv::IMREAD_UNCHANGED);
     const cv::Mat photo = cv::imread(sample_dir + "/" + project.images[c].path, cv::IMREAD_COLOR);
-    REQUIRE(render.type() == CV_8UC4);
-    REQUIRE(render.size() == photo.size());
+    const GlbCameraRender r = RenderGlbCamera(dir, glb, c, dir / ("view" + std::to_string(c) + ".png"), photo);
+    const cv::Mat& render = r.render;
+    const int covered = r.covered;
     // The model covers a good part of the photo (the three houses), so the shift is measured
     // over thousands of pixels of facade texture.
-    std::vector<cv::Mat> channels;
-    cv::split(render, channels);
-    const int covered = cv::countNonZero(channels[3] == 255);
     CHECK(covered > static_cast<int>(photo.total() / 5));
 
     double correlation = 0.0;
-    const Eigen::Vector2d shift = MeasureShiftPx(photo, render, &correlation);
-    // The render samples the baked atlas, itself resampled from the photo: alike, not equal.
-    CHECK(correlation > 0.9);
-    constexpr double kShiftTolerancePx = 1.0;  // issue 13's bound
-    CHECK(shift.norm() < kShiftTolerancePx);
+    const Eigen::Vector2d shift = CheckRenderOnPhoto(photo, render, Eigen::Vector2d(1.7, -2.3), &correlation);
     MESSAGE("Leuven camera " << c << " (" << scene.cameras[c].name << "): the rendered .glb lies "
                              << shift.x() << ", " << shift.y() << " px (|" << shift.norm()
                              << "|) from the photo, ECC correlation " << correlation << ", " << covered
                              << " px covered");
-
-    // The measurement sees a shift that is there: the render moved by a known amount.
-    const Eigen::Vector2d known(1.7, -2.3);
-    cv::Mat moved;
-    const cv::Mat translation = (cv::Mat_<double>(2, 3) << 1, 0, known.x(), 0, 1, known.y());
-    cv::warpAffine(render, moved, translation, render.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT,
-                   cv::Scalar(0, 0, 0, 0));
-    double moved_correlation = 0.0;
-    const Eigen::Vector2d moved_shift = MeasureShiftPx(photo, moved, &moved_correlation);
-    CAPTURE(moved_shift.transpose());
-    constexpr double kMeasurementTolerancePx = 0.1;
-    CHECK((moved_shift - (shift + known)).norm() < kMeasurementTolerancePx);
 
     // For looking at: the photo with the render's model blended over it.
     cv::Mat overlay = photo.clone();
@@ -429,24 +456,15 @@ TEST_CASE("export: a synthetic box rendered from the .glb through each of three 
   INFO(exported.err);
   REQUIRE(exported.exit_code == 0);
   CHECK_GLTF_VALID(glb);
-  facet::GltfScene read;
-  facet::GltfReadOptions geometry_only;
-  geometry_only.decode_images = false;
-  const std::string read_error = facet::ReadGlb(glb, geometry_only, &read);
-  REQUIRE_MESSAGE(read_error.empty(), read_error);
-  REQUIRE(read.cameras.size() == project.images.size());
+  REQUIRE(ReadGlbGeometry(glb).cameras.size() == project.images.size());
 
   for (size_t c = 0; c < project.images.size(); ++c) {
     CAPTURE(c);
     const facet::Camera& truth = project.images[c].camera;
-    const std::string shot = dir / ("view" + std::to_string(c) + "_render.png");
-    const CliResult rendered =
-        RunFacet(dir, "render-glb '" + glb + "' --camera " + std::to_string(c) + " -o '" + shot + "'");
-    INFO(rendered.err);
-    REQUIRE(rendered.exit_code == 0);
+    const cv::Mat photo = cv::imread(dir / project.images[c].path, cv::IMREAD_COLOR);
+    const GlbCameraRender r = RenderGlbCamera(dir, glb, c, dir / ("view" + std::to_string(c) + "_render.png"), photo);
     // The intrinsics come back from the file as they went in (JSON doubles: to print precision).
-    const nlohmann::json printed = nlohmann::json::parse(rendered.out);
-    CHECK(printed.at("principal_point_from_extras").get<bool>());
+    const nlohmann::json& printed = r.printed;
     CHECK(printed.at("size_px")[0].get<int>() == truth.width_px);
     CHECK(printed.at("size_px")[1].get<int>() == truth.height_px);
     constexpr double kIntrinsicsTolerancePx = 1e-6;
@@ -456,13 +474,7 @@ TEST_CASE("export: a synthetic box rendered from the .glb through each of three 
     CHECK(std::abs(printed.at("principal_point_px")[1].get<double>() - truth.principal_point_px.y()) <
           kIntrinsicsTolerancePx);
 
-    const cv::Mat render = cv::imread(shot, cv::IMREAD_UNCHANGED);
-    const cv::Mat photo = cv::imread(dir / project.images[c].path, cv::IMREAD_COLOR);
-    REQUIRE(render.type() == CV_8UC4);
-    REQUIRE(render.size() == photo.size());
-    std::vector<cv::Mat> channels;
-    cv::split(render, channels);
-    const int covered = cv::countNonZero(channels[3] == 255);
+    const int covered = r.covered;
     // The coverage is the box's silhouette, which the ray-cast photo shows against its
     // background (grey 20, which no face's paint reaches): the two agree but for edge pixels.
     cv::Mat photo_gray;
@@ -473,10 +485,7 @@ TEST_CASE("export: a synthetic box rendered from the .glb through each of three 
     CHECK(std::abs(covered - silhouette) < kSilhouetteAgreement * silhouette);
 
     double correlation = 0.0;
-    const Eigen::Vector2d shift = MeasureShiftPx(photo, render, &correlation);
-    CHECK(correlation > 0.9);
-    constexpr double kShiftTolerancePx = 1.0;  // issue 13's bound
-    CHECK(shift.norm() < kShiftTolerancePx);
+    const Eigen::Vector2d shift = CheckRenderOnPhoto(photo, r.render, Eigen::Vector2d(-1.3, 0.8), &correlation);
     MESSAGE("synthetic camera " << c << " (" << truth.width_px << " x " << truth.height_px << ", principal point "
                                 << (truth.principal_point_px -
                                     Eigen::Vector2d((truth.width_px - 1) / 2.0, (truth.height_px - 1) / 2.0))
@@ -484,17 +493,5 @@ TEST_CASE("export: a synthetic box rendered from the .glb through each of three 
                                 << " px off centre): the rendered .glb lies " << shift.x() << ", " << shift.y()
                                 << " px (|" << shift.norm() << "|) from the photo, ECC correlation " << correlation
                                 << ", " << covered << " px covered (silhouette " << silhouette << ")");
-
-    // The measurement sees a shift that is there.
-    const Eigen::Vector2d known(-1.3, 0.8);
-    cv::Mat moved;
-    const cv::Mat translation = (cv::Mat_<double>(2, 3) << 1, 0, known.x(), 0, 1, known.y());
-    cv::warpAffine(render, moved, translation, render.size(), cv::INTER_LINEAR, cv::BORDER_CONSTANT,
-                   cv::Scalar(0, 0, 0, 0));
-    double moved_correlation = 0.0;
-    const Eigen::Vector2d moved_shift = MeasureShiftPx(photo, moved, &moved_correlation);
-    CAPTURE(moved_shift.transpose());
-    constexpr double kMeasurementTolerancePx = 0.1;
-    CHECK((moved_shift - (shift + known)).norm() < kMeasurementTolerancePx);
   }
 }

@@ -109,35 +109,29 @@ MoveToolStart StartWithFreeBox(const TempDir& dir) {
 TEST_CASE("move tool: a vertex dragged in the 3D panel follows the mouse; undo restores it exactly") {
   TempDir dir("move_vertex");
   const MoveToolStart start = StartWithFreeBox(dir);
-  const facet::Id box_id = start.box_id;
-  const std::string& path = start.path;
-  const std::string& prefix = start.prefix;
-  const nlohmann::json& start_report = start.report;
-  const Viewport3d& view = start.view;
-  const facet::Project& before = start.before;
-  CHECK(start_report.at("tool").get<std::string>() == "Move");
-  const facet::Primitive& box0 = *before.FindPrimitive(box_id);
+  CHECK(start.report.at("tool").get<std::string>() == "Move");
+  const facet::Primitive& box0 = *start.before.FindPrimitive(start.box_id);
   const facet::VertexId corner = 7;  // x, y and z bits: the top far corner
   const Eigen::Vector3d p0 = box0.mesh.vertex(corner).position;
-  const Eigen::Vector2d from = Rounded(view.ToScreen(p0));
+  const Eigen::Vector2d from = Rounded(start.view.ToScreen(p0));
   const Eigen::Vector2d to = from + Eigen::Vector2d(40.0, -25.0);
 
   std::ostringstream s;
-  s << prefix << DragScript(from, to, 6, dir / "dragging.png") << "command save " << (dir / "after.facet")
+  s << start.prefix << DragScript(from, to, 6, dir / "dragging.png") << "command save " << (dir / "after.facet")
     << "\nframes 1\ncommand undo\nframes 2\n";
-  const nlohmann::json report = Render(dir, path, "drag", s.str());
+  const nlohmann::json report = Render(dir, start.path, "drag", s.str());
   INFO("log:\n" << LogText(report));
   const facet::Project after = Load(dir / "after.facet");
-  const Eigen::Vector3d p1 = after.FindPrimitive(box_id)->mesh.vertex(corner).position;
+  const Eigen::Vector3d p1 = after.FindPrimitive(start.box_id)->mesh.vertex(corner).position;
   CAPTURE(p0.transpose());
   CAPTURE(p1.transpose());
   // The vertex lies under the release pixel, in the plane through it facing the camera (the
   // press ray through the floored press pixel: a slightly different normal than eye->p0, so
   // compare with the plane of the ray the app used: through the eye and the press pixel).
-  const double under_mouse_px = (view.ToScreen(p1) - to).norm();
+  const double under_mouse_px = (start.view.ToScreen(p1) - to).norm();
   CAPTURE(under_mouse_px);
   CHECK(under_mouse_px < kMousePx);
-  const Eigen::Vector3d eye = view.Eye();
+  const Eigen::Vector3d eye = start.view.Eye();
   const double off_plane = std::abs((p1 - p0).dot((p0 - eye).normalized())) / (p1 - p0).norm();
   CAPTURE(off_plane);
   CHECK(off_plane < 0.01);  // the press pixel is within half a pixel of the vertex
@@ -145,12 +139,12 @@ TEST_CASE("move tool: a vertex dragged in the 3D panel follows the mouse; undo r
   MESSAGE("vertex drag: " << under_mouse_px << " px from the release pixel, off its plane by " << off_plane
                           << " (relative), moved " << (p1 - p0).norm());
   // Smallest change: the opposite corner (0) stays.
-  CHECK((after.FindPrimitive(box_id)->mesh.vertex(0).position - box0.mesh.vertex(0).position).norm() < kExact);
+  CHECK((after.FindPrimitive(start.box_id)->mesh.vertex(0).position - box0.mesh.vertex(0).position).norm() < kExact);
 
   REQUIRE(report.at("redo_stack").size() == 1);
   CHECK(report.at("redo_stack").back().get<std::string>() == "Move vertex");
   const facet::Project undone = FromReport(report);
-  CHECK(undone == before);
+  CHECK(undone == start.before);
 
   // The screenshot during the drag was written (looked at by hand: the box stretched, the hint).
   const cv::Mat shot = cv::imread(dir / "dragging.png");
@@ -160,21 +154,15 @@ TEST_CASE("move tool: a vertex dragged in the 3D panel follows the mouse; undo r
 TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the move command") {
   TempDir dir("move_primitive");
   const MoveToolStart start = StartWithFreeBox(dir);
-  const facet::Id box_id = start.box_id;
-  const std::string& path = start.path;
-  const std::string& prefix = start.prefix;
-  const nlohmann::json& start_report = start.report;
-  const Viewport3d& view = start.view;
-  const facet::Project& before = start.before;
-  const facet::Primitive& box0 = *before.FindPrimitive(box_id);
+  const facet::Primitive& box0 = *start.before.FindPrimitive(start.box_id);
   // The top face's centre (z = 2): seen from above by the default view.
   const Eigen::Vector3d top_centre = box0.shape.translation + Eigen::Vector3d(2.0, 1.5, 2.0);
-  const Eigen::Vector2d from = Rounded(view.ToScreen(top_centre));
+  const Eigen::Vector2d from = Rounded(start.view.ToScreen(top_centre));
   const Eigen::Vector2d to = from + Eigen::Vector2d(-30.0, 20.0);
   // Escape during a vertex drag cancels it: nothing changes, no history entry.
-  const Eigen::Vector2d corner7 = Rounded(view.ToScreen(box0.mesh.vertex(7).position));
+  const Eigen::Vector2d corner7 = Rounded(start.view.ToScreen(box0.mesh.vertex(7).position));
   std::ostringstream s;
-  s << prefix << "move " << FormatXY(corner7, 6) << "\nframes 1\ndown left\nframes 1\n";
+  s << start.prefix << "move " << FormatXY(corner7, 6) << "\nframes 1\ndown left\nframes 1\n";
   for (int i = 1; i <= 3; ++i)
     s << "move " << FormatXY(corner7 + Eigen::Vector2d(10.0 * i, 5.0 * i), 6) << "\nframes 1\n";
   s << "key escape\nframes 1\nmove " << FormatXY(corner7 + Eigen::Vector2d(50.0, 25.0), 6)
@@ -184,29 +172,30 @@ TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the
   // The command: the vertex to a position, then the primitive by a delta.
   const Eigen::Vector3d target(4.5, 3.25, 2.5);
   const Eigen::Vector3d delta(0.5, -0.25, 0.75);
-  s << "command select vertex " << box_id << " 7\nframes 1\ncommand move-selection vertex " << target.x() << " "
+  s << "command select vertex " << start.box_id << " 7\nframes 1\ncommand move-selection vertex " << target.x() << " "
     << target.y() << " " << target.z() << "\nframes 1\ncommand save " << (dir / "vertex.facet") << "\nframes 1\n";
-  s << "command select primitive " << box_id << "\nframes 1\ncommand move-selection primitive " << delta.x() << " "
-    << delta.y() << " " << delta.z() << "\nframes 1\ncommand save " << (dir / "primitive.facet") << "\nframes 1\n";
-  const nlohmann::json report = Render(dir, path, "face", s.str());
+  s << "command select primitive " << start.box_id << "\nframes 1\ncommand move-selection primitive " << delta.x()
+    << " " << delta.y() << " " << delta.z() << "\nframes 1\ncommand save " << (dir / "primitive.facet")
+    << "\nframes 1\n";
+  const nlohmann::json report = Render(dir, start.path, "face", s.str());
   INFO("log:\n" << LogText(report));
 
-  const facet::Primitive dragged = *Load(dir / "dragged.facet").FindPrimitive(box_id);
+  const facet::Primitive dragged = *Load(dir / "dragged.facet").FindPrimitive(start.box_id);
   const Eigen::Vector3d shift = dragged.shape.translation - box0.shape.translation;
   CAPTURE(shift.transpose());
   CHECK(std::abs(shift.z()) < kExact);  // over the ground
   CHECK(shift.norm() > 0.1);
   CHECK(dragged.shape.params == box0.shape.params);
   // The pressed point of the top face follows the mouse.
-  const double under_mouse_px = (view.ToScreen(top_centre + shift) - to).norm();
+  const double under_mouse_px = (start.view.ToScreen(top_centre + shift) - to).norm();
   CAPTURE(under_mouse_px);
   CHECK(under_mouse_px < 1.0);  // the press point is the floored pixel's hit, within a pixel of the centre
 
-  const facet::Primitive vertex_moved = *Load(dir / "vertex.facet").FindPrimitive(box_id);
+  const facet::Primitive vertex_moved = *Load(dir / "vertex.facet").FindPrimitive(start.box_id);
   const double miss = (vertex_moved.mesh.vertex(7).position - target).norm();
   CAPTURE(miss);
   CHECK(miss < kExact);
-  const facet::Primitive primitive_moved = *Load(dir / "primitive.facet").FindPrimitive(box_id);
+  const facet::Primitive primitive_moved = *Load(dir / "primitive.facet").FindPrimitive(start.box_id);
   for (facet::VertexId v = 0; v < 8; ++v) {
     const double error =
         (primitive_moved.mesh.vertex(v).position - vertex_moved.mesh.vertex(v).position - delta).norm();
@@ -215,7 +204,7 @@ TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the
     CHECK(error < kExact);
   }
   const facet::Project escaped = Load(dir / "escaped.facet");
-  CHECK(escaped == before);
+  CHECK(escaped == start.before);
   CHECK(report.at("log").dump().find("Move cancelled") == std::string::npos);  // a hint, not a log line
 
   const auto& undo = report.at("undo_stack");
@@ -227,13 +216,13 @@ TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the
   // Shift: the vertex moves along the world z axis only. A run of its own: saving under a new
   // name re-frames the 3D view, so the start view holds only until the model changes and is saved.
   std::ostringstream z;
-  z << prefix << "hold shift\n"
+  z << start.prefix << "hold shift\n"
     << DragScript(corner7, corner7 + Eigen::Vector2d(0.0, -30.0), 4, "") << "release shift\ncommand save "
     << (dir / "shift.facet") << "\nframes 1\n";
-  const nlohmann::json shift_report = Render(dir, path, "shift", z.str());
+  const nlohmann::json shift_report = Render(dir, start.path, "shift", z.str());
   INFO("shift log:\n" << LogText(shift_report));
   const Eigen::Vector3d p7_before = box0.mesh.vertex(7).position;
-  const Eigen::Vector3d p7 = Load(dir / "shift.facet").FindPrimitive(box_id)->mesh.vertex(7).position;
+  const Eigen::Vector3d p7 = Load(dir / "shift.facet").FindPrimitive(start.box_id)->mesh.vertex(7).position;
   CAPTURE(p7_before.transpose());
   CAPTURE(p7.transpose());
   CHECK(std::abs(p7.x() - p7_before.x()) < 1e-9);
@@ -305,14 +294,8 @@ int ReferencePixels(const cv::Mat& shot, const nlohmann::json& panel_rect) {
 TEST_CASE("reference geometry: added by script and drawn; a dragged vertex snaps onto it; undo; a missing file") {
   TempDir dir("reference_snap");
   const MoveToolStart start = StartWithFreeBox(dir);
-  const facet::Id box_id = start.box_id;
-  const std::string& path = start.path;
-  const std::string& prefix = start.prefix;
-  const nlohmann::json& start_report = start.report;
-  const Viewport3d& view = start.view;
-  const facet::Project& before = start.before;
   const facet::VertexId corner = 7;
-  const Eigen::Vector3d p0 = before.FindPrimitive(box_id)->mesh.vertex(corner).position;
+  const Eigen::Vector3d p0 = start.before.FindPrimitive(start.box_id)->mesh.vertex(corner).position;
   // A reference triangle (Z-up file: its numbers are world coordinates) whose first vertex
   // lies up and beside the box's corner.
   const Eigen::Vector3d target = p0 + Eigen::Vector3d(0.75, -0.5, 0.625);
@@ -326,13 +309,13 @@ TEST_CASE("reference geometry: added by script and drawn; a dragged vertex snaps
   }
   const std::string add = "command reference add-z-up " + (dir / "plan.obj") + "\nframes 2\n";
   // Released 3 px right and 2 px below where the reference vertex shows: within the 8 px snap.
-  const Eigen::Vector2d from = Rounded(view.ToScreen(p0));
-  const Eigen::Vector2d to = Rounded(view.ToScreen(target)) + Eigen::Vector2d(3.0, 2.0);
+  const Eigen::Vector2d from = Rounded(start.view.ToScreen(p0));
+  const Eigen::Vector2d to = Rounded(start.view.ToScreen(target)) + Eigen::Vector2d(3.0, 2.0);
   std::ostringstream s;
-  s << prefix << add << "screenshot " << (dir / "added.png") << "\n"
+  s << start.prefix << add << "screenshot " << (dir / "added.png") << "\n"
     << DragScript(from, to, 6, "") << "command save " << (dir / "after.facet") << "\nframes 1\n"
     << "command undo\nframes 2\ncommand undo\nframes 2\nscreenshot " << (dir / "undone.png") << "\n";
-  const nlohmann::json report = Render(dir, path, "snap", s.str());
+  const nlohmann::json report = Render(dir, start.path, "snap", s.str());
   INFO("log:\n" << LogText(report));
   CHECK(LogText(report).find("Add reference plan.obj (1 triangles)") != std::string::npos);
   CHECK(LogText(report).find("snapped to a reference vertex") != std::string::npos);
@@ -353,7 +336,7 @@ TEST_CASE("reference geometry: added by script and drawn; a dragged vertex snaps
   REQUIRE(after.references.size() == 1);
   CHECK(after.references[0].path == "plan.obj");  // relative to the project file
   CHECK_FALSE(after.references[0].y_up);
-  const Eigen::Vector3d p1 = after.FindPrimitive(box_id)->mesh.vertex(corner).position;
+  const Eigen::Vector3d p1 = after.FindPrimitive(start.box_id)->mesh.vertex(corner).position;
   CAPTURE(p1.transpose());
   CAPTURE(target.transpose());
   // Exactly on the reference vertex, not under the mouse 3.6 px away.

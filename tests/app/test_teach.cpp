@@ -772,10 +772,22 @@ TEST_CASE("screenshots of each teach overlay") {
   const fs::path shots = fs::path(FACET_BINARY_DIR) / "teach";
   fs::create_directories(shots);
   const std::string leuven = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuven.facet";
+  // The app opens the project by its file name from the project's folder, as a user does, so
+  // that the pictures' log shows no folder of the machine that made them.
   auto shot = [&](const std::string& project, const std::string& name, const std::string& script) {
     const std::string png = (shots / (name + ".png")).string();
     fs::remove(png);
-    const nlohmann::json report = RenderScript(dir, project, name, script + "\nscreenshot " + png + "\n");
+    WriteText(dir / (name + ".txt"), script + "\nscreenshot " + png + "\n");
+    const fs::path project_path(project);
+    const RunResult run =
+        RunRender(dir,
+                  "'" + project_path.filename().string() + "' -o '" + (dir / (name + ".png")) + "' --script '" +
+                      (dir / (name + ".txt")) + "' --report '" + (dir / (name + ".json")) + "'",
+                  project_path.parent_path().string());
+    INFO("stderr: " << run.stderr_text);
+    REQUIRE(run.exit_code == 0);
+    const nlohmann::json report = ReadJson(dir / (name + ".json"));
+    CHECK(report.at("log").dump().find(project_path.parent_path().string()) == std::string::npos);
     const cv::Mat picture = cv::imread(png);
     REQUIRE_MESSAGE(!picture.empty(), name);
     // The README's copy: a small JPEG (a few hundred KB for all four).
@@ -835,22 +847,24 @@ TEST_CASE("screenshots of each teach overlay") {
     CHECK(c.at("satisfied").get<bool>() == once.constraints[i].satisfied);
   }
   // The vanishing-point fit stepped on the Leuven photo and the two-view refinement on the
-  // synthetic pair with noisy pins, each one step from the default start (the answer moved off
-  // by 20 %), the residuals at the scale stepping chose.
+  // synthetic pair with noisy pins, each three steps from the default start (the answer moved
+  // off by 20 %), so that the window's plots show a descent; the residuals at the scale
+  // stepping chose.
+  const std::string three_steps = "command teach step\ncommand teach step\ncommand teach step\n";
   r = shot(leuven, "teach-steps-vp",
-           "frames 3\ncommand teach steps on\ncommand teach subject vanishing\ncommand teach step\nframes 3");
+           "frames 3\ncommand teach steps on\ncommand teach subject vanishing\n" + three_steps + "frames 3");
   REQUIRE(r.at("teach").at("steps").contains("vanishing"));
-  CHECK(r.at("teach").at("steps").at("vanishing").at("path").size() == 2u);
+  CHECK(r.at("teach").at("steps").at("vanishing").at("path").size() == 4u);  // the start and 3 steps
   // 1.5 px clicks.
   SyntheticSceneOptions noisy;
   noisy.noise_px = 1.5;
   const SyntheticScene noisy_scene = MakeBoxScene(noisy);
   const std::string pair_path = WriteScene(dir, noisy_scene, TwoViewMatchesProject(noisy_scene, 1.5));
   r = shot(pair_path, "teach-steps-two-view",
-           "frames 3\ncommand teach steps on\ncommand teach subject two-view\ncommand teach second-image 1\n"
-           "command teach step\ncommand select-image 1\nframes 3");
+           "frames 3\ncommand teach steps on\ncommand teach subject two-view\ncommand teach second-image 1\n" +
+               three_steps + "command select-image 1\nframes 3");
   REQUIRE(r.at("teach").at("steps").contains("two_view"));
-  CHECK(r.at("teach").at("steps").at("two_view").at("steps").get<int>() == 1);
+  CHECK(r.at("teach").at("steps").at("two_view").at("steps").get<int>() == 3);
   const cv::Mat exported = cv::imread(steps_3d);
   REQUIRE(!exported.empty());
   CHECK(exported.cols == 960);
