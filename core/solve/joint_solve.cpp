@@ -1034,9 +1034,9 @@ std::string WhySolvedModelDegenerate(const Project& before, const Project& solve
   // A solve that shrinks a size a millionfold, to a millionth of the primitive's reach, has
   // found no dimension but the null direction of an unfixed scale (sizes of 1e-16 were seen
   // with 15.6 px pin RMS). One that grows a size or moves the model a million times its reach
-  // has run its cameras and the model off to infinity together (a box of 4 m became 4e8 m
-  // at 96 px RMS after a horizon that contradicted the line families): no observation puts a
-  // model there.
+  // has run its cameras and the model off towards infinity together (a box of 4 m became 4e8
+  // m at 96 px RMS after a horizon that contradicted the line families; 7e4 m when the
+  // iterations ran out sooner): no observation puts a model there.
   const ModelChangeCheck check = CheckModelChange(before, solved);
   switch (check.fault) {
     case ModelChangeFault::kNone: return "";
@@ -1048,8 +1048,9 @@ std::string WhySolvedModelDegenerate(const Project& before, const Project& solve
     case ModelChangeFault::kGrew:
     case ModelChangeFault::kRanAway:
       return "the model ran off to infinity: " + check.what +
-             " (the cameras and the pins disagree, e.g. a horizon or lines that contradict the photo, or nothing "
-             "fixes the scale: set a known length)";
+             (check.scale_given ? " (the cameras and the pins disagree, e.g. a horizon or lines that contradict the photo)"
+                                : " (nothing fixes the model's scale: set a known length on an edge the pins see, or "
+                                  "lock a size you know)");
   }
   return "";
 }

@@ -11,8 +11,28 @@ namespace facet {
 
 namespace {
 
-// A millionfold either way: far beyond any real edit or any noise, far inside double range.
+// A millionfold: far beyond any real edit or any noise, far inside double range.
 constexpr double kChangeRatio = 1e6;
+// Growth of a size is refused sooner: runaways stop wherever the iteration budget ends, and
+// were seen at 2e4-5e4 times the reach (a box 4 wide seen from 12 becoming 7e4 wide after 5
+// iterations; the Strecha band box 223,663 wide), while a real change of scale that large
+// comes only from a length the user typed, which raises the bound with it.
+constexpr double kGrowthRatio = 1e3;
+
+// The largest length the user fixed: known lengths (distance constraints), locked sizes and
+// fixed points' distances from the origin. 0 when nothing fixes the scale.
+double LargestGivenLength(const Project& project) {
+  double given = 0.0;
+  for (const Constraint& c : project.constraints) {
+    if (c.kind == ConstraintKind::kDistance) given = std::max(given, std::abs(c.value));
+    if (c.kind == ConstraintKind::kFixedPoint) given = std::max(given, c.point.norm());
+  }
+  for (const Primitive& p : project.primitives) {
+    for (int k = 0; k < ShapeParamCount(p.shape.kind); ++k)
+      if (p.param_locked[k]) given = std::max(given, std::abs(p.shape.params(k)));
+  }
+  return given;
+}
 
 bool Centroid(const Primitive& p, Eigen::Vector3d* centroid) {
   *centroid = Eigen::Vector3d::Zero();
@@ -47,6 +67,8 @@ double PrimitiveReach(const Primitive& p, const Project& project) {
 
 ModelChangeCheck CheckModelChange(const Project& before, const Project& after) {
   ModelChangeCheck check;
+  const double given = LargestGivenLength(after);
+  check.scale_given = given > 0.0;
   for (const Primitive& p : after.primitives) {
     const Primitive* old = before.FindPrimitive(p.id);
     if (old == nullptr || old->shape.kind != p.shape.kind) continue;
@@ -60,7 +82,7 @@ ModelChangeCheck CheckModelChange(const Project& before, const Project& after) {
         fault = ModelChangeFault::kNonPositive;
       } else if (was > 0.0 && now < was / kChangeRatio && now < reach_after / kChangeRatio) {
         fault = ModelChangeFault::kCollapsed;
-      } else if (reach_before > 0.0 && now > kChangeRatio * reach_before) {
+      } else if (reach_before > 0.0 && now > kGrowthRatio * std::max(reach_before, given)) {
         fault = ModelChangeFault::kGrew;
       }
       if (fault == ModelChangeFault::kNone) continue;

@@ -14,7 +14,7 @@ enum class ModelChangeFault {
   kNone,
   kNonPositive,  // a size at or below zero
   kCollapsed,    // a size shrunk a millionfold, to a millionth of the primitive's reach
-  kGrew,         // a size grown to a million times the primitive's reach before the change
+  kGrew,         // a size grown a thousandfold beyond the primitive's reach and any length given
   kRanAway,      // the primitive's centroid moved a million times its reach before the change
 };
 
@@ -27,17 +27,22 @@ struct ModelChangeCheck {
   // The first fault found, named: "Size x of 'box' would go from 3.973 to 3.98e+08"; "" when
   // there is none.
   std::string what;
+  // Whether the user fixed the scale (a known length, a locked size or a fixed point): a
+  // runaway then means the observations contradict each other; without, nothing holds it.
+  bool scale_given = false;
   bool Ok() const { return fault == ModelChangeFault::kNone; }
 };
 
 // Compares each primitive of `after` with the same-id, same-kind primitive of `before`
 // (new primitives and changed kinds are not compared; an unchanged size never faults, so an
-// old fault is not blamed on this change). Rules, ratios 1e6 both ways:
+// old fault is not blamed on this change). Rules:
 // - a size <= 0 (or NaN);
 // - collapse: now < 1e-6 * was and now < 1e-6 * reach(after) (shrinking from an absurd start,
 //   a size of 4e8 back to 4, is a recovery, not a collapse);
-// - growth: now > 1e6 * reach(before) (a box of 4 m seen from 12 m does not become 4e8 m wide
-//   by any observation; seen when a solve ran its cameras and sizes off to infinity together);
+// - growth: now > 1e3 * max(reach(before), the largest length the user gave in `after`: known
+//   lengths, locked sizes, fixed points) (a box of 4 m seen from 12 m becomes 7e4 m wide by
+//   no observation: a solve ran its cameras and sizes off towards infinity together, along
+//   the scale the observations do not hold; a typed length of 5 km raises the bound with it);
 // - runaway: the vertex centroid moved by more than 1e6 * reach(before).
 ModelChangeCheck CheckModelChange(const Project& before, const Project& after);
 
