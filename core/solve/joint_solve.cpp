@@ -12,6 +12,7 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
+#include "core/geometry/camera_checks.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/solve/constraint_polish.h"
 #include "core/solve/joint_solve_internal.h"
@@ -20,6 +21,7 @@
 #include "core/solve/scene_solve.h"
 #include "core/solve/vertex_move.h"
 #include "core/util/eigen_decompositions.h"
+#include "core/util/format.h"
 
 namespace facet {
 
@@ -1018,6 +1020,33 @@ JointSolveSummary SolveJointTraced(const Project& project, const JointSolveOptio
   }
   if (start != &project) *solved = *start;
   WriteState(problem, state, solved);
+  // Unlocked distortion, refined against few observations, can bend past any lens (k2 = -3
+  // from 8 pins and a pinhole photo): no camera. The solve runs again with that distortion
+  // held where it was, and says so; the image's lock setting is the user's and stays.
+  Project held = project;
+  std::vector<std::string> folded;
+  for (const Image& image : solved->images) {
+    const Image* old = project.FindImage(image.id);
+    if (old == nullptr || (old->camera.k1 == image.camera.k1 && old->camera.k2 == image.camera.k2)) continue;
+    const std::string folds = WhyDistortionFolds(image.camera.k1, image.camera.k2, image.camera.focal_px,
+                                                 image.camera.principal_point_px, image.width_px, image.height_px);
+    if (folds.empty()) continue;
+    held.FindImage(image.id)->distortion_locked = true;
+    folded.push_back("image '" + image.path + "': " + folds + "; its distortion was held at k1 = " +
+                     internal::FormatNumber(old->camera.k1, 4) + ", k2 = " + internal::FormatNumber(old->camera.k2, 4) +
+                     " (draw plumb lines to estimate it, or lock it)");
+  }
+  if (!folded.empty()) {
+    JointSolveSummary again = SolveJoint(held, options, solved);
+    if (!again.IsUsable()) {
+      *solved = project;
+    } else {
+      for (const Image& image : project.images) solved->FindImage(image.id)->distortion_locked = image.distortion_locked;
+    }
+    again.held_distortion = folded;
+    again.warnings.insert(again.warnings.begin(), folded.begin(), folded.end());
+    return again;
+  }
   if (const std::string degenerate = WhySolvedModelDegenerate(project, *solved); !degenerate.empty()) {
     *solved = project;
     summary.undetermined.clear();

@@ -118,6 +118,10 @@ struct JointSolveSummary : SolverSummary {
   // The solve converged to a degenerate model (WhySolvedModelDegenerate); termination is then
   // kFailed and the message names the size.
   bool degenerate = false;
+  // Images whose unlocked distortion the solve took past any lens (WhyDistortionFolds,
+  // core/geometry/camera_checks.h): the solve ran again with it held, one sentence each (also
+  // first in warnings).
+  std::vector<std::string> held_distortion;
   std::vector<PinDiagnostic> pins;                // project.pins order
   std::vector<ImageDiagnostic> images;            // calibrated images with pins
   std::vector<ConstraintDiagnostic> constraints;  // project.constraints order

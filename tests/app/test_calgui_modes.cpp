@@ -17,6 +17,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "app/state/calgui_exif_prior.h"
+#include "core/geometry/camera_checks.h"
 #include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
@@ -218,6 +219,13 @@ TEST_CASE("calibration modes from the script: known focal, undo, prior strength,
   REQUIRE(unlocked_project.primitives.size() == 1);
   CHECK(level_project.primitives[0].shape.params == unlocked_project.primitives[0].shape.params);
   CHECK(report.at("log").dump().find("the model ran off to infinity") != std::string::npos);
+  // Unlocking the distortion of this pinhole photo let the joint solve bend it past any lens
+  // (k1 = 0.31, k2 = -3.0): refused by name, the camera keeps a distortion that maps the photo
+  // one to one.
+  const facet::Camera& unlocked_camera = unlocked_project.images[0].camera;
+  CHECK(facet::WhyDistortionFolds(unlocked_camera.k1, unlocked_camera.k2, unlocked_camera.focal_px,
+                                  unlocked_camera.principal_point_px, options.width_px, options.height_px) == "");
+  CHECK(report.at("log").dump().find("folds the photo") != std::string::npos);
   const facet::Image last = SavedImage(dir / "last.facet");
   CHECK(last.use_horizon);
   CHECK(last.horizon_px == horizon);
