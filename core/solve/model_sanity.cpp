@@ -14,7 +14,7 @@ namespace {
 // A millionfold: far beyond any real edit or any noise, far inside double range.
 constexpr double kChangeRatio = 1e6;
 // Growth of a size is refused sooner: runaways stop wherever the iteration budget ends, and
-// were seen at 2e4-5e4 times the reach (a box 4 wide seen from 12 becoming 7e4 wide after 5
+// were seen at 5e3-2e4 times the reach (a box 4 wide seen from 12 becoming 7e4-1.8e5 wide after 5
 // iterations; the Strecha band box 223,663 wide), while a real change of scale that large
 // comes only from a length the user typed, which raises the bound with it.
 constexpr double kGrowthRatio = 1e3;
