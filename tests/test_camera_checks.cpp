@@ -58,3 +58,29 @@ TEST_CASE("a user's K must be a calibration matrix") {
 
 }  // namespace
 }  // namespace facet
+
+// The radial distortion must map the photo one to one: the distorted radius
+// r (1 + k1 r^2 + k2 r^4) may peak only beyond the farthest corner. The joint solve gave
+// k1 = 0.315, k2 = -3.04 for a pinhole photo (8 pins, distortion unlocked): its peak, 0.45 of
+// f, lies inside the corner at 0.73 of f, so the corners are images of no ray.
+TEST_CASE("a distortion that folds the photo back is no camera") {
+  const Eigen::Vector2d pp(520.25, 370.75);
+  constexpr double kFocal = 892.2;
+  const std::string folded = facet::WhyDistortionFolds(0.315, -3.04, kFocal, pp, 1024, 768);
+  INFO(folded);
+  CHECK(folded.find("folds the photo") != std::string::npos);
+  CHECK(folded.find("0.45") != std::string::npos);
+  // Real lenses: a barrel of 5 % at the corner (k1 = -0.1), a pincushion, a mustache; none.
+  CHECK(facet::WhyDistortionFolds(-0.1, 0.0, kFocal, pp, 1024, 768).empty());
+  CHECK(facet::WhyDistortionFolds(0.2, 0.05, kFocal, pp, 1024, 768).empty());
+  CHECK(facet::WhyDistortionFolds(-0.25, 0.1, kFocal, pp, 1024, 768).empty());
+  CHECK(facet::WhyDistortionFolds(0.0, 0.0, kFocal, pp, 1024, 768).empty());
+  // k1 < 0 alone peaks at r^2 = -1 / (3 k1): r_d = (2/3) r there. With k1 = -1 that is 0.385,
+  // inside the corner; the same lens on a photo cropped to its centre (corner 0.3) is fine.
+  CHECK_FALSE(facet::WhyDistortionFolds(-1.0, 0.0, kFocal, pp, 1024, 768).empty());
+  const double half = 0.3 * kFocal / std::sqrt(2.0);
+  CHECK(facet::WhyDistortionFolds(-1.0, 0.0, kFocal, Eigen::Vector2d(half, half), static_cast<int>(2 * half),
+                           static_cast<int>(2 * half))
+            .empty());
+  CHECK_FALSE(facet::WhyDistortionFolds(std::numeric_limits<double>::quiet_NaN(), 0.0, kFocal, pp, 1024, 768).empty());
+}

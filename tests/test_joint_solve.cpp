@@ -509,6 +509,85 @@ TEST_CASE("joint solve: a size the pins would take below zero fails by name, the
   CHECK(solved == p);
 }
 
+// Issue 14, the scale: the whole scene (camera centres, sizes, translations) scaled by s
+// projects exactly as before, so no residual tells a solve where the scale should be when no
+// length is given; one that drifts along that direction gave the Strecha band box 223,663 wide
+// at 0.997 px. The check names the unfixed scale and the fix, and a typed length that large
+// (or a locked size) lets the same change through.
+TEST_CASE("joint solve: a scale running away along the unfixed gauge is named, not saved") {
+  testing::SyntheticScene s = testing::MakeBoxScene({});
+  Project before = s.project;
+  before.primitives[0].param_locked = {false, false, false, false};  // no length given
+  auto scaled = [](const Project& p, double factor) {
+    Project out = p;
+    for (Image& image : out.images)
+      image.camera.SetPose(image.camera.cam_from_world_rotation, factor * image.camera.CenterInWorld());
+    for (Primitive& primitive : out.primitives) {
+      primitive.shape.params *= factor;
+      primitive.shape.translation *= factor;
+    }
+    RefreshAllPrimitives(&out);
+    return out;
+  };
+  // The reprojections are the same (the gauge): to rounding.
+  const Project far = scaled(before, 2e4);
+  for (const Pin& pin : before.pins) {
+    const Eigen::Vector3d a = before.primitives[0].mesh.vertex(pin.vertex.vertex).position;
+    const Eigen::Vector3d b = far.primitives[0].mesh.vertex(pin.vertex.vertex).position;
+    CHECK((before.images[0].camera.Project(a) - far.images[0].camera.Project(b)).norm() < 1e-6);
+  }
+  const std::string why = WhySolvedModelDegenerate(before, far);
+  INFO(why);
+  CHECK(why.find("the model ran off to infinity: Size x of 'box' would go from 4 to 8e+04") != std::string::npos);
+  CHECK(why.find("nothing fixes the model's scale: set a known length") != std::string::npos);
+  // Within a thousand times the reach (about 13 here: the camera's distance), it is an answer.
+  CHECK(WhySolvedModelDegenerate(before, scaled(before, 100.0)).empty());
+  // A known length of 1e5 explains the change: no refusal.
+  Project typed = before;
+  Constraint known;
+  known.id = typed.NewId();
+  known.kind = ConstraintKind::kDistance;
+  known.vertices = {{typed.primitives[0].id, 0}, {typed.primitives[0].id, 1}};
+  known.value = 1e5;
+  typed.constraints.push_back(known);
+  Project typed_far = scaled(typed, 2e4);
+  CHECK(WhySolvedModelDegenerate(typed, typed_far).empty());
+  // A known length of 1 does not: the observations contradict it.
+  typed_far.constraints.back().value = 1.0;
+  const std::string contradicted = WhySolvedModelDegenerate(typed, typed_far);
+  CHECK(contradicted.find("the cameras and the pins disagree") != std::string::npos);
+}
+
+// Issue 14, the lens: with its distortion unlocked, 8 noisy pins on a pinhole photo bend
+// k1, k2 past any lens (here k1 = 0.12, k2 = -1.15: the photo folds back at 0.55 f inside its
+// corner at 0.73 f; k2 = -3.0 in the app's calibration modes test). The solve holds that
+// distortion, says so, and keeps the user's lock setting.
+TEST_CASE("joint solve: a distortion that would fold the photo is held, named, the lock setting kept") {
+  SyntheticSceneOptions o;
+  o.noise_px = 0.5;
+  o.seed = 7;
+  testing::SyntheticScene s = testing::MakeBoxScene(o);
+  Project p = s.project;
+  p.images[0].distortion_locked = false;
+  Project solved;
+  const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
+  INFO(summary.message);
+  REQUIRE(summary.IsUsable());
+  REQUIRE(summary.held_distortion.size() == 1);
+  MESSAGE(summary.held_distortion[0]);
+  CHECK(summary.held_distortion[0].find("folds the photo") != std::string::npos);
+  CHECK(solved.images[0].camera.k1 == p.images[0].camera.k1);
+  CHECK(solved.images[0].camera.k2 == p.images[0].camera.k2);
+  CHECK_FALSE(solved.images[0].distortion_locked);
+  // The held solve is the locked one's, to the last bit.
+  Project locked = p;
+  locked.images[0].distortion_locked = true;
+  Project locked_solved;
+  REQUIRE(SolveJoint(locked, JointSolveOptions{}, &locked_solved).IsUsable());
+  locked_solved.images[0].distortion_locked = false;
+  CHECK(solved == locked_solved);
+}
+
 TEST_CASE("joint solve: a failing solve leaves the project unchanged and says why") {
   testing::SyntheticScene s = testing::MakeBoxScene({});
   SUBCASE("vertex behind the camera at the start") {

@@ -341,6 +341,39 @@ TEST_CASE("vertex move: refusals leave the project unchanged") {
   CHECK_FALSE(summary.IsUsable());
   CHECK(moved == s.project);
 
+  // Issue 14: a drag ray almost parallel to its plane puts the target 1e9 away; a box 4 wide
+  // becoming 1e9 wide (growth beyond a million times its reach) is no model. Nor is a size
+  // dragged to nothing (a millionth of its value and of its reach). A free vertex dragged that
+  // far takes its primitive's centre with it.
+  const double far = 1e9;
+  summary = MoveVertex(s.project, {s.id, 7}, s.primitive().mesh.vertex(7).position + r * Eigen::Vector3d(far, 0, 0),
+                       {}, &moved);
+  INFO("far: " << summary.message);
+  CHECK_FALSE(summary.IsUsable());
+  CHECK(summary.message.find("beyond any camera's reach: Size x of 'p' would go from 4 to") != std::string::npos);
+  CHECK(moved == s.project);
+  const double sliver = 1e-7;  // of 4: below 1e-6 of the size and of the reach
+  summary = MoveVertex(s.project, {s.id, 7}, s.primitive().mesh.vertex(7).position + r * Eigen::Vector3d(sliver - 4.0, 0, 0),
+                       {}, &moved);
+  INFO("sliver: " << summary.message);
+  CHECK_FALSE(summary.IsUsable());
+  CHECK(summary.message.find("collapse the model: Size x of 'p' would go from 4 to") != std::string::npos);
+  CHECK(moved == s.project);
+  {
+    Project free_vertex = s.project;
+    free_vertex.FindPrimitive(s.id)->mesh.vertex(7).local.free = true;
+    RefreshAllPrimitives(&free_vertex);
+    summary = MoveVertex(free_vertex, {s.id, 7}, Eigen::Vector3d(far, far, far), {}, &moved);
+    INFO("free vertex far: " << summary.message);
+    CHECK_FALSE(summary.IsUsable());
+    CHECK(summary.message.find("the centre of 'p' would move by") != std::string::npos);
+    CHECK(moved == free_vertex);
+    // A reasonable drag of the same free vertex still applies.
+    summary = MoveVertex(free_vertex, {s.id, 7}, free_vertex.FindPrimitive(s.id)->mesh.vertex(7).position +
+                                                     Eigen::Vector3d(0.5, 0.0, 0.0), {}, &moved);
+    CHECK(summary.IsUsable());
+  }
+
   s.primitive().param_locked = {true, true, true, false};
   summary = MoveVertex(s.project, {s.id, 7}, Eigen::Vector3d::Zero(), {}, &moved);
   CHECK_FALSE(summary.IsUsable());
@@ -419,6 +452,13 @@ TEST_CASE("primitive move: translation by a delta, locks and attachment refuse")
   CHECK(moved == project);
 
   project.FindPrimitive(box_id)->translation_locked = false;
+  // Issue 14: a move of 1e9 (a grazing drag ray) takes the box a million times its reach away.
+  summary = MovePrimitive(project, box_id, Eigen::Vector3d(1e9, 0.0, 0.0), &moved);
+  INFO("far: " << summary.message);
+  CHECK_FALSE(summary.IsUsable());
+  CHECK(summary.message.find("the centre of 'box' would move by 1e+09") != std::string::npos);
+  CHECK(moved == project);
+
   summary = MovePrimitive(project, box_id, delta, &moved);
   INFO("free: " << summary.message);
   REQUIRE(summary.IsUsable());

@@ -1,5 +1,6 @@
 #include "core/geometry/camera_checks.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/util/format.h"
@@ -28,6 +29,36 @@ std::string WhyNotACamera(double focal_px, const Eigen::Vector2d& principal_poin
            ") px is " + Number(offset) + " image diagonals from the centre (at most " +
            Number(kMaxPrincipalPointOffsetPerDiagonal) + ")";
   return {};
+}
+
+std::string WhyDistortionFolds(double k1, double k2, double focal_px, const Eigen::Vector2d& principal_point_px,
+                               int width_px, int height_px) {
+  if (k1 == 0.0 && k2 == 0.0) return {};
+  if (!std::isfinite(k1) || !std::isfinite(k2)) return "the distortion is not finite";
+  if (!(focal_px > 0.0) || !std::isfinite(focal_px)) return {};  // WhyNotACamera names that
+  double corner = 0.0;
+  for (const double u : {0.0, static_cast<double>(width_px)})
+    for (const double v : {0.0, static_cast<double>(height_px)})
+      corner = std::max(corner, (Eigen::Vector2d(u, v) - principal_point_px).norm() / focal_px);
+  // d(r_d)/dr = 1 + 3 k1 s + 5 k2 s^2 with s = r^2: its first positive root is the peak.
+  double peak_s = -1.0;
+  if (k2 == 0.0) {
+    if (k1 < 0.0) peak_s = -1.0 / (3.0 * k1);
+  } else {
+    const double disc = 9.0 * k1 * k1 - 20.0 * k2;
+    if (disc >= 0.0) {
+      const double q = std::sqrt(disc);
+      for (const double root : {(-3.0 * k1 - q) / (10.0 * k2), (-3.0 * k1 + q) / (10.0 * k2)})
+        if (root > 0.0 && (peak_s < 0.0 || root < peak_s)) peak_s = root;
+    }
+  }
+  if (peak_s < 0.0) return {};
+  const double peak_r = std::sqrt(peak_s);
+  const double peak_distorted = peak_r * (1.0 + k1 * peak_s + k2 * peak_s * peak_s);
+  if (peak_distorted >= corner) return {};
+  return "the distortion k1 = " + Number(k1) + ", k2 = " + Number(k2) + " folds the photo: it bends rays back at " +
+         Number(peak_distorted) + " of the focal length from the principal point, inside the farthest corner at " +
+         Number(corner) + " (no lens does that)";
 }
 
 std::string WhyFocalIsUndetermined(double focal_px, double focal_std_px) {

@@ -28,6 +28,15 @@ std::string WhyNotACamera(double focal_px, const Eigen::Vector2d& principal_poin
 // check) says the data leave it undetermined; then one sentence with both numbers.
 std::string WhyFocalIsUndetermined(double focal_px, double focal_std_px);
 
+// Empty when the radial distortion (k1, k2 on the normalised radius r, core/geometry/camera.h)
+// maps the photo one to one; else one sentence with the numbers. The distorted radius
+// r (1 + k1 r^2 + k2 r^4) must keep growing until it reaches the photo's farthest corner
+// (from the principal point, over f): past its peak, points fold back onto nearer pixels and
+// the corners are images of no ray, which no lens does (k1 = 0.32, k2 = -3.0 at f = 892 px
+// on a 1024 x 768 photo peaks at 0.45 of the corner's 0.72).
+std::string WhyDistortionFolds(double k1, double k2, double focal_px, const Eigen::Vector2d& principal_point_px,
+                               int width_px, int height_px);
+
 // Empty when K, given by the user with no photo size, is a calibration matrix: finite, upper
 // triangular, positive focal lengths and K(2,2); else why not.
 std::string WhyNotACalibrationMatrix(const Eigen::Matrix3d& k);

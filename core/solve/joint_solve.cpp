@@ -12,13 +12,16 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
+#include "core/geometry/camera_checks.h"
 #include "core/optim/levenberg_marquardt.h"
 #include "core/solve/constraint_polish.h"
 #include "core/solve/joint_solve_internal.h"
 #include "core/solve/joint_solve_steps.h"
+#include "core/solve/model_sanity.h"
 #include "core/solve/scene_solve.h"
 #include "core/solve/vertex_move.h"
 #include "core/util/eigen_decompositions.h"
+#include "core/util/format.h"
 
 namespace facet {
 
@@ -1017,6 +1020,33 @@ JointSolveSummary SolveJointTraced(const Project& project, const JointSolveOptio
   }
   if (start != &project) *solved = *start;
   WriteState(problem, state, solved);
+  // Unlocked distortion, refined against few observations, can bend past any lens (k2 = -3
+  // from 8 pins and a pinhole photo): no camera. The solve runs again with that distortion
+  // held where it was, and says so; the image's lock setting is the user's and stays.
+  Project held = project;
+  std::vector<std::string> folded;
+  for (const Image& image : solved->images) {
+    const Image* old = project.FindImage(image.id);
+    if (old == nullptr || (old->camera.k1 == image.camera.k1 && old->camera.k2 == image.camera.k2)) continue;
+    const std::string folds = WhyDistortionFolds(image.camera.k1, image.camera.k2, image.camera.focal_px,
+                                                 image.camera.principal_point_px, image.width_px, image.height_px);
+    if (folds.empty()) continue;
+    held.FindImage(image.id)->distortion_locked = true;
+    folded.push_back("image '" + image.path + "': " + folds + "; its distortion was held at k1 = " +
+                     internal::FormatNumber(old->camera.k1, 4) + ", k2 = " + internal::FormatNumber(old->camera.k2, 4) +
+                     " (draw plumb lines to estimate it, or lock it)");
+  }
+  if (!folded.empty()) {
+    JointSolveSummary again = SolveJoint(held, options, solved);
+    if (!again.IsUsable()) {
+      *solved = project;
+    } else {
+      for (const Image& image : project.images) solved->FindImage(image.id)->distortion_locked = image.distortion_locked;
+    }
+    again.held_distortion = folded;
+    again.warnings.insert(again.warnings.begin(), folded.begin(), folded.end());
+    return again;
+  }
   if (const std::string degenerate = WhySolvedModelDegenerate(project, *solved); !degenerate.empty()) {
     *solved = project;
     summary.undetermined.clear();
@@ -1029,52 +1059,27 @@ JointSolveSummary SolveJointTraced(const Project& project, const JointSolveOptio
   return finish(budget_used ? SolverTermination::kMaxIterations : SolverTermination::kConverged, text.str());
 }
 
-namespace {
-
-// The length against which a size of `p` counts as vanishing: its largest size, or its distance
-// from the nearest camera when that is larger.
-double ReachOf(const Primitive& p, const Project& project) {
-  double reach = 0.0;
-  for (int k = 0; k < ShapeParamCount(p.shape.kind); ++k) reach = std::max(reach, std::abs(p.shape.params(k)));
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  int n = 0;
-  for (VertexId v = 0; v < p.mesh.VertexIdEnd(); ++v) {
-    if (!p.mesh.IsVertex(v)) continue;
-    centroid += p.mesh.vertex(v).position;
-    ++n;
-  }
-  if (n == 0) return reach;
-  centroid /= n;
-  double nearest = std::numeric_limits<double>::infinity();
-  for (const Image& image : project.images) nearest = std::min(nearest, (image.camera.CenterInWorld() - centroid).norm());
-  return std::isfinite(nearest) ? std::max(reach, nearest) : reach;
-}
-
-}  // namespace
-
 std::string WhySolvedModelDegenerate(const Project& before, const Project& solved) {
-  // A solve that shrinks a size a millionfold, to a millionth of the primitive's reach (its
-  // largest size or its distance from the cameras), has found no dimension but the null
-  // direction of an unfixed scale (sizes of 1e-16 were seen with 15.6 px pin RMS). Shrinking
-  // from an absurd start (a size of 4e8 m back to 4 m, seen after a failed edit) is a recovery.
-  constexpr double kCollapseRatio = 1e-6;
-  for (const Primitive& p : solved.primitives) {
-    const Primitive* old = before.FindPrimitive(p.id);
-    if (old == nullptr || old->shape.kind != p.shape.kind) continue;
-    const double reach = ReachOf(p, solved);
-    for (int k = 0; k < ShapeParamCount(p.shape.kind); ++k) {
-      const double was = old->shape.params(k), now = p.shape.params(k);
-      if (now == was) continue;
-      const bool nonpositive = !(now > 0.0);
-      const bool collapsed = was > 0.0 && now < kCollapseRatio * was && now < kCollapseRatio * reach;
-      if (!nonpositive && !collapsed) continue;
-      char text[160];
-      std::snprintf(text, sizeof(text), "%s of '%s' would go from %.4g to %.4g", ShapeParamLabel(p.shape.kind, k),
-                    p.name.c_str(), was, now);
-      return std::string(nonpositive ? "a size would be zero or negative: " : "the model collapsed: ") + text +
-             (nonpositive ? " (a size must stay above 0)"
-                          : " (nothing the pins see fixes the scale, or the constraints contradict the pins)");
-    }
+  // A solve that shrinks a size a millionfold, to a millionth of the primitive's reach, has
+  // found no dimension but the null direction of an unfixed scale (sizes of 1e-16 were seen
+  // with 15.6 px pin RMS). One that grows a size or moves the model a million times its reach
+  // has run its cameras and the model off towards infinity together (a box of 4 m became 4e8
+  // m at 96 px RMS after a horizon that contradicted the line families; 7e4 m when the
+  // iterations ran out sooner): no observation puts a model there.
+  const ModelChangeCheck check = CheckModelChange(before, solved);
+  switch (check.fault) {
+    case ModelChangeFault::kNone: return "";
+    case ModelChangeFault::kNonPositive:
+      return "a size would be zero or negative: " + check.what + " (a size must stay above 0)";
+    case ModelChangeFault::kCollapsed:
+      return "the model collapsed: " + check.what +
+             " (nothing the pins see fixes the scale, or the constraints contradict the pins)";
+    case ModelChangeFault::kGrew:
+    case ModelChangeFault::kRanAway:
+      return "the model ran off to infinity: " + check.what +
+             (check.scale_given ? " (the cameras and the pins disagree, e.g. a horizon or lines that contradict the photo)"
+                                : " (nothing fixes the model's scale: set a known length on an edge the pins see, or "
+                                  "lock a size you know)");
   }
   return "";
 }

@@ -118,6 +118,10 @@ struct JointSolveSummary : SolverSummary {
   // The solve converged to a degenerate model (WhySolvedModelDegenerate); termination is then
   // kFailed and the message names the size.
   bool degenerate = false;
+  // Images whose unlocked distortion the solve took past any lens (WhyDistortionFolds,
+  // core/geometry/camera_checks.h): the solve ran again with it held, one sentence each (also
+  // first in warnings).
+  std::vector<std::string> held_distortion;
   std::vector<PinDiagnostic> pins;                // project.pins order
   std::vector<ImageDiagnostic> images;            // calibrated images with pins
   std::vector<ConstraintDiagnostic> constraints;  // project.constraints order
@@ -141,10 +145,11 @@ struct JointSolveSummary : SolverSummary {
 JointSolveSummary SolveJoint(const Project& project, const JointSolveOptions& options, Project* solved);
 
 // Why a solved model is no answer though its solve converged (issue 14: degenerate geometry
-// gives a named error, never a number that looks like an answer): a primitive's size that
-// `solved` changed to zero or below, or shrank to nothing (below 1e-6 of its value in
-// `before`: the model collapsing towards a point when nothing the pins see fixes its scale,
-// or constraints contradict them). Names the primitive and the size; "" when usable.
+// gives a named error, never a number that looks like an answer): CheckModelChange
+// (core/solve/model_sanity.h) of `before` against `solved` -- a size at or below zero, shrunk
+// to nothing (the model collapsing when nothing the pins see fixes its scale), or grown or
+// moved a millionfold beyond its reach (cameras and model run off to infinity together) --
+// with what likely caused it. Names the primitive and the size; "" when usable.
 std::string WhySolvedModelDegenerate(const Project& before, const Project& solved);
 
 // Whether the pins see the length of the edge (a, b): it varies with a shape parameter that a

@@ -380,6 +380,7 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
     joint_options.warm_start = true;  // from the geometry solve's result
     Project joint_solved;
     summary.joint = SolveJoint(*updated, joint_options, &joint_solved);
+    for (const std::string& held : summary.joint.held_distortion) summary.messages.push_back("Joint solve: " + held);
     if (summary.joint.IsUsable()) {
       *updated = std::move(joint_solved);
     } else if (summary.joint.degenerate) {

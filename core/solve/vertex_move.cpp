@@ -5,6 +5,7 @@
 
 #include <Eigen/SVD>
 
+#include "core/solve/model_sanity.h"
 #include "core/util/eigen_decompositions.h"
 #include "core/util/format.h"
 
@@ -197,6 +198,21 @@ int ShapeParamCount(PrimitiveKind kind) {
   return 0;
 }
 
+namespace {
+
+// The check every solve's result passes (core/solve/model_sanity.h), for a drag: a drag ray
+// almost parallel to its plane puts the point at 1e9 m, and a size dragged to nothing is no
+// model either. Sizes at or below zero are named by the caller with their own hint.
+std::string WhyMoveDegenerate(const Project& before, const Project& moved) {
+  const ModelChangeCheck check = CheckModelChange(before, moved);
+  if (check.fault == ModelChangeFault::kCollapsed) return "the move would collapse the model: " + check.what;
+  if (check.fault == ModelChangeFault::kGrew || check.fault == ModelChangeFault::kRanAway)
+    return "the move would take the model beyond any camera's reach: " + check.what;
+  return "";
+}
+
+}  // namespace
+
 VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, const Eigen::Vector3d& target_in_world,
                              const VertexMoveOptions& options, Project* moved) {
   VertexMoveSummary summary;
@@ -230,6 +246,7 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
     // The offset is in primitive-local units; the rotation maps the world step into them.
     primitive.mesh.vertex(vertex.vertex).local.offset += world_from_primitive.transpose() * wanted;
     RefreshPrimitive(moved, &primitive);
+    if (const std::string why = WhyMoveDegenerate(project, *moved); !why.empty()) return refuse(why);
     summary.termination = SolverTermination::kConverged;
     summary.moved_offset = true;
     RecordPosition(*source, *moved, vertex, target_in_world, options.reach_tolerance * size, &summary);
@@ -277,6 +294,7 @@ VertexMoveSummary MoveVertex(const Project& project, const VertexRef& vertex, co
     }
   }
   RefreshAllPrimitives(moved);
+  if (const std::string why = WhyMoveDegenerate(project, *moved); !why.empty()) return refuse(why);
   RecordPosition(*source, *moved, vertex, target_in_world, options.reach_tolerance * size, &summary);
 
   const Eigen::Vector3d missing = target_in_world - summary.position;
@@ -319,6 +337,11 @@ PrimitiveMoveSummary MovePrimitive(const Project& project, Id primitive_id, cons
   }
   moved->FindPrimitive(primitive_id)->shape.translation += delta_in_world;
   RefreshAllPrimitives(moved);
+  if (const std::string why = WhyMoveDegenerate(project, *moved); !why.empty()) {
+    summary.message = why;
+    *moved = project;
+    return summary;
+  }
   summary.termination = SolverTermination::kConverged;
   summary.message = Describe(*source) + " moved by " + internal::FormatNumber(delta_in_world.norm(), kMessageDigits);
   return summary;

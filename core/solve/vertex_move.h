@@ -22,10 +22,12 @@
 // Refusals (ok false, project unchanged, message says why): a missing primitive or vertex, a
 // non-finite target, a move that would make a dimension <= 0 (the drag went through the
 // opposite face) or leave nothing to change (everything locked; the message says what to
-// unlock).
+// unlock), and one that leaves no model by the check every solve's result passes
+// (CheckModelChange, core/solve/model_sanity.h: a size dragged to a millionth of itself, or
+// grown, or the primitive moved, far beyond its reach -- a drag ray grazing its plane).
 //
 // MovePrimitive translates a whole primitive by a world delta; refused when its translation
-// is locked or it is attached to a base (move the base instead).
+// is locked, it is attached to a base (move the base instead) or the model check refuses it.
 //
 // Units: the project's (world) units throughout; frames: world unless named _in_primitive.
 #pragma once

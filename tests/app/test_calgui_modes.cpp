@@ -17,6 +17,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "app/state/calgui_exif_prior.h"
+#include "core/geometry/camera_checks.h"
 #include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 #include "tests/synthetic_scene.h"
@@ -151,7 +152,8 @@ TEST_CASE("calibration modes from the script: known focal, undo, prior strength,
   s << "command calibration principal-point fixed " << fixed_pp.x() << " " << fixed_pp.y() << "\nframes 1\n"
     << save("pp.facet");
   s << "command calibration focal exif\nframes 1\n" << save("exif.facet");
-  s << "command calibration distortion on\nframes 1\ncommand calibration distortion-lock off\nframes 1\n";
+  s << "command calibration distortion on\nframes 1\ncommand calibration distortion-lock off\nframes 1\n"
+    << save("unlocked.facet");
   s << "command calibration horizon level 300\nframes 1\n" << save("level.facet");
   const Eigen::Vector4d horizon = TrueHorizon(scene.true_camera);
   s.precision(17);
@@ -209,6 +211,21 @@ TEST_CASE("calibration modes from the script: known focal, undo, prior strength,
   CHECK_FALSE(level.distortion_locked);
   CHECK(level.use_horizon);
   CHECK(level.horizon_px == Eigen::Vector4d(0, 300, options.width_px - 1, 300));
+  // That level horizon contradicts the line families (the photo's runs from row 20 to 73): the
+  // update fails by name and the box keeps its size, never 4e8 m wide (issue 14).
+  const facet::Project level_project = facet::LoadProject(dir / "level.facet").project;
+  const facet::Project unlocked_project = facet::LoadProject(dir / "unlocked.facet").project;
+  REQUIRE(level_project.primitives.size() == 1);
+  REQUIRE(unlocked_project.primitives.size() == 1);
+  CHECK(level_project.primitives[0].shape.params == unlocked_project.primitives[0].shape.params);
+  CHECK(report.at("log").dump().find("the model ran off to infinity") != std::string::npos);
+  // Unlocking the distortion of this pinhole photo let the joint solve bend it past any lens
+  // (k1 = 0.31, k2 = -3.0): refused by name, the camera keeps a distortion that maps the photo
+  // one to one.
+  const facet::Camera& unlocked_camera = unlocked_project.images[0].camera;
+  CHECK(facet::WhyDistortionFolds(unlocked_camera.k1, unlocked_camera.k2, unlocked_camera.focal_px,
+                                  unlocked_camera.principal_point_px, options.width_px, options.height_px) == "");
+  CHECK(report.at("log").dump().find("folds the photo") != std::string::npos);
   const facet::Image last = SavedImage(dir / "last.facet");
   CHECK(last.use_horizon);
   CHECK(last.horizon_px == horizon);

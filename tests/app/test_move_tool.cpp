@@ -228,6 +228,14 @@ TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the
   CHECK(std::abs(p7.x() - p7_before.x()) < 1e-9);
   CHECK(std::abs(p7.y() - p7_before.y()) < 1e-9);
   CHECK(p7.z() - p7_before.z() > 0.05);  // up the screen is up
+
+  // Issue 14: a vertex sent 1e9 away makes a box 1e9 wide, no model: the command is refused by
+  // name and nothing is committed (the move never reaches the document).
+  const std::string far = RenderScriptRefused(
+      dir, path, "far",
+      prefix + "command select vertex " + std::to_string(box_id) + " 7\nframes 1\ncommand move-selection vertex 1e9 3 2\n");
+  CHECK(far.find("move-selection vertex: the move would take the model beyond any camera's reach: Size x of 'box'") !=
+        std::string::npos);
 }
 
 TEST_CASE("move tool: an undetermined depth keeps the dragged value through the app's re-solve") {
