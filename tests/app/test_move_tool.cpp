@@ -232,8 +232,9 @@ TEST_CASE("move tool: a face drag moves the whole primitive over the ground; the
   // Issue 14: a vertex sent 1e9 away makes a box 1e9 wide, no model: the command is refused by
   // name and nothing is committed (the move never reaches the document).
   const std::string far = RenderScriptRefused(
-      dir, path, "far",
-      prefix + "command select vertex " + std::to_string(box_id) + " 7\nframes 1\ncommand move-selection vertex 1e9 3 2\n");
+      dir, start.path, "far",
+      start.prefix + "command select vertex " + std::to_string(start.box_id) +
+          " 7\nframes 1\ncommand move-selection vertex 1e9 3 2\n");
   CHECK(far.find("move-selection vertex: the move would take the model beyond any camera's reach: Size x of 'box'") !=
         std::string::npos);
 }
