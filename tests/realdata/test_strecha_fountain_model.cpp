@@ -5,8 +5,10 @@
 // adds one box on the fountain's wall (its frieze band) and pins its corners in each photo
 // (clicks), and saves. The saved project's cameras are compared with the ground truth: the
 // relative rotation, each rotation after the best common rotation, the baseline direction and
-// the focal length; the figures are printed with MESSAGE. A third run adds a box with depth on
-// the basin and frees the focal lengths (see the last case).
+// the focal length; the figures are printed with MESSAGE. The runs differ in what the user
+// says about the lens: nothing (each photo's focal length from its lines), that both photos
+// share one lens (Image::lens_group, focal-lock off), its focal length, or nothing but a box
+// with depth on the basin and the focal lengths freed (the last case).
 //
 // Snapping is off (render --no-snap): every line end and pin below is a pixel read off the
 // photo and stated here; snapping would move it onto whatever corner the detector finds near
@@ -490,10 +492,11 @@ Comparison CompareWithGroundTruth(const facet::Project& model) {
 // calibration says so: f = 1730 +- 181 px and 853 +- 316 px); the depth family that would
 // fix f has only short stubs at the ends of mouldings, and its vanishing point lies ~250 px
 // from the principal point, where a 1 deg error in one stub moves it by tens of px. Freeing
-// the focal lengths in the joint solve (focal-lock off) makes it worse: three or four pins on
-// one face of one box do not fix f either. (The line detector, `lines detect`, does no better
-// on these photos: f = 3,400-5,300 px, its depth family made of carving and the basin's
-// slanted faces.)
+// each photo's focal length in the joint solve (focal-lock off) makes it worse: three or four
+// pins on one face of one box do not fix f either (f +58 % / -20 %, relative rotation 3.9 deg,
+// baseline 53 deg). (The line detector, `lines detect`, does no better on these photos:
+// f = 3,400-5,300 px, its depth family made of carving and the basin's slanted faces.) One
+// lens for both photos does (the next case).
 TEST_CASE("Strecha fountain through the app, focal length unknown: cameras and box solve; rotations reported") {
   const auto started = std::chrono::steady_clock::now();
   std::string log;
@@ -502,8 +505,9 @@ TEST_CASE("Strecha fountain through the app, focal length unknown: cameras and b
   const Comparison c = CompareWithGroundTruth(model);
   const double worst_deg =
       *std::max_element(c.relative_rotation_error_deg.begin(), c.relative_rotation_error_deg.end());
-  // The issue's 1 deg is reported, not asserted: these photos do not fix the focal length
-  // (see above); the next case asserts it with the focal length known.
+  // The issue's 1 deg is reported, not asserted: each photo's lines do not fix its focal
+  // length (see above); the next cases assert it with one lens for both photos and with the
+  // focal length known.
   MESSAGE("Strecha fountain, focal length from the lines:\n"
           << c.figures << "worst relative rotation error " << worst_deg << " deg: the issue's "
           << kMaxRelativeRotationErrorDeg << " deg is "
@@ -518,6 +522,46 @@ TEST_CASE("Strecha fountain through the app, focal length unknown: cameras and b
   // focal length of the right order.
   constexpr double kMaxFocalFactor = 2.0;
   for (const double error : c.focal_error) CHECK(std::abs(std::log1p(error)) < std::log(kMaxFocalFactor));
+}
+
+// The same run by a user who does not know the lens but knows that both photos come from one
+// camera (Properties > "Same lens as other photos" with "Lock focal" off; the script's
+// `calibration lens-group 1` and `calibration focal-lock off`, core/scene/project.h,
+// Image::lens_group): the joint solve then has one focal length for both photos, fixed by the
+// lines and pins of both together, where each photo's own lines leave it loose (the first
+// case). Nothing of the ground truth enters the run. Figures on this build: f -2.2 % (both),
+// relative rotation 0.50 deg, baseline direction 2.5 deg; the same lines drawn in a
+// 1280 x 720 window: +0.8 %, 0.07 deg, 2.2 deg; 1600 x 900: +2.9 %, 0.65 deg, 2.0 deg.
+TEST_CASE("Strecha fountain through the app, focal length unknown, one lens for both photos: every camera within 1 deg") {
+  std::ostringstream before;
+  for (size_t i = 0; i < Photos().size(); ++i) {
+    before << "command select-image " << i << "\nframes 1\ncommand calibration focal-lock off\nframes 1\n"
+           << "command calibration lens-group 1\nframes 1\n";
+  }
+  std::string log;
+  const facet::Project model = PinTheBox(LinesDrawnThroughTheApp(), "model_shared_lens", before.str(), &log);
+  INFO("log:\n" << log);
+  const Comparison c = CompareWithGroundTruth(model);
+  const double worst_deg =
+      *std::max_element(c.relative_rotation_error_deg.begin(), c.relative_rotation_error_deg.end());
+  MESSAGE("Strecha fountain, focal length unknown, one lens:\n"
+          << c.figures << "worst relative rotation error " << worst_deg << " deg: the issue's "
+          << kMaxRelativeRotationErrorDeg << " deg is "
+          << std::string(worst_deg < kMaxRelativeRotationErrorDeg ? "met" : "NOT met"));
+  CHECK(log.find("error:") == std::string::npos);
+  // One focal length for both photos, to the last bit (one parameter of the solve).
+  CHECK(model.images[0].camera.focal_px == model.images[1].camera.focal_px);
+  // The lens within 5 % (-2.2 % measured; 0.8-2.9 % in the other window sizes above), against
+  // 25-38 % from each photo's lines alone.
+  constexpr double kMaxFocalError = 0.05;
+  for (const double error : c.focal_error) CHECK(std::abs(error) < kMaxFocalError);
+  for (const double error_deg : c.relative_rotation_error_deg) CHECK(error_deg < kMaxRelativeRotationErrorDeg);
+  for (const double error_deg : c.aligned_rotation_error_deg) CHECK(error_deg < kMaxRelativeRotationErrorDeg);
+  // As with the known lens: the baselines from 3-4 pins per photo on one face (2.5 deg measured).
+  constexpr double kMaxBaselineDirectionErrorDeg = 5.0;
+  for (const double error_deg : c.baseline_direction_error_deg) CHECK(error_deg < kMaxBaselineDirectionErrorDeg);
+  constexpr double kMaxPinRmsPx = 3.0;
+  CHECK(c.pin_rms_px < kMaxPinRmsPx);
 }
 
 // The same run by a user who knows the lens (Properties > Focal > Fixed, the script's
@@ -560,7 +604,10 @@ TEST_CASE("Strecha fountain through the app, focal length known: every camera wi
 // rotation error after the best common rotation); the known focal length gives 0.12 deg. The
 // rim is read to a pixel or two over ~30 px of depth in each photo, so f is good to several
 // per cent, not to the ~2 % that 1 deg would need here; the readings were not adjusted
-// towards the ground truth.
+// towards the ground truth. (The same run with one lens for both photos does not get the
+// basin: from its first pin on, every solve stops with "Size z of 'box 2' would go from 0.1 to
+// -0.08" (the known height 0.1 is a distance, met by -0.1 too) and leaves the model as it
+// was, so the basin's pins end ~200 px off; the band alone meets 1 deg there, the case above.)
 TEST_CASE("Strecha fountain through the app, focal length unknown, a box with depth on the basin: rotations reported") {
   std::ostringstream before;
   for (size_t i = 0; i < Photos().size(); ++i) {
@@ -591,3 +638,4 @@ TEST_CASE("Strecha fountain through the app, focal length unknown, a box with de
   // The basin box has depth: its top's front and back are apart by more than a tenth of its width.
   CHECK(model.primitives[1].shape.params[1] > 0.1 * model.primitives[1].shape.params[0]);
 }
+
