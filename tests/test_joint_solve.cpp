@@ -380,8 +380,9 @@ TEST_CASE("joint solve: photos sharing a lens solve one focal length, noise-free
     const double second_focal_error = std::abs(solved.images[1].camera.focal_px / true_focal_px - 1.0);
     const double second_centre_error =
         (solved.images[1].camera.CenterInWorld() - truth.images[1].camera.CenterInWorld()).norm() / 10.0;
-    CAPTURE(second_focal_error);
-    CAPTURE(second_centre_error);
+    MESSAGE(std::string(shared ? "lens shared" : "own lenses")
+            << ": second view's focal length off by " << second_focal_error << " (relative), centre by "
+            << second_centre_error);
     CHECK(summary.num_parameters == (shared ? 15 : 16));  // two box sizes, 2 x 6 pose, 1 or 2 focal lengths
     if (shared) {
       CHECK(solved.images[0].camera.focal_px == solved.images[1].camera.focal_px);
@@ -391,7 +392,7 @@ TEST_CASE("joint solve: photos sharing a lens solve one focal length, noise-free
       CHECK(summary.undetermined.empty());
     } else {
       // The second view's focal length slides along the direction its three pins leave free
-      // (the damping keeps it near its start, 7 % long): nowhere near the truth, and named.
+      // (5 % off on this build, near its start): nowhere near the truth, and named.
       CHECK(second_focal_error > 1e-3);
       CHECK_FALSE(summary.undetermined.empty());
     }

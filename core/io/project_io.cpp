@@ -457,8 +457,7 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
                  {"id", "path", "width_px", "height_px", "camera", "camera_calibrated", "principal_point_mode",
                   "fixed_principal_point_px", "pose_locked", "focal_locked", "principal_point_locked", "focal_mode",
                   "fixed_focal_px", "focal_prior_px", "focal_prior_std_px", "use_horizon", "horizon_px",
-                  "estimate_distortion", "distortion_locked", "axis_quarter_turns", "use_for_texture",
-                  "lens_group"}))
+                  "estimate_distortion", "distortion_locked", "axis_quarter_turns", "use_for_texture", "lens_group"}))
     return false;
   constexpr int kMaxSize = std::numeric_limits<int>::max();
   if (!r->IdField(j, at, "id", &im->id) || !r->String(j, at, "path", &im->path) ||

@@ -862,7 +862,8 @@ std::vector<int> AddCameraBlocks(const Project& project, const BuildOptions& opt
       return offset;
     };
     if (options.refine_intrinsics && !image.focal_locked) block.focal_offset = intrinsic_offset(0, 1);
-    if (options.refine_intrinsics && !image.principal_point_locked) block.principal_point_offset = intrinsic_offset(1, 2);
+    if (options.refine_intrinsics && !image.principal_point_locked)
+      block.principal_point_offset = intrinsic_offset(1, 2);
     if (!image.pose_locked) {
       block.rotation_offset = *next;
       block.center_offset = *next + 3;

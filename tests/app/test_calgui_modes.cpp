@@ -390,9 +390,9 @@ TEST_CASE("same lens as other photos: the checkbox and `calibration lens-group N
   const RunResult run =
       Render(dir, project,
              "frames 2\n" + save("before.facet") + "click left " + ItemCenter(items, "calibration.lens_group") +
-                 "\nframes 2\n" + save("ticked.facet") +
-                 "command undo\nframes 1\n" + save("undone.facet") + "command calibration lens-group 2\nframes 1\n" +
-                 save("group2.facet") + "command calibration lens-group 0\nframes 1\n" + save("own.facet"),
+                 "\nframes 2\n" + save("ticked.facet") + "command undo\nframes 1\n" + save("undone.facet") +
+                 "command calibration lens-group 2\nframes 1\n" + save("group2.facet") +
+                 "command calibration lens-group 0\nframes 1\n" + save("own.facet"),
              "lens");
   INFO(run.stderr_text);
   REQUIRE(run.exit_code == 0);

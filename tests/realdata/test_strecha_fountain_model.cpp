@@ -116,10 +116,11 @@ const std::vector<Photo>& Photos() {
   return photos;
 }
 
-// A third photo, 0005, for the run with one lens for three photos: its lines and pins chosen as above, after the other two cases' figures were
-// measured, and not changed after its figures were seen. Lines from `facet calibrate --image`
-// on the halved photo (the longest segment of each edge, kept by eye as above); the four band
-// corners read on 5x crops where the band's frame meets the ledges over and under it.
+// A third photo, 0005, for the run with one lens for three photos: its lines and pins chosen
+// as above, after the other two cases' figures were measured, and not changed after its
+// figures were seen. Lines from `facet calibrate --image` on the halved photo (the longest
+// segment of each edge, kept by eye as above); the four band corners read on 5x crops where
+// the band's frame meets the ledges over and under it.
 const std::vector<Photo>& ThreePhotos() {
   static const std::vector<Photo> photos = [] {
     std::vector<Photo> three = Photos();
@@ -275,69 +276,67 @@ struct DrawnLines {
 };
 
 DrawnLines DrawLinesThroughTheApp(const std::vector<Photo>& photos, const std::string& dir_name) {
-  {
-    DrawnLines f;
-    f.photos = &photos;
-    f.dir = std::make_unique<TempDir>(dir_name);
-    const TempDir& dir = *f.dir;
-    REQUIRE_MESSAGE(std::filesystem::exists(StrechaFountainDir()), "missing " << StrechaFountainDir());
-    // The photos, halved, in the test's folder (never in the repo).
-    std::vector<std::string> photo_paths;
-    for (const Photo& photo : photos) {
-      const std::string source = (StrechaFountainDir() / "images" / (photo.name + ".jpg")).string();
-      const cv::Mat full = cv::imread(source, cv::IMREAD_COLOR);
-      REQUIRE_MESSAGE(!full.empty(), "cannot read " << source);
-      cv::Mat half;
-      cv::resize(full, half, cv::Size(), kPhotoScale, kPhotoScale, cv::INTER_AREA);
-      REQUIRE(half.cols == 1536);
-      REQUIRE(half.rows == 1024);
-      photo_paths.push_back(dir / (photo.name + ".jpg"));
-      REQUIRE(cv::imwrite(photo_paths.back(), half, {cv::IMWRITE_JPEG_QUALITY, 95}));
-    }
-    // An empty project, as File > New leaves it.
-    const std::string empty_path = dir / "empty.facet";
-    WriteText(empty_path, R"({"format": "facet-project", "version": 2, "units": "m", "next_id": 1, "images": [], )"
-                          R"("segments": [], "primitives": [], "pins": [], "constraints": []})");
-    const std::string photos_path = dir / "photos.facet";
-    std::string script = "frames 2\n";
-    for (const std::string& path : photo_paths) script += "command add-photo " + path + "\nframes 1\n";
-    script += "command select-image 0\nframes 2\ncommand save " + photos_path + "\nframes 1\n";
-    f.view = ViewFromReport(Run(dir, empty_path, "add_photos", script));
-    REQUIRE(f.view.zoom > 0.05);
-    REQUIRE(LoadProjectFile(photos_path).images.size() == photos.size());
+  DrawnLines f;
+  f.photos = &photos;
+  f.dir = std::make_unique<TempDir>(dir_name);
+  const TempDir& dir = *f.dir;
+  REQUIRE_MESSAGE(std::filesystem::exists(StrechaFountainDir()), "missing " << StrechaFountainDir());
+  // The photos, halved, in the test's folder (never in the repo).
+  std::vector<std::string> photo_paths;
+  for (const Photo& photo : photos) {
+    const std::string source = (StrechaFountainDir() / "images" / (photo.name + ".jpg")).string();
+    const cv::Mat full = cv::imread(source, cv::IMREAD_COLOR);
+    REQUIRE_MESSAGE(!full.empty(), "cannot read " << source);
+    cv::Mat half;
+    cv::resize(full, half, cv::Size(), kPhotoScale, kPhotoScale, cv::INTER_AREA);
+    REQUIRE(half.cols == 1536);
+    REQUIRE(half.rows == 1024);
+    photo_paths.push_back(dir / (photo.name + ".jpg"));
+    REQUIRE(cv::imwrite(photo_paths.back(), half, {cv::IMWRITE_JPEG_QUALITY, 95}));
+  }
+  // An empty project, as File > New leaves it.
+  const std::string empty_path = dir / "empty.facet";
+  WriteText(empty_path, R"({"format": "facet-project", "version": 2, "units": "m", "next_id": 1, "images": [], )"
+                        R"("segments": [], "primitives": [], "pins": [], "constraints": []})");
+  const std::string photos_path = dir / "photos.facet";
+  std::string script = "frames 2\n";
+  for (const std::string& path : photo_paths) script += "command add-photo " + path + "\nframes 1\n";
+  script += "command select-image 0\nframes 2\ncommand save " + photos_path + "\nframes 1\n";
+  f.view = ViewFromReport(Run(dir, empty_path, "add_photos", script));
+  REQUIRE(f.view.zoom > 0.05);
+  REQUIRE(LoadProjectFile(photos_path).images.size() == photos.size());
 
-    f.path = dir / "lines.facet";
-    script = "frames 2\n";
-    std::vector<const Line*> drawn_order;
-    for (size_t i = 0; i < photos.size(); ++i) {
-      script += "command select-image " + std::to_string(i) + "\nframes 1\n";
-      for (const char axis : {'x', 'z'}) {
-        script += std::string("command tool line-") + axis + "\n";
-        for (const Line& line : photos[i].lines) {
-          if (line.axis != axis) continue;
-          script += Drag(f.view, line.ab_px);
-          drawn_order.push_back(&line);
-        }
+  f.path = dir / "lines.facet";
+  script = "frames 2\n";
+  std::vector<const Line*> drawn_order;
+  for (size_t i = 0; i < photos.size(); ++i) {
+    script += "command select-image " + std::to_string(i) + "\nframes 1\n";
+    for (const char axis : {'x', 'z'}) {
+      script += std::string("command tool line-") + axis + "\n";
+      for (const Line& line : photos[i].lines) {
+        if (line.axis != axis) continue;
+        script += Drag(f.view, line.ab_px);
+        drawn_order.push_back(&line);
       }
     }
-    script += "frames 1\ncommand save " + f.path + "\nframes 1\n";
-    Run(dir, photos_path, "lines", script);
-    const facet::Project with_lines = LoadProjectFile(f.path);
-    REQUIRE(with_lines.segments.size() == drawn_order.size());
-    // Every line has the ends the script dragged between, to ImGui's whole screen pixels.
-    for (size_t k = 0; k < drawn_order.size(); ++k) {
-      const facet::Segment& segment = with_lines.segments[k];
-      const Line& line = *drawn_order[k];
-      const Eigen::Vector2d a(line.ab_px[0], line.ab_px[1]), b(line.ab_px[2], line.ab_px[3]);
-      CAPTURE(k);
-      CHECK(segment.axis == (line.axis == 'x' ? facet::Axis::kX : facet::Axis::kZ));
-      const double tolerance_px = PlacementTolerancePx(f.view, {a, b});
-      CHECK((segment.a_px - a).cwiseAbs().maxCoeff() <= tolerance_px);
-      CHECK((segment.b_px - b).cwiseAbs().maxCoeff() <= tolerance_px);
-    }
-    f.next_id = with_lines.next_id;
-    return f;
   }
+  script += "frames 1\ncommand save " + f.path + "\nframes 1\n";
+  Run(dir, photos_path, "lines", script);
+  const facet::Project with_lines = LoadProjectFile(f.path);
+  REQUIRE(with_lines.segments.size() == drawn_order.size());
+  // Every line has the ends the script dragged between, to ImGui's whole screen pixels.
+  for (size_t k = 0; k < drawn_order.size(); ++k) {
+    const facet::Segment& segment = with_lines.segments[k];
+    const Line& line = *drawn_order[k];
+    const Eigen::Vector2d a(line.ab_px[0], line.ab_px[1]), b(line.ab_px[2], line.ab_px[3]);
+    CAPTURE(k);
+    CHECK(segment.axis == (line.axis == 'x' ? facet::Axis::kX : facet::Axis::kZ));
+    const double tolerance_px = PlacementTolerancePx(f.view, {a, b});
+    CHECK((segment.a_px - a).cwiseAbs().maxCoeff() <= tolerance_px);
+    CHECK((segment.b_px - b).cwiseAbs().maxCoeff() <= tolerance_px);
+  }
+  f.next_id = with_lines.next_id;
+  return f;
 }
 
 const DrawnLines& LinesDrawnThroughTheApp() {
@@ -571,7 +570,8 @@ TEST_CASE("Strecha fountain through the app, focal length unknown: cameras and b
 // 1280 x 720 window: +0.8 %, 0.07 deg, 2.2 deg; 1600 x 900: +2.9 %, 0.65 deg, 2.0 deg. This
 // holds for this pair: a third photo that faces the wall squarely (0005, the next case) pulls
 // the shared focal length 11 % long and the rotations past 1 deg.
-TEST_CASE("Strecha fountain through the app, focal length unknown, one lens for both photos: every camera within 1 deg") {
+TEST_CASE(
+    "Strecha fountain through the app, focal length unknown, one lens for both photos: every camera within 1 deg") {
   std::ostringstream before;
   for (size_t i = 0; i < Photos().size(); ++i) {
     before << "command select-image " << i << "\nframes 1\ncommand calibration focal-lock off\nframes 1\n"
@@ -612,7 +612,7 @@ TEST_CASE("Strecha fountain through the app, focal length unknown, one lens for 
 // 0.85, 0.75 deg), so its many far-vanishing segments pull the shared focal length long
 // rather than fixing it. A second photo at an angle to the wall is what fixes the lens.
 TEST_CASE("Strecha fountain through the app, focal length unknown, one lens for three photos: rotations reported") {
-  static const DrawnLines lines = DrawLinesThroughTheApp(ThreePhotos(), "strecha_fountain_three");
+  const DrawnLines lines = DrawLinesThroughTheApp(ThreePhotos(), "strecha_fountain_three");
   std::ostringstream before;
   for (size_t i = 0; i < ThreePhotos().size(); ++i) {
     before << "command select-image " << i << "\nframes 1\ncommand calibration focal-lock off\nframes 1\n"
@@ -712,4 +712,3 @@ TEST_CASE("Strecha fountain through the app, focal length unknown, a box with de
   // The basin box has depth: its top's front and back are apart by more than a tenth of its width.
   CHECK(model.primitives[1].shape.params[1] > 0.1 * model.primitives[1].shape.params[0]);
 }
-
