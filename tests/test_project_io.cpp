@@ -263,6 +263,9 @@ Project MakeFullProject() {
   // The user's texture choices (format version 3): a photo out of texturing, faces with a
   // forced photo and exclusions, and one override whose face and photo are gone (kept).
   p.images[1].use_for_texture = false;
+  // Photos sharing a lens (format version 5): two in group 3, one on its own.
+  p.images[0].lens_group = 3;
+  p.images[2].lens_group = 3;
   facet::SetFaceTextureOverride(&p.primitives[32], {0, p.images[0].id, {p.images[2].id}});
   facet::SetFaceTextureOverride(&p.primitives[32], {2, facet::kNoId, {p.images[1].id, p.images[0].id}});
   facet::SetFaceTextureOverride(&p.primitives[3], {4000, p.next_id + 1000, {}});
@@ -397,6 +400,7 @@ TEST_CASE("each single field is written and read back") {
       {"image.distortion_locked", [](Project& p) { p.images[0].distortion_locked = false; }},
       {"image.axis_quarter_turns", [](Project& p) { p.images[0].axis_quarter_turns = 3; }},
       {"image.use_for_texture", [](Project& p) { p.images[0].use_for_texture = false; }},
+      {"image.lens_group", [](Project& p) { p.images[1].lens_group = 2; }},
       {"primitive.face_textures.face", [](Project& p) { p.primitives[32].face_textures[1].face = 3; }},
       {"primitive.face_textures.source_image",
        [](Project& p) { p.primitives[32].face_textures[0].source_image = p.images[1].id; }},
@@ -1417,7 +1421,10 @@ TEST_CASE("texture choices: version 2 files migrate to none; the current version
   REQUIRE(full.primitives[32].face_textures.size() == 2);
   Json v2 = Json::parse(facet::ProjectToJson(full));
   v2["version"] = 2;
-  for (Json& image : v2["images"]) image.erase("use_for_texture");
+  for (Json& image : v2["images"]) {
+    image.erase("use_for_texture");
+    image.erase("lens_group");
+  }
   for (Json& primitive : v2["primitives"]) primitive.erase("face_textures");
   v2.erase("references");
   const facet::ProjectLoadResult migrated = facet::ProjectFromJson(v2.dump());
@@ -1426,7 +1433,10 @@ TEST_CASE("texture choices: version 2 files migrate to none; the current version
   CHECK(migrated.warnings.empty());
   Project without_choices = full;
   without_choices.references.clear();
-  for (facet::Image& image : without_choices.images) image.use_for_texture = true;
+  for (facet::Image& image : without_choices.images) {
+    image.use_for_texture = true;
+    image.lens_group = 0;
+  }
   for (facet::Primitive& primitive : without_choices.primitives) primitive.face_textures.clear();
   CHECK(migrated.project == without_choices);
   CheckRoundTrip(full);
@@ -1465,6 +1475,32 @@ TEST_CASE("texture choices: malformed overrides are errors naming their path") {
                   at + "[0].face: missing field");
   CheckErrorNames(with([](Json& j) { j["images"][1]["use_for_texture"] = 0; }),
                   "images[1].use_for_texture: expected true or false");
+}
+
+TEST_CASE("lens groups: version 4 files migrate to a lens per photo; the current version keeps them exactly") {
+  const Project full = MakeFullProject();
+  REQUIRE(full.images[0].lens_group == 3);
+  REQUIRE(full.images[1].lens_group == 0);
+  const Json current = Json::parse(facet::ProjectToJson(full));
+  CHECK(current["images"][0]["lens_group"] == 3);
+  CheckRoundTrip(full);
+  Json v4 = current;
+  v4["version"] = 4;
+  for (Json& image : v4["images"]) image.erase("lens_group");
+  const facet::ProjectLoadResult migrated = facet::ProjectFromJson(v4.dump());
+  INFO(migrated.error);
+  REQUIRE(migrated.ok());
+  Project own_lenses = full;
+  for (facet::Image& image : own_lenses.images) image.lens_group = 0;
+  CHECK(migrated.project == own_lenses);
+  // The current version needs the field, a whole number >= 0.
+  Json bad = current;
+  bad["images"][1].erase("lens_group");
+  CheckErrorNames(bad.dump(), "images[1].lens_group: missing field");
+  bad["images"][1]["lens_group"] = -1;
+  CheckErrorNames(bad.dump(), "images[1].lens_group");
+  bad["images"][1]["lens_group"] = 1.5;
+  CheckErrorNames(bad.dump(), "images[1].lens_group");
 }
 
 TEST_CASE("the version-2 fixture loads without references and saves as the current version") {

@@ -226,6 +226,21 @@ void DrawCalibrationControls(AppState* state, const Image& image, ExifFeedback* 
   }
   RecordItem(state, "calibration.principal_point_locked");
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("Unlocked: the joint solve refines the principal point with the model");
+  // Calibration groups (PhotoModeler, Metashape): photos from one camera and lens share one
+  // focal length, principal point and k1, k2 in the joint solve. The checkbox joins group 1;
+  // `calibration lens-group N` picks any group.
+  bool shared_lens = image.lens_group > 0;
+  if (ImGui::Checkbox("Same lens as other photos", &shared_lens)) {
+    CommitImageEdit(state, id, shared_lens ? "Share the lens" : "Own lens",
+                    [&](Image* im) { im->lens_group = shared_lens ? 1 : 0; });
+  }
+  RecordItem(state, "calibration.lens_group");
+  if (ImGui::IsItemHovered()) {
+    ImGui::SetTooltip(
+        "Photos ticked here were taken with one camera and lens: the joint solve gives them one\n"
+        "focal length (and principal point, distortion) where their locks are off%s",
+        image.lens_group > 1 ? ("\nThis photo is in lens group " + std::to_string(image.lens_group)).c_str() : "");
+  }
   bool locked = image.distortion_locked;
   if (ImGui::Checkbox("Lock distortion", &locked)) {
     CommitImageEdit(state, id, locked ? "Lock distortion" : "Unlock distortion",
@@ -579,8 +594,18 @@ bool RunCalibrationCommand(AppState* state, ExifFeedback* exif_feedback, const s
                     [&](Image* im) { (focal ? im->focal_locked : im->principal_point_locked) = on; });
     return true;
   }
+  if (key == "lens-group") {
+    if (!ParseNumbers(w, 1, 1, v) || v[0] < 0.0 || v[0] != std::floor(v[0]) || v[0] > 1e6) {
+      return fail("N: 0 (the photo's own lens) or a group number shared with other photos");
+    }
+    const int group = static_cast<int>(v[0]);
+    CommitImageEdit(state, image.id, group > 0 ? "Share the lens" : "Own lens",
+                    [&](Image* im) { im->lens_group = group; });
+    return true;
+  }
   *error = "calibration: unknown key '" + key +
-           "' (principal-point, focal, horizon, distortion, distortion-lock, focal-lock, principal-point-lock)";
+           "' (principal-point, focal, horizon, distortion, distortion-lock, focal-lock, principal-point-lock, "
+           "lens-group)";
   return false;
 }
 

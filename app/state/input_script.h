@@ -71,7 +71,9 @@
 //                                                      distortion on|off (estimate from
 //                                                      lines); distortion-lock,
 //                                                      focal-lock, principal-point-lock
-//                                                      on|off (what the joint solve keeps)
+//                                                      on|off (what the joint solve keeps);
+//                                                      lens-group N (photos of one group
+//                                                      > 0 share f, c, k; 0: own lens)
 //                                   move-selection ARGS  V_op on the selected vertex or
 //                                                      primitive (RunMoveCommand,
 //                                                      app/state/move_tool.h)

@@ -209,6 +209,7 @@ OrderedJson WriteImage(const Image& im, const std::string& at, Writer* w) {
   j["distortion_locked"] = im.distortion_locked;
   j["axis_quarter_turns"] = im.axis_quarter_turns;
   j["use_for_texture"] = im.use_for_texture;
+  j["lens_group"] = im.lens_group;
   return j;
 }
 
@@ -456,7 +457,7 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
                  {"id", "path", "width_px", "height_px", "camera", "camera_calibrated", "principal_point_mode",
                   "fixed_principal_point_px", "pose_locked", "focal_locked", "principal_point_locked", "focal_mode",
                   "fixed_focal_px", "focal_prior_px", "focal_prior_std_px", "use_horizon", "horizon_px",
-                  "estimate_distortion", "distortion_locked", "axis_quarter_turns", "use_for_texture"}))
+                  "estimate_distortion", "distortion_locked", "axis_quarter_turns", "use_for_texture", "lens_group"}))
     return false;
   constexpr int kMaxSize = std::numeric_limits<int>::max();
   if (!r->IdField(j, at, "id", &im->id) || !r->String(j, at, "path", &im->path) ||
@@ -529,6 +530,7 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
       !r->Int(j, at, "axis_quarter_turns", Image::kAxisTurnsUnchosen, 3, &im->axis_quarter_turns))
     return false;
   if (!r->Bool(j, at, "use_for_texture", &im->use_for_texture)) return false;
+  if (!r->Int(j, at, "lens_group", 0, std::numeric_limits<int>::max(), &im->lens_group)) return false;
   if (im->focal_mode == FocalMode::kFixed && !(im->fixed_focal_px > 0))
     return r->Fail(Join(at, "fixed_focal_px"), "must be positive when focal_mode is \"fixed\"");
   if (im->focal_mode == FocalMode::kPrior && !(im->focal_prior_px > 0 && im->focal_prior_std_px > 0))
@@ -1012,9 +1014,20 @@ bool MigrateVersion3To4(Json* doc, std::string* /*error*/) {
   return true;
 }
 
+// Version 4 -> 5: photos could share a lens (Image::lens_group); in older files each has its own.
+bool MigrateVersion4To5(Json* doc, std::string* /*error*/) {
+  Json& root = *doc;
+  if (root.contains("images") && root["images"].is_array()) {
+    for (Json& image : root["images"]) {
+      if (image.is_object()) image["lens_group"] = 0;
+    }
+  }
+  return true;
+}
+
 // kMigrationSteps[k] turns version k + 1 into k + 2.
 constexpr std::array<MigrationStep, Project::kFormatVersion - 1> kMigrationSteps = {
-    MigrateVersion1To2, MigrateVersion2To3, MigrateVersion3To4};
+    MigrateVersion1To2, MigrateVersion2To3, MigrateVersion3To4, MigrateVersion4To5};
 
 bool MigrateToCurrent(Json* doc, int version, std::string* error) {
   for (int v = version; v < Project::kFormatVersion; ++v) {

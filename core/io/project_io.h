@@ -4,18 +4,20 @@
 // or line/column), and never crashes. Doubles are written in the shortest form that reads
 // back to the same bits, so a save/load round-trip is exact.
 //
-// Layout (version 3): {"format": "facet-project", "version": 3, "units", "next_id", "images",
+// Layout (version 5): {"format": "facet-project", "version": 5, "units", "next_id", "images",
 // "segments", "primitives", "pins", "constraints", "references"}; every field of core/scene/project.h is stored,
 // camera rotations as 9 numbers row-major (exact), primitive rotations as angle-axis, each
 // primitive's mesh record by record with its ids (holes included) so that pins and
 // constraints keep naming the same vertices; a mesh may also be "from_shape" (the unedited
 // primitive); each image's "use_for_texture" and each primitive's "face_textures" (per face:
 // {"face", "source_image" (0: the bake chooses), "excluded_images"}) are the user's texture
-// choices; a reference is {"id", "path" (relative to the project file), "axes": "y_up" |
+// choices; each image's "lens_group" (0: its own lens) says which photos share intrinsics in
+// the joint solve; a reference is {"id", "path" (relative to the project file), "axes": "y_up" |
 // "z_up", "visible"}, its mesh read from the file, never stored. Older files are upgraded on
 // load (project_io.cpp, kMigrationSteps): version 1 (boxes with corner pins,
 // tests/fixtures/project_v1.facet), version 2 (no texture choices, no references;
-// tests/fixtures/project_v2.facet, assets/samples/leuven/*.facet) and version 3 (no references).
+// tests/fixtures/project_v2.facet, assets/samples/leuven/*.facet), version 3 (no references)
+// and version 4 (no lens groups).
 #pragma once
 
 #include <cstdint>

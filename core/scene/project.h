@@ -49,6 +49,13 @@ struct Image {
   bool focal_locked = true;
   bool principal_point_locked = true;
   bool distortion_locked = true;  // the joint solve keeps camera.k1, k2
+  // Photos taken with one camera and lens (the same focal setting) share its intrinsics in the
+  // joint solve, as a calibration group does in photogrammetry: the images with the same
+  // lens_group > 0 have one focal length, one principal point and one k1, k2 among those of
+  // them the solve refines (focal_locked etc. off), which start from the mean of their values.
+  // A photo that faces a wall fixes f poorly on its own; two such photos with pins in common
+  // fix one f together. 0: the photo's own lens.
+  int lens_group = 0;
   // How the world axes of this image's line families sit in the model's world frame: the
   // camera's rotation is the vanishing-point rotation times a turn about the vertical by
   // axis_quarter_turns x 90 deg (core/solve/model_update.h). Lines alone leave that turn open
@@ -177,8 +184,8 @@ struct Project {
   // 1: boxes with corner pins (read and migrated); 2: primitives with meshes, vertex pins
   // and constraints; 3: the user's texture choices (Image::use_for_texture,
   // Primitive::face_textures), which version 2 files migrate to "none"; 4: reference geometry
-  // (references), none in older files.
-  static constexpr int kFormatVersion = 4;
+  // (references), none in older files; 5: Image::lens_group, 0 (own lens) in older files.
+  static constexpr int kFormatVersion = 5;
   std::vector<Image> images;
   std::vector<Segment> segments;
   std::vector<Primitive> primitives;

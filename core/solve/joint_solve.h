@@ -8,7 +8,9 @@
 // Parameters (each block present only when free and used by a residual):
 // - per calibrated image: focal (unless Image::focal_locked), principal point (unless
 //   principal_point_locked), rotation (3, a small rotation applied on the left) and centre (3)
-//   unless pose_locked, radial distortion k1, k2 (unless distortion_locked; Camera's model);
+//   unless pose_locked, radial distortion k1, k2 (unless distortion_locked; Camera's model).
+//   Images of one lens group (Image::lens_group > 0) have one focal length, one principal
+//   point and one k1, k2 among those they free, started from the mean of their values;
 // - per primitive: each unlocked shape parameter, rotation (unless rotation_locked) and
 //   translation (unless translation_locked). A primitive attached on a box (attached_to)
 //   takes its footprint and pose from its base, so only its own parameters from index 2 on

@@ -833,6 +833,7 @@ std::vector<int> AddCameraBlocks(const Project& project, const BuildOptions& opt
                                  const std::vector<char>& image_used, JointProblem* problem, JointState* state,
                                  int* next) {
   std::vector<int> camera_of_image(project.images.size(), -1);
+  std::map<int, std::array<int, 3>> shared_intrinsics;  // per lens group: focal, principal point, k columns
   for (size_t i = 0; i < project.images.size(); ++i) {
     const Image& image = project.images[i];
     if (!image.camera_calibrated) continue;
@@ -846,20 +847,29 @@ std::vector<int> AddCameraBlocks(const Project& project, const BuildOptions& opt
     if (!image_used[i] && !has_segments) continue;
     CameraBlock block;
     block.image_index = static_cast<int>(i);
-    if (options.refine_intrinsics && !image.focal_locked) block.focal_offset = (*next)++;
-    if (options.refine_intrinsics && !image.principal_point_locked) {
-      block.principal_point_offset = *next;
-      *next += 2;
+    block.lens_group = image.lens_group;
+    // A free intrinsic of a shared lens is numbered by the group's first camera that frees it;
+    // the others reuse its columns, so one step moves the whole group's lens.
+    std::array<int, 3>* shared = nullptr;
+    if (image.lens_group > 0) {
+      shared = &shared_intrinsics.try_emplace(image.lens_group, std::array<int, 3>{-1, -1, -1}).first->second;
     }
+    const auto intrinsic_offset = [&](int which, int count) {
+      if (shared && (*shared)[which] >= 0) return (*shared)[which];
+      const int offset = *next;
+      *next += count;
+      if (shared) (*shared)[which] = offset;
+      return offset;
+    };
+    if (options.refine_intrinsics && !image.focal_locked) block.focal_offset = intrinsic_offset(0, 1);
+    if (options.refine_intrinsics && !image.principal_point_locked)
+      block.principal_point_offset = intrinsic_offset(1, 2);
     if (!image.pose_locked) {
       block.rotation_offset = *next;
       block.center_offset = *next + 3;
       *next += 6;
     }
-    if (options.refine_intrinsics && !image.distortion_locked) {
-      block.distortion_offset = *next;
-      *next += 2;
-    }
+    if (options.refine_intrinsics && !image.distortion_locked) block.distortion_offset = intrinsic_offset(2, 2);
     camera_of_image[i] = static_cast<int>(problem->cameras.size());
     problem->cameras.push_back(block);
     const Camera& cam = image.camera;
@@ -871,6 +881,37 @@ std::vector<int> AddCameraBlocks(const Project& project, const BuildOptions& opt
     cs.k1 = cam.k1;
     cs.k2 = cam.k2;
     state->cameras.push_back(cs);
+  }
+  // One parameter stands for each shared intrinsic, so the cameras sharing it start from one
+  // value: the mean of what calibration gave each.
+  for (int which = 0; which < 3; ++which) {  // focal, principal point, k1 k2
+    const auto offset = [&](const CameraBlock& cb) {
+      return which == 0 ? cb.focal_offset : which == 1 ? cb.principal_point_offset : cb.distortion_offset;
+    };
+    const auto value = [&](const CameraState& cs) -> Eigen::Vector2d {
+      if (which == 0) return {cs.focal_px, 0.0};
+      return which == 1 ? cs.principal_point_px : Eigen::Vector2d(cs.k1, cs.k2);
+    };
+    std::map<int, std::pair<Eigen::Vector2d, int>> sums;  // per column: sum, count
+    for (size_t c = 0; c < problem->cameras.size(); ++c) {
+      const int col = offset(problem->cameras[c]);
+      if (col < 0) continue;
+      auto& [sum, count] = sums.try_emplace(col, Eigen::Vector2d::Zero(), 0).first->second;
+      sum += value(state->cameras[c]);
+      ++count;
+    }
+    for (size_t c = 0; c < problem->cameras.size(); ++c) {
+      const int col = offset(problem->cameras[c]);
+      if (col < 0 || sums.at(col).second < 2) continue;
+      const Eigen::Vector2d mean = sums.at(col).first / static_cast<double>(sums.at(col).second);
+      CameraState& cs = state->cameras[c];
+      if (which == 0) cs.focal_px = mean.x();
+      if (which == 1) cs.principal_point_px = mean;
+      if (which == 2) {
+        cs.k1 = mean.x();
+        cs.k2 = mean.y();
+      }
+    }
   }
   return camera_of_image;
 }
@@ -1143,11 +1184,20 @@ void NameParameters(const Project& project, JointProblem* problem) {
   const char* const kCamera[11] = {"focal length",     "principal point u", "principal point v", "rotation about x",
                                    "rotation about y", "rotation about z",  "position x",        "position y",
                                    "position z",       "distortion k1",     "distortion k2"};
+  std::vector<int> cameras_of_column(problem->num_parameters, 0);
+  for (const CameraBlock& cb : problem->cameras) {
+    for (int col : CameraParameterColumns(cb)) {
+      if (col >= 0) ++cameras_of_column[col];
+    }
+  }
   for (const CameraBlock& cb : problem->cameras) {
     const std::array<int, 11> cols = CameraParameterColumns(cb);
     for (int i = 0; i < 11; ++i) {
-      if (cols[i] >= 0)
-        problem->parameter_names[cols[i]] = ImageLabel(project.images[cb.image_index]) + ": " + kCamera[i];
+      if (cols[i] < 0) continue;
+      problem->parameter_names[cols[i]] =
+          (cameras_of_column[cols[i]] > 1 ? "the lens of group " + std::to_string(cb.lens_group)
+                                          : ImageLabel(project.images[cb.image_index])) +
+          ": " + kCamera[i];
     }
   }
   const char* const kPose[6] = {"rotation about x", "rotation about y", "rotation about z",

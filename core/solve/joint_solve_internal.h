@@ -75,6 +75,10 @@ struct CameraBlock {
   int rotation_offset = -1;
   int center_offset = -1;
   int distortion_offset = -1;  // k1, k2
+  // Image::lens_group: cameras of one group > 0 share the columns of the intrinsics they free
+  // (focal_offset, principal_point_offset, distortion_offset), so one column can belong to
+  // several cameras; BuildJointProblem starts them all from the mean of their values.
+  int lens_group = 0;
 };
 
 struct PrimitiveBlock {

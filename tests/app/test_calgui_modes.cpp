@@ -391,3 +391,41 @@ TEST_CASE("intrinsics locks from the script: focal and principal point unlocked 
   const bool error = run.stderr_text.find("unknown key") != std::string::npos;
   CHECK_FALSE(error);
 }
+
+TEST_CASE("same lens as other photos: the checkbox and `calibration lens-group N` set the group, undo takes it back") {
+  TempDir dir("calgui_lens_group");
+  SyntheticScene scene = MakeBoxScene(SyntheticSceneOptions());
+  const std::string project = dir / "lens.facet";
+  REQUIRE(facet::SaveProject(scene.project, project) == "");
+  REQUIRE(scene.project.images[0].lens_group == 0);
+  const RunResult probe = Render(dir, project, "frames 2\n", "lens_probe");
+  INFO(probe.stderr_text);
+  REQUIRE(probe.exit_code == 0);
+  const nlohmann::json items = ReadJson(dir / "lens_probe.json").at("items");
+  REQUIRE(items.contains("calibration.lens_group"));
+  const auto save = [&](const std::string& name) { return "command save " + (dir / name) + "\nframes 1\n"; };
+  const RunResult run =
+      Render(dir, project,
+             "frames 2\n" + save("before.facet") + "click left " + ItemCenter(items, "calibration.lens_group") +
+                 "\nframes 2\n" + save("ticked.facet") + "command undo\nframes 1\n" + save("undone.facet") +
+                 "command calibration lens-group 2\nframes 1\n" + save("group2.facet") +
+                 "command calibration lens-group 0\nframes 1\n" + save("own.facet"),
+             "lens");
+  INFO(run.stderr_text);
+  REQUIRE(run.exit_code == 0);
+  CHECK(SavedImage(dir / "ticked.facet").lens_group == 1);
+  const facet::Image undone = SavedImage(dir / "undone.facet");
+  CHECK(undone.lens_group == 0);
+  CHECK(undone == SavedImage(dir / "before.facet"));
+  CHECK(SavedImage(dir / "group2.facet").lens_group == 2);
+  CHECK(SavedImage(dir / "own.facet").lens_group == 0);
+  const nlohmann::json undo = ReadJson(dir / "lens.json").at("undo_stack");
+  INFO("undo stack: " << undo.dump());
+  REQUIRE(undo.size() == 2);
+  CHECK(undo[0] == "Share the lens");
+  CHECK(undo[1] == "Own lens");
+  // A group must be a whole number >= 0: the script stops with the usage.
+  const RunResult bad = Render(dir, project, "frames 2\ncommand calibration lens-group 1.5\nframes 1\n", "lens_bad");
+  CHECK(bad.exit_code != 0);
+  CHECK(bad.stderr_text.find("calibration lens-group: expected N") != std::string::npos);
+}

@@ -5,8 +5,10 @@
 // adds one box on the fountain's wall (its frieze band) and pins its corners in each photo
 // (clicks), and saves. The saved project's cameras are compared with the ground truth: the
 // relative rotation, each rotation after the best common rotation, the baseline direction and
-// the focal length; the figures are printed with MESSAGE. A third run adds a box with depth on
-// the basin and frees the focal lengths (see the last case).
+// the focal length; the figures are printed with MESSAGE. The runs differ in what the user
+// says about the lens: nothing (each photo's focal length from its lines), that both photos
+// share one lens (Image::lens_group, focal-lock off), its focal length, or nothing but a box
+// with depth on the basin and the focal lengths freed (the last case).
 //
 // Snapping is off (render --no-snap): every line end and pin below is a pixel read off the
 // photo and stated here; snapping would move it onto whatever corner the detector finds near
@@ -111,6 +113,37 @@ const std::vector<Photo>& Photos() {
         {'z', {380.1, 771.9, 379.4, 838.1}}},
        {{4, {291.0, 599.0}}, {5, {1087.5, 600.0}}, {0, {291.0, 661.0}}, {1, {1087.0, 671.0}}}},
   };
+  return photos;
+}
+
+// A third photo, 0005, for the run with one lens for three photos: its lines and pins chosen
+// as above, after the other two cases' figures were measured, and not changed after its
+// figures were seen. Lines from `facet calibrate --image` on the halved photo (the longest
+// segment of each edge, kept by eye as above); the four band corners read on 5x crops where
+// the band's frame meets the ledges over and under it.
+const std::vector<Photo>& ThreePhotos() {
+  static const std::vector<Photo> photos = [] {
+    std::vector<Photo> three = Photos();
+    three.push_back({"0005",
+                     {{'x', {569.4, 572.1, 1029.4, 569.7}},
+                      {'x', {478.1, 720.2, 938.1, 719.9}},
+                      {'x', {931.9, 896.9, 478.1, 899.1}},
+                      {'x', {444.4, 700.8, 896.9, 701.5}},
+                      {'x', {546.9, 40.4, 874.4, 41.4}},
+                      {'x', {576.9, 121.4, 844.4, 122.6}},
+                      {'x', {550.6, 601.8, 290.6, 603.1}},
+                      {'x', {624.4, 673.6, 954.4, 671.2}},
+                      {'z', {577.7, 356.9, 577.9, 561.9}},
+                      {'z', {777.7, 356.9, 778.4, 500.6}},
+                      {'z', {334.7, 459.4, 334.4, 563.1}},
+                      {'z', {1076.7, 456.9, 1076.8, 531.9}},
+                      {'z', {929.9, 748.1, 931.2, 863.1}},
+                      {'z', {488.4, 789.4, 488.5, 865.6}},
+                      {'z', {1404.7, 693.2, 1402.0, 586.8}},
+                      {'z', {1528.3, 596.9, 1522.3, 353.1}}},
+                     {{4, {288.0, 604.0}}, {5, {1131.0, 601.0}}, {0, {287.5, 672.0}}, {1, {1131.5, 667.0}}}});
+    return three;
+  }();
   return photos;
 }
 
@@ -235,75 +268,79 @@ nlohmann::json Run(const TempDir& dir, const std::string& project_path, const st
 // Steps 1 and 2, shared by the test cases: from an empty project, File > Add photo for each
 // halved photo, then its line families drawn with the Line X and Line Z tools.
 struct DrawnLines {
+  const std::vector<Photo>* photos = nullptr;  // Photos() or ThreePhotos()
   std::unique_ptr<TempDir> dir;
   std::string path;  // the saved project with the photos and their lines
   View view;         // the image panel's view (the photos have one size, so one fit)
   facet::Id next_id = 0;
 };
 
-const DrawnLines& LinesDrawnThroughTheApp() {
-  static const DrawnLines drawn = [] {
-    DrawnLines f;
-    f.dir = std::make_unique<TempDir>("strecha_fountain");
-    const TempDir& dir = *f.dir;
-    REQUIRE_MESSAGE(std::filesystem::exists(StrechaFountainDir()), "missing " << StrechaFountainDir());
-    // The photos, halved, in the test's folder (never in the repo).
-    std::vector<std::string> photo_paths;
-    for (const Photo& photo : Photos()) {
-      const std::string source = (StrechaFountainDir() / "images" / (photo.name + ".jpg")).string();
-      const cv::Mat full = cv::imread(source, cv::IMREAD_COLOR);
-      REQUIRE_MESSAGE(!full.empty(), "cannot read " << source);
-      cv::Mat half;
-      cv::resize(full, half, cv::Size(), kPhotoScale, kPhotoScale, cv::INTER_AREA);
-      REQUIRE(half.cols == 1536);
-      REQUIRE(half.rows == 1024);
-      photo_paths.push_back(dir / (photo.name + ".jpg"));
-      REQUIRE(cv::imwrite(photo_paths.back(), half, {cv::IMWRITE_JPEG_QUALITY, 95}));
-    }
-    // An empty project, as File > New leaves it.
-    const std::string empty_path = dir / "empty.facet";
-    WriteText(empty_path, R"({"format": "facet-project", "version": 2, "units": "m", "next_id": 1, "images": [], )"
-                          R"("segments": [], "primitives": [], "pins": [], "constraints": []})");
-    const std::string photos_path = dir / "photos.facet";
-    std::string script = "frames 2\n";
-    for (const std::string& path : photo_paths) script += "command add-photo " + path + "\nframes 1\n";
-    script += "command select-image 0\nframes 2\ncommand save " + photos_path + "\nframes 1\n";
-    f.view = ViewFromReport(Run(dir, empty_path, "add_photos", script));
-    REQUIRE(f.view.zoom > 0.05);
-    REQUIRE(LoadProjectFile(photos_path).images.size() == Photos().size());
+DrawnLines DrawLinesThroughTheApp(const std::vector<Photo>& photos, const std::string& dir_name) {
+  DrawnLines f;
+  f.photos = &photos;
+  f.dir = std::make_unique<TempDir>(dir_name);
+  const TempDir& dir = *f.dir;
+  REQUIRE_MESSAGE(std::filesystem::exists(StrechaFountainDir()), "missing " << StrechaFountainDir());
+  // The photos, halved, in the test's folder (never in the repo).
+  std::vector<std::string> photo_paths;
+  for (const Photo& photo : photos) {
+    const std::string source = (StrechaFountainDir() / "images" / (photo.name + ".jpg")).string();
+    const cv::Mat full = cv::imread(source, cv::IMREAD_COLOR);
+    REQUIRE_MESSAGE(!full.empty(), "cannot read " << source);
+    cv::Mat half;
+    cv::resize(full, half, cv::Size(), kPhotoScale, kPhotoScale, cv::INTER_AREA);
+    REQUIRE(half.cols == 1536);
+    REQUIRE(half.rows == 1024);
+    photo_paths.push_back(dir / (photo.name + ".jpg"));
+    REQUIRE(cv::imwrite(photo_paths.back(), half, {cv::IMWRITE_JPEG_QUALITY, 95}));
+  }
+  // An empty project, as File > New leaves it.
+  const std::string empty_path = dir / "empty.facet";
+  WriteText(empty_path, R"({"format": "facet-project", "version": 2, "units": "m", "next_id": 1, "images": [], )"
+                        R"("segments": [], "primitives": [], "pins": [], "constraints": []})");
+  const std::string photos_path = dir / "photos.facet";
+  std::string script = "frames 2\n";
+  for (const std::string& path : photo_paths) script += "command add-photo " + path + "\nframes 1\n";
+  script += "command select-image 0\nframes 2\ncommand save " + photos_path + "\nframes 1\n";
+  f.view = ViewFromReport(Run(dir, empty_path, "add_photos", script));
+  REQUIRE(f.view.zoom > 0.05);
+  REQUIRE(LoadProjectFile(photos_path).images.size() == photos.size());
 
-    f.path = dir / "lines.facet";
-    script = "frames 2\n";
-    std::vector<const Line*> drawn_order;
-    for (size_t i = 0; i < Photos().size(); ++i) {
-      script += "command select-image " + std::to_string(i) + "\nframes 1\n";
-      for (const char axis : {'x', 'z'}) {
-        script += std::string("command tool line-") + axis + "\n";
-        for (const Line& line : Photos()[i].lines) {
-          if (line.axis != axis) continue;
-          script += Drag(f.view, line.ab_px);
-          drawn_order.push_back(&line);
-        }
+  f.path = dir / "lines.facet";
+  script = "frames 2\n";
+  std::vector<const Line*> drawn_order;
+  for (size_t i = 0; i < photos.size(); ++i) {
+    script += "command select-image " + std::to_string(i) + "\nframes 1\n";
+    for (const char axis : {'x', 'z'}) {
+      script += std::string("command tool line-") + axis + "\n";
+      for (const Line& line : photos[i].lines) {
+        if (line.axis != axis) continue;
+        script += Drag(f.view, line.ab_px);
+        drawn_order.push_back(&line);
       }
     }
-    script += "frames 1\ncommand save " + f.path + "\nframes 1\n";
-    Run(dir, photos_path, "lines", script);
-    const facet::Project with_lines = LoadProjectFile(f.path);
-    REQUIRE(with_lines.segments.size() == drawn_order.size());
-    // Every line has the ends the script dragged between, to ImGui's whole screen pixels.
-    for (size_t k = 0; k < drawn_order.size(); ++k) {
-      const facet::Segment& segment = with_lines.segments[k];
-      const Line& line = *drawn_order[k];
-      const Eigen::Vector2d a(line.ab_px[0], line.ab_px[1]), b(line.ab_px[2], line.ab_px[3]);
-      CAPTURE(k);
-      CHECK(segment.axis == (line.axis == 'x' ? facet::Axis::kX : facet::Axis::kZ));
-      const double tolerance_px = PlacementTolerancePx(f.view, {a, b});
-      CHECK((segment.a_px - a).cwiseAbs().maxCoeff() <= tolerance_px);
-      CHECK((segment.b_px - b).cwiseAbs().maxCoeff() <= tolerance_px);
-    }
-    f.next_id = with_lines.next_id;
-    return f;
-  }();
+  }
+  script += "frames 1\ncommand save " + f.path + "\nframes 1\n";
+  Run(dir, photos_path, "lines", script);
+  const facet::Project with_lines = LoadProjectFile(f.path);
+  REQUIRE(with_lines.segments.size() == drawn_order.size());
+  // Every line has the ends the script dragged between, to ImGui's whole screen pixels.
+  for (size_t k = 0; k < drawn_order.size(); ++k) {
+    const facet::Segment& segment = with_lines.segments[k];
+    const Line& line = *drawn_order[k];
+    const Eigen::Vector2d a(line.ab_px[0], line.ab_px[1]), b(line.ab_px[2], line.ab_px[3]);
+    CAPTURE(k);
+    CHECK(segment.axis == (line.axis == 'x' ? facet::Axis::kX : facet::Axis::kZ));
+    const double tolerance_px = PlacementTolerancePx(f.view, {a, b});
+    CHECK((segment.a_px - a).cwiseAbs().maxCoeff() <= tolerance_px);
+    CHECK((segment.b_px - b).cwiseAbs().maxCoeff() <= tolerance_px);
+  }
+  f.next_id = with_lines.next_id;
+  return f;
+}
+
+const DrawnLines& LinesDrawnThroughTheApp() {
+  static const DrawnLines drawn = DrawLinesThroughTheApp(Photos(), "strecha_fountain");
   return drawn;
 }
 
@@ -315,9 +352,9 @@ facet::Project PinTheBox(const DrawnLines& lines, const std::string& name, const
   const std::string saved = *lines.dir / (name + ".facet");
   std::string script =
       "frames 2\n" + before + "command select-image 0\nframes 1\ncommand add box\nframes 1\ncommand tool pin\n";
-  for (size_t i = 0; i < Photos().size(); ++i) {
+  for (size_t i = 0; i < (*lines.photos).size(); ++i) {
     script += "command select-image " + std::to_string(i) + "\nframes 1\n";
-    for (const BoxPin& pin : Photos()[i].pins) {
+    for (const BoxPin& pin : (*lines.photos)[i].pins) {
       script += "command select vertex " + std::to_string(box_id) + " " + std::to_string(pin.vertex) + "\n" +
                 Click(lines.view, pin.uv_px);
     }
@@ -325,17 +362,17 @@ facet::Project PinTheBox(const DrawnLines& lines, const std::string& name, const
   script += "frames 2\ncommand save " + saved + "\nframes 1\n";
   *log = ReportLog(Run(*lines.dir, lines.path, name, script));
   facet::Project model = LoadProjectFile(saved);
-  REQUIRE(model.images.size() == Photos().size());
+  REQUIRE(model.images.size() == (*lines.photos).size());
   REQUIRE(model.primitives.size() == 1);
   size_t num_pins = 0;
-  for (const Photo& photo : Photos()) num_pins += photo.pins.size();
+  for (const Photo& photo : (*lines.photos)) num_pins += photo.pins.size();
   REQUIRE(model.pins.size() == num_pins);
   // Every pin sits on the screen pixel the script clicked (the view read once holds for every photo).
   for (const facet::Pin& pin : model.pins) {
     const facet::Image* image = model.FindImage(pin.image_id);
     REQUIRE(image != nullptr);
     const size_t index = static_cast<size_t>(image - model.images.data());
-    const auto& pins = Photos()[index].pins;
+    const auto& pins = (*lines.photos)[index].pins;
     const auto stated =
         std::find_if(pins.begin(), pins.end(), [&](const BoxPin& p) { return p.vertex == pin.vertex.vertex; });
     REQUIRE(stated != pins.end());
@@ -367,6 +404,7 @@ const std::vector<BasinReading>& BasinReadings() {
 // line-pinned in each photo; `before` runs first.
 facet::Project PinTheBoxAndBasin(const DrawnLines& lines, const std::string& name, const std::string& before,
                                  std::string* log) {
+  REQUIRE(lines.photos == &Photos());  // the basin is read in these two
   const facet::Id box_id = lines.next_id;
   size_t num_band_pins = 0;
   for (const Photo& photo : Photos()) num_band_pins += photo.pins.size();
@@ -427,26 +465,26 @@ struct Comparison {
   std::string figures;  // for MESSAGE
 };
 
-Comparison CompareWithGroundTruth(const facet::Project& model) {
+Comparison CompareWithGroundTruth(const facet::Project& model, const std::vector<Photo>& photos = Photos()) {
   Comparison out;
   std::vector<Eigen::Matrix3d> recovered, truth;
   std::vector<Eigen::Vector3d> recovered_centres, true_centres;
   std::ostringstream figures;
   figures.precision(3);
-  for (size_t i = 0; i < Photos().size(); ++i) {
+  for (size_t i = 0; i < photos.size(); ++i) {
     const facet::Image& image = model.images[i];
     CAPTURE(image.path);
     REQUIRE(image.camera_calibrated);
     // Each photo's world frame was chosen once (core/solve/world_frames.h).
     CHECK(image.axis_quarter_turns != facet::Image::kAxisTurnsUnchosen);
-    const GroundTruthCamera gt = ReadStrechaCamera(Photos()[i].name);
+    const GroundTruthCamera gt = ReadStrechaCamera(photos[i].name);
     const Eigen::Matrix3d k = HalvedK(gt.K);
     recovered.push_back(image.camera.cam_from_world_rotation);
     truth.push_back(gt.cam_from_world_rotation);
     recovered_centres.push_back(image.camera.CenterInWorld());
     true_centres.push_back(gt.CenterInWorld());
     out.focal_error.push_back(image.camera.focal_px / (0.5 * (k(0, 0) + k(1, 1))) - 1.0);
-    figures << Photos()[i].name << ": f " << image.camera.focal_px << " px (true " << k(0, 0) << "), "
+    figures << photos[i].name << ": f " << image.camera.focal_px << " px (true " << k(0, 0) << "), "
             << 100.0 * out.focal_error.back() << " %; principal point " << image.camera.principal_point_px.transpose()
             << " (true " << k(0, 2) << " " << k(1, 2) << ")\n";
   }
@@ -455,7 +493,7 @@ Comparison CompareWithGroundTruth(const facet::Project& model) {
   const Eigen::Matrix3d world_rotation = BestWorldRotation(recovered, truth);
   for (size_t i = 0; i < recovered.size(); ++i) {
     out.aligned_rotation_error_deg.push_back(AngleDeg(recovered[i] * world_rotation * truth[i].transpose()));
-    figures << Photos()[i].name << ": rotation error after the best common rotation "
+    figures << photos[i].name << ": rotation error after the best common rotation "
             << out.aligned_rotation_error_deg.back() << " deg\n";
   }
   for (size_t a = 0; a < recovered.size(); ++a) {
@@ -467,7 +505,7 @@ Comparison CompareWithGroundTruth(const facet::Project& model) {
       const Eigen::Vector3d baseline = recovered[b] * (recovered_centres[a] - recovered_centres[b]);
       const Eigen::Vector3d true_baseline = truth[b] * (true_centres[a] - true_centres[b]);
       out.baseline_direction_error_deg.push_back(AngleBetweenDeg(baseline, true_baseline));
-      figures << Photos()[a].name << "-" << Photos()[b].name << ": relative rotation " << AngleDeg(relative)
+      figures << photos[a].name << "-" << photos[b].name << ": relative rotation " << AngleDeg(relative)
               << " deg (true " << AngleDeg(true_relative) << "), error " << out.relative_rotation_error_deg.back()
               << " deg; baseline direction error " << out.baseline_direction_error_deg.back() << " deg\n";
     }
@@ -490,10 +528,11 @@ Comparison CompareWithGroundTruth(const facet::Project& model) {
 // calibration says so: f = 1730 +- 181 px and 853 +- 316 px); the depth family that would
 // fix f has only short stubs at the ends of mouldings, and its vanishing point lies ~250 px
 // from the principal point, where a 1 deg error in one stub moves it by tens of px. Freeing
-// the focal lengths in the joint solve (focal-lock off) makes it worse: three or four pins on
-// one face of one box do not fix f either. (The line detector, `lines detect`, does no better
-// on these photos: f = 3,400-5,300 px, its depth family made of carving and the basin's
-// slanted faces.)
+// each photo's focal length in the joint solve (focal-lock off) makes it worse: three or four
+// pins on one face of one box do not fix f either (f +58 % / -20 %, relative rotation 3.9 deg,
+// baseline 53 deg). (The line detector, `lines detect`, does no better on these photos:
+// f = 3,400-5,300 px, its depth family made of carving and the basin's slanted faces.) One
+// lens for both photos does (the next case).
 TEST_CASE("Strecha fountain through the app, focal length unknown: cameras and box solve; rotations reported") {
   const auto started = std::chrono::steady_clock::now();
   std::string log;
@@ -502,8 +541,9 @@ TEST_CASE("Strecha fountain through the app, focal length unknown: cameras and b
   const Comparison c = CompareWithGroundTruth(model);
   const double worst_deg =
       *std::max_element(c.relative_rotation_error_deg.begin(), c.relative_rotation_error_deg.end());
-  // The issue's 1 deg is reported, not asserted: these photos do not fix the focal length
-  // (see above); the next case asserts it with the focal length known.
+  // The issue's 1 deg is reported, not asserted: each photo's lines do not fix its focal
+  // length (see above); the next cases assert it with one lens for both photos and with the
+  // focal length known.
   MESSAGE("Strecha fountain, focal length from the lines:\n"
           << c.figures << "worst relative rotation error " << worst_deg << " deg: the issue's "
           << kMaxRelativeRotationErrorDeg << " deg is "
@@ -518,6 +558,86 @@ TEST_CASE("Strecha fountain through the app, focal length unknown: cameras and b
   // focal length of the right order.
   constexpr double kMaxFocalFactor = 2.0;
   for (const double error : c.focal_error) CHECK(std::abs(std::log1p(error)) < std::log(kMaxFocalFactor));
+}
+
+// The same run by a user who does not know the lens but knows that both photos come from one
+// camera (Properties > "Same lens as other photos" with "Lock focal" off; the script's
+// `calibration lens-group 1` and `calibration focal-lock off`, core/scene/project.h,
+// Image::lens_group): the joint solve then has one focal length for both photos, fixed by the
+// lines and pins of both together, where each photo's own lines leave it loose (the first
+// case). Nothing of the ground truth enters the run. Figures on this build: f -2.2 % (both),
+// relative rotation 0.50 deg, baseline direction 2.5 deg; the same lines drawn in a
+// 1280 x 720 window: +0.8 %, 0.07 deg, 2.2 deg; 1600 x 900: +2.9 %, 0.65 deg, 2.0 deg. This
+// holds for this pair, 21 deg apart, not for every pair: with 0005 (ThreePhotos, read after
+// these figures) the same run gives 0004 + 0005 (11 deg apart) f -7.2 %, 1.17 deg, and
+// 0006 + 0005 (10 deg apart) f +101 %, 9.5 deg (each photo's lines alone: 4.8 and 3.2 deg);
+// all three photos, the next case, f +11 % and 2.45 deg.
+TEST_CASE(
+    "Strecha fountain through the app, focal length unknown, one lens for both photos: every camera within 1 deg") {
+  std::ostringstream before;
+  for (size_t i = 0; i < Photos().size(); ++i) {
+    before << "command select-image " << i << "\nframes 1\ncommand calibration focal-lock off\nframes 1\n"
+           << "command calibration lens-group 1\nframes 1\n";
+  }
+  std::string log;
+  const facet::Project model = PinTheBox(LinesDrawnThroughTheApp(), "model_shared_lens", before.str(), &log);
+  INFO("log:\n" << log);
+  const Comparison c = CompareWithGroundTruth(model);
+  const double worst_deg =
+      *std::max_element(c.relative_rotation_error_deg.begin(), c.relative_rotation_error_deg.end());
+  MESSAGE("Strecha fountain, focal length unknown, one lens:\n"
+          << c.figures << "worst relative rotation error " << worst_deg << " deg: the issue's "
+          << kMaxRelativeRotationErrorDeg << " deg is "
+          << std::string(worst_deg < kMaxRelativeRotationErrorDeg ? "met" : "NOT met"));
+  CHECK(log.find("error:") == std::string::npos);
+  // One focal length for both photos, to the last bit (one parameter of the solve).
+  CHECK(model.images[0].camera.focal_px == model.images[1].camera.focal_px);
+  // The lens within 5 % (-2.2 % measured; 0.8-2.9 % in the other window sizes above), against
+  // 25-38 % from each photo's lines alone.
+  constexpr double kMaxFocalError = 0.05;
+  for (const double error : c.focal_error) CHECK(std::abs(error) < kMaxFocalError);
+  for (const double error_deg : c.relative_rotation_error_deg) CHECK(error_deg < kMaxRelativeRotationErrorDeg);
+  for (const double error_deg : c.aligned_rotation_error_deg) CHECK(error_deg < kMaxRelativeRotationErrorDeg);
+  // As with the known lens: the baselines from 3-4 pins per photo on one face (2.5 deg measured).
+  constexpr double kMaxBaselineDirectionErrorDeg = 5.0;
+  for (const double error_deg : c.baseline_direction_error_deg) CHECK(error_deg < kMaxBaselineDirectionErrorDeg);
+  constexpr double kMaxPinRmsPx = 3.0;
+  CHECK(c.pin_rms_px < kMaxPinRmsPx);
+}
+
+// The same with a third photo from the camera, 0005 (ThreePhotos): its lines and band pins as
+// the other two have them, the lens shared by all three. The issue's 1 deg is NOT met, and is
+// reported, not asserted: f +11.3 %, relative rotations 2.45 / 1.51 / 1.27 deg (0006-0004,
+// 0006-0005, 0004-0005), baselines 1.3-3.9 deg. 0005 faces the wall squarely: its own lines
+// give f +204 % (each photo's focal length freed: +81 / -12 / +230 %, up to 7.6 deg), and
+// even with the true focal length its rotation is the least sure (relative rotations 0.13,
+// 0.85, 0.75 deg), so its many far-vanishing segments pull the shared focal length long
+// rather than fixing it. A second photo at an angle to the wall is what fixes the lens.
+TEST_CASE("Strecha fountain through the app, focal length unknown, one lens for three photos: rotations reported") {
+  const DrawnLines lines = DrawLinesThroughTheApp(ThreePhotos(), "strecha_fountain_three");
+  std::ostringstream before;
+  for (size_t i = 0; i < ThreePhotos().size(); ++i) {
+    before << "command select-image " << i << "\nframes 1\ncommand calibration focal-lock off\nframes 1\n"
+           << "command calibration lens-group 1\nframes 1\n";
+  }
+  std::string log;
+  const facet::Project model = PinTheBox(lines, "model_shared_lens_three", before.str(), &log);
+  INFO("log:\n" << log);
+  const Comparison c = CompareWithGroundTruth(model, ThreePhotos());
+  const double worst_deg =
+      *std::max_element(c.relative_rotation_error_deg.begin(), c.relative_rotation_error_deg.end());
+  MESSAGE("Strecha fountain, focal length unknown, one lens, three photos:\n"
+          << c.figures << "worst relative rotation error " << worst_deg << " deg: the issue's "
+          << kMaxRelativeRotationErrorDeg << " deg is "
+          << std::string(worst_deg < kMaxRelativeRotationErrorDeg ? "met" : "NOT met"));
+  CHECK(log.find("error:") == std::string::npos);
+  for (const facet::Image& image : model.images) CHECK(image.camera.focal_px == model.images[0].camera.focal_px);
+  // What the shared lens still buys against each photo's own (81-230 % off): within 15 %
+  // (11.3 % measured); the pins met as in the other cases.
+  constexpr double kMaxFocalError = 0.15;
+  for (const double error : c.focal_error) CHECK(std::abs(error) < kMaxFocalError);
+  constexpr double kMaxPinRmsPx = 3.0;
+  CHECK(c.pin_rms_px < kMaxPinRmsPx);
 }
 
 // The same run by a user who knows the lens (Properties > Focal > Fixed, the script's
@@ -560,7 +680,10 @@ TEST_CASE("Strecha fountain through the app, focal length known: every camera wi
 // rotation error after the best common rotation); the known focal length gives 0.12 deg. The
 // rim is read to a pixel or two over ~30 px of depth in each photo, so f is good to several
 // per cent, not to the ~2 % that 1 deg would need here; the readings were not adjusted
-// towards the ground truth.
+// towards the ground truth. (The same run with one lens for both photos does not get the
+// basin: from its first pin on, every solve stops with "Size z of 'box 2' would go from 0.1 to
+// -0.08" (the known height 0.1 is a distance, met by -0.1 too) and leaves the model as it
+// was, so the basin's pins end ~200 px off; the band alone meets 1 deg there, the case above.)
 TEST_CASE("Strecha fountain through the app, focal length unknown, a box with depth on the basin: rotations reported") {
   std::ostringstream before;
   for (size_t i = 0; i < Photos().size(); ++i) {
