@@ -817,13 +817,19 @@ TEST_CASE("screenshots of each teach overlay") {
   // The solver stepped on the street: two steps from the perturbed start (the residuals still
   // tens of px), and the 3D panel of the same state exported through File > Export view's
   // command.
-  const std::string street = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/street.facet";
-  const std::string steps_3d = (shots / "teach-steps-3d.png").string();
-  fs::remove(steps_3d);
+  // The sample copied beside its photo into the test's folder, so that the export goes to a
+  // path relative to it and the picture's log names no folder of this machine.
+  const fs::path sample_dir = fs::path(FACET_SOURCE_DIR) / "assets/samples/leuven";
+  const fs::path street_dir = dir / "street";
+  fs::create_directories(street_dir);
+  for (const char* file : {"street.facet", "leuvenA.jpg"}) {
+    fs::copy_file(sample_dir / file, street_dir / file, fs::copy_options::overwrite_existing);
+  }
+  const std::string street = (street_dir / "street.facet").string();
+  const std::string steps_3d = (street_dir / "teach-steps-3d.png").string();
   r = shot(street, "teach-steps",
            "frames 3\ncommand teach steps on\ncommand teach step\ncommand teach step\ncommand teach residual-scale 4\n"
-           "frames 2\ncommand export-view 3d 960x540 " +
-               steps_3d + "\nframes 2");
+           "frames 2\ncommand export-view 3d 960x540 teach-steps-3d.png\nframes 2");
   const nlohmann::json& steps = r.at("teach").at("steps");
   REQUIRE(steps.at("steps").get<int>() == 2);
   // With spatial constraints (the augmented Lagrangian's rounds) too, the app's steps are the
