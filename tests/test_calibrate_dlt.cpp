@@ -604,6 +604,65 @@ TEST_CASE("JSON adapter: round trip and malformed input") {
   CHECK(missing.error.find("cannot open") != std::string::npos);
 }
 
+// Issue 25: a known focal length of 1e-300, 1e200 or 1e308 px crashed `calibrate --points`
+// (SIGSEGV in the SVD of the pose's translation). Refused where it enters, named, with the
+// range of camera_checks.h; on both paths (points in a volume and on a plane).
+TEST_CASE("JSON adapter: a known focal length outside any lens is refused by name") {
+  const Camera truth = MakeLookAtCamera(DefaultScene());
+  const auto volume = MakePoints(truth, {}, DefaultScene());
+  SceneSpec planar;
+  planar.planar = true;
+  const auto plane = MakePoints(truth, planar, DefaultScene());
+  for (const auto* points : {&volume, &plane}) {
+    nlohmann::json doc;
+    doc["image_size"] = {truth.width_px, truth.height_px};
+    doc["points"] = nlohmann::json::array();
+    for (const auto& p : *points)
+      doc["points"].push_back({{"xyz", {p.xyz.x(), p.xyz.y(), p.xyz.z()}}, {"uv", {p.uv_px.x(), p.uv_px.y()}}});
+    const double diagonal = std::hypot(truth.width_px, truth.height_px);
+    for (const double focal_px : {1e-300, 1e-5, 0.01 * diagonal, 101.0 * diagonal, 1e200, 1e308}) {
+      nlohmann::json bad = doc;
+      bad["focal_px"] = focal_px;
+      const CalibrateIoResult r = CalibratePointsJson(bad.dump());
+      CAPTURE(focal_px);
+      CAPTURE(r.error);
+      CHECK_FALSE(r.ok());
+      CHECK(r.json.empty());
+      CHECK(r.error.find("\"focal_px\"") != std::string::npos);
+      CHECK(r.error.find("image diagonals") != std::string::npos);
+    }
+    // The true focal length is a lens: the refusal is of the number, not of the points.
+    nlohmann::json edge = doc;
+    edge["focal_px"] = truth.focal_px;
+    const CalibrateIoResult fine = CalibratePointsJson(edge.dump());
+    CHECK_MESSAGE(fine.ok(), fine.error);
+  }
+}
+
+// The same numbers reaching the estimator without the adapter: its Check() refuses them, and
+// the pose's linear algebra refuses non-finite rays instead of handing them to the SVD.
+TEST_CASE("known focal length: options outside any lens fail Check, the solve returns a message") {
+  const Camera truth = MakeLookAtCamera(DefaultScene());
+  const auto points = MakePoints(truth, {}, DefaultScene());
+  for (const double focal_px : {1e-300, 1e200, 1e308}) {
+    DltCalibrationOptions options = OptionsFor(truth);
+    options.fixed_focal_px = focal_px;
+    std::string error;
+    CHECK_FALSE(options.Check(&error));
+    CHECK(error.find("fixed_focal_px") != std::string::npos);
+    const DltCalibrationSummary s = CalibrateFromPoints(points, options);
+    CAPTURE(focal_px);
+    CHECK_FALSE(s.IsUsable());
+    CHECK(s.termination == SolverTermination::kInvalidInput);
+  }
+  DltCalibrationOptions prior = OptionsFor(truth);
+  prior.focal_prior_px = truth.focal_px;
+  prior.focal_prior_std_px = 1e-300;
+  std::string error;
+  CHECK_FALSE(prior.Check(&error));
+  CHECK(error.find("standard deviation") != std::string::npos);
+}
+
 // ---- Known focal length (a calibrated camera's pose) and the focal prior ----
 
 // Pose errors of a camera against the truth: rotation (deg) and |t - t_true| / |t_true|.

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/estimators/calibrate_vp.h"
+#include "core/geometry/camera_checks.h"
 #include "core/io/calibrate_io.h"
 #include "tests/synthetic_scene.h"
 
@@ -331,6 +332,34 @@ TEST_CASE("bad LINES.json gives a message, never an exception") {
              R"({"axis": "x", "segments": [[10, 10, 10, 10], [10, 50, 100, 50]]},)"
              R"({"axis": "z", "segments": [[10, 10, 10, 100], [50, 10, 50, 100]]}]})",
              "zero length");
+}
+
+// Issue 25: a focal prior with std 1e-300 and a horizon at 1e308 were ignored and the output
+// held nulls; a known focal length of 1e-300 or 1e308 px was no lens. Each is refused where it
+// enters, by name.
+TEST_CASE("LINES.json: focal lengths, priors and horizons that are no camera are refused by name") {
+  const testing::SyntheticScene scene = testing::MakeBoxScene();
+  const std::string valid = LinesJson(scene, {Axis::kX, Axis::kY, Axis::kZ}, "");
+  REQUIRE(CalibrateLinesJson(valid).ok());
+  const std::string open = valid.substr(0, valid.size() - 1);
+  const double f = scene.true_camera.focal_px;
+  for (const char* focal : {"1e-300", "1e308", "1e200", "0.5"})
+    CheckError(open + ", \"focal_px\": " + focal + "}", "\"focal_px\"");
+  CheckError(open + ", \"focal_prior_px\": " + Fixed17(f) + ", \"focal_prior_std_px\": 1e-300}", "standard deviation");
+  CheckError(open + ", \"focal_prior_px\": 1e308, \"focal_prior_std_px\": 10}", "focal_prior_px");
+  CheckError(open + ", \"focal_px\": " + Fixed17(f) + ", \"horizon\": 1e308}", "\"horizon\"");
+  CheckError(open + ", \"focal_px\": " + Fixed17(f) + ", \"horizon\": [0, 1e308, 10, 1e308]}", "\"horizon\"");
+  // A prior as tight as the floor allows is still taken: the check is on the number, not the use.
+  const CalibrateIoResult tight =
+      CalibrateLinesJson(open + ", \"focal_prior_px\": " + Fixed17(f) +
+                         ", \"focal_prior_std_px\": " + Fixed17(2.0 * kMinFocalPriorRelativeStd * f) + "}");
+  REQUIRE_MESSAGE(tight.ok(), tight.error);
+  // No success output prints null for a figure the input determines.
+  const json out = json::parse(tight.json);
+  for (const char* key : {"focal_px", "residual_sigma_px", "min_family_angle_spread_deg"}) {
+    CAPTURE(key);
+    CHECK(out.at(key).is_number());
+  }
 }
 
 // Issue 14: these inputs printed a focal length as an answer (f = 66,000 +- 1.6e7 px for an

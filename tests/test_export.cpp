@@ -1,6 +1,8 @@
 // Export: the GLB is parsed back byte by byte (header, chunks, accessors, embedded PNG,
 // camera nodes), the OBJ line by line.
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -19,6 +21,7 @@
 #include "core/mesh/operators.h"
 #include "core/mesh/primitives.h"
 #include "core/texture/textured_mesh.h"
+#include "core/util/utf8.h"
 #include "gltf_validator.h"
 #include "synthetic_scene.h"
 
@@ -32,6 +35,17 @@ fs::path TempDir(const std::string& name) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
+}
+
+// Lower-case hex of a string's bytes, as the script writes paths.
+std::string HexOf(const std::string& text) {
+  std::string out;
+  char byte[3];
+  for (const char c : text) {
+    std::snprintf(byte, sizeof(byte), "%02x", static_cast<unsigned char>(c));
+    out += byte;
+  }
+  return out;
 }
 
 std::vector<std::uint8_t> ReadBytes(const fs::path& path) {
@@ -167,7 +181,8 @@ TEST_CASE("Blender script: each camera, in Blender's camera model, projects the 
   const json& c = cameras[0];
   CHECK(c["photo"] == "/work/proj/photos/o'clock.jpg");
   CHECK(c["name"] == "o'clock.jpg");
-  CHECK(script.find("MODEL = \"/work/proj/model.glb\"") != std::string::npos);
+  CHECK(script.find("MODEL = os.fsdecode(bytes.fromhex(\"" + HexOf("/work/proj/model.glb") + "\"))") !=
+        std::string::npos);
   const facet::Camera& camera = scene.project.images[0].camera;
   REQUIRE_FALSE(camera.HasDistortion());
   REQUIRE(camera.principal_point_px != Eigen::Vector2d((camera.width_px - 1) / 2.0, (camera.height_px - 1) / 2.0));
@@ -184,6 +199,199 @@ TEST_CASE("Blender script: each camera, in Blender's camera model, projects the 
     }
   }
   CHECK(checked >= 8);
+}
+
+// The cameras block of a Blender script, found as the script finds it (whole marker lines).
+json CamerasBlock(const std::string& script) {
+  const std::string begin_marker = "\n# facet-cameras-begin\n", end_marker = "\n# facet-cameras-end\n";
+  const size_t begin = script.find(begin_marker);
+  REQUIRE(begin != std::string::npos);
+  const size_t end = script.find(end_marker, begin + begin_marker.size());
+  REQUIRE(end != std::string::npos);
+  CHECK(script.find(end_marker, end + 1) == std::string::npos);  // one block, one end
+  return json::parse(script.substr(begin + begin_marker.size(), end - begin - begin_marker.size()));
+}
+
+// Names a careless user or an attacker gives a photo: quotes, backslashes, newlines, Python's
+// string ends, the script's own markers, code, bytes that are not UTF-8, and unicode. 49 of
+// them, as the probe's (issue 25: "x# facet-cameras-end.jpg" stopped the script in json.loads).
+std::vector<std::string> HostileNames() {
+  return {"x# facet-cameras-end.jpg",
+          "# facet-cameras-end",
+          "\n# facet-cameras-end\n.jpg",
+          "# facet-cameras-begin.jpg",
+          "\n# facet-cameras-begin\n[].jpg",
+          "'''.jpg",
+          "\"\"\".jpg",
+          "''''''.jpg",
+          "a'b.jpg",
+          "a\"b.jpg",
+          "back\\slash.jpg",
+          "ends with backslash\\",
+          "\\'''.jpg",
+          "\\u0027.jpg",
+          "\\x27.jpg",
+          "\\n.jpg",
+          "new\nline.jpg",
+          "carriage\rreturn.jpg",
+          "tab\tname.jpg",
+          "form\ffeed.jpg",
+          "bell\a.jpg",
+          "del\x7f.jpg",
+          "'''); __import__('os').system('touch CANARY') #.jpg",
+          "\"\"\"); __import__('os').system('touch CANARY') #.jpg",
+          "\n__import__('os').system('touch CANARY')\n.jpg",
+          "'''.split('x')[0]); import os; os.system('touch CANARY'); print(r'''.jpg",
+          "]}; import os; os.system('touch CANARY'); x = [{.jpg",
+          "{\"name\": \"evil\"}.jpg",
+          "[1, 2, 3].jpg",
+          "null",
+          "$(touch CANARY).jpg",
+          "`touch CANARY`.jpg",
+          "%s%n%x.jpg",
+          "{0}{1}.jpg",
+          "m\xff.jpg",
+          "\xfe\xfd.jpg",
+          "\xc3.jpg",
+          "\xed\xa0\x80.jpg",
+          "\xc0\xaf.jpg",
+          "caf\xc3\xa9.jpg",
+          "\xe2\x98\x83 snowman.jpg",
+          "\xf0\x9f\x93\xb7 camera.jpg",
+          "\xe5\x86\x99\xe7\x9c\x9f.jpg",
+          "\xd8\xb5\xd9\x88\xd8\xb1\xd8\xa9.jpg",
+          "\xe2\x80\xae"
+          "gpj.exe",
+          "zero\xe2\x80\x8bwidth.jpg",
+          " leading and trailing spaces ",
+          ".hidden",
+          std::string(200, 'n') + ".jpg"};
+}
+
+// A stand-in for Blender's Python API, just enough for the script: it records each camera
+// (name, lens, shifts, matrix, the photo path's bytes) and the model it imports, and writes
+// them as JSON when the script ends.
+constexpr const char* kFakeBpy = R"PY(import atexit, json, os
+
+_record = {"model_hex": None, "cameras": []}
+
+
+class _Any:
+    def __init__(self, **kw):
+        self.__dict__.update(kw)
+
+
+class _Collection(list):
+    def new(self, *args):
+        item = _Any(name=args[0] if args else "", background_images=_Collection(), type="CAMERA")
+        self.append(item)
+        return item
+
+    def remove(self, item, do_unlink=True):
+        self[:] = [x for x in self if x is not item]
+
+    def load(self, path, check_existing=True):
+        return _Any(filepath=path)
+
+
+class _Objects(_Collection):
+    def new(self, name, data):
+        obj = _Any(name=name, data=data, type="CAMERA", matrix_world=None)
+        self.append(obj)
+        return obj
+
+
+def _import_gltf(filepath):
+    _record["model_hex"] = os.fsencode(filepath).hex()
+
+
+data = _Any(filepath="", objects=_Objects(), cameras=_Collection(), images=_Collection())
+ops = _Any(import_scene=_Any(gltf=_import_gltf, obj=_import_gltf), wm=_Any(obj_import=_import_gltf))
+_scene = _Any(collection=_Any(objects=_Any(link=lambda obj: None)), camera=None, render=_Any())
+context = _Any(scene=_scene)
+
+
+@atexit.register
+def _write():
+    for obj in data.objects:
+        d = obj.data
+        photo = d.background_images[0].image.filepath if d.background_images else None
+        _record["cameras"].append({"name": obj.name, "lens": d.lens, "shift_x": d.shift_x, "shift_y": d.shift_y,
+                                   "matrix": obj.matrix_world.rows,
+                                   "photo_hex": None if photo is None else os.fsencode(photo).hex()})
+    with open(os.environ["FACET_FAKE_BPY_OUT"], "w") as out:
+        json.dump(_record, out)
+)PY";
+
+constexpr const char* kFakeMathutils = R"PY(class Matrix:
+    def __init__(self, rows):
+        self.rows = [list(r) for r in rows]
+)PY";
+
+TEST_CASE("Blender script: 49 hostile photo names load unchanged, and no code in them runs") {
+  facet::testing::SyntheticScene scene = facet::testing::MakeBoxScene();
+  const fs::path dir = TempDir("blender_hostile");
+  const std::vector<std::string> names = HostileNames();
+  REQUIRE(names.size() == 49);
+  const facet::Image base = scene.project.images[0];
+  scene.project.images.clear();
+  for (const std::string& name : names) {
+    facet::Image image = base;
+    image.id = scene.project.NewId();
+    image.path = "photos/" + name;
+    scene.project.images.push_back(image);
+    // The photo exists, so the script loads it as the camera's background.
+    fs::create_directories(dir / "photos");
+    std::ofstream(dir / "photos" / name) << "not a real photo";
+  }
+  const std::string project_path = (dir / "p.facet").string();
+  const std::string model_path = (dir / "m\xff'''\".glb").string();
+  const std::string script = facet::BlenderSetupScript(scene.project, project_path, model_path);
+
+  // The data block alone: the names as written (UTF-8, invalid bytes as U+FFFD), the photo
+  // paths' exact bytes.
+  const json cameras = CamerasBlock(script);
+  REQUIRE(cameras.size() == names.size());
+  for (size_t i = 0; i < names.size(); ++i) {
+    CAPTURE(i);
+    const std::string photo = (dir / "photos" / names[i]).lexically_normal().string();
+    CHECK(cameras[i]["name"].get<std::string>() == facet::ValidUtf8OrReplaced(names[i]));
+    CHECK(cameras[i]["photo_hex"].get<std::string>() == HexOf(photo));
+  }
+
+  // The script itself, run by Python with a fake bpy: when python3 is on the machine (it is
+  // wherever the project's scripts run; otherwise the block check above is what is tested).
+  if (std::system("python3 -c 'import json, os, atexit' > /dev/null 2>&1") != 0) {
+    MESSAGE("python3 not found: the script was checked as data only");
+    return;
+  }
+  const fs::path stubs = dir / "stubs";
+  fs::create_directories(stubs);
+  std::ofstream(stubs / "bpy.py") << kFakeBpy;
+  std::ofstream(stubs / "mathutils.py") << kFakeMathutils;
+  std::ofstream(dir / "setup.py", std::ios::binary) << script;
+  const fs::path out = dir / "ran.json";
+  const std::string command = "cd '" + dir.string() + "' && PYTHONPATH='" + stubs.string() + "' FACET_FAKE_BPY_OUT='" +
+                              out.string() + "' python3 setup.py > '" + (dir / "python.log").string() + "' 2>&1";
+  const int status = std::system(command.c_str());
+  std::ifstream log_in(dir / "python.log");
+  const std::string log((std::istreambuf_iterator<char>(log_in)), {});
+  INFO("python: " << log);
+  REQUIRE(status == 0);
+  CHECK_FALSE(fs::exists(dir / "CANARY"));  // no name's code ran
+  std::ifstream ran_in(out);
+  const json ran = json::parse(ran_in);
+  CHECK(ran["model_hex"] == HexOf(model_path));
+  REQUIRE(ran["cameras"].size() == names.size());
+  constexpr double kExact = 0.0;  // the numbers go through JSON with 17 digits: bit-exact
+  for (size_t i = 0; i < names.size(); ++i) {
+    CAPTURE(i);
+    const json& got = ran["cameras"][i];
+    CHECK(got["name"].get<std::string>() == facet::ValidUtf8OrReplaced(names[i]));
+    CHECK(got["photo_hex"] == cameras[i]["photo_hex"]);
+    CHECK(std::abs(got["lens"].get<double>() - cameras[i]["lens_mm"].get<double>()) <= kExact);
+    CHECK(got["matrix"] == cameras[i]["matrix_world"]);
+  }
 }
 
 }  // namespace

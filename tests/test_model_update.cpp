@@ -398,6 +398,28 @@ TEST_CASE("a failed solve leaves the project as the edit made it") {
   }
 }
 
+// Issue 25: k1 = 1e308 (in memory; the project file refuses it at open) made the joint solve
+// fail with "the model is unchanged" while the geometry solve's result, the camera 4,728 km
+// away, was kept and saved. A failed joint solve now leaves the project as the edit made it.
+TEST_CASE("a joint solve that fails leaves the project as the edit made it, not the geometry solve's result") {
+  SyntheticScene scene = MakeBoxScene();
+  Perturb(&scene, 1.0);
+  scene.project.images[0].camera.k1 = 1e308;
+  const Project& edited = scene.project;
+  int joint_failures = 0;
+  for (const bool calibrate : {false, true}) {
+    CAPTURE(calibrate);
+    Project updated;
+    const ModelUpdateSummary summary = UpdateEdited(edited, calibrate, /*warm_start=*/false, &updated);
+    INFO(Messages(summary));
+    CHECK_FALSE(summary.ok);
+    CHECK(updated == edited);
+    if (summary.joint.termination == SolverTermination::kFailed) ++joint_failures;
+  }
+  // The case this guards: the joint solve ran after a usable geometry solve and failed.
+  CHECK(joint_failures >= 1);
+}
+
 // Issue 14: pins that put the box's +x corners beyond its -x face ask for a negative width.
 // Whichever step gets there (the geometry solve's linear start or the joint solve), the
 // update fails by name and the project stays as the edit made it.

@@ -25,6 +25,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/geometry/camera.h"
+#include "core/image/image_io.h"
 #include "core/io/project_io.h"
 #include "core/mesh/extrude.h"
 #include "core/mesh/operators.h"
@@ -1558,4 +1559,120 @@ TEST_CASE("references: round trip, bad fields named, a missing mesh file is a wa
   // Save as into another folder keeps pointing at the same mesh file.
   facet::RebaseImagePaths(path, dir / "sub/q.facet", &p);
   CHECK(p.references[0].path == "../site.obj");
+}
+
+// Issue 25: a path that is not UTF-8 (a folder named in another encoding) aborted the process
+// when saved (nlohmann's error 316). Paths are bytes: they round-trip exactly, as a string when
+// UTF-8 and as {"bytes_hex": ...} otherwise; every other text stays UTF-8 (names are refused).
+TEST_CASE("paths that are not UTF-8 round-trip exactly as their bytes") {
+  Project p = MakeFullProject();
+  p.images[0].path = "d\xff/m\xfe\xc3.jpg";                  // invalid bytes, a truncated sequence
+  p.images[1].path = "photos/\xed\xa0\x80 surrogate.jpg";    // UTF-8 of a surrogate: not UTF-8
+  p.images[2].path = "photos/caf\xc3\xa9 \xe2\x98\x83.jpg";  // valid UTF-8 stays a plain string
+  p.references.at(0).path = "refs/\xc0\xaf overlong.obj";
+  CheckRoundTrip(p);
+  const Json doc = Json::parse(facet::ProjectToJson(p));
+  CHECK(doc["images"][0]["path"] == Json{{"bytes_hex", "64ff2f6dfec32e6a7067"}});
+  CHECK(doc["images"][1]["path"].is_object());
+  CHECK(doc["images"][2]["path"] == "photos/caf\xc3\xa9 \xe2\x98\x83.jpg");
+  CHECK(doc["references"][0]["path"].is_object());
+  CHECK(facet::CheckProjectSavable(p).empty());
+
+  TempDir dir;
+  const std::string path = dir / "p.facet";
+  REQUIRE(facet::SaveProject(p, path).empty());
+  const facet::ProjectLoadResult loaded = facet::LoadProject(path);
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+  CHECK(loaded.project == p);
+
+  // The encoded form, malformed, is an error naming its path.
+  for (const Json& bad :
+       {Json{{"bytes_hex", "6g"}}, Json{{"bytes_hex", "6"}}, Json{{"bytes_hex", 5}}, Json{{"bytes_hex", "00"}},
+        Json{{"hex", "61"}}, Json{{"bytes_hex", "61"}, {"x", 1}}, Json::array()}) {
+    Json j = SmallJson();
+    j["images"][0]["path"] = bad;
+    CAPTURE(bad.dump());
+    CheckErrorNames(j.dump(), "images[0].path");
+  }
+}
+
+// Issue 25: numbers that are no camera entered through the project file (focal 1e-300 px was
+// exported as yfov = pi, k1 = 1e308 sent the solve's camera 4,728 km away). Refused at open,
+// naming the field, with the bounds of core/geometry/camera_checks.h.
+TEST_CASE("numbers that are no camera are refused at open, naming the field") {
+  const auto calibrated = [](double focal_px) {
+    Json j = SmallJson();
+    j["images"][0]["camera_calibrated"] = true;
+    j["images"][0]["camera"]["focal_px"] = focal_px;
+    return j.dump();
+  };
+  for (const double focal_px : {1e-300, 1.0, 1e6, 1e308}) {
+    CAPTURE(focal_px);
+    CheckErrorNames(calibrated(focal_px), "images[0].camera.focal_px: f = ");
+  }
+  // An uncalibrated camera's focal is only a start: no check, the solve replaces it.
+  {
+    Json j = SmallJson();
+    j["images"][0]["camera"]["focal_px"] = 1e-300;
+    CHECK(facet::ProjectFromJson(j.dump()).ok());
+  }
+  for (const double k1 : {1e308, -1e308, -5.0}) {
+    Json j = SmallJson();
+    j["images"][0]["camera"]["k1"] = k1;
+    CAPTURE(k1);
+    CheckErrorNames(j.dump(), "images[0].camera.k1: ");
+  }
+  {
+    Json j = SmallJson();
+    j["images"][0]["camera"]["k1"] = -0.1;  // a real lens's barrel distortion
+    CHECK(facet::ProjectFromJson(j.dump()).ok());
+  }
+  for (const double fixed : {1e-300, 1e308}) {
+    Json j = SmallJson();
+    j["images"][0]["focal_mode"] = "fixed";
+    j["images"][0]["fixed_focal_px"] = fixed;
+    CheckErrorNames(j.dump(), "images[0].fixed_focal_px: f = ");
+  }
+  {
+    Json j = SmallJson();
+    j["images"][0]["focal_mode"] = "prior";
+    j["images"][0]["focal_prior_px"] = 600.0;
+    j["images"][0]["focal_prior_std_px"] = 1e-300;
+    CheckErrorNames(j.dump(), "images[0].focal_prior_px: the prior's standard deviation");
+  }
+  {
+    Json j = SmallJson();
+    j["images"][0]["use_horizon"] = true;
+    j["images"][0]["horizon_px"] = {0.0, 1e308, 639.0, 1e308};
+    CheckErrorNames(j.dump(), "images[0].horizon_px: ");
+  }
+}
+
+// Issue 25: a photo replaced by one of another size opened, solved and exported without a word
+// (the texture silently halved). Open says so, as for a missing photo, and keeps everything.
+TEST_CASE("LoadProject: a photo of another size than its image is a warning, nothing moves") {
+  TempDir dir;
+  Project p = MakeSmallProject();
+  p.references.clear();
+  p.images[0].path = "photo.png";
+  const std::string path = dir / "p.facet";
+  REQUIRE(facet::SaveProject(p, path).empty());
+  facet::ImageRgba8 half;
+  half.width = p.images[0].width_px / 2;
+  half.height = p.images[0].height_px / 2;
+  half.pixels.assign(static_cast<size_t>(half.width) * half.height * 4, 128);
+  REQUIRE(facet::WritePng(dir / "photo.png", half).empty());
+  const facet::ProjectLoadResult r = facet::LoadProject(path);
+  REQUIRE_MESSAGE(r.ok(), r.error);
+  CHECK(r.project == p);  // pins, lines and camera as saved
+  REQUIRE(r.warnings.size() == 1);
+  CHECK(r.warnings[0].find("images[0]: ") == 0);
+  CHECK(r.warnings[0].find("320 x 240 px, the image 640 x 480 px: not the same photo") != std::string::npos);
+
+  facet::ImageRgba8 same = half;
+  same.width = p.images[0].width_px;
+  same.height = p.images[0].height_px;
+  same.pixels.assign(static_cast<size_t>(same.width) * same.height * 4, 128);
+  REQUIRE(facet::WritePng(dir / "photo.png", same).empty());
+  CHECK(facet::LoadProject(path).warnings.empty());
 }

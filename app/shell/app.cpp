@@ -325,7 +325,9 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
   report["project"] = nlohmann::json::parse(ProjectToJson(state.document.project()), nullptr, false);
   report["teach"] = TeachReportJson(state);
   report["texture"] = TextureReportJson(state);
-  return report.dump(2);
+  // Paths are bytes: one that is not UTF-8 (a folder named in another encoding) is reported
+  // with U+FFFD rather than making dump() throw (nlohmann's error 316 aborted the render).
+  return report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 bool StepNeedsLineDetection(const ScriptStep& step) {

@@ -51,6 +51,13 @@ bool ParsePair(const std::string& text, double* a, double* b) {
   }
 }
 
+// Pretty JSON for stdout. Messages may quote paths, which are bytes: one that is not UTF-8
+// is printed with U+FFFD instead of making dump() throw (nlohmann's error 316).
+template <typename Json>
+std::string DumpForPrinting(const Json& doc) {
+  return doc.dump(2, ' ', false, Json::error_handler_t::replace);
+}
+
 // JSON has no NaN: pins that took no part in the solve are written as null.
 nlohmann::json NumberOrNull(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(); }
 
@@ -197,7 +204,11 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
   out["messages"] = update.messages;
   out["progress"] = update.progress;
 
-  const bool usable = update.ok;
+  // The figures printed at the top level are the saved result's: a joint solve that failed
+  // (its message says the model is unchanged) is a failed command whatever the geometry solve
+  // gave, so nothing is written and the exit code says so.
+  const bool joint_failed = joint_ran && joint.termination == SolverTermination::kFailed;
+  const bool usable = update.ok && !joint_failed;
   if (usable) {
     // Image paths are relative to the project file: keep them valid for the output's folder
     // (with error codes: a path the OS refuses is reported by the save, not thrown).
@@ -208,7 +219,7 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
       return 1;
     }
   }
-  std::cout << out.dump(2) << "\n";
+  std::cout << DumpForPrinting(out) << "\n";
   if (!usable) {
     std::cerr << "facet solve: the solve failed; " << output_path << " was not written\n";
     return 1;
@@ -224,9 +235,17 @@ int RunExportCommand(const std::string& project_path, const std::string& output_
   std::vector<ImageRgba8> photos(project.images.size());
   std::vector<const ImageRgba8*> photo_pointers(project.images.size(), nullptr);
   for (size_t i = 0; i < project.images.size(); ++i) {
-    ImageReadResult read = ReadImage(ResolveImagePath(project_path, project.images[i].path));
+    const std::string photo_path = ResolveImagePath(project_path, project.images[i].path);
+    ImageReadResult read = ReadImage(photo_path);
     if (!read.ok()) {
       std::cerr << "facet export: warning: " << read.error << " (its faces stay untextured)\n";
+      continue;
+    }
+    // Another photo under the image's name (open warned): its pixels are not the camera's.
+    const std::string other_photo =
+        WhyPhotoIsNotTheImages(project.images[i], photo_path, read.image.width, read.image.height);
+    if (!other_photo.empty()) {
+      std::cerr << "facet export: warning: " << other_photo << " (its faces stay untextured)\n";
       continue;
     }
     photos[i] = std::move(read.image);
@@ -315,7 +334,7 @@ int RunRenderGlbCommand(const std::string& glb_path, int camera_index, const std
                                 {"principal_point_px",
                                  {camera.camera.principal_point_px.x(), camera.camera.principal_point_px.y()}},
                                 {"principal_point_from_extras", camera.has_principal_point}};
-  std::cout << out.dump(2) << "\n";
+  std::cout << DumpForPrinting(out) << "\n";
   return 0;
 }
 

@@ -81,7 +81,8 @@ bool WriteBakeStatus(const AppState& state, const std::string& path, std::string
       {"uvs_fnv", FingerprintHex(mesh.uvs)},
       {"positions_fnv", FingerprintHex(mesh.positions)},
   };
-  const std::string write_error = WriteFileAtomically(path, status.dump(2) + "\n");
+  const std::string write_error =
+      WriteFileAtomically(path, status.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   if (!write_error.empty()) {
     *error = "bake-status: " + write_error;
     return false;

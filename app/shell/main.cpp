@@ -1,6 +1,7 @@
 // facet: one executable for the GUI and the command line (calibrate, relate, solve, export,
 // render).
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <iostream>
 #include <string>
@@ -40,9 +41,7 @@ bool ParseSize(const std::string& text, int* width, int* height) {
   return *width >= 64 && *height >= 64 && *width <= 16384 && *height <= 16384;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int Run(int argc, char** argv) {
   CLI::App cli{
       "Facet: interactive image-based modeling. Turn ordinary photos into a textured 3D model.\n"
       "Without a command, opens the GUI on PROJECT (or the bundled sample)."};
@@ -191,4 +190,36 @@ int main(int argc, char** argv) {
     return 1;
   }
   return facet::app::RunGui(gui);
+}
+
+// The last line of defence: an exception that escaped every layer (nlohmann's error 316 on a
+// path that is not UTF-8 did) becomes a message and exit code 1, never an abort. Layers below
+// still turn bad input into messages themselves; reaching this is a bug to report.
+void ExitOnUncaught() {
+  std::string what = "an unknown exception";
+  if (const std::exception_ptr current = std::current_exception()) {
+    try {
+      std::rethrow_exception(current);
+    } catch (const std::exception& e) {
+      what = e.what();
+    } catch (...) {
+    }
+  }
+  std::cerr << "facet: internal error (please report it): " << what << "\n";
+  std::cout.flush();
+  std::_Exit(1);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::set_terminate(ExitOnUncaught);  // exceptions escaping a worker thread, too
+  try {
+    return Run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "facet: internal error (please report it): " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "facet: internal error (please report it): an unknown exception\n";
+  }
+  return 1;
 }

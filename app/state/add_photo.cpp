@@ -5,6 +5,7 @@
 
 #include "app/state/calgui_exif_prior.h"
 #include "core/image/image_io.h"
+#include "core/io/project_io.h"
 
 namespace facet::app {
 namespace {
@@ -83,11 +84,9 @@ bool RelinkPhotoEdit(AppState* state, Id image_id, const std::string& path) {
     state->Log(LogLevel::kError, "Relink photo: " + read.error);
     return false;
   }
-  if (read.image.width != current->width_px || read.image.height != current->height_px) {
-    state->Log(LogLevel::kError, "Relink photo: " + path + " is " + std::to_string(read.image.width) + " x " +
-                                     std::to_string(read.image.height) + " px, the image it replaces " +
-                                     std::to_string(current->width_px) + " x " + std::to_string(current->height_px) +
-                                     " px: not the same photo");
+  if (const std::string other = WhyPhotoIsNotTheImages(*current, path, read.image.width, read.image.height);
+      !other.empty()) {
+    state->Log(LogLevel::kError, "Relink photo: " + other);
     return false;
   }
   Project edited = state->document.project();

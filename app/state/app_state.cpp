@@ -476,6 +476,9 @@ void RefreshDerived(AppState* state) {
     const std::string path = photo_path(image);
     state->photo_paths[image.id] = path;
     ImageReadResult read = ReadImage(path);
+    // A photo replaced by one of another size is not this image's: shown as a photo that
+    // cannot be used (as a missing one), the pins stay in the image's pixels.
+    if (read.ok()) read.error = WhyPhotoIsNotTheImages(image, path, read.image.width, read.image.height);
     if (read.ok()) {
       state->photos.emplace(image.id, std::move(read.image));
     } else {

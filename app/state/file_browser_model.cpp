@@ -1,6 +1,7 @@
 #include "app/state/file_browser_model.h"
 
 #include "core/util/file_read.h"
+#include "core/util/utf8.h"
 
 #include <algorithm>
 #include <cctype>
@@ -297,8 +298,16 @@ std::string RecentFilesToJson(const RecentFiles& recent) {
   nlohmann::json j;
   j["format"] = "facet-recent";
   j["version"] = 1;
-  j["files"] = recent.files;
-  j["folders"] = recent.folders;
+  // JSON holds UTF-8 only: a path in another encoding cannot be stored exactly, and a
+  // replaced one would name no file, so it is left out of the list (it throws otherwise).
+  const auto storable = [](const std::vector<std::string>& paths) {
+    std::vector<std::string> out;
+    for (const std::string& path : paths)
+      if (IsValidUtf8(path)) out.push_back(path);
+    return out;
+  };
+  j["files"] = storable(recent.files);
+  j["folders"] = storable(recent.folders);
   return j.dump(2);
 }
 

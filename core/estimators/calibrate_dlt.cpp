@@ -57,6 +57,7 @@ Eigen::Matrix<double, kDim + 1, kDim + 1> Normalisation(const std::vector<Eigen:
 
 // Null vector of a (rows x cols) system; false when the null space has more than one dimension.
 bool NullVector(const Eigen::MatrixXd& a, Eigen::VectorXd* v) {
+  if (!a.allFinite()) return false;  // Eigen's SVD does not converge on NaN or infinity
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV);
   const Eigen::VectorXd& s = svd.singularValues();
   const int n = static_cast<int>(a.cols());
@@ -358,6 +359,10 @@ bool LinearPlanar(const std::vector<PointCorrespondence>& points, const Eigen::V
   k.topRightCorner<2, 1>() = principal_point_px;
   const Eigen::Matrix3d b = k.inverse() * h;
   double lambda = 2.0 / (b.col(0).norm() + b.col(1).norm());
+  if (!b.allFinite() || !std::isfinite(lambda) || !(lambda != 0.0)) {
+    *error = "the plane's homography gives no pose for this focal length";
+    return false;
+  }
   // The plane's centroid is the origin of its coordinates: it lies in front of the camera.
   if (b(2, 2) < 0.0) lambda = -lambda;
   Eigen::Matrix3d rotation_from_plane;
@@ -390,6 +395,9 @@ bool TranslationGivenRotation(const std::vector<PointCorrespondence>& points, co
     a.block<3, 3>(3 * i, 0) = skew;
     b.segment<3>(3 * i) = -skew * rotation * points[i].xyz;
   }
+  // Eigen's SVD of a matrix with NaN or infinity does not converge (and has crashed): refuse
+  // it here whatever the options' checks let through.
+  if (!a.allFinite() || !b.allFinite()) return false;
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
   if (!(svd.singularValues()(2) > 1e-12 * svd.singularValues()(0))) return false;
   *translation = svd.solve(b);
@@ -477,6 +485,10 @@ void EstimateStd(const std::vector<PointCorrespondence>& points, const std::vect
   const Eigen::MatrixXd jacobian = Jacobian(model, points, free, length_scale, prior);
   const int dof = 2 * static_cast<int>(points.size()) + (prior.weight > 0.0 ? 1 : 0) - static_cast<int>(free.size());
   const Eigen::MatrixXd information = jacobian.transpose() * jacobian;
+  if (!information.allFinite()) {  // Eigen's SVD does not converge on NaN or infinity
+    summary->warnings.push_back("the refinement's uncertainties overflowed: no standard deviations");
+    return;
+  }
   const Eigen::JacobiSVD<Eigen::MatrixXd> info_svd(information, Eigen::ComputeFullU | Eigen::ComputeFullV);
   if (dof > 0 && info_svd.singularValues()(free.size() - 1) > 1e-14 * info_svd.singularValues()(0)) {
     const double variance = Residuals(model, points, prior).squaredNorm() / dof;
@@ -561,10 +573,26 @@ bool DltCalibrationOptions::Check(std::string* error) const {
     *error = "fixed_focal_px must be finite and not negative (0: solve the focal length)";
     return false;
   }
+  // A known focal length far outside any lens overflows the pose's linear algebra (1e-300 px
+  // made K^-1 infinite and the SVD crash): the range of WhyNotACamera, checked before use.
+  if (fixed_focal_px > 0.0) {
+    const std::string why = WhyNotAFocalLength(fixed_focal_px, width_px, height_px);
+    if (!why.empty()) {
+      *error = "fixed_focal_px: " + why;
+      return false;
+    }
+  }
   if (!(focal_prior_px >= 0.0) || !std::isfinite(focal_prior_px) || !(focal_prior_std_px >= 0.0) ||
       !std::isfinite(focal_prior_std_px)) {
     *error = "focal_prior_px and focal_prior_std_px must be finite and not negative (0: no prior)";
     return false;
+  }
+  if (focal_prior_px > 0.0 && focal_prior_std_px > 0.0) {
+    const std::string why = WhyNotAFocalPrior(focal_prior_px, focal_prior_std_px, width_px, height_px);
+    if (!why.empty()) {
+      *error = "focal prior: " + why;
+      return false;
+    }
   }
   if (!(pixel_noise_px > 0.0) || !std::isfinite(pixel_noise_px)) {
     *error = "pixel_noise_px must be positive";

@@ -31,6 +31,37 @@ std::string WhyNotACamera(double focal_px, const Eigen::Vector2d& principal_poin
   return {};
 }
 
+std::string WhyNotAFocalLength(double focal_px, int width_px, int height_px) {
+  const Eigen::Vector2d center(0.5 * (width_px - 1), 0.5 * (height_px - 1));
+  return WhyNotACamera(focal_px, center, width_px, height_px);
+}
+
+std::string WhyNotAFocalPrior(double prior_px, double prior_std_px, int width_px, int height_px) {
+  const std::string focal = WhyNotAFocalLength(prior_px, width_px, height_px);
+  if (!focal.empty()) return "the prior's value: " + focal;
+  if (!std::isfinite(prior_std_px) || !(prior_std_px > 0.0))
+    return "the prior's standard deviation is not a positive number (" + Number(prior_std_px) + " px)";
+  if (prior_std_px < kMinFocalPriorRelativeStd * prior_px)
+    return "the prior's standard deviation " + Number(prior_std_px) + " px is below " +
+           Number(kMinFocalPriorRelativeStd) + " of its value " + Number(prior_px) +
+           " px: give the focal length as known (fixed) instead";
+  return {};
+}
+
+std::string WhyNotALineOnPhoto(const Eigen::Vector4d& points_px, int width_px, int height_px) {
+  if (!points_px.allFinite()) return "its points are not finite";
+  if (width_px <= 0 || height_px <= 0) return "the photo has no size";
+  const Eigen::Vector2d a = points_px.head<2>(), b = points_px.tail<2>();
+  if (a == b) return "its two points are the same";
+  const double diagonal = std::hypot(static_cast<double>(width_px), static_cast<double>(height_px));
+  const Eigen::Vector2d center(0.5 * (width_px - 1), 0.5 * (height_px - 1));
+  const double offset = std::max((a - center).norm(), (b - center).norm()) / diagonal;
+  if (!(offset <= kMaxHorizonOffsetPerDiagonal))
+    return "a point is " + Number(offset) + " image diagonals from the photo's centre (at most " +
+           Number(kMaxHorizonOffsetPerDiagonal) + ")";
+  return {};
+}
+
 std::string WhyDistortionFolds(double k1, double k2, double focal_px, const Eigen::Vector2d& principal_point_px,
                                int width_px, int height_px) {
   if (k1 == 0.0 && k2 == 0.0) return {};

@@ -19,10 +19,36 @@ inline constexpr double kMaxPrincipalPointOffsetPerDiagonal = 10.0;
 // An estimated focal length whose standard deviation exceeds this fraction of it is not
 // determined by the data (the York Urban photos with the weakest lines reach ~0.2).
 inline constexpr double kMaxFocalRelativeStd = 0.5;
+// Radial distortion coefficients (k1, k2 on the normalised radius) of any lens are within a
+// few units (a fisheye's k1 ~ -0.5 at r = 1); 100 leaves room for long lenses, whose small
+// radii make k large, and refuses numbers that overflow the projection (k1 = 1e308).
+inline constexpr double kMaxDistortionCoefficient = 100.0;
+// A focal prior's standard deviation below this fraction of its value is a fixed focal length
+// in disguise whose weight (pixel noise / std) swamps every other residual: give it as fixed.
+inline constexpr double kMinFocalPriorRelativeStd = 1e-6;
+// A horizon (or any line the user gives on the photo) this many image diagonals from the
+// photo's centre is the image of a camera looking within ~0.005 deg of straight up or down
+// at the longest lens (f = 100 d): further, it carries no information, only overflow.
+inline constexpr double kMaxHorizonOffsetPerDiagonal = 1e4;
 
 // Empty when a focal length and principal point (px) make a camera for a width x height
 // photo; else one sentence saying why not, with the numbers and the bound.
 std::string WhyNotACamera(double focal_px, const Eigen::Vector2d& principal_point_px, int width_px, int height_px);
+
+// Empty when a known focal length (px) is a lens for a width x height photo (the range of
+// WhyNotACamera); else one sentence with the number and the bound. For values given by the
+// user (a fixed focal length, a prior's value) before anything is computed with them.
+std::string WhyNotAFocalLength(double focal_px, int width_px, int height_px);
+
+// Empty when a Gaussian focal prior (value and standard deviation, px) can weigh a
+// calibration of a width x height photo: its value a focal length as above, its std finite,
+// positive and at least kMinFocalPriorRelativeStd of the value; else one sentence.
+std::string WhyNotAFocalPrior(double prior_px, double prior_std_px, int width_px, int height_px);
+
+// Empty when a line given by two points (x1, y1, x2, y2, px) on a width x height photo is
+// usable: finite, two distinct points, within kMaxHorizonOffsetPerDiagonal diagonals of the
+// centre; else one sentence.
+std::string WhyNotALineOnPhoto(const Eigen::Vector4d& points_px, int width_px, int height_px);
 
 // Empty unless an estimated focal length's standard deviation (0 or NaN: not estimated, no
 // check) says the data leave it undetermined; then one sentence with both numbers.

@@ -7,8 +7,25 @@
 
 #include "core/io/export.h"
 #include "core/io/project_io.h"
+#include "core/util/utf8.h"
 
 namespace facet {
+namespace {
+
+// Lower-case hex of the bytes of `text`.
+std::string Hex(const std::string& text) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string out;
+  out.reserve(2 * text.size());
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    out += kDigits[byte >> 4];
+    out += kDigits[byte & 15];
+  }
+  return out;
+}
+
+}  // namespace
 
 std::string BlenderSetupScript(const Project& project, const std::string& project_path,
                                const std::string& model_path) {
@@ -36,10 +53,15 @@ std::string BlenderSetupScript(const Project& project, const std::string& projec
       matrix.push_back(row);
     }
     std::error_code ec;
-    const std::string photo =
+    const std::string absolute_photo =
         std::filesystem::absolute(ResolveImagePath(project_path, image.path), ec).lexically_normal().string();
-    cameras.push_back({{"name", std::filesystem::path(image.path).filename().string()},
-                       {"photo", ec ? ResolveImagePath(project_path, image.path) : photo},
+    const std::string photo = ec ? ResolveImagePath(project_path, image.path) : absolute_photo;
+    const std::string name = std::filesystem::path(image.path).filename().string();
+    // Names and paths are bytes: "name" and "photo" are their UTF-8 for Blender's names and
+    // messages (invalid bytes as U+FFFD), "photo_hex" the exact bytes the script opens.
+    cameras.push_back({{"name", ValidUtf8OrReplaced(name)},
+                       {"photo", ValidUtf8OrReplaced(photo)},
+                       {"photo_hex", Hex(photo)},
                        {"width_px", w},
                        {"height_px", h},
                        {"sensor_fit", w >= h ? "HORIZONTAL" : "VERTICAL"},
@@ -56,13 +78,19 @@ std::string BlenderSetupScript(const Project& project, const std::string& projec
   script += "# calibrated photo, with its photo as background: look through a camera (Numpad 0) to see\n";
   script += "# the model on the photo. Units: the project's; Blender's Z is up, as Facet's.\n";
   script += "import json\nimport os\n\nimport bpy\nfrom mathutils import Matrix\n\n";
-  script += "MODEL = " + nlohmann::json(model_path).dump() + "\n";
-  script += "CAMERAS = json.loads(r'''\n# facet-cameras-begin\n";
-  // JSON text has ' only inside strings, where \u0027 means the same: the raw string below
-  // then cannot end early, whatever a photo's name holds.
-  std::string data = cameras.dump(1);
+  // Paths as the hex of their bytes: any name, in any encoding, reaches the file system
+  // unchanged (os.fsdecode is Python's own file-name decoding) and no byte of it is syntax.
+  script += "MODEL = os.fsdecode(bytes.fromhex(\"" + Hex(model_path) + "\"))\n";
+  // The data is ASCII JSON (ensure_ascii) in a raw string: a quote in a name is \", a newline
+  // \n, a backslash \\, and the apostrophe, the one character that could end the raw string,
+  // is written \u0027. The marker lines are found as whole lines: every line of the dump
+  // starts with a space or a bracket, so no name can fake one.
+  std::string data = cameras.dump(1, ' ', true, nlohmann::json::error_handler_t::replace);
   for (size_t at = data.find('\''); at != std::string::npos; at = data.find('\'', at)) data.replace(at, 1, "\\u0027");
-  script += data + "\n# facet-cameras-end\n'''.split('# facet-cameras-begin')[1].split('# facet-cameras-end')[0])\n\n";
+  script +=
+      "CAMERAS = json.loads(r'''\n# facet-cameras-begin\n" + data +
+      "\n# facet-cameras-end\n'''.split(\"\\n# facet-cameras-begin\\n\")[1].split(\"\\n# facet-cameras-end\\n\")[0])"
+      "\n\n";
   script += R"PY(
 def import_model(path):
     if not os.path.isabs(path) and bpy.data.filepath:
@@ -93,9 +121,10 @@ def add_camera(c):
     obj = bpy.data.objects.new(c["name"], data)
     bpy.context.scene.collection.objects.link(obj)
     obj.matrix_world = Matrix(c["matrix_world"])
-    if os.path.exists(c["photo"]):
+    photo = os.fsdecode(bytes.fromhex(c["photo_hex"]))
+    if os.path.exists(photo):
         background = data.background_images.new()
-        background.image = bpy.data.images.load(c["photo"], check_existing=True)
+        background.image = bpy.data.images.load(photo, check_existing=True)
         background.frame_method = "STRETCH"
         data.show_background_images = True
     else:

@@ -11,7 +11,9 @@
 #include "core/estimators/calibrate_vp.h"
 #include "core/estimators/line_detection.h"
 #include "core/estimators/plumb_line.h"
+#include "core/geometry/camera_checks.h"
 #include "core/image/image_io.h"
+#include "core/util/utf8.h"
 
 namespace facet {
 namespace {
@@ -37,6 +39,8 @@ bool ReadOptionalPositive(const json& doc, const char* key, double* out, std::st
   }
   return true;
 }
+
+json FiniteOrNull(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
 
 bool ReadOptionalBool(const json& doc, const char* key, bool* out, std::string* error) {
   const auto it = doc.find(key);
@@ -141,6 +145,23 @@ bool ParseInput(const json& doc, std::vector<Segment>* segments, VpCalibrationOp
     *error = "\"focal_prior_px\" and \"focal_prior_std_px\" go together";
     return false;
   }
+  // Checked here, where they enter: a focal length outside any lens, or a prior whose std is
+  // ~0, was ignored downstream and the output held nulls.
+  if (options->fixed_focal_px > 0.0) {
+    const std::string why = WhyNotAFocalLength(options->fixed_focal_px, options->width_px, options->height_px);
+    if (!why.empty()) {
+      *error = "\"focal_px\": " + why;
+      return false;
+    }
+  }
+  if (options->focal_prior_px > 0.0) {
+    const std::string why =
+        WhyNotAFocalPrior(options->focal_prior_px, options->focal_prior_std_px, options->width_px, options->height_px);
+    if (!why.empty()) {
+      *error = "\"focal_prior_px\", \"focal_prior_std_px\": " + why;
+      return false;
+    }
+  }
   const auto horizon_it = doc.find("horizon");
   if (horizon_it != doc.end()) {
     double row = 0.0, h[4];
@@ -150,6 +171,11 @@ bool ParseInput(const json& doc, std::vector<Segment>* segments, VpCalibrationOp
       options->horizon_px = Eigen::Vector4d(h[0], h[1], h[2], h[3]);
     } else {
       *error = "\"horizon\" must be [x1, y1, x2, y2] or the row v of a level horizon, got " + horizon_it->dump();
+      return false;
+    }
+    const std::string why = WhyNotALineOnPhoto(options->horizon_px, options->width_px, options->height_px);
+    if (!why.empty()) {
+      *error = "\"horizon\": " + why;
       return false;
     }
     options->use_horizon = true;
@@ -234,9 +260,12 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
     out["vanishing_point_axes"] = axes;
     out["vanishing_points"] = points;
     out["vanishing_points_homogeneous"] = homogeneous;
-    out["focal_std_px"] = summary.focal_std_px;
-    out["principal_point_std_px"] = {summary.principal_point_std_px.x(), summary.principal_point_std_px.y()};
-    out["residual_sigma_px"] = summary.residual_sigma_px;
+    // The uncertainties are undetermined (NaN) with too few segments: said as null, as
+    // documented; every other figure must be a number (checked below).
+    out["focal_std_px"] = FiniteOrNull(summary.focal_std_px);
+    out["principal_point_std_px"] = {FiniteOrNull(summary.principal_point_std_px.x()),
+                                     FiniteOrNull(summary.principal_point_std_px.y())};
+    out["residual_sigma_px"] = FiniteOrNull(summary.residual_sigma_px);
     out["segment_residuals_px"] = summary.segment_residuals_px;
     out["outlier_segments"] = summary.outlier_segments;
     out["outlier_threshold_px"] = summary.outlier_threshold_px;
@@ -245,7 +274,7 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
     json direction_std = json::array(), spread = json::array(), to_pp = json::array();
     for (int a = 0; a < 3; ++a) {
       if (summary.segments_per_axis[a] == 0) continue;
-      direction_std.push_back(summary.vanishing_direction_std_deg[a]);
+      direction_std.push_back(FiniteOrNull(summary.vanishing_direction_std_deg[a]));
       spread.push_back(summary.family_angle_spread_deg[a]);
       to_pp.push_back(std::isfinite(summary.vanishing_point_to_principal_point_px[a])
                           ? json(summary.vanishing_point_to_principal_point_px[a])
@@ -267,6 +296,8 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
     out["warnings"] = warnings;
     out["message"] = summary.message;
     out["time_ms"] = summary.time_ms;
+    const std::string non_finite = json_io::FirstNonFiniteNumber(out);
+    if (!non_finite.empty()) return Error("calibration gave no number for " + non_finite + "; check the input");
     CalibrateIoResult result;
     result.json = out.dump(2) + "\n";
     return result;
@@ -339,7 +370,9 @@ CalibrateIoResult CalibrateImageFile(const std::string& photo_path, const Calibr
                         {"search_focal_px", found.search_focal_px},
                         {"detection_ms", found.detection_ms},
                         {"search_ms", found.search_ms}};
-    if (!options.focal_prior_source.empty()) out["focal_prior_source"] = options.focal_prior_source;
+    // The EXIF message may quote the camera's own strings: never a reason for dump() to throw.
+    if (!options.focal_prior_source.empty())
+      out["focal_prior_source"] = ValidUtf8OrReplaced(options.focal_prior_source);
     CalibrateIoResult result;
     result.json = out.dump(2) + "\n";
     return result;

@@ -40,7 +40,11 @@
 //    "segments_per_axis": [nx, ny, nz], "warnings": [...], "message": "...", "time_ms": t}
 //   core/estimators/calibrate_vp.h documents each figure.
 // Malformed JSON, missing fields, wrong types, an unknown or repeated axis, and input the
-// calibration rejects give ok() == false with a message; nothing throws.
+// calibration rejects give ok() == false with a message; nothing throws. A known focal length
+// or a prior outside the lenses of core/geometry/camera_checks.h (a prior's std below
+// kMinFocalPriorRelativeStd of its value), and a horizon further than
+// kMaxHorizonOffsetPerDiagonal diagonals, are refused by name. A success output has a number
+// for every figure but the documented nulls (undetermined uncertainties, points at infinity).
 #pragma once
 
 #include <string>

@@ -8,6 +8,7 @@
 #include "core/io/json_io_internal.h"
 
 #include "core/estimators/calibrate_dlt.h"
+#include "core/geometry/camera_checks.h"
 
 namespace facet {
 namespace {
@@ -91,6 +92,12 @@ bool ParseInput(const json& doc, std::vector<PointCorrespondence>* points, DltCa
       *error = "\"focal_px\" must be a positive number (a known focal length), got " + focal_it->dump();
       return false;
     }
+    // Checked where it enters (1e-300 and 1e308 crashed the pose's SVD): a lens for this photo.
+    const std::string why = WhyNotAFocalLength(focal_px, options->width_px, options->height_px);
+    if (!why.empty()) {
+      *error = "\"focal_px\": " + why;
+      return false;
+    }
     options->fixed_focal_px = focal_px;
   }
 
@@ -135,6 +142,8 @@ CalibrateIoResult CalibratePointsJson(const std::string& points_json_text) {
     out["warnings"] = summary.warnings;
     out["message"] = summary.message;
     out["time_ms"] = summary.time_ms;
+    const std::string non_finite = json_io::FirstNonFiniteNumber(out);
+    if (!non_finite.empty()) return Error("calibration gave no number for " + non_finite + "; check the points");
     CalibrateIoResult result;
     result.json = out.dump(2) + "\n";
     return result;

@@ -8,7 +8,8 @@
 //    "principal_point": "solve" | "center" | [cx, cy],      (optional, default "solve": free
 //   for non-coplanar points; coplanar points then use the image centre, see calibrate_dlt.h)
 //    "focal_px": f}                                         (optional: a known focal length,
-//   held; only the pose and the free principal point are solved)
+//   held; only the pose and the free principal point are solved; refused by name outside the
+//   lenses of core/geometry/camera_checks.h for this image size)
 // Output (pretty JSON, doubles with enough digits to round-trip):
 //   {"K": 3x3 rows, "R": 3x3 rows (cam_from_world), "t": [tx, ty, tz] (world units),
 //    "focal_px": f, "principal_point": [cx, cy], "distortion": [k1, k2] (OpenCV's radial model),

@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "core/geometry/camera_checks.h"
 #include "core/io/gltf_constants.h"
 
 #include "core/image/image_io.h"
@@ -227,6 +228,13 @@ bool ExportedCameraSize(const Image& image, int* width_px, int* height_px) {
 ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const std::string& path) {
   const std::string invalid = ValidateMesh(mesh);
   if (!invalid.empty()) return Failure(path + ": " + invalid);
+  // A focal length outside any lens wrote yfov = pi (1e-300 px) or 0 (1e308 px): no camera.
+  for (const Image& image : project.images) {
+    int w = 0, h = 0;
+    if (!ExportedCameraSize(image, &w, &h)) continue;
+    const std::string why = WhyNotACamera(image.camera.focal_px, image.camera.principal_point_px, w, h);
+    if (!why.empty()) return Failure(path + ": not written: the camera of " + image.path + " is not a camera: " + why);
+  }
 
   const YUpVertices vertices = ToYUpVertices(mesh);
   const std::vector<Eigen::Vector3f>& positions = vertices.positions;
@@ -330,7 +338,8 @@ ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const 
   while (bin_bytes.size() % 4 != 0) bin_bytes.push_back(0);
   root["buffers"] = Json::array({{{"byteLength", bin_bytes.size()}}});
 
-  std::string json_text = root.dump();
+  // glTF is UTF-8: a name from a path that is not (a photo's bytes) is written with U+FFFD.
+  std::string json_text = root.dump(-1, ' ', false, Json::error_handler_t::replace);
   while (json_text.size() % 4 != 0) json_text.push_back(' ');
   const size_t total = 12 + 8 + json_text.size() + 8 + bin_bytes.size();
   if (total > std::numeric_limits<std::uint32_t>::max())

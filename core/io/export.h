@@ -23,7 +23,9 @@ bool ExportedCameraSize(const Image& image, int* width_px, int* height_px);
 // One .glb holding mesh, UVs, each atlas page as an embedded PNG (one image, texture, material
 // and mesh primitive per page: "facet_textured", then "facet_textured_pageK") and one camera
 // node per calibrated image (perspective, yfov from the focal length, at the camera's pose).
-// Writes atomically (temporary file, then rename).
+// Writes atomically (temporary file, then rename). Refuses (writes nothing) when an exported
+// camera is not one by core/geometry/camera_checks.h (a focal length outside any lens).
+// Names that are not UTF-8 (a photo's path) are written with U+FFFD.
 ExportSummary ExportGlb(const TexturedMesh& mesh, const Project& project, const std::string& path);
 // FILE.obj, FILE.mtl and FILE.png (the atlas; page K > 0 of a paged atlas in FILE_pageK.png with
 // material facet_textured_pageK) side by side; OBJ's v runs upwards, so v is flipped.

@@ -56,6 +56,22 @@ bool ReadPrincipalPoint(const nlohmann::json& doc, PrincipalPointMode* mode, Eig
   return true;
 }
 
+std::string FirstNonFiniteNumber(const nlohmann::json& doc) {
+  if (doc.is_number_float()) return std::isfinite(doc.get<double>()) ? std::string() : std::string("/");
+  if (doc.is_array()) {
+    for (size_t i = 0; i < doc.size(); ++i) {
+      const std::string inner = FirstNonFiniteNumber(doc[i]);
+      if (!inner.empty()) return "/" + std::to_string(i) + (inner == "/" ? "" : inner);
+    }
+  } else if (doc.is_object()) {
+    for (auto it = doc.begin(); it != doc.end(); ++it) {
+      const std::string inner = FirstNonFiniteNumber(it.value());
+      if (!inner.empty()) return "/" + it.key() + (inner == "/" ? "" : inner);
+    }
+  }
+  return {};
+}
+
 bool ReadTextFile(const std::string& path, std::string* text, std::string* error) {
   return ReadRegularFile(path, kMaxTextFileBytes, text, error);
 }

@@ -24,6 +24,11 @@ nlohmann::json Rows(const Eigen::Matrix3d& m);
 // they are when the key is absent; false with *error for any other value.
 bool ReadPrincipalPoint(const nlohmann::json& doc, PrincipalPointMode* mode, Eigen::Vector2d* fixed_px,
                         std::string* error);
+// Empty when every number in `doc` is finite, else the JSON pointer of the first that is not
+// (e.g. "/focal_std_px"). nlohmann writes NaN and infinity as null: a success output checks
+// this so that no figure it prints is a null (an explicit null value is not a number, and
+// passes).
+std::string FirstNonFiniteNumber(const nlohmann::json& doc);
 // The whole file as text; false with *error ("cannot open PATH") when it cannot be read.
 bool ReadTextFile(const std::string& path, std::string* text, std::string* error);
 

@@ -1,7 +1,11 @@
 #include "core/io/project_io.h"
 #include "core/io/project_io_internal.h"
 
+#include "core/geometry/camera_checks.h"
+#include "core/image/image_io.h"
 #include "core/util/file_read.h"
+#include "core/util/format.h"
+#include "core/util/utf8.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -48,36 +52,8 @@ std::optional<PrincipalPointMode> PrincipalPointModeFromName(const std::string& 
   return std::nullopt;
 }
 
-bool IsValidUtf8(const std::string& s) {
-  size_t i = 0;
-  while (i < s.size()) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    int extra = 0;
-    unsigned min_code = 0;
-    unsigned code = 0;
-    if (c < 0x80) {
-      ++i;
-      continue;
-    } else if ((c & 0xE0) == 0xC0) {
-      extra = 1, min_code = 0x80, code = c & 0x1F;
-    } else if ((c & 0xF0) == 0xE0) {
-      extra = 2, min_code = 0x800, code = c & 0x0F;
-    } else if ((c & 0xF8) == 0xF0) {
-      extra = 3, min_code = 0x10000, code = c & 0x07;
-    } else {
-      return false;
-    }
-    if (i + extra >= s.size()) return false;
-    for (int k = 1; k <= extra; ++k) {
-      const auto cc = static_cast<unsigned char>(s[i + k]);
-      if ((cc & 0xC0) != 0x80) return false;
-      code = (code << 6) | (cc & 0x3F);
-    }
-    if (code < min_code || code > 0x10FFFF || (code >= 0xD800 && code <= 0xDFFF)) return false;
-    i += extra + 1;
-  }
-  return true;
-}
+// The key of a file path stored as its bytes (Writer::FilePath).
+constexpr const char* kPathBytesKey = "bytes_hex";
 
 // ---------------------------------------------------------------------------------------
 // Writing. The writer records the first value JSON cannot represent (NaN, infinity,
@@ -109,6 +85,19 @@ class Writer {
   OrderedJson String(const std::string& path, const std::string& s) {
     if (!IsValidUtf8(s) && error_.empty()) error_ = path + ": text is not valid UTF-8";
     return s;
+  }
+  // A file path is bytes: UTF-8 ones as a string, any other as {"bytes_hex": "..."} (the
+  // header), so that a photo in a folder named in another encoding round-trips exactly.
+  static OrderedJson FilePath(const std::string& s) {
+    if (IsValidUtf8(s)) return s;
+    static constexpr char kDigits[] = "0123456789abcdef";
+    std::string hex;
+    for (const char c : s) {
+      const auto byte = static_cast<unsigned char>(c);
+      hex += kDigits[byte >> 4];
+      hex += kDigits[byte & 15];
+    }
+    return OrderedJson{{kPathBytesKey, hex}};
   }
 
  private:
@@ -179,7 +168,7 @@ OrderedJson WriteMesh(const PolyMesh& mesh, const std::string& at, Writer* w) {
 OrderedJson WriteImage(const Image& im, const std::string& at, Writer* w) {
   OrderedJson j;
   j["id"] = im.id;
-  j["path"] = w->String(Join(at, "path"), std::filesystem::path(im.path).generic_string());
+  j["path"] = Writer::FilePath(std::filesystem::path(im.path).generic_string());
   j["width_px"] = im.width_px;
   j["height_px"] = im.height_px;
   const std::string cam_at = Join(at, "camera");
@@ -278,7 +267,7 @@ OrderedJson WriteConstraint(const Constraint& c, const std::string& at, Writer* 
 OrderedJson WriteReference(const Reference& ref, const std::string& at, Writer* w) {
   OrderedJson j;
   j["id"] = ref.id;
-  j["path"] = w->String(Join(at, "path"), std::filesystem::path(ref.path).generic_string());
+  j["path"] = Writer::FilePath(std::filesystem::path(ref.path).generic_string());
   j["axes"] = ref.y_up ? "y_up" : "z_up";
   j["visible"] = ref.visible;
   return j;
@@ -434,6 +423,37 @@ class Reader {
     *out = j->get<std::string>();
     return true;
   }
+  // Writer::FilePath's two forms: a string, or {"bytes_hex": even-length hex} (not UTF-8).
+  bool FilePath(const Json& obj, const std::string& obj_path, const char* key, std::string* out) {
+    const Json* j = Field(obj, obj_path, key);
+    if (!j) return false;
+    if (j->is_string()) {
+      *out = j->get<std::string>();
+      return true;
+    }
+    const std::string path = Join(obj_path, key);
+    const auto hex_it = j->is_object() && j->size() == 1 ? j->find(kPathBytesKey) : j->end();
+    if (hex_it == j->end() || !hex_it->is_string())
+      return Fail(path,
+                  std::string("expected a string or {\"") + kPathBytesKey + "\": \"HEX\"}, found " + TypeName(*j));
+    const std::string& hex = hex_it->get_ref<const std::string&>();
+    const auto digit = [](char c) {
+      if (c >= '0' && c <= '9') return c - '0';
+      if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+      if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+      return -1;
+    };
+    std::string bytes;
+    for (size_t i = 0; i + 1 < hex.size(); i += 2) {
+      const int high = digit(hex[i]), low = digit(hex[i + 1]);
+      if (high < 0 || low < 0) break;
+      bytes += static_cast<char>(high * 16 + low);
+    }
+    if (hex.size() % 2 != 0 || bytes.size() * 2 != hex.size() || bytes.find('\0') != std::string::npos)
+      return Fail(Join(path, kPathBytesKey), "expected the path's bytes as pairs of hex digits, none zero");
+    *out = std::move(bytes);
+    return true;
+  }
 
   static std::string TypeName(const Json& j) {
     if (j.is_null()) return "null";
@@ -452,6 +472,43 @@ class Reader {
   std::vector<std::string>* warnings_;
 };
 
+// The numbers of an image that must be a camera, checked where they enter (a focal length
+// of 1e-300 px was exported as yfov = pi, k1 = 1e308 sent the solve 4,728 km away): the
+// bounds of core/geometry/camera_checks.h, named by field.
+bool CheckImageNumbers(const Image& im, const std::string& at, Reader* r) {
+  const Camera& c = im.camera;
+  const std::string cam_at = Join(at, "camera");
+  const int camera_w = c.width_px > 0 ? c.width_px : im.width_px;
+  const int camera_h = c.height_px > 0 ? c.height_px : im.height_px;
+  const std::string not_a_camera = WhyNotACamera(c.focal_px, c.principal_point_px, camera_w, camera_h);
+  if (im.camera_calibrated && !not_a_camera.empty()) return r->Fail(Join(cam_at, "focal_px"), not_a_camera);
+  if (c.k1 != 0.0 || c.k2 != 0.0) {
+    if (!not_a_camera.empty())
+      return r->Fail(Join(cam_at, "k1"), "radial distortion on a camera that is not one: " + not_a_camera);
+    if (!(std::abs(c.k1) <= kMaxDistortionCoefficient) || !(std::abs(c.k2) <= kMaxDistortionCoefficient))
+      return r->Fail(Join(cam_at, std::abs(c.k1) <= kMaxDistortionCoefficient ? "k2" : "k1"),
+                     "radial distortion k1 = " + internal::FormatNumber(c.k1, 6) +
+                         ", k2 = " + internal::FormatNumber(c.k2, 6) + " is no lens (at most " +
+                         internal::FormatNumber(kMaxDistortionCoefficient, 6) + " in magnitude)");
+    const std::string folds = WhyDistortionFolds(c.k1, c.k2, c.focal_px, c.principal_point_px, camera_w, camera_h);
+    if (!folds.empty()) return r->Fail(Join(cam_at, "k1"), folds);
+  }
+  if (im.focal_mode == FocalMode::kFixed) {
+    const std::string why = WhyNotAFocalLength(im.fixed_focal_px, im.width_px, im.height_px);
+    if (!why.empty()) return r->Fail(Join(at, "fixed_focal_px"), why);
+  }
+  if (im.focal_mode == FocalMode::kPrior) {
+    const std::string why = WhyNotAFocalPrior(im.focal_prior_px, im.focal_prior_std_px, im.width_px, im.height_px);
+    if (!why.empty()) return r->Fail(Join(at, "focal_prior_px"), why);
+  }
+  // Two equal points are a horizon being placed (the calibration says so), not a bad number.
+  if (im.use_horizon && im.horizon_px.head<2>() != im.horizon_px.tail<2>()) {
+    const std::string why = WhyNotALineOnPhoto(im.horizon_px, im.width_px, im.height_px);
+    if (!why.empty()) return r->Fail(Join(at, "horizon_px"), why);
+  }
+  return true;
+}
+
 bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
   if (!r->Object(j, at,
                  {"id", "path", "width_px", "height_px", "camera", "camera_calibrated", "principal_point_mode",
@@ -460,7 +517,7 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
                   "estimate_distortion", "distortion_locked", "axis_quarter_turns", "use_for_texture", "lens_group"}))
     return false;
   constexpr int kMaxSize = std::numeric_limits<int>::max();
-  if (!r->IdField(j, at, "id", &im->id) || !r->String(j, at, "path", &im->path) ||
+  if (!r->IdField(j, at, "id", &im->id) || !r->FilePath(j, at, "path", &im->path) ||
       !r->Int(j, at, "width_px", 1, kMaxSize, &im->width_px) ||
       !r->Int(j, at, "height_px", 1, kMaxSize, &im->height_px))
     return false;
@@ -535,7 +592,7 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
     return r->Fail(Join(at, "fixed_focal_px"), "must be positive when focal_mode is \"fixed\"");
   if (im->focal_mode == FocalMode::kPrior && !(im->focal_prior_px > 0 && im->focal_prior_std_px > 0))
     return r->Fail(Join(at, "focal_prior_px"), "a prior needs focal_prior_px > 0 and focal_prior_std_px > 0");
-  return true;
+  return CheckImageNumbers(*im, at, r);
 }
 
 bool ReadSegment(const Json& j, const std::string& at, Reader* r, Segment* s) {
@@ -800,7 +857,7 @@ bool ReadConstraint(const Json& j, const std::string& at, Reader* r, Constraint*
 bool ReadReference(const Json& j, const std::string& at, Reader* r, Reference* ref) {
   std::string axes;
   if (!(r->Object(j, at, {"id", "path", "axes", "visible"}) && r->IdField(j, at, "id", &ref->id) &&
-        r->String(j, at, "path", &ref->path) && r->String(j, at, "axes", &axes) &&
+        r->FilePath(j, at, "path", &ref->path) && r->String(j, at, "axes", &axes) &&
         r->Bool(j, at, "visible", &ref->visible)))
     return false;
   if (ref->path.empty()) return r->Fail(Join(at, "path"), "a reference needs the path of its mesh file");
@@ -1183,7 +1240,17 @@ ProjectLoadResult LoadProject(const std::string& path) {
     Image& image = result.project.images[i];
     const std::string resolved = ResolveImagePath(path, image.path);
     std::error_code ec;
-    if (std::filesystem::is_regular_file(resolved, ec)) continue;
+    if (std::filesystem::is_regular_file(resolved, ec)) {
+      int width = 0, height = 0;
+      std::string size_error;
+      if (ReadImageSize(resolved, &width, &height, &size_error)) {
+        const std::string why = WhyPhotoIsNotTheImages(image, resolved, width, height);
+        if (!why.empty())
+          result.warnings.push_back("images[" + std::to_string(i) + "]: " + why +
+                                    "; its pins and lines stay as they were (File > Relink photo)");
+      }  // an unreadable photo is reported by whoever decodes it
+      continue;
+    }
     const std::string name = std::filesystem::path(image.path).filename().string();
     const std::filesystem::path beside = folder / name;
     const std::string at = "images[" + std::to_string(i) + "]: ";
@@ -1206,6 +1273,12 @@ ProjectLoadResult LoadProject(const std::string& path) {
                                 " (kept in the project; it is not drawn until the file is there)");
   }
   return result;
+}
+
+std::string WhyPhotoIsNotTheImages(const Image& image, const std::string& photo_path, int width_px, int height_px) {
+  if (width_px == image.width_px && height_px == image.height_px) return {};
+  return photo_path + " is " + std::to_string(width_px) + " x " + std::to_string(height_px) + " px, the image " +
+         std::to_string(image.width_px) + " x " + std::to_string(image.height_px) + " px: not the same photo";
 }
 
 std::string ResolveImagePath(const std::string& project_path, const std::string& image_path) {

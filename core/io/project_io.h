@@ -13,7 +13,15 @@
 // {"face", "source_image" (0: the bake chooses), "excluded_images"}) are the user's texture
 // choices; each image's "lens_group" (0: its own lens) says which photos share intrinsics in
 // the joint solve; a reference is {"id", "path" (relative to the project file), "axes": "y_up" |
-// "z_up", "visible"}, its mesh read from the file, never stored. Older files are upgraded on
+// "z_up", "visible"}, its mesh read from the file, never stored. A path (an image's or a
+// reference's) is bytes, as the file system has it: a JSON string when it is valid UTF-8,
+// else {"bytes_hex": "6dff2e6a7067"} (its bytes in hex), so that a photo in a folder named in
+// another encoding round-trips exactly (such a file needs this build or later to open). Every
+// other text (names, units) must be UTF-8: SaveProject refuses it by field otherwise.
+// Numbers that are no camera are refused at load, naming the field, with the bounds of
+// core/geometry/camera_checks.h: a calibrated camera's focal length and principal point,
+// radial distortion that folds the photo or exceeds kMaxDistortionCoefficient, a fixed focal
+// length, a focal prior (value and std) and a horizon. Older files are upgraded on
 // load (project_io.cpp, kMigrationSteps): version 1 (boxes with corner pins,
 // tests/fixtures/project_v1.facet), version 2 (no texture choices, no references;
 // tests/fixtures/project_v2.facet, assets/samples/leuven/*.facet), version 3 (no references)
@@ -55,8 +63,15 @@ ProjectLoadResult ProjectFromJson(const std::string& text);
 // back equal (non-finite numbers, dangling references, duplicate ids). Nothing is left
 // half-written; on failure the previous file at `path` is untouched.
 std::string SaveProject(const Project& project, const std::string& path);
-// Reads and validates `path`; image files missing on disk are warnings, not errors.
+// Reads and validates `path`; image files missing on disk, or there with another size than
+// the image's (WhyPhotoIsNotTheImages, read from the file's header), are warnings, not errors:
+// pins, lines and cameras stay as saved.
 ProjectLoadResult LoadProject(const std::string& path);
+// Empty when the photo file at photo_path, width_px x height_px, can be image's photo (the
+// size the image was added with: its pins, lines and camera are in those pixels); else one
+// sentence naming both sizes. A photo replaced by one of another size is another photo: open
+// warns and treats it as missing, export leaves its faces untextured, Relink refuses it.
+std::string WhyPhotoIsNotTheImages(const Image& image, const std::string& photo_path, int width_px, int height_px);
 // Resolves an image's stored path against the folder of the project file. Absolute paths
 // stay absolute; both are lexically normalised.
 std::string ResolveImagePath(const std::string& project_path, const std::string& image_path);

@@ -383,8 +383,11 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
     for (const std::string& held : summary.joint.held_distortion) summary.messages.push_back("Joint solve: " + held);
     if (summary.joint.IsUsable()) {
       *updated = std::move(joint_solved);
-    } else if (summary.joint.degenerate) {
-      // Its sizes went to zero or below: the model keeps the state the edit left it in.
+    } else if (summary.joint.degenerate || summary.joint.termination == SolverTermination::kFailed) {
+      // Its sizes went to zero or below, or it diverged from the geometry solve's result: the
+      // model keeps the state the edit left it in, as the joint solve's message says ("the
+      // model is unchanged"). Keeping the geometry solve's result instead saved a camera
+      // 4,728 km away under that message (k1 = 1e308, issue 25).
       *updated = edited;
       summary.ok = false;
       summary.messages.push_back("Joint solve: " + summary.joint.message);

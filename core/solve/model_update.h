@@ -113,8 +113,9 @@ struct ModelUpdateSummary {
   int distortion_estimates_run = 0;
   double calibration_ms = 0.0;  // the calibration step (all images)
   double time_ms = 0.0;
-  // False when a step failed; the project is then left as the edit made it (cameras and
-  // primitives keep their previous values), never half-updated.
+  // False when a step failed (the joint solve included: a joint solve that diverges does not
+  // leave the geometry solve's result behind); the project is then left as the edit made it
+  // (cameras and primitives keep their previous values), never half-updated.
   bool ok = true;
 };
 

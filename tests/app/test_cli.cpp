@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
 
@@ -494,4 +495,146 @@ TEST_CASE("export: a synthetic box rendered from the .glb through each of three 
                                 << " px (|" << shift.norm() << "|) from the photo, ECC correlation " << correlation
                                 << ", " << covered << " px covered (silhouette " << silhouette << ")");
   }
+}
+
+// ---- Issue 25: hostile numbers and paths give messages and exit codes, never a crash ----
+
+namespace {
+
+// The box scene's project as JSON text with one field of images[0] replaced (a JSON pointer
+// relative to the image), as a hand-edited or corrupted file would have it.
+std::string BoxProjectWith(const std::string& image_pointer, const nlohmann::json& value) {
+  nlohmann::json doc = nlohmann::json::parse(facet::ProjectToJson(MakeBoxScene().project));
+  doc["images"][0][nlohmann::json::json_pointer(image_pointer)] = value;
+  return doc.dump(1);
+}
+
+}  // namespace
+
+TEST_CASE("calibrate --points and --lines: a focal length, prior or horizon that is no camera exits 1 by name") {
+  TempDir dir("hostile_numbers");
+  const auto scene = MakeBoxScene();
+  const facet::Camera& truth = scene.true_camera;
+  nlohmann::json points = nlohmann::json::array();
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d x = scene.true_box.mesh.vertex(i).position;
+    const Eigen::Vector2d uv = truth.Project(x);
+    points.push_back({{"xyz", {x.x(), x.y(), x.z()}}, {"uv", {uv.x(), uv.y()}}});
+  }
+  // 1e-300, 1e200 and 1e308 crashed (SIGSEGV in the SVD of the pose's translation).
+  for (const char* focal : {"1e-300", "1e200", "1e308"}) {
+    const std::string text =
+        nlohmann::json{{"image_size", {truth.width_px, truth.height_px}}, {"points", points}}.dump().insert(
+            1, std::string("\"focal_px\": ") + focal + ", ");
+    WriteText(dir / "points.json", text);
+    const CliResult r = RunFacet(dir, "calibrate --points '" + (dir / "points.json") + "'");
+    CAPTURE(focal);
+    CAPTURE(r.err);
+    CHECK(r.exit_code == 1);
+    CHECK(r.out.empty());
+    CHECK(r.err.find("\"focal_px\": f = ") != std::string::npos);
+  }
+  // --lines: a prior with std 1e-300 and a horizon at 1e308 were ignored and printed nulls.
+  nlohmann::json lines = LinesJsonFor(scene.project, scene.project.images[0], "solve");
+  nlohmann::json prior = lines;
+  prior["focal_prior_px"] = truth.focal_px;
+  prior["focal_prior_std_px"] = 1e-300;
+  nlohmann::json horizon = lines;
+  horizon["focal_px"] = truth.focal_px;
+  horizon["horizon"] = 1e308;
+  for (const auto& [doc, field] :
+       {std::pair{prior, "\"focal_prior_px\", \"focal_prior_std_px\""}, std::pair{horizon, "\"horizon\""}}) {
+    WriteText(dir / "lines.json", doc.dump());
+    const CliResult r = RunFacet(dir, "calibrate --lines '" + (dir / "lines.json") + "'");
+    CAPTURE(r.err);
+    CHECK(r.exit_code == 1);
+    CHECK(r.out.empty());
+    CHECK(r.err.find(field) != std::string::npos);
+  }
+}
+
+TEST_CASE("solve and export refuse a project whose numbers are no camera, and write nothing") {
+  TempDir dir("hostile_project");
+  // k1 = 1e308 gave "termination": "failed" ... "the model is unchanged", exit 0, and a file
+  // with the camera 4,728 km away; focal 1e-300 / 1e308 px exported yfov = pi / 0.
+  const std::pair<const char*, nlohmann::json> cases[] = {
+      {"/camera/k1", 1e308}, {"/camera/focal_px", 1e-300}, {"/camera/focal_px", 1e308}};
+  for (const auto& [pointer, value] : cases) {
+    WriteText(dir / "in.facet", BoxProjectWith(pointer, value));
+    const std::string field = "images[0]" + std::regex_replace(std::string(pointer), std::regex("/"), ".");
+    CAPTURE(field);
+    const CliResult solve = RunFacet(dir, "solve '" + (dir / "in.facet") + "' -o '" + (dir / "out.facet") + "'");
+    CHECK(solve.exit_code == 1);
+    CHECK(solve.err.find(field) != std::string::npos);
+    CHECK_FALSE(fs::exists(dir / "out.facet"));
+    const CliResult exported = RunFacet(dir, "export '" + (dir / "in.facet") + "' -o '" + (dir / "m.glb") + "'");
+    CHECK(exported.exit_code == 1);
+    CHECK(exported.err.find(field) != std::string::npos);
+    CHECK_FALSE(fs::exists(dir / "m.glb"));
+  }
+}
+
+TEST_CASE("paths that are not UTF-8: solve, export with a Blender script, and a render report work there") {
+  TempDir dir("non_utf8");
+  auto scene = MakeBoxScene();
+  const std::string folder = dir / "d\xff";  // the probe's $'d\xff'
+  fs::create_directories(folder);
+  cv::Mat photo(scene.true_camera.height_px, scene.true_camera.width_px, CV_8UC3, cv::Scalar(40, 120, 200));
+  REQUIRE(cv::imwrite(folder + "/" + scene.project.images[0].path, photo));
+  const std::string project = folder + "/scene.facet";
+  REQUIRE(facet::SaveProject(scene.project, project).empty());
+
+  const CliResult solve = RunFacet(dir, "solve '" + project + "' -o '" + folder + "/solved\xfe.facet'");
+  INFO(solve.err);
+  CHECK(solve.exit_code == 0);
+  CHECK(facet::LoadProject(folder + "/solved\xfe.facet").ok());
+
+  // The .glb was written and the script not (error 316 aborted between them).
+  const std::string glb = folder + "/m\xff.glb", script = folder + "/s\xff.py";
+  const CliResult exported =
+      RunFacet(dir, "export '" + project + "' -o '" + glb + "' --blender-script '" + script + "'");
+  INFO(exported.err);
+  CHECK(exported.exit_code == 0);
+  CHECK(fs::exists(glb));
+  CHECK_GLTF_VALID(glb);
+  REQUIRE(fs::exists(script));
+  CHECK(ReadText(script).find("MODEL = os.fsdecode(bytes.fromhex(") != std::string::npos);
+
+  // Saving there records the path in the recent files and the report; both dumped it.
+  const nlohmann::json report =
+      facet::testing::RenderScript(dir, project, "saved", "frames 2\ncommand save\nframes 1\n");
+  CHECK(report.contains("recent_files"));
+}
+
+TEST_CASE("a photo replaced by one of another size: open says so, export leaves it untextured") {
+  TempDir dir("other_size");
+  auto scene = MakeBoxScene();
+  const facet::Image& image = scene.project.images[0];
+  cv::Mat half(image.height_px / 2, image.width_px / 2, CV_8UC3, cv::Scalar(40, 120, 200));
+  REQUIRE(cv::imwrite(dir / image.path, half));
+  REQUIRE(facet::SaveProject(scene.project, dir / "scene.facet").empty());
+  const CliResult exported = RunFacet(dir, "export '" + (dir / "scene.facet") + "' -o '" + (dir / "m.glb") + "'");
+  INFO(exported.err);
+  CHECK(exported.exit_code == 0);
+  CHECK(exported.err.find("warning: images[0]: ") != std::string::npos);
+  CHECK(exported.err.find("not the same photo") != std::string::npos);
+  CHECK(exported.err.find("its faces stay untextured") != std::string::npos);
+  const CliResult solve = RunFacet(dir, "solve '" + (dir / "scene.facet") + "' -o '" + (dir / "out.facet") + "'");
+  CHECK(solve.exit_code == 0);
+  CHECK(solve.err.find("not the same photo") != std::string::npos);
+  // The pins stay in the image's pixels: the solved file has them as they were.
+  const facet::ProjectLoadResult solved = facet::LoadProject(dir / "out.facet");
+  REQUIRE(solved.ok());
+  CHECK(solved.project.pins == scene.project.pins);
+
+  // The app opens it as it opens a missing photo: the log says why, the photo is not used
+  // (no texture from it), and saving keeps the pins where they were.
+  const nlohmann::json report = facet::testing::RenderScript(dir, dir / "scene.facet", "opened",
+                                                             "frames 2\ncommand save " + (dir / "saved.facet") + "\n");
+  const std::string log = facet::testing::ReportLog(report);
+  INFO(log);
+  CHECK(log.find("not the same photo") != std::string::npos);
+  const facet::ProjectLoadResult saved = facet::LoadProject(dir / "saved.facet");
+  REQUIRE(saved.ok());
+  CHECK(saved.project.pins == scene.project.pins);
 }
