@@ -167,6 +167,8 @@ const char* DialogName(Dialog dialog) {
     case Dialog::kConfirmNew: return "confirm-new";
     case Dialog::kConfirmOpen: return "confirm-open";
     case Dialog::kRecover: return "recover";
+    case Dialog::kProjectLocked: return "project-locked";
+    case Dialog::kSaveChanged: return "save-changed";
   }
   return "";
 }
@@ -314,6 +316,11 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
                         {"last_write_ms", autosave.stats.last_write_ms},
                         {"last_bytes", autosave.stats.last_bytes},
                         {"offer", autosave.offer ? autosave.offer->recovery_path : std::string()}};
+  const ProjectGuard& guard = state.project_guard;
+  report["project_lock"] = {{"held", guard.lock.held()},
+                            {"lock_file", guard.lock.path()},
+                            {"read_only", guard.read_only},
+                            {"question_path", guard.question_path}};
   const FileDialogState& browser = shell.file_dialog;
   report["file_dialog"] = {{"folder", browser.folder},
                            {"name", browser.name_field},
@@ -467,6 +474,7 @@ int RunGui(const GuiOptions& options) {
   }
   UseRecentFilesIn(&state, &shell, ConfigDirectory());
   state.autosave.enabled = true;
+  // A project another Facet holds is not opened yet: DrawFrame asks (read-only, a copy, cancel).
   if (!options.project_path.empty() && OpenProject(&state, options.project_path)) {
     NoteRecentFile(&state, &shell, options.project_path);
   }
@@ -500,7 +508,11 @@ int RunOffscreen(const RenderOptions& options) {
   shell.offscreen = true;  // the default layout, never the user's
   state.snapping = options.snapping;
   if (!options.config_dir.empty()) UseRecentFilesIn(&state, &shell, options.config_dir);
-  if (!options.project_path.empty() && !OpenProject(&state, options.project_path)) {
+  // With --autosave, a project another Facet holds opens read-only here (a script's `command
+  // open` asks as the GUI does); without it, the lock is taken when a script saves
+  // (app/state/project_guard.h).
+  state.project_guard.lock_on_open = options.autosave;
+  if (!options.project_path.empty() && !OpenProject(&state, options.project_path, OpenAccess::kEditOrReadOnly)) {
     return Fail("cannot open project " + options.project_path);
   }
   state.autosave.enabled = options.autosave;

@@ -22,6 +22,7 @@
 #include "core/solve/joint_solve.h"
 #include "core/solve/model_update.h"
 #include "core/texture/textured_mesh.h"
+#include "core/util/project_lock.h"
 
 namespace facet::app {
 namespace {
@@ -139,6 +140,14 @@ int RunRelateCommand(const std::string& matches_path) {
 int RunSolveCommand(const std::string& project_path, const std::string& output_path) {
   if (output_path.empty()) {
     std::cerr << "facet solve: the output path (-o) is empty\n";
+    return 1;
+  }
+  // A project open in a Facet is that Facet's to write (core/util/project_lock.h): refused
+  // before solving. The lock is held until the file is written.
+  ProjectLockResult output_lock = TryLockProject(output_path);
+  if (output_lock.holder) {
+    std::cerr << "facet solve: cannot write " << output_path << ": "
+              << DescribeLockHolder(output_path, *output_lock.holder) << "; close it there or write another file\n";
     return 1;
   }
   Project project;

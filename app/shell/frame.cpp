@@ -109,7 +109,7 @@ void HandleGlobalShortcuts(AppState* state, ShellState* shell) {
   }
   if (ImGui::IsKeyPressed(GLFW_KEY_Y, true)) Redo(state);
   if (ImGui::IsKeyPressed(GLFW_KEY_S, false)) {
-    if (io.KeyShift || state->project_path.empty()) {
+    if (io.KeyShift || SaveNeedsName(*state)) {
       OpenFileBrowser(state, shell, Dialog::kSaveAs);
     } else {
       SaveProjectAs(state, "");
@@ -311,6 +311,55 @@ void DrawPanel(AppState* state, ShellState* shell, int index, const TiledLayout&
   }
 }
 
+// The project guard's questions (app/state/project_guard.h). Both leave the state as it was
+// on Cancel; the question is answered (cleared) by any button.
+void DrawProjectGuardDialog(AppState* state, ShellState* shell) {
+  ProjectGuard& guard = state->project_guard;
+  const GuardQuestion question = guard.question;
+  if (question == GuardQuestion::kNone) {
+    CloseDialog(shell);
+    return;
+  }
+  const std::string path = guard.question_path;
+  ImGui::TextUnformatted((guard.question_text + ".").c_str());
+  if (question == GuardQuestion::kOpenLocked) {
+    ImGui::TextColored(kDimText, "Read-only: nothing is written to it or to its recovery file; Save becomes Save as.");
+    ImGui::TextColored(kDimText, "A copy: it opens read-only and asks for a new name to save it under.");
+  } else {
+    ImGui::TextColored(kDimText, "Another program or another Facet wrote it. Overwrite replaces that version.");
+  }
+  ImGui::Spacing();
+  const char* first = question == GuardQuestion::kOpenLocked ? "Open read-only" : "Overwrite";
+  const char* second = question == GuardQuestion::kOpenLocked ? "Open a copy..." : "Save as...";
+  const bool answer_first = ImGui::Button(first, ImVec2(130, 0));
+  RecordItem(state, question == GuardQuestion::kOpenLocked ? "locked.read_only" : "changed.overwrite");
+  ImGui::SameLine();
+  const bool answer_second = ImGui::Button(second, ImVec2(130, 0));
+  RecordItem(state, question == GuardQuestion::kOpenLocked ? "locked.copy" : "changed.save_as");
+  ImGui::SameLine();
+  const bool cancel = ImGui::Button("Cancel", ImVec2(110, 0)) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false);
+  RecordItem(state, question == GuardQuestion::kOpenLocked ? "locked.cancel" : "changed.cancel");
+  if (!answer_first && !answer_second && !cancel) return;
+  guard.question = GuardQuestion::kNone;
+  guard.question_path.clear();
+  guard.question_text.clear();
+  CloseDialog(shell);
+  if (cancel) return;
+  if (question == GuardQuestion::kOpenLocked) {
+    if (!OpenProject(state, path, OpenAccess::kReadOnly)) return;  // the log says why
+    NoteRecentFile(state, shell, path);
+    if (answer_second) {
+      OpenFileBrowser(state, shell, Dialog::kSaveAs, std::filesystem::path(path).stem().string() + "-copy.facet");
+    }
+    return;
+  }
+  if (answer_first) {
+    if (SaveProjectAs(state, path, /*overwrite_changed=*/true)) NoteRecentFile(state, shell, path);
+  } else {
+    OpenFileBrowser(state, shell, Dialog::kSaveAs);
+  }
+}
+
 const char* DialogTitle(Dialog dialog) {
   switch (dialog) {
     case Dialog::kOpen: return "Open project";
@@ -325,6 +374,8 @@ const char* DialogTitle(Dialog dialog) {
     case Dialog::kConfirmNew: return "Unsaved changes##new";
     case Dialog::kConfirmOpen: return "Unsaved changes##open";
     case Dialog::kRecover: return "Recover unsaved work";
+    case Dialog::kProjectLocked: return "Project open elsewhere";
+    case Dialog::kSaveChanged: return "Project changed on disk";
     case Dialog::kNone: break;
   }
   return "";
@@ -461,7 +512,7 @@ void DrawDialogs(AppState* state, ShellState* shell) {
         }
       };
       if (ImGui::Button("Save", ImVec2(110, 0))) {
-        if (state->project_path.empty()) {
+        if (SaveNeedsName(*state)) {
           CloseDialog(shell);
           shell->quit_after_save = d == Dialog::kConfirmQuit;
           OpenFileBrowser(state, shell, Dialog::kSaveAs);
@@ -481,6 +532,8 @@ void DrawDialogs(AppState* state, ShellState* shell) {
       if (ImGui::Button("Cancel", ImVec2(110, 0)) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) CloseDialog(shell);
       break;
     }
+    case Dialog::kProjectLocked:
+    case Dialog::kSaveChanged: DrawProjectGuardDialog(state, shell); break;
     case Dialog::kNone: break;
   }
   ImGui::EndPopup();
@@ -574,7 +627,8 @@ void OpenDialog(ShellState* shell, Dialog dialog, std::string path) {
 std::string WindowTitle(const AppState& state) {
   const std::string name = state.project_path.empty() ? std::string("untitled")
                                                       : std::filesystem::path(state.project_path).filename().string();
-  return "Facet - " + name + (state.document.dirty() ? " *" : "");
+  return "Facet - " + name + (state.project_guard.read_only ? " (read-only)" : "") +
+         (state.document.dirty() ? " *" : "");
 }
 
 void RequestQuit(AppState* state, ShellState* shell) {
@@ -682,6 +736,8 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   }
   if (name == "save") {
     if (!SaveProjectAs(state, arg)) {
+      // A script is refused with the reason; the GUI's Save asks (kSaveChanged).
+      state->project_guard.question = GuardQuestion::kNone;
       *error = LastLoggedError(*state);
       return false;
     }
@@ -690,6 +746,8 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   }
   if (name == "open") {
     if (!OpenProject(state, arg)) {
+      // Open in another Facet: the next frame asks, as after File > Open (kProjectLocked).
+      if (state->project_guard.question == GuardQuestion::kOpenLocked) return true;
       *error = LastLoggedError(*state);
       return false;
     }
@@ -987,6 +1045,12 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   }
   AutosaveTick(state);
   if (state->autosave.offer && shell->dialog == Dialog::kNone) OpenDialog(shell, Dialog::kRecover);
+  if (state->project_guard.question != GuardQuestion::kNone && shell->dialog == Dialog::kNone) {
+    OpenDialog(
+        shell,
+        state->project_guard.question == GuardQuestion::kOpenLocked ? Dialog::kProjectLocked : Dialog::kSaveChanged,
+        state->project_guard.question_path);
+  }
   if (state->request_quit) {
     state->request_quit = false;
     RequestQuit(state, shell);

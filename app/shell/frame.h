@@ -33,6 +33,10 @@ enum class Dialog {
   kConfirmNew,
   kConfirmOpen,
   kRecover,  // a recovery file was found: Restore or Discard (app/state/autosave.h)
+  // The project guard's questions (app/state/project_guard.h): the project is open in another
+  // Facet (read-only, a copy, cancel); the project file changed on disk (overwrite, save as, cancel).
+  kProjectLocked,
+  kSaveChanged,
 };
 // The dialogs that are the file browser (app/shell/file_actions.h).
 inline bool IsFileBrowserDialog(Dialog d) {

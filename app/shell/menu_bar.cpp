@@ -116,7 +116,7 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
                         "snap target for the Move tool, not part of the model (or drop it onto the window)");
     ImGui::Separator();
     if (ImGui::MenuItem("Save", "Ctrl+S")) {
-      if (state->project_path.empty()) {
+      if (SaveNeedsName(*state)) {
         OpenFileBrowser(state, shell, Dialog::kSaveAs);
       } else {
         SaveProjectAs(state, "");

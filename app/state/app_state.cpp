@@ -187,25 +187,71 @@ void ResetDocument(AppState* state, Project project, const std::string& path) {
 
 void NewProject(AppState* state) {
   ResetDocument(state, Project{}, "");
+  ResetProjectGuard(&state->project_guard);  // releases the lock
   state->Log(LogLevel::kInfo, "New project");
 }
 
-bool OpenProject(AppState* state, const std::string& path) {
+bool OpenProject(AppState* state, const std::string& path, OpenAccess access) {
+  ProjectGuard& guard = state->project_guard;
+  // The lock first, so that what is read is what the holder of the lock may write. The lock
+  // this session already holds on the same file is kept (a second flock from this process
+  // would fail against it).
+  const bool already_locked = guard.lock.Covers(path);
+  ProjectLock lock;
+  std::string read_only_reason;
+  if (access != OpenAccess::kReadOnly && !already_locked && guard.lock_on_open) {
+    ProjectLockResult taken = TryLockProject(path);
+    if (taken.holder) {
+      const std::string holder = DescribeLockHolder(path, *taken.holder);
+      if (access == OpenAccess::kEdit) {
+        state->Log(LogLevel::kError, "Cannot open " + path + " for editing: " + holder);
+        guard.question = GuardQuestion::kOpenLocked;
+        guard.question_path = path;
+        guard.question_text = holder;
+        return false;
+      }
+      read_only_reason = holder;
+    } else if (!taken.ok()) {
+      // A read-only folder, say: nothing here can be saved anyway, and the save will say so.
+      state->Log(LogLevel::kWarning, "Opened without a lock (" + taken.error + "): another Facet could open it too");
+    }
+    lock = std::move(taken.lock);
+  }
+  if (access == OpenAccess::kReadOnly) {
+    ProjectLockResult probe = TryLockProject(path);  // only to name the holder
+    read_only_reason = probe.holder ? DescribeLockHolder(path, *probe.holder) : "as asked";
+  }
   ProjectLoadResult loaded = LoadProject(path);
   if (!loaded.ok()) {
     state->Log(LogLevel::kError, "Cannot open " + path + ": " + loaded.error);
-    return false;
+    return false;  // the new lock, if any, goes with `lock`
   }
+  const FileIdentity known = IdentifyFile(path);
   for (const std::string& w : loaded.warnings) state->Log(LogLevel::kWarning, w);
   ResetDocument(state, std::move(loaded.project), path);
+  ProjectLock kept = already_locked && read_only_reason.empty() ? std::move(guard.lock) : std::move(lock);
+  ResetProjectGuard(&guard);  // the previous project's lock is released here
+  guard.lock = std::move(kept);
+  guard.read_only = !read_only_reason.empty();
+  guard.read_only_reason = read_only_reason;
+  guard.known = known;
   const Project& project = state->document.project();
   state->active_image_id = project.images.empty() ? kNoId : project.images.front().id;
   RefreshDiagnostics(state);  // the stored solution stays as saved
-  state->Log(LogLevel::kInfo, "Opened " + path);
+  if (guard.read_only) {
+    state->Log(LogLevel::kInfo, "Opened " + path + " read-only (" + read_only_reason +
+                                    "): nothing is written to it or its recovery file; Save writes a copy");
+  } else {
+    state->Log(LogLevel::kInfo, "Opened " + path);
+  }
   return true;
 }
 
+bool SaveNeedsName(const AppState& state) { return state.project_path.empty() || state.project_guard.read_only; }
+
 void RestoreDocument(AppState* state, Document document, const std::string& path) {
+  // Another file than the one open (an unsaved project's recovery): its lock goes.
+  if (path != state->project_path) ResetProjectGuard(&state->project_guard);
   ResetDocument(state, Project{}, path);
   state->document = std::move(document);
   const Project& project = state->document.project();
@@ -213,10 +259,48 @@ void RestoreDocument(AppState* state, Document document, const std::string& path
   RefreshDiagnostics(state);
 }
 
-bool SaveProjectAs(AppState* state, const std::string& path) {
+namespace {
+// Whether `a` and `b` name one file (both there), or the same path (neither there yet).
+bool SameFile(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  if (std::filesystem::equivalent(a, b, ec)) return true;
+  return std::filesystem::absolute(a, ec).lexically_normal() == std::filesystem::absolute(b, ec).lexically_normal();
+}
+}  // namespace
+
+bool SaveProjectAs(AppState* state, const std::string& path, bool overwrite_changed) {
   const std::string target = path.empty() ? state->project_path : path;
   if (target.empty()) {
     state->Log(LogLevel::kError, "Save: the project has no file name yet");
+    return false;
+  }
+  ProjectGuard& guard = state->project_guard;
+  // The target's lock: the one held already, or taken now (and kept once the save is done).
+  ProjectLock lock;
+  if (!guard.lock.Covers(target)) {
+    ProjectLockResult taken = TryLockProject(target);
+    if (taken.holder) {
+      state->Log(LogLevel::kError, "Cannot save " + target + ": " + DescribeLockHolder(target, *taken.holder) +
+                                       "; save it under another name");
+      return false;
+    }
+    if (!taken.ok()) state->Log(LogLevel::kWarning, "Saving without a lock (" + taken.error + ")");
+    lock = std::move(taken.lock);
+  }
+  // The project's own file, written by something else since it was read or written here: not
+  // overwritten unless the user says so. (A file removed meanwhile holds nothing to lose.)
+  std::error_code exists_ec;
+  const bool own_file = !state->project_path.empty() && SameFile(target, state->project_path);
+  if (own_file && !overwrite_changed && !FileUnchangedSince(target, guard.known) &&
+      std::filesystem::exists(target, exists_ec)) {
+    const std::string what =
+        std::filesystem::path(target).filename().string() + " changed on disk since it was opened or saved here";
+    state->Log(LogLevel::kError, "Cannot save " + target + ": " + what +
+                                     " (another program wrote it); not overwritten: save it under another name, "
+                                     "or overwrite it");
+    guard.question = GuardQuestion::kSaveChanged;
+    guard.question_path = target;
+    guard.question_text = what;
     return false;
   }
   // Into another folder, the photos' relative paths must start from the new file's folder,
@@ -240,6 +324,10 @@ bool SaveProjectAs(AppState* state, const std::string& path) {
   }
   state->project_path = target;
   state->document.MarkClean();
+  if (lock.held() || !guard.lock.Covers(target)) guard.lock = std::move(lock);  // the old file's lock goes
+  guard.read_only = false;
+  guard.read_only_reason.clear();
+  guard.known = IdentifyFile(target);
   state->Log(LogLevel::kInfo, "Saved " + target);
   return true;
 }

@@ -15,6 +15,7 @@
 
 #include "app/state/autosave.h"
 #include "app/state/line_proposals.h"
+#include "app/state/project_guard.h"
 #include "app/state/rect.h"
 #include "app/state/teach.h"
 #include "app/state/texture_choices.h"
@@ -223,6 +224,8 @@ struct AppState {
 
   // The recovery file kept while there are unsaved changes (app/state/autosave.h).
   AutosaveState autosave;
+  // The project's lock and its file's identity when last read or written (app/state/project_guard.h).
+  ProjectGuard project_guard;
   // Teach mode's overlays (View > Teach, app/state/teach.h): view settings, not in the project.
   TeachView teach;
   // View > Texture sources and File > Export's resolution (app/state/texture_choices.h).
@@ -244,13 +247,20 @@ struct AppState {
   const Image* ActiveImage() const;
 };
 
-// Starts an empty, unsaved project (clears history).
+// Starts an empty, unsaved project (clears history) and releases the project's lock.
 void NewProject(AppState* state);
-// Loads a project file into the state (clears history). Returns false and logs on failure,
-// leaving the state as it was.
-bool OpenProject(AppState* state, const std::string& path);
-// Saves atomically to `path` (or project_path when empty). Logs and returns false on failure.
-bool SaveProjectAs(AppState* state, const std::string& path);
+// Loads a project file into the state (clears history), taking its lock as `access` says
+// (app/state/project_guard.h); the previous project's lock is released once it has opened.
+// Returns false and logs on failure, leaving the state as it was; when another Facet holds
+// the lock (kEdit), project_guard.question is kOpenLocked.
+bool OpenProject(AppState* state, const std::string& path, OpenAccess access = OpenAccess::kEdit);
+// Saves atomically to `path` (or project_path when empty), taking its lock. Logs and returns
+// false on failure: another Facet holds the target's lock; or the target is the project's
+// file and it changed on disk since it was read or written here (unless `overwrite_changed`),
+// then project_guard.question is kSaveChanged.
+bool SaveProjectAs(AppState* state, const std::string& path, bool overwrite_changed = false);
+// Whether Save must ask for a name (Save as): an unsaved project, or one opened read-only.
+bool SaveNeedsName(const AppState& state);
 // Replaces the whole document, history included (a restored recovery file), as opening a
 // project does: selection, photos and derived state start again.
 void RestoreDocument(AppState* state, Document document, const std::string& path);

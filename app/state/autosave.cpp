@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <limits>
 #include <system_error>
@@ -107,6 +108,40 @@ bool CleanStateIs(const Document& document, const Project& saved) {
   return probe.undo_stack().size() == probe.clean_undo_depth() && probe.project() == saved;
 }
 
+// Renames `path` to `PATH.TAG-YYYYMMDD-HHMMSS[-N]` (a name not taken); the new name, or ""
+// when the rename failed.
+std::string MoveAside(const std::string& path, const std::string& tag) {
+  const std::time_t now = std::time(nullptr);
+  std::tm local{};
+  char stamp[32] = "unknown-time";
+  if (::localtime_r(&now, &local) != nullptr) std::strftime(stamp, sizeof(stamp), "%Y%m%d-%H%M%S", &local);
+  std::error_code ec;
+  for (int n = 0; n < 100; ++n) {
+    const std::string aside = path + "." + tag + "-" + stamp + (n == 0 ? std::string() : "-" + std::to_string(n));
+    if (fs::exists(fs::symlink_status(aside, ec))) continue;
+    fs::rename(path, aside, ec);
+    return ec ? std::string() : aside;
+  }
+  return std::string();
+}
+
+// Whether this session may write its recovery file `target` now. Never for a project opened
+// read-only: the file is the other Facet's. While a recovery offer is unanswered, the offered
+// file is first moved aside (and kept for the answer), so the edits made meanwhile are
+// written without losing it.
+bool MayWrite(AppState* state, const std::string& target) {
+  if (state->project_guard.read_only) return false;
+  std::optional<RecoveryOffer>& offer = state->autosave.offer;
+  if (!offer || offer->recovery_path != target) return true;
+  const std::string aside = MoveAside(target, "unanswered");
+  if (aside.empty()) return false;  // tried again at the next tick; the offered file stays
+  state->Log(LogLevel::kInfo, "The offered recovery file is kept as " + aside +
+                                  " until it is restored or discarded; new edits are autosaved to " + target);
+  offer->set_aside_from = target;
+  offer->recovery_path = aside;
+  return true;
+}
+
 bool ProcessAlive(pid_t pid) { return pid > 0 && (::kill(pid, 0) == 0 || errno == EPERM); }
 
 // The newest recovery file of an unsaved project whose process is gone (not this one).
@@ -152,9 +187,9 @@ void AutosaveTick(AppState* state) {
   AutosaveState& autosave = state->autosave;
   if (!autosave.enabled) return;
   CollectWrite(state, /*wait=*/false);
-  // One write at a time (the next one takes the newest document); and the offered file is
-  // the user's to restore or discard, so nothing is written until they have answered.
-  if (autosave.job || autosave.offer) return;
+  // One write at a time (the next one takes the newest document). The offered file is the
+  // user's to restore or discard: MayWrite moves it aside before anything is written there.
+  if (autosave.job) return;
   const Document& document = state->document;
   const std::string target = RecoveryFileFor(state->project_path);
   if (state->drag_start) {
@@ -162,6 +197,7 @@ void AutosaveTick(AppState* state) {
     if (!autosave.drag_since_s) autosave.drag_since_s = state->time_s;
     if (state->time_s - *autosave.drag_since_s < kIntervalS || state->time_s < autosave.retry_after_s) return;
     autosave.drag_since_s = state->time_s;
+    if (!MayWrite(state, target)) return;
     const Edit unfinished = DiffProjects(state->drag_label + " (unfinished)", *state->drag_start, document.project());
     StartWrite(state, unfinished.Empty() ? nullptr : &unfinished, target, kDragRevision);
     return;
@@ -176,6 +212,7 @@ void AutosaveTick(AppState* state) {
   if (document.revision() == autosave.written_revision && target == autosave.owned_path) return;
   if (state->time_s < autosave.retry_after_s && document.revision() == autosave.failed_revision) return;
   if (state->time_s < autosave.next_write_s) return;
+  if (!MayWrite(state, target)) return;
   StartWrite(state, nullptr, target, document.revision());
 }
 
@@ -201,6 +238,11 @@ void FinishAutosave(AppState* state) {
   CollectWrite(state, /*wait=*/true);
   if (!autosave.owned_path.empty()) RemoveFile(autosave.owned_path);
   autosave.owned_path.clear();
+  // An offer still unanswered goes back where the next start looks for it.
+  std::error_code ec;
+  if (autosave.offer && !autosave.offer->set_aside_from.empty() &&
+      !fs::exists(fs::symlink_status(autosave.offer->set_aside_from, ec)))
+    fs::rename(autosave.offer->recovery_path, autosave.offer->set_aside_from, ec);
 }
 
 bool FindRecovery(AppState* state, bool also_unsaved) {
@@ -209,7 +251,8 @@ bool FindRecovery(AppState* state, bool also_unsaved) {
   autosave.offer.reset();
   std::string path;
   std::error_code ec;
-  if (!state->project_path.empty()) {
+  // A project opened read-only: its recovery file is the other Facet's, live.
+  if (!state->project_path.empty() && !state->project_guard.read_only) {
     path = RecoveryFileFor(state->project_path);
     if (!fs::is_regular_file(path, ec)) {
       path.clear();
@@ -246,6 +289,15 @@ void RestoreRecovery(AppState* state) {
   if (!autosave.offer) return;
   RecoveryOffer offer = std::move(*autosave.offer);
   autosave.offer.reset();
+  // Edits made while the offer waited (written to the usual file) are kept beside it.
+  CollectWrite(state, /*wait=*/true);
+  if (!autosave.owned_path.empty() && autosave.owned_path != offer.recovery_path && state->document.dirty()) {
+    const std::string aside = MoveAside(autosave.owned_path, "replaced");
+    if (!aside.empty()) {
+      state->Log(LogLevel::kInfo, "The edits made before Restore are kept in " + aside);
+      autosave.owned_path.clear();
+    }
+  }
   // The document is dirty unless the recovered state is the saved one; if the project file is
   // not the history's saved state at all, nothing in it counts as saved.
   if (!CleanStateIs(offer.document, state->document.project())) offer.document.ForgetCleanState();

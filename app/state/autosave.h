@@ -24,7 +24,13 @@
 // On start, and after opening a project, a recovery file newer than the project (or, with no
 // project, an unsaved project's file left by a process that is gone) is offered: Restore
 // loads the recovered document with its history, Discard deletes the file. A recovery file
-// that does not read is reported in the log and the project opens as saved.
+// that does not read is reported in the log and the project opens as saved. Edits made while
+// the offer waits are autosaved too: the offered file is first moved aside as
+// `NAME.facet.recovery.unanswered-DATE` (moved back at a clean exit while still unanswered),
+// and edits replaced by Restore are kept as `NAME.facet.recovery.replaced-DATE`.
+//
+// A project opened read-only (another Facet holds its lock, app/state/project_guard.h) has no
+// recovery file here: nothing is written, removed or offered at its recovery path.
 #pragma once
 
 #include <cstdint>
@@ -69,6 +75,9 @@ struct RecoveryOffer {
   std::string recovery_path;
   std::string project_path;  // the document's project file; empty for an unsaved project
   Document document;
+  // Where the offered file was before an edit made while the offer waited moved it aside
+  // (autosave.cpp, MayWrite); empty while it is where it was found.
+  std::string set_aside_from;
 };
 
 struct AutosaveState {
