@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "app/shell/app.h"
+#include "app/shell/cameras_command.h"
 #include "app/shell/cli_commands.h"
 
 namespace {
@@ -161,6 +162,9 @@ int Run(int argc, char** argv) {
                      "Read and keep recent files in this folder (default: none, so renders never touch the "
                      "user's settings)");
 
+  facet::app::CamerasCommandArgs cameras_args;
+  auto* cameras = facet::app::AddCamerasSubcommand(&cli, &cameras_args);
+
   CLI11_PARSE(cli, argc, argv);
 
   if (*calibrate && !image_path.empty())
@@ -169,6 +173,8 @@ int Run(int argc, char** argv) {
   if (*relate) return facet::app::RunRelateCommand(matches_path);
   if (*solve) return facet::app::RunSolveCommand(solve_project, solve_out);
   if (*exporter) return facet::app::RunExportCommand(export_project, export_out, blender_script, texels_per_unit);
+  if (*cameras)
+    return facet::app::RunCamerasCommand(cameras_args.project_path, cameras_args.output_path, cameras_args.options);
   if (*render_glb) return facet::app::RunRenderGlbCommand(render_glb_path, render_glb_camera, render_glb_out);
   if (*render) {
     if (render_options.project_path.empty()) render_options.project_path = SampleProjectPath();
