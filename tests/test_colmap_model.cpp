@@ -278,12 +278,11 @@ TEST_CASE("broken text models are refused with the file, the line and what is wr
   // Image 1's camera (id 1) is no longer there.
   CHECK(read_with("cameras.txt", "99 SIMPLE_PINHOLE 640 480 500 320 240\n").find("refers to camera") !=
         std::string::npos);
-  CHECK(read_with("images.txt", "1 1 0 0 0 0 0 0 1 a.jpg\n1 2 3\n").find("triples") != std::string::npos);
+  CHECK(read_with("images.txt", "1 1 0 0 0 0 0 0 1 a.jpg\n1 2\n").find("triples") != std::string::npos);
   CHECK(read_with("images.txt", "1 0 0 0 0 0 0 0 1 a.jpg\n\n").find("unit length") != std::string::npos);
   CHECK(read_with("points3D.txt", "1 0 0 0 1 2 3 0.5 1 99\n").find("names 2D point 99") != std::string::npos);
   CHECK(read_with("points3D.txt", "1 0 0 0 1 2 300 0.5\n").find("bad colour") != std::string::npos);
 
-  fs::remove(TempDir("missing") / "nothing");
   const std::string missing = ReadColmapModel(TempDir("missing").string(), &model);
   CHECK(missing.find("neither cameras.bin") != std::string::npos);
   CHECK(ReadColmapModelText(TempDir("missing").string(), &model).find("cameras.txt not found") != std::string::npos);
@@ -358,11 +357,11 @@ TEST_CASE("import: photos matched by file name, resized copies rescaled, the res
   }
   SUBCASE("a photo halved in size takes the camera scaled exactly") {
     Project project = w.project;
-    Image& image = project.images[0];
-    image.width_px /= 2;
-    image.height_px /= 2;
+    project.images[0].width_px /= 2;
+    project.images[0].height_px /= 2;
     ColmapImportReport report;
     REQUIRE(ApplyColmapCameras(model, &project, &report) == "");
+    const Image& image = project.images[0];  // after the import, which replaces the project
     CHECK(report.rescaled_images == std::vector<Id>{image.id});
     const Camera& full = w.project.images[0].camera;
     const Eigen::Vector3d p = w.project.primitives[0].mesh.vertex(6).position;

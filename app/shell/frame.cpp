@@ -311,6 +311,32 @@ void DrawPanel(AppState* state, ShellState* shell, int index, const TiledLayout&
   }
 }
 
+const char* DialogTitle(Dialog dialog) {
+  switch (dialog) {
+    case Dialog::kOpen: return "Open project";
+    case Dialog::kSaveAs: return "Save project as";
+    case Dialog::kExport: return "Export model";
+    case Dialog::kExportView: return "Export view";
+    case Dialog::kAddPhoto: return "Add photo";
+    case Dialog::kRelinkPhoto: return "Relink photo";
+    case Dialog::kAddReference: return "Add reference mesh";
+    case Dialog::kAbout: return "About Facet";
+    case Dialog::kConfirmQuit: return "Unsaved changes##quit";
+    case Dialog::kConfirmNew: return "Unsaved changes##new";
+    case Dialog::kConfirmOpen: return "Unsaved changes##open";
+    case Dialog::kRecover: return "Recover unsaved work";
+    case Dialog::kProjectLocked: return "Project open elsewhere";
+    case Dialog::kSaveChanged: return "Project changed on disk";
+    case Dialog::kNone: break;
+  }
+  return "";
+}
+
+void CloseDialog(ShellState* shell) {
+  shell->dialog = Dialog::kNone;
+  ImGui::CloseCurrentPopup();
+}
+
 // The project guard's questions (app/state/project_guard.h). Both leave the state as it was
 // on Cancel; the question is answered (cleared) by any button.
 void DrawProjectGuardDialog(AppState* state, ShellState* shell) {
@@ -358,32 +384,6 @@ void DrawProjectGuardDialog(AppState* state, ShellState* shell) {
   } else {
     OpenFileBrowser(state, shell, Dialog::kSaveAs);
   }
-}
-
-const char* DialogTitle(Dialog dialog) {
-  switch (dialog) {
-    case Dialog::kOpen: return "Open project";
-    case Dialog::kSaveAs: return "Save project as";
-    case Dialog::kExport: return "Export model";
-    case Dialog::kExportView: return "Export view";
-    case Dialog::kAddPhoto: return "Add photo";
-    case Dialog::kRelinkPhoto: return "Relink photo";
-    case Dialog::kAddReference: return "Add reference mesh";
-    case Dialog::kAbout: return "About Facet";
-    case Dialog::kConfirmQuit: return "Unsaved changes##quit";
-    case Dialog::kConfirmNew: return "Unsaved changes##new";
-    case Dialog::kConfirmOpen: return "Unsaved changes##open";
-    case Dialog::kRecover: return "Recover unsaved work";
-    case Dialog::kProjectLocked: return "Project open elsewhere";
-    case Dialog::kSaveChanged: return "Project changed on disk";
-    case Dialog::kNone: break;
-  }
-  return "";
-}
-
-void CloseDialog(ShellState* shell) {
-  shell->dialog = Dialog::kNone;
-  ImGui::CloseCurrentPopup();
 }
 
 // Open, Save as, Export, Add photo: the file browser (app/shell/file_actions.h) under a

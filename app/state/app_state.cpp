@@ -213,7 +213,7 @@ bool OpenProject(AppState* state, const std::string& path, OpenAccess access) {
       read_only_reason = holder;
     } else if (!taken.ok()) {
       // A read-only folder, say: nothing here can be saved anyway, and the save will say so.
-      state->Log(LogLevel::kWarning, "Opened without a lock (" + taken.error + "): another Facet could open it too");
+      state->Log(LogLevel::kInfo, "Opened without a lock (" + taken.error + "): another Facet could open it too");
     }
     lock = std::move(taken.lock);
   }

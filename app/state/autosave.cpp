@@ -280,7 +280,8 @@ bool FindRecovery(AppState* state, bool also_unsaved) {
   // An unsaved project's file restores as an unsaved project, whatever was opened.
   const bool untitled = fs::path(path).filename().string().rfind(kUntitledPrefix, 0) == 0 &&
                         fs::path(path).parent_path() == fs::path(RecoveryFolder());
-  autosave.offer = RecoveryOffer{path, untitled ? std::string() : state->project_path, std::move(loaded.document)};
+  autosave.offer =
+      RecoveryOffer{path, untitled ? std::string() : state->project_path, std::move(loaded.document), std::string()};
   return true;
 }
 

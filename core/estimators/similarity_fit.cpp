@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <Eigen/LU>
+
 #include "core/util/eigen_decompositions.h"
 
 namespace facet {

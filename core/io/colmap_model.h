@@ -56,7 +56,8 @@ struct ColmapPoint2D {
 
 struct ColmapImage {
   std::uint32_t image_id = 0;
-  // cam_from_world: p_in_cam = R(q) * p_in_world + t; q as COLMAP stores it (w, x, y, z).
+  // cam_from_world: p_in_cam = R(q) * p_in_world + t; q as the file stores it (w, x, y, z),
+  // within a factor 2 of unit length (checked), normalised where it is used.
   Eigen::Quaterniond cam_from_world_rotation = Eigen::Quaterniond::Identity();
   Eigen::Vector3d cam_from_world_translation = Eigen::Vector3d::Zero();
   std::uint32_t camera_id = 0;

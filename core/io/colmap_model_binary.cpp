@@ -117,7 +117,7 @@ std::string ParseColmapImagesBinary(const std::string& bytes, const std::string&
     const Eigen::Vector4d q(v[0], v[1], v[2], v[3]);
     if (!(q.norm() > 0.5 && q.norm() < 2.0))
       return file_name + ": image " + std::to_string(image.image_id) + " has a rotation quaternion not of unit length";
-    image.cam_from_world_rotation = Eigen::Quaterniond(v[0], v[1], v[2], v[3]).normalized();
+    image.cam_from_world_rotation = Eigen::Quaterniond(v[0], v[1], v[2], v[3]);
     image.cam_from_world_translation = Eigen::Vector3d(v[4], v[5], v[6]);
     if (!in.Read(&image.camera_id) || !in.ReadCString(&image.name, kMaxNameBytes))
       return Truncated(file_name, "image", i, in);

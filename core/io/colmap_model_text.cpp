@@ -114,7 +114,7 @@ std::string ParseColmapImagesText(const std::string& text, const std::string& fi
       if (!ParseDouble(words[1 + i], &v[i])) return at + "bad pose number \"" + std::string(words[1 + i]) + "\"";
     const Eigen::Vector4d q(v[0], v[1], v[2], v[3]);
     if (!(q.norm() > 0.5 && q.norm() < 2.0)) return at + "the rotation quaternion is not of unit length";
-    image.cam_from_world_rotation = Eigen::Quaterniond(v[0], v[1], v[2], v[3]).normalized();
+    image.cam_from_world_rotation = Eigen::Quaterniond(v[0], v[1], v[2], v[3]);
     image.cam_from_world_translation = Eigen::Vector3d(v[4], v[5], v[6]);
     if (!ParseInt(words[8], &image.camera_id)) return at + "bad camera id \"" + std::string(words[8]) + "\"";
     // The name is the rest of the line (a file name may hold spaces), trailing blanks cut.

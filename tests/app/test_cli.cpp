@@ -32,6 +32,7 @@ using facet::testing::CliResult;
 using facet::testing::ReadText;
 using facet::testing::RunFacet;
 using facet::testing::TempDir;
+using facet::testing::WriteText;
 
 namespace {
 

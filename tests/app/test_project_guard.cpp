@@ -133,10 +133,10 @@ TEST_CASE("a project open in another Facet: the second is told by name, and read
 
   // Once the other Facet is gone, the lock is this one's.
   held.lock.Release();
-  const nlohmann::json free = Render(dir, project, "free", "frames 2\n");
-  CHECK(free.at("project_lock").at("read_only") == false);
-  CHECK(free.at("project_lock").at("held") == true);
-  CHECK(free.at("project_lock").at("lock_file") == project + ".lock");
+  const nlohmann::json freed = Render(dir, project, "freed", "frames 2\n");
+  CHECK(freed.at("project_lock").at("read_only") == false);
+  CHECK(freed.at("project_lock").at("held") == true);
+  CHECK(freed.at("project_lock").at("lock_file") == project + ".lock");
   CHECK_FALSE(fs::exists(project + ".lock"));  // released at exit
 }
 
@@ -174,12 +174,13 @@ TEST_CASE("a second process on a project another render edits leaves its recover
   const TempDir dir("guard_two_processes");
   const std::string project = CopySample(dir);
   const std::string recovery = project + ".recovery";
-  const std::string go = dir / "go";
-  facet::testing::WriteText(go, "");
-  // A: edits, autosaves, waits for `go` to be removed, then saves.
+  // A: edits, autosaves, waits while B runs (each wait at most 120 s: one per B run), then saves.
+  const std::string go1 = dir / "go1", go2 = dir / "go2";
+  facet::testing::WriteText(go1, "");
+  facet::testing::WriteText(go2, "");
   facet::testing::WriteText(dir / "a.txt", "frames 2\ncommand add box\ncommand wait-autosave\nscreenshot " +
-                                               (dir / "a_ready.png") + "\nwait-removed " + go +
-                                               "\ncommand save\nframes 2\n");
+                                               (dir / "a_ready.png") + "\nwait-removed " + go1 + "\nwait-removed " +
+                                               go2 + "\ncommand save\nframes 2\n");
   facet::testing::BackgroundRender a = facet::testing::StartRender(
       dir, "a", {"--autosave", project, "-o", dir / "a.png", "--script", dir / "a.txt", "--report", dir / "a.json"});
   const bool ready = facet::testing::WaitForFile(dir / "a_ready.png", &a, 240.0);
@@ -195,6 +196,7 @@ TEST_CASE("a second process on a project another render edits leaves its recover
   CHECK(b.at("project_lock").at("read_only") == true);
   CHECK(b.at("autosave").at("writes") == 0);
   CHECK(Bytes(recovery) == a_recovery);
+  fs::remove(go1);
   // B's save is refused by name.
   const std::string refused =
       facet::testing::RenderScriptRefused(dir, project, "b_save", "frames 2\ncommand add wedge\ncommand save\n");
@@ -202,7 +204,7 @@ TEST_CASE("a second process on a project another render edits leaves its recover
   CHECK(Bytes(recovery) == a_recovery);
 
   // A saves: its file was not touched, so the save goes through and its recovery file goes.
-  fs::remove(go);
+  fs::remove(go2);
   int status = 0;
   for (int i = 0; i < 6000 && !a.reaped; ++i) {
     if (::waitpid(a.pid, &status, WNOHANG) == a.pid) a.reaped = true, a.status = status;
@@ -271,6 +273,12 @@ TEST_CASE("a save after the project file changed on disk is refused or asked, an
                                    "\nkey ctrl+s\nframes 3\nclick left item changed.overwrite\nframes 3\n";
   // Removing `cancelled` once the cancel's marker is there, after checking the file.
   bool theirs_after_cancel = false;
+  struct JoinAtExit {
+    std::thread* thread;
+    ~JoinAtExit() {
+      if (thread->joinable()) thread->join();
+    }
+  } join_at_exit{&check_after_cancel};
   check_after_cancel = std::thread([&]() {
     for (int i = 0; i < 12000 && !fs::exists(dir / "after_cancel.png"); ++i)
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -279,7 +287,7 @@ TEST_CASE("a save after the project file changed on disk is refused or asked, an
     fs::remove(cancelled);
   });
   run_with_change("asked", asked_script, true);
-  check_after_cancel.join();
+  if (check_after_cancel.joinable()) check_after_cancel.join();
   CHECK(theirs_after_cancel);
   const nlohmann::json asked = facet::testing::ReadJson(dir / "asked.json");
   INFO(facet::testing::ReportLog(asked));
