@@ -705,6 +705,51 @@ TEST_CASE("export view: render --panel writes the image or the 3D panel alone, a
   CHECK(from_menu.rows == 1080);
 }
 
+// Light grey, nearly colourless pixels: the 3D panel's help and counts text.
+int LightGreyPixels(const cv::Mat& bgr, const cv::Rect& area) {
+  int n = 0;
+  const cv::Rect clipped = area & cv::Rect(0, 0, bgr.cols, bgr.rows);
+  for (int y = clipped.y; y < clipped.y + clipped.height; ++y)
+    for (int x = clipped.x; x < clipped.x + clipped.width; ++x) {
+      const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
+      const int lo = std::min({p[0], p[1], p[2]}), hi = std::max({p[0], p[1], p[2]});
+      n += lo > 150 && hi - lo < 20 ? 1 : 0;
+    }
+  return n;
+}
+
+TEST_CASE("issue 25: File > Export view of the 3D panel leaves out the panel's help ('drag: orbit ...')") {
+  TempDir dir("export_no_help");
+  const SyntheticScene scene = MakeBoxScene();
+  const std::string path = WriteScene(dir, scene, scene.project);
+  cv::Mat photo(scene.true_camera.height_px, scene.true_camera.width_px, CV_8UC3, cv::Scalar(40, 40, 220));
+  REQUIRE(cv::imwrite(dir / "synthetic.png", photo));
+  // On screen the help is there, and the detector sees it.
+  const nlohmann::json shown = RenderScript(dir, path, "window", "frames 3\n");
+  REQUIRE(shown.at("items").contains("viewport.help"));
+  const nlohmann::json& help = shown.at("items").at("viewport.help");
+  const cv::Rect help_rect(static_cast<int>(help.at("x").get<double>()), static_cast<int>(help.at("y").get<double>()),
+                           static_cast<int>(help.at("w").get<double>()), static_cast<int>(help.at("h").get<double>()));
+  const cv::Mat window = cv::imread(dir / "window.png");
+  REQUIRE(!window.empty());
+  const int on_screen = LightGreyPixels(window, help_rect);
+  CAPTURE(on_screen);
+  REQUIRE(on_screen > 100);
+  // The exported picture's bottom-left corner, where the help would be: no text.
+  constexpr int kW = 800, kH = 500;
+  const std::string figure = dir / "figure.png";
+  RenderScript(dir, path, "export",
+               "frames 3\ncommand export-view 3d " + std::to_string(kW) + "x" + std::to_string(kH) + " " + figure +
+                   "\nframes 2\n");
+  const cv::Mat exported = cv::imread(figure);
+  REQUIRE(exported.cols == kW);
+  REQUIRE(exported.rows == kH);
+  const int in_export =
+      LightGreyPixels(exported, cv::Rect(0, kH - help_rect.height - 12, help_rect.width + 12, help_rect.height + 12));
+  CAPTURE(in_export);
+  CHECK(in_export < 5);
+}
+
 TEST_CASE("Numbers window: K, R, t of the active camera, F of two photos, copied as text and LaTeX") {
   TempDir dir("teach_numbers");
   const SyntheticScene scene = MakeBoxScene();
