@@ -747,7 +747,8 @@ TEST_CASE("issue 25: File > Export view of the 3D panel leaves out the panel's h
   const int in_export =
       LightGreyPixels(exported, cv::Rect(0, kH - help_rect.height - 12, help_rect.width + 12, help_rect.height + 12));
   CAPTURE(in_export);
-  CHECK(in_export < 5);
+  // A tenth of the text's count at most: grid or model edges in that corner stay below it.
+  CHECK(in_export * 10 < on_screen);
 }
 
 TEST_CASE("Numbers window: K, R, t of the active camera, F of two photos, copied as text and LaTeX") {
