@@ -24,6 +24,7 @@
 #include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
 #include "app/state/model_pick.h"
+#include "app/state/teach.h"
 
 namespace facet::app {
 namespace {
@@ -34,6 +35,8 @@ constexpr double kCornerPickRadiusPx = 8.0;
 constexpr double kMinSegmentLengthPx = 3.0;  // shorter new segments are accidental clicks
 constexpr double kDragStartPx = 2.0;         // motion before a press becomes a drag
 constexpr int kImagePanelHover = 1;          // AppState::hover_panel
+// Lines of the vanishing overlay's text box the view leaves room for under the photo.
+constexpr int kVanishingTextLines = 6;
 
 // GL textures of one photo, and which pixels they were made from.
 struct CachedPhoto {
@@ -88,6 +91,8 @@ struct ImagePanelState::Impl {
   Id shown_tab = kNoId;
   Id context_segment = kNoId;
   bool fit_requested = false;
+  std::uint64_t document_generation = 0;  // AppState's, when the views were last started afresh
+  Id vanishing_view_image = kNoId;        // the image ShowVanishingConstruction last framed
   ImageViewReport report;
   // Fine pointing, Shift held during a press: ImGui reports whole screen pixels, so the
   // pointer then moves at 1 / magnification of the mouse's speed, continuing from where it
@@ -550,6 +555,18 @@ void StartLeftPress(AppState* state, PanelState* panel, const Image& image, cons
   if (tool == Tool::kSelect) state->selection = Selection();
 }
 
+// Whether `uv` (image px) is on the image's photo; logs why not.
+bool PinFitsPhoto(AppState* state, Id image_id, const Eigen::Vector2d& uv) {
+  const Image* image = state->document.project().FindImage(image_id);
+  if (image == nullptr) return false;
+  if (uv.x() >= 0.0 && uv.y() >= 0.0 && uv.x() <= image->width_px && uv.y() <= image->height_px) return true;
+  char text[200];
+  std::snprintf(text, sizeof(text), "Pin not placed: (%.1f, %.1f) is outside the %d x %d photo", uv.x(), uv.y(),
+                image->width_px, image->height_px);
+  state->Log(LogLevel::kWarning, text);
+  return false;
+}
+
 // `pointer_px_per_image_px`: screen px per image px of the pointer's motion (the zoom, times
 // the magnification in fine mode), so "too short" means what the user saw.
 void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& mouse_uv,
@@ -579,6 +596,15 @@ void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& 
       if (drag.press_line_pin != kNoId) SelectLinePin(state, drag.press_line_pin);
     }
   } else if (IsEditDrag(drag.kind)) {
+    const bool pins = drag.kind == DragKind::kPlacePin || drag.kind == DragKind::kMovePin;
+    const bool places = drag.began || (drag.kind == DragKind::kPlacePin && drag.place_on_click);
+    if (pins && places && !PinFitsPhoto(state, drag.image_id, mouse_uv + drag.grab_offset)) {
+      // A pin off the photo pins the vertex to nothing the photo shows: refused, and said so.
+      if (drag.began) CancelDrag(state);
+      if (drag.kind == DragKind::kPlacePin) state->selection.pin_id = kNoId;
+      drag = Interaction();
+      return;
+    }
     if (!drag.began && !drag.toggle_on_click.Empty()) {
       if (ElementExists(state->document.project(), drag.toggle_on_click)) {
         ToggleSelected(&state->selection, drag.toggle_on_click);
@@ -1028,10 +1054,11 @@ OverlayInput MakeOverlayInput(AppState* state, const PanelState& panel, const Im
 }
 
 // Step 8: the photo (or its placeholder), the overlays, the drag previews, a load error, the
-// loupe and the fine pointer, clipped to the view.
-void DrawViewContents(const AppState& state, const PanelState& panel, const ImageViewState& view, const Image& image,
-                      const OverlayInput& overlay, const ViewFrame& frame,
-                      const std::function<const TiledTexture*(Id)>& texture_of) {
+// loupe and the fine pointer, clipped to the view. Returns the top of the teach overlay's text
+// boxes (screen y; the view's bottom when there are none).
+float DrawViewContents(const AppState& state, const PanelState& panel, const ImageViewState& view, const Image& image,
+                       const OverlayInput& overlay, const ViewFrame& frame,
+                       const std::function<const TiledTexture*(Id)>& texture_of) {
   ImGuiIO& io = ImGui::GetIO();
   const ViewTransform transform = TransformOf(view);
   const Interaction& drag = panel.interaction;
@@ -1051,7 +1078,8 @@ void DrawViewContents(const AppState& state, const PanelState& panel, const Imag
                      IM_COL32(0, 0, 0, 255));
   DrawImageOverlays(draw_list, overlay, transform, rect_min, rect_max, panel.overlay);
   DrawCalibrationOverlay(draw_list, state, image, transform, rect_min, rect_max, frame.hovered ? &mouse_uv : nullptr);
-  DrawTeachImageOverlay(draw_list, state, image, transform, rect_min, rect_max, texture_of);
+  const float teach_text_top =
+      DrawTeachImageOverlay(draw_list, state, image, transform, rect_min, rect_max, texture_of);
   DrawLineProposals(draw_list, state, image.id, transform, rect_min, rect_max);
   if (drag.kind == DragKind::kNewSegment) {
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, IM_COL32(0, 0, 0, 200), 4.0f);
@@ -1085,6 +1113,7 @@ void DrawViewContents(const AppState& state, const PanelState& panel, const Imag
     }
   }
   draw_list->PopClipRect();
+  return teach_text_top;
 }
 
 // Step 9: the hover tooltip and the status line (pointer, zoom, hover, tool hint).
@@ -1108,6 +1137,25 @@ void DrawViewStatus(const AppState& state, const PanelState& panel, const ImageV
   }
 }
 
+// View > Teach > Vanishing points just turned on (or another photo shown with it on): the
+// view takes in the construction (the vanishing points, the circle, C'), which lies mostly
+// off the photo, with room under it for the overlay's text box. Once: the user zooms freely.
+void ShowVanishingConstruction(const AppState* state, PanelState* panel, ImageViewState* view, const Image& image,
+                               const ViewFrame& frame) {
+  if (!state->teach.vanishing_points) {
+    panel->vanishing_view_image = kNoId;
+    return;
+  }
+  if (panel->vanishing_view_image == image.id) return;
+  panel->vanishing_view_image = image.id;
+  const std::optional<TeachVanishing> teach = TeachVanishingFor(*state, image.id);
+  if (!teach) return;
+  Eigen::Vector2d lo, hi;
+  TeachVanishingExtent(*teach, frame.width_px, frame.height_px, &lo, &hi);
+  const float text_box_px = kVanishingTextLines * (ImGui::GetTextLineHeight() + 2.0f) + 24.0f;
+  FitImageViewToBox(view, lo, hi, frame.rect_min, frame.rect_size, text_box_px);
+}
+
 // One image's view for one frame, in the steps above.
 void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ImageViewState& view = panel->views[image.id];
@@ -1118,6 +1166,7 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   frame.width_px = frame.texture ? frame.texture->width : std::max(1, image.width_px);
   frame.height_px = frame.texture ? frame.texture->height : std::max(1, image.height_px);
   FitAndZoomView(panel, &view, frame, fit_now, one_to_one);
+  ShowVanishingConstruction(state, panel, &view, image, frame);
   if (panel->like_view && panel->like_view->image_id == image.id && panel->like_view->rect_w > 0.0f &&
       panel->like_view->rect_h > 0.0f) {
     // The other panel's view scaled about the canvas centres, all of it in view.
@@ -1153,8 +1202,12 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   const std::vector<ProjectedPrimitive> current_model = ProjectModel(shown, *current_image);
   OverlayInput overlay = MakeOverlayInput(state, *panel, *current_image, current_model, frame.hover);
   overlay.project = &shown;
-  DrawViewContents(*state, *panel, view, image, overlay, frame,
-                   [&](Id id) { return TextureFor(panel, *state, id); });  // teach mode's insets
+  const float teach_text_top = DrawViewContents(*state, *panel, view, image, overlay, frame,
+                                                [&](Id id) { return TextureFor(panel, *state, id); });  // insets
+  if (teach_text_top < frame.rect_max.y) {  // the teach overlay's text, for the report
+    state->item_rects["teach.text"] = {frame.rect_min.x, teach_text_top, frame.rect_size.x,
+                                       frame.rect_max.y - teach_text_top};
+  }
   DrawViewStatus(*state, *panel, view, frame);
 
   panel->report.image_id = image.id;
@@ -1171,6 +1224,14 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
 
 void DrawImagePanel(AppState* state, ImagePanelState* owner) {
   PanelState& panel = Panel(owner);
+  if (panel.document_generation != state->document_generation) {
+    // Another project: its images (whose ids start again) are shown fitted, not at the zoom
+    // and place the last project's image of the same id had.
+    panel.document_generation = state->document_generation;
+    panel.views.clear();
+    panel.interaction = Interaction();
+    panel.fine_active = false;
+  }
   CollectGarbage(&panel, *state);
   const Project& project = state->document.project();
   if (project.images.empty()) {

@@ -27,6 +27,23 @@ void FitImageView(ImageViewState* view, int width_px, int height_px, ImVec2 rect
   view->last_size = rect_size;
 }
 
+void FitImageViewToBox(ImageViewState* view, const Eigen::Vector2d& box_min_px, const Eigen::Vector2d& box_max_px,
+                       ImVec2 rect_min, ImVec2 rect_size, float reserve_bottom_px) {
+  const float usable_h = std::max(1.0f, rect_size.y - std::max(0.0f, reserve_bottom_px));
+  const float avail_w = std::max(1.0f, rect_size.x - 2.0f * kFitMarginPx);
+  const float avail_h = std::max(1.0f, usable_h - 2.0f * kFitMarginPx);
+  const Eigen::Vector2d size = (box_max_px - box_min_px).cwiseMax(1.0);
+  view->zoom = std::clamp(std::min(avail_w / static_cast<float>(size.x()), avail_h / static_cast<float>(size.y())),
+                          kMinImageZoom, kMaxImageZoom);
+  const Eigen::Vector2d box_centre = 0.5 * (box_min_px + box_max_px);
+  const ImVec2 centre(rect_min.x + 0.5f * rect_size.x, rect_min.y + 0.5f * usable_h);
+  view->origin = ImVec2(centre.x - view->zoom * static_cast<float>(box_centre.x()),
+                        centre.y - view->zoom * static_cast<float>(box_centre.y()));
+  view->fitted = false;
+  view->initialized = true;
+  view->last_size = rect_size;
+}
+
 void ZoomImageViewAbout(ImageViewState* view, float new_zoom, ImVec2 anchor) {
   new_zoom = std::clamp(new_zoom, kMinImageZoom, kMaxImageZoom);
   const float ratio = new_zoom / view->zoom;

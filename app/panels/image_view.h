@@ -35,6 +35,11 @@ inline ViewTransform TransformOf(const ImageViewState& view) { return ViewTransf
 // Centres a width_px x height_px image in the screen rectangle at the largest zoom that
 // leaves an 8 px margin; marks the view fitted.
 void FitImageView(ImageViewState* view, int width_px, int height_px, ImVec2 rect_min, ImVec2 rect_size);
+// Centres the image-px box [box_min_px, box_max_px] in the screen rectangle less
+// `reserve_bottom_px` at its bottom (kept free for a text box), at the largest zoom that
+// leaves an 8 px margin. The view is not marked fitted: a resize keeps it.
+void FitImageViewToBox(ImageViewState* view, const Eigen::Vector2d& box_min_px, const Eigen::Vector2d& box_max_px,
+                       ImVec2 rect_min, ImVec2 rect_size, float reserve_bottom_px);
 // Sets the zoom (clamped to [kMinImageZoom, kMaxImageZoom]) keeping the image point under
 // the screen point `anchor` where it is.
 void ZoomImageViewAbout(ImageViewState* view, float new_zoom, ImVec2 anchor);

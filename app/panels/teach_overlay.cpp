@@ -118,6 +118,7 @@ void Circle(ImDrawList* draw, const Screen& s, const Eigen::Vector2d& center_px,
 }
 
 const char* kAxisNames[3] = {"x", "y", "z"};
+constexpr int kExtensionAlpha = 90;  // the extended segments, faint
 
 void DrawVanishingConstruction(ImDrawList* draw, const AppState& state, const Image& image, const Screen& s,
                                float* text_y) {
@@ -128,22 +129,29 @@ void DrawVanishingConstruction(ImDrawList* draw, const AppState& state, const Im
     return;
   }
   const VanishingConstruction& c = teach->construction;
-  // Each family's segments extended to its own vanishing point.
-  for (const Segment& segment : state.document.project().segments) {
-    if (segment.image_id != image.id) continue;
-    const int a = static_cast<int>(segment.axis);
-    if (!c.present[a]) continue;
-    const Eigen::Vector2d undistorted_a = image.camera.UndistortPixel(segment.a_px);
-    const Eigen::Vector2d undistorted_b = image.camera.UndistortPixel(segment.b_px);
-    const ImU32 color = AxisColor(segment.axis, 150);
+  // Each family's longest segments extended to its own vanishing point, faintly (every one
+  // of a hundred-odd extensions hatched the photo and hid the construction).
+  const std::vector<Id> extended = TeachExtendedSegments(state, image.id, c);
+  int segments = 0;
+  for (const Segment& segment : state.document.project().segments)
+    segments += segment.image_id == image.id && c.present[static_cast<int>(segment.axis)] ? 1 : 0;
+  for (const Id id : extended) {
+    const Segment* segment = state.document.project().FindSegment(id);
+    const int a = static_cast<int>(segment->axis);
+    const Eigen::Vector2d undistorted_a = image.camera.UndistortPixel(segment->a_px);
+    const Eigen::Vector2d undistorted_b = image.camera.UndistortPixel(segment->b_px);
+    const ImU32 color = AxisColor(segment->axis, kExtensionAlpha);
     if (c.finite[a]) {
       const Eigen::Vector2d& v = c.points_px[a];
       const Eigen::Vector2d far_end =
           (undistorted_a - v).norm() > (undistorted_b - v).norm() ? undistorted_a : undistorted_b;
-      Line(draw, s, s(far_end), s(v), color, 1.0f);
+      DrawClippedScreenLine(draw, s(far_end), s(v), s.rect_min, s.rect_max, color, 1.0f);
     } else {
       const Eigen::Vector2d mid = 0.5 * (undistorted_a + undistorted_b);
-      InfiniteLine(draw, s, mid.homogeneous().cross(teach->vanishing_points_px[a]), color, 1.0f, false);
+      Eigen::Vector2d p, q;
+      if (ImageLineAcrossView(s.view, mid.homogeneous().cross(teach->vanishing_points_px[a]), s.rect_min, s.rect_max,
+                              &p, &q))
+        DrawClippedScreenLine(draw, p, q, s.rect_min, s.rect_max, color, 1.0f);
     }
   }
   if (!c.horizon.isZero()) {
@@ -163,9 +171,7 @@ void DrawVanishingConstruction(ImDrawList* draw, const AppState& state, const Im
     for (int k = 0; k < 3; ++k) Line(draw, s, s(c.points_px[k]), s(c.altitude_feet_px[k]), kAltitudeColor, 1.0f, true);
   }
   // The focal construction on the pair with the smallest circle (the one most likely in view).
-  const FocalConstruction* shown = nullptr;
-  for (const FocalConstruction& f : c.focal_constructions)
-    if (f.valid && (shown == nullptr || f.circle_radius_px < shown->circle_radius_px)) shown = &f;
+  const FocalConstruction* shown = ShownFocalConstruction(c);
   const Eigen::Vector2d& p = c.principal_point_px;
   if (shown != nullptr) {
     const FocalConstruction& f = *shown;
@@ -212,6 +218,10 @@ void DrawVanishingConstruction(ImDrawList* draw, const AppState& state, const Im
   const ImU32 white = IM_COL32(255, 255, 255, 240), dim = IM_COL32(200, 200, 200, 230);
   lines.push_back({white, std::string("Vanishing points: ") + VanishingConstructionKindName(c.kind) +
                               " (each family's own fit, 95 % ellipses)"});
+  if (static_cast<int>(extended.size()) < segments)
+    lines.push_back({dim, "extended to their points: each family's " + std::to_string(kTeachExtensionsPerFamily) +
+                              " longest segments (" + std::to_string(extended.size()) + " of " +
+                              std::to_string(segments) + ")"});
   if (c.focal_px > 0.0)
     lines.push_back(
         {kConstructionColor, std::string("construction: f = ") + FormatNumber(c.focal_px, 6) + " px" +
@@ -548,9 +558,10 @@ void Plot(const char* label, const std::vector<double>& values, const std::strin
 
 }  // namespace
 
-void DrawTeachImageOverlay(ImDrawList* draw_list, const AppState& state, const Image& image, const ViewTransform& view,
-                           ImVec2 clip_min, ImVec2 clip_max, const std::function<const TiledTexture*(Id)>& texture_of) {
-  if (!state.teach.vanishing_points && !state.teach.epipolar && !state.teach.solver_steps) return;
+float DrawTeachImageOverlay(ImDrawList* draw_list, const AppState& state, const Image& image, const ViewTransform& view,
+                            ImVec2 clip_min, ImVec2 clip_max,
+                            const std::function<const TiledTexture*(Id)>& texture_of) {
+  if (!state.teach.vanishing_points && !state.teach.epipolar && !state.teach.solver_steps) return clip_max.y;
   draw_list->PushClipRect(clip_min, clip_max, true);
   const Screen s{view, Eigen::Vector2d(clip_min.x, clip_min.y), Eigen::Vector2d(clip_max.x, clip_max.y)};
   float text_y = clip_max.y - 8.0f;
@@ -564,6 +575,8 @@ void DrawTeachImageOverlay(ImDrawList* draw_list, const AppState& state, const I
   if (state.teach.vanishing_points) DrawVanishingConstruction(draw_list, state, image, s, &text_y);
   if (state.teach.epipolar) DrawEpipolar(draw_list, state, image, s, &text_y, texture_of);
   draw_list->PopClipRect();
+  // TextBox leaves text_y 6 px above the top box.
+  return text_y < clip_max.y - 8.0f ? text_y + 6.0f : clip_max.y;
 }
 
 void DrawTeachViewportOverlay(ImDrawList* draw_list, const AppState& state, double length,

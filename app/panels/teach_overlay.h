@@ -16,9 +16,10 @@ namespace facet::app {
 
 // Over `image` in the screen rectangle [clip_min, clip_max] of the image panel, after the
 // other overlays. `texture_of` gives another image's photo texture (or null) for the insets
-// that show the pointer's epipolar lines in the other photos.
-void DrawTeachImageOverlay(ImDrawList* draw_list, const AppState& state, const Image& image, const ViewTransform& view,
-                           ImVec2 clip_min, ImVec2 clip_max, const std::function<const TiledTexture*(Id)>& texture_of);
+// that show the pointer's epipolar lines in the other photos. Returns the top of its text
+// boxes (screen y), which stack up from the rectangle's bottom; clip_max.y when it drew none.
+float DrawTeachImageOverlay(ImDrawList* draw_list, const AppState& state, const Image& image, const ViewTransform& view,
+                            ImVec2 clip_min, ImVec2 clip_max, const std::function<const TiledTexture*(Id)>& texture_of);
 
 // In the 3D panel: each calibrated image's vanishing directions as rays from its camera
 // centre, `length` world units long; the rays of the epipolar overlay (DrawTeachRays); a note

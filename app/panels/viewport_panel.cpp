@@ -166,10 +166,11 @@ struct SceneMeasure {
 // Everything the panel keeps between frames: this panel's own view state (the document and
 // the selection stay in AppState).
 struct ViewportPanelState::Impl {
+  bool picture_only = false;  // ShowViewportPictureOnly
   GlResources gl;
   OrbitCamera orbit;
   bool framed_once = false;
-  std::string framed_project_path;
+  std::uint64_t framed_generation = 0;  // AppState::document_generation when last framed
   bool had_content = false;
   // What the view last framed (automatically or by the user's Frame), and whether the
   // project had primitives then: a large change of the model reframes (NeedsReframe).
@@ -938,8 +939,15 @@ void DrawToolbar(AppState* state, PanelState* panel, const SceneMeasure& measure
   }
 }
 
+// Where DrawOverlay put its texts (screen px; empty when not drawn), for the item report.
+struct OverlayTextRects {
+  Rect help;         // counts and mouse help, bottom left
+  Rect bake_status;  // "baking texture...", right above the help
+  Rect tool_hint;    // the Move tool's hint, above those
+};
+
 void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup& view, ImVec2 origin, ImVec2 size,
-                 ImVec2 view_scale) {
+                 ImVec2 view_scale, OverlayTextRects* text_rects) {
   ImDrawList* draw = ImGui::GetWindowDrawList();
   draw->PushClipRect(origin, ImVec2(origin.x + size.x, origin.y + size.y), true);
   const Project& project = ShownProject(state);
@@ -1003,6 +1011,10 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
     }
   }
 
+  if (panel.picture_only) {  // File > Export view: the model, not the UI's help
+    draw->PopClipRect();
+    return;
+  }
   // Help and counts in the bottom-left corner.
   char counts[128];
   std::snprintf(counts, sizeof(counts), "%zu vertices \xc2\xb7 %zu triangles", state.mesh.positions.size(),
@@ -1016,14 +1028,26 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
   draw->AddRectFilled(box_min, box_max, IM_COL32(0, 0, 0, 110), 3.0f);
   draw->AddText(ImVec2(box_min.x + 4.0f, box_min.y + 2.0f), IM_COL32(230, 230, 230, 230), counts);
   draw->AddText(ImVec2(box_min.x + 4.0f, box_min.y + 2.0f + line_h + 2.0f), IM_COL32(200, 200, 200, 200), kHelpText);
+  text_rects->help = {box_min.x, box_min.y, box_max.x - box_min.x, box_max.y - box_min.y};
 
+  // Status lines stack upwards from the help box, each in its own row, so none covers another.
+  float row_bottom = box_min.y - 2.0f;
+  auto draw_row = [&](const char* text, ImU32 color, ImU32 background) {
+    const ImVec2 text_size = ImGui::CalcTextSize(text);
+    const ImVec2 row_min(box_min.x, row_bottom - line_h - 6.0f);
+    const ImVec2 row_max(row_min.x + text_size.x + 8.0f, row_bottom);
+    draw->AddRectFilled(row_min, row_max, background, 3.0f);
+    draw->AddText(ImVec2(row_min.x + 4.0f, row_min.y + 3.0f), color, text);
+    row_bottom = row_min.y - 2.0f;
+    return Rect{row_min.x, row_min.y, row_max.x - row_min.x, row_max.y - row_min.y};
+  };
+  // The texture catching up with an edit in the background.
+  if (BakeInFlight(state)) {
+    text_rects->bake_status = draw_row("baking texture...", IM_COL32(200, 200, 200, 230), IM_COL32(0, 0, 0, 110));
+  }
   if (state.tool == Tool::kMove) {  // the Move tool's help, or what the drag did
     const std::string hint = MoveToolHint(panel.move_drag);
-    const ImVec2 hint_min(box_min.x, box_min.y - line_h - 8.0f);
-    const ImVec2 hint_size = ImGui::CalcTextSize(hint.c_str());
-    draw->AddRectFilled(hint_min, ImVec2(hint_min.x + hint_size.x + 8.0f, box_min.y - 2.0f), IM_COL32(0, 0, 0, 140),
-                        3.0f);
-    draw->AddText(ImVec2(hint_min.x + 4.0f, hint_min.y + 2.0f), IM_COL32(255, 210, 60, 255), hint.c_str());
+    text_rects->tool_hint = draw_row(hint.c_str(), IM_COL32(255, 210, 60, 255), IM_COL32(0, 0, 0, 140));
   }
   if (panel.orbit.photo_image_id != kNoId) {
     if (const Image* image = project.FindImage(panel.orbit.photo_image_id)) {
@@ -1058,11 +1082,16 @@ void FollowProject(const AppState& state, PanelState* panel, const SceneMeasure&
   // looking through a photo; otherwise the user's own orbit stays.
   const bool large_edit = !state.drag_start && ((has_primitives && !panel->had_primitives) ||
                                                 (has_primitives && NeedsReframe(panel->framed_bounds, measure.frame_bounds)));
-  if (!panel->framed_once || panel->framed_project_path != state.project_path ||
-      (has_content && !panel->had_content) || large_edit) {
+  const bool new_document = !panel->framed_once || panel->framed_generation != state.document_generation;
+  if (new_document) {
+    // Another project: the default orbit direction, out of any photo view (its image ids
+    // start again), framed on the new model.
+    panel->orbit = OrbitCamera();
+  }
+  if (new_document || (has_content && !panel->had_content) || large_edit) {
     if (panel->orbit.photo_image_id == kNoId) OrbitFrame(&panel->orbit, measure.frame_bounds, width_px, height_px);
     panel->framed_once = true;
-    panel->framed_project_path = state.project_path;
+    panel->framed_generation = state.document_generation;
     panel->framed_bounds = measure.frame_bounds;
   }
   panel->had_content = has_content;
@@ -1271,7 +1300,11 @@ void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
   ImGui::GetWindowDrawList()->AddImage(ToImTexture(gl.target.color_texture()), frame.origin,
                                        ImVec2(frame.origin.x + size.x, frame.origin.y + size.y), ImVec2(0, 1),
                                        ImVec2(1, 0));
-  DrawOverlay(*state, panel, view, frame.origin, size, ImVec2(scale_x, scale_y));
+  OverlayTextRects text_rects;
+  DrawOverlay(*state, panel, view, frame.origin, size, ImVec2(scale_x, scale_y), &text_rects);
+  if (text_rects.help.w > 0.0f) state->item_rects["viewport.help"] = text_rects.help;
+  if (text_rects.bake_status.w > 0.0f) state->item_rects["viewport.bake_status"] = text_rects.bake_status;
+  if (text_rects.tool_hint.w > 0.0f) state->item_rects["viewport.tool_hint"] = text_rects.tool_hint;
   if (state->texture.show_sources) {
     ImDrawList* draw = ImGui::GetWindowDrawList();
     draw->PushClipRect(frame.origin, ImVec2(frame.origin.x + size.x, frame.origin.y + size.y), true);
@@ -1293,13 +1326,15 @@ void DrawViewportPanel(AppState* state, ViewportPanelState* owner) {
 
 void RequestViewportFrame(ViewportPanelState* panel) { Panel(panel).frame_requested = true; }
 
+void ShowViewportPictureOnly(ViewportPanelState* panel) { Panel(panel).picture_only = true; }
+
 void CopyViewportView(const ViewportPanelState& from, ViewportPanelState* to) {
   PanelState& out = Panel(to);
   if (!from.impl) return;
   const PanelState& in = *from.impl;
   out.orbit = in.orbit;
   out.framed_once = in.framed_once;
-  out.framed_project_path = in.framed_project_path;
+  out.framed_generation = in.framed_generation;
   out.had_content = in.had_content;
   out.framed_bounds = in.framed_bounds;
   out.had_primitives = in.had_primitives;

@@ -28,6 +28,9 @@ struct ViewportPanelState {
 // projected box corner picks it, a click on a box face picks the box, elsewhere clears both).
 // Mouse and the F key act only while the panel is hovered or being dragged.
 void DrawViewportPanel(AppState* state, ViewportPanelState* panel);
+// From now on the panel draws the picture alone, without the UI's help, counts and tool
+// hints over it (File > Export view's panel).
+void ShowViewportPictureOnly(ViewportPanelState* panel);
 // The last frame's view, for the render report and tests: a world point X shows at panel
 // pixel ((ndc.x + 1) / 2 * width_px, (1 - ndc.y) / 2 * height_px) with ndc = clip_from_world X
 // (divided by w), i.e. at screen (origin + that / framebuffer scale).

@@ -12,6 +12,7 @@
 
 #include <imgui.h>
 #include <imgui_impl_opengl3.h>
+#include <imgui_internal.h>  // ImTextCharFromUtf8: a script's typed text, one character at a time
 #include <nlohmann/json.hpp>
 
 #include "app/panels/image_panel.h"
@@ -22,6 +23,7 @@
 #include "app/shell/file_actions.h"
 #include "app/shell/frame.h"
 #include "app/shell/glfw_window.h"
+#include "app/shell/input_feed.h"
 #include "app/shell/layout.h"
 #include "app/shell/teach_report.h"
 #include "app/state/app_state.h"
@@ -62,47 +64,67 @@ void SetGlfwKeyMap(ImGuiIO& io) {
   io.KeyMap[ImGuiKey_Z] = GLFW_KEY_Z;
 }
 
-// The synthetic input device of the offscreen mode.
+// The synthetic input device of the offscreen mode: each step's events go through the same
+// queue as the window's (app/state/input_queue.h), stamped with the step's frame time.
 struct ScriptedInput {
-  float mouse_x = -FLT_MAX, mouse_y = -FLT_MAX;  // no mouse until the script moves it
-  bool mouse_down[3] = {false, false, false};
+  InputQueue* queue = nullptr;
   bool hold_shift = false, hold_ctrl = false, hold_alt = false;
-  int key_down = -1;
+  bool shift_down = false, ctrl_down = false, alt_down = false;  // as queued
+  int key_down = -1;  // the previous step's key, released at the start of the next step
 
-  void Apply(const ScriptStep* step, ImGuiIO& io) {
-    if (key_down >= 0) io.KeysDown[key_down] = false;
+  void SetModifier(double t, int key, bool want, bool* down) {
+    if (want != *down) queue->Key(t, key, want);
+    *down = want;
+  }
+  void SetModifiers(double t, bool shift, bool ctrl, bool alt) {
+    SetModifier(t, GLFW_KEY_LEFT_SHIFT, shift, &shift_down);
+    SetModifier(t, GLFW_KEY_LEFT_CONTROL, ctrl, &ctrl_down);
+    SetModifier(t, GLFW_KEY_LEFT_ALT, alt, &alt_down);
+  }
+
+  // Queues what the platform would deliver during the step's frame at time `t`.
+  void Push(const ScriptStep* step, double t) {
+    if (key_down >= 0) queue->Key(t, key_down, false);
     key_down = -1;
-    io.MouseWheel = 0.0f;
     ScriptKey key;
     if (step) {
-      if (step->mouse_pos) {
-        mouse_x = (*step->mouse_pos)[0];
-        mouse_y = (*step->mouse_pos)[1];
-      }
+      const bool release_first = step->burst == Burst::kReleaseThenMove;
+      if (release_first) queue->MouseButton(t, step->burst_button, false);
+      if (step->mouse_pos) queue->MouseMove(t, (*step->mouse_pos)[0], (*step->mouse_pos)[1]);
       for (int b = 0; b < 3; ++b) {
-        if (step->mouse_down[b]) mouse_down[b] = *step->mouse_down[b];
+        if (step->mouse_down[b]) queue->MouseButton(t, b, *step->mouse_down[b]);
+      }
+      if (step->burst == Burst::kDoubleClick) {
+        for (bool down : {true, false, true, false}) queue->MouseButton(t, step->burst_button, down);
       }
       if (step->hold_shift) hold_shift = *step->hold_shift;
       if (step->hold_ctrl) hold_ctrl = *step->hold_ctrl;
       if (step->hold_alt) hold_alt = *step->hold_alt;
-      io.MouseWheel = step->wheel;
-      if (step->key_press) {
-        key = *step->key_press;
-        key_down = key.key_code;
-        io.KeysDown[key_down] = true;
-        if (key.character) io.AddInputCharacter(key.character);
-      }
-      if (!step->text.empty()) io.AddInputCharactersUTF8(step->text.c_str());
+      if (step->wheel != 0.0f) queue->Wheel(t, 0.0f, step->wheel);
+      if (step->key_press) key = *step->key_press;
     }
-    io.MousePos = ImVec2(mouse_x, mouse_y);
-    for (int b = 0; b < 3; ++b) io.MouseDown[b] = mouse_down[b];
-    io.KeyShift = hold_shift || key.shift;
-    io.KeyCtrl = hold_ctrl || key.ctrl;
-    io.KeyAlt = hold_alt || key.alt;
-    io.KeySuper = false;
-    io.KeysDown[GLFW_KEY_LEFT_SHIFT] = io.KeyShift;
-    io.KeysDown[GLFW_KEY_LEFT_CONTROL] = io.KeyCtrl;
-    io.KeysDown[GLFW_KEY_LEFT_ALT] = io.KeyAlt;
+    SetModifiers(t, hold_shift || key.shift, hold_ctrl || key.ctrl, hold_alt || key.alt);
+    if (step && step->key_press) {
+      queue->Key(t, key.key_code, true);
+      if (key.character) queue->Char(t, key.character);
+      if (step->burst == Burst::kTap) {
+        queue->Key(t, key.key_code, false);
+        SetModifiers(t, hold_shift, hold_ctrl, hold_alt);
+      } else {
+        key_down = key.key_code;
+      }
+    }
+    if (step) {
+      const char* text = step->text.c_str();
+      const char* end = text + step->text.size();
+      while (text < end) {
+        unsigned c = 0;
+        const int length = ImTextCharFromUtf8(&c, text, end);
+        if (length <= 0) break;
+        text += length;
+        if (c) queue->Char(t, c);
+      }
+    }
   }
 };
 
@@ -271,6 +293,7 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
                               {"last_image_id", lines.last_image_id},
                               {"last_frames_in_flight", lines.last_frames_in_flight},
                               {"last_start_ms", lines.last_start_ms}};
+  report["detect_lines_on_add"] = state.detect_lines_on_add;
   report["line_proposals"] = {{"image_id", state.line_proposals ? state.line_proposals->image_id : kNoId},
                               {"count", state.line_proposals ? state.line_proposals->segments.size() : 0}};
   report["selection"] = {{"segment_id", state.selection.segment_id},
@@ -341,7 +364,8 @@ bool StepNeedsLineDetection(const ScriptStep& step) {
   const bool presses = std::any_of(step.mouse_down.begin(), step.mouse_down.end(),
                                    [](const std::optional<bool>& down) { return down.value_or(false); });
   return presses || step.key_press || !step.text.empty() || !step.dropped_paths.empty() ||
-         !step.screenshot_path.empty();
+         !step.screenshot_path.empty() || step.burst != Burst::kNone ||
+         (step.mouse_pos && step.mouse_space == PointSpace::kItem);
 }
 
 int Fail(const std::string& message) {
@@ -362,15 +386,11 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
   SetGlfwKeyMap(io);
 
   ScriptedInput input;
+  input.queue = &shell->input_queue;
   std::array<float, 2> drag_anchor{0.0f, 0.0f};  // screen position where the current drag began
   int frame = 0;
   // One frame: input, app command, UI, render into the target, optional screenshot.
-  auto run_frame = [&](const ScriptStep* step) -> bool {
-    // A line detection on its worker is waited for before a step whose outcome may depend on
-    // the proposals (a click or key on them, a picture of them), so a script acts the same
-    // however fast the worker is; between such steps the frames go on while it runs, as in
-    // the GUI. `lines` commands wait by themselves (app/state/line_proposals.h).
-    if (step && StepNeedsLineDetection(*step)) CollectLineDetection(state, /*wait=*/true);
+  auto draw_frame = [&](const ScriptStep* step) -> bool {
     ScriptStep resolved;
     if (step && step->mouse_pos) {
       resolved = *step;
@@ -389,7 +409,10 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
       resolved.mouse_space = PointSpace::kScreen;
       step = &resolved;
     }
-    input.Apply(step, io);
+    // The frame's time on the queue's clock: each frame one step of the fixed clock later.
+    const double input_time_s = (frame + 1) * kFrameTimeS;
+    input.Push(step, input_time_s);
+    ApplyInputFrame(shell->input_queue.NextFrame(input_time_s), &io);
     if (step && !step->dropped_paths.empty()) shell->dropped_paths = step->dropped_paths;
     if (step && !step->command.empty()) {
       std::string command_error;
@@ -421,6 +444,20 @@ int RenderWithContext(const RenderOptions& options, AppState* state, ShellState*
       return false;
     }
     return true;
+  };
+
+  // A line detection on its worker is waited for before a step whose outcome may depend on
+  // the proposals (a click or key on them, a picture of them, a point on one of their
+  // widgets), so a script acts the same however fast the worker is; between such steps the
+  // frames go on while it runs, as in the GUI. When the wait brought the proposals, one frame
+  // draws them first, so that `item image.accept_lines` finds its button. `lines` commands
+  // wait by themselves (app/state/line_proposals.h).
+  auto run_frame = [&](const ScriptStep* step) -> bool {
+    if (step && StepNeedsLineDetection(*step) && LineDetectionInFlight(*state)) {
+      CollectLineDetection(state, /*wait=*/true);
+      if (!draw_frame(nullptr)) return false;
+    }
+    return draw_frame(step);
   };
 
   bool ok = true;

@@ -106,6 +106,7 @@ std::string ExportView(AppState* state, ShellState* shell, const ExportViewReque
     shell->export_image_panel = &image_panel;
   } else {
     CopyViewportView(shell->viewport_panel, &viewport_panel);
+    ShowViewportPictureOnly(&viewport_panel);  // the model, not "drag: orbit ..."
     shell->export_viewport_panel = &viewport_panel;
   }
   // The panel's bars (tabs, toolbar, status line) are measured in the first frame; the window

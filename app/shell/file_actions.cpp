@@ -1,7 +1,10 @@
 #include "app/shell/file_actions.h"
 
+#include <algorithm>
 #include <cctype>
+#include <cstdlib>
 #include <filesystem>
+#include <utility>
 
 #include <imgui.h>
 
@@ -41,26 +44,55 @@ std::string ProjectFolder(const AppState& state) {
   return state.project_path.empty() ? std::string() : ParentFolder(NormalizePath("", state.project_path));
 }
 
+// The bundled samples (the source tree's assets/samples, an install's share/facet/samples):
+// where the app's first project comes from, never where the user's own files should go.
+bool IsBundledSampleFolder(const std::string& folder) {
+  std::error_code ec;
+  const fs::path canonical = fs::weakly_canonical(folder, ec);
+  if (ec) return false;
+  std::vector<fs::path> roots = {fs::path(FACET_SOURCE_DIR) / "assets/samples"};
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) roots.push_back(exe.parent_path() / "../share/facet/samples");
+  for (const fs::path& root : roots) {
+    const fs::path r = fs::weakly_canonical(root, ec);
+    if (ec) continue;
+    const auto [root_end, folder_it] = std::mismatch(r.begin(), r.end(), canonical.begin(), canonical.end());
+    if (root_end == r.end()) return true;
+  }
+  return false;
+}
+
+std::string HomeFolder() {
+  const char* home = std::getenv("HOME");
+  std::error_code ec;
+  return home && *home ? std::string(home) : fs::current_path(ec).string();
+}
+
 std::string StartFolder(const AppState& state, const ShellState& shell, BrowsePurpose purpose) {
   std::error_code ec;
-  auto usable = [&](const std::string& folder) { return !folder.empty() && fs::is_directory(folder, ec); };
-  // Saving and exporting go next to the project; opening and adding photos where the last
-  // file of that kind came from.
+  const bool writes = purpose == BrowsePurpose::kSaveProject || purpose == BrowsePurpose::kExport ||
+                      purpose == BrowsePurpose::kExportView;
+  // Files written never go into the bundled sample's folder unless the user goes there.
+  auto usable = [&](const std::string& folder) {
+    return !folder.empty() && fs::is_directory(folder, ec) && !(writes && IsBundledSampleFolder(folder));
+  };
+  // Saving and exporting go next to the project, else where the user last wrote that kind of
+  // file or last went, else home; opening and adding photos where the last file of that
+  // kind came from.
   std::vector<std::string> candidates;
   const std::vector<std::string> same_kind = RecentFilesWith(shell.recent_files, PurposeExtensions(purpose));
-  if (purpose == BrowsePurpose::kSaveProject || purpose == BrowsePurpose::kExport ||
-      purpose == BrowsePurpose::kExportView) {
+  if (writes) {
     candidates.push_back(ProjectFolder(state));
-    if (!same_kind.empty()) candidates.push_back(ParentFolder(same_kind.front()));
+    for (const std::string& file : same_kind) candidates.push_back(ParentFolder(file));
   } else {
     if (!same_kind.empty()) candidates.push_back(ParentFolder(same_kind.front()));
     candidates.push_back(ProjectFolder(state));
   }
-  if (!shell.recent_files.folders.empty()) candidates.push_back(shell.recent_files.folders.front());
+  for (const std::string& folder : shell.recent_files.folders) candidates.push_back(folder);
   for (const std::string& folder : candidates) {
     if (usable(folder)) return folder;
   }
-  return fs::current_path(ec).string();
+  return writes ? HomeFolder() : fs::current_path(ec).string();
 }
 
 void CloseBrowser(ShellState* shell) {
@@ -97,6 +129,7 @@ void OpenFileBrowser(AppState* state, ShellState* shell, Dialog dialog, const st
 void DrawFileBrowser(AppState* state, ShellState* shell) {
   const FileDialogResult result = DrawFileDialog(state, &shell->file_dialog, shell->recent_files, state->time_s);
   if (result.outcome == FileDialogOutcome::kCancelled) {
+    shell->after_save = Dialog::kNone;  // the question's quit, new or open is off too
     CloseBrowser(shell);
     return;
   }
@@ -110,7 +143,10 @@ void DrawFileBrowser(AppState* state, ShellState* shell) {
   std::string error;
   if (RunAppCommand(state, shell, CommandOf(purpose), {result.path}, &error)) {
     CloseBrowser(shell);
-    if (purpose == BrowsePurpose::kSaveProject && shell->quit_after_save) shell->quit_now = true;
+    if (purpose == BrowsePurpose::kSaveProject && shell->after_save != Dialog::kNone) {
+      const Dialog question = std::exchange(shell->after_save, Dialog::kNone);
+      ProceedAfterConfirm(state, shell, question, shell->after_save_path);
+    }
   } else {
     shell->file_dialog.error = error;
   }

@@ -14,10 +14,12 @@
 
 namespace facet::app {
 
-// Opens the browser as `dialog` (kOpen, kSaveAs, kExport or kAddPhoto). It starts in the
-// folder of the last file of the same kind, else the project's folder, else the last folder
-// used, else the working directory. `name` is proposed for writing (Save as: the project's
-// file name when empty).
+// Opens the browser as `dialog` (kOpen, kSaveAs, kExport or kAddPhoto). Open and Add photo
+// start in the folder of the last file of the same kind, else the project's folder, else the
+// last folder used, else the working directory. Save and Export start in the project's
+// folder, else the folder of the last file of that kind, else the last folder used, else
+// home; never in the bundled sample's folder. `name` is proposed for writing (Save as: the
+// project's file name when empty).
 void OpenFileBrowser(AppState* state, ShellState* shell, Dialog dialog, const std::string& name = {});
 
 // Draws the browser into the open modal popup and, once a file is chosen, runs the open,

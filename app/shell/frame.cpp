@@ -81,6 +81,12 @@ bool WriteBakeStatus(const AppState& state, const std::string& path, std::string
       {"uvs_fnv", FingerprintHex(mesh.uvs)},
       {"positions_fnv", FingerprintHex(mesh.positions)},
   };
+  // The 3D panel's overlay texts as the last frame drew them (the status while it bakes).
+  nlohmann::json texts = nlohmann::json::object();
+  for (const auto& [name, r] : state.item_rects) {
+    if (name.rfind("viewport.", 0) == 0) texts[name] = {{"x", r.x}, {"y", r.y}, {"w", r.w}, {"h", r.h}};
+  }
+  status["viewport_texts"] = std::move(texts);
   const std::string write_error =
       WriteFileAtomically(path, status.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   if (!write_error.empty()) {
@@ -393,6 +399,7 @@ void DrawPathDialog(AppState* state, ShellState* shell) {
   if (d == Dialog::kAddPhoto) {
     ImGui::TextColored(kDimText, "A JPEG, PNG or TIFF photo; its EXIF focal length becomes a prior");
     ImGui::Checkbox("Detect lines (proposals to accept in the image panel)", &state->detect_lines_on_add);
+    RecordItem(state, "add_photo.detect_lines");
   }
   if (d == Dialog::kExport) ImGui::TextColored(kDimText, "The extension chooses the format: .glb (glTF) or .obj");
   if (d == Dialog::kAddReference)
@@ -501,31 +508,27 @@ void DrawDialogs(AppState* state, ShellState* shell) {
       ImGui::TextColored(kDimText, d == Dialog::kConfirmQuit ? "Save them before quitting?" : "Save them first?");
       ImGui::Spacing();
       const std::string pending_path = shell->dialog_path;
-      auto proceed = [&]() {
-        if (d == Dialog::kConfirmQuit) {
-          shell->quit_now = true;
-        } else if (d == Dialog::kConfirmNew) {
-          NewProject(state);
-        } else {
-          std::string error;
-          RunAppCommand(state, shell, "open", {pending_path}, &error);
-        }
-      };
-      if (ImGui::Button("Save", ImVec2(110, 0))) {
+      auto proceed = [&]() { ProceedAfterConfirm(state, shell, d, pending_path); };
+      const bool save = ImGui::Button("Save", ImVec2(110, 0));
+      RecordItem(state, "confirm.save");
+      if (save) {
         if (SaveNeedsName(*state)) {
           CloseDialog(shell);
-          shell->quit_after_save = d == Dialog::kConfirmQuit;
           OpenFileBrowser(state, shell, Dialog::kSaveAs);
+          shell->after_save = d;  // the question's answer follows the save
+          shell->after_save_path = pending_path;
           break;
         }
+        CloseDialog(shell);  // first: what follows may open a dialog of its own (recovery)
         if (SaveProjectAs(state, "")) proceed();
-        CloseDialog(shell);
         break;
       }
       ImGui::SameLine();
-      if (ImGui::Button("Discard", ImVec2(110, 0))) {
-        proceed();
+      const bool discard = ImGui::Button("Discard", ImVec2(110, 0));
+      RecordItem(state, "confirm.discard");
+      if (discard) {
         CloseDialog(shell);
+        proceed();
         break;
       }
       ImGui::SameLine();
@@ -617,6 +620,18 @@ bool RunSelectCommand(AppState* state, const std::string& arg, std::string* erro
 }
 
 }  // namespace
+
+void ProceedAfterConfirm(AppState* state, ShellState* shell, Dialog question, const std::string& path) {
+  if (question == Dialog::kConfirmQuit) {
+    shell->quit_now = true;
+  } else if (question == Dialog::kConfirmNew) {
+    std::string error;
+    RunAppCommand(state, shell, "new", {}, &error);
+  } else if (question == Dialog::kConfirmOpen) {
+    std::string error;
+    RunAppCommand(state, shell, "open", {path}, &error);  // a failure is in the log
+  }
+}
 
 void OpenDialog(ShellState* shell, Dialog dialog, std::string path) {
   shell->dialog = dialog;
@@ -1081,15 +1096,6 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
     }
   }
   if (!ImGui::GetIO().MouseDown[0]) shell->tearing_panel = -1;
-
-  // The texture catches up with an edit in the background: say so over the 3D panel.
-  const int viewport = static_cast<int>(PanelId::kViewport);
-  if (BakeInFlight(*state) && shell->panel_drawn[viewport] && shell->dialog == Dialog::kNone) {
-    const Rect& r = shell->panel_rects[viewport];
-    const float line = ImGui::GetTextLineHeightWithSpacing();
-    ImGui::GetForegroundDrawList()->AddText(ImVec2(r.x + 8.0f, r.y + r.h - line - 6.0f), ImGui::GetColorU32(kDimText),
-                                            "baking texture...");
-  }
 
   DrawTeachNumbersWindow(state);  // View > Teach > Numbers
   DrawTeachStepsWindow(state);    // View > Teach > Solver steps

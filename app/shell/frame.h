@@ -16,6 +16,7 @@
 #include "app/panels/viewport_panel.h"
 #include "app/shell/layout.h"
 #include "app/state/app_state.h"
+#include "app/state/input_queue.h"
 
 namespace facet::app {
 
@@ -69,11 +70,18 @@ struct ShellState {
   // Paths dropped onto the window (GLFW) or by the script's `drop`, handled at the start of
   // the next frame (HandleDroppedFiles).
   std::vector<std::string> dropped_paths;
+  // The window's input events (GLFW callbacks) or the script's, taken by each frame in turn
+  // (app/state/input_queue.h), so that none is lost when a frame is slow.
+  InputQueue input_queue;
 
   // Set when the user confirmed quitting (or there was nothing to save); the platform loop
   // then exits.
   bool quit_now = false;
-  bool quit_after_save = false;  // the Save As dialog was opened by the quit confirmation
+  // The unsaved-changes question (kConfirmQuit, kConfirmNew, kConfirmOpen) whose Save opened
+  // the Save As dialog: once that save succeeds, its quit, new project or open (of
+  // after_save_path) follows. kNone: a plain Save As.
+  Dialog after_save = Dialog::kNone;
+  std::string after_save_path;
 
   // Splitter and tear-off interaction.
   int active_splitter = -1;  // index into the last TiledLayout's splitters
@@ -118,6 +126,10 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
 
 // Opens a modal dialog; `path` is the project a kConfirmOpen is about.
 void OpenDialog(ShellState* shell, Dialog dialog, std::string path = {});
+
+// What an answered unsaved-changes question (kConfirmQuit, kConfirmNew, kConfirmOpen)
+// leads to once the changes are saved or discarded: quit, a new project, or opening `path`.
+void ProceedAfterConfirm(AppState* state, ShellState* shell, Dialog question, const std::string& path);
 
 // Asks to quit: quits at once when nothing is unsaved, else opens the confirmation dialog.
 void RequestQuit(AppState* state, ShellState* shell);

@@ -6,6 +6,7 @@
 #include <GLFW/glfw3.h>
 
 #include <algorithm>
+#include <cfloat>
 #include <cstdio>
 #include <cstdlib>
 
@@ -16,6 +17,7 @@
 #include "app/panels/image_panel.h"
 #include "app/panels/viewport_panel.h"
 #include "app/shell/export_view.h"
+#include "app/shell/input_feed.h"
 #include "app/shell/window_placement.h"
 
 namespace facet::app {
@@ -34,6 +36,47 @@ void PrintGlfwError(int code, const char* description) {
 void QueueDroppedFiles(GLFWwindow* window, int count, const char** paths) {
   auto* shell = static_cast<ShellState*>(glfwGetWindowUserPointer(window));
   for (int i = 0; i < count; ++i) shell->dropped_paths.emplace_back(paths[i]);
+}
+
+// The input callbacks queue the events for the frames (app/state/input_queue.h) instead of
+// setting ImGui's state directly, so a press and release within one frame both arrive.
+InputQueue& QueueOf(GLFWwindow* window) {
+  return static_cast<ShellState*>(glfwGetWindowUserPointer(window))->input_queue;
+}
+
+void QueueCursorPos(GLFWwindow* window, double x, double y) {
+  QueueOf(window).MouseMove(glfwGetTime(), static_cast<float>(x), static_cast<float>(y));
+}
+
+void QueueCursorEnter(GLFWwindow* window, int entered) {
+  ImGui_ImplGlfw_CursorEnterCallback(window, entered);
+  InputQueue& queue = QueueOf(window);
+  const auto& buttons = queue.State().mouse_down;
+  const bool dragging = std::any_of(buttons.begin(), buttons.end(), [](bool down) { return down; });
+  if (!entered && !dragging) queue.MouseMove(glfwGetTime(), -FLT_MAX, -FLT_MAX);
+}
+
+void QueueMouseButton(GLFWwindow* window, int button, int action, int mods) {
+  // The queued pointer is where the platform's motion events left it when the button went
+  // (glfwGetCursorPos would ask where it is now, after any later motion).
+  if (action == GLFW_PRESS || action == GLFW_RELEASE) {
+    QueueOf(window).MouseButton(glfwGetTime(), button, action == GLFW_PRESS);
+  }
+}
+
+void QueueScroll(GLFWwindow* window, double dx, double dy) {
+  QueueOf(window).Wheel(glfwGetTime(), static_cast<float>(dx), static_cast<float>(dy));
+}
+
+void QueueKey(GLFWwindow* window, int key, int scancode, int action, int mods) {
+  if (action == GLFW_PRESS || action == GLFW_RELEASE) QueueOf(window).Key(glfwGetTime(), key, action == GLFW_PRESS);
+}
+
+void QueueChar(GLFWwindow* window, unsigned int c) { QueueOf(window).Char(glfwGetTime(), c); }
+
+void QueueFocus(GLFWwindow* window, int focused) {
+  ImGui_ImplGlfw_WindowFocusCallback(window, focused);
+  if (!focused) QueueOf(window).ReleaseAll(glfwGetTime());  // their releases go elsewhere
 }
 
 }  // namespace
@@ -99,6 +142,14 @@ int RunGlfwWindow(AppState* state, ShellState* shell, const std::string& imgui_i
   ImGui_ImplGlfw_InitForOpenGL(window, /*install_callbacks=*/true);
   glfwSetWindowUserPointer(window, shell);
   glfwSetDropCallback(window, QueueDroppedFiles);
+  // After the backend's: ours replace its input callbacks (it keeps the monitor one).
+  glfwSetCursorPosCallback(window, QueueCursorPos);
+  glfwSetCursorEnterCallback(window, QueueCursorEnter);
+  glfwSetMouseButtonCallback(window, QueueMouseButton);
+  glfwSetScrollCallback(window, QueueScroll);
+  glfwSetKeyCallback(window, QueueKey);
+  glfwSetCharCallback(window, QueueChar);
+  glfwSetWindowFocusCallback(window, QueueFocus);
   ImGui_ImplOpenGL3_Init("#version 330");
 
   while (!shell->quit_now) {
@@ -113,7 +164,8 @@ int RunGlfwWindow(AppState* state, ShellState* shell, const std::string& imgui_i
       RequestQuit(state, shell);
     }
     ImGui_ImplOpenGL3_NewFrame();
-    ImGui_ImplGlfw_NewFrame();
+    ImGui_ImplGlfw_NewFrame();  // display size, cursor shape, gamepads
+    ApplyInputFrame(shell->input_queue.NextFrame(glfwGetTime()), &ImGui::GetIO());
     ImGui::NewFrame();
     DrawFrame(state, shell, glfwGetTime());
     ImGui::Render();

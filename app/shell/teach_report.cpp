@@ -247,8 +247,10 @@ nlohmann::json TeachReportJson(const AppState& state) {
                  {"second_image_id", view.second_image_id}};
   nlohmann::json vanishing = nlohmann::json::array();
   for (const Image& image : state.document.project().images)
-    if (const std::optional<TeachVanishing> t = TeachVanishingFor(state, image.id))
+    if (const std::optional<TeachVanishing> t = TeachVanishingFor(state, image.id)) {
       vanishing.push_back(VanishingJson(*t));
+      vanishing.back()["extended_segment_ids"] = TeachExtendedSegments(state, image.id, t->construction);
+    }
   out["vanishing"] = vanishing;
   nlohmann::json lines = nlohmann::json::array();
   for (const TeachEpipolarLine& l : TeachEpipolarLines(state))

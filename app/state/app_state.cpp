@@ -162,8 +162,19 @@ void ResetDocument(AppState* state, Project project, const std::string& path) {
   state->line_proposals.reset();  // image ids start again in another project
   DropLineDetection(state);
   state->project_path = path;
+  ++state->document_generation;
   state->selection = {};
   state->active_image_id = kNoId;
+  // What the tools remember refers to the old project's elements, or is a choice made for
+  // it: a new document starts with a box to add and no half-built constraint or measure.
+  state->add_kind = PrimitiveKind::kBox;
+  state->add_on_top = true;
+  state->push_pull_face = {};
+  state->measure_pair = {};
+  state->constraint_first_edge = {};
+  state->constraint_first_kind.reset();
+  state->pointer_in_image_px.reset();
+  state->pointer_image_id = kNoId;
   state->drag_start.reset();
   if (state->bake_job) {
     state->retired_photos.merge(state->photos);  // the worker may still read them

@@ -145,6 +145,9 @@ struct LoadedReference {
 struct AppState {
   Document document;
   std::string project_path;  // empty for an unsaved project
+  // Increments whenever another document replaces this one (new, open, a restored recovery):
+  // the panels then start their views afresh (fitted photo, framed model).
+  std::uint64_t document_generation = 0;
   Selection selection;
   Tool tool = Tool::kSelect;
   PrimitiveKind add_kind = PrimitiveKind::kBox;  // what kAddPrimitive adds
@@ -217,7 +220,7 @@ struct AppState {
   // photo.
   std::optional<LineProposals> line_proposals;
   LineDetectionWork line_detection;
-  bool detect_lines_on_add = false;
+  bool detect_lines_on_add = true;  // ticked from the start, as the tutorial's first step expects
   // The image panel's Snap option (app/panels/image_snapping.h): points placed in a photo snap
   // to corners, segments and the model nearby; Alt turns it off for one placement.
   bool snapping = true;

@@ -248,6 +248,17 @@ std::string ParseMouse(const std::string& cmd, const std::vector<std::string>& t
     steps->push_back(step);
   } else if (cmd == "click") {
     return ParseClick(t, step, steps);
+  } else if (cmd == "double-click" || cmd == "up-then-move") {
+    const int b = t.size() >= 2 ? ButtonIndex(Lower(t[1])) : -1;
+    size_t i = 2;
+    Point p;
+    if (b < 0 || !ParsePoint(t, &i, &p) || i != t.size()) {
+      return "'" + cmd + " BUTTON POINT' needs left|right|middle and a point; " + kPointHelp;
+    }
+    SetPoint(p, &step);
+    step.burst = cmd == "double-click" ? Burst::kDoubleClick : Burst::kReleaseThenMove;
+    step.burst_button = b;
+    steps->push_back(step);
   } else if (cmd == "drag") {
     return ParseDrag(t, step, steps);
   } else {  // wheel
@@ -270,7 +281,7 @@ std::string ParseMouse(const std::string& cmd, const std::vector<std::string>& t
 
 // key [ctrl+][shift+][alt+]KEY: a press and, one frame later, the release.
 std::string ParseKey(const std::vector<std::string>& t, ScriptStep step, Steps* steps) {
-  if (t.size() != 2) return "'key [ctrl+][shift+][alt+]KEY' needs one key";
+  if (t.size() != 2) return "'" + Lower(t[0]) + " [ctrl+][shift+][alt+]KEY' needs one key";
   std::string spec = Lower(t[1]);
   ScriptKey key;
   for (;;) {
@@ -296,6 +307,11 @@ std::string ParseKey(const std::vector<std::string>& t, ScriptStep step, Steps* 
     key.character = ' ';
   }
   step.key_press = key;
+  if (Lower(t[0]) == "tap") {
+    step.burst = Burst::kTap;
+    steps->push_back(step);
+    return "";
+  }
   steps->push_back(step);
   ScriptStep release;
   release.line = step.line;
@@ -374,7 +390,7 @@ bool IsUiEvent(const std::vector<std::string>& t) {
            (Lower(t[1]) != "wait-bake" && Lower(t[1]) != "bake-status" && Lower(t[1]) != "wait-autosave" &&
             Lower(t[1]) != "advance-clock" && Lower(t[1]) != "wait-removed");
   return cmd == "click" || cmd == "drag" || cmd == "key" || cmd == "type" || cmd == "wheel" || cmd == "drop" ||
-         cmd == "down" || cmd == "hold";
+         cmd == "down" || cmd == "hold" || cmd == "tap" || cmd == "double-click";
 }
 
 // One non-empty line (comment stripped).
@@ -384,10 +400,11 @@ std::string ParseLine(const std::string& line, int line_no, Steps* steps) {
   ScriptStep step;
   step.line = line_no;
   if (cmd == "frames") return ParseFrames(t, step, steps);
-  if (cmd == "move" || cmd == "down" || cmd == "up" || cmd == "click" || cmd == "drag" || cmd == "wheel") {
+  if (cmd == "move" || cmd == "down" || cmd == "up" || cmd == "click" || cmd == "drag" || cmd == "wheel" ||
+      cmd == "double-click" || cmd == "up-then-move") {
     return ParseMouse(cmd, t, step, steps);
   }
-  if (cmd == "key") return ParseKey(t, step, steps);
+  if (cmd == "key" || cmd == "tap") return ParseKey(t, step, steps);
   if (cmd == "type") {
     step.text = Rest(line, 1);
     if (step.text.empty()) return "'type TEXT' needs text";

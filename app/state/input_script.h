@@ -23,6 +23,12 @@
 //                                 names its own (drag left image U1 V1 U2 V2 8; drag left
 //                                 vertex 0 4 image U V 8); its start is fixed when it begins.
 //   key [ctrl+][shift+][alt+]KEY  press (1 frame), release (1 frame); e.g. key ctrl+z
+//   tap [ctrl+][shift+][alt+]KEY  press and release delivered within one frame (a short key
+//                                 press during a slow frame); the app still sees both
+//   double-click BUTTON POINT     move, press, release, press, release, all delivered within
+//                                 one frame
+//   up-then-move BUTTON POINT     release the button, then move to POINT, both within one
+//                                 frame: the release counts where it happened
 //   type TEXT                     text characters for the active text field (1 frame)
 //   hold|release shift|ctrl|alt   keep a modifier down / let it go
 //   command NAME [ARGS]           new, undo, redo, save PATH, open PATH, tool NAME,
@@ -156,6 +162,15 @@ struct ScriptKey {
   unsigned character = 0;  // text input sent along with the key (0: none)
 };
 
+// Platform events a step delivers within its one frame, in this order; the input queue
+// (app/state/input_queue.h) hands them to the UI over as many frames as it needs.
+enum class Burst {
+  kNone,
+  kTap,             // key_press goes down and up
+  kDoubleClick,     // mouse_pos, then burst_button down, up, down, up
+  kReleaseThenMove  // burst_button up, then mouse_pos
+};
+
 // What a step's mouse position is measured in (see POINT above).
 enum class PointSpace { kScreen, kImage, kVertex, kItem };
 
@@ -173,7 +188,9 @@ struct ScriptStep {
   std::array<std::optional<bool>, 3> mouse_down;  // left, right, middle: press / release
   float wheel = 0.0f;
   std::optional<ScriptKey> key_press;  // held during this step only
-  std::string text;                    // characters typed this step
+  Burst burst = Burst::kNone;
+  int burst_button = 0;  // kDoubleClick, kReleaseThenMove: 0 left, 1 right, 2 middle
+  std::string text;      // characters typed this step
   std::optional<bool> hold_shift, hold_ctrl, hold_alt;
   std::string command;  // app command name; empty for none
   std::vector<std::string> command_args;

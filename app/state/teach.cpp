@@ -43,6 +43,59 @@ bool* TeachFlag(TeachView* view, const std::string& name) {
   return nullptr;
 }
 
+const FocalConstruction* ShownFocalConstruction(const VanishingConstruction& construction) {
+  const FocalConstruction* shown = nullptr;
+  for (const FocalConstruction& f : construction.focal_constructions)
+    if (f.valid && (shown == nullptr || f.circle_radius_px < shown->circle_radius_px)) shown = &f;
+  return shown;
+}
+
+std::vector<Id> TeachExtendedSegments(const AppState& state, Id image_id, const VanishingConstruction& construction) {
+  std::array<std::vector<const Segment*>, 3> families;
+  for (const Segment& segment : state.document.project().segments) {
+    if (segment.image_id == image_id && construction.present[static_cast<int>(segment.axis)])
+      families[static_cast<int>(segment.axis)].push_back(&segment);
+  }
+  std::vector<Id> ids;
+  for (std::vector<const Segment*>& family : families) {
+    const size_t keep = std::min(family.size(), kTeachExtensionsPerFamily);
+    std::partial_sort(family.begin(), family.begin() + keep, family.end(), [](const Segment* p, const Segment* q) {
+      return (p->b_px - p->a_px).squaredNorm() > (q->b_px - q->a_px).squaredNorm();
+    });
+    for (size_t k = 0; k < keep; ++k) ids.push_back(family[k]->id);
+  }
+  return ids;
+}
+
+void TeachVanishingExtent(const TeachVanishing& teach, int width_px, int height_px, Eigen::Vector2d* min_px,
+                          Eigen::Vector2d* max_px) {
+  const Eigen::Vector2d size(width_px, height_px);
+  const Eigen::Vector2d centre = 0.5 * size;
+  const double limit = kMaxVanishingViewDiagonals * size.norm();
+  Eigen::Vector2d lo = Eigen::Vector2d::Zero(), hi = size;
+  auto include = [&](const Eigen::Vector2d& p) {
+    if (!p.allFinite() || (p - centre).norm() > limit) return;
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  };
+  const VanishingConstruction& c = teach.construction;
+  for (int a = 0; a < 3; ++a) {
+    if (c.finite[a]) include(c.points_px[a]);
+  }
+  include(c.principal_point_px);
+  if (const FocalConstruction* f = ShownFocalConstruction(c)) {
+    const Eigen::Vector2d r = Eigen::Vector2d::Constant(f->circle_radius_px);
+    if (f->circle_radius_px < limit) {
+      include(f->circle_center_px - r);
+      include(f->circle_center_px + r);
+    }
+    include(f->altitude_foot_px);
+    include(f->turned_center_px);
+  }
+  *min_px = lo;
+  *max_px = hi;
+}
+
 std::optional<TeachVanishing> TeachVanishingFor(const AppState& state, Id image_id) {
   const Project& project = state.document.project();
   const Image* image = project.FindImage(image_id);

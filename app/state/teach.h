@@ -139,6 +139,26 @@ struct TeachVanishing {
 // Empty when the image has no usable calibration from line families.
 std::optional<TeachVanishing> TeachVanishingFor(const AppState& state, Id image_id);
 
+// The focal construction the overlay draws: of the valid ones, the pair with the smallest
+// circle (the one most likely in view); null when there is none.
+const FocalConstruction* ShownFocalConstruction(const VanishingConstruction& construction);
+
+// The vanishing overlay extends at most this many segments of a family to its vanishing
+// point (the longest): every one of a hundred-odd extensions hatched the photo.
+constexpr size_t kTeachExtensionsPerFamily = 8;
+// The segments of the image whose extensions the overlay draws: per family present in the
+// construction, its kTeachExtensionsPerFamily longest.
+std::vector<Id> TeachExtendedSegments(const AppState& state, Id image_id, const VanishingConstruction& construction);
+
+// A vanishing point farther than this many photo diagonals from the photo's centre is left
+// out of the view the overlay asks for: the photo would shrink to a dot.
+constexpr double kMaxVanishingViewDiagonals = 4.0;
+// The rectangle (image px) the vanishing overlay needs in view: the photo of width_px x
+// height_px, the finite vanishing points within kMaxVanishingViewDiagonals, the principal
+// point and the shown focal construction (its circle, h and C').
+void TeachVanishingExtent(const TeachVanishing& teach, int width_px, int height_px, Eigen::Vector2d* min_px,
+                          Eigen::Vector2d* max_px);
+
 // An epipolar line the overlay draws in image `in_image_id`, of the point uv_px of image
 // `from_image_id` (a pin of a selected vertex, or the pointer).
 struct TeachEpipolarLine {

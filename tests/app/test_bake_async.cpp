@@ -138,6 +138,20 @@ TEST_CASE("texture bake in the background: the edit's frame does not wait, the r
   CHECK(s1.at("triangles").get<size_t>() == 2 * one_box_triangles);
   CHECK(s1.at("input_revision").get<std::uint64_t>() > s1.at("baked_input_revision").get<std::uint64_t>());
   CHECK(s1.at("started").get<int>() == s0.at("started").get<int>() + 1);
+  // Issue 25: that frame said so in the 3D panel, in a row of its own above the counts and
+  // mouse help (it was drawn over them), and the collected frame no longer does.
+  {
+    const nlohmann::json& texts = s1.at("viewport_texts");
+    REQUIRE(texts.contains("viewport.help"));
+    REQUIRE(texts.contains("viewport.bake_status"));
+    const nlohmann::json& help = texts.at("viewport.help");
+    const nlohmann::json& baking = texts.at("viewport.bake_status");
+    const double help_top = help.at("y").get<double>();
+    const double baking_bottom = baking.at("y").get<double>() + baking.at("h").get<double>();
+    CHECK(baking_bottom <= help_top);  // no overlap: the status ends where the help begins, or above
+    CHECK(baking.at("h").get<double>() > 0.0);
+    CHECK_FALSE(s2.at("viewport_texts").contains("viewport.bake_status"));
+  }
   // And that frame did not wait for it: starting costs a fraction of the bake.
   const double start_ms = s1.at("start_refresh_ms").get<double>();
   const double bake_ms = s2.at("bake_ms").get<double>();

@@ -285,3 +285,34 @@ TEST_CASE("Detect lines in flight: dropped when its photo is removed or another 
   CHECK(ProposedCount(report) == -1);  // no "Detect lines: N proposed" ever
   CHECK(LoadProjectFile(kSampleProject).images.size() == report.at("project").at("images").size());
 }
+
+TEST_CASE("issue 25: a script clicks Accept right after adding a 3072 x 2048 photo: it waits for the detection") {
+  TempDir dir("detect_lines_big");
+  // A big synthetic photo: the box's segments (three families, in perspective) drawn thick.
+  SyntheticSceneOptions options;
+  options.width_px = 3072;
+  options.height_px = 2048;
+  options.focal_px *= 3.0;
+  const SyntheticScene scene = MakeBoxScene(options);
+  cv::Mat photo(options.height_px, options.width_px, CV_8UC3, cv::Scalar(120, 120, 120));
+  for (const facet::Segment& s : scene.project.segments) {
+    cv::line(photo, cv::Point(static_cast<int>(s.a_px.x()), static_cast<int>(s.a_px.y())),
+             cv::Point(static_cast<int>(s.b_px.x()), static_cast<int>(s.b_px.y())), cv::Scalar(20, 20, 20), 6,
+             cv::LINE_AA);
+  }
+  const std::string photo_path = dir / "big.png";
+  REQUIRE(cv::imwrite(photo_path, photo));
+  const std::string project = WriteEmptyProject(dir);
+  // Detect lines is on by default (issue 25): no `lines on-add`. The click's point is the
+  // Accept button, which only the frame after the detection draws.
+  const nlohmann::json report =
+      RenderScript(dir, project, "accept",
+                   "frames 2\ncommand add-photo " + photo_path + "\nclick left item image.accept_lines\nframes 2\n");
+  INFO(ReportLog(report));
+  const facet::Project after = facet::ProjectFromJson(report.at("project").dump()).project;
+  REQUIRE(after.images.size() == 1);
+  CHECK(after.images[0].width_px == 3072);
+  CHECK(after.segments.size() >= 3);
+  REQUIRE(!report.at("undo_stack").empty());
+  CHECK(report.at("undo_stack").back().get<std::string>().find("ccept") != std::string::npos);
+}

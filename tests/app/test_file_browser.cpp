@@ -335,3 +335,145 @@ TEST_CASE("Drop: a photo is added, an unknown file is refused in the log, a proj
   CHECK(opened["file_dialog"]["folder"] == dir.path.string());
   CHECK(opened["file_dialog"]["name"] == "notes.txt");
 }
+
+TEST_CASE("issue 25: File > New over unsaved work, Save, a name, Enter: saved, then the new project follows") {
+  TempDir dir("browser_new_after_save");
+  const std::string scene = WriteBoxScene(dir);
+  // An unsaved project with a box: New asks; Save opens Save as (it has no file yet).
+  const std::string unsaved = "frames 2\ncommand new\nframes 1\ncommand add box\nframes 2\n";
+  const nlohmann::json asked = Run(dir, scene, "asked", unsaved + "key ctrl+n\nframes 3\n");
+  REQUIRE(asked["dialog"] == "confirm-new");
+  const nlohmann::json save_as =
+      Run(dir, scene, "save_as", unsaved + "key ctrl+n\nframes 3\n" + Click(asked, "confirm.save") + "frames 3\n");
+  REQUIRE(save_as["dialog"] == "save-as");
+  const std::string name = dir / "first";
+  const nlohmann::json after = Run(dir, scene, "after",
+                                   unsaved + "key ctrl+n\nframes 3\n" + Click(asked, "confirm.save") +
+                                       "frames 3\ntype " + name + "\nframes 1\nkey enter\nframes 3\n");
+  INFO(ReportLog(after));
+  // The work is in first.facet, and the app shows the new, empty, untitled project.
+  REQUIRE(fs::exists(name + ".facet"));
+  CHECK(LoadProjectFile(name + ".facet").primitives.size() == 1);
+  CHECK(after["dialog"] == "");
+  CHECK(after["project_path"] == "");
+  CHECK(after["project"]["primitives"].empty());
+  CHECK_FALSE(after["dirty"].get<bool>());
+  CHECK(LogHas(after, "info", "New project"));
+
+  // The same through Open: the unsaved work saved under a name, then the chosen project opens.
+  const std::string open_scene = "key ctrl+o\nframes 3\ntype " + scene + "\nframes 1\nkey enter\nframes 3\n";
+  const nlohmann::json open_asked = Run(dir, scene, "open_asked", unsaved + open_scene);
+  REQUIRE(open_asked["dialog"] == "confirm-open");
+  const std::string second = dir / "second";
+  const nlohmann::json opened = Run(dir, scene, "opened",
+                                    unsaved + open_scene + Click(open_asked, "confirm.save") + "frames 3\ntype " +
+                                        second + "\nframes 1\nkey enter\nframes 3\n");
+  INFO(ReportLog(opened));
+  REQUIRE(fs::exists(second + ".facet"));
+  CHECK(LoadProjectFile(second + ".facet").primitives.size() == 1);
+  CHECK(opened["dialog"] == "");
+  CHECK(opened["project_path"] == scene);
+  CHECK(LogHas(opened, "info", "Opened " + scene));
+
+  // Cancelling the Save as drops the question's New: a later plain Save as only saves.
+  const nlohmann::json cancelled = Run(dir, scene, "cancelled",
+                                       unsaved + "key ctrl+n\nframes 3\n" + Click(asked, "confirm.save") +
+                                           "frames 3\nkey escape\nframes 2\nkey ctrl+shift+s\nframes 3\ntype " +
+                                           (dir / "third") + "\nframes 1\nkey enter\nframes 3\n");
+  INFO(ReportLog(cancelled));
+  REQUIRE(fs::exists(dir / "third.facet"));
+  CHECK(cancelled["project_path"] == dir / "third.facet");
+  CHECK(cancelled["project"]["primitives"].size() == 1);
+}
+
+TEST_CASE("issue 25: Detect lines is ticked the first time File > Add photo opens, and the added photo is detected") {
+  TempDir dir("browser_detect_default");
+  const std::string scene = WriteBoxScene(dir);
+  cv::Mat photo(300, 400, CV_8UC3, cv::Scalar(70, 70, 70));
+  cv::rectangle(photo, cv::Rect(80, 60, 240, 180), cv::Scalar(230, 230, 230), 3);
+  REQUIRE(cv::imwrite(dir / "walls.png", photo));
+  const nlohmann::json bare = Run(dir, scene, "probe_menu", "frames 2\n");
+  const std::string open_file_menu = Click(bare, "menu.file") + "frames 2\n";
+  const nlohmann::json menu = Run(dir, scene, "probe_add", "frames 2\n" + open_file_menu);
+  const std::string open_browser = "frames 2\n" + open_file_menu + Click(menu, "menu.add_photo") + "frames 3\n";
+  const nlohmann::json dialog = Run(dir, scene, "dialog", open_browser);
+  REQUIRE(dialog["dialog"] == "add-photo");
+  CHECK(dialog["items"].contains("add_photo.detect_lines"));
+  CHECK(dialog["detect_lines_on_add"].get<bool>());
+  // The photo chosen with the option as it came: its lines are detected.
+  const nlohmann::json added = Run(dir, scene, "added", open_browser + DoubleClick(dialog, "file.entry/walls.png"));
+  INFO(ReportLog(added));
+  CHECK(added["dialog"] == "");
+  REQUIRE(added["project"]["images"].size() == 2);
+  CHECK(added["line_detection"]["started"] == 1);
+  CHECK(added["line_detection"]["last_image_id"] == added["active_image_id"]);
+}
+
+TEST_CASE("issue 25: Save and Export start in the project's folder, else the last used, never the bundled sample's") {
+  TempDir dir("browser_start_folder");
+  const std::string scene = WriteBoxScene(dir);
+  const std::string config = dir / "facet_config";
+  const std::string sample_folder = fs::path(kSample).parent_path().string();
+  const char* home_env = std::getenv("HOME");
+  REQUIRE(home_env != nullptr);
+  const std::string home = home_env;
+  // A first run with no recent files: the bundled sample open, Save as starts at home.
+  const nlohmann::json fresh = Run(dir, kSample, "fresh", "frames 2\nkey ctrl+shift+s\nframes 3\n");
+  REQUIRE(fresh["dialog"] == "save-as");
+  CHECK(fresh["file_dialog"]["folder"] == home);
+  // The user's project noted as used, then the sample opened (as the GUI does at start).
+  Run(dir, scene, "used", "frames 2\ncommand save\nframes 1\n", config);
+  const std::string sample_open = "frames 2\ncommand open " + kSample + "\nframes 2\n";
+  const nlohmann::json save_as = Run(dir, scene, "save_as", sample_open + "key ctrl+shift+s\nframes 3\n", config);
+  REQUIRE(save_as["dialog"] == "save-as");
+  CHECK(save_as["file_dialog"]["folder"] != sample_folder);
+  CHECK(save_as["file_dialog"]["folder"] == dir.path.string());
+  // Export from the sample: the last folder used too.
+  const nlohmann::json menu =
+      Run(dir, scene, "probe_menu", sample_open + "click left item menu.file\nframes 2\n", config);
+  const nlohmann::json exported = Run(
+      dir, scene, "export",
+      sample_open + "click left item menu.file\nframes 2\n" + Click(menu, "menu.export_gltf") + "frames 3\n", config);
+  REQUIRE(exported["dialog"] == "export");
+  CHECK(exported["file_dialog"]["folder"] == dir.path.string());
+  // New, then Save as: still not the sample's folder, though the sample is the last project.
+  const nlohmann::json fresh_save =
+      Run(dir, scene, "new_save", sample_open + "command new\nframes 1\nkey ctrl+shift+s\nframes 3\n", config);
+  CHECK(fresh_save["file_dialog"]["folder"] == dir.path.string());
+  // A project of the user's own: its folder.
+  fs::create_directories(dir.path / "other");
+  REQUIRE(facet::SaveProject(MakeBoxScene().project, dir / "other/mine.facet") == "");
+  const nlohmann::json own =
+      Run(dir, dir / "other/mine.facet", "own", "frames 2\nkey ctrl+shift+s\nframes 3\n", config);
+  CHECK(own["file_dialog"]["folder"] == (dir.path / "other").string());
+}
+
+TEST_CASE("issue 25: a key tapped and a double-click delivered within one frame both take effect") {
+  TempDir dir("browser_fast_input");
+  const std::string scene = WriteBoxScene(dir);
+  REQUIRE(cv::imwrite(dir / "b.png", cv::Mat(300, 400, CV_8UC3, cv::Scalar(60, 80, 100))));
+  // B pressed and released before the frame reads the keyboard: one primitive more.
+  const size_t before = LoadProjectFile(scene).primitives.size();
+  const nlohmann::json tapped =
+      Run(dir, scene, "tapped", "frames 2\nmove item tool.Select\nframes 1\ntap b\nframes 3\n");
+  INFO(ReportLog(tapped));
+  CHECK(tapped["project"]["primitives"].size() == before + 1);
+  // Without Detect lines (so nothing waits), a double-click on the photo in File > Add photo,
+  // all four button events within one frame: the photo is added.
+  const nlohmann::json bare = Run(dir, scene, "probe_menu", "frames 2\n");
+  const std::string open_browser = "frames 2\ncommand lines on-add off\n" + Click(bare, "menu.file") + "frames 2\n" +
+                                   "click left item menu.add_photo\nframes 3\n";
+  const nlohmann::json browser = Run(dir, scene, "browser", open_browser);
+  REQUIRE(browser["dialog"] == "add-photo");
+  REQUIRE(browser["items"].contains("file.entry/b.png"));
+  const nlohmann::json added =
+      Run(dir, scene, "added", open_browser + "double-click left item file.entry/b.png\nframes 4\n");
+  INFO(ReportLog(added));
+  CHECK(added["dialog"] == "");
+  CHECK(added["project"]["images"].size() == 2);
+  // The same double-click as one ordinary click (what a lost press leaves) only selects.
+  const nlohmann::json single =
+      Run(dir, scene, "single", open_browser + "click left item file.entry/b.png\nframes 4\n");
+  CHECK(single["dialog"] == "add-photo");
+  CHECK(single["project"]["images"].size() == 1);
+}

@@ -334,13 +334,10 @@ TEST_CASE("image panel: Escape cancels an endpoint drag; Delete removes the sele
   CHECK(deleted.at("undo_stack").size() == 1);
 }
 
-TEST_CASE("image panel: the pin tool pins a clicked box vertex where the next click lands") {
-  TempDir dir("pin");
-  const Fixture f = WriteFixture(dir, false, false);
-  const View view = ViewFromReport(Render(dir, f, "start", ""));
+// The box corner farthest on screen from the others (at least 20 px from each), inside the view.
+int LonelyCorner(const Fixture& f, const View& view) {
   std::array<Eigen::Vector3d, 8> corners;  // the box mesh's vertex i is corner i
   for (int c = 0; c < 8; ++c) corners[c] = f.scene.true_box.mesh.vertex(static_cast<facet::VertexId>(c)).position;
-  // The corner farthest on screen from the others.
   int best = -1;
   double best_gap = -1;
   for (int i = 0; i < 8; ++i) {
@@ -357,7 +354,20 @@ TEST_CASE("image panel: the pin tool pins a clicked box vertex where the next cl
   }
   REQUIRE(best >= 0);
   REQUIRE(best_gap > 20.0);
-  const Eigen::Vector2d corner_screen = Whole(view.ToScreen(f.scene.true_camera.Project(corners[best])));
+  return best;
+}
+
+Eigen::Vector2d CornerOnScreen(const Fixture& f, const View& view, int corner) {
+  return Whole(view.ToScreen(
+      f.scene.true_camera.Project(f.scene.true_box.mesh.vertex(static_cast<facet::VertexId>(corner)).position)));
+}
+
+TEST_CASE("image panel: the pin tool pins a clicked box vertex where the next click lands") {
+  TempDir dir("pin");
+  const Fixture f = WriteFixture(dir, false, false);
+  const View view = ViewFromReport(Render(dir, f, "start", ""));
+  const int best = LonelyCorner(f, view);
+  const Eigen::Vector2d corner_screen = CornerOnScreen(f, view, best);
   const Eigen::Vector2d target = corner_screen + Eigen::Vector2d(-14, 9);
   const std::string script = "frames 2\ncommand tool pin\nclick left " + FormatXY(corner_screen, 10) +
                              "\nframes 1\nclick left " + FormatXY(target, 10) + "\nframes 2\n";
@@ -370,6 +380,54 @@ TEST_CASE("image panel: the pin tool pins a clicked box vertex where the next cl
   CHECK(pin.image_id == f.scene.image_id);
   CHECK((pin.uv_px - view.ToImage(target)).norm() < 0.01 / view.zoom);
   CHECK(report.at("undo_stack").size() == 1);
+}
+
+TEST_CASE("issue 25: a pin lands where the button was released, though the pointer moved on in that frame") {
+  TempDir dir("pin_release");
+  const Fixture f = WriteFixture(dir, false, false);
+  const View view = ViewFromReport(Render(dir, f, "start", ""));
+  const int corner = LonelyCorner(f, view);
+  const Eigen::Vector2d corner_screen = CornerOnScreen(f, view, corner);
+  const Eigen::Vector2d target = corner_screen + Eigen::Vector2d(-14, 9);
+  // The user releases at the target and moves on 150 px before the frame reads the input.
+  const Eigen::Vector2d moved_on = target + Eigen::Vector2d(150, 60);
+  REQUIRE(view.Inside(moved_on, 5.0));
+  const std::string script = "frames 2\ncommand tool pin\nclick left " + FormatXY(corner_screen, 10) +
+                             "\nframes 1\nmove " + FormatXY(target, 10) + "\ndown left\nup-then-move left " +
+                             FormatXY(moved_on, 10) + "\nframes 3\n";
+  const nlohmann::json report = Render(dir, f, "pin", script);
+  const facet::Project project = ProjectFromReport(report);
+  REQUIRE(project.pins.size() == 1);
+  const facet::Pin& pin = project.pins.front();
+  CHECK(pin.vertex.vertex == static_cast<facet::VertexId>(corner));
+  // Within a hundredth of a screen pixel of the release, 160 px from where the pointer went.
+  CHECK((pin.uv_px - view.ToImage(target)).norm() < 0.01 / view.zoom);
+  CHECK(report.at("undo_stack").size() == 1);
+}
+
+TEST_CASE("issue 25: a pin released off the photo is refused with a message; the model is unchanged") {
+  TempDir dir("pin_outside");
+  const Fixture f = WriteFixture(dir, false, false);
+  const View view = ViewFromReport(Render(dir, f, "start", ""));
+  const int corner = LonelyCorner(f, view);
+  const Eigen::Vector2d corner_screen = CornerOnScreen(f, view, corner);
+  // Zoomed out about the photo's centre, the panel shows a margin around the photo: the
+  // release lands 40 image px left of its left edge.
+  const Eigen::Vector2d centre =
+      Whole(view.ToScreen({0.5 * f.scene.true_camera.width_px, 0.5 * f.scene.true_camera.height_px}));
+  const std::string script = "frames 2\ncommand tool pin\nclick left " + FormatXY(corner_screen, 10) +
+                             "\nframes 1\nwheel -4 " + FormatXY(centre, 10) + "\nframes 2\nclick left image -40 " +
+                             std::to_string(f.scene.true_camera.height_px / 2) + "\nframes 2\n";
+  const nlohmann::json report = Render(dir, f, "pin", script);
+  const View zoomed = ViewFromReport(report);
+  REQUIRE(zoomed.zoom < view.zoom);
+  REQUIRE(zoomed.Inside(zoomed.ToScreen({-40.0, 0.5 * f.scene.true_camera.height_px}), 2.0));
+  const facet::Project project = ProjectFromReport(report);
+  CHECK(project.pins.empty());
+  CHECK(report.at("undo_stack").size() == 0);
+  bool said = false;
+  for (const auto& e : report.at("log")) said = said || e.at("text").get<std::string>().rfind("Pin not placed", 0) == 0;
+  CHECK(said);
 }
 
 TEST_CASE("image panel: with Shift held during a press the pointer moves at 1/magnification of the mouse") {

@@ -614,3 +614,76 @@ TEST_CASE("issue 14: a known length no pin sees leaves the kept height; one they
     CHECK(solved.shape.params(2) == doctest::Approx(2.0 * scene.true_box.shape.params(2)).epsilon(1e-6));
   }
 }
+
+TEST_CASE("issue 25: File > New and Open start the Add primitive kind again at box") {
+  TempDir dir("new_resets_kind");
+  SyntheticScene scene;
+  const std::string path = WriteCalibratedNoModel(dir, &scene);
+  const int w = scene.true_camera.width_px, h = scene.true_camera.height_px;
+  const Eigen::Vector2d aim(0.40 * w, 0.70 * h);
+  // A wedge added (the kind stays wedge), the work discarded by File > New, then B.
+  const std::string wedge = "frames 2\ncommand add wedge at " + FormatXY(aim, 10) + "\nframes 2\n";
+  const nlohmann::json asked = RenderScript(dir, path, "asked", wedge + "key ctrl+n\nframes 3\n");
+  REQUIRE(asked.at("dialog") == "confirm-new");
+  REQUIRE(asked.at("project").at("primitives").size() == 1);
+  REQUIRE(asked.at("project").at("primitives")[0].at("kind") == "wedge");
+  const nlohmann::json fresh =
+      RenderScript(dir, path, "fresh",
+                   wedge + "key ctrl+n\nframes 3\nclick left " + ItemCenter(asked.at("items"), "confirm.discard") +
+                       "\nframes 2\nmove item tool.Select\nframes 1\nkey b\nframes 3\n");
+  INFO(ReportLog(fresh));
+  CHECK(fresh.at("project_path") == "");
+  REQUIRE(fresh.at("project").at("primitives").size() == 1);
+  CHECK(fresh.at("project").at("primitives")[0].at("kind") == "box");
+  // Opening a project starts it again too.
+  const nlohmann::json opened = RenderScript(
+      dir, path, "opened",
+      wedge + "command save\ncommand open " + path + "\nframes 2\nmove item tool.Select\nframes 1\nkey b\nframes 3\n");
+  INFO(ReportLog(opened));
+  const auto& primitives = opened.at("project").at("primitives");
+  REQUIRE(!primitives.empty());
+  CHECK(primitives.back().at("kind") == "box");
+}
+
+TEST_CASE("issue 25: a project opened after another shows its photo fitted and its model framed") {
+  TempDir dir("view_per_project");
+  const LineScene scene = WriteLineScene(dir);
+  const std::string second = dir / "second.facet";
+  REQUIRE(facet::SaveProject(scene.scene.project, second) == "");
+  // The second project alone: the view a project opens with.
+  const nlohmann::json alone = RenderScript(dir, second, "alone", "frames 3\n");
+  const View fitted = ViewFromReport(alone);
+  const Viewport3d framed = ViewportFromReport(alone);
+  // The first project zoomed in on its photo and orbited in 3D, then the second one opened.
+  const Viewport3d before = framed;  // the same panel rectangle
+  const std::string viewport_centre =
+      FormatXY({before.origin_x + 0.5 * before.width_px, before.origin_y + 0.5 * before.height_px}, 8);
+  const std::string image_centre =
+      FormatXY({fitted.rect_x + 0.5 * fitted.rect_w, fitted.rect_y + 0.5 * fitted.rect_h}, 8);
+  const nlohmann::json switched = RenderScript(
+      dir, scene.path, "switched",
+      "frames 3\nwheel 4 " + image_centre + "\nframes 2\ndrag left " + viewport_centre + " " +
+          FormatXY({before.origin_x + 0.5 * before.width_px + 120, before.origin_y + 0.5 * before.height_px + 40}, 8) +
+          " 6\nframes 2\ncommand open " + second + "\nframes 3\n");
+  INFO(ReportLog(switched));
+  REQUIRE(switched.at("project_path") == second);
+  const View shown = ViewFromReport(switched);
+  CHECK(shown.zoom == doctest::Approx(fitted.zoom).epsilon(1e-6));
+  CHECK(shown.origin_x == doctest::Approx(fitted.origin_x).epsilon(1e-6));
+  CHECK(shown.origin_y == doctest::Approx(fitted.origin_y).epsilon(1e-6));
+  const Viewport3d orbit = ViewportFromReport(switched);
+  CHECK((orbit.Eye() - framed.Eye()).norm() < 1e-6 * std::max(1.0, framed.Eye().norm()));
+  CHECK((orbit.clip_from_world - framed.clip_from_world).norm() < 1e-6 * framed.clip_from_world.norm());
+}
+
+TEST_CASE("issue 25: the wheel of the previous case zooms the photo (so its check can fail)") {
+  TempDir dir("view_zoom_seen");
+  const LineScene scene = WriteLineScene(dir);
+  const nlohmann::json alone = RenderScript(dir, scene.path, "alone", "frames 3\n");
+  const View fitted = ViewFromReport(alone);
+  const std::string image_centre =
+      FormatXY({fitted.rect_x + 0.5 * fitted.rect_w, fitted.rect_y + 0.5 * fitted.rect_h}, 8);
+  const nlohmann::json zoomed =
+      RenderScript(dir, scene.path, "zoomed", "frames 3\nwheel 4 " + image_centre + "\nframes 3\n");
+  CHECK(ViewFromReport(zoomed).zoom > 1.5 * fitted.zoom);
+}
