@@ -1,6 +1,8 @@
 #include "core/io/project_io.h"
 #include "core/io/project_io_internal.h"
 
+#include "core/geometry/id_limits.h"
+
 #include "core/util/file_read.h"
 
 #include <fcntl.h>
@@ -423,6 +425,8 @@ class Reader {
     const std::string path = Join(obj_path, key);
     if (!j->is_number_unsigned() || j->get<std::uint64_t>() == 0)
       return Fail(path, "expected a positive integer id, found " + Describe(*j));
+    if (j->get<std::uint64_t>() > kMaxId)
+      return Fail(path, "expected an id up to " + std::to_string(kMaxId) + " (2^62), found " + Describe(*j));
     *out = j->get<std::uint64_t>();
     return true;
   }
