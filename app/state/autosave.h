@@ -24,7 +24,16 @@
 // On start, and after opening a project, a recovery file newer than the project (or, with no
 // project, an unsaved project's file left by a process that is gone) is offered: Restore
 // loads the recovered document with its history, Discard deletes the file. A recovery file
-// that does not read is reported in the log and the project opens as saved.
+// that does not read (a newer version, a damaged base) is never replaced nor deleted: it is
+// moved aside to `NAME.facet.recovery.broken-YYYYMMDD-HHMMSS` (core/util/file_write.h,
+// MoveFileAside), the log says where, and the project opens as saved. One that restores only
+// in part (a journal record that does not apply, core/io/recovery_io.h) is offered as far as
+// it reads, and moved aside the same way whatever the answer.
+//
+// The recovery file's name is the program's choice, so a symbolic link, a FIFO or a device at
+// that name is not Facet's: it is never read, written through or removed. Finding one is
+// logged; each write then fails with a message naming it, logged once as a warning (as any
+// failed write, see above) and counted in the failures, until it is removed.
 #pragma once
 
 #include <cstdint>
@@ -69,6 +78,9 @@ struct RecoveryOffer {
   std::string recovery_path;
   std::string project_path;  // the document's project file; empty for an unsaved project
   Document document;
+  // The file holds more than `document` (RecoveryLoadResult::dropped): it is kept aside, not
+  // removed, whatever the answer.
+  bool holds_more = false;
 };
 
 struct AutosaveState {
