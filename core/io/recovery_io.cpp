@@ -425,8 +425,8 @@ bool ReadRecords(const std::string& text, Reader* r, RecoveryLoadResult* result)
   if (read.content) read = ReadPrefix(text, read.journal_records);
   if (!read.rebuild_error.empty()) {
     // Every record applied, but the history they make does not rebuild (a redo edit, the clean
-    // depth): the longest prefix that does, found by bisection (a prefix that rebuilds, one
-    // more that does not).
+    // depth, which only the rebuild checks): by bisection, a prefix that rebuilds and the record
+    // with which it no longer does; O(log records) readings, and only for a damaged file.
     if (read.journal_records == 0) return refuse(read.rebuild_error);
     PrefixRead good = ReadPrefix(text, 0);
     if (!good.rebuild_error.empty()) return refuse(read.rebuild_error);
