@@ -217,8 +217,10 @@ TEST_CASE("a corrupt or inconsistent recovery file is reported, and the project 
   report = RenderAutosave(dir, project, "inconsistent", "frames 2\n");
   CHECK(LogHas(report, "Recovery file not restored: " + recovery +
                            ": history: undo[0]: does not revert onto the project after it: units: the project's "
-                           "units are not the edit's; " +
-                           project + " opened as saved"));
+                           "units are not the edit's; the file is kept as " +
+                           recovery + ".broken-"));
+  CHECK(LogHas(report, project + " opened as saved"));
+  CHECK_FALSE(fs::exists(recovery));  // moved aside, both of them (the test that follows checks the bytes)
   CHECK(ReportProject(report) == saved);
   CHECK(report.at("dialog") == "");
 }
