@@ -3,6 +3,7 @@
 // malformed or inconsistent files are errors that name what is wrong, never crashes.
 #include <doctest/doctest.h>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -15,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/geometry/id_limits.h"
 #include "core/io/project_io.h"
 #include "core/io/recovery_io.h"
 #include "core/scene/document.h"
@@ -179,7 +181,8 @@ TEST_CASE("a recovery file from an older Facet restores the project without its 
   CHECK(loaded.document.redo_stack().empty());
   CHECK(loaded.document.dirty());
   bool warned = false;
-  for (const std::string& w : loaded.warnings) warned = warned || w.find("its undo history is not") != std::string::npos;
+  for (const std::string& w : loaded.warnings)
+    warned = warned || w.find("its undo history is not") != std::string::npos;
   CHECK(warned);
   // A newer project version is refused by name.
   j["project"]["version"] = Project::kFormatVersion + 1;
@@ -497,13 +500,191 @@ TEST_CASE("a torn journal restores up to its last whole record and says so") {
   REQUIRE(loaded.warnings.size() == 1);
   CHECK(loaded.warnings[0].find("restored as of the base record") != std::string::npos);
 
-  // A whole record (its checksum right) that does not fit the document is damage, named.
-  Document two(facet::testing::MakeBoxScene().project);
-  const std::string base = Base(Text(two)).dump();
-  const std::string bad_keep = R"({"undo_keep":9,"redo_keep":0,"undo":[],"redo":[],"clean_undo_depth":0,)"
-                               R"("clean_is_unreachable":false})";
-  CHECK(ErrorOf(facet::FrameRecoveryRecords({base, bad_keep})) ==
-        "journal[0].undo_keep: 9 is beyond the undo history (0 edits)");
+  CHECK_FALSE(loaded.dropped.empty());  // the app keeps such a file aside (app/state/autosave.h)
+}
+
+namespace {
+
+// A journal record (core/io/recovery_io.h) that sets the units: the edit from `from` to `to`
+// on top of `undo_keep` kept edits.
+std::string UnitsRecord(size_t undo_keep, const std::string& from, const std::string& to) {
+  nlohmann::json record = {{"undo_keep", undo_keep},
+                           {"redo_keep", 0},
+                           {"undo", nlohmann::json::array({{{"label", "units " + to}, {"units", {from, to}}}})},
+                           {"redo", nlohmann::json::array()},
+                           {"clean_undo_depth", 0},
+                           {"clean_is_unreachable", false}};
+  return record.dump();
+}
+
+// The document after `n` units records of UnitsRecord's chain m -> u0 -> u1 -> ...
+Document UnitsDocument(size_t n) {
+  Document doc(facet::testing::MakeBoxScene().project);
+  for (size_t i = 0; i < n; ++i) {
+    Project next = doc.project();
+    next.units = "u" + std::to_string(i);
+    REQUIRE(doc.Commit("units " + next.units, next));
+  }
+  return doc;
+}
+
+}  // namespace
+
+// A whole record (its checksum right) whose content does not apply ends the journal like a
+// torn one: the document is that of the record before, and `dropped` names the record and
+// why; the records after it are dropped with it (their base is gone).
+TEST_CASE("a journal record that does not apply restores up to the record before it and names it") {
+  const Document empty(facet::testing::MakeBoxScene().project);
+  const std::string base = Base(Text(empty)).dump();
+  const std::string r0 = UnitsRecord(0, "m", "u0"), r1 = UnitsRecord(1, "u0", "u1"), r2 = UnitsRecord(2, "u1", "u2");
+  REQUIRE(UnitsDocument(0).project() == empty.project());
+  {
+    const RecoveryLoadResult whole = RecoveryFromText(facet::FrameRecoveryRecords({base, r0, r1, r2}));
+    REQUIRE_MESSAGE(whole.ok(), whole.error);
+    CHECK(whole.dropped.empty());
+    CHECK(whole.journal_records == 3);
+    CHECK(whole.document.project().units == "u2");
+  }
+  // Frames made by hand: FrameRecoveryRecords calls every record after the first "journal".
+  const std::string base_only = facet::FrameRecoveryRecords({base});
+  const std::string base_frame = base_only.substr(base_only.find('\n') + 1);
+  auto journal_frame = [&](const std::string& payload) {
+    return facet::FrameRecoveryRecords({base, payload}).substr(base_only.size());
+  };
+  struct Case {
+    const char* name;
+    std::string bad_frame;  // in place of journal[1]
+    std::string why;        // the start of `dropped`
+  };
+  const Case cases[] = {
+      {"an undo_keep beyond the history",
+       journal_frame(R"({"undo_keep":9,"redo_keep":0,"undo":[],"redo":[],"clean_undo_depth":0,)"
+                     R"("clean_is_unreachable":false})"),
+       "journal[1].undo_keep: 9 is beyond the undo history (1 edits)"},
+      {"an edit that does not fit the project", journal_frame(UnitsRecord(1, "yd", "u1")),
+       "journal[1].undo[0]: does not apply onto the project: units"},
+      {"not JSON", journal_frame("{\"undo_keep\": 1,"), "journal[1]: line 1, column"},
+      {"a base record in the middle", base_frame, "journal[1]: expected a journal record, found \"base\""},
+      {"a next_id that would wrap at the next object",
+       journal_frame(R"({"undo_keep":1,"redo_keep":0,"undo":[{"label":"ids","next_id":[)" +
+                     std::to_string(empty.project().next_id) +
+                     R"(,18446744073709551615]}],"redo":[],"clean_undo_depth":0,"clean_is_unreachable":false})"),
+       "journal[1].undo[0].next_id: expected [before, after] as two positive integers up to 4611686018427387904"},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.name);
+    const std::string text = facet::FrameRecoveryRecords({base, r0}) + c.bad_frame + journal_frame(r2);
+    const RecoveryLoadResult loaded = RecoveryFromText(text);
+    REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+    CHECK(loaded.journal_records == 1);
+    CheckSameDocument(loaded.document, UnitsDocument(1));
+    INFO(loaded.dropped);
+    CHECK(loaded.dropped.rfind(c.why, 0) == 0);
+    CHECK(loaded.dropped.find(
+              "journal[1] and what follows it (" + std::to_string(c.bad_frame.size() + journal_frame(r2).size()) +
+              " bytes) are dropped and the document is restored as of journal[0]") != std::string::npos);
+    CHECK(std::find(loaded.warnings.begin(), loaded.warnings.end(), loaded.dropped) != loaded.warnings.end());
+  }
+  // In the first record: the base alone.
+  const RecoveryLoadResult first = RecoveryFromText(facet::FrameRecoveryRecords({base, UnitsRecord(0, "yd", "u0")}));
+  REQUIRE_MESSAGE(first.ok(), first.error);
+  CHECK(first.journal_records == 0);
+  CheckSameDocument(first.document, UnitsDocument(0));
+  CHECK(first.dropped.find("restored as of the base record") != std::string::npos);
+}
+
+// Every record applies, but with one of them the history no longer rebuilds (a redo edit is
+// only checked then): the longest prefix that rebuilds is restored, the record named.
+TEST_CASE("a journal record after which the history does not rebuild is dropped with what follows") {
+  const Document empty(facet::testing::MakeBoxScene().project);
+  const std::string base = Base(Text(empty)).dump();
+  std::vector<std::string> records = {base};
+  for (size_t i = 0; i < 6; ++i)
+    records.push_back(UnitsRecord(i, i == 0 ? "m" : "u" + std::to_string(i - 1), "u" + std::to_string(i)));
+  // journal[4]: keeps the 4 edits and gains a redo that cannot follow the project (its units
+  // start from "yd"); journal[5] then builds on it, keeping the redo.
+  records[5] = R"({"undo_keep":4,"redo_keep":0,"undo":[],"redo":[{"label":"bad redo","units":["yd","ft"]}],)"
+               R"("clean_undo_depth":0,"clean_is_unreachable":false})";
+  nlohmann::json keeps_redo = nlohmann::json::parse(UnitsRecord(4, "u3", "u4"));
+  keeps_redo["redo_keep"] = 1;
+  records[6] = keeps_redo.dump();
+  const RecoveryLoadResult loaded = RecoveryFromText(facet::FrameRecoveryRecords(records));
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+  INFO(loaded.dropped);
+  CHECK(loaded.journal_records == 4);
+  CheckSameDocument(loaded.document, UnitsDocument(4));
+  CHECK(loaded.dropped.rfind("journal[4]: the history with it does not rebuild: history: redo[0]: does not apply", 0) ==
+        0);
+  CHECK(loaded.dropped.find("restored as of journal[3]") != std::string::npos);
+}
+
+// Ids enter through the project file's reader and the recovery file's: each refuses values
+// beyond kMaxId, so the next object's id (next_id, counted up) can never wrap to 0.
+TEST_CASE("a next_id or an id that would wrap is refused where it is read") {
+  const Document doc(facet::testing::MakeBoxScene().project);
+  nlohmann::json base = Base(Text(doc));
+  for (const std::uint64_t value : {std::uint64_t{18446744073709551615u}, facet::kMaxId + 1}) {
+    CAPTURE(value);
+    nlohmann::json j = base;
+    j["project"]["next_id"] = value;
+    CHECK(ErrorOf(Framed(j)).rfind("project: next_id: expected an id up to 4611686018427387904 (2^62), found ", 0) ==
+          0);
+    nlohmann::json project = nlohmann::json::parse(facet::ProjectToJson(doc.project()));
+    project["next_id"] = value;
+    const facet::ProjectLoadResult loaded = facet::ProjectFromJson(project.dump());
+    CHECK_FALSE(loaded.ok());
+    CHECK(loaded.error.find("next_id: expected an id up to 4611686018427387904 (2^62)") != std::string::npos);
+    project["next_id"] = doc.project().next_id;
+    project["images"][0]["id"] = value;
+    CHECK(facet::ProjectFromJson(project.dump()).error.find("images[0].id: expected an id up to") != std::string::npos);
+  }
+  // kMaxId itself is a valid next_id; the next objects count on from it.
+  nlohmann::json j = base;
+  j["project"]["next_id"] = facet::kMaxId;
+  const RecoveryLoadResult at_max = RecoveryFromText(Framed(j));
+  REQUIRE_MESSAGE(at_max.ok(), at_max.error);
+  Project next = at_max.document.project();
+  CHECK(next.NewId() == facet::kMaxId);
+  CHECK(next.next_id == facet::kMaxId + 1);
+}
+
+// The recovery file's name is the program's: a link or a FIFO there is refused by name, and
+// what the link points to is untouched (issue 25: a link to the project turned it into
+// recovery text).
+TEST_CASE("the recovery journal refuses a symbolic link or a FIFO at its path") {
+  const TempFile file("linked");
+  const TempFile other("other_project");
+  {
+    std::ofstream out(other.path, std::ios::binary);
+    out << "the other project";
+  }
+  std::filesystem::remove(file.path);
+  std::filesystem::create_symlink(other.path, file.path);
+  Document doc(facet::testing::MakeBoxScene().project);
+  facet::RecoveryJournal journal;
+  facet::RecoveryWritten written;
+  facet::RecoveryWriteResult result = journal.Write(file.path, facet::MakeRecoveryDelta(doc, nullptr, &written));
+  CHECK(result.error ==
+        "refusing to write " + file.path + ": it is a symbolic link (to " + other.path + "), not a file Facet wrote");
+  CHECK(ReadAll(other.path) == "the other project");
+  CHECK(facet::SaveRecovery(doc, file.path).find("it is a symbolic link") != std::string::npos);
+  CHECK(ReadAll(other.path) == "the other project");
+  // Written whole once the link is gone; then a link put in its place stops the appends too.
+  std::filesystem::remove(file.path);
+  REQUIRE(journal.Write(file.path, facet::MakeRecoveryDelta(doc, nullptr, &written)).ok());
+  std::filesystem::remove(file.path);
+  std::filesystem::create_symlink(other.path, file.path);
+  Project next = doc.project();
+  next.units = "ft";
+  REQUIRE(doc.Commit("units", next));
+  result = journal.Write(file.path, facet::MakeRecoveryDelta(doc, nullptr, &written));
+  CHECK(result.error.find("it is a symbolic link") != std::string::npos);
+  CHECK(ReadAll(other.path) == "the other project");
+  std::filesystem::remove(file.path);
+  REQUIRE(::mkfifo(file.path.c_str(), 0644) == 0);
+  result = journal.Write(file.path, facet::MakeRecoveryDelta(doc, nullptr, &written));
+  CHECK(result.error == "refusing to write " + file.path + ": it is a FIFO, not a regular file");
+  std::filesystem::remove(file.path);
 }
 
 // Version 1 (one JSON object, rewritten whole after every edit) is still read: its document

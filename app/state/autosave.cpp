@@ -14,6 +14,7 @@
 
 #include "app/state/app_state.h"
 #include "core/io/recovery_io.h"
+#include "core/util/file_write.h"
 
 namespace facet::app {
 namespace {
@@ -35,9 +36,22 @@ double MsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
+// Removes a recovery file this session wrote. Only a regular file: a link or a device put
+// in its place since is not Facet's (fs::remove would delete the link, never its target, but
+// the link is the user's too).
 void RemoveFile(const std::string& path) {
+  if (!DescribeNonRegular(path).empty()) return;
   std::error_code ec;
   fs::remove(path, ec);
+}
+
+// Keeps a recovery file that will not be restored whole out of autosave's way (it would
+// otherwise be replaced by the next write and removed at exit): what the log says about it.
+std::string KeepAside(const std::string& path) {
+  std::string moved_to;
+  const std::string error = MoveFileAside(path, "broken", &moved_to);
+  if (!error.empty()) return error + " (the next autosave replaces it)";
+  return "the file is kept as " + moved_to;
 }
 
 void StartWrite(AppState* state, const Edit* unfinished, const std::string& path, std::uint64_t revision) {
@@ -108,21 +122,11 @@ bool CleanStateIs(const Document& document, const Project& saved) {
   return probe.undo_stack().size() == probe.clean_undo_depth() && probe.project() == saved;
 }
 
-// Renames `path` to `PATH.TAG-YYYYMMDD-HHMMSS[-N]` (a name not taken); the new name, or ""
-// when the rename failed.
+// Renames `path` to `PATH.TAG-YYYYMMDD-HHMMSS[-N]` (core/util/file_write.h, MoveFileAside);
+// the new name, or "" when the rename failed.
 std::string MoveAside(const std::string& path, const std::string& tag) {
-  const std::time_t now = std::time(nullptr);
-  std::tm local{};
-  char stamp[32] = "unknown-time";
-  if (::localtime_r(&now, &local) != nullptr) std::strftime(stamp, sizeof(stamp), "%Y%m%d-%H%M%S", &local);
-  std::error_code ec;
-  for (int n = 0; n < 100; ++n) {
-    const std::string aside = path + "." + tag + "-" + stamp + (n == 0 ? std::string() : "-" + std::to_string(n));
-    if (fs::exists(fs::symlink_status(aside, ec))) continue;
-    fs::rename(path, aside, ec);
-    return ec ? std::string() : aside;
-  }
-  return std::string();
+  std::string moved_to;
+  return MoveFileAside(path, tag, &moved_to).empty() ? moved_to : std::string();
 }
 
 // Whether this session may write its recovery file `target` now. Never for a project opened
@@ -163,7 +167,7 @@ std::string FindUntitledRecovery() {
     if (pid == ::getpid() || ProcessAlive(static_cast<pid_t>(pid))) continue;  // another window's live file
     std::error_code time_ec;
     const fs::file_time_type time = fs::last_write_time(entry.path(), time_ec);
-    if (time_ec || !entry.is_regular_file(time_ec)) continue;
+    if (time_ec || entry.symlink_status(time_ec).type() != fs::file_type::regular) continue;
     if (best.empty() || time > best_time) best = entry.path().string(), best_time = time;
   }
   return best;
@@ -254,7 +258,12 @@ bool FindRecovery(AppState* state, bool also_unsaved) {
   // A project opened read-only: its recovery file is the other Facet's, live.
   if (!state->project_path.empty() && !state->project_guard.read_only) {
     path = RecoveryFileFor(state->project_path);
-    if (!fs::is_regular_file(path, ec)) {
+    if (const std::string what = DescribeNonRegular(path); !what.empty()) {
+      // Planted or left by something else: neither read nor written (core/util/file_write.h).
+      state->Log(LogLevel::kWarning, "Recovery file " + path + " is " + what +
+                                         ": not read, and autosave will not write through it until it is removed");
+      path.clear();
+    } else if (!fs::exists(fs::symlink_status(path, ec))) {
       path.clear();
     } else {
       // Older than the project: the project was saved after it (by another window, or a copy
@@ -271,8 +280,10 @@ bool FindRecovery(AppState* state, bool also_unsaved) {
   if (path.empty()) return false;
   RecoveryLoadResult loaded = LoadRecovery(path);
   if (!loaded.ok()) {
+    // Refused (a newer version, a damaged base): what it holds may still be rescued by hand,
+    // so it is moved out of the way of the next write rather than replaced.
     state->Log(LogLevel::kError,
-               "Recovery file not restored: " + loaded.error +
+               "Recovery file not restored: " + loaded.error + "; " + KeepAside(path) +
                    (state->project_path.empty() ? std::string() : "; " + state->project_path + " opened as saved"));
     return false;
   }
@@ -280,8 +291,8 @@ bool FindRecovery(AppState* state, bool also_unsaved) {
   // An unsaved project's file restores as an unsaved project, whatever was opened.
   const bool untitled = fs::path(path).filename().string().rfind(kUntitledPrefix, 0) == 0 &&
                         fs::path(path).parent_path() == fs::path(RecoveryFolder());
-  autosave.offer =
-      RecoveryOffer{path, untitled ? std::string() : state->project_path, std::move(loaded.document), std::string()};
+  autosave.offer = RecoveryOffer{path, untitled ? std::string() : state->project_path, std::move(loaded.document),
+                                 std::string(), !loaded.dropped.empty()};
   return true;
 }
 
@@ -305,18 +316,31 @@ void RestoreRecovery(AppState* state) {
   const size_t undo = offer.document.undo_stack().size(), redo = offer.document.redo_stack().size();
   RestoreDocument(state, std::move(offer.document), offer.project_path);
   // The file holds exactly this document: it stays until a save, and a later write replaces
-  // it (an unsaved project's moves to this process's name).
-  autosave.owned_path = offer.recovery_path;
-  autosave.written_revision = state->document.revision();
+  // it (an unsaved project's moves to this process's name). One that holds more (records
+  // dropped) is kept aside, and the next write starts a new file.
+  std::string kept;
+  if (offer.holds_more) {
+    kept = "; " + KeepAside(offer.recovery_path);
+  } else {
+    autosave.owned_path = offer.recovery_path;
+    autosave.written_revision = state->document.revision();
+  }
   state->Log(LogLevel::kInfo, "Restored from " + offer.recovery_path + " (" + std::to_string(undo) +
-                                  (undo == 1 ? " edit" : " edits") + " to undo, " + std::to_string(redo) + " to redo)");
+                                  (undo == 1 ? " edit" : " edits") + " to undo, " + std::to_string(redo) + " to redo)" +
+                                  kept);
 }
 
 void DiscardRecovery(AppState* state) {
   AutosaveState& autosave = state->autosave;
   if (!autosave.offer) return;
-  RemoveFile(autosave.offer->recovery_path);
-  state->Log(LogLevel::kInfo, "Discarded the recovery file " + autosave.offer->recovery_path);
+  if (autosave.offer->holds_more) {
+    // The user discarded what was offered, not the records that did not read.
+    state->Log(LogLevel::kInfo, "Discarded the recovery of " + autosave.offer->recovery_path + "; " +
+                                    KeepAside(autosave.offer->recovery_path));
+  } else {
+    RemoveFile(autosave.offer->recovery_path);
+    state->Log(LogLevel::kInfo, "Discarded the recovery file " + autosave.offer->recovery_path);
+  }
   autosave.offer.reset();
 }
 

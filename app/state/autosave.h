@@ -24,13 +24,22 @@
 // On start, and after opening a project, a recovery file newer than the project (or, with no
 // project, an unsaved project's file left by a process that is gone) is offered: Restore
 // loads the recovered document with its history, Discard deletes the file. A recovery file
-// that does not read is reported in the log and the project opens as saved. Edits made while
-// the offer waits are autosaved too: the offered file is first moved aside as
+// that does not read (a newer version, a damaged base) is never replaced nor deleted: it is
+// moved aside to `NAME.facet.recovery.broken-YYYYMMDD-HHMMSS` (core/util/file_write.h,
+// MoveFileAside), the log says where, and the project opens as saved. One that restores only
+// in part (a journal record that does not apply, core/io/recovery_io.h) is offered as far as
+// it reads, and moved aside the same way whatever the answer. Edits made while the offer
+// waits are autosaved too: the offered file is first moved aside as
 // `NAME.facet.recovery.unanswered-DATE` (moved back at a clean exit while still unanswered),
 // and edits replaced by Restore are kept as `NAME.facet.recovery.replaced-DATE`.
 //
 // A project opened read-only (another Facet holds its lock, app/state/project_guard.h) has no
 // recovery file here: nothing is written, removed or offered at its recovery path.
+//
+// The recovery file's name is the program's choice, so a symbolic link, a FIFO or a device at
+// that name is not Facet's: it is never read, written through or removed. Finding one is
+// logged; each write then fails with a message naming it, logged once as a warning (as any
+// failed write, see above) and counted in the failures, until it is removed.
 #pragma once
 
 #include <cstdint>
@@ -78,6 +87,9 @@ struct RecoveryOffer {
   // Where the offered file was before an edit made while the offer waited moved it aside
   // (autosave.cpp, MayWrite); empty while it is where it was found.
   std::string set_aside_from;
+  // The file holds more than `document` (RecoveryLoadResult::dropped): it is kept aside, not
+  // removed, whatever the answer.
+  bool holds_more = false;
 };
 
 struct AutosaveState {

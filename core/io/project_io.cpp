@@ -3,6 +3,7 @@
 
 #include "core/geometry/camera_checks.h"
 #include "core/image/image_io.h"
+#include "core/geometry/id_limits.h"
 #include "core/util/file_read.h"
 #include "core/util/format.h"
 #include "core/util/utf8.h"
@@ -412,6 +413,8 @@ class Reader {
     const std::string path = Join(obj_path, key);
     if (!j->is_number_unsigned() || j->get<std::uint64_t>() == 0)
       return Fail(path, "expected a positive integer id, found " + Describe(*j));
+    if (j->get<std::uint64_t>() > kMaxId)
+      return Fail(path, "expected an id up to " + std::to_string(kMaxId) + " (2^62), found " + Describe(*j));
     *out = j->get<std::uint64_t>();
     return true;
   }

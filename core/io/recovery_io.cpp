@@ -4,8 +4,10 @@
 #include <cassert>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <optional>
 
+#include "core/geometry/id_limits.h"
 #include "core/io/project_io_internal.h"
 #include "core/util/file_read.h"
 #include "core/util/file_write.h"
@@ -122,8 +124,8 @@ bool ReadChanges(const Json& edit, const char* key, const std::string& at, Reade
     Change<T> change;
     std::uint64_t value = 0;
     if (!j.contains("id")) return r->Fail(Join(cat, "id"), "missing field");
-    if (!r->Unsigned(j["id"], Join(cat, "id"), &value) || value == kNoId)
-      return r->Fail(Join(cat, "id"), "expected a positive integer id");
+    if (!r->Unsigned(j["id"], Join(cat, "id"), &value) || value == kNoId || value > kMaxId)
+      return r->Fail(Join(cat, "id"), "expected a positive integer id up to " + std::to_string(kMaxId));
     change.id = value;
     for (const bool before : {true, false}) {
       const char* side = before ? "before" : "after";
@@ -149,8 +151,9 @@ bool ReadChanges(const Json& edit, const char* key, const std::string& at, Reade
 }
 
 bool ReadEdit(const Json& j, const std::string& at, Reader* r, Edit* edit) {
-  if (!r->Object(j, at,
-                 {"label", "images", "segments", "primitives", "pins", "constraints", "references", "units", "next_id"}))
+  if (!r->Object(
+          j, at,
+          {"label", "images", "segments", "primitives", "pins", "constraints", "references", "units", "next_id"}))
     return false;
   if (!j.contains("label") || !j["label"].is_string()) return r->Fail(Join(at, "label"), "expected a string");
   edit->label = j["label"].get<std::string>();
@@ -168,10 +171,14 @@ bool ReadEdit(const Json& j, const std::string& at, Reader* r, Edit* edit) {
   }
   if (j.contains("next_id")) {
     const Json& next_id = j["next_id"];
-    if (!next_id.is_array() || next_id.size() != 2 || !next_id[0].is_number_unsigned() ||
-        !next_id[1].is_number_unsigned() || next_id[0].get<std::uint64_t>() == kNoId ||
-        next_id[1].get<std::uint64_t>() == kNoId)
-      return r->Fail(Join(at, "next_id"), "expected [before, after] as two positive integers");
+    // The project file's bound (core/geometry/id_limits.h): a next_id near 2^64 would wrap to 0 at
+    // the next object the user creates.
+    const auto valid = [](const Json& id) {
+      return id.is_number_unsigned() && id.get<std::uint64_t>() != kNoId && id.get<std::uint64_t>() <= kMaxId;
+    };
+    if (!next_id.is_array() || next_id.size() != 2 || !valid(next_id[0]) || !valid(next_id[1]))
+      return r->Fail(Join(at, "next_id"),
+                     "expected [before, after] as two positive integers up to " + std::to_string(kMaxId));
     edit->next_id_before = next_id[0].get<std::uint64_t>();
     edit->next_id_after = next_id[1].get<std::uint64_t>();
   }
@@ -232,8 +239,7 @@ bool ReadBase(Json& root, bool legacy, Reader* r, History* h) {
   // The edits' objects are in the current project layout. A project from an older version
   // (a recovery file left by the Facet before an update) is migrated like a project file,
   // but its edits would no longer match it: the work is restored without its history.
-  if (!project_json.is_object() || !project_json.contains("version") ||
-      !project_json["version"].is_number_unsigned() ||
+  if (!project_json.is_object() || !project_json.contains("version") || !project_json["version"].is_number_unsigned() ||
       project_json["version"].get<std::uint64_t>() > static_cast<std::uint64_t>(Project::kFormatVersion))
     return r->Fail("project.version", "expected " + std::to_string(Project::kFormatVersion) + " or older");
   const std::uint64_t project_version = project_json["version"].get<std::uint64_t>();
@@ -332,41 +338,127 @@ bool ParsePayload(const std::string& payload, const std::string& at, Json* j, Re
   return true;
 }
 
-// A version 2 file: the header line, the base record and the journal.
-bool ReadRecords(const std::string& text, Reader* r, Document* document, size_t* journal_records) {
+std::string RecordName(size_t k) { return "journal[" + std::to_string(k) + "]"; }
+// What the document is restored as of when journal[k] and the records after it are dropped.
+std::string AsOf(size_t k) { return k == 0 ? std::string("the base record") : RecordName(k - 1); }
+
+// The base record and at most `max_journal` journal records of a version 2 file, rebuilt into
+// a document.
+struct PrefixRead {
+  std::string base_error;     // the header or the base record is refused: nothing reads
+  std::string rebuild_error;  // the records read, but their history does not rebuild
+  std::vector<std::string> warnings;
+  size_t journal_records = 0;  // read and applied
+  size_t end = 0;              // where the bytes not read begin
+  // The record that ended the reading before `max_journal`: damaged (a crash), or whole with
+  // content that does not apply (`content`; then nothing was rebuilt, the history holds part
+  // of it).
+  bool stopped = false, content = false;
+  std::string why;
+  Document document;
+};
+
+PrefixRead ReadPrefix(const std::string& text, size_t max_journal) {
+  PrefixRead read;
+  Reader r{{}, &read.warnings};
   const size_t eol = text.find('\n');
   const std::string header = text.substr(0, eol);
   const std::string want = std::string(kFormatName) + " " + std::to_string(kFormatVersion);
-  if (header != want)
-    return r->Fail("version", "\"" + header.substr(0, 40) + "\" is not a version this build reads (" + want +
-                                  "; version " + std::to_string(kLegacyVersion) + " is read as one JSON object)");
+  if (header != want) {
+    read.base_error = "version: \"" + header.substr(0, 40) + "\" is not a version this build reads (" + want +
+                      "; version " + std::to_string(kLegacyVersion) + " is read as one JSON object)";
+    return read;
+  }
   size_t pos = eol == std::string::npos ? text.size() : eol + 1;
   std::string kind, payload, why;
-  if (!NextRecord(text, &pos, &kind, &payload, &why)) return r->Fail("base", why);
-  if (kind != "base") return r->Fail("base", "expected the base record first, found \"" + kind + "\"");
+  if (!NextRecord(text, &pos, &kind, &payload, &why)) {
+    read.base_error = "base: " + why;
+    return read;
+  }
   History h;
   Json base;
-  if (!ParsePayload(payload, "base", &base, r) || !ReadBase(base, /*legacy=*/false, r, &h)) return false;
-  for (size_t k = 0; pos < text.size(); ++k) {
-    const std::string at = "journal[" + std::to_string(k) + "]";
-    const size_t record_start = pos;
+  if (kind != "base") r.Fail("base", "expected the base record first, found \"" + kind + "\"");
+  if (!r.error.empty() || !ParsePayload(payload, "base", &base, &r) || !ReadBase(base, /*legacy=*/false, &r, &h)) {
+    read.base_error = r.error;
+    return read;
+  }
+  read.end = pos;
+  for (size_t k = 0; pos < text.size() && k < max_journal; ++k) {
+    const std::string at = RecordName(k);
     if (!NextRecord(text, &pos, &kind, &payload, &why)) {
-      // What a crash during an append leaves: the work up to the record before is whole.
-      r->warnings->push_back(at + ": " + why + " (a write cut short by a crash): its " +
-                             std::to_string(text.size() - record_start) +
-                             " bytes are dropped and the document is restored as of " +
-                             (k == 0 ? std::string("the base record") : "journal[" + std::to_string(k - 1) + "]"));
+      read.stopped = true;
+      read.why = at + ": " + why;
       break;
     }
-    if (kind != "journal") return r->Fail(at, "expected a journal record, found \"" + kind + "\"");
     Json j;
-    if (!ParsePayload(payload, at, &j, r) || !ReadJournal(j, at, r, &h)) return false;
-    ++*journal_records;
+    if (kind != "journal") r.Fail(at, "expected a journal record, found \"" + kind + "\"");
+    if (!r.error.empty() || !ParsePayload(payload, at, &j, &r) || !ReadJournal(j, at, &r, &h)) {
+      read.stopped = read.content = true;
+      read.why = r.error;
+      return read;
+    }
+    ++read.journal_records;
+    read.end = pos;
   }
-  if (h.without_history && *journal_records > 0)
-    r->warnings->push_back("the project is restored as of the base record: the " + std::to_string(*journal_records) +
-                           " journal records after it are in the older layout and are not replayed");
-  return Rebuild(h, r, document);
+  if (h.without_history && read.journal_records > 0)
+    read.warnings.push_back("the project is restored as of the base record: the " +
+                            std::to_string(read.journal_records) +
+                            " journal records after it are in the older layout and are not replayed");
+  if (!Rebuild(h, &r, &read.document)) read.rebuild_error = r.error;
+  return read;
+}
+
+// A version 2 file: the header line, the base record and the journal. The journal restores as
+// far as it reads: a record that is damaged, or whole but does not apply (nor rebuild), ends
+// it, and the document is that of the record before (result->dropped says which and why).
+bool ReadRecords(const std::string& text, Reader* r, RecoveryLoadResult* result) {
+  constexpr size_t kAllRecords = std::numeric_limits<size_t>::max();
+  auto refuse = [r](const std::string& error) {
+    r->error = error;
+    return false;
+  };
+  PrefixRead read = ReadPrefix(text, kAllRecords);
+  if (!read.base_error.empty()) return refuse(read.base_error);
+  bool torn = read.stopped && !read.content;
+  std::string why = read.why;
+  // The history holds part of the record that failed: read again, up to the one before it.
+  if (read.content) read = ReadPrefix(text, read.journal_records);
+  if (!read.rebuild_error.empty()) {
+    // Every record applied, but the history they make does not rebuild (a redo edit, the clean
+    // depth, which only the rebuild checks): by bisection, a prefix that rebuilds and the record
+    // with which it no longer does; O(log records) readings, and only for a damaged file.
+    if (read.journal_records == 0) return refuse(read.rebuild_error);
+    PrefixRead good = ReadPrefix(text, 0);
+    if (!good.rebuild_error.empty()) return refuse(read.rebuild_error);
+    size_t bad_count = read.journal_records;
+    std::string bad_error = read.rebuild_error;
+    while (bad_count - good.journal_records > 1) {
+      PrefixRead mid = ReadPrefix(text, good.journal_records + (bad_count - good.journal_records) / 2);
+      if (mid.rebuild_error.empty()) {
+        good = std::move(mid);
+      } else {
+        bad_count = mid.journal_records;
+        bad_error = mid.rebuild_error;
+      }
+    }
+    read = std::move(good);
+    torn = false;
+    why = RecordName(read.journal_records) + ": the history with it does not rebuild: " + bad_error;
+  }
+  const size_t k = read.journal_records;
+  if (torn) {
+    // What a crash during an append leaves: the work up to the record before is whole.
+    result->dropped = why + " (a write cut short by a crash): its " + std::to_string(text.size() - read.end) +
+                      " bytes are dropped and the document is restored as of " + AsOf(k);
+  } else if (!why.empty()) {
+    result->dropped = why + ": " + RecordName(k) + " and what follows it (" + std::to_string(text.size() - read.end) +
+                      " bytes) are dropped and the document is restored as of " + AsOf(k);
+  }
+  if (!result->dropped.empty()) read.warnings.push_back(result->dropped);
+  result->warnings.insert(result->warnings.end(), read.warnings.begin(), read.warnings.end());
+  result->journal_records = k;
+  result->document = std::move(read.document);
+  return true;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -423,7 +515,7 @@ RecoveryLoadResult RecoveryFromText(const std::string& text) {
   try {
     Reader reader{{}, &result.warnings};
     if (text.rfind(std::string(kFormatName) + " ", 0) == 0) {
-      if (!ReadRecords(text, &reader, &result.document, &result.journal_records)) result.error = reader.error;
+      if (!ReadRecords(text, &reader, &result)) result.error = reader.error;
     } else {
       // Version 1: one JSON object (or not a recovery file at all: the format check says so).
       Json root;
@@ -443,7 +535,7 @@ std::string SaveRecovery(const Document& document, const std::string& path) {
   std::string error;
   const std::string text = RecoveryToText(document, &error);
   if (!error.empty()) return "cannot write " + path + ": " + error;
-  return WriteFileAtomically(path, text);
+  return WriteFileAtomically(path, text, Symlinks::kRefuse);
 }
 
 RecoveryLoadResult LoadRecovery(const std::string& path) {
@@ -540,7 +632,7 @@ RecoveryWriteResult RecoveryJournal::Write(const std::string& path, RecoveryDelt
     return result;
   }
   const std::string text = FileHeader() + Frame("base", base);
-  result.error = WriteFileAtomically(path, text);
+  result.error = WriteFileAtomically(path, text, Symlinks::kRefuse);
   if (!result.error.empty()) return result;
   path_ = path;
   base_bytes_ = text.size();

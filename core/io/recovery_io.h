@@ -25,13 +25,21 @@
 //   {"undo_keep": n - 1, "redo": [that edit]}, a new edit {"undo_keep": n, "undo": [it]}.
 // A crash in the middle of an append leaves a last record cut short (or, on a disk that
 // reorders writes, one whose checksum fails): the reader drops it and whatever follows, restores
-// the document up to the record before it and says so in a warning. The base is only ever
-// written whole (core/util/file_write.h), so a damaged base is an error. Version 1's file (the
-// base's JSON object with "format": "facet-recovery", "version": 1, unframed) is still read.
+// the document up to the record before it and says so in a warning. A whole journal record
+// (its checksum right) whose content does not apply (malformed JSON, an edit that does not fit
+// the project, an id beyond kMaxId), or after which the history no longer rebuilds, ends the
+// journal the same way: the document is that of the record before, and `dropped` names the
+// record and why. The base is only ever written whole (core/util/file_write.h), so a damaged
+// base is an error. Version 1's file (the base's JSON object with "format": "facet-recovery",
+// "version": 1, unframed) is still read.
 //
 // Reading is as strict as the project loader's: a malformed file, or a history that does not
 // lead exactly to its project (Document::Rebuild), is an error naming the record, the JSON path
-// or the edit, never a crash.
+// or the edit, never a crash. Ids and next_id are bounded by kMaxId (core/geometry/id_limits.h), as
+// in a project file.
+//
+// Writing never follows a symbolic link nor replaces a device or a FIFO (Symlinks::kRefuse,
+// core/util/file_write.h): the file's name is the program's choice, not the user's.
 #pragma once
 
 #include <cstddef>
@@ -49,6 +57,10 @@ struct RecoveryLoadResult {
   std::string error;                  // empty on success
   std::vector<std::string> warnings;  // unknown fields; a torn journal tail dropped
   size_t journal_records = 0;         // journal records applied (a torn one not counted)
+  // Not empty when the file holds more than the document restored: which record ended the
+  // journal and why (also among the warnings). What was dropped may still be rescued by hand,
+  // so the app keeps such a file aside rather than replacing it (app/state/autosave.h).
+  std::string dropped;
   bool ok() const { return error.empty(); }
 };
 
@@ -59,7 +71,8 @@ RecoveryLoadResult RecoveryFromText(const std::string& text);
 // The framing alone, for tests and the fuzz target: a version 2 file of these payloads, the
 // first the base record, with correct lengths and checksums.
 std::string FrameRecoveryRecords(const std::vector<std::string>& payloads);
-// Writes a one-record file atomically (core/util/file_write.h). Empty on success, else the error.
+// Writes a one-record file atomically (core/util/file_write.h), refusing a symbolic link, a
+// device or a FIFO at `path`. Empty on success, else the error.
 std::string SaveRecovery(const Document& document, const std::string& path);
 RecoveryLoadResult LoadRecovery(const std::string& path);
 
@@ -98,7 +111,8 @@ struct RecoveryWriteResult {
 // compaction) on the first write, after a failed one, for another path, and when the journal
 // would grow beyond the base, so the file stays at most about twice the document and the bytes
 // written per edit stay proportional to the edit (the base doubles between compactions).
-// Not thread-safe: one write at a time.
+// A symbolic link, a device or a FIFO at `path` is refused with a message naming it (never
+// appended to, written through or replaced). Not thread-safe: one write at a time.
 class RecoveryJournal {
  public:
   RecoveryWriteResult Write(const std::string& path, RecoveryDelta delta);

@@ -5,10 +5,16 @@
 // recovery file, for a saved project and an unsaved one; an unsaved project's file is offered
 // at start and restores as an unsaved project, also when its journal is torn; Discard deletes
 // the file; a corrupt or inconsistent recovery file is reported and the project opens as saved.
+// A link at the recovery file's name (to the project, to another project) is refused by name and
+// what it points to is untouched; a recovery file that is refused (a newer version, a damaged
+// base) is moved aside with its bytes, never replaced nor deleted, and one that restores only
+// in part is kept aside too.
 // The 30 s timers read the offscreen clock, which the scripts move on with `advance-clock`.
 #include <doctest/doctest.h>
 
 #include <signal.h>
+
+#include <filesystem>
 
 #include <string>
 #include <vector>
@@ -211,8 +217,10 @@ TEST_CASE("a corrupt or inconsistent recovery file is reported, and the project 
   report = RenderAutosave(dir, project, "inconsistent", "frames 2\n");
   CHECK(LogHas(report, "Recovery file not restored: " + recovery +
                            ": history: undo[0]: does not revert onto the project after it: units: the project's "
-                           "units are not the edit's; " +
-                           project + " opened as saved"));
+                           "units are not the edit's; the file is kept as " +
+                           recovery + ".broken-"));
+  CHECK(LogHas(report, project + " opened as saved"));
+  CHECK_FALSE(fs::exists(recovery));  // moved aside, both of them (the test that follows checks the bytes)
   CHECK(ReportProject(report) == saved);
   CHECK(report.at("dialog") == "");
 }
@@ -297,8 +305,8 @@ TEST_CASE("a drag longer than 30 s is autosaved as an unfinished edit, and resto
 }
 
 TEST_CASE("a failed autosave is reported once, and written at the next edit once the cause is gone") {
-  // The recovery file a link into a missing folder: every write fails at once (the writer
-  // writes where a link points, and cannot create its temporary file there).
+  // The recovery file a link into a missing folder: every write fails at once (a link at the
+  // recovery file's name is refused, core/util/file_write.h).
   const TempDir dir("autosave_fail");
   const std::string project = CopySample(dir);
   const std::string blocker = project + ".recovery";
@@ -344,8 +352,8 @@ TEST_CASE("a failed autosave is reported once, and written at the next edit once
        at = log.find("warning: Autosave: ", at + 1))
     ++warnings;
   CHECK(warnings == 1);
-  CHECK(log.find("warning: Autosave: cannot create a temporary file beside " +
-                 (dir / "missing/leuven.facet.recovery")) != std::string::npos);
+  CHECK(log.find("warning: Autosave: refusing to write " + blocker + ": it is a symbolic link (to " +
+                 (dir / "missing/leuven.facet.recovery") + "), not a file Facet wrote") != std::string::npos);
   CHECK(log.find("(trying again at the next change, or in 30 s)") != std::string::npos);
   CHECK(log.find("info: Autosave: written to " + blocker + " again") != std::string::npos);
   CHECK(Labels(report.at("undo_stack")) == std::vector<std::string>{"Add box", "Add box", "Add box"});
@@ -403,4 +411,147 @@ TEST_CASE("an unsaved project's recovery file is offered at start and restores a
   CHECK(restored.at("project_path") == "");
   CHECK(restored.at("dirty") == true);
   CHECK(restored.at("dialog") == "");
+}
+
+namespace {
+
+// The files in `dir` whose name starts with `prefix`.
+std::vector<std::string> FilesStartingWith(const TempDir& dir, const std::string& prefix) {
+  std::vector<std::string> found;
+  for (const auto& entry : fs::directory_iterator(dir / ""))
+    if (entry.path().filename().string().rfind(prefix, 0) == 0) found.push_back(entry.path().string());
+  return found;
+}
+
+size_t Count(const std::string& text, const std::string& part) {
+  size_t n = 0;
+  for (size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1)) ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("a link at the recovery file's name is refused by name, and what it points to is untouched") {
+  const TempDir dir("autosave_link");
+  const std::string project = CopySample(dir);
+  fs::copy_file(project, dir / "other.facet");
+  const std::string recovery = project + ".recovery";
+  // To another project, then to the project itself: either was overwritten by the first autosave.
+  for (const std::string& target : {dir / "other.facet", project}) {
+    CAPTURE(target);
+    const std::string bytes_before = facet::testing::ReadText(target);
+    fs::remove(recovery);
+    fs::create_symlink(target, recovery);
+    const nlohmann::json report = RenderAutosave(dir, project, "link",
+                                                 "frames 2\n"
+                                                 "command add box\n"
+                                                 "frames 20\n"
+                                                 "command add box\n"
+                                                 "frames 20\n");
+    const std::string log = facet::testing::ReportLog(report);
+    INFO(log);
+    CHECK(facet::testing::ReadText(target) == bytes_before);
+    CHECK(fs::is_symlink(recovery));  // neither replaced nor removed at exit
+    CHECK(LogHas(report, "Recovery file " + recovery +
+                             " is a symbolic link: not read, and autosave will not write through it until it is "
+                             "removed"));
+    // Each edit is refused, reported once: the user is told autosave is not protecting them.
+    CHECK(report.at("autosave").at("failures").get<int>() == 2);
+    CHECK(report.at("autosave").at("writes").get<int>() == 0);
+    CHECK(Count(log, "warning: Autosave: refusing to write " + recovery + ": it is a symbolic link (to " + target +
+                         "), not a file Facet wrote") == 1);
+    CHECK(Labels(report.at("undo_stack")) == std::vector<std::string>{"Add box", "Add box"});
+  }
+}
+
+TEST_CASE("a recovery file that is refused is moved aside with its bytes, never replaced nor deleted") {
+  const TempDir dir("autosave_refused");
+  const std::string project = CopySample(dir);
+  const facet::Project saved = facet::testing::LoadProjectFile(project);
+  const std::string recovery = project + ".recovery";
+  facet::Document document(saved);
+  facet::Project edited = saved;
+  edited.units = "ft";
+  REQUIRE(document.Commit("Units", edited));
+  std::string error;
+  const std::string good = facet::RecoveryToText(document, &error);
+  REQUIRE(error.empty());
+  std::string damaged_base = good;
+  damaged_base[good.size() - 3] ^= 0x01;  // in the base's payload: its checksum fails
+  struct Case {
+    const char* name;
+    std::string bytes;
+    std::string why;
+  };
+  const Case cases[] = {
+      {"written by a newer Facet", "facet-recovery 3\n" + good.substr(good.find('\n') + 1),
+       "version: \"facet-recovery 3\" is not a version this build reads"},
+      {"a damaged base", damaged_base, "base: its checksum does not match"},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.name);
+    for (const std::string& old : FilesStartingWith(dir, "leuven.facet.recovery.broken-")) fs::remove(old);
+    facet::testing::WriteText(recovery, c.bytes);
+    // Edits after it: the autosave writes a new file of its own and removes it at exit.
+    const nlohmann::json report =
+        RenderAutosave(dir, project, "refused", "frames 2\ncommand add box\ncommand wait-autosave\nframes 2\n");
+    const std::string log = facet::testing::ReportLog(report);
+    INFO(log);
+    const std::vector<std::string> aside = FilesStartingWith(dir, "leuven.facet.recovery.broken-");
+    REQUIRE(aside.size() == 1);
+    CHECK(facet::testing::ReadText(aside[0]) == c.bytes);
+    CHECK(LogHas(report, "Recovery file not restored: " + recovery + ": " + c.why));
+    CHECK(LogHas(report, "; the file is kept as " + aside[0] + "; " + project + " opened as saved"));
+    CHECK(report.at("autosave").at("writes").get<int>() >= 1);
+    CHECK(Labels(report.at("undo_stack")) == std::vector<std::string>{"Add box"});
+    CHECK_FALSE(fs::exists(recovery));  // the session's own file, removed at the clean exit
+  }
+}
+
+TEST_CASE("a recovery file that restores only in part is offered, and kept aside whatever the answer") {
+  const TempDir dir("autosave_partial");
+  const std::string project = CopySample(dir);
+  const facet::Project saved = facet::testing::LoadProjectFile(project);
+  const std::string recovery = project + ".recovery";
+  // The base, one journal record (units ft), then a whole record (its checksum right) whose
+  // edit does not apply: it starts from yards.
+  facet::Document document(saved);
+  facet::RecoveryJournal journal;
+  facet::RecoveryWritten written;
+  REQUIRE(journal.Write(recovery, facet::MakeRecoveryDelta(document, nullptr, &written)).ok());
+  facet::Project edited = saved;
+  edited.units = "ft";
+  REQUIRE(document.Commit("Units", edited));
+  REQUIRE_FALSE(journal.Write(recovery, facet::MakeRecoveryDelta(document, nullptr, &written)).compacted);
+  const std::string bad = R"({"undo_keep":1,"redo_keep":0,"undo":[{"label":"Units","units":["yd","in"]}],)"
+                          R"("redo":[],"clean_undo_depth":0,"clean_is_unreachable":false})";
+  const std::string header_and_base = facet::FrameRecoveryRecords({"{}"});
+  const std::string bad_frame = facet::FrameRecoveryRecords({"{}", bad}).substr(header_and_base.size());
+  facet::testing::WriteText(recovery, facet::testing::ReadText(recovery) + bad_frame);
+  const std::string original = facet::testing::ReadText(recovery);
+
+  for (const std::string answer : {"restore", "discard"}) {
+    CAPTURE(answer);
+    for (const std::string& old : FilesStartingWith(dir, "leuven.facet.recovery.broken-")) fs::remove(old);
+    facet::testing::WriteText(recovery, original);
+    const nlohmann::json report =
+        RenderAutosave(dir, project, answer, "frames 2\nclick left item recover." + answer + "\nframes 2\n");
+    const std::string log = facet::testing::ReportLog(report);
+    INFO(log);
+    CHECK(LogHas(report, recovery + ": journal[1].undo[0]: does not apply onto the project: units"));
+    CHECK(LogHas(report, "journal[1] and what follows it (" + std::to_string(bad_frame.size()) +
+                             " bytes) are dropped and the document is restored as of journal[0]"));
+    const std::vector<std::string> aside = FilesStartingWith(dir, "leuven.facet.recovery.broken-");
+    REQUIRE(aside.size() == 1);
+    CHECK(facet::testing::ReadText(aside[0]) == original);
+    CHECK(LogHas(report, "the file is kept as " + aside[0]));
+    if (answer == "restore") {
+      CHECK(LogHas(report, "Restored from " + recovery + " (1 edit to undo, 0 to redo)"));
+      CHECK(Labels(report.at("undo_stack")) == std::vector<std::string>{"Units"});
+      CHECK(ReportProject(report).units == "ft");
+    } else {
+      CHECK(report.at("undo_stack").empty());
+      CHECK(ReportProject(report) == saved);
+    }
+  }
 }

@@ -1,11 +1,14 @@
 // The recovery file (core/io/recovery_io.h), which the app reads at start after a crash: any
-// bytes either load or are refused with a message. The input is read twice: as a whole file
-// (version 2 records, or a version 1 JSON object), and as one JSON payload per line framed into
-// records with correct lengths and checksums (FrameRecoveryRecords), so that mutations reach
-// the base and journal readers instead of stopping at a checksum. A file that loads must write
-// back, the written text must load back to the same document (project, undo and redo history,
-// clean state) and write the same text again; the loaded history must be live: undoing all of
-// it and redoing all of it returns to the loaded project.
+// bytes either load or are refused with a message. The input is read twice: raw, as a whole
+// file (version 2 records, or a version 1 JSON object: the framing, the checksums, the header);
+// and as record contents, one JSON payload per line, which the harness frames into records with
+// correct lengths and checksums (FrameRecoveryRecords), so that mutations reach the base and
+// journal readers' content checks instead of stopping at a checksum. A file that loads must
+// write back, the written text must load back to the same document (project, undo and redo
+// history, clean state) and write the same text again; the loaded history must be live:
+// undoing all of it and redoing all of it returns to the loaded project. A file that loads only
+// in part (a journal record that does not apply, `dropped`) must load to exactly the document
+// of the records before that one, framed alone, and that shorter file must load whole.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -25,9 +28,9 @@ bool SameDocument(const facet::Document& a, const facet::Document& b) {
          a.clean_undo_depth() == b.clean_undo_depth() && a.clean_is_unreachable() == b.clean_is_unreachable();
 }
 
-void Check(const std::string& text) {
-  const facet::RecoveryLoadResult loaded = facet::RecoveryFromText(text);
-  if (!loaded.ok()) return;
+facet::RecoveryLoadResult Check(const std::string& text) {
+  facet::RecoveryLoadResult loaded = facet::RecoveryFromText(text);
+  if (!loaded.ok()) return loaded;
   std::string error;
   const std::string written = facet::RecoveryToText(loaded.document, &error);
   if (!error.empty()) Fail(kTarget, "a loaded recovery file cannot be written: " + error);
@@ -48,6 +51,7 @@ void Check(const std::string& text) {
   if (loaded.document.redo_stack().empty() && !(live.project() == loaded.document.project())) {
     Fail(kTarget, "undo all + redo all does not return to the loaded project");
   }
+  return loaded;
 }
 
 }  // namespace
@@ -61,6 +65,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     payloads.push_back(text.substr(start, end - start));
     start = end + 1;
   }
-  Check(facet::FrameRecoveryRecords(payloads));
+  const facet::RecoveryLoadResult loaded = Check(facet::FrameRecoveryRecords(payloads));
+  if (loaded.ok() && !loaded.dropped.empty()) {
+    // The journal stopped at journal[journal_records]: the base and the records before it.
+    if (loaded.journal_records + 1 >= payloads.size()) Fail(kTarget, "dropped names no record: " + loaded.dropped);
+    payloads.resize(loaded.journal_records + 1);
+    const facet::RecoveryLoadResult prefix = facet::RecoveryFromText(facet::FrameRecoveryRecords(payloads));
+    if (!prefix.ok()) Fail(kTarget, "the records before the one dropped do not load: " + prefix.error);
+    if (!prefix.dropped.empty())
+      Fail(kTarget, "the records before the one dropped load only in part: " + prefix.dropped);
+    if (prefix.journal_records != loaded.journal_records) Fail(kTarget, "the prefix applies another number of records");
+    if (!SameDocument(prefix.document, loaded.document))
+      Fail(kTarget, "a partial load differs from the records before the one dropped");
+  }
   return 0;
 }
