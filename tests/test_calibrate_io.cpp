@@ -14,6 +14,7 @@
 #include "core/estimators/calibrate_vp.h"
 #include "core/geometry/camera_checks.h"
 #include "core/io/calibrate_io.h"
+#include "core/util/input_limits.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {
@@ -278,6 +279,31 @@ TEST_CASE("principal point choices and a vanishing point at infinity") {
     CHECK(j.at("vanishing_point_axes") == json({"x", "z"}));
     CHECK(j.at("warnings").empty());
   }
+}
+
+TEST_CASE("regression: more than kMaxCalibrationSegments segments are refused by name, before any is read (issue 25)") {
+  // 1e6 segments took tens of seconds; the count is checked first.
+  std::string segments;
+  for (size_t i = 0; i <= kMaxCalibrationSegments; ++i) segments += std::string(i ? ", " : "") + "[1, 2, 3, 4]";
+  const std::string text = R"({"image_size": [640, 480], "families": [{"axis": "x", "segments": [)" + segments + "]}]}";
+  const CalibrateIoResult result = CalibrateLinesJson(text);
+  CHECK_FALSE(result.ok());
+  CHECK(result.error == "a calibration takes at most " + std::to_string(kMaxCalibrationSegments) +
+                            " line segments; this file has " + std::to_string(kMaxCalibrationSegments + 1));
+}
+
+TEST_CASE("at kMaxCalibrationSegments segments the synthetic camera comes back (issue 25)") {
+  testing::SyntheticSceneOptions o;
+  o.extra_lines_per_axis = static_cast<int>(kMaxCalibrationSegments / 3) - 4;  // 4 edges per axis besides
+  testing::SyntheticScene scene = testing::MakeBoxScene(o);
+  while (scene.project.segments.size() < kMaxCalibrationSegments)  // a repeated segment changes no solution
+    scene.project.segments.push_back(scene.project.segments.front());
+  REQUIRE(scene.project.segments.size() == kMaxCalibrationSegments);
+  const CalibrateIoResult result = CalibrateLinesJson(LinesJson(scene, {Axis::kX, Axis::kY, Axis::kZ}, ""));
+  INFO("error: " << result.error);
+  REQUIRE(result.ok());
+  const double focal_px = json::parse(result.json).at("focal_px").get<double>();
+  CHECK(std::abs(focal_px - scene.true_camera.focal_px) < 1e-6 * scene.true_camera.focal_px);
 }
 
 TEST_CASE("bad LINES.json gives a message, never an exception") {

@@ -14,6 +14,7 @@
 #include "core/estimators/two_view.h"
 #include "core/io/relate_io.h"
 #include "core/util/eigen_decompositions.h"
+#include "core/util/input_limits.h"
 #include "tests/synthetic_scene.h"
 
 namespace facet {
@@ -283,6 +284,43 @@ TEST_CASE("the adaptive RANSAC stop draws far fewer samples than 100 on clean ma
     CHECK(again.inliers == dirty.inliers);
     CHECK(MaxAbsDiff(again.F, dirty.F) == 0.0);
   }
+}
+
+TEST_CASE("regression: many wrong matches just outside the threshold cost a bounded number of refits (issue 25)") {
+  // 1e5 matches with 90 % outliers took 32 s in `relate`, most of it one refit per flagged
+  // match within twice the threshold. Here 200 wrong matches lie 3.3 to 5.7 px from their
+  // epipolar lines (inside the readmission band of 2 x 3 px), among 300 true ones.
+  constexpr double kNoisePx = 0.3;
+  constexpr int kTrue = 300, kNear = 200;
+  SceneOptions o;
+  o.noise_px = kNoisePx;
+  o.num_points = kTrue + kNear;
+  o.seed = 11;
+  TwoViewScene s = MakeScene(o);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> shift(3.0, 8.0);
+  std::uniform_int_distribution<int> sign(0, 1);
+  for (int i = kTrue; i < kTrue + kNear; ++i) {
+    const Eigen::Vector3d line = s.F * s.uv1[i].homogeneous();
+    const Eigen::Vector2d normal = line.head<2>().normalized();
+    const Eigen::Vector2d on_line = s.uv2[i];
+    double rms = 0.0;
+    do {  // off the line across it, until the RMS of both distances is in the band
+      s.uv2[i] = on_line + (sign(rng) ? 1.0 : -1.0) * shift(rng) * normal;
+      rms = SymmetricEpipolarDistances(s.F, s.uv1[i], s.uv2[i]).norm() / std::sqrt(2.0);
+    } while (rms < 3.3 || rms > 5.7);
+  }
+  const FundamentalSummary summary = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
+  REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
+  CAPTURE(summary.readmission_refits);
+  CAPTURE(summary.num_inliers);
+  // At most 32 single and 66 pair trials (two_view.cpp), not one per near match.
+  CHECK(summary.readmission_refits <= 32 + 66);
+  int lost = 0;
+  for (int i = 0; i < kTrue; ++i) lost += !summary.inliers[i];
+  CHECK(lost == 0);
+  const Points true1(s.uv1.begin(), s.uv1.begin() + kTrue), true2(s.uv2.begin(), s.uv2.begin() + kTrue);
+  CHECK(SymmetricEpipolarRms(summary.F, true1, true2) < 2.0 * kNoisePx);
 }
 
 // Points of the scene in front of both cameras of a pose (depths by least squares).
@@ -585,6 +623,30 @@ TEST_CASE("relate JSON adapter: round trip with and without K, and bad input") {
   bad["matches"] = nlohmann::json::array({{1, 2, 3, 4}, {5, 6, 7, 8}});
   CHECK(error_of(bad.dump()).find("at least 7") != std::string::npos);
   CHECK(!RelateMatchesFile("/nonexistent/matches.json").ok());
+}
+
+TEST_CASE("relate: matches over kMaxRelateMatches are refused by name; at the limit they are related (issue 25)") {
+  SceneOptions o;
+  o.noise_px = 0.3;
+  o.num_points = static_cast<int>(kMaxRelateMatches);
+  const TwoViewScene s = MakeScene(o);
+  nlohmann::json in;
+  in["image_sizes"] = {{s.cam1.width_px, s.cam1.height_px}, {s.cam2.width_px, s.cam2.height_px}};
+  in["matches"] = nlohmann::json::array();
+  for (size_t i = 0; i < s.uv1.size(); ++i)
+    in["matches"].push_back({s.uv1[i].x(), s.uv1[i].y(), s.uv2[i].x(), s.uv2[i].y()});
+  const RelateIoResult at_limit = RelateMatchesJson(in.dump());
+  REQUIRE_MESSAGE(at_limit.ok(), at_limit.error);
+  const nlohmann::json out = nlohmann::json::parse(at_limit.json);
+  CHECK(out["outliers"].empty());
+  CHECK(MaxAbsDiff(ReadRows(out["F"]), s.F) < 1e-3);  // unit-norm F, 0.3 px noise on 10,000 matches
+  CHECK(out["symmetric_epipolar_rms_px"].get<double>() < 2.0 * 0.3);
+
+  in["matches"].push_back(in["matches"][0]);
+  const RelateIoResult over = RelateMatchesJson(in.dump());
+  CHECK(!over.ok());
+  CHECK(over.error == "relate takes at most " + std::to_string(kMaxRelateMatches) + " matches; this file has " +
+                          std::to_string(kMaxRelateMatches + 1));
 }
 
 }  // namespace

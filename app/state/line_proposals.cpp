@@ -1,5 +1,6 @@
 #include "app/state/line_proposals.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +11,7 @@
 
 #include "app/state/app_state.h"
 #include "core/io/project_io.h"
+#include "core/util/input_limits.h"
 
 namespace facet::app {
 namespace {
@@ -212,6 +214,15 @@ bool AcceptLineProposals(AppState* state) {
     return false;
   }
   Project edited = state->document.project();
+  const size_t already =
+      static_cast<size_t>(std::count_if(edited.segments.begin(), edited.segments.end(),
+                                        [&](const Segment& s) { return s.image_id == proposals.image_id; }));
+  if (already + proposals.segments.size() > kMaxCalibrationSegments) {
+    state->Log(LogLevel::kError, "Accept lines: a photo may have at most " + std::to_string(kMaxCalibrationSegments) +
+                                     " line segments; this one would have " +
+                                     std::to_string(already + proposals.segments.size()));
+    return false;
+  }
   for (Segment s : proposals.segments) {
     s.id = edited.NewId();
     s.image_id = proposals.image_id;

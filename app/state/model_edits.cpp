@@ -9,13 +9,14 @@
 #include <set>
 #include <sstream>
 
-#include <Eigen/Geometry>
 #include <imgui.h>
+#include <Eigen/Geometry>
 
 #include "core/mesh/extrude.h"
 #include "core/mesh/operators.h"
 #include "core/solve/joint_solve.h"
 #include "core/solve/vertex_move.h"
+#include "core/util/input_limits.h"
 
 namespace facet::app {
 namespace {
@@ -257,6 +258,11 @@ bool AddPrimitiveEdit(AppState* state, PrimitiveKind kind, Id base_id, const std
   if (base_id != kNoId) {
     const Primitive* base = edited.FindPrimitive(base_id);
     if (base == nullptr) return Refuse(state, label, "the base primitive is gone");
+    if (AttachmentDepth(edited, *base) >= kMaxAttachmentDepth)
+      return Refuse(state, label + " on top",
+                    "a primitive may sit on at most " + std::to_string(kMaxAttachmentDepth) +
+                        " others (a chain of attachments); " + base->name + " sits on " +
+                        std::to_string(kMaxAttachmentDepth) + " already");
     PrimitiveShape attached = primitive->shape;
     if (!AttachOnTop(base->shape, &attached, &message)) return Refuse(state, label + " on top", message);
     if (kind == PrimitiveKind::kWedge && base->shape.params[1] > base->shape.params[0]) {

@@ -75,6 +75,9 @@ struct FundamentalSummary : SolverSummary {
   // Symmetric transfer RMS of the best homography (DLT) on the inliers; 0 if not computed.
   double homography_rms_px = 0.0;
   int ransac_iterations = 0;
+  // Refits that tried flagged matches near the threshold back in (bounded: at most 32 single
+  // and 66 pair trials, whatever the number of matches).
+  int readmission_refits = 0;
   // With FundamentalOptions::record_refine_trace: every trial of the final refinement (cost in
   // px^2, step in the orthonormal representation's 7 parameters).
   std::vector<LmIteration> refine_trace;

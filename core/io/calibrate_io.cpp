@@ -14,6 +14,7 @@
 #include "core/geometry/camera_checks.h"
 #include "core/image/image_io.h"
 #include "core/util/utf8.h"
+#include "core/util/input_limits.h"
 
 namespace facet {
 namespace {
@@ -81,6 +82,18 @@ bool ParseInput(const json& doc, std::vector<Segment>* segments, VpCalibrationOp
   }
   if (!families_it->is_array()) {
     *error = "\"families\" must be an array";
+    return false;
+  }
+  // Counted before any is read: a million segments are refused at once (input_limits.h).
+  size_t total_segments = 0;
+  for (const json& family : *families_it) {
+    if (!family.is_object()) continue;
+    const auto segments_it = family.find("segments");
+    if (segments_it != family.end() && segments_it->is_array()) total_segments += segments_it->size();
+  }
+  if (total_segments > kMaxCalibrationSegments) {
+    *error = "a calibration takes at most " + std::to_string(kMaxCalibrationSegments) +
+             " line segments; this file has " + std::to_string(total_segments);
     return false;
   }
   std::array<bool, 3> seen{};

@@ -7,11 +7,13 @@
 #include "core/util/file_read.h"
 #include "core/util/format.h"
 #include "core/util/utf8.h"
+#include "core/util/input_limits.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cmath>
@@ -772,9 +774,11 @@ bool ReadPrimitive(const Json& j, const std::string& at, Reader* r, Primitive* p
   }
   if (!known_kind) return r->Fail(Join(at, "kind"), "unknown primitive kind \"" + kind + "\"");
   if (!r->Vector<kMaxPrimitiveParams>(j, at, "params", &shape.params) ||
-      !r->Int(j, at, "segments", 0, 100000, &shape.segments) || !r->Vector<3>(j, at, "rotation", &shape.rotation) ||
-      !r->Vector<3>(j, at, "translation", &shape.translation))
+      !r->Int(j, at, "segments", 0, std::numeric_limits<int>::max(), &shape.segments) ||
+      !r->Vector<3>(j, at, "rotation", &shape.rotation) || !r->Vector<3>(j, at, "translation", &shape.translation))
     return false;
+  if (const std::string too_many = PrimitiveSidesProblem(shape); !too_many.empty())
+    return r->Fail(Join(at, "segments"), too_many);
   for (int k = 0; k < kMaxPrimitiveParams; ++k)
     if (shape.params(k) < 0) return r->Fail(Index(Join(at, "params"), k), "a dimension cannot be negative");
   // A wedge's ridge: "x" (absent: files before it could turn) or "y".
@@ -915,22 +919,30 @@ bool CheckReferences(const Project& p, Reader* r) {
   for (size_t i = 0; i < p.primitives.size(); ++i) {
     if (!claim(p.primitives[i].id, Index("primitives", i))) return false;
   }
+  std::unordered_map<Id, Id> base_of;
+  for (const Primitive& primitive : p.primitives) base_of[primitive.id] = primitive.attached_to;
   for (size_t i = 0; i < p.primitives.size(); ++i) {
     const Id base = p.primitives[i].attached_to;
-    if (base != kNoId && (base == p.primitives[i].id || p.FindPrimitive(base) == nullptr))
+    if (base != kNoId && (base == p.primitives[i].id || base_of.count(base) == 0))
       return r->Fail(Join(Index("primitives", i), "attached_to"),
                      "refers to a missing primitive " + std::to_string(base));
   }
-  // Attachments form trees: a primitive rides on its base, which may not ride on it. Walking
-  // up from each primitive, a chain longer than the primitive count has met a cycle.
+  // Attachments form trees: a primitive rides on its base, which may not ride on it; and at
+  // most kMaxAttachmentDepth bases deep (core/util/input_limits.h). Each walk up stops there,
+  // so a long chain costs O(primitives x limit), not a walk of the whole chain per primitive.
   for (size_t i = 0; i < p.primitives.size(); ++i) {
-    Id current = p.primitives[i].attached_to;
-    for (size_t steps = 0; current != kNoId; ++steps) {
-      if (current == p.primitives[i].id || steps > p.primitives.size())
+    std::vector<Id> below;
+    for (Id current = p.primitives[i].attached_to; current != kNoId; current = base_of.at(current)) {
+      if (current == p.primitives[i].id || std::find(below.begin(), below.end(), current) != below.end())
+        return r->Fail(Join(Index("primitives", i), "attached_to"), "the chain of bases of primitive " +
+                                                                        std::to_string(p.primitives[i].id) +
+                                                                        " loops (attachments must form trees)");
+      if (static_cast<int>(below.size()) == kMaxAttachmentDepth)
         return r->Fail(Join(Index("primitives", i), "attached_to"),
-                       "the chain of bases of primitive " + std::to_string(p.primitives[i].id) +
-                           " loops (attachments must form trees)");
-      current = p.FindPrimitive(current)->attached_to;
+                       "a primitive may sit on at most " + std::to_string(kMaxAttachmentDepth) +
+                           " others (a chain of attachments); primitive " + std::to_string(p.primitives[i].id) +
+                           " sits on more");
+      below.push_back(current);
     }
   }
   // "vertex 3 of primitive 7", checked against the mesh.
@@ -942,11 +954,16 @@ bool CheckReferences(const Project& p, Reader* r) {
                              std::to_string(ref.primitive_id) + " does not have");
     return true;
   };
+  std::unordered_map<Id, size_t> segments_of_image;
   for (size_t i = 0; i < p.segments.size(); ++i) {
     const std::string at = Index("segments", i);
     if (!claim(p.segments[i].id, at)) return false;
     if (!image_ids.count(p.segments[i].image_id))
       return r->Fail(Join(at, "image_id"), "refers to a missing image " + std::to_string(p.segments[i].image_id));
+    if (++segments_of_image[p.segments[i].image_id] > kMaxCalibrationSegments)
+      return r->Fail(Join(at, "image_id"), "a photo may have at most " + std::to_string(kMaxCalibrationSegments) +
+                                               " line segments; image " + std::to_string(p.segments[i].image_id) +
+                                               " has more");
   }
   for (size_t i = 0; i < p.pins.size(); ++i) {
     const std::string at = Index("pins", i);

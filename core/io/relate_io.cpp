@@ -9,6 +9,7 @@
 
 #include "core/estimators/two_view.h"
 #include "core/geometry/camera_checks.h"
+#include "core/util/input_limits.h"
 
 namespace facet {
 namespace {
@@ -54,6 +55,11 @@ bool ParseInput(const json& doc, Input* in, std::string* error) {
   const auto matches_it = doc.find("matches");
   if (matches_it == doc.end() || !matches_it->is_array()) {
     *error = "missing \"matches\": [[u1, v1, u2, v2], ...]";
+    return false;
+  }
+  if (matches_it->size() > kMaxRelateMatches) {
+    *error = "relate takes at most " + std::to_string(kMaxRelateMatches) + " matches; this file has " +
+             std::to_string(matches_it->size());
     return false;
   }
   for (size_t i = 0; i < matches_it->size(); ++i) {

@@ -4,7 +4,7 @@
 //
 // Input (pixels, 0-based, core/geometry/conventions.h):
 //   {"image_sizes": [[w1, h1], [w2, h2]],
-//    "matches": [[u1, v1, u2, v2], ...]            (7 or more),
+//    "matches": [[u1, v1, u2, v2], ...]            (7 to kMaxRelateMatches, core/util/input_limits.h),
 //    "K": [K1, K2]}                                 (optional; each 3x3 rows)
 // Output (pretty JSON, doubles with enough digits to round-trip):
 //   {"F": 3x3 rows (x2^T F x1 = 0, unit Frobenius norm, largest entry positive),

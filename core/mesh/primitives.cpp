@@ -6,6 +6,7 @@
 
 #include "core/geometry/camera.h"
 #include "core/mesh/box.h"
+#include "core/util/input_limits.h"
 
 namespace facet {
 
@@ -170,8 +171,16 @@ Eigen::Vector3d PrimitiveLocalToWorld(const PrimitiveShape& primitive, const Eig
   return RotationFromAngleAxis(primitive.rotation) * p_in_primitive + primitive.translation;
 }
 
+std::string PrimitiveSidesProblem(const PrimitiveShape& primitive) {
+  if (primitive.segments <= kMaxPrimitiveSides) return "";
+  return std::string("a ") + PrimitiveKindName(primitive.kind) + " may have at most " +
+         std::to_string(kMaxPrimitiveSides) + " sides; this one has " + std::to_string(primitive.segments);
+}
+
 AddPrimitiveResult AddPrimitive(PolyMesh* mesh, const PrimitiveShape& primitive) {
   AddPrimitiveResult result;
+  result.message = PrimitiveSidesProblem(primitive);
+  if (!result.message.empty()) return result;
   const int num_params = NumParams(primitive.kind);
   for (int i = 0; i < num_params; ++i) {
     if (!(primitive.params[i] > 0.0) || !std::isfinite(primitive.params[i])) {

@@ -59,10 +59,16 @@ struct AddPrimitiveResult {
   std::vector<FaceId> faces;
 };
 
+// Empty when the primitive's side count is within kMaxPrimitiveSides (core/util/input_limits.h),
+// else the refusal that names the limit ("a cylinder may have at most 1024 sides; this one
+// has 100000"). The project reader, AddPrimitive and the GUI check it where a count enters.
+std::string PrimitiveSidesProblem(const PrimitiveShape& primitive);
+
 // K_create: adds the primitive's vertices and faces to the mesh with world positions from
 // its pose, per-corner UVs (the corner's local position projected on the face's first edge
 // and its in-plane normal, in world units) and per-face materials (face index, or 0/1 for
-// caps/sides of a cylinder). Refuses non-positive dimensions or too few segments.
+// caps/sides of a cylinder). Refuses non-positive dimensions, too few segments and more
+// than kMaxPrimitiveSides.
 AddPrimitiveResult AddPrimitive(PolyMesh* mesh, const PrimitiveShape& primitive);
 
 // Recomputes the world positions of every vertex of `primitive.id` from its local

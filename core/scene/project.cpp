@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cassert>
+#include <unordered_map>
+
+#include "core/util/input_limits.h"
 
 namespace facet {
 
@@ -68,25 +71,33 @@ void RefreshPrimitive(Project* project, Primitive* primitive) {
   UpdatePrimitivePositions(&primitive->mesh, primitive->shape);
 }
 
-void RefreshAllPrimitives(Project* project) {
-  // Attachment chains are short (a roof on a box); bases first, by depth.
-  auto depth = [&](const Primitive& p) {
-    int d = 0;
-    const Primitive* cur = &p;
-    while (cur->attached_to != kNoId && d < 64) {
-      cur = project->FindPrimitive(cur->attached_to);
-      if (cur == nullptr) break;
-      ++d;
-    }
-    return d;
-  };
-  int max_depth = 0;
-  for (const Primitive& p : project->primitives) max_depth = std::max(max_depth, depth(p));
-  for (int d = 0; d <= max_depth; ++d) {
-    for (Primitive& p : project->primitives) {
-      if (depth(p) == d) RefreshPrimitive(project, &p);
-    }
+int AttachmentDepth(const Project& project, const Primitive& primitive) {
+  int depth = 0;
+  for (const Primitive* cur = &primitive; cur->attached_to != kNoId && depth < kMaxAttachmentDepth; ++depth) {
+    cur = project.FindPrimitive(cur->attached_to);
+    if (cur == nullptr) break;
   }
+  return depth;
+}
+
+void RefreshAllPrimitives(Project* project) {
+  // Bases first, by depth. The depths are computed once through an id index: a project of
+  // many primitives in deep chains would otherwise walk every chain once per level.
+  std::unordered_map<Id, const Primitive*> by_id;
+  for (const Primitive& p : project->primitives) by_id[p.id] = &p;
+  std::vector<std::pair<int, size_t>> order;  // (depth, index), stable by index within a depth
+  for (size_t i = 0; i < project->primitives.size(); ++i) {
+    int depth = 0;
+    for (const Primitive* cur = &project->primitives[i]; cur->attached_to != kNoId && depth < kMaxAttachmentDepth;
+         ++depth) {
+      const auto it = by_id.find(cur->attached_to);
+      if (it == by_id.end()) break;
+      cur = it->second;
+    }
+    order.emplace_back(depth, i);
+  }
+  std::sort(order.begin(), order.end());
+  for (const auto& [depth, i] : order) RefreshPrimitive(project, &project->primitives[i]);
 }
 
 const FaceTextureOverride* FindFaceTextureOverride(const Primitive& primitive, FaceId face) {

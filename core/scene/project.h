@@ -227,6 +227,9 @@ bool AddPrimitiveToProject(Project* project, PrimitiveShape shape, const std::st
 void RefreshPrimitive(Project* project, Primitive* primitive);
 // RefreshPrimitive for every primitive, bases before the primitives attached to them.
 void RefreshAllPrimitives(Project* project);
+// How many bases the primitive sits on (0: none), counted up to kMaxAttachmentDepth
+// (core/util/input_limits.h), which a file or an edit may not exceed.
+int AttachmentDepth(const Project& project, const Primitive& primitive);
 
 bool operator==(const Camera& a, const Camera& b);
 bool operator==(const Image& a, const Image& b);
