@@ -1,14 +1,18 @@
 // Issue 27: COLMAP itself (the Debian package, run by core/io/colmap_run.h) on four of
 // Strecha's fountain-P11 photos (0004-0007, FACET_SHARED_DATA/strecha-fountain-p11-subset),
-// features found at most 1024 px on the longer side, one lens for all four. The reconstruction
-// is brought into the ground truth's frame by the similarity that best maps its camera centres
-// onto the true ones (core/estimators/similarity_fit.h); then every photo must be registered,
-// every camera's rotation within 0.3 degrees of the truth and its focal length within 1 %. The
-// figures (time per stage, rotation, centre and focal errors) are printed with MESSAGE.
+// features found at most 1024 px on the longer side, one lens for all four. Every photo must be
+// registered; every relative rotation between two cameras within 0.3 degrees of the truth's;
+// and, with the reconstruction brought into the ground truth's frame, every camera's rotation
+// within 0.3 degrees and its focal length within 1 %. The frame: the similarity on the camera
+// centres (core/estimators/similarity_fit.h) is reported, but four centres on a gentle arc fix
+// the turn about the line through them weakly (it left all four cameras ~0.45 deg off by one
+// common turn), so the asserted alignment takes its rotation from the cameras' rotations and its
+// scale and shift from the centres. The figures (time per stage, rotation, centre and focal
+// errors) are printed with MESSAGE.
 //
-// Cost: COLMAP takes about 1.5 minutes of two cores here (most of it feature extraction and
-// matching); the test fails, rather than skipping, when colmap is not installed
-// (scripts/setup.sh installs it).
+// Cost: COLMAP took 148-154 s of two heavily loaded cores here (feature extraction 53-59 s, matching
+// 64-65 s, mapping 30-32 s; 93 s in all on a lighter load); the test fails, rather than skipping, when
+// colmap is not installed (scripts/setup.sh installs it).
 //
 // The binary model COLMAP wrote is also converted to text by COLMAP's own model_converter, and
 // Facet's binary and text readers must agree on it to the last bit.
@@ -21,6 +25,8 @@
 #include <vector>
 
 #include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <Eigen/SVD>
 
 #include "core/estimators/similarity_fit.h"
 #include "core/io/colmap_camera.h"
@@ -88,22 +94,65 @@ TEST_CASE("COLMAP on fountain 0004-0007 registers every photo; aligned, each cam
     centers.push_back(camera.CenterInWorld());
     true_centers.push_back(truths.back().CenterInWorld());
   }
+  // Alignment-free first: the rotation between every two cameras against the truth's.
+  double max_relative_error_deg = 0.0;
+  for (size_t i = 0; i < kPhotos.size(); ++i)
+    for (size_t j = i + 1; j < kPhotos.size(); ++j) {
+      const Eigen::Matrix3d relative =
+          cameras[i].cam_from_world_rotation * cameras[j].cam_from_world_rotation.transpose();
+      const Eigen::Matrix3d true_relative =
+          truths[i].cam_from_world_rotation * truths[j].cam_from_world_rotation.transpose();
+      max_relative_error_deg = std::max(max_relative_error_deg, RotationAngleDeg(relative * true_relative.transpose()));
+    }
+  MESSAGE("largest error of a relative rotation between two cameras: " << max_relative_error_deg << " deg");
+  CHECK(max_relative_error_deg < kMaxRotationErrorDeg);
+
+  // The similarity on the camera centres alone (Umeyama).
   const SimilarityFit fit = FitSimilarity(centers, true_centers);
   REQUIRE_MESSAGE(fit.ok, fit.message);
   double baseline = 0.0;  // the largest distance between two true centres
   for (const Eigen::Vector3d& a : true_centers)
     for (const Eigen::Vector3d& b : true_centers) baseline = std::max(baseline, (a - b).norm());
-  MESSAGE("alignment: scale " << fit.transform.scale << ", centre RMS residual " << fit.rms_residual << " m ("
-                              << 100.0 * fit.rms_residual / baseline << " % of the " << baseline
-                              << " m widest baseline)");
-
+  MESSAGE("alignment on the centres: scale " << fit.transform.scale << ", centre RMS residual " << fit.rms_residual
+                                             << " m (" << 100.0 * fit.rms_residual / baseline << " % of the "
+                                             << baseline << " m widest baseline)");
   for (size_t i = 0; i < kPhotos.size(); ++i) {
     // world_true = s R world_colmap + t, so cam_from_world_true = cam_from_world_colmap * R^T.
     const Eigen::Matrix3d rotation = cameras[i].cam_from_world_rotation * fit.transform.rotation.transpose();
+    MESSAGE(kPhotos[i] << " after the centre alignment: rotation "
+                       << RotationAngleDeg(rotation * truths[i].cam_from_world_rotation.transpose()) << " deg, centre "
+                       << (fit.transform.Apply(centers[i]) - true_centers[i]).norm() << " m");
+  }
+
+  // Four centres on a gentle arc leave the turn about the line through them weakly fixed (the
+  // errors above are one common turn), so the rotation of the frame is taken from the cameras'
+  // rotations (their chordal mean: world_true_from_colmap ~ R_true_i^T R_colmap_i), the scale and
+  // shift from the centres given it. That is the alignment the bound applies to.
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < kPhotos.size(); ++i)
+    sum += truths[i].cam_from_world_rotation.transpose() * cameras[i].cam_from_world_rotation;
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Vector3d signs(1.0, 1.0, 1.0);
+  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0) signs(2) = -1.0;
+  const Eigen::Matrix3d frame_rotation = svd.matrixU() * signs.asDiagonal() * svd.matrixV().transpose();
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero(), true_mean = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < kPhotos.size(); ++i) mean += centers[i] / 4.0, true_mean += true_centers[i] / 4.0;
+  double numerator = 0.0, denominator = 0.0;
+  for (size_t i = 0; i < kPhotos.size(); ++i) {
+    numerator += (true_centers[i] - true_mean).dot(frame_rotation * (centers[i] - mean));
+    denominator += (centers[i] - mean).squaredNorm();
+  }
+  const double scale = numerator / denominator;
+  MESSAGE("alignment on the rotations: " << RotationAngleDeg(frame_rotation * fit.transform.rotation.transpose())
+                                         << " deg from the centres' rotation, scale " << scale);
+
+  for (size_t i = 0; i < kPhotos.size(); ++i) {
+    const Eigen::Matrix3d rotation = cameras[i].cam_from_world_rotation * frame_rotation.transpose();
     const double rotation_error_deg = RotationAngleDeg(rotation * truths[i].cam_from_world_rotation.transpose());
     const double true_focal = 0.5 * (truths[i].K(0, 0) + truths[i].K(1, 1));
     const double focal_error = cameras[i].focal_px / true_focal - 1.0;
-    const double center_error = (fit.transform.Apply(centers[i]) - true_centers[i]).norm();
+    const Eigen::Vector3d aligned_center = scale * frame_rotation * (centers[i] - mean) + true_mean;
+    const double center_error = (aligned_center - true_centers[i]).norm();
     MESSAGE(kPhotos[i] << ": rotation " << rotation_error_deg << " deg, centre " << center_error << " m, focal "
                        << cameras[i].focal_px << " px vs " << true_focal << " (" << 100.0 * focal_error << " %), k1 "
                        << cameras[i].k1 << ", principal point (" << cameras[i].principal_point_px.x() << ", "
