@@ -51,7 +51,8 @@ std::vector<std::uint8_t> SquareBin() {
   return bytes;
 }
 
-void CheckMesh(const std::string& name, const std::string& error, const facet::ReferenceMesh& mesh) {
+// What every message must be: valid UTF-8, and silent about the file outside the folder.
+void CheckMessage(const std::string& name, const std::string& error) {
   try {
     (void)nlohmann::json(error).dump();
   } catch (const nlohmann::json::exception&) {
@@ -59,6 +60,10 @@ void CheckMesh(const std::string& name, const std::string& error, const facet::R
   }
   if (error.find("FIFO") != std::string::npos)
     Fail(kTarget, name + ": the file outside the folder was looked at: " + error);
+}
+
+void CheckMesh(const std::string& name, const std::string& error, const facet::ReferenceMesh& mesh) {
+  CheckMessage(name, error);
   if (!error.empty()) {
     if (error.rfind(name + ": ", 0) != 0 && error.rfind(name + ", line ", 0) != 0)
       Fail(kTarget, "a refusal does not start with the file's name: " + error);
@@ -111,7 +116,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
   facet::GltfScene scene;
   error = facet::ReadGltfBytes(bytes, "scene.gltf", g_folder, facet::GltfReadOptions(), &scene);
-  CheckMesh("scene.gltf", error, facet::ReferenceMesh());
+  CheckMessage("scene.gltf", error);
   if (!error.empty()) {
     if (error.rfind("scene.gltf: ", 0) != 0) Fail(kTarget, "a refusal does not start with the file's name: " + error);
     if (!scene.positions.empty() || !scene.batches.empty() || !scene.cameras.empty() || !scene.images.empty())
