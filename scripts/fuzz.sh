@@ -18,7 +18,7 @@ bash scripts/setup.sh --checked
 
 seconds="${1:-60}"
 [ $# -gt 0 ] && shift
-all_targets=(fuzz_project fuzz_recovery fuzz_colmap_model fuzz_calibrate_lines fuzz_calibrate_points fuzz_relate_matches fuzz_input_script fuzz_image)
+all_targets=(fuzz_project fuzz_recovery fuzz_colmap_model fuzz_reference fuzz_calibrate_lines fuzz_calibrate_points fuzz_relate_matches fuzz_input_script fuzz_image)
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=("${all_targets[@]}")
 build="${FACET_BUILD_DIR:-$root/build/fuzz}"

@@ -298,17 +298,22 @@ TEST_CASE("regression: many wrong matches just outside the threshold cost a boun
   o.seed = 11;
   TwoViewScene s = MakeScene(o);
   std::mt19937 rng(5);
-  std::uniform_real_distribution<double> shift(3.0, 8.0);
+  std::uniform_real_distribution<double> target_rms(3.5, 5.5);
   std::uniform_int_distribution<int> sign(0, 1);
   for (int i = kTrue; i < kTrue + kNear; ++i) {
     const Eigen::Vector3d line = s.F * s.uv1[i].homogeneous();
-    const Eigen::Vector2d normal = line.head<2>().normalized();
+    const Eigen::Vector2d across = (sign(rng) ? 1.0 : -1.0) * line.head<2>().normalized();
     const Eigen::Vector2d on_line = s.uv2[i];
-    double rms = 0.0;
-    do {  // off the line across it, until the RMS of both distances is in the band
-      s.uv2[i] = on_line + (sign(rng) ? 1.0 : -1.0) * shift(rng) * normal;
-      rms = SymmetricEpipolarDistances(s.F, s.uv1[i], s.uv2[i]).norm() / std::sqrt(2.0);
-    } while (rms < 3.3 || rms > 5.7);
+    auto rms_at = [&](double shift) {
+      return SymmetricEpipolarDistances(s.F, s.uv1[i], on_line + shift * across).norm() / std::sqrt(2.0);
+    };
+    // Moved across its epipolar line until the RMS of both distances is the target (bisection).
+    const double target = target_rms(rng);
+    double lo = 0.0, hi = 50.0;
+    for (int k = 0; k < 60; ++k) (rms_at(0.5 * (lo + hi)) < target ? lo : hi) = 0.5 * (lo + hi);
+    s.uv2[i] = on_line + hi * across;
+    REQUIRE(rms_at(hi) > 3.3);
+    REQUIRE(rms_at(hi) < 5.7);
   }
   const FundamentalSummary summary = EstimateFundamentalMatrix(s.uv1, s.uv2, FundamentalOptions());
   REQUIRE_MESSAGE(summary.IsUsable(), summary.message);

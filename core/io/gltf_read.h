@@ -17,9 +17,14 @@
 // decoded; never http: or another scheme), TRIANGLES
 // primitives, float positions / normals / texture coordinates (any byte stride), indices of
 // 8, 16 or 32 bits or none, node hierarchies with matrix or TRS, perspective cameras. Anything
-// else is refused with a message naming it, never read wrongly.
+// else is refused with a message naming it, never read wrongly: every count, offset and
+// stride is checked against its buffer before anything is allocated or read, every JSON field
+// against the type it must have, and positions, normals and texture coordinates must be
+// finite (NaN and infinities are refused by name).
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -31,8 +36,8 @@
 namespace facet {
 
 struct GltfCamera {
-  std::string name;        // the node's name, else the camera's
-  double yfov_rad = 0.0;   // vertical field of view
+  std::string name;           // the node's name, else the camera's
+  double yfov_rad = 0.0;      // vertical field of view
   double aspect_ratio = 0.0;  // width / height; 0 when the file does not give it
   double znear = 0.0;
   bool has_principal_point = false;  // extras.principal_point_px was there
@@ -54,17 +59,35 @@ struct GltfScene {
   std::vector<Eigen::Vector3f> normals;    // unit; zero when the file has none
   std::vector<Eigen::Vector2f> uvs;        // TEXCOORD_0, (0, 0) when absent; v down as glTF's
   std::vector<GltfBatch> batches;
-  std::vector<ImageRgba8> images;  // decoded embedded images, by glTF image index
+  std::vector<ImageRgba8> images;   // decoded embedded images, by glTF image index
   std::vector<GltfCamera> cameras;  // one per camera node, in node order
 };
 
 struct GltfReadOptions {
   int default_height_px = 1000;  // image height of a camera without extras.image_size_px
   bool decode_images = true;     // false: GltfScene::images stays empty (geometry only)
+  // Caps checked before anything is allocated or read: a file over one is refused with the
+  // limit named. A mesh used by several nodes counts once per node (its triangles are copied
+  // under each node's transform).
+  size_t max_vertices = 16'000'000;   // GltfScene::positions
+  size_t max_triangles = 32'000'000;  // over all batches
+  size_t max_primitives = 100'000;    // primitive instances (one GltfBatch each)
+  size_t max_nodes = 1'000'000;       // the file's `nodes` array
 };
 
-// Reads `path`. Returns an empty string on success, else the error naming the file and what
-// is wrong or unsupported (and *scene is left empty).
+// Reads a glTF held in memory: GLB when `bytes` start with the GLB magic, else JSON text.
+// `name` (the file's path, for the wrappers below) starts every error message. `folder` is
+// where buffers and images with a relative URI are read from; such a URI must stay inside it
+// after %XX decoding (no absolute path, no `..` component, no symbolic link leading out),
+// else it is refused without opening or describing anything outside. An empty `folder` allows
+// data: URIs and a GLB's BIN chunk only. Returns an empty string on success, else the error
+// (and *scene is left empty); never throws.
+std::string ReadGltfBytes(const std::vector<std::uint8_t>& bytes, const std::string& name, const std::string& folder,
+                          const GltfReadOptions& options, GltfScene* scene);
+
+// Reads `path` (its folder as ReadGltfBytes's `folder`). Returns an empty string on success,
+// else the error naming the file and what is wrong or unsupported (and *scene is left empty).
+// ReadGlb refuses a file that is not a GLB.
 std::string ReadGlb(const std::string& path, const GltfReadOptions& options, GltfScene* scene);
 
 // Reads `path` as ReadGlb does when it starts with the GLB magic, else as a JSON glTF (.gltf)

@@ -4,6 +4,8 @@
 #include <cctype>
 #include <charconv>
 #include <filesystem>
+#include <functional>
+#include <new>
 #include <set>
 #include <sstream>
 
@@ -19,11 +21,29 @@ Eigen::Vector3d WorldFromFile(const Eigen::Vector3d& p, bool y_up) {
 }
 
 // An OBJ index (1-based, or negative: counted back from the last vertex so far) as 0-based;
-// -1 when it is 0 or out of range.
+// -1 when it is 0 or out of range. `count` is at most kMaxReferenceVertices.
 int ObjIndex(long value, size_t count) {
-  if (value > 0 && static_cast<size_t>(value) <= count) return static_cast<int>(value - 1);
-  if (value < 0 && static_cast<size_t>(-value) <= count) return static_cast<int>(count + value);
+  const long n = static_cast<long>(count);
+  if (value > 0 && value <= n) return static_cast<int>(value - 1);
+  if (value < 0 && value >= -n) return static_cast<int>(n + value);
   return -1;
+}
+
+// Text from the file quoted in a message: printable ASCII only (the app's log and reports are
+// JSON, which holds UTF-8 only), shortened.
+std::string Quoted(const std::string& text) {
+  constexpr size_t kMaxQuoted = 40;
+  std::string out = "'";
+  for (size_t i = 0; i < text.size() && i < kMaxQuoted; ++i) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    out += c >= 0x20 && c < 0x7F ? static_cast<char>(c) : '?';
+  }
+  if (text.size() > kMaxQuoted) out += "...";
+  return out + "'";
+}
+
+std::string TooManyTriangles(const std::string& name) {
+  return name + ": more than " + std::to_string(kMaxReferenceTriangles) + " triangles, the most a reference may have";
 }
 
 std::string ReadObj(const std::string& path, const std::string& text, bool y_up, ReferenceMesh* mesh) {
@@ -41,7 +61,8 @@ std::string ReadObj(const std::string& path, const std::string& text, bool y_up,
       Eigen::Vector3d p;
       if (!(words >> p.x() >> p.y() >> p.z()) || !p.allFinite()) return at() + "a vertex needs three finite numbers";
       if (mesh->positions.size() >= kMaxReferenceVertices)
-        return path + ": more than " + std::to_string(kMaxReferenceVertices) + " vertices";
+        return path + ": more than " + std::to_string(kMaxReferenceVertices) +
+               " vertices, the most a reference may have";
       mesh->positions.push_back(WorldFromFile(p, y_up));
     } else if (tag == "f") {
       face.clear();
@@ -51,13 +72,14 @@ std::string ReadObj(const std::string& path, const std::string& text, bool y_up,
         const std::string first = corner.substr(0, corner.find('/'));
         long value = 0;
         const auto [end, ec] = std::from_chars(first.data(), first.data() + first.size(), value);
-        const int index = ec == std::errc() && end == first.data() + first.size()
-                              ? ObjIndex(value, mesh->positions.size())
-                              : -1;
-        if (index < 0) return at() + "face corner '" + corner + "' names no vertex defined before it";
+        const int index =
+            ec == std::errc() && end == first.data() + first.size() ? ObjIndex(value, mesh->positions.size()) : -1;
+        if (index < 0) return at() + "face corner " + Quoted(corner) + " names no vertex defined before it";
+        if (face.size() > kMaxReferenceTriangles + 2) return TooManyTriangles(path);
         face.push_back(index);
       }
       if (face.size() < 3) return at() + "a face needs at least three corners";
+      if (face.size() - 2 > kMaxReferenceTriangles - mesh->triangles.size()) return TooManyTriangles(path);
       for (size_t k = 1; k + 1 < face.size(); ++k) mesh->triangles.push_back({face[0], face[k], face[k + 1]});
       for (size_t k = 0; k < face.size(); ++k) mesh->edges.push_back({face[k], face[(k + 1) % face.size()]});
     }
@@ -65,14 +87,18 @@ std::string ReadObj(const std::string& path, const std::string& text, bool y_up,
   return "";
 }
 
-std::string ReadGltfReference(const std::string& path, bool y_up, ReferenceMesh* mesh) {
-  GltfScene scene;
+// The options a reference is read with: geometry only, within the reference's caps.
+GltfReadOptions ReferenceGltfOptions() {
   GltfReadOptions options;
   options.decode_images = false;
-  const std::string error = ReadGltf(path, options, &scene);
-  if (!error.empty()) return error;
-  if (scene.positions.size() > kMaxReferenceVertices)
-    return path + ": more than " + std::to_string(kMaxReferenceVertices) + " vertices";
+  options.max_vertices = kMaxReferenceVertices;
+  options.max_triangles = kMaxReferenceTriangles;
+  return options;
+}
+
+// A glTF scene's triangles (ReadGltf checked their indices and the caps) as a reference.
+void FromGltfScene(const GltfScene& scene, bool y_up, ReferenceMesh* mesh) {
+  mesh->positions.reserve(scene.positions.size());
   for (const Eigen::Vector3f& p : scene.positions) mesh->positions.push_back(WorldFromFile(p.cast<double>(), y_up));
   for (const GltfBatch& batch : scene.batches) {
     for (size_t i = 0; i + 2 < batch.indices.size(); i += 3) {
@@ -82,7 +108,6 @@ std::string ReadGltfReference(const std::string& path, bool y_up, ReferenceMesh*
       for (int k = 0; k < 3; ++k) mesh->edges.push_back({t[k], t[(k + 1) % 3]});
     }
   }
-  return "";
 }
 
 // Each undirected edge once; glTF's triangles keep their diagonals (the file has no polygons).
@@ -96,23 +121,9 @@ void DeduplicateEdges(ReferenceMesh* mesh) {
   mesh->edges = std::move(unique);
 }
 
-}  // namespace
-
-std::string ReadReferenceMesh(const std::string& path, bool y_up, ReferenceMesh* mesh) {
-  *mesh = ReferenceMesh();
-  std::string extension = std::filesystem::path(path).extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  std::string error;
-  if (extension == ".obj") {
-    std::string text;
-    if (!ReadRegularFile(path, kMaxTextFileBytes, &text, &error)) return error;
-    error = ReadObj(path, text, y_up, mesh);
-  } else if (extension == ".glb" || extension == ".gltf") {
-    error = ReadGltfReference(path, y_up, mesh);
-  } else {
-    return path + ": a reference mesh must be a Wavefront .obj or a glTF .glb or .gltf";
-  }
-  if (error.empty() && mesh->triangles.empty()) error = path + ": the file holds no triangles";
+// What every reader ends with: an empty mesh on error, else its edges once each and bounds.
+std::string Finish(const std::string& name, std::string error, ReferenceMesh* mesh) {
+  if (error.empty() && mesh->triangles.empty()) error = name + ": the file holds no triangles";
   if (!error.empty()) {
     *mesh = ReferenceMesh();
     return error;
@@ -124,6 +135,55 @@ std::string ReadReferenceMesh(const std::string& path, bool y_up, ReferenceMesh*
     mesh->hi = mesh->hi.cwiseMax(p);
   }
   return "";
+}
+
+// Reads into *mesh; any exception (out of memory) is a message too.
+std::string Guarded(const std::string& name, ReferenceMesh* mesh, const std::function<std::string()>& read) {
+  *mesh = ReferenceMesh();
+  std::string error;
+  try {
+    error = read();
+  } catch (const std::bad_alloc&) {
+    error = name + ": too large to read (out of memory)";
+  } catch (const std::exception& e) {
+    error = name + ": cannot be read (" + std::string(e.what()) + ")";
+  }
+  return Finish(name, std::move(error), mesh);
+}
+
+}  // namespace
+
+std::string ReadReferenceMesh(const std::string& path, bool y_up, ReferenceMesh* mesh) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension == ".obj") {
+    return Guarded(path, mesh, [&] {
+      std::string text, error;
+      if (!ReadRegularFile(path, kMaxTextFileBytes, &text, &error)) return error;
+      return ReadObj(path, text, y_up, mesh);
+    });
+  }
+  if (extension == ".glb" || extension == ".gltf") {
+    return Guarded(path, mesh, [&] {
+      GltfScene scene;
+      const std::string error = ReadGltf(path, ReferenceGltfOptions(), &scene);
+      if (error.empty()) FromGltfScene(scene, y_up, mesh);
+      return error;
+    });
+  }
+  *mesh = ReferenceMesh();
+  return path + ": a reference mesh must be a Wavefront .obj or a glTF .glb or .gltf";
+}
+
+std::string ReadReferenceMeshBytes(const std::vector<std::uint8_t>& bytes, ReferenceFormat format,
+                                   const std::string& name, const std::string& folder, bool y_up, ReferenceMesh* mesh) {
+  return Guarded(name, mesh, [&] {
+    if (format == ReferenceFormat::kObj) return ReadObj(name, std::string(bytes.begin(), bytes.end()), y_up, mesh);
+    GltfScene scene;
+    const std::string error = ReadGltfBytes(bytes, name, folder, ReferenceGltfOptions(), &scene);
+    if (error.empty()) FromGltfScene(scene, y_up, mesh);
+    return error;
+  });
 }
 
 }  // namespace facet

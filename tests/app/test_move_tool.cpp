@@ -447,3 +447,64 @@ TEST_CASE("reference geometry: a .gltf with its .bin is added by the app; one wi
   CHECK(refused.find("buffer 0") != std::string::npos);
   CHECK(refused.find("gone.bin") != std::string::npos);
 }
+
+// Issue 25: a saved project naming hostile reference files (the import probe's) crashed every
+// time it opened. It opens, says for each file what is wrong, keeps the references and the
+// model, and saves them again as they were.
+TEST_CASE("reference geometry: a project naming hostile glTF files opens with a message for each, nothing lost") {
+  TempDir dir("reference_hostile");
+  facet::Id box_id = facet::kNoId;
+  const std::string box_path = WriteFreeBox(dir, &box_id);
+  const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  std::string bin(reinterpret_cast<const char*>(positions), sizeof(positions));
+  const nlohmann::json square = {
+      {"asset", {{"version", "2.0"}}},
+      {"nodes", {{{"mesh", 0}}}},
+      {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"material", 0}}}}}}},
+      {"materials", {{{"pbrMetallicRoughness", {{"baseColorFactor", {1, 1, 1, 1}}}}}}},
+      {"cameras", {{{"type", "perspective"}, {"perspective", {{"yfov", 0.8}}}, {"extras", nlohmann::json::object()}}}},
+      {"buffers", {{{"uri", "tri.bin"}, {"byteLength", bin.size()}}}},
+      {"bufferViews", {{{"buffer", 0}, {"byteLength", bin.size()}}}},
+      {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}}}}};
+  WriteText(dir / "tri.bin", bin);
+  struct Hostile {
+    std::string file, pointer;
+    nlohmann::json value;
+    std::string says;
+  };
+  const std::vector<Hostile> hostile = {
+      {"wrap.gltf", "/accessors/0/count", 6148914691236517206ull, "accessor 0 (POSITION).count"},
+      {"stride.gltf", "/bufferViews/0/byteStride", 1ull << 63, "byteStride"},
+      {"image_size.gltf", "/cameras/0/extras/image_size_px", nlohmann::json::array(), "image_size_px"},
+      {"color.gltf", "/materials/0/pbrMetallicRoughness/baseColorFactor", nlohmann::json::array(), "baseColorFactor"},
+      {"escape.gltf", "/buffers/0/uri", "..%2F..%2F..%2Fetc%2Fpasswd", "leaves the glTF's folder"},
+  };
+  facet::Project project = Load(box_path);
+  for (const Hostile& h : hostile) {
+    nlohmann::json file = square;
+    file[nlohmann::json::json_pointer(h.pointer)] = h.value;
+    if (h.file == "image_size.gltf") file["nodes"][0]["camera"] = 0;
+    WriteText(dir / h.file, file.dump());
+    facet::Reference reference;
+    reference.id = project.NewId();
+    reference.path = h.file;
+    project.references.push_back(reference);
+  }
+  const std::string path = dir / "hostile.facet";
+  REQUIRE(facet::SaveProject(project, path) == "");
+  const nlohmann::json report =
+      Render(dir, path, "hostile", "frames 3\ncommand save " + (dir / "again.facet") + "\nframes 1\n");
+  INFO("log:\n" << LogText(report));
+  REQUIRE(report.at("references").size() == hostile.size());
+  for (size_t i = 0; i < hostile.size(); ++i) {
+    CAPTURE(hostile[i].file);
+    CHECK_FALSE(report["references"][i]["loaded"].get<bool>());
+    const std::string error = report["references"][i]["error"].get<std::string>();
+    CHECK(error.find(hostile[i].file) != std::string::npos);
+    CHECK(error.find(hostile[i].says) != std::string::npos);
+    CHECK(LogText(report).find(hostile[i].file) != std::string::npos);
+  }
+  const facet::Project again = Load(dir / "again.facet");
+  CHECK(again.references == project.references);
+  CHECK(again.primitives.size() == project.primitives.size());
+}
