@@ -265,8 +265,7 @@ CalibrateIoResult CalibrateLinesJson(const std::string& lines_json_text) {
       // A point at infinity is its direction in the image, said as such, not a null that a
       // reader could take for a missing value (issue 14).
       if (summary.vanishing_point_at_infinity[a])
-        points.push_back(
-            {{"at_infinity", true}, {"direction", {v.x() / v.head<2>().norm(), v.y() / v.head<2>().norm()}}});
+        points.push_back({{"at_infinity", true}, {"direction", {v.x() / v.head<2>().norm(), v.y() / v.head<2>().norm()}}});
       else
         points.push_back({v.x() / v.z(), v.y() / v.z()});
       homogeneous.push_back({v.x(), v.y(), v.z()});

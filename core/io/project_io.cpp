@@ -516,28 +516,10 @@ bool CheckImageNumbers(const Image& im, const std::string& at, Reader* r) {
 
 bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
   if (!r->Object(j, at,
-                 {"id",
-                  "path",
-                  "width_px",
-                  "height_px",
-                  "camera",
-                  "camera_calibrated",
-                  "principal_point_mode",
-                  "fixed_principal_point_px",
-                  "pose_locked",
-                  "focal_locked",
-                  "principal_point_locked",
-                  "focal_mode",
-                  "fixed_focal_px",
-                  "focal_prior_px",
-                  "focal_prior_std_px",
-                  "use_horizon",
-                  "horizon_px",
-                  "estimate_distortion",
-                  "distortion_locked",
-                  "axis_quarter_turns",
-                  "use_for_texture",
-                  "lens_group"}))
+                 {"id", "path", "width_px", "height_px", "camera", "camera_calibrated", "principal_point_mode",
+                  "fixed_principal_point_px", "pose_locked", "focal_locked", "principal_point_locked", "focal_mode",
+                  "fixed_focal_px", "focal_prior_px", "focal_prior_std_px", "use_horizon", "horizon_px",
+                  "estimate_distortion", "distortion_locked", "axis_quarter_turns", "use_for_texture", "lens_group"}))
     return false;
   constexpr int kMaxSize = std::numeric_limits<int>::max();
   if (!r->IdField(j, at, "id", &im->id) || !r->FilePath(j, at, "path", &im->path) ||
@@ -803,10 +785,8 @@ bool ReadPrimitive(const Json& j, const std::string& at, Reader* r, Primitive* p
   if (j.contains("ridge")) {
     std::string ridge;
     if (!r->String(j, at, "ridge", &ridge)) return false;
-    if (ridge != "x" && ridge != "y")
-      return r->Fail(Join(at, "ridge"), "expected \"x\" or \"y\", found \"" + ridge + "\"");
-    if (shape.kind != PrimitiveKind::kWedge && ridge == "y")
-      return r->Fail(Join(at, "ridge"), "only a wedge has a ridge");
+    if (ridge != "x" && ridge != "y") return r->Fail(Join(at, "ridge"), "expected \"x\" or \"y\", found \"" + ridge + "\"");
+    if (shape.kind != PrimitiveKind::kWedge && ridge == "y") return r->Fail(Join(at, "ridge"), "only a wedge has a ridge");
     shape.ridge_along_y = ridge == "y";
   }
   const Json* locked = r->Field(j, at, "param_locked");
@@ -888,8 +868,7 @@ bool ReadReference(const Json& j, const std::string& at, Reader* r, Reference* r
         r->Bool(j, at, "visible", &ref->visible)))
     return false;
   if (ref->path.empty()) return r->Fail(Join(at, "path"), "a reference needs the path of its mesh file");
-  if (axes != "y_up" && axes != "z_up")
-    return r->Fail(Join(at, "axes"), "expected \"y_up\" or \"z_up\", found \"" + axes + "\"");
+  if (axes != "y_up" && axes != "z_up") return r->Fail(Join(at, "axes"), "expected \"y_up\" or \"z_up\", found \"" + axes + "\"");
   ref->y_up = axes == "y_up";
   return true;
 }
@@ -1155,9 +1134,10 @@ bool ReadProject(Json& root, Reader* r, Project* p) {
   std::string migrate_error;
   if (!MigrateToCurrent(&root, version->get<int>(), &migrate_error)) return r->Fail("", migrate_error);
 
-  if (!r->Object(root, "",
-                 {"format", "version", "units", "next_id", "images", "segments", "primitives", "pins", "constraints",
-                  "references"}) ||
+  if (!r->Object(
+          root, "",
+          {"format", "version", "units", "next_id", "images", "segments", "primitives", "pins", "constraints",
+           "references"}) ||
       !r->String(root, "", "units", &p->units) || !r->IdField(root, "", "next_id", &p->next_id) ||
       !ReadList(root, "images", r, ReadImage, &p->images) ||
       !ReadList(root, "segments", r, ReadSegment, &p->segments) ||
