@@ -9,7 +9,7 @@
 // reader's refusal would say "FIFO", and no file inside the folder is one.
 //
 // Properties: a refusal starts with the file's name and leaves the mesh empty, its message is
-// valid UTF-8 (the app's log and reports are JSON) and never says "FIFO"; a mesh that reads has
+// valid UTF-8 (the app's log and reports are JSON) and never names a side path as a FIFO; a mesh that reads has
 // triangles whose indices name its vertices, finite positions inside its bounds, and at most
 // kMaxReferenceVertices vertices and kMaxReferenceTriangles triangles.
 #include <sys/stat.h>
@@ -58,7 +58,8 @@ void CheckMessage(const std::string& name, const std::string& error) {
   } catch (const nlohmann::json::exception&) {
     Fail(kTarget, name + ": a message is not valid UTF-8");
   }
-  if (error.find("FIFO") != std::string::npos)
+  // The file reader names the path it refused; the input itself may well say "FIFO".
+  if (error.find(g_folder + "/") != std::string::npos && error.find("FIFO") != std::string::npos)
     Fail(kTarget, name + ": the file outside the folder was looked at: " + error);
 }
 
