@@ -1624,7 +1624,7 @@ TEST_CASE("numbers that are no camera are refused at open, naming the field") {
   }
   {
     Json j = SmallJson();
-    j["images"][0]["camera"]["k1"] = -0.1;  // a real lens's barrel distortion
+    j["images"][0]["camera"]["k1"] = -0.01;  // a mild barrel distortion that does not fold this photo
     CHECK(facet::ProjectFromJson(j.dump()).ok());
   }
   for (const double fixed : {1e-300, 1e308}) {
