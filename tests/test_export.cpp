@@ -1166,7 +1166,7 @@ TEST_CASE("reference meshes: a .gltf with its buffer in a .bin file or a data: U
        "buffer 0 holds " + std::to_string(bin.size()) + " bytes, its byteLength says " +
            std::to_string(bin.size() + 40)},
       {"missing.gltf", missing_bin.dump(), "buffer 0: " + (dir / "gone.bin").string()},
-      {"remote.gltf", remote.dump(), "buffer 0: its URI https:... is not a file beside the glTF"},
+      {"remote.gltf", remote.dump(), "buffer 0: its URI 'https:'... is not a file beside the glTF"},
       {"no_uri.gltf", no_uri.dump(), "buffer 0 has no uri"},
       {"not_base64.gltf", not_base64.dump(), "buffer 0: its data: URI holds a character that is not base64"},
       {"truncated.gltf", with_file.dump().substr(0, 80), "malformed glTF JSON"},

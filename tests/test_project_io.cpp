@@ -27,6 +27,7 @@
 #include "core/geometry/camera.h"
 #include "core/image/image_io.h"
 #include "core/io/project_io.h"
+#include "core/util/input_limits.h"
 #include "core/mesh/extrude.h"
 #include "core/mesh/operators.h"
 #include "core/scene/project.h"
@@ -1131,27 +1132,34 @@ TEST_CASE("regression: a mesh's id ends are bounded over the whole project befor
   CHECK(r.project.primitives[0].mesh.VertexIdEnd() == 1000);
   CHECK(facet::ProjectFromJson(facet::ProjectToJson(r.project)).project == r.project);
 
-  // The bound is over all primitives: each unedited 100,000-segment cylinder ("from_shape")
-  // takes 600,002 ids; one fits, a second does not.
+  // The bound is over all primitives: each unedited cylinder of kMaxPrimitiveSides sides
+  // ("from_shape") takes a few thousand ids; as many as fit load, one more does not.
   j = sample;
   Json cylinder = j["primitives"][0];
   cylinder["kind"] = "cylinder";
-  cylinder["segments"] = 100000;
+  cylinder["segments"] = facet::kMaxPrimitiveSides;
   cylinder["mesh"] = "from_shape";
   j["pins"] = Json::array();
   j["primitives"] = Json::array({cylinder});
   r = facet::ProjectFromJson(j.dump());
   REQUIRE_MESSAGE(r.ok(), r.error);
   const auto& mesh = r.project.primitives[0].mesh;
-  const std::uint64_t ids = std::uint64_t{mesh.VertexIdEnd()} + mesh.EdgeIdEnd() + mesh.FaceIdEnd();
-  CHECK(ids > facet::kMaxProjectMeshIds / 2);
-  CHECK(ids <= facet::kMaxProjectMeshIds);
-  cylinder["id"] = j["next_id"];
-  j["next_id"] = j["next_id"].get<int>() + 1;
-  j["primitives"].push_back(cylinder);
+  const std::uint64_t ids_per_cylinder = std::uint64_t{mesh.VertexIdEnd()} + mesh.EdgeIdEnd() + mesh.FaceIdEnd();
+  const std::uint64_t fitting = facet::kMaxProjectMeshIds / ids_per_cylinder;
+  REQUIRE(fitting >= 1);
+  auto add_cylinder = [&]() {
+    cylinder["id"] = j["next_id"];
+    j["next_id"] = j["next_id"].get<int>() + 1;
+    j["primitives"].push_back(cylinder);
+  };
+  while (j["primitives"].size() < fitting) add_cylinder();
+  r = facet::ProjectFromJson(j.dump());
+  REQUIRE_MESSAGE(r.ok(), r.error);
+  add_cylinder();
   r = facet::ProjectFromJson(j.dump());
   CHECK_FALSE(r.ok());
-  CHECK(r.error.rfind("primitives[1].mesh: the meshes' ids go past the limit", 0) == 0);
+  CHECK_MESSAGE(r.error.rfind("primitives[" + std::to_string(fitting) + "].mesh: the meshes' ids go past the limit", 0) == 0,
+                r.error);
 }
 
 TEST_CASE("a wedge's ridge along y round-trips; absent means x; a bad value names its path") {

@@ -254,7 +254,7 @@ TEST_CASE("a history that does not lead to its project is an error naming the ed
   error = mutated([](json& j) { j["project"]["images"][0]["camera"]["focal_px"] = 850.0; });
   CHECK(error.find("history: undo[1]: does not revert") == 0);
   // A redo edit that starts from another project.
-  error = mutated([](json& j) { j["redo"][0]["images"][0]["before"]["camera"]["focal_px"] = 1.0; });
+  error = mutated([](json& j) { j["redo"][0]["images"][0]["before"]["camera"]["focal_px"] = 1000.0; });
   CHECK(error.find("history: redo[0]: does not apply onto the project before it") == 0);
   // An index that points past the list.
   error = mutated([](json& j) {

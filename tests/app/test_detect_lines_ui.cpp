@@ -233,8 +233,10 @@ TEST_CASE("Detect lines runs on a worker: frames go on meanwhile, and the propos
   TempDir dir("detect_lines_worker");
   const std::string project = WriteEmptyProject(dir);
   const std::string small = WriteSmallPhoto(dir);
-  const std::string add =
-      "frames 2\ncommand add-photo " + kLeuvenPhoto + "\ncommand add-photo " + small + "\nframes 2\n";
+  // Detection on add is ticked by default: off here, so that the button below starts the
+  // only detection.
+  const std::string add = "frames 2\ncommand lines on-add off\ncommand add-photo " + kLeuvenPhoto +
+                          "\ncommand add-photo " + small + "\nframes 2\n";
   const nlohmann::json probe = RenderScript(dir, project, "probe", add);
   REQUIRE(probe.at("items").contains("image.detect_lines"));
   CHECK(probe.at("line_detection").at("started") == 0);

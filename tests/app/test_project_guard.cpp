@@ -179,7 +179,7 @@ TEST_CASE("a second process on a project another render edits leaves its recover
   facet::testing::WriteText(go1, "");
   facet::testing::WriteText(go2, "");
   facet::testing::WriteText(dir / "a.txt", "frames 2\ncommand add box\ncommand wait-autosave\nscreenshot " +
-                                               (dir / "a_ready.png") + "\nwait-removed " + go1 + "\nwait-removed " +
+                                               (dir / "a_ready.png") + "\ncommand wait-removed " + go1 + "\ncommand wait-removed " +
                                                go2 + "\ncommand save\nframes 2\n");
   facet::testing::BackgroundRender a = facet::testing::StartRender(
       dir, "a", {"--autosave", project, "-o", dir / "a.png", "--script", dir / "a.txt", "--report", dir / "a.json"});
@@ -234,7 +234,7 @@ TEST_CASE("a save after the project file changed on disk is refused or asked, an
     const std::string go = dir / (name + "_go"), ready = dir / (name + "_ready.png");
     facet::testing::WriteText(go, "");
     facet::testing::WriteText(dir / (name + ".txt"), "frames 2\ncommand add box\nscreenshot " + ready +
-                                                         "\nwait-removed " + go + "\n" + script_after);
+                                                         "\ncommand wait-removed " + go + "\n" + script_after);
     facet::testing::BackgroundRender run = facet::testing::StartRender(
         dir, name,
         {project, "-o", dir / (name + ".png"), "--script", dir / (name + ".txt"), "--report", dir / (name + ".json")});
@@ -269,7 +269,7 @@ TEST_CASE("a save after the project file changed on disk is refused or asked, an
   std::thread check_after_cancel;
   const std::string asked_script = "key ctrl+s\nframes 3\nscreenshot " + (dir / "asked.png") +
                                    "\nclick left item changed.cancel\nframes 2\nscreenshot " +
-                                   (dir / "after_cancel.png") + "\nwait-removed " + cancelled +
+                                   (dir / "after_cancel.png") + "\ncommand wait-removed " + cancelled +
                                    "\nkey ctrl+s\nframes 3\nclick left item changed.overwrite\nframes 3\n";
   // Removing `cancelled` once the cancel's marker is there, after checking the file.
   bool theirs_after_cancel = false;
