@@ -597,7 +597,10 @@ TEST_CASE("paths that are not UTF-8: solve, export with a Blender script, and a 
   INFO(exported.err);
   CHECK(exported.exit_code == 0);
   CHECK(fs::exists(glb));
-  CHECK_GLTF_VALID(glb);
+  // The validator (Node) cannot open a path that is not UTF-8: it checks a copy by another name.
+  const std::string glb_copy = dir / "m_copy.glb";
+  fs::copy_file(glb, glb_copy, fs::copy_options::overwrite_existing);
+  CHECK_GLTF_VALID(glb_copy);
   REQUIRE(fs::exists(script));
   CHECK(ReadText(script).find("MODEL = os.fsdecode(bytes.fromhex(") != std::string::npos);
 
