@@ -91,7 +91,9 @@ void CollectWrite(AppState* state, bool wait) {
     ++autosave.stats.failures;
     // Not every frame: at the next change, or in 30 s (the cause may go away on its own).
     autosave.retry_after_s = state->time_s + kIntervalS;
-    autosave.failed_revision = state->document.revision();
+    // The revision the write held, not the document's now: an edit made while the failing
+    // write was under way is a change, and is tried at once.
+    autosave.failed_revision = job.revision;
     if (error != autosave.last_error)
       state->Log(LogLevel::kWarning, "Autosave: " + error + " (trying again at the next change, or in 30 s)");
     autosave.last_error = error;

@@ -311,14 +311,15 @@ TEST_CASE("a failed autosave is reported once, and written at the next edit once
   const std::string project = CopySample(dir);
   const std::string blocker = project + ".recovery";
   fs::create_symlink(dir / "missing/leuven.facet.recovery", blocker);
-  // Two edits, each tried once (and 20 frames after each: no attempt per frame); then the
+  // Two edits, each tried once (20 and 60 frames after them: no attempt per frame; the 60 leave
+  // the second attempt time to end under a sanitizer, whose write throttle is longer); then the
   // test removes the folder and a third edit is written.
   facet::testing::WriteText(dir / "fail.txt",
                             "frames 2\n"
                             "command add box\n"
                             "frames 20\n"
                             "command add box\n"
-                            "frames 20\n"
+                            "frames 60\n"
                             "screenshot " +
                                 (dir / "failed.png") +
                                 "\n"
@@ -447,7 +448,7 @@ TEST_CASE("a link at the recovery file's name is refused by name, and what it po
                                                  "command add box\n"
                                                  "frames 20\n"
                                                  "command add box\n"
-                                                 "frames 20\n");
+                                                 "frames 60\n");
     const std::string log = facet::testing::ReportLog(report);
     INFO(log);
     CHECK(facet::testing::ReadText(target) == bytes_before);
