@@ -1044,6 +1044,7 @@ OverlayInput MakeOverlayInput(AppState* state, const PanelState& panel, const Im
   overlay.selection = state->selection;
   overlay.selected_line_pin = SelectedLinePin(state);
   overlay.hover = hover;
+  overlay.flagged_pins = &state->last_update.joint.flagged_pins;
   const Interaction& drag = panel.interaction;
   if (drag.kind == DragKind::kMoveLinePinEnd) {  // the dragged handle stays lit
     overlay.hover = OverlayHover();

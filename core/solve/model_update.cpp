@@ -383,6 +383,10 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
     for (const std::string& held : summary.joint.held_distortion) summary.messages.push_back("Joint solve: " + held);
     if (summary.joint.IsUsable()) {
       *updated = std::move(joint_solved);
+      // A pin far beyond the others' spread is most likely a wrong click: named so that the
+      // user can move or drop it (the robust loss already keeps it from pulling the cameras).
+      for (const FlaggedPin& flagged : summary.joint.flagged_pins)
+        summary.messages.push_back("Joint solve: " + flagged.sentence);
     } else if (summary.joint.degenerate || summary.joint.termination == SolverTermination::kFailed) {
       // Its sizes went to zero or below, or it diverged from the geometry solve's result: the
       // model keeps the state the edit left it in, as the joint solve's message says ("the
