@@ -310,6 +310,11 @@ ModelUpdateOptions DragFrameUpdateOptions(int iterations) {
   options.joint.max_iterations = iterations;
   options.joint.compute_diagnostics = false;
   options.joint.polish_constraints = false;
+  // Plain least squares while a pin is dragged: the model follows the pin the user moves
+  // (the robust loss would down-weight it as soon as it left the others' spread, and the
+  // drag would seem to do nothing). The release's commit solve is robust and flags the pin
+  // if the other pins disagree with where it was left.
+  options.joint.robust_pins = false;
   options.initialize_from_pins = false;
   options.geometry_solve_when_warm = false;
   return options;
