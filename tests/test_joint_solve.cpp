@@ -645,9 +645,9 @@ TEST_CASE("joint solve: a distortion that would fold the photo is held, named, t
   const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
   INFO(summary.message);
   REQUIRE(summary.IsUsable());
-  REQUIRE(summary.held_distortion.size() == 1);
-  MESSAGE(summary.held_distortion[0]);
-  CHECK(summary.held_distortion[0].find("folds the photo") != std::string::npos);
+  REQUIRE(summary.held_intrinsics.size() == 1);
+  MESSAGE(summary.held_intrinsics[0]);
+  CHECK(summary.held_intrinsics[0].find("folds the photo") != std::string::npos);
   CHECK(solved.images[0].camera.k1 == p.images[0].camera.k1);
   CHECK(solved.images[0].camera.k2 == p.images[0].camera.k2);
   CHECK_FALSE(solved.images[0].distortion_locked);
@@ -658,6 +658,62 @@ TEST_CASE("joint solve: a distortion that would fold the photo is held, named, t
   REQUIRE(SolveJoint(locked, JointSolveOptions{}, &locked_solved).IsUsable());
   locked_solved.images[0].distortion_locked = false;
   CHECK(solved == locked_solved);
+}
+
+// Issue 26, the shared lens ran away (134,515 px from 19 pins): pins that barely fix f let
+// the solve take it beyond any lens. Here the pins are those of a 60 times longer lens from
+// 60 times farther (the same box, nearly an affine view; no line families), and f starts at
+// the photo's diagonal: the solve would go past 25 diagonals. It holds f where it started,
+// says so, and keeps the lock setting; the result is the locked solve's.
+TEST_CASE("joint solve: a focal length taken beyond 25 image diagonals is held, named, the lock setting kept") {
+  testing::SyntheticScene s = testing::MakeBoxScene({});
+  Project p = s.project;
+  p.segments.clear();
+  const Camera& near = s.true_camera;
+  Camera tele = near;
+  constexpr double kLonger = 60.0;
+  const Eigen::Vector3d forward = near.cam_from_world_rotation.row(2).transpose();
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (int c = 0; c < 8; ++c) centroid += s.true_box.mesh.vertex(c).position / 8.0;
+  const double distance = (centroid - near.CenterInWorld()).dot(forward);
+  const Eigen::Vector3d far_center = near.CenterInWorld() - (kLonger - 1.0) * distance * forward;
+  tele.focal_px = kLonger * near.focal_px;
+  tele.cam_from_world_translation = -(tele.cam_from_world_rotation * far_center);
+  const auto corner = [&](const Pin& pin) { return s.true_box.mesh.vertex(pin.vertex.vertex).position; };
+  for (Pin& pin : p.pins) pin.uv_px = tele.Project(corner(pin));
+  Image& image = p.images[0];
+  image.focal_locked = false;
+  const double diagonal = std::hypot(static_cast<double>(image.width_px), static_cast<double>(image.height_px));
+  REQUIRE(tele.focal_px / diagonal > 25.0);
+  REQUIRE(near.focal_px / diagonal < 25.0);
+  Project solved;
+  const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
+  INFO(summary.message);
+  REQUIRE(summary.IsUsable());
+  REQUIRE(summary.held_intrinsics.size() == 1);
+  MESSAGE(summary.held_intrinsics[0]);
+  CHECK(summary.held_intrinsics[0].find("the pins do not fix it; it was held at") != std::string::npos);
+  CHECK(solved.images[0].camera.focal_px == p.images[0].camera.focal_px);
+  CHECK_FALSE(solved.images[0].focal_locked);
+  Project locked = p;
+  locked.images[0].focal_locked = true;
+  Project locked_solved;
+  REQUIRE(SolveJoint(locked, JointSolveOptions{}, &locked_solved).IsUsable());
+  locked_solved.images[0].focal_locked = false;
+  CHECK(solved == locked_solved);
+  // The same pins with the focal length within 25 diagonals (10 times longer): refined, not held.
+  Project moderate = p;
+  Camera ten = near;
+  ten.focal_px = 10.0 * near.focal_px;
+  ten.cam_from_world_translation =
+      -(ten.cam_from_world_rotation * (near.CenterInWorld() - 9.0 * distance * forward));
+  for (Pin& pin : moderate.pins) pin.uv_px = ten.Project(corner(pin));
+  REQUIRE(ten.focal_px / diagonal < 25.0);
+  Project moderate_solved;
+  const JointSolveSummary refined = SolveJoint(moderate, JointSolveOptions{}, &moderate_solved);
+  REQUIRE(refined.IsUsable());
+  CHECK(refined.held_intrinsics.empty());
+  CHECK(moderate_solved.images[0].camera.focal_px != moderate.images[0].camera.focal_px);
 }
 
 TEST_CASE("joint solve: a failing solve leaves the project unchanged and says why") {

@@ -64,6 +64,11 @@ constexpr double kCostGapFloorPx2 = 1e-20;
 constexpr int kMaxDiagnosticParameters = 600;  // dense SVD above this costs too much for a full solve
 constexpr double kRankTolerance = 1e-9;        // singular values below this times the largest are zero
 constexpr int kMaxColdStartParameters = 300;   // the geometry solve's initialisation is dense
+// A focal length the solve takes beyond this many image diagonals (f / d times 43.3 mm: a
+// 1,080 mm lens on a full-frame camera) is no lens a photo for modelling was taken with, but
+// pins that cannot fix f letting it run along the viewing direction (134,515 px after 100
+// iterations from 19 pins on a shared lens, issue 26). It is held where it started.
+constexpr double kMaxSolvedFocalPerDiagonal = 25.0;
 
 // The damped normal equations (J^T J + lambda D) delta = -J^T r, D = diag(J^T J) floored.
 class NormalEquations {
@@ -1148,14 +1153,41 @@ JointSolveSummary SolveJointTraced(const Project& project, const JointSolveOptio
                      internal::FormatNumber(old->camera.k1, 4) + ", k2 = " + internal::FormatNumber(old->camera.k2, 4) +
                      " (draw plumb lines to estimate it, or lock it)");
   }
+  // A focal length that ran away (kMaxSolvedFocalPerDiagonal) is held the same way, for
+  // every photo of its lens.
+  for (const Image& image : solved->images) {
+    const Image* old = project.FindImage(image.id);
+    if (old == nullptr || old->focal_locked || old->camera.focal_px == image.camera.focal_px) continue;
+    const double diagonal = std::hypot(static_cast<double>(image.width_px), static_cast<double>(image.height_px));
+    const double start_per_diagonal = old->camera.focal_px / diagonal;
+    const double per_diagonal = image.camera.focal_px / diagonal;
+    const bool ran_away = !(per_diagonal >= kMinFocalPerDiagonal && per_diagonal <= kMaxSolvedFocalPerDiagonal);
+    const bool start_was_a_lens =
+        start_per_diagonal >= kMinFocalPerDiagonal && start_per_diagonal <= kMaxSolvedFocalPerDiagonal;
+    if (!ran_away || !start_was_a_lens || held.FindImage(image.id)->focal_locked) continue;
+    for (Image& same_lens : held.images) {
+      if (same_lens.id == image.id || (image.lens_group > 0 && same_lens.lens_group == image.lens_group))
+        same_lens.focal_locked = true;
+    }
+    folded.push_back("image '" + image.path + "': the solve took its focal length to " +
+                     internal::FormatNumber(image.camera.focal_px, 6) + " px (" +
+                     internal::FormatNumber(per_diagonal, 3) + " image diagonals, beyond any lens up to " +
+                     internal::FormatNumber(kMaxSolvedFocalPerDiagonal, 3) +
+                     "): the pins do not fix it; it was held at " + internal::FormatNumber(old->camera.focal_px, 6) +
+                     " px (pin points at other depths, add a photo from another side, or give the focal length)");
+  }
   if (!folded.empty()) {
     JointSolveSummary again = SolveJoint(held, options, solved);
     if (!again.IsUsable()) {
       *solved = project;
     } else {
-      for (const Image& image : project.images) solved->FindImage(image.id)->distortion_locked = image.distortion_locked;
+      for (const Image& image : project.images) {
+        Image* out = solved->FindImage(image.id);
+        out->distortion_locked = image.distortion_locked;
+        out->focal_locked = image.focal_locked;
+      }
     }
-    again.held_distortion = folded;
+    again.held_intrinsics = folded;
     again.warnings.insert(again.warnings.begin(), folded.begin(), folded.end());
     return again;
   }

@@ -152,9 +152,10 @@ struct JointSolveSummary : SolverSummary {
   // kFailed and the message names the size.
   bool degenerate = false;
   // Images whose unlocked distortion the solve took past any lens (WhyDistortionFolds,
-  // core/geometry/camera_checks.h): the solve ran again with it held, one sentence each (also
-  // first in warnings).
-  std::vector<std::string> held_distortion;
+  // core/geometry/camera_checks.h), or whose unlocked focal length it took beyond 25 image
+  // diagonals (a 1,080 mm lens on full frame: pins that do not fix f): the solve ran again
+  // with those held where they started, one sentence each (also first in warnings).
+  std::vector<std::string> held_intrinsics;
   std::vector<PinDiagnostic> pins;                // project.pins order
   std::vector<ImageDiagnostic> images;            // calibrated images with pins
   std::vector<ConstraintDiagnostic> constraints;  // project.constraints order

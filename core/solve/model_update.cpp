@@ -385,7 +385,7 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
     joint_options.warm_start = true;  // from the geometry solve's result
     Project joint_solved;
     summary.joint = SolveJoint(*updated, joint_options, &joint_solved);
-    for (const std::string& held : summary.joint.held_distortion) summary.messages.push_back("Joint solve: " + held);
+    for (const std::string& held : summary.joint.held_intrinsics) summary.messages.push_back("Joint solve: " + held);
     if (summary.joint.IsUsable()) {
       *updated = std::move(joint_solved);
       // A pin far beyond the others' spread is most likely a wrong click: named so that the
