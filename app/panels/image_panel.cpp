@@ -1099,7 +1099,7 @@ float DrawViewContents(const AppState& state, const PanelState& panel, const Ima
   DrawLineProposals(draw_list, state, image.id, transform, rect_min, rect_max);
   if (drag.kind == DragKind::kNewSegment) {
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, IM_COL32(0, 0, 0, 200), 4.0f);
-    DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, AxisColor(drag.axis), 2.0f);
+    DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, AxisColor(drag.axis, 255), 2.0f);
   }
   if (drag.kind == DragKind::kLinePin &&
       (mouse_uv - drag.press_uv).norm() * frame.pointer_scale >= kMinSegmentLengthPx) {
