@@ -24,18 +24,12 @@
 #include "core/util/utf8.h"
 #include "gltf_validator.h"
 #include "synthetic_scene.h"
+#include "tests/temp_files.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("facet_test_export_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 // Lower-case hex of a string's bytes, as the script writes paths.
 std::string HexOf(const std::string& text) {
@@ -46,11 +40,6 @@ std::string HexOf(const std::string& text) {
     out += byte;
   }
   return out;
-}
-
-std::vector<std::uint8_t> ReadBytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
 }
 
 std::uint32_t U32(const std::vector<std::uint8_t>& b, size_t offset) {
@@ -99,7 +88,7 @@ struct Glb {
 
 // Parses and checks the container: header, exactly a JSON chunk then a BIN chunk.
 Glb ParseGlb(const fs::path& path) {
-  const std::vector<std::uint8_t> bytes = ReadBytes(path);
+  const std::vector<std::uint8_t> bytes = facet::testing::ReadBytes(path);
   REQUIRE(bytes.size() >= 28);
   CHECK(U32(bytes, 0) == 0x46546C67);  // "glTF"
   CHECK(U32(bytes, 4) == 2);
@@ -330,7 +319,8 @@ constexpr const char* kFakeMathutils = R"PY(class Matrix:
 
 TEST_CASE("Blender script: 49 hostile photo names load unchanged, and no code in them runs") {
   facet::testing::SyntheticScene scene = facet::testing::MakeBoxScene();
-  const fs::path dir = TempDir("blender_hostile");
+  const facet::testing::TempDir temp_dir("blender_hostile");
+  const fs::path& dir = temp_dir.path;
   const std::vector<std::string> names = HostileNames();
   REQUIRE(names.size() == 49);
   const facet::Image base = scene.project.images[0];
@@ -398,7 +388,8 @@ TEST_CASE("Blender script: 49 hostile photo names load unchanged, and no code in
 
 TEST_CASE("GLB: container, accessors, bounds, embedded atlas and triangles") {
   const Fixture f = BakedScene();
-  const fs::path dir = TempDir("glb");
+  const facet::testing::TempDir temp_dir("glb");
+  const fs::path& dir = temp_dir.path;
   const fs::path path = dir / "model.glb";
   const facet::ExportSummary summary = facet::ExportGlb(f.mesh, f.scene.project, path.string());
   REQUIRE_MESSAGE(summary.success, summary.message);
@@ -504,7 +495,8 @@ TEST_CASE("GLB: one camera node per calibrated image, at the camera's pose in Y-
   extra.camera_calibrated = false;
   f.scene.project.images.push_back(extra);
   f.mesh.atlas = facet::ImageRgba8();  // plain mesh: one primitive, no image
-  const fs::path path = TempDir("glb_camera") / "model.glb";
+  const facet::testing::TempDir temp_path("glb_camera");
+  const fs::path path = temp_path.path / "model.glb";
   const facet::ExportSummary summary = facet::ExportGlb(f.mesh, f.scene.project, path.string());
   REQUIRE_MESSAGE(summary.success, summary.message);
   CHECK_GLTF_VALID(path.string());
@@ -566,7 +558,8 @@ TEST_CASE("GLB: one camera node per calibrated image, at the camera's pose in Y-
 
 TEST_CASE("OBJ: counts, flipped UVs in [0,1], material and texture side by side") {
   const Fixture f = BakedScene();
-  const fs::path dir = TempDir("obj");
+  const facet::testing::TempDir temp_dir("obj");
+  const fs::path& dir = temp_dir.path;
   const facet::ExportSummary summary = facet::ExportObj(f.mesh, (dir / "house.obj").string());
   REQUIRE_MESSAGE(summary.success, summary.message);
   CHECK(summary.files_written.size() == 3);
@@ -643,7 +636,8 @@ TEST_CASE("OBJ: counts, flipped UVs in [0,1], material and texture side by side"
   CHECK(png.rows == f.mesh.atlas.height);
 
   // Without texture: no PNG, no map.
-  const fs::path plain_dir = TempDir("obj_plain");
+  const facet::testing::TempDir temp_plain_dir("obj_plain");
+  const fs::path& plain_dir = temp_plain_dir.path;
   const auto plain = facet::ExportObj(facet::BuildUntexturedMesh(f.scene.project), (plain_dir / "box").string());
   REQUIRE_MESSAGE(plain.success, plain.message);
   CHECK(fs::exists(plain_dir / "box.obj"));
@@ -696,7 +690,8 @@ TEST_CASE("GLB and OBJ round trip: vertex and triangle counts of a split box and
   CHECK(textured_triangles > 0);
   CHECK(textured_triangles < expected_triangles);
 
-  const fs::path dir = TempDir("roundtrip");
+  const facet::testing::TempDir temp_dir("roundtrip");
+  const fs::path& dir = temp_dir.path;
   const auto glb_summary = facet::ExportGlb(f.mesh, project, (dir / "m.glb").string());
   REQUIRE_MESSAGE(glb_summary.success, glb_summary.message);
   CHECK_GLTF_VALID((dir / "m.glb").string());
@@ -732,7 +727,8 @@ TEST_CASE("GLB and OBJ round trip: vertex and triangle counts of a split box and
 
 TEST_CASE("export errors: unwritable path, empty or malformed mesh") {
   const Fixture f = BakedScene();
-  const fs::path missing = TempDir("errors") / "no_such_folder";
+  const facet::testing::TempDir temp_missing("errors");
+  const fs::path missing = temp_missing.path / "no_such_folder";
   auto s = facet::ExportGlb(f.mesh, f.scene.project, (missing / "m.glb").string());
   CHECK_FALSE(s.success);
   CHECK(s.message.find("m.glb") != std::string::npos);
@@ -742,7 +738,8 @@ TEST_CASE("export errors: unwritable path, empty or malformed mesh") {
   CHECK_FALSE(s.message.empty());
   CHECK_FALSE(fs::exists(missing));
 
-  const fs::path dir = TempDir("errors_mesh");
+  const facet::testing::TempDir temp_dir("errors_mesh");
+  const fs::path& dir = temp_dir.path;
   s = facet::ExportGlb(facet::TexturedMesh(), f.scene.project, (dir / "e.glb").string());
   CHECK_FALSE(s.success);
   CHECK(s.message.find("empty") != std::string::npos);
@@ -782,7 +779,8 @@ TEST_CASE("GLB and OBJ with a paged atlas: one image, texture and material per p
   size_t textured_triangles = 0;
   for (auto t : mesh.triangle_textured) textured_triangles += t;
 
-  const fs::path dir = TempDir("paged");
+  const facet::testing::TempDir temp_dir("paged");
+  const fs::path& dir = temp_dir.path;
   const facet::ExportSummary summary = facet::ExportGlb(mesh, scene.project, (dir / "paged.glb").string());
   REQUIRE_MESSAGE(summary.success, summary.message);
   CHECK_GLTF_VALID((dir / "paged.glb").string());
@@ -875,7 +873,8 @@ void WriteGlb(const fs::path& path, const json& gltf, const std::vector<std::uin
 TEST_CASE("glTF Validator: it runs, and it reports an error in a GLB that has one") {
   // Without this the zero-error checks above could pass on a validator that never looks.
   const Fixture f = BakedScene();
-  const fs::path dir = TempDir("validator");
+  const facet::testing::TempDir temp_dir("validator");
+  const fs::path& dir = temp_dir.path;
   const fs::path good = dir / "good.glb";
   REQUIRE(facet::ExportGlb(f.mesh, f.scene.project, good.string()).success);
   CHECK_GLTF_VALID(good.string());
@@ -894,7 +893,8 @@ TEST_CASE("glTF Validator: it runs, and it reports an error in a GLB that has on
 
 TEST_CASE("ReadGlb gives back what ExportGlb wrote: vertices, triangles per material, atlas, camera") {
   const Fixture f = BakedScene();
-  const fs::path path = TempDir("read_back") / "m.glb";
+  const facet::testing::TempDir temp_path("read_back");
+  const fs::path path = temp_path.path / "m.glb";
   REQUIRE(facet::ExportGlb(f.mesh, f.scene.project, path.string()).success);
   facet::GltfScene scene;
   const std::string error = facet::ReadGlb(path.string(), {}, &scene);
@@ -944,7 +944,8 @@ TEST_CASE("Leuven sample: every exported camera projects the exported model onto
   // Geometry and cameras are what this checks; the textured render is tests/app/test_cli.cpp's.
   const facet::TexturedMesh mesh = facet::BuildUntexturedMesh(project);
   REQUIRE(!mesh.positions.empty());
-  const fs::path path = TempDir("leuven") / "street.glb";
+  const facet::testing::TempDir temp_path("leuven");
+  const fs::path path = temp_path.path / "street.glb";
   const facet::ExportSummary summary = facet::ExportGlb(mesh, project, path.string());
   REQUIRE_MESSAGE(summary.success, summary.message);
   CHECK_GLTF_VALID(path.string());
@@ -999,7 +1000,8 @@ TEST_CASE("Leuven sample: every exported camera projects the exported model onto
 
 TEST_CASE("reference meshes: an exported OBJ and GLB read back as references land on the model") {
   const Fixture f = BakedScene();
-  const fs::path dir = TempDir("reference");
+  const facet::testing::TempDir temp_dir("reference");
+  const fs::path& dir = temp_dir.path;
   REQUIRE(facet::ExportObj(f.mesh, (dir / "house.obj").string()).success);
   REQUIRE(facet::ExportGlb(f.mesh, f.scene.project, (dir / "house.glb").string()).success);
   CHECK_GLTF_VALID((dir / "house.glb").string());
@@ -1032,7 +1034,8 @@ TEST_CASE("reference meshes: an exported OBJ and GLB read back as references lan
 }
 
 TEST_CASE("reference meshes: OBJ faces, negative indices and errors that name the file and line") {
-  const fs::path dir = TempDir("reference_obj");
+  const facet::testing::TempDir temp_dir("reference_obj");
+  const fs::path& dir = temp_dir.path;
   const std::string path = (dir / "plan.obj").string();
   std::ofstream(path) << "# a quad and a triangle\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\n"
                          "f 1/1 2/1 3/1 4/1\nv 0 0 1\nf -1 1 2\nusemtl x\n";
@@ -1111,7 +1114,8 @@ nlohmann::json SquareGltf(const std::string& uri, const Eigen::Vector3d& transla
 }  // namespace
 
 TEST_CASE("reference meshes: a .gltf with its buffer in a .bin file or a data: URI; broken ones refused by name") {
-  const fs::path dir = TempDir("reference_gltf");
+  const facet::testing::TempDir temp_dir("reference_gltf");
+  const fs::path& dir = temp_dir.path;
   const Eigen::Vector3d translation(2.0, -1.0, 0.5);
   std::vector<std::uint8_t> bin;
   // The .bin's name has a space, which a URI writes %20.

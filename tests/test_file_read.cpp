@@ -16,27 +16,13 @@
 #include "core/image/image_io.h"
 #include "core/io/project_io.h"
 #include "core/util/file_read.h"
+#include "tests/temp_files.h"
 
 namespace facet {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Folder {
-  fs::path path;
-  Folder() {
-    path = fs::temp_directory_path() / ("facet_file_read_" + std::to_string(::getpid()));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~Folder() { fs::remove_all(path); }
-  std::string operator/(const std::string& name) const { return (path / name).string(); }
-};
-
-void Write(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out << bytes;
-}
 
 // A PNG header (signature and IHDR) claiming w x h pixels; stb reads the size from it alone.
 std::string PngHeader(std::uint32_t w, std::uint32_t h) {
@@ -54,22 +40,22 @@ std::string PngHeader(std::uint32_t w, std::uint32_t h) {
 }
 
 TEST_CASE("a regular file is read whole; its bytes are the file's") {
-  Folder dir;
+  const testing::TempDir dir("file_read");
   const std::string content = std::string("facet\0bytes", 11) + std::string(100000, 'x');
-  Write(dir / "a.bin", content);
+  testing::WriteText(dir / "a.bin", content);
   std::string text, error;
   REQUIRE_MESSAGE(ReadRegularFile(dir / "a.bin", kMaxTextFileBytes, &text, &error), error);
   CHECK(text == content);
   std::vector<std::uint8_t> bytes;
   REQUIRE(ReadRegularFile(dir / "a.bin", kMaxTextFileBytes, &bytes, &error));
   CHECK(bytes.size() == content.size());
-  Write(dir / "empty", "");
+  testing::WriteText(dir / "empty", "");
   REQUIRE(ReadRegularFile(dir / "empty", kMaxTextFileBytes, &text, &error));
   CHECK(text.empty());
 }
 
 TEST_CASE("a folder, a FIFO and a device are refused at once, saying what they are") {
-  Folder dir;
+  const testing::TempDir dir("file_read");
   REQUIRE(::mkfifo((dir / "pipe").c_str(), 0600) == 0);
   std::string text, error;
   CHECK_FALSE(ReadRegularFile(dir.path.string(), kMaxTextFileBytes, &text, &error));
@@ -95,8 +81,8 @@ TEST_CASE("a folder, a FIFO and a device are refused at once, saying what they a
 }
 
 TEST_CASE("a file over the limit is refused with the limit in the message") {
-  Folder dir;
-  Write(dir / "big", std::string(3u << 20, 'x'));
+  const testing::TempDir dir("file_read");
+  testing::WriteText(dir / "big", std::string(3u << 20, 'x'));
   std::string text, error;
   CHECK_FALSE(ReadRegularFile(dir / "big", 2u << 20, &text, &error));
   CHECK(error.find("3 MB, larger than the limit of 2 MB") != std::string::npos);
@@ -107,15 +93,15 @@ TEST_CASE("a file over the limit is refused with the limit in the message") {
   std::vector<std::uint8_t> head;
   REQUIRE(ReadRegularFileHead(dir / "big", 1000, &head, &error));
   CHECK(head.size() == 1000);
-  Write(dir / "short", "abc");
+  testing::WriteText(dir / "short", "abc");
   REQUIRE(ReadRegularFileHead(dir / "short", 1000, &head, &error));
   CHECK(head.size() == 3);
   CHECK_FALSE(ReadRegularFileHead("/dev/zero", 1000, &head, &error));
 }
 
 TEST_CASE("a photo over the pixel limit is refused from its header, before decoding") {
-  Folder dir;
-  Write(dir / "huge.png", PngHeader(20000, 20000));
+  const testing::TempDir dir("file_read");
+  testing::WriteText(dir / "huge.png", PngHeader(20000, 20000));
   const ImageReadResult huge = ReadImage(dir / "huge.png");
   INFO(huge.error);
   REQUIRE_FALSE(huge.ok());

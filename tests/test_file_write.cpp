@@ -18,44 +18,25 @@
 #include <string>
 
 #include "core/util/file_write.h"
+#include "tests/temp_files.h"
 
 namespace facet {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Folder {
-  fs::path path;
-  Folder() {
-    path = fs::temp_directory_path() / ("facet_file_write_" + std::to_string(::getpid()));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~Folder() { fs::remove_all(path); }
-  std::string operator/(const std::string& name) const { return (path / name).string(); }
-};
-
-void Write(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out << bytes;
-}
-
-std::string Read(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 bool Contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 // Nothing but the named entry in the folder: no temporary file left behind.
-size_t EntriesIn(const Folder& dir) {
+size_t EntriesIn(const testing::TempDir& dir) {
   size_t n = 0;
   for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir.path)) ++n;
   return n;
 }
 
 TEST_CASE("a FIFO, a socket and a folder are refused by name and left as they were") {
-  Folder dir;
+  const testing::TempDir dir("file_write");
   const std::string fifo = dir / "out.fifo";
   REQUIRE(::mkfifo(fifo.c_str(), 0644) == 0);
   for (const Symlinks symlinks : {Symlinks::kFollow, Symlinks::kRefuse}) {
@@ -95,7 +76,7 @@ TEST_CASE("a device is refused, never replaced by a regular file") {
   // Reading what /dev/null is only looks (lstat); writing is tried on a node of our own, made
   // where the test may (as root, which is where the replacement did the harm: /dev/zero).
   CHECK(DescribeNonRegular("/dev/null") == "a character device");
-  Folder dir;
+  const testing::TempDir dir("file_write");
   const std::string node = dir / "null";
   if (::mknod(node.c_str(), S_IFCHR | 0666, makedev(1, 3)) != 0) {
     MESSAGE("mknod not permitted (not root): a device node is covered through DescribeNonRegular only");
@@ -113,23 +94,23 @@ TEST_CASE("a device is refused, never replaced by a regular file") {
 }
 
 TEST_CASE("a user's save writes through a link to a regular file; the recovery file refuses the link") {
-  Folder dir;
+  const testing::TempDir dir("file_write");
   const std::string other = dir / "other.facet";
-  Write(other, "the other project");
+  testing::WriteText(other, "the other project");
   const std::string link = dir / "mine.facet";
   fs::create_symlink("other.facet", link);  // relative, as users make them
 
   // Symlinks::kFollow: the file it points to gets the bytes, the link stays a link.
   CHECK(WriteFileAtomically(link, "saved through the link") == "");
   CHECK(fs::is_symlink(link));
-  CHECK(Read(other) == "saved through the link");
+  CHECK(testing::ReadText(other) == "saved through the link");
 
   // Symlinks::kRefuse: refused by name, its target untouched.
-  Write(other, "the other project");
+  testing::WriteText(other, "the other project");
   const std::string error = WriteFileAtomically(link, "recovery text", Symlinks::kRefuse);
   CHECK(error == "refusing to write " + link + ": it is a symbolic link (to other.facet), not a file Facet wrote");
   CHECK(fs::is_symlink(link));
-  CHECK(Read(other) == "the other project");
+  CHECK(testing::ReadText(other) == "the other project");
   // Also a dangling link: nothing is created where it points.
   const std::string dangling = dir / "dangling.recovery";
   fs::create_symlink(dir / "created-through-link", dangling);
@@ -141,17 +122,17 @@ TEST_CASE("a user's save writes through a link to a regular file; the recovery f
   const std::string plain = dir / "plain.recovery";
   CHECK(WriteFileAtomically(plain, "one", Symlinks::kRefuse) == "");
   CHECK(WriteFileAtomically(plain, "two", Symlinks::kRefuse) == "");
-  CHECK(Read(plain) == "two");
+  CHECK(testing::ReadText(plain) == "two");
 }
 
 TEST_CASE("appending refuses a link and a FIFO at once, and appends to a regular file") {
-  Folder dir;
+  const testing::TempDir dir("file_write");
   const std::string other = dir / "other.facet";
-  Write(other, "the other project");
+  testing::WriteText(other, "the other project");
   const std::string link = dir / "journal.recovery";
   fs::create_symlink(other, link);
   CHECK(AppendToFile(link, "record") == "cannot append to " + link + ": it is a symbolic link");
-  CHECK(Read(other) == "the other project");
+  CHECK(testing::ReadText(other) == "the other project");
 
   // No reader on the FIFO: opening it for writing would wait for one forever.
   const std::string fifo = dir / "fifo.recovery";
@@ -159,28 +140,28 @@ TEST_CASE("appending refuses a link and a FIFO at once, and appends to a regular
   CHECK(AppendToFile(fifo, "record") == "cannot append to " + fifo + ": it is a FIFO");
 
   const std::string plain = dir / "plain.recovery";
-  Write(plain, "base\n");
+  testing::WriteText(plain, "base\n");
   CHECK(AppendToFile(plain, "record\n") == "");
-  CHECK(Read(plain) == "base\nrecord\n");
+  CHECK(testing::ReadText(plain) == "base\nrecord\n");
 }
 
 TEST_CASE("a file moved aside keeps its bytes and never replaces another") {
-  Folder dir;
+  const testing::TempDir dir("file_write");
   const std::string path = dir / "p.facet.recovery";
-  Write(path, "first");
+  testing::WriteText(path, "first");
   std::string first, second;
   REQUIRE(MoveFileAside(path, "broken", &first) == "");
   CHECK(first.rfind(path + ".broken-", 0) == 0);
   // "-YYYYMMDD-HHMMSS"
   CHECK(first.size() == path.size() + std::string(".broken-20260101-120000").size());
   CHECK_FALSE(fs::exists(path));
-  CHECK(Read(first) == "first");
+  CHECK(testing::ReadText(first) == "first");
   // Within the same second the name is taken: the second gets another, the first is kept.
-  Write(path, "second");
+  testing::WriteText(path, "second");
   REQUIRE(MoveFileAside(path, "broken", &second) == "");
   CHECK(second != first);
-  CHECK(Read(first) == "first");
-  CHECK(Read(second) == "second");
+  CHECK(testing::ReadText(first) == "first");
+  CHECK(testing::ReadText(second) == "second");
   CHECK(EntriesIn(dir) == 2);
 
   CHECK(Contains(MoveFileAside(path, "broken", &second), "No such file"));

@@ -32,6 +32,7 @@
 #include "core/mesh/operators.h"
 #include "core/scene/project.h"
 #include "tests/synthetic_scene.h"
+#include "tests/temp_files.h"
 
 namespace fs = std::filesystem;
 using facet::Axis;
@@ -47,31 +48,11 @@ using facet::Segment;
 
 namespace {
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    std::string templ = (fs::temp_directory_path() / "facet_project_io_XXXXXX").string();
-    REQUIRE(::mkdtemp(templ.data()) != nullptr);
-    path = templ;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string operator/(const std::string& name) const { return (path / name).string(); }
-};
 
 std::set<std::string> ListDir(const fs::path& dir) {
   std::set<std::string> names;
   for (const auto& entry : fs::directory_iterator(dir)) names.insert(entry.path().filename().string());
   return names;
-}
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 void WriteFile(const std::string& path, const std::string& bytes) {
@@ -349,17 +330,17 @@ TEST_CASE("every field round-trips exactly and re-saving is byte-identical") {
   const Project p = MakeFullProject();
   CheckRoundTrip(p);
 
-  TempDir dir;
+  const facet::testing::TempDir dir("project_io");
   const std::string path = dir / "full.facet";
   REQUIRE(facet::SaveProject(p, path) == "");
-  const std::string first = ReadFile(path);
+  const std::string first = facet::testing::ReadText(path);
   CHECK(first == facet::ProjectToJson(p));
   const facet::ProjectLoadResult loaded = facet::LoadProject(path);
   INFO("error: " << loaded.error);
   REQUIRE(loaded.ok());
   CHECK(loaded.project == p);
   REQUIRE(facet::SaveProject(loaded.project, path) == "");
-  CHECK(ReadFile(path) == first);
+  CHECK(facet::testing::ReadText(path) == first);
   CHECK(ListDir(dir.path) == std::set<std::string>{"full.facet"});
 }
 
@@ -554,7 +535,7 @@ TEST_CASE("doubles round-trip bit-exactly") {
 }
 
 TEST_CASE("NaN and infinity are refused with the field's path, and nothing is written") {
-  TempDir dir;
+  const facet::testing::TempDir dir("project_io");
   const std::string path = dir / "p.facet";
   {
     Project p = MakeFullProject();
@@ -592,7 +573,7 @@ TEST_CASE("NaN and infinity are refused with the field's path, and nothing is wr
 }
 
 TEST_CASE("a project that would not load back is not saved, and the old file stays") {
-  TempDir dir;
+  const facet::testing::TempDir dir("project_io");
   const std::string path = dir / "p.facet";
   WriteFile(path, "old contents");
   Project p = MakeFullProject();
@@ -610,7 +591,7 @@ TEST_CASE("a project that would not load back is not saved, and the old file sta
   const std::string error3 = facet::SaveProject(r, path);
   INFO(error3);
   CHECK(error3.find("constraints[0].vertices[0]") != std::string::npos);
-  CHECK(ReadFile(path) == "old contents");
+  CHECK(facet::testing::ReadText(path) == "old contents");
   CHECK(ListDir(dir.path) == std::set<std::string>{"p.facet"});
 }
 
@@ -637,7 +618,7 @@ TEST_CASE("every truncation of a valid file is an error with a line and column")
     CHECK(r.project == Project());
   }
   // Truncated files on disk too, at a few cut points.
-  TempDir dir;
+  const facet::testing::TempDir dir("project_io");
   for (size_t length : {size_t{0}, size_t{1}, text.size() / 3, text.size() / 2, text.size() - 2}) {
     const std::string path = dir / "cut.facet";
     WriteFile(path, text.substr(0, length));
@@ -928,7 +909,7 @@ TEST_CASE("unknown fields are warnings, not errors") {
 }
 
 TEST_CASE("LoadProject: missing files are errors, missing images are warnings") {
-  TempDir dir;
+  const facet::testing::TempDir dir("project_io");
   const facet::ProjectLoadResult missing = facet::LoadProject(dir / "nope.facet");
   INFO(missing.error);
   CHECK_FALSE(missing.ok());
@@ -981,7 +962,7 @@ TEST_CASE("LoadProject: missing files are errors, missing images are warnings") 
 }
 
 TEST_CASE("atomic save: missing folder, replacing a file, failures leave no trace") {
-  TempDir dir;
+  const facet::testing::TempDir dir("project_io");
   const Project p = MakeFullProject();
 
   SUBCASE("a path in a missing folder fails and creates nothing") {
@@ -995,7 +976,7 @@ TEST_CASE("atomic save: missing folder, replacing a file, failures leave no trac
     WriteFile(path, "old contents");
     ::chmod(path.c_str(), 0640);
     REQUIRE(facet::SaveProject(p, path) == "");
-    CHECK(ReadFile(path) == facet::ProjectToJson(p));
+    CHECK(facet::testing::ReadText(path) == facet::ProjectToJson(p));
     CHECK((fs::status(path).permissions() & fs::perms::all) ==
           (fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read));
     CHECK(ListDir(dir.path) == std::set<std::string>{"p.facet"});
@@ -1013,7 +994,7 @@ TEST_CASE("atomic save: missing folder, replacing a file, failures leave no trac
     fs::create_symlink(target, dir.path / "link.facet");
     REQUIRE(facet::SaveProject(p, dir / "link.facet") == "");
     CHECK(fs::is_symlink(dir.path / "link.facet"));
-    CHECK(ReadFile(target) == facet::ProjectToJson(p));
+    CHECK(facet::testing::ReadText(target) == facet::ProjectToJson(p));
     CHECK(ListDir(dir.path / "real") == std::set<std::string>{"p.facet"});
   }
   SUBCASE("a target that is a folder fails; the folder stays and no temp file remains") {
@@ -1023,7 +1004,7 @@ TEST_CASE("atomic save: missing folder, replacing a file, failures leave no trac
     INFO(error);
     CHECK_FALSE(error.empty());
     CHECK(fs::is_directory(dir.path / "taken.facet"));
-    CHECK(ReadFile(dir / "taken.facet/inside.txt") == "keep me");
+    CHECK(facet::testing::ReadText(dir / "taken.facet/inside.txt") == "keep me");
     CHECK(ListDir(dir.path) == std::set<std::string>{"taken.facet"});
   }
   SUBCASE("a write that fails midway leaves the old file intact and no temp file") {
@@ -1044,7 +1025,7 @@ TEST_CASE("atomic save: missing folder, replacing a file, failures leave no trac
     ::signal(SIGXFSZ, old_handler);
     INFO(error);
     CHECK(error.find("writing") != std::string::npos);
-    CHECK(ReadFile(path) == old_text);
+    CHECK(facet::testing::ReadText(path) == old_text);
     CHECK(ListDir(dir.path) == std::set<std::string>{"p.facet"});
   }
 }
@@ -1113,7 +1094,7 @@ TEST_CASE("a mesh written as \"from_shape\" is the primitive's unedited mesh") {
 // allocated that many records (holes are allowed) before reading any: the sample project with
 // "vertex_id_end": 2^29, 8.5 KB, asked for 154 GB. The project's mesh ids are now bounded.
 TEST_CASE("regression: a mesh's id ends are bounded over the whole project before allocation (fuzz_project)") {
-  Json sample = Json::parse(ReadFile(std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuven.facet"));
+  Json sample = Json::parse(facet::testing::ReadText(std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuven.facet"));
   REQUIRE(facet::ProjectFromJson(sample.dump()).ok());
   Json j = sample;
   j["primitives"][0]["mesh"]["vertex_id_end"] = 1 << 29;
@@ -1366,10 +1347,10 @@ TEST_CASE("the version-1 fixture keeps loading: boxes become box primitives, cor
   CHECK(r.warnings.size() == 2);
 
   // Saving writes the current version, which loads back equal.
-  TempDir dir;
+  const facet::testing::TempDir dir("project_io");
   const std::string saved = dir / "upgraded.facet";
   REQUIRE(facet::SaveProject(p, saved) == "");
-  const Json j = Json::parse(ReadFile(saved));
+  const Json j = Json::parse(facet::testing::ReadText(saved));
   CHECK(j["version"] == Project::kFormatVersion);
   // Through version 2 to 3: no texture choices.
   for (const facet::Image& image : p.images) CHECK(image.use_for_texture);
@@ -1385,7 +1366,7 @@ TEST_CASE("the version-1 fixture keeps loading: boxes become box primitives, cor
 }
 
 TEST_CASE("version-1 content errors still name their location") {
-  Json j = Json::parse(ReadFile(std::string(FACET_SOURCE_DIR) + "/tests/fixtures/project_v1.facet"));
+  Json j = Json::parse(facet::testing::ReadText(std::string(FACET_SOURCE_DIR) + "/tests/fixtures/project_v1.facet"));
   {
     Json bad = j;
     bad["pins"][1]["corner"] = 8;
@@ -1407,7 +1388,7 @@ TEST_CASE("texture choices: version 2 files migrate to none; the current version
   // The shipped Leuven sample is a version-2 file: it loads with every photo used for texture
   // and no face override, and saves as the current version that loads back equal.
   const std::string sample_path = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/leuven.facet";
-  const Json sample = Json::parse(ReadFile(sample_path));
+  const Json sample = Json::parse(facet::testing::ReadText(sample_path));
   REQUIRE(sample["version"] == 2);
   REQUIRE_FALSE(sample["images"][0].contains("use_for_texture"));
   const facet::ProjectLoadResult old = facet::LoadProject(sample_path);
@@ -1515,16 +1496,16 @@ TEST_CASE("lens groups: version 4 files migrate to a lens per photo; the current
 TEST_CASE("the version-2 fixture loads without references and saves as the current version") {
   // tests/fixtures/project_v2.facet is a frozen copy of the Leuven sample as version 2 wrote it.
   const std::string fixture = std::string(FACET_SOURCE_DIR) + "/tests/fixtures/project_v2.facet";
-  REQUIRE(Json::parse(ReadFile(fixture))["version"] == 2);
+  REQUIRE(Json::parse(facet::testing::ReadText(fixture))["version"] == 2);
   const facet::ProjectLoadResult r = facet::LoadProject(fixture);
   INFO(r.error);
   REQUIRE(r.ok());
   CHECK(r.project.references.empty());
   CHECK(r.project.primitives.size() == 1);
   CHECK(r.project.images.size() == 1);
-  TempDir dir;
+  const facet::testing::TempDir dir("project_io");
   REQUIRE(facet::SaveProject(r.project, dir / "upgraded.facet") == "");
-  const Json j = Json::parse(ReadFile(dir / "upgraded.facet"));
+  const Json j = Json::parse(facet::testing::ReadText(dir / "upgraded.facet"));
   CHECK(j["version"] == Project::kFormatVersion);
   CHECK(j["references"] == Json::array());
   const facet::ProjectLoadResult again = facet::LoadProject(dir / "upgraded.facet");
@@ -1550,7 +1531,7 @@ TEST_CASE("references: round trip, bad fields named, a missing mesh file is a wa
 
   // Saved beside no mesh file: the load warns with the resolved path and keeps the reference;
   // saving again writes it unchanged.
-  TempDir dir;
+  const facet::testing::TempDir dir("project_io");
   const std::string path = dir / "p.facet";
   REQUIRE(facet::SaveProject(p, path) == "");
   const facet::ProjectLoadResult loaded = facet::LoadProject(path);
@@ -1560,9 +1541,9 @@ TEST_CASE("references: round trip, bad fields named, a missing mesh file is a wa
     warned = warned || (w.find("references[0]: reference mesh not found: " + (dir / "site.obj")) == 0);
   CHECK(warned);
   CHECK(loaded.project == p);
-  const std::string first = ReadFile(path);
+  const std::string first = facet::testing::ReadText(path);
   REQUIRE(facet::SaveProject(loaded.project, path) == "");
-  CHECK(ReadFile(path) == first);
+  CHECK(facet::testing::ReadText(path) == first);
 
   // Save as into another folder keeps pointing at the same mesh file.
   facet::RebaseImagePaths(path, dir / "sub/q.facet", &p);
@@ -1586,7 +1567,7 @@ TEST_CASE("paths that are not UTF-8 round-trip exactly as their bytes") {
   CHECK(doc["references"][0]["path"].is_object());
   CHECK(facet::CheckProjectSavable(p).empty());
 
-  TempDir dir;
+  const facet::testing::TempDir dir("project_io");
   const std::string path = dir / "p.facet";
   REQUIRE(facet::SaveProject(p, path).empty());
   const facet::ProjectLoadResult loaded = facet::LoadProject(path);
@@ -1659,7 +1640,7 @@ TEST_CASE("numbers that are no camera are refused at open, naming the field") {
 // Issue 25: a photo replaced by one of another size opened, solved and exported without a word
 // (the texture silently halved). Open says so, as for a missing photo, and keeps everything.
 TEST_CASE("LoadProject: a photo of another size than its image is a warning, nothing moves") {
-  TempDir dir;
+  const facet::testing::TempDir dir("project_io");
   Project p = MakeSmallProject();
   p.references.clear();
   p.images[0].path = "photo.png";

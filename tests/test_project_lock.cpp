@@ -18,29 +18,12 @@
 #include "core/util/file_identity.h"
 #include "core/util/file_write.h"
 #include "core/util/project_lock.h"
+#include "tests/temp_files.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    std::string templ = (fs::temp_directory_path() / "facet_project_lock_XXXXXX").string();
-    REQUIRE(::mkdtemp(templ.data()) != nullptr);
-    path = templ;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string operator/(const std::string& name) const { return (path / name).string(); }
-};
-
-std::string ReadAll(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 // A child that takes the lock, reports (one byte on a pipe) whether it has it, and then
 // waits to be killed. Returns its pid; *locked tells whether it took the lock.
@@ -67,7 +50,7 @@ pid_t StartHolder(const std::string& project, bool* locked) {
 }  // namespace
 
 TEST_CASE("a second lock on a project fails and names its holder, in this process and in another") {
-  const TempDir dir;
+  const facet::testing::TempDir dir("project_lock");
   const std::string project = dir / "street.facet";
   facet::WriteFileAtomically(project, "{}");
 
@@ -104,7 +87,7 @@ TEST_CASE("a second lock on a project fails and names its holder, in this proces
 }
 
 TEST_CASE("a lock held by another process names it, and goes when that process dies") {
-  const TempDir dir;
+  const facet::testing::TempDir dir("project_lock");
   const std::string project = dir / "street.facet";
   facet::WriteFileAtomically(project, "{}");
 
@@ -126,11 +109,11 @@ TEST_CASE("a lock held by another process names it, and goes when that process d
   CHECK(fs::exists(project + ".lock"));
   facet::ProjectLockResult taken = facet::TryLockProject(project);
   REQUIRE_MESSAGE(taken.ok(), taken.error);
-  CHECK(ReadAll(project + ".lock").find("pid " + std::to_string(::getpid()) + "\n") != std::string::npos);
+  CHECK(facet::testing::ReadText(project + ".lock").find("pid " + std::to_string(::getpid()) + "\n") != std::string::npos);
 }
 
 TEST_CASE("a lock file that is a symlink or not a regular file is refused, and nothing is written through it") {
-  const TempDir dir;
+  const facet::testing::TempDir dir("project_lock");
   const std::string project = dir / "street.facet";
   const std::string victim = dir / "victim.facet";
   facet::WriteFileAtomically(victim, "precious");
@@ -139,7 +122,7 @@ TEST_CASE("a lock file that is a symlink or not a regular file is refused, and n
   CHECK_FALSE(linked.ok());
   CHECK_FALSE(linked.holder.has_value());
   CHECK(linked.error.find("symlink") != std::string::npos);
-  CHECK(ReadAll(victim) == "precious");
+  CHECK(facet::testing::ReadText(victim) == "precious");
 
   const std::string folder_project = dir / "folder.facet";
   fs::create_directory(folder_project + ".lock");
@@ -149,7 +132,7 @@ TEST_CASE("a lock file that is a symlink or not a regular file is refused, and n
 }
 
 TEST_CASE("a hostile lock file's text is shown bounded and printable") {
-  const TempDir dir;
+  const facet::testing::TempDir dir("project_lock");
   const std::string project = dir / "street.facet";
   facet::LockHolder holder;
   holder.pid = 77;
@@ -173,7 +156,7 @@ TEST_CASE("a hostile lock file's text is shown bounded and printable") {
 }
 
 TEST_CASE("a file's identity: other bytes are a change, the same bytes rewritten are not") {
-  const TempDir dir;
+  const facet::testing::TempDir dir("project_lock");
   const std::string path = dir / "street.facet";
   REQUIRE(facet::WriteFileAtomically(path, "version one").empty());
   const facet::FileIdentity known = facet::IdentifyFile(path);

@@ -19,6 +19,7 @@
 
 #include "core/io/gltf_read.h"
 #include "core/io/reference_mesh.h"
+#include "tests/temp_files.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -26,13 +27,6 @@ using nlohmann::json;
 namespace {
 
 constexpr const char* kName = "hostile.gltf";
-
-fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("facet_test_reference_import_" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 // RFC 4648 base64, written apart from the reader's decoder.
 std::string Base64(const std::vector<std::uint8_t>& bytes) {
@@ -371,7 +365,8 @@ TEST_CASE("reference import: files that describe more than a reference may hold 
 }
 
 TEST_CASE("reference import: buffer URIs stay inside the glTF's folder, and nothing outside is opened or described") {
-  const fs::path dir = TempDir("uri");
+  const facet::testing::TempDir temp_dir("uri");
+  const fs::path& dir = temp_dir.path;
   const fs::path folder = dir / "model";
   fs::create_directories(folder / "sub");
   std::vector<std::uint8_t> bin;

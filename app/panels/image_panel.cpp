@@ -37,7 +37,7 @@ constexpr double kMinSegmentLengthPx = 3.0;  // shorter new segments are acciden
 constexpr double kDragStartPx = 2.0;         // motion before a press becomes a drag
 constexpr int kImagePanelHover = 1;          // AppState::hover_panel
 // Lines of the vanishing overlay's text box the view leaves room for under the photo.
-constexpr int kVanishingTextLines = 6;
+constexpr int kVanishingTextLines = 9;
 
 // GL textures of one photo, and which pixels they were made from.
 struct CachedPhoto {

@@ -69,9 +69,40 @@ void Label(ImDrawList* draw, const Eigen::Vector2d& p, ImU32 color, const std::s
 
 // Lines of text in a dark box at the view's bottom-left, its bottom at `*y`, which moves up
 // above it (the photo's top, where the vanishing points often are, stays clear).
-void TextBox(ImDrawList* draw, const Screen& s, float* y, const std::vector<std::pair<ImU32, std::string>>& lines) {
-  if (lines.empty()) return;
+// Each line broken at spaces to fit `max_width` (px); continuations indented.
+std::vector<std::pair<ImU32, std::string>> WrappedLines(const std::vector<std::pair<ImU32, std::string>>& lines,
+                                                        float max_width) {
+  std::vector<std::pair<ImU32, std::string>> out;
+  for (const auto& [color, text] : lines) {
+    if (ImGui::CalcTextSize(text.c_str()).x <= max_width) {
+      out.emplace_back(color, text);
+      continue;
+    }
+    std::string current;
+    size_t start = 0;
+    while (start <= text.size()) {
+      const size_t end = std::min(text.find(' ', start), text.size());
+      const std::string word = text.substr(start, end - start);
+      const std::string candidate = current.empty() ? word : current + " " + word;
+      if (!current.empty() && ImGui::CalcTextSize(candidate.c_str()).x > max_width) {
+        out.emplace_back(color, current);
+        current = "  " + word;
+      } else {
+        current = candidate;
+      }
+      start = end + 1;
+    }
+    if (!current.empty()) out.emplace_back(color, current);
+  }
+  return out;
+}
+
+void TextBox(ImDrawList* draw, const Screen& s, float* y, const std::vector<std::pair<ImU32, std::string>>& unwrapped) {
+  if (unwrapped.empty()) return;
   const float pad = 5.0f, line_h = ImGui::GetTextLineHeight();
+  // Within the view: a line longer than the panel is wide is broken, never cut off.
+  const float max_width = std::max(120.0f, static_cast<float>(s.rect_max.x() - s.rect_min.x()) - 16.0f - 2 * pad);
+  const std::vector<std::pair<ImU32, std::string>> lines = WrappedLines(unwrapped, max_width);
   float width = 0.0f;
   for (const auto& [color, text] : lines) width = std::max(width, ImGui::CalcTextSize(text.c_str()).x);
   const float height = lines.size() * (line_h + 2.0f) + 2 * pad;

@@ -26,47 +26,23 @@ void InputQueue::Push(const InputEvent& event) {
 }
 
 void InputQueue::MouseMove(double time_s, float x, float y) {
-  InputEvent e;
-  e.kind = InputEvent::Kind::kMouseMove;
-  e.time_s = time_s;
-  e.x = x;
-  e.y = y;
-  Push(e);
+  Push({.kind = InputEvent::Kind::kMouseMove, .time_s = time_s, .x = x, .y = y});
 }
 
 void InputQueue::MouseButton(double time_s, int button, bool down) {
-  InputEvent e;
-  e.kind = InputEvent::Kind::kMouseButton;
-  e.time_s = time_s;
-  e.code = button;
-  e.down = down;
-  Push(e);
+  Push({.kind = InputEvent::Kind::kMouseButton, .time_s = time_s, .code = button, .down = down});
 }
 
 void InputQueue::Wheel(double time_s, float dx, float dy) {
-  InputEvent e;
-  e.kind = InputEvent::Kind::kWheel;
-  e.time_s = time_s;
-  e.x = dx;
-  e.y = dy;
-  Push(e);
+  Push({.kind = InputEvent::Kind::kWheel, .time_s = time_s, .x = dx, .y = dy});
 }
 
 void InputQueue::Key(double time_s, int key, bool down) {
-  InputEvent e;
-  e.kind = InputEvent::Kind::kKey;
-  e.time_s = time_s;
-  e.code = key;
-  e.down = down;
-  Push(e);
+  Push({.kind = InputEvent::Kind::kKey, .time_s = time_s, .code = key, .down = down});
 }
 
 void InputQueue::Char(double time_s, unsigned character) {
-  InputEvent e;
-  e.kind = InputEvent::Kind::kChar;
-  e.time_s = time_s;
-  e.character = character;
-  Push(e);
+  Push({.kind = InputEvent::Kind::kChar, .time_s = time_s, .character = character});
 }
 
 void InputQueue::ReleaseAll(double time_s) {

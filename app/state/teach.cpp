@@ -84,13 +84,17 @@ void TeachVanishingExtent(const TeachVanishing& teach, int width_px, int height_
   }
   include(c.principal_point_px);
   if (const FocalConstruction* f = ShownFocalConstruction(c)) {
+    // The whole circle only when it is about the photo's size: a circle through far points
+    // would shrink the photo to a corner, and the construction's steps (h, C', f) lie near
+    // the photo whatever the circle's size.
     const Eigen::Vector2d r = Eigen::Vector2d::Constant(f->circle_radius_px);
-    if (f->circle_radius_px < limit) {
+    if (f->circle_radius_px < kMaxVanishingCircleViewDiagonals * size.norm()) {
       include(f->circle_center_px - r);
       include(f->circle_center_px + r);
     }
     include(f->altitude_foot_px);
     include(f->turned_center_px);
+    include(f->focal_end_px);
   }
   *min_px = lo;
   *max_px = hi;

@@ -151,11 +151,15 @@ constexpr size_t kTeachExtensionsPerFamily = 8;
 std::vector<Id> TeachExtendedSegments(const AppState& state, Id image_id, const VanishingConstruction& construction);
 
 // A vanishing point farther than this many photo diagonals from the photo's centre is left
-// out of the view the overlay asks for: the photo would shrink to a dot.
-constexpr double kMaxVanishingViewDiagonals = 4.0;
+// out of the view the overlay asks for (the overlay marks it at the panel's edge): the photo
+// would shrink to a corner. At 2 the photo keeps about a third of the view's width.
+constexpr double kMaxVanishingViewDiagonals = 2.0;
+// The focal construction's circle is framed whole only up to this radius (photo diagonals).
+constexpr double kMaxVanishingCircleViewDiagonals = 1.0;
 // The rectangle (image px) the vanishing overlay needs in view: the photo of width_px x
 // height_px, the finite vanishing points within kMaxVanishingViewDiagonals, the principal
-// point and the shown focal construction (its circle, h and C').
+// point and the shown focal construction (h's foot, C', the focal length's end, and its
+// circle when it is within kMaxVanishingCircleViewDiagonals).
 void TeachVanishingExtent(const TeachVanishing& teach, int width_px, int height_px, Eigen::Vector2d* min_px,
                           Eigen::Vector2d* max_px);
 

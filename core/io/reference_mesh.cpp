@@ -11,6 +11,7 @@
 
 #include "core/io/gltf_read.h"
 #include "core/util/file_read.h"
+#include "core/util/utf8.h"
 
 namespace facet {
 namespace {
@@ -31,16 +32,7 @@ int ObjIndex(long value, size_t count) {
 
 // Text from the file quoted in a message: printable ASCII only (the app's log and reports are
 // JSON, which holds UTF-8 only), shortened.
-std::string Quoted(const std::string& text) {
-  constexpr size_t kMaxQuoted = 40;
-  std::string out = "'";
-  for (size_t i = 0; i < text.size() && i < kMaxQuoted; ++i) {
-    const unsigned char c = static_cast<unsigned char>(text[i]);
-    out += c >= 0x20 && c < 0x7F ? static_cast<char>(c) : '?';
-  }
-  if (text.size() > kMaxQuoted) out += "...";
-  return out + "'";
-}
+std::string Quoted(const std::string& text) { return QuotedAscii(text, 40); }
 
 std::string TooManyTriangles(const std::string& name) {
   return name + ": more than " + std::to_string(kMaxReferenceTriangles) + " triangles, the most a reference may have";

@@ -39,14 +39,14 @@ bool IsValidUtf8(const std::string& text) {
   return true;
 }
 
-std::string ValidUtf8OrReplaced(const std::string& text) {
+std::string ValidUtf8OrReplaced(const std::string& text, const char* replacement) {
   if (IsValidUtf8(text)) return text;
   std::string out;
   out.reserve(text.size() + 8);
   for (size_t at = 0; at < text.size();) {
     const size_t length = Utf8SequenceLength(text, at);
     if (length == 0) {
-      out += "\xEF\xBF\xBD";  // U+FFFD REPLACEMENT CHARACTER
+      out += replacement;
       ++at;
     } else {
       out.append(text, at, length);
@@ -54,6 +54,16 @@ std::string ValidUtf8OrReplaced(const std::string& text) {
     }
   }
   return out;
+}
+
+std::string QuotedAscii(const std::string& text, size_t max_chars) {
+  std::string out = "'";
+  for (size_t i = 0; i < text.size() && i < max_chars; ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    out += c >= 0x20 && c < 0x7F ? static_cast<char>(c) : '?';
+  }
+  if (text.size() > max_chars) out += "...";
+  return out + "'";
 }
 
 }  // namespace facet

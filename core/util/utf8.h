@@ -10,7 +10,11 @@ namespace facet {
 // True when `text` is valid UTF-8 (shortest forms, no surrogates, at most U+10FFFF).
 bool IsValidUtf8(const std::string& text);
 // `text` itself when valid UTF-8, else with each byte that starts no valid sequence replaced
-// by U+FFFD: for reports, messages and names, never for what must round-trip.
-std::string ValidUtf8OrReplaced(const std::string& text);
+// by `replacement` (U+FFFD unless asked, e.g. "?" where a message must stay ASCII when it
+// was): for reports, messages and names, never for what must round-trip.
+std::string ValidUtf8OrReplaced(const std::string& text, const char* replacement = "\xEF\xBF\xBD");
+// Text from a file quoted in a message: 'text' with every byte outside printable ASCII shown
+// as '?', cut after `max_chars` with "...".
+std::string QuotedAscii(const std::string& text, size_t max_chars);
 
 }  // namespace facet

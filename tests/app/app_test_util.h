@@ -33,6 +33,7 @@
 #include "core/mesh/box.h"
 #include "core/scene/project.h"
 #include "tests/synthetic_scene.h"
+#include "tests/temp_files.h"
 
 namespace facet::testing {
 
@@ -41,20 +42,6 @@ namespace fs = std::filesystem;
 // The projected model's colour (app/panels/image_overlay.h, kModelEdgeColor), RGB.
 constexpr std::array<int, 3> kModelEdgeRgb = {255, 220, 0};
 
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name) {
-    path = fs::temp_directory_path() / ("facet_app_test_" + std::to_string(::getpid()) + "_" + name);
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    if (std::getenv("FACET_KEEP_TEST_DIRS")) return;  // for looking at the screenshots
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string operator/(const std::string& file) const { return (path / file).string(); }
-};
 
 struct RunResult {
   int exit_code = -1;
@@ -153,13 +140,6 @@ struct CliResult {
   std::string err;
 };
 
-inline std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // A command-line run of facet (not `render`): exit code, stdout, stderr.
 // Runs facet with `args` (already shell-quoted where needed), without a display.
 inline CliResult RunFacet(const TempDir& dir, const std::string& args) {
@@ -178,11 +158,6 @@ inline nlohmann::json ReadJson(const std::string& path) {
   std::ifstream in(path);
   REQUIRE_MESSAGE(in.good(), "missing report " << path);
   return nlohmann::json::parse(in);
-}
-
-inline void WriteText(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
 }
 
 // The report's log, one "level: text" line per entry (for failure messages).

@@ -29,25 +29,12 @@
 
 namespace fs = std::filesystem;
 using facet::testing::FormatXY;
+using facet::testing::TempDir;
+using facet::testing::WriteText;
 using facet::testing::MakeBoxScene;
 using facet::testing::SyntheticScene;
 
 namespace {
-
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name) {
-    path = fs::temp_directory_path() / ("facet_image_panel_test_" + std::to_string(::getpid()) + "_" + name);
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    if (std::getenv("FACET_KEEP_TEST_DIRS")) return;
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string operator/(const std::string& file) const { return (path / file).string(); }
-};
 
 // A colour per pixel from a hash, so that any offset of one pixel shows.
 cv::Vec3b PixelColor(int x, int y) {
@@ -89,7 +76,7 @@ struct RunResult {
 // These cases place points exactly where the mouse goes: the Snap option off (render --no-snap);
 // tests/app/test_snapping.cpp covers snapping.
 
-RunResult RunRender(const TempDir& dir, const std::string& args, const std::string& env = "") {
+RunResult RunRenderNoSnap(const TempDir& dir, const std::string& args, const std::string& env = "") {
   const std::string err = dir / "stderr.txt";
   const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY XDG_CONFIG_HOME='" + (dir / "config") + "' " + env + " '" +
                           std::string(FACET_APP_EXE) + "' render --no-snap " + args + " 2> '" + err + "'";
@@ -101,11 +88,6 @@ RunResult RunRender(const TempDir& dir, const std::string& args, const std::stri
   ss << in.rdbuf();
   r.stderr_text = ss.str();
   return r;
-}
-
-void WriteText(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
 }
 
 nlohmann::json ReadJson(const std::string& path) {
@@ -152,7 +134,7 @@ nlohmann::json Render(const TempDir& dir, const Fixture& f, const std::string& n
     WriteText(dir / (name + ".txt"), script);
     args += " --script '" + (dir / (name + ".txt")) + "'";
   }
-  const RunResult run = RunRender(dir, args, env);
+  const RunResult run = RunRenderNoSnap(dir, args, env);
   INFO("stderr: " << run.stderr_text);
   REQUIRE(run.exit_code == 0);
   return ReadJson(dir / (name + ".json"));

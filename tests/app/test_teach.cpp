@@ -752,7 +752,7 @@ TEST_CASE("issue 25: File > Export view of the 3D panel leaves out the panel's h
 }
 
 // app/state/teach.h: vanishing points farther than this many photo diagonals stay out of view.
-constexpr double kMaxVanishingViewDiagonals = 4.0;
+constexpr double kMaxVanishingViewDiagonals = 2.0;
 
 TEST_CASE("issue 25: Teach > Vanishing points on the app's sample: construction in view, thinned, text off the photo") {
   TempDir dir("teach_street");
