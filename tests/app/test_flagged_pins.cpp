@@ -67,8 +67,7 @@ TEST_CASE("a pin clicked 60 px off is named in the log, marked, and dropped by t
   const auto wrong = std::find_if(with_wrong.pins.begin(), with_wrong.pins.end(),
                                   [](const facet::Pin& pin) { return pin.vertex.vertex == kWrongCorner; });
   REQUIRE(wrong != with_wrong.pins.end());
-  // Where the mouse went, within a screen pixel at the panel's zoom (the script's point is
-  // rounded to the screen's pixel grid on the way).
+  // Where the mouse went, within a screen pixel at the panel's zoom.
   CHECK((wrong->uv_px - wrong_uv).norm() <= 1.0 / report.at("image_view").at("zoom").get<double>());
   const facet::Id wrong_id = wrong->id;
 
