@@ -3,6 +3,7 @@
 // the paper's pavilion with free ridge vertices, diagnostics and failure safety.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -644,9 +645,9 @@ TEST_CASE("joint solve: a distortion that would fold the photo is held, named, t
   const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
   INFO(summary.message);
   REQUIRE(summary.IsUsable());
-  REQUIRE(summary.held_distortion.size() == 1);
-  MESSAGE(summary.held_distortion[0]);
-  CHECK(summary.held_distortion[0].find("folds the photo") != std::string::npos);
+  REQUIRE(summary.held_intrinsics.size() == 1);
+  MESSAGE(summary.held_intrinsics[0]);
+  CHECK(summary.held_intrinsics[0].find("folds the photo") != std::string::npos);
   CHECK(solved.images[0].camera.k1 == p.images[0].camera.k1);
   CHECK(solved.images[0].camera.k2 == p.images[0].camera.k2);
   CHECK_FALSE(solved.images[0].distortion_locked);
@@ -657,6 +658,62 @@ TEST_CASE("joint solve: a distortion that would fold the photo is held, named, t
   REQUIRE(SolveJoint(locked, JointSolveOptions{}, &locked_solved).IsUsable());
   locked_solved.images[0].distortion_locked = false;
   CHECK(solved == locked_solved);
+}
+
+// Issue 26, the shared lens ran away (134,515 px from 19 pins): pins that barely fix f let
+// the solve take it beyond any lens. Here the pins are those of a 60 times longer lens from
+// 60 times farther (the same box, nearly an affine view; no line families), and f starts at
+// the photo's diagonal: the solve would go past 25 diagonals. It holds f where it started,
+// says so, and keeps the lock setting; the result is the locked solve's.
+TEST_CASE("joint solve: a focal length taken beyond 25 image diagonals is held, named, the lock setting kept") {
+  testing::SyntheticScene s = testing::MakeBoxScene({});
+  Project p = s.project;
+  p.segments.clear();
+  const Camera& near = s.true_camera;
+  Camera tele = near;
+  constexpr double kLonger = 60.0;
+  const Eigen::Vector3d forward = near.cam_from_world_rotation.row(2).transpose();
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (int c = 0; c < 8; ++c) centroid += s.true_box.mesh.vertex(c).position / 8.0;
+  const double distance = (centroid - near.CenterInWorld()).dot(forward);
+  const Eigen::Vector3d far_center = near.CenterInWorld() - (kLonger - 1.0) * distance * forward;
+  tele.focal_px = kLonger * near.focal_px;
+  tele.cam_from_world_translation = -(tele.cam_from_world_rotation * far_center);
+  const auto corner = [&](const Pin& pin) { return s.true_box.mesh.vertex(pin.vertex.vertex).position; };
+  for (Pin& pin : p.pins) pin.uv_px = tele.Project(corner(pin));
+  Image& image = p.images[0];
+  image.focal_locked = false;
+  const double diagonal = std::hypot(static_cast<double>(image.width_px), static_cast<double>(image.height_px));
+  REQUIRE(tele.focal_px / diagonal > 25.0);
+  REQUIRE(near.focal_px / diagonal < 25.0);
+  Project solved;
+  const JointSolveSummary summary = SolveJoint(p, JointSolveOptions{}, &solved);
+  INFO(summary.message);
+  REQUIRE(summary.IsUsable());
+  REQUIRE(summary.held_intrinsics.size() == 1);
+  MESSAGE(summary.held_intrinsics[0]);
+  CHECK(summary.held_intrinsics[0].find("the pins do not fix it; it was held at") != std::string::npos);
+  CHECK(solved.images[0].camera.focal_px == p.images[0].camera.focal_px);
+  CHECK_FALSE(solved.images[0].focal_locked);
+  Project locked = p;
+  locked.images[0].focal_locked = true;
+  Project locked_solved;
+  REQUIRE(SolveJoint(locked, JointSolveOptions{}, &locked_solved).IsUsable());
+  locked_solved.images[0].focal_locked = false;
+  CHECK(solved == locked_solved);
+  // The same pins with the focal length within 25 diagonals (10 times longer): refined, not held.
+  Project moderate = p;
+  Camera ten = near;
+  ten.focal_px = 10.0 * near.focal_px;
+  ten.cam_from_world_translation =
+      -(ten.cam_from_world_rotation * (near.CenterInWorld() - 9.0 * distance * forward));
+  for (Pin& pin : moderate.pins) pin.uv_px = ten.Project(corner(pin));
+  REQUIRE(ten.focal_px / diagonal < 25.0);
+  Project moderate_solved;
+  const JointSolveSummary refined = SolveJoint(moderate, JointSolveOptions{}, &moderate_solved);
+  REQUIRE(refined.IsUsable());
+  CHECK(refined.held_intrinsics.empty());
+  CHECK(moderate_solved.images[0].camera.focal_px != moderate.images[0].camera.focal_px);
 }
 
 TEST_CASE("joint solve: a failing solve leaves the project unchanged and says why") {
@@ -952,6 +1009,115 @@ TEST_CASE(
   CHECK(chi_square >= kChiSquare6Dof1e6);
   constexpr double kClearlyAbove = 2.0;
   CHECK(pinhole.reprojection_rms_px >= kClearlyAbove * summary.reprojection_rms_px);
+}
+
+// Issue 26: two pins clicked 50 and 75 px off their corners (a stair step mistaken for the
+// next one) among pins with 0.5 px noise. Least squares lets them pull every camera; the
+// robust loss keeps the cameras where the clean pins put them and flags those two pins only.
+double RotationAngleDeg(const Camera& a, const Camera& b) {
+  const Eigen::AngleAxisd d(a.cam_from_world_rotation * b.cam_from_world_rotation.transpose());
+  return std::abs(d.angle()) * 180.0 / M_PI;
+}
+
+struct CameraDeviation {
+  double rotation_deg = 0.0;  // largest over the images
+  double centre = 0.0;        // largest centre distance over the scene size (10)
+  double focal = 0.0;         // largest relative focal difference
+};
+
+CameraDeviation Deviation(const Project& a, const Project& b) {
+  CameraDeviation d;
+  for (size_t i = 0; i < a.images.size(); ++i) {
+    const Camera& x = a.images[i].camera;
+    const Camera& y = b.images[i].camera;
+    d.rotation_deg = std::max(d.rotation_deg, RotationAngleDeg(x, y));
+    d.centre = std::max(d.centre, (x.CenterInWorld() - y.CenterInWorld()).norm() / 10.0);
+    d.focal = std::max(d.focal, std::abs(x.focal_px / y.focal_px - 1.0));
+  }
+  return d;
+}
+
+TEST_CASE(
+    "joint solve: two pins clicked 50-75 px off are flagged and down-weighted; the cameras stay within the noise") {
+  constexpr double kNoisePx = 0.5;
+  Scene scene = MakeScene(3, 3, 1.0, kNoisePx);
+  for (Image& image : scene.truth.images) image.focal_locked = false;
+  const Project clean_start = Perturb(scene.truth, 0.04);
+  Project clean;
+  const JointSolveSummary clean_summary = SolveJoint(clean_start, JointSolveOptions{}, &clean);
+  REQUIRE(clean_summary.IsUsable());
+  // Noise alone: nothing beyond the others, nothing down-weighted (the noise scale is floored
+  // at 1 px, Huber's corner at 3 px: a 0.5 px-noise residual never reaches it).
+  CHECK(clean_summary.flagged_pins.empty());
+  CHECK(clean_summary.num_downweighted_pins == 0);
+  const CameraDeviation noise_error = Deviation(clean, scene.truth);
+
+  // Two wrong clicks, in two different photos.
+  Project wrong_start = clean_start;
+  const int bad_a = 5, bad_b = static_cast<int>(wrong_start.pins.size()) - 3;
+  REQUIRE(wrong_start.pins[bad_a].image_id != wrong_start.pins[bad_b].image_id);
+  wrong_start.pins[bad_a].uv_px += Eigen::Vector2d(50.0, 0.0);
+  wrong_start.pins[bad_b].uv_px += Eigen::Vector2d(-45.0, 60.0);  // 75 px
+  const Id bad_ids[2] = {wrong_start.pins[bad_a].id, wrong_start.pins[bad_b].id};
+
+  JointSolveOptions least_squares;
+  least_squares.robust_pins = false;
+  Project pulled;
+  const JointSolveSummary pulled_summary = SolveJoint(wrong_start, least_squares, &pulled);
+  REQUIRE(pulled_summary.IsUsable());
+  Project robust;
+  const JointSolveSummary summary = SolveJoint(wrong_start, JointSolveOptions{}, &robust);
+  INFO(summary.message);
+  REQUIRE(summary.IsUsable());
+  const CameraDeviation ls_off = Deviation(pulled, clean);
+  const CameraDeviation robust_off = Deviation(robust, clean);
+  MESSAGE("cameras vs the clean solve: least squares "
+          << ls_off.rotation_deg << " deg, centre " << ls_off.centre << ", focal " << ls_off.focal << "; robust "
+          << robust_off.rotation_deg << " deg, centre " << robust_off.centre << ", focal " << robust_off.focal
+          << "; the noise's own error vs the truth " << noise_error.rotation_deg << " deg, centre "
+          << noise_error.centre << ", focal " << noise_error.focal << "; " << summary.num_downweighted_pins
+          << " pins down-weighted, scale " << summary.pin_scale_px << " px, " << summary.iterations << " iterations");
+  // The robust cameras differ from the clean solve's by less than the noise's own error (the
+  // clean solve against the truth): the wrong clicks no longer count.
+  CHECK(robust_off.rotation_deg <= noise_error.rotation_deg);
+  CHECK(robust_off.centre <= noise_error.centre);
+  CHECK(robust_off.focal <= noise_error.focal);
+  // Least squares is pulled far beyond that (the failure this fixes).
+  CHECK(ls_off.rotation_deg >= 5.0 * noise_error.rotation_deg);
+
+  // Both wrong pins flagged, and only they, with their distance and a sentence naming them.
+  REQUIRE(summary.flagged_pins.size() == 2);
+  std::vector<Id> flagged;
+  for (const FlaggedPin& f : summary.flagged_pins) {
+    flagged.push_back(f.pin_id);
+    CHECK(f.error_px >= 40.0);
+    CHECK(f.sentence.find("pin " + std::to_string(f.pin_id) + " in view") == 0);
+    CHECK(f.sentence.find("px from where the model puts it") != std::string::npos);
+    CHECK(std::find(summary.warnings.begin(), summary.warnings.end(), f.sentence) != summary.warnings.end());
+  }
+  std::sort(flagged.begin(), flagged.end());
+  CHECK(flagged == std::vector<Id>{std::min(bad_ids[0], bad_ids[1]), std::max(bad_ids[0], bad_ids[1])});
+  CHECK(summary.num_downweighted_pins == 2);
+  CHECK(summary.message.find("2 pins down-weighted") != std::string::npos);
+  CHECK(least_squares.robust_pins == false);
+  CHECK(pulled_summary.flagged_pins.empty());  // the loss off: no scale, nothing flagged
+}
+
+TEST_CASE("joint solve: the robust loss leaves noise-free scenes at the least-squares optimum (1e-9)") {
+  Scene scene = MakeScene(3, 3, 1.0, 0.0);
+  const Project start = Perturb(scene.truth, 0.04);
+  Project solved;
+  const JointSolveSummary summary = SolveJoint(start, JointSolveOptions{}, &solved);
+  REQUIRE(summary.IsUsable());
+  CHECK(summary.pin_scale_px == 1.0);  // the floor: noise-free residuals have no spread
+  CHECK(summary.num_downweighted_pins == 0);
+  CHECK(MaxRelativeShapeError(solved, scene.truth) <= kNoiseFreeTolerance);
+  CHECK(MaxCameraCentreError(solved, scene.truth, 10.0) <= kNoiseFreeTolerance);
+  JointSolveOptions bad;
+  bad.outlier_scale = 1.0;  // below huber_scale
+  std::string why;
+  CHECK_FALSE(bad.Check(&why));
+  CHECK(why.find("outlier_scale") != std::string::npos);
 }
 
 }  // namespace

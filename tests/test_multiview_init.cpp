@@ -835,6 +835,151 @@ TEST_CASE("refusals: too few pins, too few shared vertices, collinear pins; the 
   }
 }
 
+// ---- Issue 26: later cameras from pins ----
+
+// Keeps only the pins of image_id on the given (box index, corner) pairs.
+void KeepPinsOn(Scene* s, Id image_id, const std::vector<std::pair<int, int>>& corners) {
+  auto& pins = s->project.pins;
+  std::erase_if(pins, [&](const Pin& pin) {
+    if (pin.image_id != image_id) return false;
+    for (const auto& [box, corner] : corners)
+      if (pin.vertex.primitive_id == s->box_ids[box] && static_cast<int>(pin.vertex.vertex) == corner) return false;
+    return true;
+  });
+}
+
+// Moves a box and puts every pin where its image's true camera sees the vertex now.
+void MoveBoxAndReproject(Scene* s, int box, const Eigen::Vector3d& shift) {
+  Project& p = s->project;
+  p.FindPrimitive(s->box_ids[box])->shape.translation += shift;
+  RefreshAllPrimitives(&p);
+  for (Pin& pin : p.pins) {
+    for (size_t i = 0; i < p.images.size(); ++i)
+      if (p.images[i].id == pin.image_id) pin.uv_px = s->truth[i].Project(VertexInWorld(p, pin.vertex));
+  }
+}
+
+// Noise-free recovery of the second photo's camera (relative focal length and translation,
+// rotation in radians).
+constexpr double kResectedTol = 1e-6;
+
+void CheckResected(const Camera& estimate, const Camera& truth) {
+  const CameraErrors e = Compare(estimate, truth);
+  CAPTURE(e.focal_rel);
+  CAPTURE(e.rotation_rad);
+  CAPTURE(e.translation_rel);
+  CHECK(e.focal_rel < kResectedTol);
+  CHECK(e.rotation_rad < kResectedTol);
+  CHECK(e.translation_rel < kResectedTol);
+}
+
+TEST_CASE("resection: 4 pins on a common plane spread over two boxes, not exactly coplanar in the model") {
+  SceneSpec spec;
+  spec.extra_boxes = 1;
+  spec.principal_point_offset_px = Eigen::Vector2d::Zero();  // one view of a plane cannot fix it
+  Scene s = MakeScene(spec);
+  // The solved model puts the second box's foot 3 cm above the first's (a thickness of
+  // ~1e-3 of the points' extent: no plane holds all four): the exact-plane test (1e-4) says "not coplanar", and 4
+  // points off a plane were refused ("needs 6, or 4 on one face").
+  MoveBoxAndReproject(&s, 1, Eigen::Vector3d(0.0, 0.0, 0.03));
+  const Id image_id = s.project.images[1].id;
+  KeepPinsOn(&s, image_id, {{0, 0}, {0, 1}, {1, 0}, {1, 3}});
+  REQUIRE(PinsIn(s.project, image_id) == 4);
+  Project out;
+  const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, {}, &out);
+  INFO(Messages(summary));
+  const MultiViewImageReport& report = summary.images[1];
+  REQUIRE(report.path == MultiViewInitPath::kResection);
+  CHECK(report.message.find("nearly planar") != std::string::npos);
+  CheckResected(out.images[1].camera, s.truth[1]);
+  MESSAGE("4 pins over two boxes, 3 cm off one plane: " << report.message);
+}
+
+TEST_CASE("resection: 6 non-planar pins spread over two boxes take the DLT") {
+  SceneSpec spec;
+  spec.extra_boxes = 1;
+  Scene s = MakeScene(spec);
+  const Id image_id = s.project.images[1].id;
+  KeepPinsOn(&s, image_id, {{0, 0}, {0, 1}, {0, 5}, {1, 2}, {1, 3}, {1, 6}});
+  REQUIRE(PinsIn(s.project, image_id) == 6);
+  Project out;
+  const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, {}, &out);
+  INFO(Messages(summary));
+  const MultiViewImageReport& report = summary.images[1];
+  REQUIRE(report.path == MultiViewInitPath::kResection);
+  CHECK(report.message.rfind("resection from 6 pins", 0) == 0);  // the DLT, principal point free
+  CheckResected(out.images[1].camera, s.truth[1]);
+  CHECK(Compare(out.images[1].camera, s.truth[1]).principal_point_px < kResectedTol * s.truth[1].focal_px);
+}
+
+TEST_CASE("resection: 4 non-planar pins with the focal length of a shared lens or EXIF give the pose") {
+  SceneSpec spec;
+  spec.extra_boxes = 1;
+  spec.principal_point_offset_px = Eigen::Vector2d::Zero();
+  Scene s = MakeScene(spec);
+  const Id image_id = s.project.images[1].id;
+  KeepPinsOn(&s, image_id, {{0, 0}, {0, 5}, {1, 1}, {1, 6}});
+  REQUIRE(PinsIn(s.project, image_id) == 4);
+  REQUIRE(s.truth[0].focal_px == s.truth[1].focal_px);  // one lens
+  {
+    // Alone, 4 pins off a plane do not fix f: refused, and the message says what would.
+    Project out;
+    const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, {}, &out);
+    INFO(Messages(summary));
+    CHECK(summary.images[1].path == MultiViewInitPath::kNone);
+    CHECK(summary.images[1].message.find("no focal length is known") != std::string::npos);
+  }
+  SUBCASE("the lens shared with the calibrated photo") {
+    for (Image& image : s.project.images) image.lens_group = 1;
+    Project out;
+    const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, {}, &out);
+    INFO(Messages(summary));
+    const MultiViewImageReport& report = summary.images[1];
+    REQUIRE(report.path == MultiViewInitPath::kResection);
+    CHECK(report.message.find("pose with the known focal length") == 0);
+    CHECK(report.message.find("shares with image 'synthetic.png'") != std::string::npos);
+    CHECK(out.images[1].camera.focal_px == s.project.images[0].camera.focal_px);
+    CheckResected(out.images[1].camera, s.truth[1]);
+  }
+  SUBCASE("EXIF") {
+    MultiViewInitOptions options;
+    options.focal_px_by_image[image_id] = s.truth[1].focal_px;
+    Project out;
+    const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, options, &out);
+    INFO(Messages(summary));
+    const MultiViewImageReport& report = summary.images[1];
+    REQUIRE(report.path == MultiViewInitPath::kResection);
+    CHECK(report.message.find("EXIF") != std::string::npos);
+    CheckResected(out.images[1].camera, s.truth[1]);
+  }
+}
+
+TEST_CASE("resection: a focal length beyond any lens is refused by name, not kept") {
+  // The second photo taken with a 350-diagonal telephoto from far away: the DLT measures its
+  // focal length (f = 4.5e5 px), which Facet does not accept as a camera.
+  SceneSpec spec;
+  spec.extra_boxes = 1;
+  Scene s = MakeScene(spec);
+  Camera& far = s.truth[1];
+  const Eigen::Vector3d target(2.0, 1.5, 1.2);
+  constexpr double kZoom = 500.0;
+  far.SetPose(far.cam_from_world_rotation, target + kZoom * (far.CenterInWorld() - target));
+  far.focal_px *= kZoom;
+  MoveBoxAndReproject(&s, 0, Eigen::Vector3d::Zero());
+  const Id image_id = s.project.images[1].id;
+  KeepPinsOn(&s, image_id, {{0, 0}, {0, 1}, {0, 5}, {1, 2}, {1, 3}, {1, 6}});
+  REQUIRE(PinsIn(s.project, image_id) == 6);  // fewer than two views need: resection alone
+  Project out;
+  const MultiViewInitSummary summary = CalibrateImagesFromPins(s.project, {}, &out);
+  INFO(Messages(summary));
+  const MultiViewImageReport& report = summary.images[1];
+  CHECK(report.path == MultiViewInitPath::kNone);
+  CHECK_FALSE(out.images[1].camera_calibrated);
+  CHECK(report.message.find("f = 450000 px is") != std::string::npos);
+  CHECK(report.message.find("image diagonals, outside any lens") != std::string::npos);
+  CHECK(out == s.project);
+}
+
 TEST_CASE("epipolar line: through the true match, clipped to the image, absent when it misses") {
   const Scene s = MakeScene({});
   const Eigen::Matrix3d F = FundamentalFromCameras(s.truth[0], s.truth[1]);

@@ -13,6 +13,7 @@
 #include "app/panels/texture_sections.h"
 #include "app/panels/widgets.h"
 #include "app/state/calgui_exif_prior.h"
+#include "app/state/model_edits.h"
 #include "core/io/project_io.h"
 #include "core/solve/scene_solve.h"
 
@@ -453,6 +454,19 @@ void DrawSolveSection(AppState* state) {
   for (const std::string& w : j.undetermined) WrappedColored(kWarningText, w);
   for (const std::string& w : j.conflicts) WrappedColored(kErrorText, w);
   for (const std::string& w : j.warnings) WrappedColored(kWarningText, w);
+  if (j.IsUsable() && j.num_downweighted_pins > 0) {
+    LabelValue("Down-weighted", "%d pins (noise scale %.2f px)", j.num_downweighted_pins, j.pin_scale_px);
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("Pins far from where the model puts them count less in the solve (robust loss)");
+  }
+  if (j.IsUsable() && !j.flagged_pins.empty()) {
+    // The offer to drop the likely wrong clicks: one undoable edit (Edit > Undo brings them back).
+    const std::string label =
+        "Drop " + std::to_string(j.flagged_pins.size()) + " flagged pin" + (j.flagged_pins.size() == 1 ? "" : "s");
+    if (ImGui::Button(label.c_str())) DropFlaggedPinsEdit(state);
+    RecordItem(state, "solve.drop_flagged_pins");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Remove the pins marked in red (likely wrong clicks); undoable");
+  }
   if (j.IsUsable()) {
     const bool open = ImGui::TreeNodeEx("Geometry solve (start)", ImGuiTreeNodeFlags_SpanAvailWidth);
     RecordItem(state, "solve.geometry_node");

@@ -27,6 +27,7 @@ constexpr ImU32 kFreeVertexColor = IM_COL32(80, 230, 255, 255);
 constexpr ImU32 kLinePinColor = IM_COL32(0, 255, 200, 255);      // a line pin's photo line
 constexpr ImU32 kLinePinLineColor = IM_COL32(0, 255, 200, 110);  // ... extended across the view
 constexpr ImU32 kLinePinResidualColor = IM_COL32(255, 70, 200, 255);
+constexpr ImU32 kFlaggedPinColor = IM_COL32(255, 50, 50, 255);  // a pin the solve flagged as a likely wrong click
 
 struct ScreenRect {
   Eigen::Vector2d min, max;
@@ -550,6 +551,18 @@ void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const V
         char text[16];
         std::snprintf(text, sizeof(text), "%d", number);
         DrawShadowedText(draw_list, ImVec2(c.x + 7, c.y - 18), hot ? kHighlightColor : kPinColor, text);
+      }
+      // A likely wrong click: a red ring around the pin and how far the model puts its vertex,
+      // so that it stands out among the others before the user reads the log.
+      if (input.flagged_pins != nullptr) {
+        for (const FlaggedPin& flagged : *input.flagged_pins) {
+          if (flagged.pin_id != pin.id) continue;
+          draw_list->AddCircle(c, 11.0f, kShadowColor, 0, 4.5f);
+          draw_list->AddCircle(c, 11.0f, kFlaggedPinColor, 0, 2.5f);
+          char text[32];
+          std::snprintf(text, sizeof(text), "%.0f px off?", flagged.error_px);
+          DrawShadowedText(draw_list, ImVec2(c.x + 13, c.y + 2), kFlaggedPinColor, text);
+        }
       }
     }
   }

@@ -88,6 +88,9 @@ struct OverlayInput {
   Selection selection;
   Id selected_line_pin = kNoId;  // drawn highlighted (with its edge, which the selection holds)
   OverlayHover hover;
+  // Pins the last solve found far beyond the others' spread (JointSolveSummary::flagged_pins):
+  // drawn with a red warning ring and their distance in px. May be null.
+  const std::vector<FlaggedPin>* flagged_pins = nullptr;
 };
 
 // Draws every overlay of input.image into the screen rectangle [clip_min, clip_max].

@@ -20,6 +20,7 @@
 #include "app/panels/image_view.h"
 #include "app/panels/line_proposals_view.h"
 #include "app/panels/teach_overlay.h"
+#include "app/panels/widgets.h"
 #include "app/platform/image_tiles.h"
 #include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
@@ -487,15 +488,26 @@ void StartLeftPress(AppState* state, PanelState* panel, const Image& image, cons
   }
   if (hover.pin_id != kNoId) {
     const Pin* pin = project.FindPin(hover.pin_id);
+    const ElementRef chosen = state->selection.element;
+    // The Pin tool with a vertex chosen: a click (no drag) near another pin still pins the
+    // chosen vertex where clicked (two corners a few px apart); a drag moves the pin under
+    // the pointer, as with any tool.
+    const bool click_pins_chosen = tool == Tool::kPin && chosen.kind == ElementKind::kVertex &&
+                                   ElementExists(project, chosen) &&
+                                   !(pin->vertex.primitive_id == chosen.primitive_id && pin->vertex.vertex == chosen.element);
     if (tool == Tool::kSelect && ImGui::GetIO().KeyShift) {
       drag.toggle_on_click = {ElementKind::kVertex, pin->vertex.primitive_id, pin->vertex.vertex};
-    } else {
+    } else if (!click_pins_chosen) {
       state->selection = Selection();
       state->selection.pin_id = hover.pin_id;
     }
     drag.kind = DragKind::kMovePin;
     drag.target_id = hover.pin_id;
     drag.grab_offset = pin->uv_px - mouse_uv;
+    if (click_pins_chosen) {
+      drag.place_on_click = true;
+      drag.vertex = {chosen.primitive_id, chosen.element};
+    }
     return;
   }
   if (hover.segment_id != kNoId) {
@@ -597,8 +609,11 @@ void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& 
     }
   } else if (IsEditDrag(drag.kind)) {
     const bool pins = drag.kind == DragKind::kPlacePin || drag.kind == DragKind::kMovePin;
-    const bool places = drag.began || (drag.kind == DragKind::kPlacePin && drag.place_on_click);
-    if (pins && places && !PinFitsPhoto(state, drag.image_id, mouse_uv + drag.grab_offset)) {
+    const bool places = drag.began || drag.place_on_click;
+    // A click places the chosen vertex's pin where clicked; a drag moves or places it where
+    // the grabbed point ends.
+    const Eigen::Vector2d placed_uv = drag.began ? Eigen::Vector2d(mouse_uv + drag.grab_offset) : mouse_uv;
+    if (pins && places && !PinFitsPhoto(state, drag.image_id, placed_uv)) {
       // A pin off the photo pins the vertex to nothing the photo shows: refused, and said so.
       if (drag.began) CancelDrag(state);
       if (drag.kind == DragKind::kPlacePin) state->selection.pin_id = kNoId;
@@ -624,7 +639,7 @@ void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& 
       }
     } else if (drag.began) {
       EndDrag(state);
-    } else if (drag.kind == DragKind::kPlacePin && drag.place_on_click) {
+    } else if ((drag.kind == DragKind::kPlacePin || drag.kind == DragKind::kMovePin) && drag.place_on_click) {
       Project edited = state->document.project();
       const Id pin_id = PinVertex(&edited, drag.image_id, drag.vertex, mouse_uv);
       state->selection = Selection();
@@ -632,7 +647,7 @@ void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& 
       state->selection.primitive_id = drag.vertex.primitive_id;
       CommitEdit(state, "Pin vertex", std::move(edited));
     }
-    if (drag.kind == DragKind::kPlacePin && (drag.began || drag.place_on_click)) {
+    if ((drag.kind == DragKind::kPlacePin && drag.began) || (!drag.began && drag.place_on_click)) {
       // The vertex is pinned: the next pin starts by choosing a vertex again.
       state->selection.element = {};
     }
@@ -1044,6 +1059,7 @@ OverlayInput MakeOverlayInput(AppState* state, const PanelState& panel, const Im
   overlay.selection = state->selection;
   overlay.selected_line_pin = SelectedLinePin(state);
   overlay.hover = hover;
+  overlay.flagged_pins = &state->last_update.joint.flagged_pins;
   const Interaction& drag = panel.interaction;
   if (drag.kind == DragKind::kMoveLinePinEnd) {  // the dragged handle stays lit
     overlay.hover = OverlayHover();
@@ -1083,7 +1099,7 @@ float DrawViewContents(const AppState& state, const PanelState& panel, const Ima
   DrawLineProposals(draw_list, state, image.id, transform, rect_min, rect_max);
   if (drag.kind == DragKind::kNewSegment) {
     DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, IM_COL32(0, 0, 0, 200), 4.0f);
-    DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, AxisColor(drag.axis), 2.0f);
+    DrawImageLine(draw_list, transform, drag.press_uv, mouse_uv, rect_min, rect_max, AxisColor(drag.axis, 255), 2.0f);
   }
   if (drag.kind == DragKind::kLinePin &&
       (mouse_uv - drag.press_uv).norm() * frame.pointer_scale >= kMinSegmentLengthPx) {
@@ -1156,11 +1172,38 @@ void ShowVanishingConstruction(const AppState* state, PanelState* panel, ImageVi
   FitImageViewToBox(view, lo, hi, frame.rect_min, frame.rect_size, text_box_px);
 }
 
+// The last solve's likely wrong clicks in this photo (JointSolveSummary::flagged_pins), in a
+// row above the view where the user is looking, with the offer to drop every flagged pin as
+// one undoable edit (the Solve section has the same button).
+void DrawFlaggedPinsBar(AppState* state, Id image_id) {
+  const JointSolveSummary& joint = state->last_update.joint;
+  if (!joint.IsUsable() || joint.flagged_pins.empty()) return;
+  int here = 0;
+  double worst_px = 0.0;
+  for (const FlaggedPin& flagged : joint.flagged_pins) {
+    if (flagged.image_id != image_id) continue;
+    ++here;
+    worst_px = std::max(worst_px, flagged.error_px);
+  }
+  if (here == 0) return;
+  ImGui::TextColored(kWarningText, "%d pin%s here %s far from the model (up to %.0f px): wrong click%s?", here,
+                     here == 1 ? "" : "s", here == 1 ? "is" : "are", worst_px, here == 1 ? "" : "s");
+  RecordItem(state, "image.flagged_pins");
+  ImGui::SameLine();
+  const size_t all = joint.flagged_pins.size();
+  const std::string label = "Drop " + std::to_string(all) + " flagged pin" + (all == 1 ? "" : "s");
+  if (ImGui::SmallButton(label.c_str())) DropFlaggedPinsEdit(state);
+  RecordItem(state, "image.drop_flagged_pins");
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("Remove the pins ringed in red in every photo (likely wrong clicks); Edit > Undo brings them back");
+}
+
 // One image's view for one frame, in the steps above.
 void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ImageViewState& view = panel->views[image.id];
   bool fit_now = false, one_to_one = false;
   DrawLineProposalsBar(state, image.id);
+  DrawFlaggedPinsBar(state, image.id);
   ViewFrame frame = LayOutView(state, panel, &view, &fit_now, &one_to_one);
   frame.texture = TextureFor(panel, *state, image.id);
   frame.width_px = frame.texture ? frame.texture->width : std::max(1, image.width_px);

@@ -1011,6 +1011,18 @@ void DrawOverlay(const AppState& state, const PanelState& panel, const ViewSetup
     }
   }
 
+  // Vertices whose pin the last solve flagged as a likely wrong click: red rings, so that the
+  // 3D view points at the same corner the image panel marks.
+  for (const FlaggedPin& flagged : state.last_update.joint.flagged_pins) {
+    const auto pin =
+        std::find_if(project.pins.begin(), project.pins.end(), [&](const Pin& p) { return p.id == flagged.pin_id; });
+    if (pin == project.pins.end() || project.FindVertex(pin->vertex) == nullptr) continue;
+    ImVec2 p;
+    if (!to_screen(VertexInWorld(project, pin->vertex), &p)) continue;
+    draw->AddCircle(p, 9.0f, IM_COL32(0, 0, 0, 200), 0, 4.0f);
+    draw->AddCircle(p, 9.0f, IM_COL32(255, 50, 50, 255), 0, 2.5f);
+  }
+
   if (panel.picture_only) {  // File > Export view: the model, not the UI's help
     draw->PopClipRect();
     return;

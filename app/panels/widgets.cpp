@@ -10,6 +10,18 @@ namespace facet::app {
 void RecordItem(AppState* state, const std::string& name) {
   const ImVec2 min = ImGui::GetItemRectMin(), size = ImGui::GetItemRectSize();
   state->item_rects[name] = {min.x, min.y, size.x, size.y};
+  // Drawn but scrolled out of its panel (or clipped by it): a scripted click at its centre
+  // would land on whatever is there instead.
+  const ImVec2 clip_min = ImGui::GetWindowDrawList()->GetClipRectMin();
+  const ImVec2 clip_max = ImGui::GetWindowDrawList()->GetClipRectMax();
+  const ImVec2 centre(min.x + 0.5f * size.x, min.y + 0.5f * size.y);
+  const bool in_view = centre.x >= clip_min.x && centre.y >= clip_min.y && centre.x < clip_max.x &&
+                       centre.y < clip_max.y;
+  if (in_view) {
+    state->clipped_items.erase(name);
+  } else {
+    state->clipped_items.insert(name);
+  }
 }
 
 ImVec4 AxisColor(Axis axis) {

@@ -144,6 +144,10 @@ bool ResolveScriptPoint(const AppState& state, const ShellState& shell, const Sc
       *error = "no widget named '" + step.mouse_item + "' was drawn in the frame before";
       return false;
     }
+    if (state.clipped_items.count(step.mouse_item) > 0) {
+      *error = "widget '" + step.mouse_item + "' was drawn out of view (its panel is scrolled or too small)";
+      return false;
+    }
     *screen = {it->second.x + 0.5f * it->second.w, it->second.y + 0.5f * it->second.h};
     return true;
   }

@@ -1021,6 +1021,7 @@ namespace {
 // the display without a title bar; its canvas is noted for the crop.
 void DrawExportViewFrame(AppState* state, ShellState* shell) {
   state->item_rects.clear();
+  state->clipped_items.clear();
   const ImGuiViewport* vp = ImGui::GetMainViewport();
   ImGui::SetNextWindowPos(vp->Pos, ImGuiCond_Always);
   ImGui::SetNextWindowSize(vp->Size, ImGuiCond_Always);
@@ -1074,6 +1075,7 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   HandleGlobalShortcuts(state, shell);
 
   state->item_rects.clear();
+  state->clipped_items.clear();
   const float menu_height = DrawMenuBar(state, shell);
   const ImGuiViewport* vp = ImGui::GetMainViewport();
   const Rect work{vp->Pos.x + kWorkAreaMarginPx, vp->Pos.y + menu_height + kWorkAreaMarginPx,

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <future>
 #include <map>
+#include <set>
 #include <optional>
 #include <string>
 #include <vector>
@@ -178,6 +179,8 @@ struct AppState {
   // "primitive.name"): per-frame UI introspection for the render report and tests, cleared
   // by DrawFrame, filled by RecordItem (app/panels/widgets.h).
   std::map<std::string, Rect> item_rects;
+  // Of those, the ones whose centre is outside their panel's visible part (scrolled away).
+  std::set<std::string> clipped_items;
 
   // Photos by image id, loaded once (core type; each panel makes its own GL textures). An
   // entry is never changed in place once loaded, so the bake's worker thread reads the pixels

@@ -354,6 +354,26 @@ bool DeleteVertexEdit(AppState* state, Id primitive_id, VertexId vertex) {
   return true;
 }
 
+bool DropFlaggedPinsEdit(AppState* state) {
+  const std::vector<FlaggedPin> flagged = state->last_update.joint.flagged_pins;
+  if (flagged.empty()) return Refuse(state, "Drop flagged pins", "the last solve flagged no pin");
+  Project edited = state->document.project();
+  std::vector<std::string> dropped;
+  for (const FlaggedPin& f : flagged) {
+    const size_t before = edited.pins.size();
+    std::erase_if(edited.pins, [&](const Pin& pin) { return pin.id == f.pin_id; });
+    if (edited.pins.size() < before) dropped.push_back(f.sentence);
+  }
+  if (dropped.empty()) return Refuse(state, "Drop flagged pins", "the flagged pins are gone already");
+  for (const std::string& why : dropped) state->Log(LogLevel::kInfo, "Dropped a flagged pin: " + why);
+  if (state->selection.pin_id != kNoId && edited.FindPin(state->selection.pin_id) == nullptr)
+    state->selection.pin_id = kNoId;
+  const std::string label =
+      "Drop " + std::to_string(dropped.size()) + " flagged pin" + (dropped.size() == 1 ? "" : "s");
+  CommitEdit(state, label, std::move(edited));
+  return true;
+}
+
 bool ConnectVerticesEdit(AppState* state, Id primitive_id, VertexId a, VertexId b) {
   Project edited;
   Primitive* primitive = EditablePrimitive(state, &edited, primitive_id, "Connect vertices");

@@ -168,6 +168,12 @@ bool PushPullFaceEdit(AppState* state, Id primitive_id, FaceId face, double dist
 // of its bounding box), or 0.1 for an empty mesh.
 double DefaultPushPullDistance(const Primitive& primitive);
 
+// Removes the pins the last solve flagged as likely wrong clicks
+// (state->last_update.joint.flagged_pins) as ONE undoable edit, "Drop N flagged pins", with
+// the re-solve; the log names each dropped pin. Refused (logged, nothing changes) when none
+// is flagged or none of them is still in the project.
+bool DropFlaggedPinsEdit(AppState* state);
+
 // Pins `vertex` at uv in the image (replacing its earlier pin there). Returns the pin id.
 Id PinVertex(Project* project, Id image_id, const VertexRef& vertex, const Eigen::Vector2d& uv_px);
 

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -38,6 +39,13 @@ bool JointSolveOptions::Check(std::string* error) const {
     return fail("initial_lambda must be positive and finite");
   if (!(constraint_tolerance > 0.0)) return fail("constraint_tolerance must be positive");
   if (!(conflict_tolerance > 0.0)) return fail("conflict_tolerance must be positive");
+  if (!(robust_min_scale_px > 0.0) || !std::isfinite(robust_min_scale_px))
+    return fail("robust_min_scale_px must be positive and finite");
+  if (!(huber_scale > 0.0) || !std::isfinite(huber_scale)) return fail("huber_scale must be positive and finite");
+  if (!(outlier_scale >= huber_scale) || !std::isfinite(outlier_scale))
+    return fail("outlier_scale must be finite and at least huber_scale");
+  if (robust_min_pins < 3) return fail("robust_min_pins must be at least 3");
+  if (max_robust_rounds < 0) return fail("max_robust_rounds must be non-negative");
   return true;
 }
 
@@ -56,6 +64,11 @@ constexpr double kCostGapFloorPx2 = 1e-20;
 constexpr int kMaxDiagnosticParameters = 600;  // dense SVD above this costs too much for a full solve
 constexpr double kRankTolerance = 1e-9;        // singular values below this times the largest are zero
 constexpr int kMaxColdStartParameters = 300;   // the geometry solve's initialisation is dense
+// A focal length the solve takes beyond this many image diagonals (f / d times 43.3 mm: a
+// 1,080 mm lens on a full-frame camera) is no lens a photo for modelling was taken with, but
+// pins that cannot fix f letting it run along the viewing direction (134,515 px after 100
+// iterations from 19 pins on a shared lens, issue 26). It is held where it started.
+constexpr double kMaxSolvedFocalPerDiagonal = 25.0;
 
 // The damped normal equations (J^T J + lambda D) delta = -J^T r, D = diag(J^T J) floored.
 class NormalEquations {
@@ -629,6 +642,66 @@ RoundsOutcome RunOuterRounds(const JointSolveOptions& options, JointProblem* pro
   return outcome;
 }
 
+// The median of a 2D isotropic Gaussian residual's norm (a Rayleigh variable) over its
+// per-axis sigma: sqrt(2 ln 2).
+constexpr double kRayleighMedianOverSigma = 1.1774100225154747;
+// Reweighted rounds stop once no pin's weight moved by more than this.
+constexpr double kRobustWeightTolerance = 1e-3;
+
+// The pins' noise scale (px) from their unweighted residuals at the problem's last
+// evaluation, or 0 when there are too few pins for a spread to mean anything.
+double RobustPinScale(const JointSolveOptions& options, const JointProblem& problem) {
+  std::vector<double> norms;
+  for (const ResidualBlock& b : problem.blocks) {
+    if (b.kind == BlockKind::kPin) norms.push_back(b.raw.norm());
+  }
+  if (static_cast<int>(norms.size()) < options.robust_min_pins) return 0.0;
+  const size_t mid = norms.size() / 2;
+  std::nth_element(norms.begin(), norms.begin() + mid, norms.end());
+  double median = norms[mid];
+  if (norms.size() % 2 == 0) median = 0.5 * (median + *std::max_element(norms.begin(), norms.begin() + mid));
+  return std::max(median / kRayleighMedianOverSigma, options.robust_min_scale_px);
+}
+
+// The robust loss's weight on a squared residual of norm e (JointSolveOptions::robust_pins).
+double RobustPinWeight(const JointSolveOptions& options, double sigma, double e) {
+  const double c = options.huber_scale * sigma;
+  const double t = options.outlier_scale * sigma;
+  if (!(e > c)) return 1.0;
+  if (e <= t) return c / e;
+  return (c / e) * (t / e) * (t / e);
+}
+
+// Sets every pin block's weight from its residual at the last evaluation; returns the largest
+// change of a weight.
+double UpdatePinWeights(const JointSolveOptions& options, double sigma, JointProblem* problem) {
+  double change = 0.0;
+  for (ResidualBlock& b : problem->blocks) {
+    if (b.kind != BlockKind::kPin) continue;
+    const double w = RobustPinWeight(options, sigma, b.raw.norm());
+    change = std::max(change, std::abs(w - b.weight * b.weight));
+    b.weight = std::sqrt(w);
+  }
+  return change;
+}
+
+// Iteratively reweighted solves from the least-squares result (the blocks evaluated at
+// *state) until the weights settle, the budget runs out or max_robust_rounds. Returns the
+// noise scale used (0: the loss did not run).
+double RunRobustRounds(const JointSolveOptions& options, JointProblem* problem, JointState* state, LmWorkspace* lm,
+                       RoundsOutcome* outcome) {
+  if (!options.robust_pins) return 0.0;
+  double sigma = RobustPinScale(options, *problem);
+  if (sigma == 0.0) return 0.0;
+  for (int round = 0; round < options.max_robust_rounds && !outcome->budget_used; ++round) {
+    if (UpdatePinWeights(options, sigma, problem) <= kRobustWeightTolerance) break;
+    *outcome = RunOuterRounds(options, problem, state, lm);
+    if (outcome->failed) break;
+    sigma = RobustPinScale(options, *problem);
+  }
+  return sigma;
+}
+
 // The constraints' values at the start (raw, per constraint block in block order), so that
 // the result can be compared with the start on the same exact-penalty merit.
 std::vector<Eigen::VectorXd> ConstraintValues(const JointProblem& problem) {
@@ -642,7 +715,32 @@ std::vector<Eigen::VectorXd> ConstraintValues(const JointProblem& problem) {
 struct StartPoint {
   double observation_cost = 0.0;
   std::vector<Eigen::VectorXd> constraint_values;  // ConstraintValues at the start
+  // Per block, the unweighted squared norm of an observation block's residual (0 for a
+  // constraint block), so that the start can be costed with the robust weights at the end.
+  std::vector<double> observation_squared_norms;
 };
+
+StartPoint StartPointOf(const JointProblem& problem) {
+  StartPoint start{ObservationCost(problem), ConstraintValues(problem), {}};
+  for (const ResidualBlock& b : problem.blocks) {
+    const bool observation = b.kind != BlockKind::kConstraint;
+    start.observation_squared_norms.push_back(
+        !observation ? 0.0 : (b.kind == BlockKind::kPin ? b.raw.squaredNorm() : b.residual.squaredNorm()));
+  }
+  return start;
+}
+
+// The start's observation cost under the blocks' current weights, so that it compares with
+// the (weighted) result's.
+StartPoint WeightedStart(const JointProblem& problem, StartPoint start) {
+  double cost = 0.0;
+  for (size_t i = 0; i < problem.blocks.size() && i < start.observation_squared_norms.size(); ++i) {
+    const ResidualBlock& b = problem.blocks[i];
+    cost += (b.kind == BlockKind::kPin ? b.weight * b.weight : 1.0) * start.observation_squared_norms[i];
+  }
+  start.observation_cost = 0.5 * cost;
+  return start;
+}
 
 // The exact (L1) penalty merit obs + sum_i w_i |c_i| at the result and at the start, with
 // w_i = 2 |lambda_i|, lambda_i = multiplier + mu c the final multiplier estimate (first order).
@@ -858,14 +956,28 @@ ConstraintPolishSummary Polish(const JointSolveOptions& options, JointProblem* p
 void FillDiagnostics(const Project& project, const JointSolveOptions& options, const JointProblem& problem,
                      bool name_conflicts, JointSolveSummary* summary) {
   summary->pins.clear();
-  for (const Pin& pin : project.pins) summary->pins.push_back({pin.id, std::numeric_limits<double>::quiet_NaN()});
+  summary->flagged_pins.clear();
+  summary->num_downweighted_pins = 0;
+  for (const Pin& pin : project.pins) summary->pins.push_back({pin.id, std::numeric_limits<double>::quiet_NaN(), 1.0});
   std::map<int, ImageDiagnostic> per_camera;
   double sum_sq = 0.0, max_px = 0.0;
   int count = 0;
   for (const ResidualBlock& b : problem.blocks) {
     if (b.kind != BlockKind::kPin) continue;
-    const double e = b.residual.norm();
+    const double e = b.raw.norm();
     summary->pins[b.source].error_px = e;
+    summary->pins[b.source].weight = b.weight * b.weight;
+    if (b.weight < 1.0) ++summary->num_downweighted_pins;
+    if (summary->pin_scale_px > 0.0 && e > options.outlier_scale * summary->pin_scale_px) {
+      const Pin& pin = project.pins[b.source];
+      FlaggedPin flagged{pin.id, pin.image_id, e, ""};
+      const Image* image = project.FindImage(pin.image_id);
+      const std::string photo = image != nullptr ? std::filesystem::path(image->path).stem().string()
+                                                 : "image " + std::to_string(pin.image_id);
+      flagged.sentence = "pin " + std::to_string(pin.id) + " in " + photo + " is " + internal::FormatNumber(e, 3) +
+                         " px from where the model puts it";
+      summary->flagged_pins.push_back(flagged);
+    }
     ImageDiagnostic& d = per_camera[b.camera];
     d.image_id = project.images[problem.cameras[b.camera].image_index].id;
     ++d.num_pins;
@@ -880,6 +992,8 @@ void FillDiagnostics(const Project& project, const JointSolveOptions& options, c
     d.rms_px = std::sqrt(d.rms_px / d.num_pins);
     summary->images.push_back(d);
   }
+  std::sort(summary->flagged_pins.begin(), summary->flagged_pins.end(),
+            [](const FlaggedPin& a, const FlaggedPin& b) { return a.error_px > b.error_px; });
   summary->reprojection_rms_px = count > 0 ? std::sqrt(sum_sq / count) : 0.0;
   summary->reprojection_max_px = max_px;
 
@@ -957,7 +1071,7 @@ JointSolveSummary SolveJointTraced(const Project& project, const JointSolveOptio
                   "at the start a pinned vertex lies on or behind its camera; the model is unchanged");
   }
   summary.initial_cost = ObservationCost(problem);
-  const StartPoint start_point{summary.initial_cost, ConstraintValues(problem)};
+  const StartPoint start_point = StartPointOf(problem);
 
   // The Schur complement on primitive groups, unless a constraint makes a group too large.
   SchurEquations schur;
@@ -975,7 +1089,8 @@ JointSolveSummary SolveJointTraced(const Project& project, const JointSolveOptio
   lm.trial = state;
   lm.delta.resize(problem.num_parameters);
   lm.trace = trace;
-  const RoundsOutcome rounds = RunOuterRounds(options, &problem, &state, &lm);
+  RoundsOutcome rounds = RunOuterRounds(options, &problem, &state, &lm);
+  if (!rounds.failed) summary.pin_scale_px = RunRobustRounds(options, &problem, &state, &lm, &rounds);
   if (rounds.failed) {
     *solved = project;
     summary.iterations = lm.iterations;
@@ -994,13 +1109,15 @@ JointSolveSummary SolveJointTraced(const Project& project, const JointSolveOptio
 
   const bool evaluated = EvaluateBlocks(&problem, state, true);
   summary.final_cost = ObservationCost(problem);
-  const std::string unusable = WhyResultUnusable(problem, state, evaluated, summary.final_cost, start_point);
+  const std::string unusable =
+      WhyResultUnusable(problem, state, evaluated, summary.final_cost, WeightedStart(problem, start_point));
   if (!unusable.empty()) {
     *solved = project;
     return finish(SolverTermination::kFailed, unusable);
   }
 
   FillDiagnostics(project, options, problem, !budget_used, &summary);
+  for (const FlaggedPin& flagged : summary.flagged_pins) summary.warnings.push_back(flagged.sentence);
   if (options.compute_diagnostics) {
     if (problem.num_parameters <= kMaxDiagnosticParameters) {
       summary.undetermined = UndeterminedParameters(problem, &summary.degrees_of_freedom_left);
@@ -1036,14 +1153,41 @@ JointSolveSummary SolveJointTraced(const Project& project, const JointSolveOptio
                      internal::FormatNumber(old->camera.k1, 4) + ", k2 = " + internal::FormatNumber(old->camera.k2, 4) +
                      " (draw plumb lines to estimate it, or lock it)");
   }
+  // A focal length that ran away (kMaxSolvedFocalPerDiagonal) is held the same way, for
+  // every photo of its lens.
+  for (const Image& image : solved->images) {
+    const Image* old = project.FindImage(image.id);
+    if (old == nullptr || old->focal_locked || old->camera.focal_px == image.camera.focal_px) continue;
+    const double diagonal = std::hypot(static_cast<double>(image.width_px), static_cast<double>(image.height_px));
+    const double start_per_diagonal = old->camera.focal_px / diagonal;
+    const double per_diagonal = image.camera.focal_px / diagonal;
+    const bool ran_away = !(per_diagonal >= kMinFocalPerDiagonal && per_diagonal <= kMaxSolvedFocalPerDiagonal);
+    const bool start_was_a_lens =
+        start_per_diagonal >= kMinFocalPerDiagonal && start_per_diagonal <= kMaxSolvedFocalPerDiagonal;
+    if (!ran_away || !start_was_a_lens || held.FindImage(image.id)->focal_locked) continue;
+    for (Image& same_lens : held.images) {
+      if (same_lens.id == image.id || (image.lens_group > 0 && same_lens.lens_group == image.lens_group))
+        same_lens.focal_locked = true;
+    }
+    folded.push_back("image '" + image.path + "': the solve took its focal length to " +
+                     internal::FormatNumber(image.camera.focal_px, 6) + " px (" +
+                     internal::FormatNumber(per_diagonal, 3) + " image diagonals, beyond any lens up to " +
+                     internal::FormatNumber(kMaxSolvedFocalPerDiagonal, 3) +
+                     "): the pins do not fix it; it was held at " + internal::FormatNumber(old->camera.focal_px, 6) +
+                     " px (pin points at other depths, add a photo from another side, or give the focal length)");
+  }
   if (!folded.empty()) {
     JointSolveSummary again = SolveJoint(held, options, solved);
     if (!again.IsUsable()) {
       *solved = project;
     } else {
-      for (const Image& image : project.images) solved->FindImage(image.id)->distortion_locked = image.distortion_locked;
+      for (const Image& image : project.images) {
+        Image* out = solved->FindImage(image.id);
+        out->distortion_locked = image.distortion_locked;
+        out->focal_locked = image.focal_locked;
+      }
     }
-    again.held_distortion = folded;
+    again.held_intrinsics = folded;
     again.warnings.insert(again.warnings.begin(), folded.begin(), folded.end());
     return again;
   }
@@ -1056,6 +1200,10 @@ JointSolveSummary SolveJointTraced(const Project& project, const JointSolveOptio
   std::ostringstream text;
   text << "RMS " << summary.reprojection_rms_px << " px over " << summary.pins.size() << " pins after "
        << summary.iterations << " iterations";
+  if (summary.num_downweighted_pins > 0) {
+    text << "; " << summary.num_downweighted_pins << " pin" << (summary.num_downweighted_pins == 1 ? "" : "s")
+         << " down-weighted (noise scale " << internal::FormatNumber(summary.pin_scale_px, 3) << " px)";
+  }
   return finish(budget_used ? SolverTermination::kMaxIterations : SolverTermination::kConverged, text.str());
 }
 

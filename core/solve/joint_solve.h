@@ -84,6 +84,21 @@ struct JointSolveOptions {
   // Diagnostics cost a dense SVD of the column-scaled Jacobian: on for a full solve, off per
   // frame. Above 600 parameters the analysis is skipped with a warning.
   bool compute_diagnostics = true;
+  // Robust loss on the pins (issue 26: a pin clicked 47-75 px off its place pulled every
+  // camera by degrees). After the least-squares solve, the pins' noise scale sigma is taken
+  // from their own spread, median(|r_i|) / 1.1774 (the median of a 2D Gaussian residual's
+  // norm is 1.1774 sigma), floored at robust_min_scale_px; then iteratively reweighted solves
+  // weigh each pin's squared residual by w(|r|): 1 up to huber_scale * sigma (quadratic, so
+  // noise-free and inlier-only scenes keep the least-squares optimum), Huber's c / |r| above,
+  // and beyond outlier_scale * sigma a redescending tail (c / |r|) (t / |r|)^2, t that
+  // threshold, whose pull on the model fades as 1 / |r|^2. Pins beyond outlier_scale * sigma
+  // are flagged in the summary. Needs at least robust_min_pins pins.
+  bool robust_pins = true;
+  double robust_min_scale_px = 1.0;
+  double huber_scale = 3.0;    // in units of sigma
+  double outlier_scale = 5.0;  // in units of sigma, above huber_scale
+  int robust_min_pins = 6;
+  int max_robust_rounds = 8;  // reweighted solves after the first
   enum class LinearSolver { kSchur, kSparseLdlt };
   LinearSolver linear_solver = LinearSolver::kSchur;
 
@@ -93,6 +108,15 @@ struct JointSolveOptions {
 struct PinDiagnostic {
   Id pin_id = kNoId;
   double error_px = 0.0;  // NaN when the pin did not take part
+  double weight = 1.0;    // the robust loss's weight on its squared residual (1: an inlier)
+};
+// A pin whose residual is far beyond the others' (JointSolveOptions::outlier_scale): most
+// likely a click on the wrong place.
+struct FlaggedPin {
+  Id pin_id = kNoId;
+  Id image_id = kNoId;
+  double error_px = 0.0;  // distance from where the solved model puts its vertex, px
+  std::string sentence;   // "pin 12 in 0003 is 47 px from where the model puts it"
 };
 struct ImageDiagnostic {
   Id image_id = kNoId;
@@ -111,19 +135,27 @@ struct ConstraintDiagnostic {
 
 // The joint solve's summary: SolverSummary's fields (core/optim/solver_summary.h), with
 // initial_cost and final_cost 0.5 * sum of squared observation residuals (px^2, pins and
-// segments) at the start and at the result.
+// segments) at the start and at the result; with down-weighted pins final_cost is the robust
+// objective (each pin's squared residual times its weight).
 struct JointSolveSummary : SolverSummary {
   int num_residuals = 0;
   int num_parameters = 0;
   double reprojection_rms_px = 0.0;  // over the pins that took part
   double reprojection_max_px = 0.0;
+  // Robust loss on the pins (JointSolveOptions::robust_pins): the noise scale sigma it used
+  // (px; 0 when it did not run), the pins it gave a weight below 1, and those beyond the
+  // outlier threshold, worst first (their sentences are also in warnings).
+  double pin_scale_px = 0.0;
+  int num_downweighted_pins = 0;
+  std::vector<FlaggedPin> flagged_pins;
   // The solve converged to a degenerate model (WhySolvedModelDegenerate); termination is then
   // kFailed and the message names the size.
   bool degenerate = false;
   // Images whose unlocked distortion the solve took past any lens (WhyDistortionFolds,
-  // core/geometry/camera_checks.h): the solve ran again with it held, one sentence each (also
-  // first in warnings).
-  std::vector<std::string> held_distortion;
+  // core/geometry/camera_checks.h), or whose unlocked focal length it took beyond 25 image
+  // diagonals (a 1,080 mm lens on full frame: pins that do not fix f): the solve ran again
+  // with those held where they started, one sentence each (also first in warnings).
+  std::vector<std::string> held_intrinsics;
   std::vector<PinDiagnostic> pins;                // project.pins order
   std::vector<ImageDiagnostic> images;            // calibrated images with pins
   std::vector<ConstraintDiagnostic> constraints;  // project.constraints order

@@ -1274,9 +1274,11 @@ bool EvaluateBlocks(JointProblem* problem, const JointState& state, bool with_ja
                          with_jacobian ? &d_cam : nullptr, with_jacobian && k_free ? &d_k : nullptr)) {
           ok = false;
           block.residual.setZero();
+          block.raw.setZero(2);
           continue;
         }
-        block.residual = r;
+        block.raw = r;
+        block.residual = block.weight * r;
         if (with_jacobian) {
           for (int i = 0; i < 9; ++i) {
             if (block.camera_cols[i] >= 0) block.jacobian.col(block.camera_cols[i]) = d_cam.col(i);
@@ -1286,6 +1288,7 @@ bool EvaluateBlocks(JointProblem* problem, const JointState& state, bool with_ja
           }
           const std::vector<int>& map = block.vertex_cols[0];
           for (size_t j = 0; j < map.size(); ++j) block.jacobian.col(map[j]).noalias() += d_point * v.jacobian.col(j);
+          if (block.weight != 1.0) block.jacobian *= block.weight;
         }
         break;
       }

@@ -19,7 +19,8 @@
 // It owns only its parameters from index 2 on; its own pose is not a parameter.
 //
 // Residual blocks, each a few rows with a dense Jacobian over its own parameter columns:
-// - pin (2 rows, px): project(vertex) - uv_px, through the camera's distortion;
+// - pin (2 rows, px): project(vertex) - uv_px, through the camera's distortion, times the
+//   block's robust weight (ResidualBlock::weight, 1 unless the pin is down-weighted);
 // - segment (2 rows, px): signed distance of each endpoint to the line through the segment's
 //   midpoint and the vanishing point K R e_axis (the second is minus the first). The user
 //   draws on the distorted photo, so with distortion the endpoints are first undistorted with
@@ -165,7 +166,11 @@ struct ResidualBlock {
   Eigen::Vector2d segment_a_px = Eigen::Vector2d::Zero();  // the endpoints as drawn (distorted)
   Eigen::Vector2d segment_b_px = Eigen::Vector2d::Zero();
   int axis = 0;
-  // Evaluated values (weighted for constraints), and the unweighted constraint residual.
+  // Pins: the square root of the robust loss's weight (JointSolveOptions::robust_pins), which
+  // multiplies the residual and its Jacobian; 1 for a pin the loss treats as an inlier.
+  double weight = 1.0;
+  // Evaluated values (weighted for constraints and down-weighted pins), and the unweighted
+  // residual (constraints: scale-free; pins: px).
   Eigen::VectorXd residual;
   Eigen::MatrixXd jacobian;
   Eigen::VectorXd raw;

@@ -310,6 +310,11 @@ ModelUpdateOptions DragFrameUpdateOptions(int iterations) {
   options.joint.max_iterations = iterations;
   options.joint.compute_diagnostics = false;
   options.joint.polish_constraints = false;
+  // Plain least squares while a pin is dragged: the model follows the pin the user moves
+  // (the robust loss would down-weight it as soon as it left the others' spread, and the
+  // drag would seem to do nothing). The release's commit solve is robust and flags the pin
+  // if the other pins disagree with where it was left.
+  options.joint.robust_pins = false;
   options.initialize_from_pins = false;
   options.geometry_solve_when_warm = false;
   return options;
@@ -380,9 +385,13 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
     joint_options.warm_start = true;  // from the geometry solve's result
     Project joint_solved;
     summary.joint = SolveJoint(*updated, joint_options, &joint_solved);
-    for (const std::string& held : summary.joint.held_distortion) summary.messages.push_back("Joint solve: " + held);
+    for (const std::string& held : summary.joint.held_intrinsics) summary.messages.push_back("Joint solve: " + held);
     if (summary.joint.IsUsable()) {
       *updated = std::move(joint_solved);
+      // A pin far beyond the others' spread is most likely a wrong click: named so that the
+      // user can move or drop it (the robust loss already keeps it from pulling the cameras).
+      for (const FlaggedPin& flagged : summary.joint.flagged_pins)
+        summary.messages.push_back("Joint solve: " + flagged.sentence);
     } else if (summary.joint.degenerate || summary.joint.termination == SolverTermination::kFailed) {
       // Its sizes went to zero or below, or it diverged from the geometry solve's result: the
       // model keeps the state the edit left it in, as the joint solve's message says ("the

@@ -13,6 +13,7 @@
 #include "core/estimators/calibrate_dlt.h"
 #include "core/estimators/homography_pose.h"
 #include "core/estimators/projective_upgrade.h"
+#include "core/solve/pin_resection.h"
 #include "core/util/eigen_decompositions.h"
 
 namespace facet {
@@ -157,6 +158,78 @@ struct ResectionResult {
   std::vector<Id> flagged;
 };
 
+// The focal length of a calibrated image that shares `image`'s lens (Image::lens_group), or 0;
+// *source names it.
+double SharedLensFocalPx(const Project& project, const Image& image, std::string* source) {
+  if (image.lens_group <= 0) return 0.0;
+  for (const Image& other : project.images) {
+    if (other.id == image.id || other.lens_group != image.lens_group || !other.camera_calibrated) continue;
+    if (!(other.camera.focal_px > 0.0) || !std::isfinite(other.camera.focal_px)) continue;
+    *source = "the lens it shares with " + Quoted(other);
+    return other.camera.focal_px;
+  }
+  return 0.0;
+}
+
+// When the DLT or the exact plane gave no camera, or one that is no camera (`reason`): the
+// nearly planar path, then the pose with a known focal length (the shared lens's, EXIF, the
+// image's fixed focal length or its prior), each checked as a camera (core/solve/pin_resection.h).
+ResectionResult ResectOtherwise(const Project& project, const Image& image,
+                                const std::vector<PointCorrespondence>& points, const MultiViewInitOptions& options,
+                                const std::string& reason) {
+  ResectionResult result;
+  PinResectionInput input;
+  for (const PointCorrespondence& p : points) {
+    input.points.push_back(p.xyz);
+    input.pixels.push_back(p.uv_px);
+  }
+  input.width_px = image.width_px;
+  input.height_px = image.height_px;
+  input.principal_point_px = image.principal_point_mode == PrincipalPointMode::kFixed
+                                 ? image.fixed_principal_point_px
+                                 : ImageCenter(image.width_px, image.height_px);
+  input.max_iterations = options.max_resection_iterations;
+  std::string why = reason;
+  if (const std::string spread = WhyPinsNotSpread(input); !spread.empty()) {
+    result.message = why + "; " + spread;
+    return result;
+  }
+  const bool focal_fixed = image.focal_mode == FocalMode::kFixed && image.fixed_focal_px > 0.0;
+  auto take = [&](const PinResectionResult& r, const std::string& note) {
+    result.ok = true;
+    result.camera = r.camera;
+    result.rms_px = r.rms_px;
+    result.message = r.message + note;
+    result.warnings.push_back(Quoted(image) + ": " + reason + "; " + r.message + note);
+  };
+  if (!focal_fixed && PointsThicknessRatio(input.points) <= options.coplanar_thickness_ratio) {
+    const PinResectionResult planar = ResectNearlyPlanar(input);
+    if (planar.ok) {
+      take(planar, "");
+      return result;
+    }
+    why += "; " + planar.message;
+  }
+  std::string source;
+  double focal_px = SharedLensFocalPx(project, image, &source);
+  if (!(focal_px > 0.0)) {
+    focal_px = KnownFocalPx(image, options);
+    source = options.focal_px_by_image.count(image.id) ? "the photo's EXIF" : "the image's focal setting";
+  }
+  if (focal_px > 0.0) {
+    const PinResectionResult pose = ResectWithKnownFocal(input, focal_px);
+    if (pose.ok) {
+      take(pose, " (f from " + source + ", held)");
+      return result;
+    }
+    why += "; with f = " + Format("%.1f px", focal_px) + " from " + source + ": " + pose.message;
+  } else {
+    why += "; no focal length is known for it (share a lens with a calibrated photo, or give its focal length)";
+  }
+  result.message = why;
+  return result;
+}
+
 ResectionResult Resect(const Project& project, const Image& image, const std::vector<const Pin*>& pins,
                        const MultiViewInitOptions& options) {
   ResectionResult result;
@@ -182,8 +255,25 @@ ResectionResult Resect(const Project& project, const Image& image, const std::ve
   while (true) {
     DltCalibrationSummary dlt = CalibrateFromPoints(points, dlt_options);
     if (!dlt.IsUsable()) {
-      result.message = dlt.message;
-      return result;
+      ResectionResult other = ResectOtherwise(project, image, points, options, dlt.message);
+      other.flagged.insert(other.flagged.begin(), result.flagged.begin(), result.flagged.end());
+      return other;
+    }
+    // A focal length beyond any lens (f = 63,038 px was kept) is refused by name, never kept.
+    if (const std::string refused = WhyResectedCameraRefused(
+            dlt.camera,
+            [&] {
+              std::vector<Eigen::Vector3d> xyz;
+              for (const PointCorrespondence& p : points) xyz.push_back(p.xyz);
+              return xyz;
+            }(),
+            image.width_px, image.height_px);
+        !refused.empty()) {
+      ResectionResult other =
+          ResectOtherwise(project, image, points, options,
+                          std::string(dlt.planar ? "resection (planar)" : "resection") + " refused: " + refused);
+      other.flagged.insert(other.flagged.begin(), result.flagged.begin(), result.flagged.end());
+      return other;
     }
     const auto worst = std::max_element(dlt.residuals_px.begin(), dlt.residuals_px.end());
     const int min_points = dlt.planar ? 4 : 6;
@@ -643,7 +733,9 @@ std::vector<int> InitializeByResection(const PinInitContext& ctx, const std::set
         report.message = r.message;
       } else if (known_pins.size() < 6) {
         // The DLT found them off one plane: the count is what the user must change.
-        note = std::to_string(known_pins.size()) + " pins on known vertices; resection needs 6, or 4 on one face";
+        note = std::to_string(known_pins.size()) +
+               " pins on known vertices; resection needs 6, or 4 on one face, or 4 with a known focal length (" +
+               r.message + ")";
         left.push_back(static_cast<int>(i));
       } else {
         note = std::to_string(known_pins.size()) + " pins on known vertices, resection failed (" + r.message + ")";

@@ -18,7 +18,15 @@
 //     then solves only its pose (and the principal point its mode leaves free), a calibrated
 //     PnP; with FocalMode::kPrior the focal length is refined under that Gaussian prior (weighed
 //     with resection_pixel_noise_px). focal_px_by_image (EXIF) is not used here: resection
-//     measures f, an EXIF value is only as good as the prior it would be.
+//     measures f, an EXIF value is only as good as the prior it would be. Where the pins
+//     cannot fix f (the DLT or the plane fails, e.g. "no positive focal length", or gives a
+//     focal length no lens has, refused by name by WhyNotACamera: f = 63,038 px was once
+//     kept), core/solve/pin_resection.h takes over (issue 26): pins nearly on one plane
+//     (thickness <= coplanar_thickness_ratio, e.g. 4 pins spread over two boxes whose solved
+//     faces are not exactly coplanar) by the homography on their common plane refined on the
+//     true points; then, with a focal length known from a calibrated image of the same lens
+//     group (Image::lens_group), else focal_px_by_image (EXIF), else the image's fixed focal
+//     length or prior, the pose alone from 4 or more pins, planar or not.
 // (b) Two views: the images not resected, when exactly two are left; then each image still
 //     uncalibrated (after (b) or (c), or alone) with the calibrated image, at input or
 //     initialised here, it shares the most pinned vertices with. Correspondences are the
