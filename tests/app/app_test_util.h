@@ -134,6 +134,26 @@ inline int StopRender(BackgroundRender* render, int signal) {
   return WIFSIGNALED(render->status) ? WTERMSIG(render->status) : 0;
 }
 
+// Waits up to `timeout_s` for a background render to end by itself, then kills what is left
+// (SIGKILL) and reaps it. True when it exited by itself with status 0: a test that reads what
+// the exit leaves behind (the removed recovery file) must not kill it between its report and
+// its clean-up.
+inline bool WaitForExit(BackgroundRender* render, double timeout_s) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (!render->reaped && std::chrono::steady_clock::now() < until) {
+    if (::waitpid(render->pid, &render->status, WNOHANG) == render->pid) {
+      render->reaped = true;
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (!render->reaped) {
+    StopRender(render, SIGKILL);
+    return false;
+  }
+  return WIFEXITED(render->status) && WEXITSTATUS(render->status) == 0;
+}
+
 struct CliResult {
   int exit_code = -1;
   std::string out;

@@ -336,10 +336,13 @@ TEST_CASE("a failed autosave is reported once, and written at the next edit once
   const bool still_blocked = fs::is_symlink(blocker);
   fs::remove(blocker);
   const bool reported = failed && facet::testing::WaitForFile(dir / "fail.json", &session, 240.0);
-  facet::testing::StopRender(&session, SIGKILL);  // reaps it (it has exited, or hangs)
+  // The report is written before the exit's clean-up: wait for the exit itself.
+  const bool exited_cleanly = reported && facet::testing::WaitForExit(&session, 240.0);
+  if (!reported) facet::testing::StopRender(&session, SIGKILL);
   INFO("stderr: " << facet::testing::ReadText(dir / "fail.stderr.txt"));
   REQUIRE(failed);
   REQUIRE(reported);
+  CHECK(exited_cleanly);
   CHECK(still_blocked);
   const nlohmann::json report = facet::testing::ReadJson(dir / "fail.json");
   const std::string log = facet::testing::ReportLog(report);
