@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "core/io/camera_export.h"
 #include "core/io/colmap_camera.h"
 #include "core/util/file_write.h"
 
@@ -20,6 +21,16 @@ std::string Number(double x) {
 
 std::string FileNameOf(const std::string& path) { return std::filesystem::path(path).filename().string(); }
 
+// images.txt ends an image's line with its name, the rest of the line with blanks at its ends
+// cut (COLMAP's reader and ours): a name must not start or end with one, nor break the line.
+bool NameFitsImagesText(const std::string& name) {
+  auto blank = [](char c) { return c == ' ' || c == '\t'; };
+  if (blank(name.front()) || blank(name.back())) return false;
+  for (char c : name)
+    if (c == '\n' || c == '\r') return false;
+  return true;
+}
+
 }  // namespace
 
 std::string ColmapModelFromProject(const Project& project, const ColmapExportOptions& options, ColmapModel* model) {
@@ -27,8 +38,11 @@ std::string ColmapModelFromProject(const Project& project, const ColmapExportOpt
   ColmapModel out;
   std::map<Id, size_t> image_index;  // Facet image id -> index into out.images
   std::set<std::string> names;
-  for (const Image& image : project.images) {
-    if (!image.camera_calibrated) continue;
+  std::vector<const Image*> exported;
+  const std::string not_exportable = ImagesForCameraExport(project, &exported);
+  if (!not_exportable.empty()) return not_exportable;
+  for (const Image* exported_image : exported) {
+    const Image& image = *exported_image;
     if (image.id > std::numeric_limits<std::uint32_t>::max())
       return "image " + std::to_string(image.id) + ": its id does not fit COLMAP's 32-bit image ids";
     const std::uint32_t id = static_cast<std::uint32_t>(image.id);
@@ -37,6 +51,9 @@ std::string ColmapModelFromProject(const Project& project, const ColmapExportOpt
     colmap_image.camera_id = id;
     colmap_image.name = FileNameOf(image.path);
     if (colmap_image.name.empty()) return "image " + std::to_string(image.id) + " has no file name";
+    if (!NameFitsImagesText(colmap_image.name))
+      return "photo \"" + colmap_image.name +
+             "\": its file name starts or ends with a blank or holds a line break, which images.txt cannot hold";
     if (!names.insert(colmap_image.name).second)
       return "two photos are named \"" + colmap_image.name + "\": COLMAP's images are told apart by file name";
     colmap_image.cam_from_world_rotation = Eigen::Quaterniond(image.camera.cam_from_world_rotation);

@@ -19,8 +19,10 @@ struct ColmapExportOptions {
 // The model of `project`'s calibrated images: one camera per image (COLMAP camera id = image
 // id = Facet's image id), named by the photo's file name (its last path component, which the
 // COLMAP importer matches on). Images without a calibrated camera are left out; vertices are
-// numbered 1, 2, ... over the primitives in order. "" on success, else why (an id beyond
-// COLMAP's 32 bits, two photos with one file name); *model is then empty.
+// numbered 1, 2, ... over the primitives in order. "" on success, else why (no calibrated
+// photo or a camera that is no camera, core/io/camera_export.h; an id beyond COLMAP's 32 bits,
+// two photos with one file name, a name images.txt cannot hold); *model is then empty.
+// Every Facet camera has an exact COLMAP model (core/io/colmap_camera.h): nothing is rounded.
 std::string ColmapModelFromProject(const Project& project, const ColmapExportOptions& options, ColmapModel* model);
 
 // The three text files as COLMAP 3.8 writes them, every number with 17 significant digits
