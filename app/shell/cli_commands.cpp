@@ -1,5 +1,6 @@
 #include "app/shell/cli_commands.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -15,10 +16,12 @@
 #include "core/io/blender_script.h"
 #include "core/io/calibrate_io.h"
 #include "core/io/calibrate_points_io.h"
+#include "core/io/colmap_model_write.h"
 #include "core/io/export.h"
 #include "core/io/gltf_read.h"
 #include "core/io/project_io.h"
 #include "core/io/relate_io.h"
+#include "core/io/transforms_json.h"
 #include "core/solve/joint_solve.h"
 #include "core/solve/model_update.h"
 #include "core/texture/textured_mesh.h"
@@ -236,10 +239,74 @@ int RunSolveCommand(const std::string& project_path, const std::string& output_p
   return 0;
 }
 
-int RunExportCommand(const std::string& project_path, const std::string& output_path,
+namespace {
+
+// What `facet export` writes: --format, else the output's name tells.
+std::string ExportFormatOf(const std::string& format, const std::string& output_path, std::string* error) {
+  std::string ext = std::filesystem::path(output_path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if ((format == "glb" || format == "obj") && ext != "." + format) {
+    *error = "--format " + format + " writes FILE." + format + ", not '" + output_path + "'";
+    return "";
+  }
+  if (!format.empty()) return format;
+  if (ext == ".glb") return "glb";
+  if (ext == ".obj") return "obj";
+  if (ext == ".json") return "transforms";
+  std::error_code ec;
+  if ((!output_path.empty() && output_path.back() == '/') || std::filesystem::is_directory(output_path, ec))
+    return "colmap";
+  *error = "cannot tell the format from '" + output_path +
+           "': use FILE.glb or FILE.obj (the model), transforms.json (the cameras for nerfstudio), or a folder "
+           "FOLDER/ or --format colmap (the cameras as a COLMAP text model)";
+  return "";
+}
+
+// The calibrated cameras, without the texture: nothing to bake, no photo read.
+int ExportCameras(const Project& project, const std::string& project_path, const std::string& output_path,
+                  const std::string& format) {
+  if (format == "colmap") {
+    ColmapModel model;
+    std::string error = ColmapModelFromProject(project, {}, &model);
+    if (error.empty()) error = WriteColmapModelText(output_path, model);
+    if (!error.empty()) {
+      std::cerr << "facet export: " << error << "; nothing written\n";
+      return 1;
+    }
+    const std::filesystem::path folder(output_path);
+    for (const char* file : {"cameras.txt", "images.txt", "points3D.txt"})
+      std::cout << (folder / file).string() << "\n";
+    return 0;
+  }
+  const std::string error = WriteTransformsJson(project, project_path, output_path);
+  if (!error.empty()) {
+    std::cerr << "facet export: " << error << "; nothing written\n";
+    return 1;
+  }
+  std::cout << output_path << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int RunExportCommand(const std::string& project_path, const std::string& output_path, const std::string& format_option,
                      const std::string& blender_script_path, double texels_per_unit) {
+  std::string format_error;
+  const std::string format = ExportFormatOf(format_option, output_path, &format_error);
+  if (format.empty()) {
+    std::cerr << "facet export: " << format_error << "\n";
+    return 1;
+  }
+  const bool cameras_only = format == "colmap" || format == "transforms";
+  if (cameras_only && (!blender_script_path.empty() || texels_per_unit > 0.0)) {
+    std::cerr << "facet export: --blender-script and --texels-per-unit go with a model (.glb, .obj), not with the "
+                 "cameras alone ("
+              << format << ")\n";
+    return 1;
+  }
   Project project;
   if (!LoadForCli(project_path, &project)) return 1;
+  if (cameras_only) return ExportCameras(project, project_path, output_path, format);
   // Each photo is read once and baked in place (the bake takes pointers, copies no pixels).
   std::vector<ImageRgba8> photos(project.images.size());
   std::vector<const ImageRgba8*> photo_pointers(project.images.size(), nullptr);
@@ -278,16 +345,7 @@ int RunExportCommand(const std::string& project_path, const std::string& output_
   } else if (texels_per_unit > 0.0) {
     std::cerr << "facet export: texture: " << bake.message << "\n";
   }
-  const std::string ext = std::filesystem::path(output_path).extension().string();
-  ExportSummary exported;
-  if (ext == ".glb") {
-    exported = ExportGlb(mesh, project, output_path);
-  } else if (ext == ".obj") {
-    exported = ExportObj(mesh, output_path);
-  } else {
-    std::cerr << "facet export: unknown format '" << ext << "': use FILE.glb or FILE.obj\n";
-    return 1;
-  }
+  const ExportSummary exported = format == "glb" ? ExportGlb(mesh, project, output_path) : ExportObj(mesh, output_path);
   if (!exported.success) {
     std::cerr << "facet export: " << exported.message << "\n";
     return 1;
@@ -296,8 +354,8 @@ int RunExportCommand(const std::string& project_path, const std::string& output_
   if (!blender_script_path.empty()) {
     std::error_code ec;
     const std::string model = std::filesystem::absolute(output_path, ec).lexically_normal().string();
-    const std::string error = WriteFileAtomically(
-        blender_script_path, BlenderSetupScript(project, project_path, ec ? output_path : model));
+    const std::string error =
+        WriteFileAtomically(blender_script_path, BlenderSetupScript(project, project_path, ec ? output_path : model));
     if (!error.empty()) {
       std::cerr << "facet export: " << error << "\n";
       return 1;
@@ -335,14 +393,14 @@ int RunRenderGlbCommand(const std::string& glb_path, int camera_index, const std
     return 1;
   }
   const GltfCamera& camera = scene.cameras[camera_index];
-  nlohmann::ordered_json out = {{"output", output_png},
-                                {"camera", camera_index},
-                                {"name", camera.name},
-                                {"size_px", {shot.width, shot.height}},
-                                {"focal_px", camera.camera.focal_px},
-                                {"principal_point_px",
-                                 {camera.camera.principal_point_px.x(), camera.camera.principal_point_px.y()}},
-                                {"principal_point_from_extras", camera.has_principal_point}};
+  nlohmann::ordered_json out = {
+      {"output", output_png},
+      {"camera", camera_index},
+      {"name", camera.name},
+      {"size_px", {shot.width, shot.height}},
+      {"focal_px", camera.camera.focal_px},
+      {"principal_point_px", {camera.camera.principal_point_px.x(), camera.camera.principal_point_px.y()}},
+      {"principal_point_from_extras", camera.has_principal_point}};
   std::cout << DumpForPrinting(out) << "\n";
   return 0;
 }

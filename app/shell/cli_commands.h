@@ -1,6 +1,6 @@
 // The command-line verbs that work without a window: calibrate, relate, solve, export,
-// render-glb (offscreen EGL). Each prints its result (JSON where a program may read it) on stdout, errors on stderr, and returns the
-// process exit code (0 success, 1 unusable input).
+// render-glb (offscreen EGL). Each prints its result (JSON where a program may read it) on stdout, errors on stderr,
+// and returns the process exit code (0 success, 1 unusable input).
 #pragma once
 
 #include <string>
@@ -16,11 +16,15 @@ int RunCalibrateImageCommand(const std::string& photo_path, const std::string& p
                              const std::string& focal_prior, double focal_px);
 int RunRelateCommand(const std::string& matches_path);
 int RunSolveCommand(const std::string& project_path, const std::string& output_path);
+// `format`: "glb" or "obj" (the textured model), "colmap" (the calibrated cameras as a COLMAP
+// text model in the folder output_path, core/io/colmap_model_write.h) or "transforms" (as
+// nerfstudio's transforms.json, core/io/transforms_json.h); empty: from output_path (.glb,
+// .obj, .json; a folder, existing or written with a trailing '/', for colmap).
 // With a non-empty blender_script_path, also writes the Blender set-up script
 // (core/io/blender_script.h) that imports output_path and adds the photos' cameras.
 // texels_per_unit > 0 sets the texture's resolution (TextureBakeOptions::texels_per_unit);
-// 0 keeps the rule from the photos.
-int RunExportCommand(const std::string& project_path, const std::string& output_path,
+// 0 keeps the rule from the photos. Both only for a model (glb, obj).
+int RunExportCommand(const std::string& project_path, const std::string& output_path, const std::string& format = "",
                      const std::string& blender_script_path = "", double texels_per_unit = 0.0);
 
 // Renders a .glb through its camera node number camera_index (0-based, in node order) with

@@ -109,10 +109,23 @@ int Run(int argc, char** argv) {
   solve->add_option("project", solve_project, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
   solve->add_option("-o,--output", solve_out, "Where to write the solved project")->required();
 
-  auto* exporter = cli.add_subcommand("export", "Export the textured model as binary glTF (.glb) or OBJ + MTL + PNG");
-  std::string export_project, export_out;
+  auto* exporter = cli.add_subcommand(
+      "export",
+      "Export the textured model as binary glTF (.glb) or OBJ + MTL + PNG, or the calibrated cameras as a COLMAP "
+      "text model or a nerfstudio / instant-ngp transforms.json");
+  std::string export_project, export_out, export_format;
   exporter->add_option("project", export_project, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
-  exporter->add_option("-o,--output", export_out, "FILE.glb or FILE.obj")->required();
+  exporter
+      ->add_option("-o,--output", export_out,
+                   "FILE.glb or FILE.obj (the model); transforms.json (any NAME.json: the cameras for nerfstudio, "
+                   "photo paths relative to its folder); FOLDER/ (the cameras as COLMAP's cameras.txt, images.txt "
+                   "and points3D.txt: the model's vertices, their pins as tracks; the folder is created)")
+      ->required();
+  exporter
+      ->add_option("--format", export_format,
+                   "glb | obj | colmap | transforms (default: from the output's name: .glb, .obj, .json, a "
+                   "folder)")
+      ->check(CLI::IsMember({"glb", "obj", "colmap", "transforms"}));
   std::string blender_script;
   exporter->add_option("--blender-script", blender_script,
                        "Also write a Blender Python script: imports the model, adds each photo's camera "
@@ -172,7 +185,8 @@ int Run(int argc, char** argv) {
   if (*calibrate) return facet::app::RunCalibrateCommand(lines_path, points_path);
   if (*relate) return facet::app::RunRelateCommand(matches_path);
   if (*solve) return facet::app::RunSolveCommand(solve_project, solve_out);
-  if (*exporter) return facet::app::RunExportCommand(export_project, export_out, blender_script, texels_per_unit);
+  if (*exporter)
+    return facet::app::RunExportCommand(export_project, export_out, export_format, blender_script, texels_per_unit);
   if (*cameras)
     return facet::app::RunCamerasCommand(cameras_args.project_path, cameras_args.output_path, cameras_args.options);
   if (*render_glb) return facet::app::RunRenderGlbCommand(render_glb_path, render_glb_camera, render_glb_out);

@@ -16,7 +16,9 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
-// The photo's path as the trainer should open it: relative to the JSON's folder.
+// The photo's path as the trainer should open it: relative to the JSON's folder, so that the
+// two can move together, unless they share no folder but the root (then absolute: a path up
+// to "/" and down again breaks as soon as either moves).
 std::string PathFromJsonFolder(const std::string& project_path, const std::string& image_path,
                                const std::string& json_path) {
   namespace fs = std::filesystem;
@@ -27,7 +29,12 @@ std::string PathFromJsonFolder(const std::string& project_path, const std::strin
   const fs::path folder = fs::absolute(fs::path(json_path), ec).parent_path().lexically_normal();
   if (ec) return photo.generic_string();
   const fs::path relative = photo.lexically_relative(folder);
-  return relative.empty() ? photo.generic_string() : relative.generic_string();
+  const auto first_below_root = [](const fs::path& p) {
+    auto it = p.begin();
+    return it != p.end() && ++it != p.end() ? *it : fs::path();
+  };
+  const bool share_a_folder = first_below_root(photo) == first_below_root(folder);
+  return relative.empty() || !share_a_folder ? photo.generic_string() : relative.generic_string();
 }
 
 Json Intrinsics(const Camera& camera) {

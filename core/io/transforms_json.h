@@ -10,8 +10,8 @@
 // - Intrinsics fl_x = fl_y = f, cx, cy, w, h, and OpenCV's k1, k2, p1 = p2 = 0 (Facet's radial
 //   model is OpenCV's with k3 = 0): at the top level when every exported photo has the same,
 //   else in each frame. camera_model "OPENCV" when a camera has distortion, else "PINHOLE".
-// - file_path: the photo relative to the folder of the transforms.json (forward slashes; an
-//   absolute path when there is no relative one).
+// - file_path: the photo relative to the folder of the transforms.json (forward slashes), or
+//   absolute when the two share no folder below the root.
 #pragma once
 
 #include <string>

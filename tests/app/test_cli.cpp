@@ -18,6 +18,8 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "core/io/colmap_import.h"
+#include "core/io/colmap_model.h"
 #include "core/io/gltf_read.h"
 #include "core/io/project_io.h"
 #include "core/mesh/box.h"
@@ -347,6 +349,68 @@ Eigen::Vector2d CheckRenderOnPhoto(const cv::Mat& photo, const cv::Mat& render, 
 // it through each camera node it holds (the principal point from the camera's extras, which
 // a glTF camera cannot hold) with the 3D panel's renderer; the textured model must land on
 // the photo it was textured from to under a pixel.
+TEST_CASE("export: the Leuven street's camera as a COLMAP text model and as transforms.json, read back") {
+  constexpr double kExact = 1e-9;  // 17 significant digits read back to rounding
+  TempDir dir("export_cameras");
+  const std::string sample = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven/street.facet";
+  const facet::Project project = facet::testing::LoadProjectFile(sample);
+  const facet::Image& photo = project.images.at(0);
+  REQUIRE(photo.camera_calibrated);
+
+  // COLMAP: a folder named by a trailing '/', created with its parent.
+  const CliResult colmap = RunFacet(dir, "export '" + sample + "' -o '" + (dir / "colmap/sparse/") + "'");
+  INFO(colmap.err);
+  REQUIRE(colmap.exit_code == 0);
+  for (const char* file : {"cameras.txt", "images.txt", "points3D.txt"}) {
+    CAPTURE(file);
+    CHECK(colmap.out.find(file) != std::string::npos);
+  }
+  facet::ColmapModel model;
+  REQUIRE(facet::ReadColmapModelText(dir / "colmap/sparse", &model) == "");
+  REQUIRE(model.images.size() == 1);
+  CHECK(model.images[0].name == "leuvenA.jpg");
+  facet::Project imported = project;
+  imported.images[0].camera = facet::Camera();
+  imported.images[0].camera_calibrated = false;
+  facet::ColmapImportReport report;
+  REQUIRE(facet::ApplyColmapCameras(model, &imported, &report) == "");
+  const facet::Camera& got = imported.images[0].camera;
+  CHECK(std::abs(got.focal_px - photo.camera.focal_px) < kExact * photo.camera.focal_px);
+  CHECK((got.principal_point_px - photo.camera.principal_point_px).norm() < kExact * photo.camera.focal_px);
+  CHECK((got.cam_from_world_rotation - photo.camera.cam_from_world_rotation).norm() < kExact);
+  CHECK((got.cam_from_world_translation - photo.camera.cam_from_world_translation).norm() < kExact);
+  size_t vertices = 0;
+  for (const facet::Primitive& primitive : project.primitives) vertices += primitive.mesh.NumVertices();
+  CHECK(model.points3d.size() == vertices);
+  CHECK(model.images[0].points2d.size() == project.pins.size());
+
+  // transforms.json, by its name; the photo's path opens from the JSON's folder.
+  const CliResult nerf = RunFacet(dir, "export '" + sample + "' -o '" + (dir / "transforms.json") + "'");
+  INFO(nerf.err);
+  REQUIRE(nerf.exit_code == 0);
+  const nlohmann::json doc = nlohmann::json::parse(ReadText(dir / "transforms.json"));
+  REQUIRE(doc.at("frames").size() == 1);
+  const fs::path file_path = doc["frames"][0].at("file_path").get<std::string>();
+  CHECK(fs::exists(dir.path / file_path));
+  CHECK(doc.at("fl_x").get<double>() == photo.camera.focal_px);
+  CHECK(doc.at("cx").get<double>() == photo.camera.principal_point_px.x() + 0.5);
+  CHECK(doc.at("cy").get<double>() == photo.camera.principal_point_px.y() + 0.5);
+  CHECK(doc.at("w").get<int>() == photo.width_px);
+  const nlohmann::json& m = doc["frames"][0].at("transform_matrix");
+  const Eigen::Vector3d center(m[0][3].get<double>(), m[1][3].get<double>(), m[2][3].get<double>());
+  CHECK((center - photo.camera.CenterInWorld()).norm() < kExact * (1.0 + center.norm()));
+
+  // Nothing calibrated: exit 1 with the reason, nothing written.
+  facet::Project uncalibrated = project;
+  uncalibrated.images[0].camera_calibrated = false;
+  REQUIRE(facet::SaveProject(uncalibrated, dir / "uncalibrated.facet").empty());
+  const CliResult refused = RunFacet(
+      dir, "export '" + (dir / "uncalibrated.facet") + "' --format colmap -o '" + (dir / "refused") + "'");
+  CHECK(refused.exit_code == 1);
+  CHECK(refused.err.find("no photo has a calibrated camera") != std::string::npos);
+  CHECK(!fs::exists(dir / "refused"));
+}
+
 TEST_CASE("export: the Leuven street rendered from the .glb through each exported camera lies on the photo") {
   TempDir dir("render_glb");
   const std::string sample_dir = std::string(FACET_SOURCE_DIR) + "/assets/samples/leuven";
