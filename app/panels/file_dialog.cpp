@@ -46,11 +46,29 @@ void Relist(FileDialogState* dialog, double time_s) {
   dialog->listed_time_s = time_s;
 }
 
+constexpr const char* kColmapCamerasFile = "cameras.txt";
+
+// A COLMAP model is a folder, chosen by its cameras.txt: a name typed that is neither an
+// existing folder (entered, as always) nor cameras.txt names the model's folder.
+std::string AsColmapCamerasFile(const FileDialogState& dialog, const std::string& typed) {
+  const TypedPath as_typed = ResolveTypedPath(dialog.folder, typed, true);
+  if (as_typed.kind == TypedPathKind::kEmpty || as_typed.kind == TypedPathKind::kFolder) return typed;
+  if (fs::path(as_typed.path).filename() == kColmapCamerasFile) return typed;
+  return JoinPath(as_typed.path, kColmapCamerasFile);
+}
+
 // What Enter or the confirm button does with a typed or selected path: go into a folder,
 // choose a file, or explain why not.
-FileDialogResult Accept(FileDialogState* dialog, const std::string& typed) {
+FileDialogResult Accept(FileDialogState* dialog, const std::string& typed_text) {
   const bool writes = PurposeWrites(dialog->purpose);
+  const bool colmap = dialog->purpose == BrowsePurpose::kExportColmap;
+  const std::string typed = colmap ? AsColmapCamerasFile(*dialog, typed_text) : typed_text;
   TypedPath target = ResolveTypedPath(dialog->folder, typed, writes);
+  if (colmap && target.kind == TypedPathKind::kMissing) {
+    // A new model folder, created by the export, in a folder that is there.
+    std::error_code ec;
+    if (fs::is_directory(ParentFolder(ParentFolder(target.path)), ec)) return {FileDialogOutcome::kChosen, target.path};
+  }
   if (target.kind == TypedPathKind::kMissing && !writes) {
     // "house" opens house.facet when that is what is there.
     const TypedPath with_extension =
@@ -62,7 +80,7 @@ FileDialogResult Accept(FileDialogState* dialog, const std::string& typed) {
       dialog->error = writes ? "Type a file name." : "Choose a file, or type its name or path.";
       return {};
     case TypedPathKind::kFolder:
-      if (typed == dialog->name_field) dialog->name_field.clear();
+      if (typed == dialog->name_field) dialog->name_field = colmap ? kColmapCamerasFile : "";
       GoToFolder(dialog, target.path);
       return {};
     case TypedPathKind::kMissing: dialog->error = target.error; return {};
@@ -248,7 +266,8 @@ void StartFileDialog(FileDialogState* dialog, BrowsePurpose purpose, const std::
   if (start.empty() || !fs::is_directory(start, ec)) start = fs::current_path(ec).string();
   GoToFolder(dialog, start);
   dialog->name_field = name;
-  dialog->select_stem_pending = PurposeWrites(purpose) && !name.empty();
+  // A COLMAP model's name is its folder's, typed over the whole of "cameras.txt".
+  dialog->select_stem_pending = PurposeWrites(purpose) && !name.empty() && purpose != BrowsePurpose::kExportColmap;
 }
 
 FileDialogResult DrawFileDialog(AppState* state, FileDialogState* dialog, const RecentFiles& recent, double time_s) {

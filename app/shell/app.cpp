@@ -185,6 +185,8 @@ const char* DialogName(Dialog dialog) {
     case Dialog::kSaveAs: return "save-as";
     case Dialog::kExport: return "export";
     case Dialog::kExportView: return "export-view";
+    case Dialog::kExportColmap: return "export-colmap";
+    case Dialog::kExportTransforms: return "export-transforms";
     case Dialog::kAddPhoto: return "add-photo";
     case Dialog::kRelinkPhoto: return "relink-photo";
     case Dialog::kAddReference: return "add-reference";

@@ -20,6 +20,8 @@ BrowsePurpose PurposeOf(Dialog dialog) {
     case Dialog::kSaveAs: return BrowsePurpose::kSaveProject;
     case Dialog::kExport: return BrowsePurpose::kExport;
     case Dialog::kExportView: return BrowsePurpose::kExportView;
+    case Dialog::kExportColmap: return BrowsePurpose::kExportColmap;
+    case Dialog::kExportTransforms: return BrowsePurpose::kExportTransforms;
     case Dialog::kAddPhoto: return BrowsePurpose::kAddPhoto;
     case Dialog::kRelinkPhoto: return BrowsePurpose::kRelinkPhoto;
     case Dialog::kAddReference: return BrowsePurpose::kAddReference;
@@ -33,6 +35,8 @@ const char* CommandOf(BrowsePurpose purpose) {
     case BrowsePurpose::kSaveProject: return "save";
     case BrowsePurpose::kExport: return "export";
     case BrowsePurpose::kExportView: return "export-view";
+    case BrowsePurpose::kExportColmap: return "export-colmap";
+    case BrowsePurpose::kExportTransforms: return "export-transforms";
     case BrowsePurpose::kAddPhoto: return "add-photo";
     case BrowsePurpose::kRelinkPhoto: return "relink-photo";
     case BrowsePurpose::kAddReference: return "add-reference";
@@ -70,8 +74,7 @@ std::string HomeFolder() {
 
 std::string StartFolder(const AppState& state, const ShellState& shell, BrowsePurpose purpose) {
   std::error_code ec;
-  const bool writes = purpose == BrowsePurpose::kSaveProject || purpose == BrowsePurpose::kExport ||
-                      purpose == BrowsePurpose::kExportView;
+  const bool writes = PurposeWrites(purpose);
   // Files written never go into the bundled sample's folder unless the user goes there.
   auto usable = [&](const std::string& folder) {
     return !folder.empty() && fs::is_directory(folder, ec) && !(writes && IsBundledSampleFolder(folder));

@@ -25,6 +25,7 @@
 #include "app/panels/teach_overlay.h"
 #include "app/panels/viewport_panel.h"
 #include "app/panels/widgets.h"
+#include "app/shell/export_cameras.h"
 #include "app/shell/export_view.h"
 #include "app/shell/file_actions.h"
 #include "app/shell/menu_bar.h"
@@ -323,6 +324,8 @@ const char* DialogTitle(Dialog dialog) {
     case Dialog::kSaveAs: return "Save project as";
     case Dialog::kExport: return "Export model";
     case Dialog::kExportView: return "Export view";
+    case Dialog::kExportColmap: return "Export cameras (COLMAP)";
+    case Dialog::kExportTransforms: return "Export cameras (transforms.json)";
     case Dialog::kAddPhoto: return "Add photo";
     case Dialog::kRelinkPhoto: return "Relink photo";
     case Dialog::kAddReference: return "Add reference mesh";
@@ -402,6 +405,12 @@ void DrawPathDialog(AppState* state, ShellState* shell) {
     RecordItem(state, "add_photo.detect_lines");
   }
   if (d == Dialog::kExport) ImGui::TextColored(kDimText, "The extension chooses the format: .glb (glTF) or .obj");
+  if (d == Dialog::kExportColmap)
+    ImGui::TextColored(kDimText,
+                       "cameras.txt, images.txt and points3D.txt (the vertices, their pins as tracks) in the folder "
+                       "chosen; a new folder name typed is created");
+  if (d == Dialog::kExportTransforms)
+    ImGui::TextColored(kDimText, "nerfstudio / instant-ngp cameras; photo paths relative to the file's folder");
   if (d == Dialog::kAddReference)
     ImGui::TextColored(kDimText,
                        "A mesh to model against (.obj, .glb or .gltf, Y up): drawn, snapped to, never exported");
@@ -466,6 +475,8 @@ void DrawDialogs(AppState* state, ShellState* shell) {
     case Dialog::kRelinkPhoto:
     case Dialog::kAddReference:
     case Dialog::kExport:
+    case Dialog::kExportColmap:
+    case Dialog::kExportTransforms:
     case Dialog::kExportView: DrawPathDialog(state, shell); break;
     case Dialog::kAbout:
       ImGui::Text("Facet %s", "0.1");
@@ -978,6 +989,8 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     return true;
   }
   if (name == "bake-status") return WriteBakeStatus(*state, arg, error);
+  if (name == "export-colmap") return ExportColmapCameras(state, shell, arg, error);
+  if (name == "export-transforms") return ExportTransformsJson(state, shell, arg, error);
   if (name == "export") {
     // The model as it is now, textured (at the export dialog's resolution, when one is set).
     TexturedMesh mesh;

@@ -26,6 +26,10 @@ enum class Dialog {
   kSaveAs,
   kExport,
   kExportView,  // File > Export view: a panel as a PNG (app/shell/export_view.h)
+  // File > Export cameras: the calibrated cameras as a COLMAP text model (the browser picks
+  // cameras.txt in the model's folder) or as nerfstudio's transforms.json.
+  kExportColmap,
+  kExportTransforms,
   kAddPhoto,
   kRelinkPhoto,
   kAddReference,
@@ -42,7 +46,8 @@ enum class Dialog {
 // The dialogs that are the file browser (app/shell/file_actions.h).
 inline bool IsFileBrowserDialog(Dialog d) {
   return d == Dialog::kOpen || d == Dialog::kSaveAs || d == Dialog::kExport || d == Dialog::kExportView ||
-         d == Dialog::kAddPhoto || d == Dialog::kRelinkPhoto || d == Dialog::kAddReference;
+         d == Dialog::kExportColmap || d == Dialog::kExportTransforms || d == Dialog::kAddPhoto ||
+         d == Dialog::kRelinkPhoto || d == Dialog::kAddReference;
 }
 
 struct ShellState {

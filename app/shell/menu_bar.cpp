@@ -8,6 +8,7 @@
 
 #include "app/panels/side_panels.h"
 #include "app/panels/widgets.h"
+#include "app/shell/export_cameras.h"
 #include "app/shell/file_actions.h"
 #include "app/state/file_browser_model.h"
 #include "app/state/model_edits.h"
@@ -133,6 +134,24 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
     if (ImGui::MenuItem("Export OBJ...", nullptr, false, has_mesh)) {
       OpenFileBrowser(state, shell, Dialog::kExport, StemOf(state->project_path) + ".obj");
     }
+    // The cameras alone, for the tools that start from calibrated photos (dense MVS, NeRF,
+    // Gaussian splatting) where structure from motion fails.
+    const std::string no_cameras = WhyNoCamerasToExport(*state);
+    if (ImGui::MenuItem("Export cameras (COLMAP)...", nullptr, false, no_cameras.empty()))
+      OpenFileBrowser(state, shell, Dialog::kExportColmap, "cameras.txt");
+    RecordItem(state, "menu.export_colmap");
+    if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+      ImGui::SetTooltip("%s", no_cameras.empty() ? "The calibrated cameras as a COLMAP text model: cameras.txt, "
+                                                   "images.txt and points3D.txt (the vertices, their pins as tracks)"
+                                                 : no_cameras.c_str());
+    if (ImGui::MenuItem("Export cameras (transforms.json)...", nullptr, false, no_cameras.empty()))
+      OpenFileBrowser(state, shell, Dialog::kExportTransforms, "transforms.json");
+    RecordItem(state, "menu.export_transforms");
+    if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+      ImGui::SetTooltip("%s", no_cameras.empty()
+                                  ? "The calibrated cameras for nerfstudio or instant-ngp (OpenGL camera-to-world "
+                                    "matrices, intrinsics, OpenCV distortion)"
+                                  : no_cameras.c_str());
     if (ImGui::MenuItem("Export view...")) {
       OpenFileBrowser(state, shell, Dialog::kExportView, StemOf(state->project_path) + "-view.png");
     }

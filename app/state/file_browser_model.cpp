@@ -33,6 +33,8 @@ const std::vector<std::string> kExportExtensions = {".glb", ".obj"};
 // What Facet writes, and glTF's JSON form, which other tools write as often as .glb.
 const std::vector<std::string> kReferenceExtensions = {".glb", ".gltf", ".obj"};
 const std::vector<std::string> kViewExtensions = {".png"};
+const std::vector<std::string> kColmapExtensions = {".txt"};
+const std::vector<std::string> kTransformsExtensions = {".json"};
 // What OpenCV's imgcodecs (core/image/image_io.h) reads on Debian 12.
 const std::vector<std::string> kPhotoExtensions = {".jpg", ".jpeg", ".png", ".tif", ".tiff", ".bmp", ".webp"};
 
@@ -68,6 +70,8 @@ const std::vector<std::string>& PurposeExtensions(BrowsePurpose purpose) {
     case BrowsePurpose::kSaveProject: return kProjectExtensions;
     case BrowsePurpose::kExport: return kExportExtensions;
     case BrowsePurpose::kExportView: return kViewExtensions;
+    case BrowsePurpose::kExportColmap: return kColmapExtensions;
+    case BrowsePurpose::kExportTransforms: return kTransformsExtensions;
     case BrowsePurpose::kAddPhoto:
     case BrowsePurpose::kRelinkPhoto: return kPhotoExtensions;
     case BrowsePurpose::kAddReference: return kReferenceExtensions;
@@ -81,6 +85,8 @@ const char* PurposeTitle(BrowsePurpose purpose) {
     case BrowsePurpose::kSaveProject: return "Save project as";
     case BrowsePurpose::kExport: return "Export model";
     case BrowsePurpose::kExportView: return "Export view";
+    case BrowsePurpose::kExportColmap: return "Export cameras (COLMAP)";
+    case BrowsePurpose::kExportTransforms: return "Export cameras (transforms.json)";
     case BrowsePurpose::kAddPhoto: return "Add photo";
     case BrowsePurpose::kRelinkPhoto: return "Relink photo";
     case BrowsePurpose::kAddReference: return "Add reference mesh";
@@ -93,7 +99,9 @@ const char* PurposeVerb(BrowsePurpose purpose) {
     case BrowsePurpose::kOpenProject: return "Open";
     case BrowsePurpose::kSaveProject: return "Save";
     case BrowsePurpose::kExport:
-    case BrowsePurpose::kExportView: return "Export";
+    case BrowsePurpose::kExportView:
+    case BrowsePurpose::kExportColmap:
+    case BrowsePurpose::kExportTransforms: return "Export";
     case BrowsePurpose::kAddPhoto: return "Add";
     case BrowsePurpose::kRelinkPhoto: return "Relink";
     case BrowsePurpose::kAddReference: return "Add";
@@ -107,6 +115,8 @@ const char* PurposeFilterLabel(BrowsePurpose purpose) {
     case BrowsePurpose::kSaveProject: return "Facet projects (*.facet)";
     case BrowsePurpose::kExport: return "Models (*.glb, *.obj)";
     case BrowsePurpose::kExportView: return "PNG pictures (*.png)";
+    case BrowsePurpose::kExportColmap: return "COLMAP text files (*.txt)";
+    case BrowsePurpose::kExportTransforms: return "JSON files (*.json)";
     case BrowsePurpose::kAddPhoto:
     case BrowsePurpose::kRelinkPhoto: return "Photos (*.jpg, *.png, *.tif, ...)";
     case BrowsePurpose::kAddReference: return "Meshes (*.obj, *.glb, *.gltf)";
@@ -116,7 +126,8 @@ const char* PurposeFilterLabel(BrowsePurpose purpose) {
 
 bool PurposeWrites(BrowsePurpose purpose) {
   return purpose == BrowsePurpose::kSaveProject || purpose == BrowsePurpose::kExport ||
-         purpose == BrowsePurpose::kExportView;
+         purpose == BrowsePurpose::kExportView || purpose == BrowsePurpose::kExportColmap ||
+         purpose == BrowsePurpose::kExportTransforms;
 }
 
 bool HasExtension(const std::string& name, const std::vector<std::string>& extensions) {

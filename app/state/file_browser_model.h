@@ -13,7 +13,17 @@
 namespace facet::app {
 
 // The four uses of the one browser.
-enum class BrowsePurpose { kOpenProject, kSaveProject, kExport, kAddPhoto, kRelinkPhoto, kAddReference, kExportView };
+enum class BrowsePurpose {
+  kOpenProject,
+  kSaveProject,
+  kExport,
+  kAddPhoto,
+  kRelinkPhoto,
+  kAddReference,
+  kExportView,
+  kExportColmap,  // cameras.txt in the COLMAP model's folder (images.txt, points3D.txt beside it)
+  kExportTransforms,
+};
 
 // The extensions a purpose offers, lower case with the dot; the first is the one Save as and
 // Export append to a name without one (".facet", ".glb").

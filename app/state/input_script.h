@@ -132,6 +132,11 @@
 //                                                      panel alone, its canvas W x H px, as
 //                                                      a PNG (after this step's frame;
 //                                                      app/shell/export_view.h)
+//                                   export-colmap PATH  File > Export cameras (COLMAP): the
+//                                                      model into folder PATH (or PATH's
+//                                                      folder when it names cameras.txt)
+//                                   export-transforms PATH  File > Export cameras
+//                                                      (transforms.json)
 //                                 Tool names: select, line-x, line-y, line-z, pin,
 //                                 add-primitive (adds at once), split-edge, delete-vertex,
 //                                 connect-vertices, delete-edge, push-pull, move, line-pin,
