@@ -11,6 +11,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/io/colmap_model.h"
 #include "core/io/project_io.h"
 #include "tests/app/app_test_util.h"
 #include "tests/gltf_validator.h"
@@ -235,6 +236,29 @@ TEST_CASE("File > Export glTF: a typed name gets .glb and the model is written t
   CHECK(std::string(magic, 4) == "glTF");
   CHECK(LogHas(exported, "info", "Exported " + (dir / "model.glb")));
   CHECK_GLTF_VALID(dir / "model.glb");
+}
+
+TEST_CASE("File > Export cameras: a new folder typed gets the COLMAP model, a name gets .json; off without a camera") {
+  TempDir dir("browser_export_cameras");
+  const std::string open_file_menu = "frames 1\nclick left item menu.file\nframes 1\n";
+  std::string script = open_file_menu + "click left item menu.export_colmap\nframes 2\n";
+  script += "type " + (dir / "sparse") + "\nkey enter\nframes 2\n";
+  script += open_file_menu + "click left item menu.export_transforms\nframes 2\n";
+  script += "type " + (dir / "nerf") + "\nkey enter\nframes 2\n";
+  // A new project has no photo: both items are disabled, a click opens nothing.
+  script += "command new\n" + open_file_menu + "click left item menu.export_colmap\nframes 2\n";
+  const nlohmann::json report = Run(dir, kSample, "export_cameras", script);
+  INFO(ReportLog(report));
+  CHECK(report["dialog"] == "");
+  CHECK(LogHas(report, "info",
+               "as a COLMAP text model (cameras.txt, images.txt, points3D.txt) to " + (dir / "sparse/cameras.txt")));
+  CHECK(LogHas(report, "info", "as transforms.json to " + (dir / "nerf.json")));
+  facet::ColmapModel model;
+  REQUIRE(facet::ReadColmapModelText(dir / "sparse", &model) == "");
+  CHECK(model.images.size() == 1);
+  const nlohmann::json nerf = ReadJson(dir / "nerf.json");
+  CHECK(nerf.at("frames").size() == 1);
+  CHECK(fs::exists(dir.path / nerf["frames"][0].at("file_path").get<std::string>()));
 }
 
 TEST_CASE("The browser explains what it cannot do and keeps open; Escape cancels") {
