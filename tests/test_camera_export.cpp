@@ -304,4 +304,12 @@ TEST_CASE("camera exports refuse a project with no calibrated photo, a broken ca
     CHECK(json_error.find("blocker") != std::string::npos);
     CHECK(ReadText(dir / "blocker") == "not a folder");
   }
+  SUBCASE("a folder named images.txt in the model's folder: refused before cameras.txt is written") {
+    const Project project = ThreeBoxesThreePhotos();
+    fs::create_directories(dir.path / "colmap/images.txt");
+    REQUIRE(ColmapModelFromProject(project, {}, &model) == "");
+    const std::string error = WriteColmapModelText(model_dir, model);
+    CHECK(error.find("images.txt is a folder") != std::string::npos);
+    CHECK(!fs::exists(dir / "colmap/cameras.txt"));
+  }
 }

@@ -163,6 +163,14 @@ std::string WriteColmapModelText(const std::string& dir, const ColmapModel& mode
   std::filesystem::create_directories(dir, ec);
   if (ec) return "cannot create the folder " + dir + ": " + ec.message();
   const std::filesystem::path folder(dir);
+  // Each file is replaced atomically, not the three together: what would stop the second or
+  // third (a folder or a device under its name) is looked for before the first is written.
+  for (const char* name : {"cameras.txt", "images.txt", "points3D.txt"}) {
+    const std::filesystem::path path = folder / name;
+    if (std::filesystem::is_symlink(path, ec)) continue;  // followed by the write, as a user's Save is
+    const std::string what = DescribeNonRegular(path.string());
+    if (!what.empty()) return path.string() + " is " + what + ": the model was not written";
+  }
   std::string error = WriteFileAtomically((folder / "cameras.txt").string(), FormatColmapCamerasText(model));
   if (error.empty()) error = WriteFileAtomically((folder / "images.txt").string(), FormatColmapImagesText(model));
   if (error.empty()) error = WriteFileAtomically((folder / "points3D.txt").string(), FormatColmapPoints3DText(model));

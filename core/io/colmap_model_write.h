@@ -32,7 +32,8 @@ std::string FormatColmapImagesText(const ColmapModel& model);
 std::string FormatColmapPoints3DText(const ColmapModel& model);
 
 // Writes the three files into folder `dir` (created when missing), each atomically
-// (core/util/file_write.h). "" on success, else what failed.
+// (core/util/file_write.h), after checking that none of the three names is taken by a folder,
+// a device or a FIFO (then nothing is written). "" on success, else what failed.
 std::string WriteColmapModelText(const std::string& dir, const ColmapModel& model);
 
 }  // namespace facet
