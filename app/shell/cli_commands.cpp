@@ -268,9 +268,10 @@ int ExportCameras(const Project& project, const std::string& project_path, const
   if (format == "colmap") {
     ColmapModel model;
     std::string error = ColmapModelFromProject(project, {}, &model);
-    if (error.empty()) error = WriteColmapModelText(output_path, model);
+    if (!error.empty()) error += "; nothing written";
+    if (error.empty()) error = WriteColmapModelText(output_path, model);  // says what it wrote on failure
     if (!error.empty()) {
-      std::cerr << "facet export: " << error << "; nothing written\n";
+      std::cerr << "facet export: " << error << "\n";
       return 1;
     }
     const std::filesystem::path folder(output_path);

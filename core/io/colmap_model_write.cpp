@@ -5,6 +5,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <utility>
 
 #include "core/io/camera_export.h"
 #include "core/io/colmap_camera.h"
@@ -169,12 +170,20 @@ std::string WriteColmapModelText(const std::string& dir, const ColmapModel& mode
     const std::filesystem::path path = folder / name;
     if (std::filesystem::is_symlink(path, ec)) continue;  // followed by the write, as a user's Save is
     const std::string what = DescribeNonRegular(path.string());
-    if (!what.empty()) return path.string() + " is " + what + ": the model was not written";
+    if (!what.empty()) return path.string() + " is " + what + "; nothing written";
   }
-  std::string error = WriteFileAtomically((folder / "cameras.txt").string(), FormatColmapCamerasText(model));
-  if (error.empty()) error = WriteFileAtomically((folder / "images.txt").string(), FormatColmapImagesText(model));
-  if (error.empty()) error = WriteFileAtomically((folder / "points3D.txt").string(), FormatColmapPoints3DText(model));
-  return error;
+  const std::pair<const char*, std::string (*)(const ColmapModel&)> files[] = {
+      {"cameras.txt", FormatColmapCamerasText},
+      {"images.txt", FormatColmapImagesText},
+      {"points3D.txt", FormatColmapPoints3DText}};
+  std::string written;
+  for (const auto& [name, format] : files) {
+    const std::string error = WriteFileAtomically((folder / name).string(), format(model));
+    if (!error.empty())
+      return error + (written.empty() ? "; nothing written" : "; only " + written + " written (the model is mixed)");
+    written += (written.empty() ? "" : " and ") + std::string(name);
+  }
+  return "";
 }
 
 }  // namespace facet

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Every file Facet writes goes through one atomic writer (core/util/atomic_write.h): on a full
 # disk a write fails with the reason and leaves the old file whole, and a symlinked target
-# stays a link. This test runs the command line's three writers (solve -o, export, render -o)
-# on a small tmpfs filled to the last byte, then through a symlink on one with room.
+# stays a link. This test runs the command line's writers (solve -o, export: the model and the
+# cameras, render -o) on a small tmpfs filled to the last byte, then through a symlink on one
+# with room.
 #
 #   full_disk_test.sh FACET_EXE SAMPLE_DIR
 #
@@ -36,7 +37,10 @@ cp "$sample/leuven.facet" "$sample/leuvenA.jpg" "$disk/"
 # Old outputs the failed writes must leave as they are.
 printf 'an earlier screenshot\n' >"$disk/shot.png"
 printf 'an earlier export\n' >"$disk/model.glb"
-cp "$disk"/* "$keep/"
+printf 'earlier cameras\n' >"$disk/transforms.json"
+mkdir "$disk/colmap"
+printf 'earlier cameras\n' >"$disk/colmap/cameras.txt"
+cp -r "$disk"/* "$keep/"
 
 # Fill the disk to the last block (dd stops at ENOSPC), then the last bytes of a partial block.
 dd if=/dev/zero of="$disk/filler" bs=64k 2>/dev/null || true
@@ -59,6 +63,8 @@ expect_refused() {  # NAME FILE COMMAND...: the command fails, says why, leaves 
 cd "$disk"
 expect_refused solve leuven.facet "$exe" solve leuven.facet -o leuven.facet
 expect_refused export model.glb "$exe" export leuven.facet -o model.glb
+expect_refused export-transforms transforms.json "$exe" export leuven.facet -o transforms.json
+expect_refused export-colmap colmap/cameras.txt "$exe" export leuven.facet -o colmap/
 expect_refused render shot.png "$exe" render leuven.facet -o shot.png --size 320x200
 after="$(ls -A "$disk" | sort)"
 [ "$before" = "$after" ] || fail "files were left behind: $(diff <(echo "$before") <(echo "$after") | tr '\n' ' ')"
