@@ -36,6 +36,9 @@ void LogUpdate(AppState* state, const ModelUpdateSummary& previous, const ModelU
     if (!Contains(previous.progress, m)) state->Log(LogLevel::kInfo, m);
   }
   for (const std::string& n : summary.notes) state->Log(LogLevel::kInfo, n);
+  for (const std::string& w : summary.warnings) {
+    if (!Contains(previous.warnings, w)) state->Log(LogLevel::kWarning, w);
+  }
 }
 
 }  // namespace

@@ -163,6 +163,7 @@ bool operator==(const Image& a, const Image& b) {
          a.focal_prior_std_px == b.focal_prior_std_px && a.use_horizon == b.use_horizon &&
          a.horizon_px == b.horizon_px && a.estimate_distortion == b.estimate_distortion &&
          a.distortion_locked == b.distortion_locked && a.axis_quarter_turns == b.axis_quarter_turns &&
+         a.axis_turn_provisional == b.axis_turn_provisional &&
          a.use_for_texture == b.use_for_texture && a.lens_group == b.lens_group;
 }
 bool operator==(const PrimitiveShape& a, const PrimitiveShape& b) {

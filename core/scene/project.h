@@ -64,6 +64,10 @@ struct Image {
   // kAxisTurnsUnchosen until then (and in files written before it existed).
   static constexpr int kAxisTurnsUnchosen = -1;
   int axis_quarter_turns = kAxisTurnsUnchosen;
+  // The turn above was the best of the four by too small a margin to keep (two pins, or
+  // pins that fit two turns nearly as well): it is used, and chosen again at every update
+  // until the pins tell the turns apart (core/solve/world_frames.h).
+  bool axis_turn_provisional = false;
   // Whether the texture bake may take colour from this photo at all (false: e.g. a passer-by
   // stands in front of the model; the photo still calibrates and pins as before).
   bool use_for_texture = true;

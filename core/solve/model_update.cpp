@@ -121,6 +121,7 @@ Image CalibrationKey(const Image& image) {
   Image key = image;
   key.camera = Camera();
   key.axis_quarter_turns = Image::kAxisTurnsUnchosen;  // applied after the calibration
+  key.axis_turn_provisional = false;
   return key;
 }
 
@@ -237,9 +238,11 @@ void CalibrateFromLines(Project* calibrated, ModelUpdateCache* cache, ModelUpdat
       image.camera.k1 = entry.k1;
       image.camera.k2 = entry.k2;
       // The recorded turn about the vertical puts the lines' axes in the model's world frame
-      // (core/solve/world_frames.h); an image without one is chosen after this loop.
-      if (image.axis_quarter_turns == Image::kAxisTurnsUnchosen) unchosen->push_back(image.id);
-      image.camera.SetPose(vp.cam_from_world_rotation * AxisTurn(std::max(image.axis_quarter_turns, 0)), center);
+      // (core/solve/world_frames.h); an image without one, or with a provisional one, is
+      // chosen after this loop from the lines' own axes.
+      const bool choose = image.axis_quarter_turns == Image::kAxisTurnsUnchosen || image.axis_turn_provisional;
+      if (choose) unchosen->push_back(image.id);
+      image.camera.SetPose(vp.cam_from_world_rotation * AxisTurn(choose ? 0 : image.axis_quarter_turns), center);
       image.camera_calibrated = true;
     } else {
       (vp.incomplete ? summary->progress : summary->messages).push_back("Image '" + image.path + "': " + vp.message);
@@ -331,8 +334,10 @@ ModelUpdateSummary UpdateModel(const Project& edited, const ModelUpdateOptions& 
     CalibrateFromLines(&calibrated, cache, &summary, &unchosen);
     if (!unchosen.empty()) {
       summary.world_frames = ReconcileWorldFrames(unchosen, &calibrated);
-      for (const WorldFrameChoice& choice : summary.world_frames)
-        if (!choice.note.empty()) summary.notes.push_back(choice.note);
+      for (const WorldFrameChoice& choice : summary.world_frames) {
+        if (choice.note.empty()) continue;
+        (choice.provisional ? summary.warnings : summary.notes).push_back(choice.note);
+      }
     }
   }
 

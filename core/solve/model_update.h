@@ -105,6 +105,9 @@ struct ModelUpdateSummary {
   // User-facing, informational: what the update decided for the user (e.g. a photo's world
   // axes turned to agree with the model), for the log.
   std::vector<std::string> notes;
+  // User-facing: what the update did but the user should look at (a photo's world axes chosen
+  // by too small a margin to keep). Not failures: `ok` stays true.
+  std::vector<std::string> warnings;
   // The calibration step per image with segments: run, or taken from the cache (the plumb-line
   // estimate counts apart: it is reused whenever the image and its segments are unchanged,
   // even when the vanishing-point calibration runs again for a camera whose k changed).

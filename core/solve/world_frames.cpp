@@ -31,6 +31,23 @@ namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
+// When a turn chosen from pins is kept (world_frames.h): enough points for the fit to have
+// redundancy, and a next best turn clearly worse both relatively and in pixels (a click is
+// good to a pixel or two; wrong turns with 3+ well-spread pins fit tens of pixels worse).
+constexpr int kMinPinsToKeepResectionTurn = 3;
+constexpr int kMinVerticesToKeepRelativeTurn = 4;
+constexpr double kKeepTurnRatio = 3.0;
+constexpr double kKeepTurnGapPx = 3.0;
+
+bool MarginClear(double error, double runner_up) {
+  return !std::isfinite(runner_up) || (runner_up >= kKeepTurnRatio * error && runner_up - error >= kKeepTurnGapPx);
+}
+
+std::string ProvisionalText() {
+  return ": too close to keep, used for now and chosen again at each change (pin more vertices, spread over the "
+         "photo)";
+}
+
 // A candidate turn's score: fewer points behind first, then the lower RMS.
 struct Score {
   int behind = std::numeric_limits<int>::max();
@@ -94,10 +111,11 @@ std::string TurnText(int k) {
   return kText[k];
 }
 
-void SetTurn(Image* image, int k, const Eigen::Vector3d& centre) {
-  // The rotation in the project is vanishing-point x AxisTurn(0) for an unchosen image.
+void SetTurn(Image* image, int k, const Eigen::Vector3d& centre, bool provisional) {
+  // The rotation in the project is vanishing-point x AxisTurn(0) for an image being chosen.
   image->camera.SetPose(image->camera.cam_from_world_rotation * AxisTurn(k), centre);
   image->axis_quarter_turns = k;
+  image->axis_turn_provisional = provisional;
 }
 
 std::string Figures(const WorldFrameChoice& c, const char* unit) {
@@ -145,9 +163,11 @@ bool ChooseByResection(const std::set<Id>& solved_primitives, Image* image, cons
   choice->num_points = static_cast<int>(points.size());
   choice->error = best.rms;
   choice->runner_up = second.behind == 0 ? second.rms : kInfinity;
+  choice->provisional = choice->num_points < kMinPinsToKeepResectionTurn || !MarginClear(choice->error, choice->runner_up);
   choice->note = "Image " + ImageName(*image) + ": world axes " + TurnText(best_k) + ", to agree with the model (" +
-                 std::to_string(points.size()) + " pins on solved vertices: " + Figures(*choice, "px") + ")";
-  SetTurn(image, best_k, best_centre);
+                 std::to_string(points.size()) + " pins on solved vertices: " + Figures(*choice, "px") + ")" +
+                 (choice->provisional ? ProvisionalText() : "");
+  SetTurn(image, best_k, best_centre, choice->provisional);
   return true;
 }
 
@@ -216,13 +236,16 @@ bool ChooseByRelativePose(const std::vector<const Image*>& references, Image* im
     choice->num_points = static_cast<int>(rays.size());
     choice->error = best.rms;
     choice->runner_up = second.behind == 0 ? second.rms : kInfinity;
+    choice->provisional =
+        choice->num_points < kMinVerticesToKeepRelativeTurn || !MarginClear(choice->error, choice->runner_up);
     choice->note = "Image " + ImageName(*image) + ": world axes " + TurnText(best_k) + ", to agree with image " +
                    ImageName(*reference) + " (relative pose from " + std::to_string(rays.size()) +
-                   " shared vertices: " + Figures(*choice, "px epipolar") + ")";
+                   " shared vertices: " + Figures(*choice, "px epipolar") + ")" +
+                   (choice->provisional ? ProvisionalText() : "");
     // The baseline's length is unknown here: the reference's distance to the model is the
     // start; the geometry solve sets it.
     const double distance = std::max(reference->camera.CenterInWorld().norm(), 1.0);
-    SetTurn(image, best_k, reference->camera.CenterInWorld() + distance * best_baseline);
+    SetTurn(image, best_k, reference->camera.CenterInWorld() + distance * best_baseline, choice->provisional);
     return true;
   }
   return false;
@@ -275,7 +298,7 @@ bool ChooseByModelFit(const std::set<Id>& open, Image* image, const Project& pro
                    ", so that the model's primitives fit its pins with positive sizes (" +
                    Figures(*choice, "px") + ")";
   }
-  SetTurn(image, best_k, image->camera.CenterInWorld());
+  SetTurn(image, best_k, image->camera.CenterInWorld(), false);
   return true;
 }
 
@@ -324,6 +347,7 @@ std::vector<WorldFrameChoice> ReconcileWorldFrames(const std::vector<Id>& unchos
           choice.image_id = image.id;
           choice.source = WorldFrameChoice::Source::kFirstImage;
           image.axis_quarter_turns = 0;
+          image.axis_turn_provisional = false;
         }
       } else if (!ChooseByRelativePose(references(), &image, *project, &choice)) {
         continue;
@@ -334,6 +358,39 @@ std::vector<WorldFrameChoice> ReconcileWorldFrames(const std::vector<Id>& unchos
       progress = true;
       break;  // resection first again: the model may now place more of the others' pins
     }
+  }
+  // An image with one pin on the model so far cannot be resected, and its camera still sits
+  // where it was made (at the origin): the solve would find the pinned vertex behind it and
+  // refuse the whole update ("at the start a pinned vertex lies on or behind its camera").
+  // It is put on that pin's ray at the reference cameras' distance from the vertex, so the
+  // pin joins the solve; its turn waits for a second pin.
+  for (Image& image : project->images) {
+    if (open.count(image.id) == 0 || reference_ids.empty()) continue;
+    const Pin* first = nullptr;
+    for (const Pin& pin : project->pins) {
+      if (pin.image_id == image.id && solved_primitives.count(pin.vertex.primitive_id) > 0 &&
+          project->FindVertex(pin.vertex) != nullptr) {
+        first = &pin;
+        break;
+      }
+    }
+    if (first == nullptr) continue;
+    const Eigen::Vector3d vertex = VertexInWorld(*project, first->vertex);
+    if (image.camera.CamFromWorld(vertex).z() > 0.0) continue;  // already in front
+    double distance = 0.0;
+    for (Id id : reference_ids) distance += (project->FindImage(id)->camera.CenterInWorld() - vertex).norm();
+    distance /= static_cast<double>(reference_ids.size());
+    if (!(distance > 0.0) || !std::isfinite(distance)) continue;
+    const Eigen::Vector3d ray =
+        (image.camera.cam_from_world_rotation.transpose() * CameraRay(image.camera, first->uv_px)).normalized();
+    image.camera.SetPose(image.camera.cam_from_world_rotation, vertex - distance * ray);
+  }
+  // A provisional turn the pins no longer choose (e.g. pins removed) is unchosen again: its
+  // camera holds the lines' own axes now, and the solve must read its families that way.
+  for (Image& image : project->images) {
+    if (open.count(image.id) == 0 || !image.axis_turn_provisional) continue;
+    image.axis_quarter_turns = Image::kAxisTurnsUnchosen;
+    image.axis_turn_provisional = false;
   }
   return choices;
 }

@@ -13,6 +13,12 @@
 //   whose baseline triangulates every shared vertex in front with the lowest epipolar error
 //   wins;
 // - the first image with lines and no reference keeps turn 0: it sets the world axes.
+// A turn chosen from pins is kept only when the pins tell it clearly from the next best (3 or
+// more pins, 4 or more shared vertices, and a next best turn that fits several times worse
+// and pixels worse): two pins often fit two turns within a pixel, and a turn kept from them
+// turned cameras by 90-180 deg. Below that margin the best turn is used but provisional
+// (Image::axis_turn_provisional): it is chosen again from all pins at every update, and the
+// update warns until the pins settle it.
 // An image that shares no pins with the model stays unchosen (turn 0 meanwhile, not
 // recorded) until it does. Each choice is said in one sentence for the app's log.
 #pragma once
@@ -41,6 +47,7 @@ struct WorldFrameChoice {
   int num_points = 0;      // pins (resection) or shared vertices (relative pose) it used
   double error = 0.0;      // the chosen turn's RMS: px (resection) or epipolar px
   double runner_up = 0.0;  // the next best turn's, infinite when no other kept points in front
+  bool provisional = false;  // too small a margin to keep (see above): chosen again next update
   std::string note;        // the sentence for the log
 };
 
