@@ -598,11 +598,13 @@ bool RunSelectCommand(AppState* state, const std::string& arg, std::string* erro
     *value = std::strtoull(text.c_str(), &end, 10);
     return !text.empty() && *end == '\0';
   };
-  unsigned long long primitive_id = 0, element = 0;
+  unsigned long long element = 0;
   const Project& project = state->document.project();
-  if (w.size() == 2 && w[0] == "primitive" && number(w[1], &primitive_id)) {
-    if (!project.FindPrimitive(primitive_id)) {
-      *error = "select: no primitive " + w[1];
+  Id primitive_id = kNoId;
+  std::string why;
+  if (w.size() == 2 && w[0] == "primitive") {
+    if (!ResolvePrimitiveToken(project, w[1], &primitive_id, &why)) {
+      *error = "select: " + why;
       return false;
     }
     state->selection = {};
@@ -610,16 +612,20 @@ bool RunSelectCommand(AppState* state, const std::string& arg, std::string* erro
     return true;
   }
   ElementRef ref;
-  if (w.size() == 3 && number(w[1], &primitive_id) && number(w[2], &element)) {
+  if (w.size() == 3 && number(w[2], &element)) {
     ref.kind = w[0] == "vertex" ? ElementKind::kVertex
                : w[0] == "edge" ? ElementKind::kEdge
                : w[0] == "face" ? ElementKind::kFace
                                 : ElementKind::kNone;
-    ref.primitive_id = primitive_id;
     ref.element = static_cast<std::uint32_t>(element);
   }
   if (ref.kind == ElementKind::kNone) {
-    *error = "select: expected 'vertex|edge|face PRIMITIVE_ID ELEMENT_ID', 'primitive ID' or 'none'";
+    *error = "select: expected 'vertex|edge|face PRIMITIVE ELEMENT_ID', 'primitive PRIMITIVE' or 'none' (PRIMITIVE: an "
+             "id, @N or last)";
+    return false;
+  }
+  if (!ResolvePrimitiveToken(project, w[1], &ref.primitive_id, &why)) {
+    *error = "select: " + why;
     return false;
   }
   if (!ElementExists(project, ref)) {

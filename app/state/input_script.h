@@ -37,8 +37,13 @@
 //                                                      cylinder, plane), on the selected box;
 //                                   add KIND at U V    standing on the ground under image px
 //                                                      (U, V) of the active image
-//                                   select vertex|edge|face PRIMITIVE_ID ELEMENT_ID,
-//                                   select primitive ID, select none
+//                                   select vertex|edge|face PRIMITIVE ELEMENT_ID,
+//                                   select primitive PRIMITIVE, select none
+//                                                      PRIMITIVE: its id, @N (the N-th
+//                                                      primitive, from 1, in the order made)
+//                                                      or last; @N and last do not change
+//                                                      with how many lines or pins came
+//                                                      before (ResolvePrimitiveToken)
 //                                   ridge x|y          the selected wedge's ridge direction
 //                                                      (SetWedgeRidgeEdit)
 //                                   free-vertex        toggle the selected vertex's freedom
@@ -58,7 +63,7 @@
 //                                   reference add|add-z-up PATH, reference remove|show|hide INDEX
 //                                                      reference geometry (.obj, .glb, .gltf), one
 //                                                      undoable edit each (app/state/reference_edits.h)
-//                                   select-add vertex|edge|face PRIMITIVE_ID ELEMENT_ID
+//                                   select-add vertex|edge|face PRIMITIVE ELEMENT_ID
 //                                                      add to the selection (RunSelectAddCommand)
 //                                   line-pin IMAGE_INDEX X1 Y1 X2 Y2  the selected edge on the
 //                                                      image line through (X1, Y1), (X2, Y2)

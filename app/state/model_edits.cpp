@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -1126,24 +1128,65 @@ bool ApplyToolClick(AppState* state, const ElementRef& picked, double t, bool ex
   }
 }
 
+bool ResolvePrimitiveToken(const Project& project, const std::string& token, Id* id, std::string* error) {
+  const auto number = [](const std::string& text, unsigned long long* value) {
+    if (text.empty() || !std::isdigit(static_cast<unsigned char>(text[0]))) return false;
+    char* end = nullptr;
+    errno = 0;
+    *value = std::strtoull(text.c_str(), &end, 10);
+    return *end == '\0' && errno == 0;
+  };
+  unsigned long long value = 0;
+  if (token == "last") {
+    if (project.primitives.empty()) {
+      *error = "no primitive yet ('last')";
+      return false;
+    }
+    *id = project.primitives.back().id;
+    return true;
+  }
+  if (token.size() > 1 && token[0] == '@' && number(token.substr(1), &value)) {
+    if (value < 1 || value > project.primitives.size()) {
+      *error = "no primitive " + token + " (the project has " + std::to_string(project.primitives.size()) + ")";
+      return false;
+    }
+    *id = project.primitives[value - 1].id;
+    return true;
+  }
+  if (number(token, &value)) {
+    *id = static_cast<Id>(value);
+    if (project.FindPrimitive(*id) == nullptr) {
+      *error = "no primitive " + token;
+      return false;
+    }
+    return true;
+  }
+  *error = "'" + token + "' is no primitive: expected its id, @N or last";
+  return false;
+}
+
 bool RunSelectAddCommand(AppState* state, const std::string& arg, std::string* error) {
   std::istringstream in(arg);
-  std::string kind, extra;
-  unsigned long long primitive_id = 0, element = 0;
+  std::string kind, primitive, extra;
+  unsigned long long element = 0;
   ElementRef ref;
-  if (in >> kind >> primitive_id >> element && !(in >> extra)) {
+  const Project& project = state->document.project();
+  if (in >> kind >> primitive >> element && !(in >> extra)) {
     ref.kind = kind == "vertex" ? ElementKind::kVertex
                : kind == "edge" ? ElementKind::kEdge
                : kind == "face" ? ElementKind::kFace
                                 : ElementKind::kNone;
-    ref.primitive_id = static_cast<Id>(primitive_id);
     ref.element = static_cast<std::uint32_t>(element);
   }
   if (ref.kind == ElementKind::kNone) {
-    *error = "select-add: expected 'vertex|edge|face PRIMITIVE_ID ELEMENT_ID'";
+    *error = "select-add: expected 'vertex|edge|face PRIMITIVE ELEMENT_ID' (PRIMITIVE: an id, @N or last)";
     return false;
   }
-  const Project& project = state->document.project();
+  std::string why;
+  if (!ResolvePrimitiveToken(project, primitive, &ref.primitive_id, &why)) {
+    *error = "select-add: " + why;
+    return false;
+  }
   if (!ElementExists(project, ref)) {
     *error = "select-add: no " + DescribeElement(project, ref);
     return false;

@@ -150,7 +150,13 @@ std::string ConstraintEditLabel(ConstraintKind kind);
 // equal-length between exactly two selected edges at once.
 bool RunConstrainCommand(AppState* state, const std::string& arg, std::string* error);
 
-// The script command `select-add KIND PRIMITIVE_ID ELEMENT_ID`: adds an element to the
+// A script's name for a primitive: its id (ids count every object made, lines and pins
+// included, so the same box is 175 in one session and 506 in another), `@N` (the N-th
+// primitive of the project, from 1, in the order they were made) or `last` (the newest).
+// False with *error naming what was asked when no primitive answers.
+bool ResolvePrimitiveToken(const Project& project, const std::string& token, Id* id, std::string* error);
+
+// The script command `select-add KIND PRIMITIVE ELEMENT_ID`: adds an element to the
 // selection (multi-selection for coplanar/collinear on vertex sets).
 bool RunSelectAddCommand(AppState* state, const std::string& arg, std::string* error);
 // The script command `line-pin IMAGE_INDEX X1 Y1 X2 Y2`: the selected edge on the line

@@ -6,7 +6,12 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "app/state/input_script.h"
+#include "app/state/model_edits.h"
+#include "core/mesh/box.h"
+#include "core/scene/project.h"
 
 using facet::app::ParseScript;
 using facet::app::PointSpace;
@@ -121,4 +126,47 @@ TEST_CASE("regression: a short script cannot expand past kMaxScriptSteps (fuzz_i
   // One step more, from a second line, does not.
   CHECK_FALSE(ParseScript("frames 100000\nmove 1 2\n", &script, &error));
   CHECK(error == "line 2: the script is longer than 100000 frame steps");
+}
+
+// Script names for primitives (app/state/model_edits.h, ResolvePrimitiveToken): ids count every
+// object made, lines and pins included, so the same box has another id when the user drew more
+// lines first; @N and last name it the same way in both.
+TEST_CASE("primitives named by @N and last do not depend on how many lines came before") {
+  auto make = [](int lines_before) {
+    facet::Project project;
+    for (int i = 0; i < lines_before; ++i) {
+      facet::Segment line;
+      line.id = project.NewId();
+      project.segments.push_back(line);
+    }
+    for (int k = 0; k < 3; ++k) {
+      facet::Id id = facet::kNoId;
+      REQUIRE(facet::AddPrimitiveToProject(&project, facet::MakeBox(facet::kNoId, Eigen::Vector3d(1.0, 2.0, 3.0)),
+                                           "box", &id, nullptr));
+    }
+    return project;
+  };
+  const facet::Project few = make(2), many = make(900);
+  REQUIRE(few.primitives[1].id != many.primitives[1].id);  // what made scripts break
+  std::string error;
+  for (const facet::Project* project : {&few, &many}) {
+    facet::Id id = facet::kNoId;
+    CHECK(facet::app::ResolvePrimitiveToken(*project, "@2", &id, &error));
+    CHECK(id == project->primitives[1].id);
+    CHECK(facet::app::ResolvePrimitiveToken(*project, "last", &id, &error));
+    CHECK(id == project->primitives[2].id);
+    CHECK(facet::app::ResolvePrimitiveToken(*project, std::to_string(project->primitives[0].id), &id, &error));
+    CHECK(id == project->primitives[0].id);
+  }
+  facet::Id id = facet::kNoId;
+  CHECK_FALSE(facet::app::ResolvePrimitiveToken(few, "@4", &id, &error));
+  CHECK(error == "no primitive @4 (the project has 3)");
+  CHECK_FALSE(facet::app::ResolvePrimitiveToken(few, "@0", &id, &error));
+  CHECK_FALSE(facet::app::ResolvePrimitiveToken(few, "1", &id, &error));  // a line's id, not a primitive's
+  CHECK(error == "no primitive 1");
+  CHECK_FALSE(facet::app::ResolvePrimitiveToken(few, "box", &id, &error));
+  CHECK(error == "'box' is no primitive: expected its id, @N or last");
+  CHECK_FALSE(facet::app::ResolvePrimitiveToken(few, "@99999999999999999999999", &id, &error));
+  CHECK_FALSE(facet::app::ResolvePrimitiveToken(facet::Project(), "last", &id, &error));
+  CHECK(error == "no primitive yet ('last')");
 }
