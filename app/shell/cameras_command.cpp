@@ -3,6 +3,8 @@
 #include <filesystem>
 #include <iostream>
 
+#include <Eigen/Geometry>
+
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -11,6 +13,27 @@
 #include "core/io/project_io.h"
 
 namespace facet::app {
+
+nlohmann::json ColmapAlignmentJson(const ColmapAlignmentSummary& alignment) {
+  const SimilarityTransform& t = alignment.project_from_reconstruction;
+  const Eigen::AngleAxisd turn(t.rotation);
+  return {{"message", alignment.message},
+          {"warnings", alignment.warnings},
+          {"rotation", {{"source", AlignmentSourceName(alignment.rotation_source)}, {"note", alignment.rotation_note}}},
+          {"scale", {{"source", AlignmentSourceName(alignment.scale_source)}, {"note", alignment.scale_note}}},
+          {"position", {{"source", AlignmentSourceName(alignment.position_source)}, {"note", alignment.position_note}}},
+          {"project_from_reconstruction",
+           {{"scale", t.scale},
+            {"rotation_angle_axis",
+             {turn.angle() * turn.axis().x(), turn.angle() * turn.axis().y(), turn.angle() * turn.axis().z()}},
+            {"translation", {t.translation.x(), t.translation.y(), t.translation.z()}}}},
+          {"common_images", alignment.common_images},
+          {"num_line_families", alignment.num_line_families},
+          {"num_known_lengths", alignment.num_known_lengths},
+          {"center_rms", alignment.center_rms},
+          {"rotation_rms_deg", alignment.rotation_rms_deg},
+          {"center_fit_rotation_deg", alignment.center_fit_rotation_deg}};
+}
 
 CLI::App* AddCamerasSubcommand(CLI::App* cli, CamerasCommandArgs* args) {
   CLI::App* cameras =
@@ -83,7 +106,9 @@ int RunCamerasCommand(const std::string& project_path, const std::string& output
     return 1;
   }
   ColmapImportReport report;
-  const std::string error = ApplyColmapCameras(summary.model, &project, &report);
+  ColmapAlignmentSummary alignment;
+  const std::string error =
+      ApplyAlignedColmapCameras(summary.model, ColmapAlignmentOptions{}, &project, &report, &alignment);
   if (!error.empty()) {
     std::cout << out.dump(2) << "\n";
     std::cerr << "facet cameras: " << error << "; " << output_path << " was not written\n";
@@ -91,6 +116,9 @@ int RunCamerasCommand(const std::string& project_path, const std::string& output
   }
   out["updated_images"] = report.updated_images;
   out["photos_not_placed"] = report.missing_photos;
+  out["alignment"] = ColmapAlignmentJson(alignment);
+  std::cerr << "facet cameras: aligned to the project: " << alignment.message << "\n";
+  for (const std::string& w : alignment.warnings) std::cerr << "facet cameras: warning: " << w << "\n";
   RebaseImagePaths(project_path, output_path, &project);
   const std::string save_error = SaveProject(project, output_path);
   if (!save_error.empty()) {
