@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "app/state/colmap_cameras.h"
 #include "core/io/colmap_import.h"
 #include "core/io/colmap_run.h"
 #include "core/io/project_io.h"
@@ -42,7 +43,9 @@ CLI::App* AddCamerasSubcommand(CLI::App* cli, CamerasCommandArgs* args) {
                           "writes the project with them and prints a JSON summary");
   cameras->add_option("project", args->project_path, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
   cameras->add_option("-o,--output", args->output_path, "Where to write the project with the cameras")->required();
-  cameras->add_option("--colmap", args->options.colmap, "The colmap program")->capture_default_str();
+  args->options.colmap = ColmapExecutableFromEnvironment();
+  cameras->add_option("--colmap", args->options.colmap, "The colmap program (default: $FACET_COLMAP, else colmap)")
+      ->capture_default_str();
   cameras
       ->add_option("--work-dir", args->options.work_dir,
                    "COLMAP's working folder (its database, models and log); default: OUT's folder/OUT-stem.colmap")

@@ -18,7 +18,7 @@ class App;
 namespace facet::app {
 
 struct CamerasCommandOptions {
-  std::string colmap = "colmap";  // the colmap program (path or name on PATH)
+  std::string colmap = "colmap";  // the colmap program (path or name on PATH); the CLI's default: $FACET_COLMAP
   std::string work_dir;           // "" : OUT.facet's folder / "<OUT stem>.colmap"
   int max_image_size_px = 1600;
   int num_threads = 2;

@@ -9,7 +9,9 @@
 // - cancelled while the stand-in's matcher sleeps (a picture of the progress window then):
 //   the project is unchanged, nothing on the undo stack, within seconds;
 // - FACET_COLMAP naming no program: the menu item is disabled with the install hint, a start
-//   is refused with it, nothing changes.
+//   is refused with it, nothing changes;
+// - `facet cameras` with the stand-in: the written cameras are the truth's, the JSON reports
+//   the alignment.
 #include <cstdlib>
 
 #include "core/io/colmap_model_write.h"
@@ -220,4 +222,33 @@ TEST_CASE("Cameras from all photos without colmap: the item is disabled with the
   const std::string refused = RenderScriptRefused(dir, project_path, "start", "command colmap start\n");
   CHECK(refused.find("apt-get install colmap") != std::string::npos);
   CHECK(refused.find("/nonexistent/colmap") != std::string::npos);
+}
+
+TEST_CASE("facet cameras with the stand-in colmap: the cameras aligned into the project's frame, the JSON says how") {
+  TempDir dir("colmap_cli");
+  const Project truth = TruthProject(dir);
+  FakeColmapOptions fake;
+  fake.model_dir = WriteReconstruction(dir, truth);
+  const std::string colmap = WriteFakeColmap(dir / "fake-colmap", fake);
+  const std::string project_path = WriteStartProject(dir, truth);
+  const CliResult run =
+      RunFacet(dir, "cameras '" + project_path + "' -o '" + (dir / "out.facet") + "' --colmap '" + colmap + "'");
+  INFO("stderr: " << run.err);
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json out = nlohmann::json::parse(run.out);
+  CHECK(out.at("num_registered") == 4);
+  const nlohmann::json& alignment = out.at("alignment");
+  CHECK(alignment.at("message") ==
+        "rotation: 3 cameras in common; scale: 3 camera centres; position: 3 camera centres");
+  CHECK(alignment.at("rotation").at("source") == "cameras in common");
+  CHECK(std::abs(alignment.at("project_from_reconstruction").at("scale").get<double>() - 1.0 / 0.37) < kExact);
+  CHECK(alignment.at("center_rms").get<double>() < kExact);
+  CHECK(run.err.find("aligned to the project: rotation: 3 cameras in common") != std::string::npos);
+  const Project written = LoadProjectFile(dir / "out.facet");
+  for (size_t i = 0; i < truth.images.size(); ++i) {
+    INFO(truth.images[i].path);
+    CHECK((written.images[i].camera.CenterInWorld() - truth.images[i].camera.CenterInWorld()).norm() < kExact);
+    CHECK((written.images[i].camera.cam_from_world_rotation - truth.images[i].camera.cam_from_world_rotation).norm() <
+          kExact);
+  }
 }
