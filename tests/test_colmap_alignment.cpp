@@ -254,6 +254,24 @@ TEST_CASE("no camera in common: up and heading from the line families, the scale
   const Eigen::Vector3d step = aligned.images[2].camera.CenterInWorld() - aligned.images[0].camera.CenterInWorld();
   CHECK((step - 0.37 * true_step).norm() < kExact);
 
+  // The turn each photo with horizontal lines needs for its calibration from lines to keep
+  // this heading is recorded: 0 for photo 0 (the reference) and photo 1 (y lines along y).
+  CHECK(alignment.chosen_turns == std::vector<std::pair<Id, int>>{{truth.images[0].id, 0}, {truth.images[1].id, 0}});
+  CHECK(aligned.images[1].axis_quarter_turns == 0);
+  CHECK(aligned.images[2].axis_quarter_turns == Image::kAxisTurnsUnchosen);  // no horizontal lines
+
+  // Photo 1's lines along the world's y labelled x (the labeller's choice): the heading is the
+  // same (photo 1 counts modulo 90 deg), and its turn is 3, which makes its x family the world's y.
+  Project relabelled = project;
+  for (Segment& s : relabelled.segments)
+    if (s.image_id == truth.images[1].id) s.axis = Axis::kX;
+  REQUIRE(ApplyAlignedColmapCameras(Reconstruction(truth), ColmapAlignmentOptions{}, &relabelled, &report,
+                                    &alignment) == "");
+  CHECK((relabelled.images[1].camera.cam_from_world_rotation - truth.images[1].camera.cam_from_world_rotation).norm() <
+        kExact);
+  CHECK(relabelled.images[1].axis_quarter_turns == 3);
+  CHECK(WorldAxisOfFamily(0, 3) == 1);
+
   // Photo 0's turn recorded as 1: its x family is the world's y, the world turned with it.
   project.images[0].axis_quarter_turns = 1;
   aligned = project;

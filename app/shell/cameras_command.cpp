@@ -33,7 +33,8 @@ nlohmann::json ColmapAlignmentJson(const ColmapAlignmentSummary& alignment) {
           {"num_known_lengths", alignment.num_known_lengths},
           {"center_rms", alignment.center_rms},
           {"rotation_rms_deg", alignment.rotation_rms_deg},
-          {"center_fit_rotation_deg", alignment.center_fit_rotation_deg}};
+          {"center_fit_rotation_deg", alignment.center_fit_rotation_deg},
+          {"chosen_turns", alignment.chosen_turns}};
 }
 
 CLI::App* AddCamerasSubcommand(CLI::App* cli, CamerasCommandArgs* args) {

@@ -46,6 +46,13 @@ void LogApplied(AppState* state, const ColmapRunSummary& run, const ColmapImport
                "COLMAP could not place " + JoinNames(report.missing_photos) + "; their cameras are as they were");
   state->Log(LogLevel::kInfo, "Cameras aligned to the project: " + alignment.message);
   for (const std::string& w : alignment.warnings) state->Log(LogLevel::kWarning, "Alignment: " + w);
+  if (!alignment.chosen_turns.empty()) {
+    std::vector<std::string> turns;
+    for (const auto& [id, quarter_turns] : alignment.chosen_turns)
+      if (const Image* image = project.FindImage(id))
+        turns.push_back(FileNameOf(image->path) + " " + std::to_string(90 * quarter_turns) + " deg");
+    state->Log(LogLevel::kInfo, "Line axes turned to agree with COLMAP's cameras: " + JoinNames(turns));
+  }
   state->Log(LogLevel::kInfo, "COLMAP's log: " + run.log_path);
 }
 

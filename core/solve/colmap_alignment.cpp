@@ -24,6 +24,9 @@ constexpr double kTwoPi = 2.0 * M_PI;
 constexpr double kKnownLengthDisagreement = 0.05;
 // A box's kept size is a known length only while its corners 0 and 2^k still span it.
 constexpr double kBoxCornerTolerance = 1e-6;
+// A photo's line family further than this from every world axis the aligned camera could give
+// it leaves its turn unchosen.
+constexpr double kMaxTurnErrorDeg = 20.0;
 // A direction whose horizontal part is shorter than this is no horizontal family's.
 constexpr double kMinHorizontalPart = 0.5;
 
@@ -398,6 +401,31 @@ ColmapAlignmentSummary AlignReconstructionToProject(const Project& before, const
   }
 
   for (const Image* image : registered) TransformCamera(transform, &project->FindImage(image->id)->camera);
+
+  // A photo with horizontal line families and no recorded turn is re-calibrated from its lines
+  // after the edit (core/solve/model_update.h) as vanishing-point rotation x AxisTurn(turn):
+  // the turn that puts its families where the aligned camera sees them is recorded, so that
+  // the re-calibration keeps this heading instead of a guess (core/solve/world_frames.h).
+  for (const Image* registered_image : registered) {
+    Image* image = project->FindImage(registered_image->id);
+    if (image->axis_quarter_turns != Image::kAxisTurnsUnchosen) continue;
+    for (Axis axis : {Axis::kX, Axis::kY}) {
+      Eigen::Vector3d d;
+      if (!FamilyDirection(*project, *image, axis, &d) || std::abs(d.z()) < options.min_forward_component) continue;
+      if (d.z() < 0.0) d = -d;
+      const Eigen::Vector3d in_world = image->camera.cam_from_world_rotation.transpose() * d;
+      int best = 0;
+      double best_cos = -2.0;
+      for (int turns = 0; turns < 4; ++turns) {
+        const double c = (AxisTurn(-turns) * Eigen::Vector3d::Unit(static_cast<int>(axis))).dot(in_world);
+        if (c > best_cos) best_cos = c, best = turns;
+      }
+      if (best_cos < std::cos(kMaxTurnErrorDeg / kRadToDeg)) continue;
+      image->axis_quarter_turns = best;
+      summary.chosen_turns.emplace_back(image->id, best);
+      break;
+    }
+  }
 
   // How well the cameras in common agree once aligned.
   double center_sum = 0.0, rotation_sum_deg2 = 0.0;

@@ -27,6 +27,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -86,13 +87,18 @@ struct ColmapAlignmentSummary : SolverSummary {
   // With three or more common centres not on one line: the angle (deg) between the rotation
   // of the centres' own similarity and the one used; -1 when it was not computed.
   double center_fit_rotation_deg = -1.0;
+  // Registered images with horizontal line families and no recorded quarter turn
+  // (Image::axis_quarter_turns) get the turn that puts their families where the aligned camera
+  // sees them (within 20 deg), so that the calibration from their lines after the edit keeps
+  // this heading: (image id, turns), in project order.
+  std::vector<std::pair<Id, int>> chosen_turns;
 };
 
 // The similarity from the reconstruction's frame into the project's. `before`: the project as
 // it was (its cameras are the target frame's). *project: the same project with the
 // reconstruction's cameras on the images listed in `reconstructed_images` (ids of *project);
-// their cameras are moved into the project's frame. Other images, the model and the pins are
-// not changed. On a summary that is not IsUsable(), *project is unchanged.
+// their cameras are moved into the project's frame (and turns recorded, see chosen_turns).
+// Other images, the model and the pins are not changed. On a summary that is not IsUsable(), *project is unchanged.
 ColmapAlignmentSummary AlignReconstructionToProject(const Project& before, const std::vector<Id>& reconstructed_images,
                                                     const ColmapAlignmentOptions& options, Project* project);
 
