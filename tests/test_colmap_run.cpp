@@ -2,7 +2,8 @@
 // (exit codes, the log, cancel ending the whole process group), the runner's refusals (no
 // colmap: the install hint; too few photos; one file name twice) with a stand-in program,
 // and the similarity fit that brings a reconstruction into another frame
-// (core/estimators/similarity_fit.h). COLMAP itself runs in the real-data suite
+// (core/estimators/similarity_fit.h), and a whole run with a stand-in whose mapper writes a
+// text model (tests/fake_colmap.h). COLMAP itself runs in the real-data suite
 // (tests/realdata/test_colmap_fountain.cpp).
 #include <doctest/doctest.h>
 
@@ -21,8 +22,10 @@
 #include <Eigen/Geometry>
 
 #include "core/estimators/similarity_fit.h"
+#include "core/io/colmap_model_write.h"
 #include "core/io/colmap_run.h"
 #include "core/util/child_process.h"
+#include "tests/fake_colmap.h"
 
 namespace fs = std::filesystem;
 using namespace facet;
@@ -196,4 +199,50 @@ TEST_CASE("the similarity fit recovers a known scale, rotation and translation; 
                                              Eigen::Vector3d(2, 2, 2)};
   CHECK(!FitSimilarity(line, line).ok);
   CHECK(!FitSimilarity({source[0], source[1]}, {target[0], target[1]}).ok);
+}
+
+TEST_CASE("RunColmap with a stand-in colmap: the mapper's text model is read, the photos it placed are named") {
+  const fs::path dir = TempDir("fake_mapper");
+  for (const char* name : {"a.jpg", "b.jpg", "c.jpg"}) std::ofstream(dir / name) << "x";
+  // A model of a.jpg and b.jpg only: c.jpg is the photo COLMAP could not place.
+  ColmapModel model;
+  for (std::uint32_t id : {1u, 2u}) {
+    ColmapCamera camera;
+    camera.camera_id = id;
+    camera.model = ColmapCameraModel::kSimplePinhole;
+    camera.width_px = 640;
+    camera.height_px = 480;
+    camera.params = {500.0, 320.0, 240.0};
+    model.cameras.push_back(camera);
+    ColmapImage image;
+    image.image_id = id;
+    image.camera_id = id;
+    image.name = id == 1 ? "a.jpg" : "b.jpg";
+    image.cam_from_world_translation = Eigen::Vector3d(id, 0.0, 0.0);
+    model.images.push_back(image);
+  }
+  REQUIRE(WriteColmapModelText((dir / "model").string(), model) == "");
+  testing::FakeColmapOptions fake;
+  fake.model_dir = (dir / "model").string();
+  ColmapRunOptions options;
+  options.colmap_executable = testing::WriteFakeColmap(dir / "fake-colmap", fake);
+  options.working_dir = (dir / "work").string();
+  options.photo_paths = {(dir / "a.jpg").string(), (dir / "b.jpg").string(), (dir / "c.jpg").string()};
+  const ColmapRunSummary summary = RunColmap(options);
+  REQUIRE_MESSAGE(summary.IsUsable(), summary.message);
+  CHECK(summary.stage_reached == ColmapStage::kDone);
+  CHECK(summary.num_registered == 2);
+  CHECK(summary.registered == std::vector<bool>{true, true, false});
+  CHECK(summary.model.images.size() == 2);
+  CHECK(summary.model_dir == (dir / "work" / "sparse" / "0").string());
+  REQUIRE(summary.warnings.size() == 1);
+  CHECK(summary.warnings[0] == "COLMAP could not place photo c.jpg");
+  CHECK(ReadText(summary.log_path).find("fake colmap: mapper") != std::string::npos);
+
+  // The mapper failing: kFailed, the log named.
+  fake.mapper_exit_code = 7;
+  options.colmap_executable = testing::WriteFakeColmap(dir / "failing-colmap", fake);
+  const ColmapRunSummary failed = RunColmap(options);
+  CHECK(failed.termination == SolverTermination::kFailed);
+  CHECK(failed.message.find("mapping failed (exit code 7)") != std::string::npos);
 }

@@ -19,6 +19,7 @@
 #include "app/panels/side_panels.h"
 #include "app/panels/viewport_panel.h"
 #include "app/platform/egl_context.h"
+#include "app/shell/cameras_command.h"
 #include "app/shell/export_view.h"
 #include "app/shell/file_actions.h"
 #include "app/shell/frame.h"
@@ -27,6 +28,7 @@
 #include "app/shell/layout.h"
 #include "app/shell/teach_report.h"
 #include "app/state/app_state.h"
+#include "app/state/colmap_cameras.h"
 #include "app/state/input_script.h"
 #include "app/state/line_proposals.h"
 #include "core/io/project_io.h"
@@ -300,6 +302,24 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
                               {"last_frames_in_flight", lines.last_frames_in_flight},
                               {"last_start_ms", lines.last_start_ms}};
   report["detect_lines_on_add"] = state.detect_lines_on_add;
+  const ColmapWork& colmap = state.colmap;
+  const ColmapJob* colmap_job = colmap.job.get();
+  report["colmap"] = {
+      {"executable", colmap.executable},
+      {"available", colmap.available.value_or(false)},
+      {"install_hint", ColmapInstallHint()},
+      {"window_open", colmap.window_open},
+      {"in_flight", colmap_job != nullptr},
+      {"stage", colmap_job ? ColmapStageName(static_cast<ColmapStage>(colmap_job->stage.load())) : ""},
+      {"working_dir", colmap_job ? colmap_job->working_dir : colmap.last_working_dir},
+      {"started", colmap.started},
+      {"applied", colmap.applied},
+      {"cancelled", colmap.cancelled},
+      {"failed", colmap.failed},
+      {"dropped", colmap.dropped},
+      {"last_message", colmap.last_message},
+      {"last_log", colmap.last_log_path},
+      {"alignment", colmap.last_alignment ? ColmapAlignmentJson(*colmap.last_alignment) : nlohmann::json()}};
   report["line_proposals"] = {{"image_id", state.line_proposals ? state.line_proposals->image_id : kNoId},
                               {"count", state.line_proposals ? state.line_proposals->segments.size() : 0}};
   report["selection"] = {{"segment_id", state.selection.segment_id},

@@ -3,14 +3,39 @@
 #include <filesystem>
 #include <iostream>
 
+#include <Eigen/Geometry>
+
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "app/state/colmap_cameras.h"
 #include "core/io/colmap_import.h"
 #include "core/io/colmap_run.h"
 #include "core/io/project_io.h"
 
 namespace facet::app {
+
+nlohmann::json ColmapAlignmentJson(const ColmapAlignmentSummary& alignment) {
+  const SimilarityTransform& t = alignment.project_from_reconstruction;
+  const Eigen::AngleAxisd turn(t.rotation);
+  return {{"message", alignment.message},
+          {"warnings", alignment.warnings},
+          {"rotation", {{"source", AlignmentSourceName(alignment.rotation_source)}, {"note", alignment.rotation_note}}},
+          {"scale", {{"source", AlignmentSourceName(alignment.scale_source)}, {"note", alignment.scale_note}}},
+          {"position", {{"source", AlignmentSourceName(alignment.position_source)}, {"note", alignment.position_note}}},
+          {"project_from_reconstruction",
+           {{"scale", t.scale},
+            {"rotation_angle_axis",
+             {turn.angle() * turn.axis().x(), turn.angle() * turn.axis().y(), turn.angle() * turn.axis().z()}},
+            {"translation", {t.translation.x(), t.translation.y(), t.translation.z()}}}},
+          {"common_images", alignment.common_images},
+          {"num_line_families", alignment.num_line_families},
+          {"num_known_lengths", alignment.num_known_lengths},
+          {"center_rms", alignment.center_rms},
+          {"rotation_rms_deg", alignment.rotation_rms_deg},
+          {"center_fit_rotation_deg", alignment.center_fit_rotation_deg},
+          {"chosen_turns", alignment.chosen_turns}};
+}
 
 CLI::App* AddCamerasSubcommand(CLI::App* cli, CamerasCommandArgs* args) {
   CLI::App* cameras =
@@ -19,7 +44,9 @@ CLI::App* AddCamerasSubcommand(CLI::App* cli, CamerasCommandArgs* args) {
                           "writes the project with them and prints a JSON summary");
   cameras->add_option("project", args->project_path, "Project file (*.facet)")->required()->check(CLI::ExistingFile);
   cameras->add_option("-o,--output", args->output_path, "Where to write the project with the cameras")->required();
-  cameras->add_option("--colmap", args->options.colmap, "The colmap program")->capture_default_str();
+  args->options.colmap = ColmapExecutableFromEnvironment();
+  cameras->add_option("--colmap", args->options.colmap, "The colmap program (default: $FACET_COLMAP, else colmap)")
+      ->capture_default_str();
   cameras
       ->add_option("--work-dir", args->options.work_dir,
                    "COLMAP's working folder (its database, models and log); default: OUT's folder/OUT-stem.colmap")
@@ -83,7 +110,9 @@ int RunCamerasCommand(const std::string& project_path, const std::string& output
     return 1;
   }
   ColmapImportReport report;
-  const std::string error = ApplyColmapCameras(summary.model, &project, &report);
+  ColmapAlignmentSummary alignment;
+  const std::string error =
+      ApplyAlignedColmapCameras(summary.model, ColmapAlignmentOptions{}, &project, &report, &alignment);
   if (!error.empty()) {
     std::cout << out.dump(2) << "\n";
     std::cerr << "facet cameras: " << error << "; " << output_path << " was not written\n";
@@ -91,6 +120,9 @@ int RunCamerasCommand(const std::string& project_path, const std::string& output
   }
   out["updated_images"] = report.updated_images;
   out["photos_not_placed"] = report.missing_photos;
+  out["alignment"] = ColmapAlignmentJson(alignment);
+  std::cerr << "facet cameras: aligned to the project: " << alignment.message << "\n";
+  for (const std::string& w : alignment.warnings) std::cerr << "facet cameras: warning: " << w << "\n";
   RebaseImagePaths(project_path, output_path, &project);
   const std::string save_error = SaveProject(project, output_path);
   if (!save_error.empty()) {

@@ -20,6 +20,7 @@
 #include <GLFW/glfw3.h>  // key codes only
 
 #include "app/panels/camera_sections.h"
+#include "app/panels/colmap_window.h"
 #include "app/panels/image_panel.h"
 #include "app/panels/side_panels.h"
 #include "app/panels/teach_overlay.h"
@@ -30,6 +31,7 @@
 #include "app/shell/file_actions.h"
 #include "app/shell/menu_bar.h"
 #include "app/state/add_photo.h"
+#include "app/state/colmap_cameras.h"
 #include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
 #include "app/state/move_tool.h"
@@ -914,6 +916,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     return true;
   }
   if (name == "lines") return RunLinesCommand(state, arg, error);
+  if (name == "colmap") return RunColmapCommand(state, arg, error);
   if (name == "constrain") return RunConstrainCommand(state, arg, error);
   if (name == "select-add") return RunSelectAddCommand(state, arg, error);
   if (name == "line-pin") return RunLinePinCommand(state, arg, error);
@@ -1073,6 +1076,7 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
   RefreshDerived(state);
   SyncReferenceMeshes(state);
   CollectLineDetection(state, /*wait=*/false);
+  CollectColmapCameras(state, /*wait=*/false);  // a finished run becomes one edit
   UpdateTeachSteps(state);  // View > Teach > Solver steps: dropped when the document changed
   if (shell->export_image_panel != nullptr || shell->export_viewport_panel != nullptr) {
     DrawExportViewFrame(state, shell);
@@ -1120,6 +1124,7 @@ void DrawFrame(AppState* state, ShellState* shell, double time_s) {
 
   DrawTeachNumbersWindow(state);  // View > Teach > Numbers
   DrawTeachStepsWindow(state);    // View > Teach > Solver steps
+  DrawColmapWindow(state);        // File > Cameras from all photos
   DrawDialogs(state, shell);
   if (shell->dialog == Dialog::kNone) HandleToolShortcuts(state);
 }

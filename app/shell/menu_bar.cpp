@@ -6,10 +6,13 @@
 
 #include <imgui.h>
 
+#include "core/io/colmap_run.h"
+
 #include "app/panels/side_panels.h"
 #include "app/panels/widgets.h"
 #include "app/shell/export_cameras.h"
 #include "app/shell/file_actions.h"
+#include "app/state/colmap_cameras.h"
 #include "app/state/file_browser_model.h"
 #include "app/state/model_edits.h"
 
@@ -115,6 +118,26 @@ float DrawMenuBar(AppState* state, ShellState* shell) {
     if (ImGui::IsItemHovered())
       ImGui::SetTooltip("A mesh made elsewhere (.obj, .glb, .gltf) to model against: drawn see-through in both panels, a "
                         "snap target for the Move tool, not part of the model (or drop it onto the window)");
+    // COLMAP on every photo, in the background (app/state/colmap_cameras.h); its window shows
+    // the progress. Disabled without the program, with the install hint as its tooltip.
+    const bool colmap = ColmapAvailable(state);
+    const size_t num_photos = state->document.project().images.size();
+    if (ImGui::MenuItem("Cameras from all photos...", nullptr, false,
+                        colmap && num_photos >= 2 && !ColmapInFlight(*state)))
+      state->colmap.window_open = true;
+    RecordItem(state, "menu.colmap_cameras");
+    if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) {
+      if (!colmap) {
+        ImGui::SetTooltip("%s (FACET_COLMAP names the program)", ColmapInstallHint().c_str());
+      } else if (ColmapInFlight(*state)) {
+        ImGui::SetTooltip("COLMAP is running (its window shows how far)");
+      } else if (num_photos < 2) {
+        ImGui::SetTooltip("Add two photos or more first");
+      } else {
+        ImGui::SetTooltip("A camera for every photo from COLMAP (structure from motion), in the background, "
+                          "brought into the project's frame as one undoable edit");
+      }
+    }
     ImGui::Separator();
     if (ImGui::MenuItem("Save", "Ctrl+S")) {
       if (SaveNeedsName(*state)) {

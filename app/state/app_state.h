@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "app/state/autosave.h"
+#include "app/state/colmap_cameras.h"
 #include "app/state/line_proposals.h"
 #include "app/state/project_guard.h"
 #include "app/state/rect.h"
@@ -244,6 +245,10 @@ struct AppState {
   std::optional<Project> drag_start;
   ModelUpdateSummary drag_start_update;  // last_update when the drag began (what was logged)
   std::string drag_label;
+
+  // File > Cameras from all photos: COLMAP on its worker thread, its window and its last outcome
+  // (app/state/colmap_cameras.h).
+  ColmapWork colmap;
 
   // The bake in flight, if any. Declared last so that it is destroyed first: the future of
   // std::async waits for the worker before the photos it reads are freed.

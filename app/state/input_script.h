@@ -94,6 +94,13 @@
 //                                                      discard, on-add on|off, hold on|off
 //                                                      (RunLinesCommand,
 //                                                      app/state/line_proposals.h)
+//                                   colmap ARGS        File > Cameras from all photos
+//                                                      (RunColmapCommand,
+//                                                      app/state/colmap_cameras.h): start,
+//                                                      cancel, wait (for the run in
+//                                                      flight, then apply it), wait-stage
+//                                                      STAGE (tests), open|close
+//                                                      (its window), single-camera on|off
 //                                   wait-bake          block until the texture bake of the
 //                                                      current project is swapped in
 //                                   bake-status PATH   the background bake's state as JSON

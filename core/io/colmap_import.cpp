@@ -75,4 +75,16 @@ std::string ApplyColmapCameras(const ColmapModel& model, Project* project, Colma
   return "";
 }
 
+std::string ApplyAlignedColmapCameras(const ColmapModel& model, const ColmapAlignmentOptions& options, Project* project,
+                                      ColmapImportReport* report, ColmapAlignmentSummary* alignment) {
+  *alignment = {};
+  Project imported = *project;
+  const std::string error = ApplyColmapCameras(model, &imported, report);
+  if (!error.empty()) return error;
+  *alignment = AlignReconstructionToProject(*project, report->updated_images, options, &imported);
+  if (!alignment->IsUsable()) return "cameras not aligned to the project: " + alignment->message;
+  *project = std::move(imported);
+  return "";
+}
+
 }  // namespace facet

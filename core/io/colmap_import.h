@@ -1,7 +1,8 @@
 // A COLMAP reconstruction's cameras into a Facet project: each photo of the project takes the
 // camera of the COLMAP image with the same file name (last path component); a photo the
-// reconstruction lacks keeps its own camera. The cameras stay in the reconstruction's frame
-// (its axes and scale): aligning them to the project's is a separate step.
+// reconstruction lacks keeps its own camera. ApplyColmapCameras leaves the cameras in the
+// reconstruction's frame (its axes and scale); ApplyAlignedColmapCameras also aligns them to
+// the project's.
 #pragma once
 
 #include <string>
@@ -9,6 +10,7 @@
 
 #include "core/io/colmap_model.h"
 #include "core/scene/project.h"
+#include "core/solve/colmap_alignment.h"
 
 namespace facet {
 
@@ -26,5 +28,12 @@ struct ColmapImportReport {
 // (core/io/colmap_camera.h) or two COLMAP images with one file name is refused by name.
 // "" on success, else the error; on error *project is unchanged (nothing half-applied).
 std::string ApplyColmapCameras(const ColmapModel& model, Project* project, ColmapImportReport* report);
+
+// ApplyColmapCameras, then the cameras it set brought into the project's frame
+// (core/solve/colmap_alignment.h) against the project as it was: what `facet cameras` and File >
+// Cameras from all photos apply. "" on success, else the error of either step; on error
+// *project is unchanged.
+std::string ApplyAlignedColmapCameras(const ColmapModel& model, const ColmapAlignmentOptions& options, Project* project,
+                                      ColmapImportReport* report, ColmapAlignmentSummary* alignment);
 
 }  // namespace facet
