@@ -19,7 +19,9 @@
 #include "core/io/colmap_import.h"
 #include "core/io/colmap_model_write.h"
 #include "core/mesh/box.h"
+#include "core/io/project_io.h"
 #include "core/solve/colmap_alignment.h"
+#include "core/solve/model_update.h"
 #include "core/solve/world_frames.h"
 
 using namespace facet;
@@ -322,4 +324,51 @@ TEST_CASE("alignment refusals: no registered image, bad options") {
   CHECK(summary.termination == SolverTermination::kInvalidInput);
   CHECK(summary.message.find("min_forward_component") != std::string::npos);
   CHECK(project == before);
+}
+
+TEST_CASE("cameras from COLMAP are held: the next update neither recalibrates them from their lines nor moves them") {
+  // Photo 0 has all three line families, drawn 1.5 px off (a user's): its calibration from
+  // lines alone lands degrees and percents away from COLMAP's camera. After the import, the
+  // update that follows every edit must keep COLMAP's camera exactly.
+  const Project truth = ThreeCameraProject();
+  Project project = truth;
+  for (Axis axis : {Axis::kX, Axis::kY, Axis::kZ}) AddLines(&project, truth.images[0], axis);
+  int k = 0;
+  for (Segment& s : project.segments) s.b_px += 1.5 * Eigen::Vector2d(std::cos(0.7 * ++k), std::sin(1.3 * k));
+  for (Image& image : project.images) {
+    image.camera_calibrated = false;
+    image.camera = Camera();
+  }
+  // Without the import, the lines calibrate photo 0 by themselves: how far that is.
+  Project from_lines;
+  REQUIRE(UpdateModel(project, CommitUpdateOptions(), &from_lines).ok);
+  REQUIRE(from_lines.images[0].camera_calibrated);
+  const double lines_focal_error = std::abs(from_lines.images[0].camera.focal_px / truth.images[0].camera.focal_px - 1);
+
+  Project imported = project;
+  ColmapImportReport report;
+  ColmapAlignmentSummary alignment;
+  REQUIRE(ApplyAlignedColmapCameras(Reconstruction(truth), ColmapAlignmentOptions{}, &imported, &report, &alignment) ==
+          "");
+  for (const Image& image : imported.images) {
+    CHECK(image.camera_from_reconstruction);
+    CHECK(image.pose_locked);
+    CHECK(image.focal_locked);
+  }
+  Project updated;
+  const ModelUpdateSummary summary = UpdateModel(imported, CommitUpdateOptions(), &updated);
+  CHECK(summary.ok);
+  CHECK(summary.images_calibrated == 0);
+  for (size_t i = 0; i < imported.images.size(); ++i) {
+    CAPTURE(i);
+    CHECK(updated.images[i].camera == imported.images[i].camera);  // bit for bit
+  }
+  MESSAGE("photo 0's lines alone: focal length " << 100 * lines_focal_error << " % off; held: unchanged");
+  CHECK(lines_focal_error > 1e-3);  // the case shows what holding saves
+
+  // The mark round-trips; files without it read as before.
+  const ProjectLoadResult loaded = ProjectFromJson(ProjectToJson(updated));
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error);
+  CHECK(loaded.project == updated);
+  CHECK(ProjectToJson(project).find("camera_from_reconstruction") == std::string::npos);
 }

@@ -66,6 +66,10 @@ std::string ApplyColmapCameras(const ColmapModel& model, Project* project, Colma
     }
     image.camera = camera;
     image.camera_calibrated = true;
+    // Held as COLMAP gave it: neither its lines (model_update's calibration) nor the solves move
+    // it until the user frees it (Properties' locks).
+    image.camera_from_reconstruction = true;
+    image.pose_locked = image.focal_locked = image.principal_point_locked = image.distortion_locked = true;
     out.updated_images.push_back(image.id);
   }
   for (const auto& [name, colmap_image] : by_name)

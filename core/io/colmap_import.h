@@ -21,7 +21,9 @@ struct ColmapImportReport {
   std::vector<Id> rescaled_images;          // updated images whose photo is a resized copy of COLMAP's
 };
 
-// Sets the intrinsics and pose of every matched image (and camera_calibrated). A COLMAP
+// Sets the intrinsics and pose of every matched image (and camera_calibrated), and holds it:
+// camera_from_reconstruction (its lines no longer calibrate it) and its pose and intrinsics
+// locked (Image's locks; the user may free them). A COLMAP
 // camera whose size differs from the project photo's by a uniform scale (a resized copy: both
 // sides within half a pixel of COLMAP's times project width / COLMAP width) is rescaled
 // exactly; any other size difference, a camera model Facet cannot represent

@@ -202,6 +202,7 @@ OrderedJson WriteImage(const Image& im, const std::string& at, Writer* w) {
   j["axis_quarter_turns"] = im.axis_quarter_turns;
   // Only when set: files of settled projects read as before.
   if (im.axis_turn_provisional) j["axis_turn_provisional"] = true;
+  if (im.camera_from_reconstruction) j["camera_from_reconstruction"] = true;
   j["use_for_texture"] = im.use_for_texture;
   j["lens_group"] = im.lens_group;
   return j;
@@ -521,7 +522,8 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
                  {"id", "path", "width_px", "height_px", "camera", "camera_calibrated", "principal_point_mode",
                   "fixed_principal_point_px", "pose_locked", "focal_locked", "principal_point_locked", "focal_mode",
                   "fixed_focal_px", "focal_prior_px", "focal_prior_std_px", "use_horizon", "horizon_px",
-                  "estimate_distortion", "distortion_locked", "axis_quarter_turns", "axis_turn_provisional", "use_for_texture", "lens_group"}))
+                  "estimate_distortion", "distortion_locked", "axis_quarter_turns", "axis_turn_provisional", "camera_from_reconstruction", "use_for_texture",
+                  "lens_group"}))
     return false;
   constexpr int kMaxSize = std::numeric_limits<int>::max();
   if (!r->IdField(j, at, "id", &im->id) || !r->FilePath(j, at, "path", &im->path) ||
@@ -593,7 +595,9 @@ bool ReadImage(const Json& j, const std::string& at, Reader* r, Image* im) {
   if (j.contains("axis_quarter_turns") &&
       !r->Int(j, at, "axis_quarter_turns", Image::kAxisTurnsUnchosen, 3, &im->axis_quarter_turns))
     return false;
-  if (!optional_bool("axis_turn_provisional", &im->axis_turn_provisional)) return false;
+  if (!optional_bool("axis_turn_provisional", &im->axis_turn_provisional) ||
+      !optional_bool("camera_from_reconstruction", &im->camera_from_reconstruction))
+    return false;
   if (im->axis_turn_provisional && im->axis_quarter_turns == Image::kAxisTurnsUnchosen)
     return r->Fail(Join(at, "axis_turn_provisional"), "a provisional turn needs axis_quarter_turns 0 to 3");
   if (!r->Bool(j, at, "use_for_texture", &im->use_for_texture)) return false;

@@ -164,6 +164,7 @@ bool operator==(const Image& a, const Image& b) {
          a.horizon_px == b.horizon_px && a.estimate_distortion == b.estimate_distortion &&
          a.distortion_locked == b.distortion_locked && a.axis_quarter_turns == b.axis_quarter_turns &&
          a.axis_turn_provisional == b.axis_turn_provisional &&
+         a.camera_from_reconstruction == b.camera_from_reconstruction &&
          a.use_for_texture == b.use_for_texture && a.lens_group == b.lens_group;
 }
 bool operator==(const PrimitiveShape& a, const PrimitiveShape& b) {

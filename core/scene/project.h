@@ -68,6 +68,12 @@ struct Image {
   // pins that fit two turns nearly as well): it is used, and chosen again at every update
   // until the pins tell the turns apart (core/solve/world_frames.h).
   bool axis_turn_provisional = false;
+  // The camera came from a reconstruction (COLMAP, core/io/colmap_import.h): its lines no
+  // longer calibrate it (the calibration from lines would replace COLMAP's intrinsics and
+  // rotation, good to a tenth of a degree, by their own, good to a degree or two). The import
+  // also locks its pose and intrinsics, which the user may free; this stays until the next
+  // import.
+  bool camera_from_reconstruction = false;
   // Whether the texture bake may take colour from this photo at all (false: e.g. a passer-by
   // stands in front of the model; the photo still calibrates and pins as before).
   bool use_for_texture = true;

@@ -175,7 +175,9 @@ void CalibrateFromLines(Project* calibrated, ModelUpdateCache* cache, ModelUpdat
     ImageCalibrationCacheEntry entry;
     for (const Segment& s : calibrated->segments)
       if (s.image_id == image.id) entry.segments.push_back(s);
-    if (entry.segments.empty()) continue;
+    // A camera from a reconstruction is better than its lines make it (Image::
+    // camera_from_reconstruction): the joint solve still reads the lines, this step does not.
+    if (entry.segments.empty() || image.camera_from_reconstruction) continue;
     entry.image = CalibrationKey(image);
     ImageCalibrationCacheEntry* cached = nullptr;
     if (cache != nullptr) {
