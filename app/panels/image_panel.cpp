@@ -22,6 +22,7 @@
 #include "app/panels/teach_overlay.h"
 #include "app/panels/widgets.h"
 #include "app/platform/image_tiles.h"
+#include "app/state/ghost_pins.h"
 #include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
 #include "app/state/model_pick.h"
@@ -1013,6 +1014,12 @@ void HandleIdleKeys(AppState* state, PanelState* panel) {
     if (delete_pressed || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) return;
   }
   if (delete_pressed) DeleteSelection(state, panel);
+  // Enter accepts the ghost pins (the button above the photo).
+  if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Enter), false) &&
+      (state->tool == Tool::kSelect || state->tool == Tool::kPin)) {
+    const PinProposalSummary* ghosts = GhostPinsFor(state, state->active_image_id);
+    if (ghosts != nullptr && ProposedGhostPins(*ghosts) > 0) AcceptGhostPinsEdit(state, state->active_image_id);
+  }
   if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
     // Escape steps back: first whatever is half done (V_connect's first vertex, the
     // multi-selection beyond its main element, the constraint builder's first edge, the vertex
@@ -1060,6 +1067,7 @@ OverlayInput MakeOverlayInput(AppState* state, const PanelState& panel, const Im
   overlay.selected_line_pin = SelectedLinePin(state);
   overlay.hover = hover;
   overlay.flagged_pins = &state->last_update.joint.flagged_pins;
+  overlay.ghost_pins = GhostPinsFor(state, current_image.id);
   const Interaction& drag = panel.interaction;
   if (drag.kind == DragKind::kMoveLinePinEnd) {  // the dragged handle stays lit
     overlay.hover = OverlayHover();
@@ -1198,12 +1206,60 @@ void DrawFlaggedPinsBar(AppState* state, Id image_id) {
     ImGui::SetTooltip("Remove the pins ringed in red in every photo (likely wrong clicks); Edit > Undo brings them back");
 }
 
+// Pins proposed from the other photos' pins (app/state/ghost_pins.h), in a row above the view
+// like the flagged pins', with the offer to accept them all as one undoable edit (or Enter).
+void DrawGhostPinsBar(AppState* state, Id image_id) {
+  const PinProposalSummary* summary = GhostPinsFor(state, image_id);
+  if (summary == nullptr) return;
+  const int proposed = ProposedGhostPins(*summary);
+  if (proposed == 0) return;
+  ImGui::TextColored(ImVec4(0.55f, 1.0f, 0.47f, 1.0f), "%d pin%s proposed from the other photos", proposed,
+                     proposed == 1 ? "" : "s");
+  RecordItem(state, "image.pin_proposals");
+  ImGui::SameLine();
+  const std::string label = "Accept " + std::to_string(proposed) + " proposal" + (proposed == 1 ? "" : "s");
+  if (ImGui::SmallButton(label.c_str())) AcceptGhostPinsEdit(state, image_id);
+  RecordItem(state, "image.accept_pin_proposals");
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip(
+        "Pin every hollow green marker (Enter); a click on one pins that one; Edit > Undo takes them back");
+}
+
+// A click on a ghost pin (not with Alt, which places by hand) accepts that proposal.
+bool ClickGhostPin(AppState* state, Id image_id, const ViewTransform& view, bool view_hovered) {
+  if (!view_hovered || !ImGui::IsMouseClicked(ImGuiMouseButton_Left) || ImGui::GetIO().KeyAlt) return false;
+  if (state->tool != Tool::kSelect && state->tool != Tool::kPin) return false;
+  const PinProposalSummary* summary = GhostPinsFor(state, image_id);
+  if (summary == nullptr) return false;
+  const Eigen::Vector2d mouse = ToEigen(ImGui::GetIO().MousePos);
+  double best = kGhostPinRadiusPx;
+  int found = -1;
+  for (size_t k = 0; k < summary->proposals.size(); ++k) {
+    const PinProposal& p = summary->proposals[k];
+    if (!p.Proposed()) continue;
+    // The Pin tool with a vertex chosen places that vertex: only its own ghost is taken.
+    const ElementRef& chosen = state->selection.element;
+    if (state->tool == Tool::kPin && chosen.kind == ElementKind::kVertex &&
+        !(chosen.primitive_id == p.vertex.primitive_id && chosen.element == p.vertex.vertex))
+      continue;
+    const double d = (ToEigen(view.ToScreen(p.match.uv_px.x(), p.match.uv_px.y())) - mouse).norm();
+    if (d < best) {
+      best = d;
+      found = static_cast<int>(k);
+    }
+  }
+  if (found < 0) return false;
+  AcceptGhostPinEdit(state, image_id, static_cast<size_t>(found));
+  return true;
+}
+
 // One image's view for one frame, in the steps above.
 void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ImageViewState& view = panel->views[image.id];
   bool fit_now = false, one_to_one = false;
   DrawLineProposalsBar(state, image.id);
   DrawFlaggedPinsBar(state, image.id);
+  DrawGhostPinsBar(state, image.id);
   ViewFrame frame = LayOutView(state, panel, &view, &fit_now, &one_to_one);
   frame.texture = TextureFor(panel, *state, image.id);
   frame.width_px = frame.texture ? frame.texture->width : std::max(1, image.width_px);
@@ -1231,7 +1287,9 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ApplySnapping(*state, panel, image, model, &frame);
   UpdateHover(state, *panel, image, model, transform, &frame);
   // A click on a detected line's proposal selects it rather than starting a tool's action.
-  if (!ClickLineProposal(state, image.id, transform, frame.hovered))
+  // So does a click on a ghost pin (accepted).
+  if (!ClickLineProposal(state, image.id, transform, frame.hovered) &&
+      !ClickGhostPin(state, image.id, transform, frame.hovered))
     StartInteraction(state, panel, image, model, transform, frame);
   ContinueInteraction(state, panel, &view, frame);
   DrawSegmentContextMenu(state, panel);

@@ -29,6 +29,7 @@
 #include "app/shell/file_actions.h"
 #include "app/shell/menu_bar.h"
 #include "app/state/add_photo.h"
+#include "app/state/ghost_pins.h"
 #include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
 #include "app/state/move_tool.h"
@@ -897,6 +898,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
     return true;
   }
   if (name == "lines") return RunLinesCommand(state, arg, error);
+  if (name == "pin-proposals") return RunPinProposalsCommand(state, arg, error);
   if (name == "constrain") return RunConstrainCommand(state, arg, error);
   if (name == "select-add") return RunSelectAddCommand(state, arg, error);
   if (name == "line-pin") return RunLinePinCommand(state, arg, error);

@@ -78,6 +78,7 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"reference", {1, 1}},   {"add-reference", {1, 1}},
       {"export-view", {1, 1}},
       {"advance-clock", {1, 1}}, {"wait-removed", {1, 1}},
+      {"pin-proposals", {1, 1}},
   };
   return arity;
 }

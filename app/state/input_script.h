@@ -89,6 +89,9 @@
 //                                                      discard, on-add on|off, hold on|off
 //                                                      (RunLinesCommand,
 //                                                      app/state/line_proposals.h)
+//                                   pin-proposals accept [I]  the ghost pins of the active
+//                                                      image: all as one edit, or the I-th
+//                                                      proposed (app/state/ghost_pins.h)
 //                                   wait-bake          block until the texture bake of the
 //                                                      current project is swapped in
 //                                   bake-status PATH   the background bake's state as JSON
