@@ -493,15 +493,39 @@ PointMatch MatchPointAlongEpipolar(const ProposalView& a_view, const ProposalVie
     if (peak) match.second_score = std::max(match.second_score, scores[k]);
   }
 
-  // Sub-pixel: parabolas along and across the line, at steps of 1, 1/2, 1/4 and 1/8 px.
+  // Sub-pixel: a quadratic fitted to the NCC on a 3 x 3 grid about the peak (along and
+  // across the line; the two interact where the window is only a corner), its maximum taken,
+  // at grid steps of 1, 1/2 and 1/4 px.
   double s = best + s_min, t = 0.0;
-  for (double step : {1.0, 0.5, 0.25, 0.125}) {
-    const double zero = score_at(s, t);
-    const double minus = score_at(s - step, t), plus = score_at(s + step, t);
-    if (minus > kInvalid && plus > kInvalid) s += step * Parabola(minus, zero, plus);
-    const double zero2 = score_at(s, t);
-    const double left = score_at(s, t - step), right = score_at(s, t + step);
-    if (left > kInvalid && right > kInvalid) t += step * Parabola(left, zero2, right);
+  for (double step : {1.0, 0.5, 0.25}) {
+    double f[3][3];
+    bool complete = true;
+    for (int j = 0; j < 3 && complete; ++j) {
+      for (int i = 0; i < 3 && complete; ++i) {
+        f[j][i] = score_at(s + (i - 1) * step, t + (j - 1) * step);
+        complete = f[j][i] > kInvalid;
+      }
+    }
+    if (!complete) break;
+    // f ~ c + g . (x, y) + 1/2 (x, y) H (x, y)^T on the grid's coordinates in steps.
+    const Eigen::Vector2d g(0.5 * (f[1][2] - f[1][0]), 0.5 * (f[2][1] - f[0][1]));
+    Eigen::Matrix2d hessian;
+    hessian(0, 0) = f[1][2] - 2.0 * f[1][1] + f[1][0];
+    hessian(1, 1) = f[2][1] - 2.0 * f[1][1] + f[0][1];
+    hessian(0, 1) = hessian(1, 0) = 0.25 * (f[2][2] - f[2][0] - f[0][2] + f[0][0]);
+    Eigen::Vector2d delta = Eigen::Vector2d::Zero();
+    if (hessian.determinant() > 0.0 && hessian(0, 0) < 0.0) {
+      delta = -hessian.inverse() * g;
+    } else {  // not a maximum there: the best grid point
+      int bi = 1, bj = 1;
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i)
+          if (f[j][i] > f[bj][bi]) bi = i, bj = j;
+      delta = Eigen::Vector2d(bi - 1, bj - 1);
+    }
+    delta = delta.cwiseMax(-1.0).cwiseMin(1.0);
+    s += step * delta.x();
+    t += step * delta.y();
   }
   match.score = score_at(s, t);
   Eigen::Vector2d found = p0 + s * along + t * across;

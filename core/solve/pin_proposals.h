@@ -4,8 +4,9 @@
 // vertex is. Along the epipolar line in B of the pin, over the depths the model allows, the
 // window around the pin in A is warped into B (by the homography of each modelled face
 // through the vertex, a fronto-parallel plane where there is none) and compared by normalised
-// cross-correlation (NCC). The best peak is refined to sub-pixel by parabola fits along and
-// across the line, and kept only when it is unique (no second peak nearly as good further
+// cross-correlation (NCC). The best peak is refined to sub-pixel by a quadratic (a parabola
+// along and across the line, with their cross term) fitted to the NCC on a 3 x 3 grid about
+// it, at finer grids in turn, and kept only when it is unique (no second peak nearly as good further
 // along the line) and, where a third calibrated photo sees the point, consistent there (the
 // point triangulated from A and B lands on that photo's pin, or on a good NCC peak).
 //
@@ -44,7 +45,7 @@ struct PinProposalOptions {
   // A face is compared in a photo only when seen at least this steeply there (cosine of the
   // angle between its normal and the direction to the camera): a face seen edge on shows its
   // texture squeezed into a few pixels.
-  double min_view_cos = 0.2;
+  double min_view_cos = 0.25;
   // With faces given, only the window's samples on them are compared (the rest is what the
   // model does not hold: sky, another building); with fewer than this share of the window on
   // them, the fronto-parallel plane warps the whole window instead.
