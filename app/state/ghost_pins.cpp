@@ -43,10 +43,21 @@ int ProposedGhostPins(const PinProposalSummary& summary) {
                                         [](const PinProposal& p) { return p.Proposed(); }));
 }
 
+// Whether a pin in another calibrated image could be proposed here (else nothing is computed,
+// not even the grey photos).
+bool PinnedElsewhere(const Project& project, Id image_id) {
+  for (const Pin& pin : project.pins) {
+    const Image* image = project.FindImage(pin.image_id);
+    if (pin.image_id != image_id && image != nullptr && image->camera_calibrated) return true;
+  }
+  return false;
+}
+
 const PinProposalSummary* GhostPinsFor(AppState* state, Id image_id) {
   if (state->drag_start) return nullptr;
   const Image* image = state->document.project().FindImage(image_id);
-  if (image == nullptr || !image->camera_calibrated) return nullptr;
+  if (image == nullptr || !image->camera_calibrated || !PinnedElsewhere(state->document.project(), image_id))
+    return nullptr;
   GhostPinsState& ghosts = state->ghost_pins;
   const std::uint64_t photos_key = PhotosKey(*state);
   if (!ghosts.computed || ghosts.revision != state->document.revision() || ghosts.epoch != state->document.epoch() ||
