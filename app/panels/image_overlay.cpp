@@ -28,6 +28,7 @@ constexpr ImU32 kLinePinColor = IM_COL32(0, 255, 200, 255);      // a line pin's
 constexpr ImU32 kLinePinLineColor = IM_COL32(0, 255, 200, 110);  // ... extended across the view
 constexpr ImU32 kLinePinResidualColor = IM_COL32(255, 70, 200, 255);
 constexpr ImU32 kFlaggedPinColor = IM_COL32(255, 50, 50, 255);  // a pin the solve flagged as a likely wrong click
+constexpr ImU32 kGhostPinColor = IM_COL32(140, 255, 120, 255);  // a pin proposed from another photo
 
 struct ScreenRect {
   Eigen::Vector2d min, max;
@@ -563,6 +564,30 @@ void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const V
           std::snprintf(text, sizeof(text), "%.0f px off?", flagged.error_px);
           DrawShadowedText(draw_list, ImVec2(c.x + 13, c.y + 2), kFlaggedPinColor, text);
         }
+      }
+    }
+  }
+
+  if (options.show_pins && input.ghost_pins != nullptr) {
+    // Ghost pins: a dashed ring, hollow, with the match's score.
+    for (const PinProposal& proposal : input.ghost_pins->proposals) {
+      if (!proposal.Proposed()) continue;
+      const Eigen::Vector2d p = ImageToScreen(view, proposal.match.uv_px);
+      if (!rect.Contains(p, 20.0)) continue;
+      const ImVec2 c = ToImVec2(p);
+      draw_list->AddCircle(c, kGhostPinRadiusPx, kShadowColor, 0, 3.5f);
+      constexpr int kDashes = 8;
+      for (int k = 0; k < kDashes; ++k) {
+        const float a0 = 2.0f * 3.14159265f * k / kDashes, a1 = a0 + 3.14159265f / kDashes;
+        draw_list->PathArcTo(c, kGhostPinRadiusPx, a0, a1, 4);
+        draw_list->PathStroke(kGhostPinColor, 0, 2.0f);
+      }
+      draw_list->AddLine(ImVec2(c.x - 2, c.y), ImVec2(c.x + 2, c.y), kGhostPinColor, 1.0f);
+      draw_list->AddLine(ImVec2(c.x, c.y - 2), ImVec2(c.x, c.y + 2), kGhostPinColor, 1.0f);
+      if (options.show_labels) {
+        char text[16];
+        std::snprintf(text, sizeof(text), "%.2f", proposal.match.score);
+        DrawShadowedText(draw_list, ImVec2(c.x + 9, c.y + 2), kGhostPinColor, text);
       }
     }
   }

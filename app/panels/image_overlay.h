@@ -91,7 +91,13 @@ struct OverlayInput {
   // Pins the last solve found far beyond the others' spread (JointSolveSummary::flagged_pins):
   // drawn with a red warning ring and their distance in px. May be null.
   const std::vector<FlaggedPin>* flagged_pins = nullptr;
+  // Pins proposed from the other photos (app/state/ghost_pins.h): drawn hollow, dashed, with
+  // their NCC score. May be null.
+  const PinProposalSummary* ghost_pins = nullptr;
 };
+
+// A ghost pin's marker radius (screen px): a click within it accepts the proposal.
+constexpr float kGhostPinRadiusPx = 7.0f;
 
 // Draws every overlay of input.image into the screen rectangle [clip_min, clip_max].
 void DrawImageOverlays(ImDrawList* draw_list, const OverlayInput& input, const ViewTransform& view, ImVec2 clip_min,

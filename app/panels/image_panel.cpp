@@ -22,6 +22,7 @@
 #include "app/panels/teach_overlay.h"
 #include "app/panels/widgets.h"
 #include "app/platform/image_tiles.h"
+#include "app/state/ghost_pins.h"
 #include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
 #include "app/state/model_pick.h"
@@ -79,6 +80,7 @@ struct Interaction {
   Eigen::Vector2d grab_offset = Eigen::Vector2d::Zero();  // item position minus press position
   Eigen::Vector2d original_a = Eigen::Vector2d::Zero(), original_b = Eigen::Vector2d::Zero();
   Eigen::Vector2d last_uv = Eigen::Vector2d::Constant(1e300);
+  int ghost_index = -1;  // the ghost pin pressed on (GhostUnderPress): a click accepts it
 };
 
 }  // namespace
@@ -584,6 +586,14 @@ bool PinFitsPhoto(AppState* state, Id image_id, const Eigen::Vector2d& uv) {
 void FinishLeftPress(AppState* state, PanelState* panel, const Eigen::Vector2d& mouse_uv,
                      double pointer_px_per_image_px) {
   Interaction& drag = panel->interaction;
+  if (drag.ghost_index >= 0 && !drag.began && drag.kind != DragKind::kPan) {
+    // A click on a ghost pin: it is accepted instead of what the click would have done.
+    const Id image_id = drag.image_id;
+    const size_t ghost = static_cast<size_t>(drag.ghost_index);
+    drag = Interaction();
+    AcceptGhostPinEdit(state, image_id, ghost);
+    return;
+  }
   if (drag.kind == DragKind::kNewSegment) {
     const double length_px = (mouse_uv - drag.press_uv).norm() * pointer_px_per_image_px;
     if (length_px >= kMinSegmentLengthPx && state->document.project().FindImage(drag.image_id)) {
@@ -1016,6 +1026,12 @@ void HandleIdleKeys(AppState* state, PanelState* panel) {
     if (delete_pressed || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) return;
   }
   if (delete_pressed) DeleteSelection(state, panel);
+  // Enter accepts the ghost pins (the button above the photo).
+  if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Enter), false) &&
+      (state->tool == Tool::kSelect || state->tool == Tool::kPin)) {
+    const PinProposalSummary* ghosts = GhostPinsFor(state, state->active_image_id);
+    if (ghosts != nullptr && ProposedGhostPins(*ghosts) > 0) AcceptGhostPinsEdit(state, state->active_image_id);
+  }
   if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape), false)) {
     // Escape steps back: first whatever is half done (V_connect's first vertex, the
     // multi-selection beyond its main element, the constraint builder's first edge, the vertex
@@ -1063,6 +1079,7 @@ OverlayInput MakeOverlayInput(AppState* state, const PanelState& panel, const Im
   overlay.selected_line_pin = SelectedLinePin(state);
   overlay.hover = hover;
   overlay.flagged_pins = &state->last_update.joint.flagged_pins;
+  overlay.ghost_pins = GhostPinsFor(state, current_image.id);
   const Interaction& drag = panel.interaction;
   if (drag.kind == DragKind::kMoveLinePinEnd) {  // the dragged handle stays lit
     overlay.hover = OverlayHover();
@@ -1201,11 +1218,60 @@ void DrawFlaggedPinsBar(AppState* state, Id image_id) {
     ImGui::SetTooltip("Remove the pins ringed in red in every photo (likely wrong clicks); Edit > Undo brings them back");
 }
 
+// Pins proposed from the other photos' pins (app/state/ghost_pins.h), above the view like the
+// flagged pins, with the offer to accept them all as one undoable edit (or Enter). On the
+// Detect lines row unless that row shows a detection or its proposals: the offer comes and
+// goes with every edit, and a row of its own would move the photo under the pointer.
+void DrawGhostPinsBar(AppState* state, Id image_id) {
+  const PinProposalSummary* summary = GhostPinsFor(state, image_id);
+  if (summary == nullptr) return;
+  const int proposed = ProposedGhostPins(*summary);
+  if (proposed == 0) return;
+  const bool lines_row_busy =
+      state->line_detection.job.has_value() || (state->line_proposals && state->line_proposals->image_id == image_id);
+  if (!lines_row_busy) ImGui::SameLine();
+  ImGui::TextColored(ImVec4(0.55f, 1.0f, 0.47f, 1.0f), "%d pin%s proposed from the other photos", proposed,
+                     proposed == 1 ? "" : "s");
+  RecordItem(state, "image.pin_proposals");
+  ImGui::SameLine();
+  const std::string label = "Accept " + std::to_string(proposed) + " proposal" + (proposed == 1 ? "" : "s");
+  if (ImGui::SmallButton(label.c_str())) AcceptGhostPinsEdit(state, image_id);
+  RecordItem(state, "image.accept_pin_proposals");
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip(
+        "Pin every hollow green marker (Enter); a click on one pins that one; Edit > Undo takes them back");
+}
+
+// The ghost pin under a left press (not with Alt, which places by hand, nor with the Pin
+// tool's vertex chosen, which pins that vertex where clicked), or -1. A click on it (no drag)
+// accepts it; a drag from it does what it did before (e.g. drags the vertex under it).
+int GhostUnderPress(AppState* state, Id image_id, const ViewTransform& view, bool view_hovered) {
+  if (!view_hovered || !ImGui::IsMouseClicked(ImGuiMouseButton_Left) || ImGui::GetIO().KeyAlt) return -1;
+  if (state->tool != Tool::kSelect && state->tool != Tool::kPin) return -1;
+  if (state->tool == Tool::kPin && state->selection.element.kind == ElementKind::kVertex) return -1;
+  const PinProposalSummary* summary = GhostPinsFor(state, image_id);
+  if (summary == nullptr) return -1;
+  const Eigen::Vector2d mouse = ToEigen(ImGui::GetIO().MousePos);
+  double best = kGhostPinRadiusPx;
+  int found = -1;
+  for (size_t k = 0; k < summary->proposals.size(); ++k) {
+    const PinProposal& p = summary->proposals[k];
+    if (!p.Proposed()) continue;
+    const double d = (ToEigen(view.ToScreen(p.match.uv_px.x(), p.match.uv_px.y())) - mouse).norm();
+    if (d < best) {
+      best = d;
+      found = static_cast<int>(k);
+    }
+  }
+  return found;
+}
+
 // One image's view for one frame, in the steps above.
 void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ImageViewState& view = panel->views[image.id];
   bool fit_now = false, one_to_one = false;
   DrawLineProposalsBar(state, image.id);
+  DrawGhostPinsBar(state, image.id);
   DrawFlaggedPinsBar(state, image.id);
   ViewFrame frame = LayOutView(state, panel, &view, &fit_now, &one_to_one);
   frame.texture = TextureFor(panel, *state, image.id);
@@ -1234,8 +1300,15 @@ void DrawImageView(AppState* state, PanelState* panel, const Image& image) {
   ApplySnapping(*state, panel, image, model, &frame);
   UpdateHover(state, *panel, image, model, transform, &frame);
   // A click on a detected line's proposal selects it rather than starting a tool's action.
-  if (!ClickLineProposal(state, image.id, transform, frame.hovered))
+  if (!ClickLineProposal(state, image.id, transform, frame.hovered)) {
+    const int ghost = GhostUnderPress(state, image.id, transform, frame.hovered);
     StartInteraction(state, panel, image, model, transform, frame);
+    if (ghost >= 0 && panel->interaction.kind == DragKind::kNone) {
+      AcceptGhostPinEdit(state, image.id, static_cast<size_t>(ghost));  // nothing to drag
+    } else if (ghost >= 0) {
+      panel->interaction.ghost_index = ghost;  // accepted on a release without a drag
+    }
+  }
   ContinueInteraction(state, panel, &view, frame);
   DrawSegmentContextMenu(state, panel);
 

@@ -322,6 +322,28 @@ std::string BuildReport(const AppState& state, const ShellState& shell, const Re
       {"alignment", colmap.last_alignment ? ColmapAlignmentJson(*colmap.last_alignment) : nlohmann::json()}};
   report["line_proposals"] = {{"image_id", state.line_proposals ? state.line_proposals->image_id : kNoId},
                               {"count", state.line_proposals ? state.line_proposals->segments.size() : 0}};
+  {
+    // Ghost pins as last computed (app/state/ghost_pins.h): refused ones with their reason.
+    const GhostPinsState& ghosts = state.ghost_pins;
+    nlohmann::json proposals = nlohmann::json::array();
+    if (ghosts.computed) {
+      for (const PinProposal& p : ghosts.summary.proposals) {
+        proposals.push_back({{"primitive_id", p.vertex.primitive_id},
+                             {"vertex", p.vertex.vertex},
+                             {"source_image_id", p.source_image_id},
+                             {"u", p.match.uv_px.x()},
+                             {"v", p.match.uv_px.y()},
+                             {"score", p.match.score},
+                             {"uniqueness", p.match.uniqueness},
+                             {"proposed", p.Proposed()},
+                             {"reason", p.match.reason}});
+      }
+    }
+    report["pin_proposals"] = {{"image_id", ghosts.computed ? ghosts.image_id : kNoId},
+                               {"computations", ghosts.computations},
+                               {"error", ghosts.summary.error},
+                               {"proposals", std::move(proposals)}};
+  }
   report["selection"] = {{"segment_id", state.selection.segment_id},
                          {"segment_endpoint", state.selection.segment_endpoint},
                          {"pin_id", state.selection.pin_id},

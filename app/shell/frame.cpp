@@ -32,6 +32,7 @@
 #include "app/shell/menu_bar.h"
 #include "app/state/add_photo.h"
 #include "app/state/colmap_cameras.h"
+#include "app/state/ghost_pins.h"
 #include "app/state/line_proposals.h"
 #include "app/state/model_edits.h"
 #include "app/state/move_tool.h"
@@ -917,6 +918,7 @@ bool RunAppCommand(AppState* state, ShellState* shell, const std::string& name, 
   }
   if (name == "lines") return RunLinesCommand(state, arg, error);
   if (name == "colmap") return RunColmapCommand(state, arg, error);
+  if (name == "pin-proposals") return RunPinProposalsCommand(state, arg, error);
   if (name == "constrain") return RunConstrainCommand(state, arg, error);
   if (name == "select-add") return RunSelectAddCommand(state, arg, error);
   if (name == "line-pin") return RunLinePinCommand(state, arg, error);

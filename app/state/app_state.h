@@ -16,6 +16,7 @@
 
 #include "app/state/autosave.h"
 #include "app/state/colmap_cameras.h"
+#include "app/state/ghost_pins.h"
 #include "app/state/line_proposals.h"
 #include "app/state/project_guard.h"
 #include "app/state/rect.h"
@@ -225,6 +226,8 @@ struct AppState {
   std::optional<LineProposals> line_proposals;
   LineDetectionWork line_detection;
   bool detect_lines_on_add = true;  // ticked from the start, as the tutorial's first step expects
+  // Pins proposed in the shown photo from the other photos' pins (app/state/ghost_pins.h).
+  GhostPinsState ghost_pins;
   // The image panel's Snap option (app/panels/image_snapping.h): points placed in a photo snap
   // to corners, segments and the model nearby; Alt turns it off for one placement.
   bool snapping = true;

@@ -80,6 +80,7 @@ const std::map<std::string, std::pair<int, int>>& CommandArity() {
       {"export-colmap", {1, 1}}, {"export-transforms", {1, 1}},
       {"advance-clock", {1, 1}}, {"wait-removed", {1, 1}},
       {"colmap", {1, 1}},
+      {"pin-proposals", {1, 1}},
   };
   return arity;
 }

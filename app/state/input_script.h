@@ -101,6 +101,9 @@
 //                                                      flight, then apply it), wait-stage
 //                                                      STAGE (tests), open|close
 //                                                      (its window), single-camera on|off
+//                                   pin-proposals accept [I]  the ghost pins of the active
+//                                                      image: all as one edit, or the I-th
+//                                                      proposed (app/state/ghost_pins.h)
 //                                   wait-bake          block until the texture bake of the
 //                                                      current project is swapped in
 //                                   bake-status PATH   the background bake's state as JSON
