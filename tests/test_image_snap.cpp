@@ -41,28 +41,6 @@ TEST_CASE("the nearest of several points, whatever its kind") {
   CHECK((r.position_px - Eigen::Vector2d(11, 11)).norm() < kTol);
 }
 
-TEST_CASE("for a pin, the photo's own points before a nearer projected model vertex") {
-  // A model still being fitted projects its vertex 2 px off the corner the user aims at; the
-  // pin must take the corner (and any photo point: a detected end too), the vertex only
-  // when the photo offers nothing near.
-  SnapFeatures f;
-  f.corners = {{13, 10}};
-  f.model_vertices = {{11, 10}};
-  CHECK(SnapToFeatures({10, 10}, f, 5.0).kind == SnapKind::kModelVertex);  // lines, edges: nearest
-  f.photo_points_first = true;
-  SnapResult r = SnapToFeatures({10, 10}, f, 5.0);
-  CHECK(r.kind == SnapKind::kCorner);
-  CHECK((r.position_px - Eigen::Vector2d(13, 10)).norm() < kTol);
-  f.corners.clear();
-  f.detected_segment_ends = {{14, 10}};
-  r = SnapToFeatures({10, 10}, f, 5.0);
-  CHECK(r.kind == SnapKind::kSegmentEnd);
-  f.detected_segment_ends.clear();
-  r = SnapToFeatures({10, 10}, f, 5.0);
-  CHECK(r.kind == SnapKind::kModelVertex);
-  CHECK((r.position_px - Eigen::Vector2d(11, 10)).norm() < kTol);
-}
-
 TEST_CASE("a detected segment's end only when no corner, drawn end or vertex is near") {
   SnapFeatures f;
   f.detected_segment_ends = {{10.5, 10}};

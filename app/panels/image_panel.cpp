@@ -880,7 +880,6 @@ SnapRequest SnapRequestFor(const AppState& state, const PanelState& panel) {
       request.active = IsLineTool(state.tool) || state.tool == Tool::kPin || state.tool == Tool::kLinePin;
       if (state.tool == Tool::kPin || state.tool == Tool::kLinePin) {
         request.exclude_primitive = state.selection.element.primitive_id;
-        request.pin = state.tool == Tool::kPin;
       }
       break;
     case DragKind::kNewSegment:
@@ -902,13 +901,11 @@ SnapRequest SnapRequestFor(const AppState& state, const PanelState& panel) {
       if (const Pin* pin = project.FindPin(drag.target_id)) {
         request.active = true;
         request.exclude_primitive = pin->vertex.primitive_id;
-        request.pin = true;
       }
       break;
     case DragKind::kPlacePin:
       request.active = true;
       request.exclude_primitive = drag.vertex.primitive_id;
-      request.pin = true;
       break;
     case DragKind::kLinePin:
       request.active = true;

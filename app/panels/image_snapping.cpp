@@ -44,7 +44,6 @@ void PhotoFeatures::CollectGarbage(const AppState& state) {
 SnapFeatures CollectSnapFeatures(const AppState& state, const Image& image, const std::vector<ProjectedPrimitive>& model,
                                  const PhotoSnapFeatures* photo, const SnapRequest& request) {
   SnapFeatures features;
-  features.photo_points_first = request.pin;
   if (photo != nullptr) {
     features.corners = photo->corners;
     features.segments = photo->segments;

@@ -30,7 +30,6 @@ struct SnapRequest {
   bool vanishing_direction = false;
   Axis axis = Axis::kX;
   Eigen::Vector2d anchor_px = Eigen::Vector2d::Zero();  // the segment's fixed end
-  bool pin = false;  // a pin is placed or moved: the photo's points first (SnapFeatures)
 };
 
 // What a photo offers to snap to by itself.

@@ -128,12 +128,9 @@ SnapResult SnapToFeatures(const Eigen::Vector2d& pointer_px, const SnapFeatures&
   for (const Eigen::Vector2d& p : features.segment_ends) {
     if (!replaced(p)) Consider(SnapKind::kSegmentEnd, p, pointer_px, radius_px, &point);
   }
-  const auto consider_model_vertices = [&] {
-    for (const Eigen::Vector2d& p : features.model_vertices) {
-      Consider(SnapKind::kModelVertex, p, pointer_px, radius_px, &point);
-    }
-  };
-  if (!features.photo_points_first) consider_model_vertices();
+  for (const Eigen::Vector2d& p : features.model_vertices) {
+    Consider(SnapKind::kModelVertex, p, pointer_px, radius_px, &point);
+  }
   // A detected corner is refined on the pixels themselves: where it is near, it is the same
   // corner more exactly, so segment corners come after the points above.
   if (point.kind != SnapKind::kNone) return point;
@@ -142,10 +139,6 @@ SnapResult SnapToFeatures(const Eigen::Vector2d& pointer_px, const SnapFeatures&
     if (!replaced(p)) Consider(SnapKind::kSegmentEnd, p, pointer_px, radius_px, &point);
   }
   if (point.kind != SnapKind::kNone) return point;
-  if (features.photo_points_first) {
-    consider_model_vertices();
-    if (point.kind != SnapKind::kNone) return point;
-  }
 
   const std::optional<Line> vanishing = VanishingLine(features);
   if (vanishing) {

@@ -37,11 +37,6 @@ struct SnapFeatures {
   bool has_vanishing_direction = false;
   Eigen::Vector2d anchor_px = Eigen::Vector2d::Zero();
   Eigen::Vector3d vanishing_point = Eigen::Vector3d::Zero();
-  // For a pin: the photo's own points (corners, segment ends and corners, detected ends) before
-  // the model's projected vertices, which are taken only when none of those is near. A pin says
-  // where the photo shows a vertex; a model still being fitted (a photo being calibrated) puts
-  // its projections pixels off, and a nearer projected vertex dragged the clicks with it.
-  bool photo_points_first = false;
 };
 
 struct SnapResult {
@@ -62,7 +57,7 @@ struct SnapResult {
 // Among lines (segments, edges, the vanishing direction) the nearest, except that where the
 // vanishing direction and another line cross within the radius, the crossing is taken (a
 // segment drawn towards its vanishing point that ends on an edge). A non-finite pointer
-// gives kNone. With photo_points_first, model vertices come after every photo point.
+// gives kNone.
 constexpr double kSegmentCornerMinAngleDeg = 20.0;
 SnapResult SnapToFeatures(const Eigen::Vector2d& pointer_px, const SnapFeatures& features, double radius_px);
 
