@@ -267,7 +267,9 @@ TEST_CASE("periodic stripes are refused as not unique, the same point on blobs i
     const Scene s = MakeScene(stripes ? kStripes : kBlobs, centers, focals, 1.0);
     const Camera& a = s.CameraOf(0);
     const Camera& b = s.CameraOf(1);
-    for (const auto& [x, normal] : points) {
+    for (const auto& point : points) {
+      // Named copies: clang cannot capture a structured binding in CAPTURE's lambda.
+      const Eigen::Vector3d x = point.first, normal = point.second;
       CAPTURE(x.transpose());
       ProposalView view_a{s.images[0], &a, &s.photos.at(s.images[0]), a.Project(x)};
       ProposalView view_b{s.images[1], &b, &s.photos.at(s.images[1]), std::nullopt};
