@@ -236,9 +236,11 @@ TEST_CASE("the reported focal standard deviation matches the spread of the estim
   constexpr double kNoisePx = 0.5;
   // The sample standard deviation of 60 draws is itself uncertain by ~1 / sqrt(2 * 59) = 9 %.
   constexpr double kStdRelTol = 0.25;
+  // 60 points (was 150): the claim is the ratio of reported to observed spread, which holds at
+  // any count; 150 made this case 206 of the suite's 254 CPU-s under the sanitizers.
   MultiViewOptions o;
   o.num_views = 6;
-  o.num_points = 150;
+  o.num_points = 60;
   const MultiViewScene s = MakeMultiViewScene(o);
   const double true_focal = s.cameras[0].focal_px;
   for (PrincipalPointMode mode : {PrincipalPointMode::kImageCenter, PrincipalPointMode::kSolve}) {
